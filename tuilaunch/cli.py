@@ -1,0 +1,108 @@
+"""`tuilaunch FILE [name:=value ...]` and `tuilaunch PACKAGE FILE [...]`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import traceback
+
+from .engine.errors import LaunchError, PackageError
+from .engine.loader import load_file
+from .engine.packages import ensure_environment, package_share
+from .engine.resolve import resolve
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="tuilaunch",
+        description="Run a ROS 2 launch file (SimpleLauncher DSL or launch API) in a terminal UI.",
+        epilog="Arguments are given as name:=value, as with ros2 launch.")
+    parser.add_argument("items", nargs="+", metavar="FILE | PACKAGE FILE | name:=value",
+                        help="a launch file, or a package and a launch file in its share, "
+                        "then launch arguments")
+    parser.add_argument("-s", "--show-args", action="store_true",
+                        help="list the launch arguments and exit")
+    parser.add_argument("-p", "--print", dest="print_plan", action="store_true",
+                        help="print what would run with these arguments and exit")
+    parser.add_argument("--json", action="store_true", help="with --print: one JSON object")
+    parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
+    return parser
+
+
+def split_items(items: list[str]) -> tuple[list[str], dict[str, str]]:
+    positional: list[str] = []
+    arguments: dict[str, str] = {}
+    for item in items:
+        if ":=" in item:
+            name, value = item.split(":=", 1)
+            if not name:
+                raise LaunchError(f"launch argument {item!r} has no name",
+                                  hint="write name:=value")
+            arguments[name] = value
+        else:
+            positional.append(item)
+    return positional, arguments
+
+
+def find_launch_file(positional: list[str]) -> str:
+    if len(positional) == 1:
+        path = positional[0]
+        if not os.path.isfile(path):
+            raise PackageError(f"launch file {path} does not exist",
+                               hint="give a path, or PACKAGE FILE to search a package's share")
+        return path
+    if len(positional) == 2:
+        package, name = positional
+        share = package_share(package)
+        for candidate in (share / name, share / "launch" / name):
+            if candidate.is_file():
+                return str(candidate)
+        for root, _dirs, files in os.walk(share):
+            if name in files:
+                return os.path.join(root, name)
+        raise PackageError(f"launch file '{name}' not found in package '{package}' ({share})")
+    raise LaunchError(f"expected FILE or PACKAGE FILE, got {' '.join(positional)!r}",
+                      hint="launch arguments are written name:=value")
+
+
+def main(argv: list[str] | None = None) -> int:
+    options = _parser().parse_intermixed_args(argv)
+    ensure_environment()
+    try:
+        positional, arguments = split_items(options.items)
+        path = find_launch_file(positional)
+        loaded = load_file(path)
+        plan = resolve(loaded, arguments)
+    except LaunchError as exc:
+        if options.debug:
+            traceback.print_exc()
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return 2
+    if options.show_args:
+        from .printing import format_arguments
+
+        print(format_arguments(plan.arguments, plan.file), end="")
+        return 0
+    if options.print_plan:
+        if options.json:
+            print(json.dumps(plan.to_json(), indent=2))
+        else:
+            from .printing import format_tree
+
+            print(format_tree(plan), end="")
+        problems = plan.problems()
+        for problem in problems:
+            print(f"tuilaunch: error: {problem}", file=sys.stderr)
+        if problems:
+            print("tuilaunch: the processes above cannot start: install or source what they "
+                  "need, or turn off the arguments that enable them", file=sys.stderr)
+        return 3 if problems else 0
+    print("tuilaunch: running a plan comes with the supervisor; use --print or --show-args",
+          file=sys.stderr)
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,80 @@
+"""Errors the operator can cause, each carrying where it happened.
+
+Every message a user sees names the launch file and line, the argument, package or node at
+fault, and what would fix it. Tracebacks are for `--debug` only.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+from dataclasses import dataclass
+from types import TracebackType
+
+_ENGINE_DIR = os.path.dirname(os.path.abspath(__file__))
+_PACKAGE_DIR = os.path.dirname(_ENGINE_DIR)
+
+
+@dataclass(frozen=True)
+class Origin:
+    """A place in a user's launch file: where an entity was written."""
+
+    file: str
+    line: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}"
+
+
+def _is_ours(filename: str) -> bool:
+    return os.path.abspath(filename).startswith(_PACKAGE_DIR + os.sep)
+
+
+def caller_origin() -> Origin | None:
+    """The innermost stack frame outside tuilaunch: the user's line that made this call."""
+    frame = sys._getframe(1)
+    while frame is not None:
+        filename = frame.f_code.co_filename
+        if not _is_ours(filename) and not filename.startswith("<frozen"):
+            return Origin(filename, frame.f_lineno)
+        frame = frame.f_back  # type: ignore[assignment]
+    return None
+
+
+def origin_from_traceback(tb: TracebackType | None, files: set[str]) -> Origin | None:
+    """The innermost traceback frame that lies in one of the given launch files."""
+    found: Origin | None = None
+    for frame_summary in traceback.extract_tb(tb):
+        if os.path.abspath(frame_summary.filename) in files:
+            found = Origin(frame_summary.filename, frame_summary.lineno or 0)
+    return found
+
+
+class LaunchError(Exception):
+    """A problem with the launch file or its arguments, reported without a traceback."""
+
+    def __init__(self, message: str, origin: Origin | None = None, hint: str | None = None):
+        super().__init__(message)
+        self.message = message
+        self.origin = origin
+        self.hint = hint
+
+    def __str__(self) -> str:
+        where = f"{self.origin}: " if self.origin else ""
+        text = f"{where}{self.message}"
+        if self.hint:
+            text += f"\n  hint: {self.hint}"
+        return text
+
+
+class ArgumentError(LaunchError):
+    """A launch argument value that cannot be used (not in choices, not a boolean, unknown)."""
+
+
+class PackageError(LaunchError):
+    """A package, launch file or executable that the ament index does not know."""
+
+
+class DslError(LaunchError):
+    """A SimpleLauncher or launch API call with arguments it cannot take."""

@@ -1,0 +1,202 @@
+"""The Plan: what will happen for one set of argument values, as plain data.
+
+A Plan can be printed as JSON, diffed against another, and tested without starting
+anything. The supervisor runs it; the UI draws its tree.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .conditions import ConditionOutcome
+from .errors import Origin
+
+
+@dataclass
+class Trigger:
+    """What starts an item: an event on another process or action, then a delay."""
+
+    on: str  # "start" | "exit" | "io" | "timer" | "shutdown"
+    target: str | None = None
+    delay: float = 0.0
+    io: str | None = None
+    after: Trigger | None = None
+    target_entity: Any = field(default=None, repr=False, compare=False)
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"on": self.on, "target": self.target, "delay": self.delay}
+        if self.io:
+            out["io"] = self.io
+        if self.after is not None:
+            out["after"] = self.after.to_json()
+        return out
+
+    def describe(self) -> str:
+        event = {
+            "start": f"{self.target} starts",
+            "exit": f"{self.target} exits",
+            "io": f"{self.target} prints on {self.io}",
+            "timer": "launch",
+            "shutdown": "shutdown",
+        }[self.on]
+        if self.on == "timer" and self.after is not None:
+            event = "armed"
+        text = f"{self.delay:g} s after {event}" if self.delay else f"when {event}"
+        if self.after is not None:
+            text += f", armed {self.after.describe()}"
+        return text
+
+
+@dataclass
+class ArgumentInfo:
+    name: str
+    default: str | None
+    value: str | None
+    description: str | None
+    choices: list[str] | None
+    type: str
+    file: str
+    line: int | None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.name, "default": self.default, "value": self.value,
+                "description": self.description, "choices": self.choices, "type": self.type,
+                "file": self.file, "line": self.line}
+
+
+@dataclass
+class ProcessPlan:
+    id: str
+    kind: str  # "node" | "process" | "container"
+    name: str | None
+    namespace: str
+    package: str | None
+    executable: str
+    cmd: list[str]
+    parameters: dict[str, Any]
+    parameter_files: list[str]
+    generated_parameter_files: list[tuple[str, dict[str, Any]]]
+    remappings: list[list[str]]
+    env: dict[str, str]
+    clear_env: bool
+    cwd: str | None
+    respawn: bool
+    respawn_delay: float
+    respawn_max_retries: int
+    sigterm_timeout: float | None
+    sigkill_timeout: float | None
+    enabled: bool
+    skipped_by: ConditionOutcome | None
+    trigger: Trigger | None
+    origin: Origin | None
+    error: str | None = None
+    components: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def full_name(self) -> str | None:
+        if self.name is None:
+            return None
+        return ("" if self.namespace == "/" else self.namespace) + "/" + self.name
+
+    @property
+    def label(self) -> str:
+        return self.full_name or f"{self.namespace.rstrip('/')}/<{self.executable}>"
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "id": self.id, "kind": self.kind, "name": self.name, "full_name": self.full_name,
+            "namespace": self.namespace, "package": self.package, "executable": self.executable,
+            "cmd": self.cmd, "parameters": self.parameters,
+            "parameter_files": self.parameter_files, "remappings": self.remappings,
+            "env": self.env, "respawn": self.respawn, "respawn_delay": self.respawn_delay,
+            "enabled": self.enabled,
+            "skipped_by": self.skipped_by.to_json() if self.skipped_by else None,
+            "trigger": self.trigger.to_json() if self.trigger else None,
+            "origin": str(self.origin) if self.origin else None,
+            "error": self.error, "components": self.components,
+        }
+
+
+@dataclass
+class ActionPlan:
+    id: str
+    kind: str  # "call_service" | "set_parameters" | "log" | "event_callback" | "shutdown"
+    target: str | None
+    data: Any
+    namespace: str
+    verbosity: str
+    enabled: bool
+    skipped_by: ConditionOutcome | None
+    trigger: Trigger | None
+    origin: Origin | None
+    source: Any = field(default=None, repr=False, compare=False)
+    configurations: dict[str, str] = field(default_factory=dict, repr=False, compare=False)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "id": self.id, "kind": self.kind, "target": self.target, "data": self.data,
+            "namespace": self.namespace, "verbosity": self.verbosity, "enabled": self.enabled,
+            "skipped_by": self.skipped_by.to_json() if self.skipped_by else None,
+            "trigger": self.trigger.to_json() if self.trigger else None,
+            "origin": str(self.origin) if self.origin else None,
+        }
+
+
+@dataclass
+class TreeItem:
+    """One row of the group tree: a group, include, process or action, with its children."""
+
+    kind: str  # "group" | "include" | "process" | "action"
+    label: str
+    enabled: bool
+    namespace: str = "/"
+    condition: ConditionOutcome | None = None
+    trigger: Trigger | None = None
+    ref: str | None = None
+    children: list[TreeItem] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "kind": self.kind, "label": self.label, "enabled": self.enabled,
+            "namespace": self.namespace,
+            "condition": self.condition.to_json() if self.condition else None,
+            "trigger": self.trigger.to_json() if self.trigger else None,
+            "ref": self.ref, "children": [c.to_json() for c in self.children],
+        }
+
+
+@dataclass
+class Plan:
+    file: str
+    arguments: list[ArgumentInfo]
+    processes: list[ProcessPlan]
+    actions: list[ActionPlan]
+    tree: TreeItem
+    params_dir: Path
+    warnings: list[str] = field(default_factory=list)
+
+    def process(self, process_id: str) -> ProcessPlan:
+        for proc in self.processes:
+            if proc.id == process_id:
+                return proc
+        raise KeyError(process_id)
+
+    def enabled_processes(self) -> list[ProcessPlan]:
+        return [p for p in self.processes if p.enabled]
+
+    def problems(self) -> list[str]:
+        """Enabled processes that cannot start: each names the process and why."""
+        return [f"{p.id} ({p.label}): {p.error}" for p in self.processes
+                if p.enabled and p.error]
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "file": self.file,
+            "arguments": [a.to_json() for a in self.arguments],
+            "processes": [p.to_json() for p in self.processes],
+            "actions": [a.to_json() for a in self.actions],
+            "tree": self.tree.to_json(),
+            "warnings": self.warnings,
+        }

@@ -1,0 +1,624 @@
+"""Resolve a Description against argument values into a Plan.
+
+Entities are visited in file order, as launch does, so an include that passes an argument
+changes it for what follows (unless the include is scoped), and a declaration only sets a
+default when the argument has no value yet.
+"""
+
+from __future__ import annotations
+
+import os
+import shlex
+import sys
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from .conditions import ConditionOutcome
+from .entities import (
+    CallService,
+    ComposableNode,
+    DeclareLaunchArgument,
+    DslOpaque,
+    Entity,
+    ExecuteProcess,
+    Group,
+    IncludeLaunchDescription,
+    IoCallbacks,
+    LaunchDescription,
+    LoadComposableNodes,
+    LogInfo,
+    Node,
+    OpaqueFunction,
+    PushRosNamespace,
+    RegisterEventHandler,
+    SetEnvironmentVariable,
+    SetLaunchConfiguration,
+    SetParameter,
+    SetParameters,
+    SetRemap,
+    Shutdown,
+    TimerAction,
+    UnsetEnvironmentVariable,
+    entity_list,
+)
+from .errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
+from .events import When
+from .loader import LoadedFile, compat_modules, known_launch_files, load_file
+from .packages import find_executable
+from .params import ParamValue, flatten_parameters, typed_value, yaml_typed
+from .plan import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
+from .substitutions import PerformContext, describe, perform, perform_optional, text_to_bool
+
+DEFAULT_RESPAWN_MAX_RETRIES = 10
+
+
+def join_namespace(base: str, ns: str | None) -> str:
+    """Relative namespaces append, absolute ones reset; the result is absolute."""
+    if not ns:
+        return base
+    joined = ns if ns.startswith("/") else base.rstrip("/") + "/" + ns
+    parts = [p for p in joined.split("/") if p]
+    return "/" + "/".join(parts)
+
+
+def resolve_name(namespace: str, name: str) -> str:
+    return join_namespace(namespace, name) if not name.startswith("/") else \
+        join_namespace("/", name)
+
+
+@dataclass
+class Scope:
+    configurations: dict[str, str]
+    launch_file: str
+    namespace: str = "/"
+    enabled: bool = True
+    skipped_by: ConditionOutcome | None = None
+    trigger: Trigger | None = None
+    global_parameters: list[tuple[Any, Any]] = field(default_factory=list)
+    remaps: list[tuple[Any, Any]] = field(default_factory=list)
+    env: dict[str, str | None] = field(default_factory=dict)
+
+    def child(self, scoped: bool) -> Scope:
+        return replace(
+            self,
+            configurations=dict(self.configurations) if scoped else self.configurations,
+            global_parameters=list(self.global_parameters),
+            remaps=list(self.remaps),
+            env=dict(self.env),
+        )
+
+    def context(self) -> PerformContext:
+        return PerformContext(self.configurations, self.launch_file)
+
+
+class Resolver:
+    def __init__(self, arguments: Mapping[str, str], params_dir: Path) -> None:
+        self.cli_arguments = dict(arguments)
+        self.params_dir = params_dir
+        self.processes: list[ProcessPlan] = []
+        self.actions: list[ActionPlan] = []
+        self.arguments: dict[str, ArgumentInfo] = {}
+        self.entity_ids: dict[int, str] = {}
+        self.triggers: list[Trigger] = []
+        self.warnings: list[str] = []
+        self._counter = 0
+
+    # --- entry -------------------------------------------------------------------------
+
+    def resolve(self, loaded: LoadedFile) -> Plan:
+        scope = Scope(dict(self.cli_arguments), loaded.path)
+        root = TreeItem("group", os.path.basename(loaded.path), True)
+        self.walk(loaded.entities, scope, root)
+        for trigger in self.triggers:
+            if trigger.target_entity is not None:
+                trigger.target = self.entity_ids.get(id(trigger.target_entity))
+                if trigger.target is None:
+                    self.warnings.append(
+                        f"a trigger waits for {describe_entity(trigger.target_entity)}, which "
+                        "this launch never runs: what it triggers will not start")
+        declared = set(self.arguments)
+        for name in self.cli_arguments:
+            if name not in declared:
+                self.warnings.append(
+                    f"argument '{name}' is not declared by {os.path.basename(loaded.path)} "
+                    f"or its includes (declared: {', '.join(sorted(declared)) or 'none'})")
+        return Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
+                    root, self.params_dir, self.warnings)
+
+    def walk(self, entities: list[Any], scope: Scope, parent: TreeItem) -> None:
+        for entity in entities:
+            self.visit(entity, scope, parent)
+
+    def _next_id(self, base: str) -> str:
+        self._counter += 1
+        return f"{base}-{self._counter}"
+
+    def _gate(self, entity: Any, scope: Scope) -> tuple[bool, ConditionOutcome | None]:
+        """Whether an entity runs, and the condition that stops it if it does not."""
+        enabled, skipped, _ = self._gate_outcome(entity, scope)
+        return enabled, skipped
+
+    def _gate_outcome(self, entity: Any, scope: Scope)\
+            -> tuple[bool, ConditionOutcome | None, ConditionOutcome | None]:
+        """Also the entity's own condition outcome; only read when its scope runs."""
+        condition = getattr(entity, "condition", None)
+        if not scope.enabled:
+            return False, scope.skipped_by, None
+        if condition is None:
+            return True, None, None
+        outcome = condition.evaluate(scope.context())
+        return outcome.holds, (None if outcome.holds else outcome), outcome
+
+    # --- dispatch ----------------------------------------------------------------------
+
+    def visit(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        if isinstance(entity, LaunchDescription):
+            self.walk(entity.entities, scope, parent)
+        elif isinstance(entity, DeclareLaunchArgument):
+            self.declare(entity, scope)
+        elif isinstance(entity, Group):
+            self.group(entity, scope, parent)
+        elif isinstance(entity, Node | ExecuteProcess):
+            self.process(entity, scope, parent)
+        elif isinstance(entity, IncludeLaunchDescription):
+            self.include(entity, scope, parent)
+        elif isinstance(entity, PushRosNamespace):
+            if scope.enabled:
+                scope.namespace = join_namespace(scope.namespace,
+                                                 perform(entity.namespace, scope.context()))
+        elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
+                        | LoadComposableNodes):
+            self.action(entity, scope, parent)
+        elif isinstance(entity, TimerAction):
+            self.timer(entity, scope, parent)
+        elif isinstance(entity, RegisterEventHandler):
+            self.event_handler(entity, scope, parent)
+        elif isinstance(entity, DslOpaque | OpaqueFunction):
+            self.opaque(entity, scope, parent)
+        elif isinstance(entity, SetEnvironmentVariable):
+            if self._gate(entity, scope)[0]:
+                ctx = scope.context()
+                scope.env[perform(entity.name, ctx)] = perform(entity.value, ctx)
+        elif isinstance(entity, UnsetEnvironmentVariable):
+            if self._gate(entity, scope)[0]:
+                scope.env[perform(entity.name, scope.context())] = None
+        elif isinstance(entity, SetLaunchConfiguration):
+            if self._gate(entity, scope)[0]:
+                ctx = scope.context()
+                scope.configurations[perform(entity.name, ctx)] = perform(entity.value, ctx)
+        elif isinstance(entity, SetParameter):
+            if self._gate(entity, scope)[0]:
+                scope.global_parameters.append((entity.name, entity.value))
+        elif isinstance(entity, SetRemap):
+            if self._gate(entity, scope)[0]:
+                scope.remaps.append((entity.src, entity.dst))
+        else:
+            where = getattr(entity, "origin", None)
+            self.warnings.append(f"{where or scope.launch_file}: ignored {entity!r}, which "
+                                 "tuilaunch does not know how to run")
+
+    # --- arguments -----------------------------------------------------------------------
+
+    def declare(self, decl: DeclareLaunchArgument, scope: Scope) -> None:
+        ctx = scope.context()
+        default = perform_optional(decl.default_value, ctx)
+        if decl.name not in scope.configurations and default is not None:
+            scope.configurations[decl.name] = default
+        value = scope.configurations.get(decl.name)
+        if decl.name not in self.arguments:
+            self.arguments[decl.name] = ArgumentInfo(
+                decl.name, default, value, decl.description, decl.choices,
+                decl.py_type or "str", scope.launch_file,
+                decl.origin.line if decl.origin else None)
+        if not scope.enabled:
+            return
+        if value is None:
+            raise ArgumentError(
+                f"argument '{decl.name}' is required and has no value", decl.origin,
+                hint=f"pass {decl.name}:=value" + (f" ({decl.description})"
+                                                   if decl.description else ""))
+        if decl.choices is not None and value not in decl.choices:
+            raise ArgumentError(
+                f"argument '{decl.name}' = {value!r} is not one of its choices: "
+                f"{', '.join(decl.choices)}", decl.origin,
+                hint=f"pass {decl.name}:=<one of {', '.join(decl.choices)}>")
+
+    # --- groups and triggers ---------------------------------------------------------------
+
+    def group(self, group: Group, outer: Scope, parent: TreeItem) -> None:
+        enabled, skipped, outcome = self._gate_outcome(group, outer)
+        scope = outer.child(group.scoped)
+        scope.enabled, scope.skipped_by = enabled, skipped
+        ctx = scope.context()
+        if enabled:
+            for key, value in group.launch_configurations.items():
+                scope.configurations[perform(key, ctx)] = perform(value, ctx)
+        if group.namespace is not None and enabled:
+            scope.namespace = join_namespace(scope.namespace, perform(group.namespace, ctx))
+        if group.when is not None:
+            scope.trigger = self.when_trigger(group.when, scope)
+        item = TreeItem("group", group_label(group, scope, outcome), enabled, scope.namespace,
+                        outcome, scope.trigger if group.when is not None else None)
+        if group.label in ("root", "opaque"):
+            # the DSL's root group only carries the constructor namespace: no extra tree level
+            item = parent
+        else:
+            parent.children.append(item)
+        self.walk(group.children, scope, item)
+
+    def when_trigger(self, when: When, scope: Scope) -> Trigger:
+        delay = 0.0
+        if when.delay is not None and scope.enabled:
+            text = perform(when.delay, scope.context())
+            try:
+                delay = float(text)
+            except ValueError:
+                raise ArgumentError(f"When(delay=...) gave {text!r}, which is not a number",
+                                    when.origin, hint="a delay is in seconds") from None
+        trigger = Trigger(when.on, None, delay, when.io, scope.trigger, when.target)
+        self.triggers.append(trigger)
+        return trigger
+
+    def timer(self, timer: TimerAction, outer: Scope, parent: TreeItem) -> None:
+        enabled, skipped = self._gate(timer, outer)
+        scope = outer.child(False)
+        scope.enabled, scope.skipped_by = enabled, skipped
+        delay = 0.0
+        if enabled:
+            text = perform(timer.period, scope.context())
+            try:
+                delay = float(text)
+            except ValueError:
+                raise ArgumentError(f"TimerAction period {text!r} is not a number",
+                                    timer.origin) from None
+        scope.trigger = Trigger("timer", None, delay, None, outer.trigger)
+        item = TreeItem("group", f"timer {delay:g} s", enabled, scope.namespace, None,
+                        scope.trigger)
+        parent.children.append(item)
+        self.walk(timer.actions, scope, item)
+
+    def event_handler(self, register: RegisterEventHandler, outer: Scope, parent: TreeItem)\
+            -> None:
+        handler = register.handler
+        enabled, skipped = self._gate(register, outer)
+        scope = outer.child(False)
+        scope.enabled, scope.skipped_by = enabled, skipped
+        scope.trigger = Trigger(handler.on, None, 0.0, handler.io, outer.trigger, handler.target)
+        self.triggers.append(scope.trigger)
+        item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
+                        scope.trigger)
+        parent.children.append(item)
+        body = handler.handler
+        if callable(body) and not isinstance(body, Entity):
+            self.action(IoCallbacks([body]), scope, item)
+        else:
+            self.walk(entity_list(body), scope, item)
+
+    # --- includes and opaque functions -----------------------------------------------------
+
+    def include(self, include: IncludeLaunchDescription, outer: Scope, parent: TreeItem)\
+            -> None:
+        enabled, skipped = self._gate(include, outer)
+        ctx = outer.context()
+        try:
+            path = perform(include.location, ctx)
+        except LaunchError:
+            if enabled:
+                raise
+            parent.children.append(TreeItem("include", f"include {describe(include.location)}",
+                                             False, outer.namespace, skipped))
+            return
+        if enabled:
+            # arguments are performed before any is set, as launch does
+            values = [(perform(k, ctx), perform(v, ctx)) for k, v in include.launch_arguments]
+            for key, value in values:
+                outer.configurations[key] = value
+        scope = outer.child(False)
+        scope.enabled, scope.skipped_by = enabled, skipped
+        item = TreeItem("include", f"include {os.path.basename(path)}", enabled,
+                        outer.namespace, skipped)
+        parent.children.append(item)
+        try:
+            loaded = load_file(path, include.origin)
+        except LaunchError:
+            if enabled:
+                raise
+            return
+        scope.launch_file = loaded.path
+        self.walk(loaded.entities, scope, item)
+
+    def opaque(self, entity: DslOpaque | OpaqueFunction, scope: Scope, parent: TreeItem) -> None:
+        if not self._gate(entity, scope)[0]:
+            return
+        context = LaunchContextShim(scope.configurations, scope.launch_file)
+        try:
+            with compat_modules():
+                if isinstance(entity, DslOpaque):
+                    with entity.launcher.opaque_scope(context) as root:
+                        result = entity.function()
+                    produced = entity_list(result) if result is not None else [root]
+                else:
+                    produced = entity_list(entity.function(context, *entity.args,
+                                                           **entity.kwargs))
+        except LaunchError:
+            raise
+        except Exception as exc:  # user code: report its own file and line
+            origin = origin_from_traceback(sys.exc_info()[2], known_launch_files())
+            raise LaunchError(f"the opaque function raised {type(exc).__name__}: {exc}",
+                              origin or entity.origin) from None
+        self.walk(produced, scope, parent)
+
+    # --- processes -------------------------------------------------------------------------
+
+    def process(self, entity: Node | ExecuteProcess, scope: Scope, parent: TreeItem) -> None:
+        enabled, skipped = self._gate(entity, scope)
+        try:
+            plan = self._process_plan(entity, scope, enabled, skipped)
+        except LaunchError as exc:
+            if enabled:
+                raise
+            base = os.path.basename(describe(getattr(entity, "executable", None) or "process"))
+            plan = ProcessPlan(self._next_id(base), entity.kind, None, scope.namespace, None,
+                               base, [], {}, [], [], [], {}, False, None, False, 0.0, 0, None,
+                               None, False, skipped, scope.trigger, entity.origin,
+                               error=f"not resolved: {exc.message}")
+        self.processes.append(plan)
+        self.entity_ids[id(entity)] = plan.id
+        parent.children.append(TreeItem("process", plan.label, enabled, plan.namespace,
+                                        skipped, scope.trigger, plan.id))
+
+    def _process_plan(self, entity: Node | ExecuteProcess, scope: Scope, enabled: bool,
+                      skipped: ConditionOutcome | None) -> ProcessPlan:
+        ctx = scope.context()
+        env = {k: v for k, v in scope.env.items() if v is not None}
+        if entity.additional_env:
+            env.update({perform(k, ctx): perform(v, ctx) for k, v in entity.additional_env.items()})
+        clear_env = entity.env is not None
+        if entity.env is not None:
+            env = {perform(k, ctx): perform(v, ctx) for k, v in entity.env.items()}
+        prefix = shlex.split(perform(entity.prefix, ctx)) if entity.prefix is not None else []
+        respawn = text_to_bool(perform(entity.respawn, ctx)) or False
+        respawn_delay = float(perform(entity.respawn_delay, ctx)) if entity.respawn_delay \
+            is not None else 0.0
+        retries = entity.respawn_max_retries
+        common = dict(
+            env=env, clear_env=clear_env, cwd=perform_optional(entity.cwd, ctx),
+            respawn=respawn, respawn_delay=respawn_delay,
+            respawn_max_retries=DEFAULT_RESPAWN_MAX_RETRIES if retries is None else retries,
+            sigterm_timeout=_float_or_none(entity.sigterm_timeout, ctx),
+            sigkill_timeout=_float_or_none(entity.sigkill_timeout, ctx),
+            enabled=enabled, skipped_by=skipped, trigger=scope.trigger, origin=entity.origin,
+        )
+        if isinstance(entity, ExecuteProcess):
+            return self._execute_process_plan(entity, ctx, scope, prefix, common)
+        return self._node_plan(entity, ctx, scope, prefix, common)
+
+    def _execute_process_plan(self, entity: ExecuteProcess, ctx: PerformContext, scope: Scope,
+                              prefix: list[str], common: dict[str, Any]) -> ProcessPlan:
+        cmd = [perform(part, ctx) for part in _items(entity.cmd)]
+        cmd = [c for c in cmd if c != ""]
+        if entity.shell:
+            cmd = ["/bin/sh", "-c", " ".join(cmd)]
+        if not cmd:
+            raise LaunchError("ExecuteProcess with an empty cmd", entity.origin)
+        name = perform_optional(entity.name, ctx)
+        base = name or os.path.basename(cmd[0].split()[0])
+        error = None
+        if not entity.shell and "/" not in cmd[0] and _which(cmd[0]) is None:
+            error = f"command '{cmd[0]}' not found on PATH"
+        return ProcessPlan(self._next_id(base), "process", name, scope.namespace, None, cmd[0],
+                           prefix + cmd, {}, [], [], [], error=error, **common)
+
+    def _node_plan(self, entity: Node, ctx: PerformContext, scope: Scope, prefix: list[str],
+                   common: dict[str, Any]) -> ProcessPlan:
+        package = perform_optional(entity.package, ctx)
+        executable = perform(entity.executable, ctx)
+        name = perform_optional(entity.name, ctx) or None
+        namespace = join_namespace(scope.namespace, perform_optional(entity.namespace, ctx))
+        proc_id = self._next_id(os.path.basename(executable))
+        error = None
+        exe_path = executable
+        if package is not None:
+            try:
+                exe_path = str(find_executable(package, executable, entity.origin))
+            except PackageError as exc:
+                error = exc.message
+        elif _which(executable) is None:
+            error = f"executable '{executable}' not found on PATH"
+        merged: dict[str, ParamValue] = {}
+        for key, value in scope.global_parameters:
+            merged[perform(key, ctx)] = typed_value(value, ctx, describe(key), entity.origin)
+        user_files: list[str] = []
+        generated: list[tuple[str, dict[str, Any]]] = []
+        params_args: list[str] = []
+        pending: dict[str, ParamValue] = dict(merged)
+        for item in _items(entity.parameters):
+            if isinstance(item, dict):
+                values = flatten_parameters(item, ctx, entity.origin)
+                merged.update(values)
+                pending.update(values)
+                continue
+            if pending:
+                generated.append(self._params_file(proc_id, len(generated), pending, params_args))
+                pending = {}
+            path = perform(item, ctx)
+            user_files.append(path)
+            params_args += ["--params-file", path]
+            if not os.path.isfile(path) and error is None:
+                error = f"parameter file {path} does not exist"
+        if pending:
+            generated.append(self._params_file(proc_id, len(generated), pending, params_args))
+        remappings = [[perform(a, ctx), perform(b, ctx)]
+                      for a, b in [*scope.remaps, *_pairs(entity.remappings)]]
+        arguments = [perform(a, ctx) for a in _items(entity.arguments)]
+        ros_arguments = [perform(a, ctx) for a in _items(entity.ros_arguments)]
+        ros_args = list(ros_arguments)
+        if name:
+            ros_args += ["-r", f"__node:={name}"]
+        if namespace != "/":
+            ros_args += ["-r", f"__ns:={namespace}"]
+        ros_args += params_args
+        for src, dst in remappings:
+            ros_args += ["-r", f"{src}:={dst}"]
+        cmd = [*prefix, exe_path, *arguments]
+        if ros_args:
+            cmd += ["--ros-args", *ros_args]
+        components = [self._component(c, ctx, namespace) for c in entity.components]
+        return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
+                           merged, user_files, generated, remappings, error=error,
+                           components=components, **common)
+
+    def _params_file(self, proc_id: str, index: int, params: dict[str, Any],
+                     params_args: list[str]) -> tuple[str, dict[str, Any]]:
+        suffix = "" if index == 0 else f"-{index + 1}"
+        path = str(self.params_dir / f"{proc_id}{suffix}.yaml")
+        params_args += ["--params-file", path]
+        return path, dict(params)
+
+    def _component(self, component: ComposableNode, ctx: PerformContext, namespace: str)\
+            -> dict[str, Any]:
+        params: dict[str, Any] = {}
+        for item in _items(component.parameters):
+            if isinstance(item, dict):
+                params.update(flatten_parameters(item, ctx, component.origin))
+        return {
+            "package": perform(component.package, ctx),
+            "plugin": perform(component.plugin, ctx),
+            "name": perform_optional(component.name, ctx),
+            "namespace": join_namespace(namespace, perform_optional(component.namespace, ctx)),
+            "parameters": params,
+            "remappings": [[perform(a, ctx), perform(b, ctx)]
+                           for a, b in _pairs(component.remappings)],
+        }
+
+    # --- actions ---------------------------------------------------------------------------
+
+    def action(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        enabled, skipped = self._gate(entity, scope)
+        ctx = scope.context()
+        target: str | None = None
+        data: Any = None
+        verbosity = ""
+        if isinstance(entity, LogInfo):
+            kind = "log"
+            data = perform(entity.msg, ctx) if enabled else describe(entity.msg)
+        elif isinstance(entity, CallService):
+            kind = "call_service"
+            if enabled:
+                target = resolve_name(scope.namespace, perform(entity.server, ctx))
+                data = _request_values(entity.request, ctx, scope.namespace, entity.origin)
+                verbosity = perform(entity.verbosity, ctx)
+            else:
+                target = describe(entity.server)
+        elif isinstance(entity, SetParameters):
+            kind = "set_parameters"
+            if enabled:
+                target = resolve_name(scope.namespace, perform(entity.node_name, ctx))
+                data = flatten_parameters(entity.parameters, ctx, entity.origin)
+                verbosity = perform(entity.verbosity, ctx)
+            else:
+                target = describe(entity.node_name)
+        elif isinstance(entity, Shutdown):
+            kind = "shutdown"
+            data = perform(entity.reason, ctx) if enabled else describe(entity.reason)
+        elif isinstance(entity, LoadComposableNodes):
+            kind = "load_components"
+            target = describe(entity.target_container)
+            data = [self._component(c, ctx, scope.namespace) for c in entity.components] \
+                if enabled else []
+        else:
+            kind = "event_callback"
+            data = len(entity.callbacks)
+        action_id = f"{kind}-{len(self.actions) + 1}"
+        plan = ActionPlan(action_id, kind, target, data, scope.namespace, verbosity, enabled,
+                          skipped, scope.trigger, entity.origin, entity,
+                          dict(scope.configurations))
+        self.actions.append(plan)
+        self.entity_ids[id(entity)] = action_id
+        label = {"log": f"log: {data}", "call_service": f"call {target}",
+                 "set_parameters": f"set parameters of {target}",
+                 "shutdown": "shutdown", "event_callback": "event callback",
+                 "load_components": f"load components into {target}"}[kind]
+        parent.children.append(TreeItem("action", label, enabled, scope.namespace, skipped,
+                                        scope.trigger, action_id))
+
+
+def _request_values(request: dict[str, Any], ctx: PerformContext, namespace: str,
+                    origin: Origin | None) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in request.items():
+        if isinstance(value, dict):
+            out[key] = _request_values(value, ctx, namespace, origin)
+            continue
+        typed = typed_value(value, ctx, key, origin)
+        out[key] = namespace if typed == "__ns" else typed
+    return out
+
+
+def _items(value: Any) -> list[Any]:
+    if value is None:
+        return []
+    if isinstance(value, list | tuple):
+        return list(value)
+    return [value]
+
+
+def _pairs(value: Any) -> list[tuple[Any, Any]]:
+    if value is None:
+        return []
+    if isinstance(value, dict):
+        return list(value.items())
+    return [(a, b) for a, b in value]
+
+
+def _which(command: str) -> str | None:
+    import shutil
+
+    return shutil.which(command)
+
+
+def _float_or_none(value: Any, ctx: PerformContext) -> float | None:
+    return None if value is None else float(perform(value, ctx))
+
+
+def describe_entity(entity: Any) -> str:
+    text = entity.describe() if hasattr(entity, "describe") else repr(entity)
+    origin = getattr(entity, "origin", None)
+    return f"{text} ({origin})" if origin else text
+
+
+def group_label(group: Group, scope: Scope, outcome: ConditionOutcome | None) -> str:
+    parts = []
+    if group.namespace is not None:
+        parts.append(f"ns {scope.namespace}")
+    if group.condition is not None:
+        parts.append(group.condition.describe())
+    return ", ".join(parts) or group.label or "group"
+
+
+class LaunchContextShim(PerformContext):
+    """What an OpaqueFunction receives as `context`: launch configurations and perform."""
+
+    @property
+    def launch_configurations(self) -> dict[str, str]:
+        return self.configurations
+
+    def perform_substitution(self, substitution: Any) -> str:
+        return perform(substitution, self)
+
+
+def default_params_dir() -> Path:
+    return Path(tempfile.gettempdir()) / f"tuilaunch-{os.getpid()}-params"
+
+
+def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
+            params_dir: Path | None = None) -> Plan:
+    """The Plan for these argument values (`name -> text`, as given on the command line)."""
+    resolver = Resolver(arguments or {}, params_dir or default_params_dir())
+    return resolver.resolve(loaded)
+
+
+__all__ = ["Resolver", "join_namespace", "resolve", "yaml_typed"]

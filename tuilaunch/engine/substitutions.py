@@ -1,0 +1,443 @@
+"""Lazy values: substitutions performed against the argument values of one resolve.
+
+The same Description is resolved again whenever the operator edits an argument, so nothing
+here is evaluated when a launch file is loaded, only in `perform`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shlex
+import shutil
+import subprocess
+import uuid
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from .errors import LaunchError, Origin, caller_origin
+
+SubValue = Any  # str | int | float | bool | Substitution | nested lists of those
+
+
+@dataclass
+class PerformContext:
+    """What substitutions may read while a plan is resolved."""
+
+    configurations: dict[str, str]
+    launch_file: str | None = None
+    environment: Mapping[str, str] = field(default_factory=lambda: os.environ)
+    event_locals: dict[str, Any] = field(default_factory=dict)
+
+
+class Substitution:
+    """A value known only once argument values are: performed to a string."""
+
+    origin: Origin | None = None
+
+    def perform(self, context: PerformContext) -> str:
+        raise NotImplementedError
+
+    def describe(self) -> str:
+        return type(self).__name__
+
+    def __repr__(self) -> str:
+        return self.describe()
+
+    # `+` and `/` exist on every substitution (not only SimpleSubstitution) because users
+    # chain sl.arg() results with plain launch substitutions and strings in any order.
+    def __add__(self, other: SubValue) -> SimpleSubstitution:
+        return SimpleSubstitution(self, other)
+
+    def __radd__(self, other: SubValue) -> SimpleSubstitution:
+        return SimpleSubstitution(other, self)
+
+    def __truediv__(self, other: SubValue) -> SimpleSubstitution:
+        if other is None:
+            return SimpleSubstitution(self)
+        return SimpleSubstitution(PathJoin([self, other]))
+
+    def __rtruediv__(self, other: SubValue) -> SimpleSubstitution:
+        if other is None:
+            return SimpleSubstitution(self)
+        return SimpleSubstitution(PathJoin([other, self]))
+
+
+def flatten(value: SubValue) -> list[Any]:
+    """Nested lists and tuples of parts into one flat list, dropping None."""
+    if isinstance(value, list | tuple):
+        out: list[Any] = []
+        for item in value:
+            out.extend(flatten(item))
+        return out
+    return [] if value is None else [value]
+
+
+def is_lazy(value: SubValue) -> bool:
+    return any(isinstance(part, Substitution) for part in flatten(value))
+
+
+def perform(value: SubValue, context: PerformContext) -> str:
+    """Any text-like value (str, number, substitution, list of them) as one string."""
+    return "".join(
+        part.perform(context) if isinstance(part, Substitution) else _plain_text(part)
+        for part in flatten(value)
+    )
+
+
+def perform_optional(value: SubValue, context: PerformContext) -> str | None:
+    return None if value is None else perform(value, context)
+
+
+def describe(value: SubValue) -> str:
+    return "".join(
+        part.describe() if isinstance(part, Substitution) else _plain_text(part)
+        for part in flatten(value)
+    )
+
+
+def _plain_text(value: Any) -> str:
+    return str(value)
+
+
+class TextSubstitution(Substitution):
+    def __init__(self, text: str = "") -> None:
+        self.text = str(text)
+
+    def perform(self, context: PerformContext) -> str:
+        return self.text
+
+    def describe(self) -> str:
+        return self.text
+
+
+class SimpleSubstitution(Substitution):
+    """simple_launch's concatenation of parts, with `+` and `/` against anything text-like."""
+
+    def __init__(self, *parts: SubValue) -> None:
+        self.parts: list[Any] = flatten(list(parts))
+
+    def perform(self, context: PerformContext) -> str:
+        return perform(self.parts, context)
+
+    def describe(self) -> str:
+        return describe(self.parts)
+
+    def has_elems(self) -> bool:
+        return bool(self.parts)
+
+    def substitutions(self) -> list[Any]:
+        return list(self.parts)
+
+    def __add__(self, other: SubValue) -> SimpleSubstitution:
+        return SimpleSubstitution(self.parts, other)
+
+    def __radd__(self, other: SubValue) -> SimpleSubstitution:
+        return SimpleSubstitution(other, self.parts)
+
+    def __iadd__(self, other: SubValue) -> SimpleSubstitution:
+        return self + other
+
+
+class LaunchConfiguration(Substitution):
+    """The value of a launch argument: `sl.arg(name)` and `$(var name)`."""
+
+    def __init__(self, variable_name: SubValue, default: SubValue = None) -> None:
+        self.variable_name = variable_name
+        self.default = default
+        self.origin = caller_origin()
+
+    def name(self, context: PerformContext | None = None) -> str:
+        if context is None:
+            return describe(self.variable_name)
+        return perform(self.variable_name, context)
+
+    def perform(self, context: PerformContext) -> str:
+        name = self.name(context)
+        if name in context.configurations:
+            return context.configurations[name]
+        if self.default is not None:
+            return perform(self.default, context)
+        raise LaunchError(
+            f"launch argument '{name}' is used but has no value",
+            self.origin,
+            hint=f"declare it with sl.declare_arg('{name}', default) or pass {name}:=value",
+        )
+
+    def describe(self) -> str:
+        return f"$(var {describe(self.variable_name)})"
+
+
+class EnvironmentVariable(Substitution):
+    def __init__(self, name: SubValue, *, default_value: SubValue = None) -> None:
+        self.name = name
+        self.default_value = default_value
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        name = perform(self.name, context)
+        if name in context.environment:
+            return context.environment[name]
+        if self.default_value is not None:
+            return perform(self.default_value, context)
+        raise LaunchError(
+            f"environment variable '{name}' is not set", self.origin,
+            hint=f"export {name}=... or give EnvironmentVariable a default_value",
+        )
+
+    def describe(self) -> str:
+        return f"$(env {describe(self.name)})"
+
+
+class PathJoin(Substitution):
+    """`/` between substitutions and `PathJoinSubstitution`."""
+
+    def __init__(self, parts: Iterable[SubValue]) -> None:
+        self.parts = list(parts)
+
+    def perform(self, context: PerformContext) -> str:
+        pieces = [perform(part, context) for part in self.parts]
+        return os.path.join(*pieces) if pieces else ""
+
+    def describe(self) -> str:
+        return "/".join(describe(part) for part in self.parts)
+
+
+PathJoinSubstitution = PathJoin
+
+
+_EVAL_NAMES = {"true": True, "false": False, "True": True, "False": False, "math": math}
+
+
+class PythonExpression(Substitution):
+    """`sl.py_eval` and launch's PythonExpression: parts performed, then evaluated.
+
+    `true`/`false` are accepted as Python booleans because launch arguments come from the
+    command line in ROS spelling (`robot1:=true`).
+    """
+
+    def __init__(self, expression: SubValue, python_modules: SubValue = None) -> None:
+        self.expression = expression
+        self.modules = flatten(python_modules) if python_modules is not None else []
+        self.origin = caller_origin()
+
+    def evaluate(self, context: PerformContext) -> Any:
+        text = perform(self.expression, context)
+        names: dict[str, Any] = dict(_EVAL_NAMES)
+        for module in self.modules:
+            name = perform(module, context)
+            names[name] = __import__(name)
+        try:
+            return eval(text, names)
+        except Exception as exc:  # any user expression error must name the expression
+            raise LaunchError(
+                f"cannot evaluate Python expression {text!r}: {type(exc).__name__}: {exc}",
+                self.origin,
+                hint="py_eval joins its parts as text: check spaces around and/or/not "
+                "and quotes around string values",
+            ) from None
+
+    def perform(self, context: PerformContext) -> str:
+        return str(self.evaluate(context))
+
+    def describe(self) -> str:
+        return f"$(eval {describe(self.expression)!r})"
+
+
+class Command(Substitution):
+    """Output of a command run at resolve time (e.g. `xacro robot.xacro`)."""
+
+    def __init__(self, command: SubValue, on_stderr: SubValue = "fail") -> None:
+        self.command = command
+        self.on_stderr = on_stderr
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        text = perform(self.command, context)
+        argv = shlex.split(text)
+        if argv and argv[0] == "xacro" and shutil.which("xacro") is None:
+            from .xacro_run import run_xacro_argv
+
+            return run_xacro_argv(argv[1:], self.origin)
+        try:
+            done = subprocess.run(argv, capture_output=True, text=True, timeout=60)
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise LaunchError(f"command {text!r} could not run: {exc}", self.origin) from None
+        mode = perform(self.on_stderr, context)
+        if done.returncode != 0 or (done.stderr and mode == "fail"):
+            raise LaunchError(
+                f"command {text!r} failed (exit {done.returncode}): {done.stderr.strip()}",
+                self.origin,
+            )
+        return done.stdout
+
+    def describe(self) -> str:
+        return f"$(command {describe(self.command)!r})"
+
+
+class FindExecutable(Substitution):
+    def __init__(self, *, name: SubValue) -> None:
+        self.name = name
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        name = perform(self.name, context)
+        found = shutil.which(name)
+        if found is None:
+            raise LaunchError(f"executable '{name}' not found on PATH", self.origin)
+        return found
+
+    def describe(self) -> str:
+        return f"$(find-exec {describe(self.name)})"
+
+
+class FindPackageShare(Substitution):
+    def __init__(self, package: SubValue) -> None:
+        self.package = package
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        from .packages import package_share
+
+        return str(package_share(perform(self.package, context), self.origin))
+
+    def describe(self) -> str:
+        return f"$(find-pkg-share {describe(self.package)})"
+
+
+class FindPackagePrefix(Substitution):
+    def __init__(self, package: SubValue) -> None:
+        self.package = package
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        from .packages import package_prefix
+
+        return str(package_prefix(perform(self.package, context), self.origin))
+
+    def describe(self) -> str:
+        return f"$(find-pkg-prefix {describe(self.package)})"
+
+
+class ThisLaunchFile(Substitution):
+    def perform(self, context: PerformContext) -> str:
+        return context.launch_file or ""
+
+    def describe(self) -> str:
+        return "$(filename)"
+
+
+class ThisLaunchFileDir(Substitution):
+    def perform(self, context: PerformContext) -> str:
+        return os.path.dirname(context.launch_file or "")
+
+    def describe(self) -> str:
+        return "$(dirname)"
+
+
+class LocalSubstitution(Substitution):
+    """A value of the event being handled (e.g. `event.reason`), known only at run time."""
+
+    def __init__(self, expression: str, description: str | None = None) -> None:
+        self.expression = expression
+        self.description = description
+
+    def perform(self, context: PerformContext) -> str:
+        value: Any = context.event_locals
+        for key in self.expression.split("."):
+            if isinstance(value, dict):
+                value = value.get(key, "")
+            else:
+                value = getattr(value, key, "")
+        return str(value) if value != {} else f"<{self.expression}>"
+
+    def describe(self) -> str:
+        return f"<{self.expression}>"
+
+
+class AnonName(Substitution):
+    """A name made unique per run, stable within one resolve of the same plan."""
+
+    _names: dict[str, str] = {}
+
+    def __init__(self, name: SubValue) -> None:
+        self.name = name
+
+    def perform(self, context: PerformContext) -> str:
+        base = perform(self.name, context)
+        if base not in self._names:
+            self._names[base] = f"{base}_{uuid.uuid4().hex[:8]}"
+        return self._names[base]
+
+    def describe(self) -> str:
+        return f"$(anon {describe(self.name)})"
+
+
+def text_to_bool(text: str) -> bool | None:
+    """ROS launch's reading of a condition string; None when it is not a boolean."""
+    lowered = text.strip().lower()
+    if lowered in ("true", "1"):
+        return True
+    if lowered in ("false", "0"):
+        return False
+    return None
+
+
+class _BoolSubstitution(Substitution):
+    def __init__(self, *operands: SubValue) -> None:
+        self.operands = operands
+        self.origin = caller_origin()
+
+    def _bool(self, value: SubValue, context: PerformContext) -> bool:
+        text = perform(value, context)
+        result = text_to_bool(text)
+        if result is None:
+            raise LaunchError(
+                f"{describe(value)} = {text!r} is not a boolean", self.origin,
+                hint="use true or false",
+            )
+        return result
+
+
+class NotSubstitution(_BoolSubstitution):
+    def perform(self, context: PerformContext) -> str:
+        return str(not self._bool(self.operands[0], context)).lower()
+
+
+class AndSubstitution(_BoolSubstitution):
+    def perform(self, context: PerformContext) -> str:
+        return str(all(self._bool(v, context) for v in self.operands)).lower()
+
+
+class OrSubstitution(_BoolSubstitution):
+    def perform(self, context: PerformContext) -> str:
+        return str(any(self._bool(v, context) for v in self.operands)).lower()
+
+
+class EqualsSubstitution(Substitution):
+    def __init__(self, left: SubValue, right: SubValue) -> None:
+        self.left, self.right = left, right
+
+    def perform(self, context: PerformContext) -> str:
+        return str(perform(self.left, context) == perform(self.right, context)).lower()
+
+
+class NotEqualsSubstitution(EqualsSubstitution):
+    def perform(self, context: PerformContext) -> str:
+        return str(perform(self.left, context) != perform(self.right, context)).lower()
+
+
+class IfElseSubstitution(Substitution):
+    def __init__(self, condition: SubValue, if_value: SubValue = "", else_value: SubValue = "")\
+            -> None:
+        self.condition, self.if_value, self.else_value = condition, if_value, else_value
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        text = perform(self.condition, context)
+        value = text_to_bool(text)
+        if value is None:
+            raise LaunchError(f"IfElseSubstitution condition {text!r} is not a boolean",
+                              self.origin)
+        return perform(self.if_value if value else self.else_value, context)

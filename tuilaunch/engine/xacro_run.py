@@ -1,0 +1,56 @@
+"""xacro, run in-process at resolve time for `robot_state_publisher` descriptions."""
+
+from __future__ import annotations
+
+import io
+from contextlib import redirect_stderr
+from typing import Any
+
+from .errors import LaunchError, Origin, caller_origin
+from .substitutions import PerformContext, Substitution, SubValue, describe, perform
+
+
+def run_xacro(path: str, mappings: dict[str, str], origin: Origin | None) -> str:
+    try:
+        import xacro
+    except ImportError:
+        raise LaunchError("the xacro package is not installed", origin,
+                          hint="pip install xacro") from None
+    errors = io.StringIO()
+    try:
+        with redirect_stderr(errors):
+            document = xacro.process_file(path, mappings=mappings)
+    except Exception as exc:  # xacro raises many types; all are the user's file at fault
+        detail = errors.getvalue().strip()
+        raise LaunchError(
+            f"xacro failed on {path}: {exc}" + (f" ({detail})" if detail else ""), origin
+        ) from None
+    return str(document.toprettyxml(indent="  "))
+
+
+def run_xacro_argv(argv: list[str], origin: Origin | None) -> str:
+    """`xacro FILE name:=value ...` as a Command substitution would run it."""
+    files = [a for a in argv if ":=" not in a and not a.startswith("-")]
+    if not files:
+        raise LaunchError("xacro command without a file", origin)
+    mappings = dict(a.split(":=", 1) for a in argv if ":=" in a)
+    return run_xacro(files[0], mappings, origin)
+
+
+class Xacro(Substitution):
+    """The xacro output of a description file: always a string parameter, never YAML-read."""
+
+    string_typed = True
+
+    def __init__(self, path: SubValue, arguments: list[tuple[Any, Any]]) -> None:
+        self.path = path
+        self.arguments = arguments
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        mappings = {perform(k, context): perform(v, context) for k, v in self.arguments}
+        return run_xacro(perform(self.path, context), mappings, self.origin)
+
+    def describe(self) -> str:
+        args = " ".join(f"{describe(k)}:={describe(v)}" for k, v in self.arguments)
+        return f"$(xacro {describe(self.path)}{' ' + args if args else ''})"
