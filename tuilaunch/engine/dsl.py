@@ -176,7 +176,7 @@ class SimpleLauncher:
         opaque = DslOpaque(self, opaque_function)
 
         def generate_launch_description() -> LaunchDescription:
-            root = Group(body + [opaque], namespace=self.namespace or None, scoped=False,
+            root = Group([*body, opaque], namespace=self.namespace or None, scoped=False,
                          label="root")
             return LaunchDescription([*decls, root])
 
@@ -322,7 +322,7 @@ class SimpleLauncher:
 
     def log_info(self, msg: SubValue) -> LogInfo:
         entity = LogInfo(msg=msg)
-        return self.add_action(entity)  # type: ignore[no-any-return]
+        return self.add_action(entity)
 
     def include(self, package: SubValue = None, launch_file: SubValue = None,
                 launch_dir: SubValue = None, launch_arguments: Any = None) -> Any:
@@ -346,7 +346,7 @@ class SimpleLauncher:
         if request is not None and not isinstance(request, dict):
             raise DslError(f"call_service request must be a dict, got {request!r}",
                            caller_origin())
-        return self.add_action(CallService(server, request, verbosity))  # type: ignore
+        return self.add_action(CallService(server, request, verbosity))
 
     service = call_service
 
@@ -355,7 +355,7 @@ class SimpleLauncher:
         if parameters is not None and not isinstance(parameters, dict):
             raise DslError(f"set_parameters takes a dict, got {parameters!r}", caller_origin())
         entity = SetParameters(node_name, parameters or {}, verbosity)
-        return self.add_action(entity)  # type: ignore[no-any-return]
+        return self.add_action(entity)
 
     def rviz(self, config_file: SubValue = None, warnings: bool = False) -> Any:
         args: list[Any] = [] if config_file is None else ["-d", config_file]

@@ -295,7 +295,7 @@ class Group(Entity):
         return self.label or "group"
 
 
-def GroupAction(  # noqa: N802 - launch API name
+def GroupAction(
     actions: Iterable[Any],
     *,
     condition: Condition | None = None,
@@ -394,7 +394,7 @@ def _pairs(value: Any, origin: Origin | None) -> list[tuple[Any, Any]]:
         return []
     if isinstance(value, dict):
         return list(value.items())
-    pairs = []
+    pairs: list[tuple[Any, Any]] = []
     for item in value:
         if isinstance(item, dict):
             pairs.extend(item.items())
@@ -451,7 +451,7 @@ class Shutdown(Entity):
         self.reason = reason
 
 
-def EmitEvent(*, event: Any, condition: Condition | None = None, **_: Any) -> Entity:  # noqa: N802
+def EmitEvent(*, event: Any, condition: Condition | None = None, **_: Any) -> Entity:
     if isinstance(event, Shutdown):
         event.condition = condition
         return event

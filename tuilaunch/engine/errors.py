@@ -6,6 +6,7 @@ fault, and what would fix it. Tracebacks are for `--debug` only.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import traceback
@@ -27,8 +28,13 @@ class Origin:
         return f"{self.file}:{self.line}"
 
 
+_SKIPPED_FILES = {os.path.abspath(contextlib.__file__)}
+
+
 def _is_ours(filename: str) -> bool:
-    return os.path.abspath(filename).startswith(_PACKAGE_DIR + os.sep)
+    """Frames of tuilaunch itself, or of the `with` machinery between the user and us."""
+    path = os.path.abspath(filename)
+    return path.startswith(_PACKAGE_DIR + os.sep) or path in _SKIPPED_FILES
 
 
 def caller_origin() -> Origin | None:

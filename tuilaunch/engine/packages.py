@@ -85,12 +85,10 @@ def find_executable(package: str, executable: str, origin: Origin | None = None)
     lib = package_prefix(package, origin) / "lib" / package
     available = sorted(p.name for p in lib.iterdir() if os.access(p, os.X_OK)) if lib.is_dir()\
         else []
-    raise PackageError(
-        f"executable '{executable}' not found in package '{package}'",
-        origin,
-        hint=f"available: {', '.join(available)}" if available
-        else f"package '{package}' installs no executables in {lib}",
-    )
+    choices = f"available: {', '.join(available)}" if available \
+        else f"the package installs no executables in {lib}"
+    raise PackageError(f"executable '{executable}' not found in package '{package}' ({choices})",
+                       origin)
 
 
 def find_in_share(package: str, file_name: str, origin: Origin | None = None) -> Path:

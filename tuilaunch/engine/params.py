@@ -69,7 +69,7 @@ def typed_value(value: Any, context: PerformContext, where: str, origin: Origin 
         items = [typed_value(v, context, where, origin) for v in value]
         kinds = {type(v) for v in items}
         if kinds <= {int, float} and float in kinds:
-            items = [float(v) for v in items]
+            items = [float(v) for v in items if isinstance(v, int | float)]
         elif len(kinds) > 1:
             raise LaunchError(
                 f"parameter '{where}' mixes types in a list: {items!r}", origin,

@@ -188,8 +188,8 @@ class Plan:
 
     def problems(self) -> list[str]:
         """Enabled processes that cannot start: each names the process and why."""
-        return [f"{p.id} ({p.label}): {p.error}" for p in self.processes
-                if p.enabled and p.error]
+        return [f"{p.origin or self.file}: {p.id} ({p.label}): {p.error}"
+                for p in self.processes if p.enabled and p.error]
 
     def to_json(self) -> dict[str, Any]:
         return {

@@ -418,7 +418,8 @@ class Resolver:
         executable = perform(entity.executable, ctx)
         name = perform_optional(entity.name, ctx) or None
         namespace = join_namespace(scope.namespace, perform_optional(entity.namespace, ctx))
-        proc_id = self._next_id(os.path.basename(executable))
+        # the node's name when it has one: `[monitor-5]` says more than `[listener-5]`
+        proc_id = self._next_id(name or os.path.basename(executable))
         error = None
         exe_path = executable
         if package is not None:

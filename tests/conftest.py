@@ -1,0 +1,53 @@
+"""Shared helpers: load and resolve launch files written by a test, run the CLI."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tuilaunch.engine import Plan, load_file, resolve
+from tuilaunch.engine.packages import ensure_environment, known_packages
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = ROOT / "examples"
+
+ensure_environment()
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if "tuilaunch_demos" not in known_packages():
+        raise pytest.UsageError(
+            "the demo package is not installed: pip install ./examples/tuilaunch_demos")
+
+
+@pytest.fixture
+def write(tmp_path: Path):
+    """Writes a launch file (dedented) into the test's folder and returns its path."""
+
+    def _write(text: str, name: str = "test_launch.py") -> Path:
+        path = tmp_path / name
+        path.write_text(textwrap.dedent(text))
+        return path
+
+    return _write
+
+
+def plan_of(path: Path | str, **arguments: Any) -> Plan:
+    args = {k: str(v) for k, v in arguments.items()}
+    return resolve(load_file(str(path)), args)
+
+
+def enabled_names(plan: Plan) -> set[str]:
+    return {p.full_name or p.label for p in plan.processes if p.enabled}
+
+
+def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 60) -> \
+        subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
+                          text=True, timeout=timeout, env={**os.environ, **(env or {})})

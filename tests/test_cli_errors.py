@@ -1,0 +1,142 @@
+"""The command line: --show-args, --print, --json, PACKAGE FILE, and every bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from .conftest import EXAMPLES, run_cli
+
+HEADER = "from simple_launch import SimpleLauncher\n"
+BRINGUP = str(EXAMPLES / "bringup.py")
+
+
+def test_show_args_lists_every_argument_with_default_description_and_choices():
+    result = run_cli(BRINGUP, "--show-args")
+    assert result.returncode == 0, result.stderr
+    out = result.stdout
+    for name in ("robot", "rate", "listener", "services", "mode", "topic"):
+        assert f"'{name}':" in out
+    assert "robot name, used as the namespace of its nodes" in out
+    assert "(default: 'r1', type: str)" in out
+    assert "Valid choices are: ['idle', 'patrol', 'dock']" in out
+    assert "monitor.launch.py" in out  # an included file's argument says where it comes from
+
+
+def test_print_tree_shows_groups_triggers_and_skipped_branches_with_reasons():
+    result = run_cli(BRINGUP, "--print", "robot:=r2", "listener:=false")
+    assert result.returncode == 0, result.stderr
+    out = result.stdout
+    assert "4 of 5 processes will run" in out
+    assert "ns /r2" in out and "/r2/<talker>" in out
+    assert "1 s after talker-1 starts" in out
+    assert "(skipped) if $(var listener)  = 'false'" in out
+    assert "listener-2 /r2/<listener>: if $(var listener) is 'false'" in out
+
+
+def test_print_json_has_the_documented_fields():
+    result = run_cli(BRINGUP, "--print", "--json", "robot:=r2", "mode:=dock")
+    assert result.returncode == 0, result.stderr
+    plan = json.loads(result.stdout)
+    arg = next(a for a in plan["arguments"] if a["name"] == "mode")
+    assert {k: arg[k] for k in ("default", "value", "choices")} == {
+        "default": "patrol", "value": "dock", "choices": ["idle", "patrol", "dock"]}
+    talker = plan["processes"][0]
+    for key in ("id", "name", "namespace", "package", "executable", "cmd", "parameters",
+                "parameter_files", "remappings", "enabled", "trigger"):
+        assert key in talker
+    assert talker["namespace"] == "/r2" and talker["parameters"]["message"] == "r2 says hi"
+    configurable = next(p for p in plan["processes"] if p["executable"] == "configurable")
+    assert configurable["trigger"] == {"on": "start", "target": talker["id"], "delay": 1.0}
+    kinds = {(a["kind"], a["target"], json.dumps(a["data"])) for a in plan["actions"]}
+    assert ("set_parameters", "/r2/control/configurable", '{"mode": "dock"}') in kinds
+    assert ("call_service", "/r2/reset", "{}") in kinds
+
+
+def test_package_and_file_like_ros2_launch():
+    result = run_cli("tuilaunch_demos", "monitor.launch.py", "--print", "--json", "topic:=/t")
+    assert result.returncode == 0, result.stderr
+    (monitor,) = json.loads(result.stdout)["processes"]
+    assert monitor["remappings"] == [["chatter", "/t"]]
+
+
+def check_error(result, *fragments: str) -> None:
+    assert result.returncode != 0
+    assert "Traceback" not in result.stderr, result.stderr
+    for fragment in fragments:
+        assert fragment in result.stderr, result.stderr
+
+
+def test_syntax_error_names_file_and_line(write):
+    path = write(HEADER + "def generate_launch_description(:\n    pass\n")
+    check_error(run_cli(str(path), "--print"), f"{path}:2", "syntax error")
+
+
+def test_exception_in_launch_file_names_file_and_line(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    sl = SimpleLauncher()
+    x = {}['missing']
+    return sl.launch_description()
+""")
+    check_error(run_cli(str(path), "--print"), f"{path}:5", "KeyError")
+
+
+def test_debug_shows_the_traceback(write):
+    path = write(HEADER + "def generate_launch_description():\n    raise RuntimeError('boom')\n")
+    result = run_cli(str(path), "--print", "--debug")
+    assert result.returncode != 0 and "Traceback" in result.stderr and "boom" in result.stderr
+
+
+def test_wrong_dsl_arguments(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.node('tuilaunch_demos', 'talker', paramters={'a': 1})
+    return sl.launch_description()
+""")
+    check_error(run_cli(str(path), "--print"), f"{path}:5", "unknown argument(s): paramters")
+
+
+def test_unknown_package_and_executable(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.node('no_such_pkg', 'x')
+    sl.node('tuilaunch_demos', 'no_such_exe')
+    sl.node('tuilaunch_demos', 'talker')
+    return sl.launch_description()
+""")
+    result = run_cli(str(path), "--print", "--json")
+    check_error(result, "package 'no_such_pkg' not found in the ament index",
+                "executable 'no_such_exe' not found in package 'tuilaunch_demos'",
+                "available: configurable, listener, service_server, talker")
+    plan = json.loads(result.stdout)  # the plan is still printed whole
+    assert [p["error"] is None for p in plan["processes"]] == [False, False, True]
+
+
+def test_unknown_launch_file_and_package_on_the_command_line(tmp_path):
+    check_error(run_cli(str(tmp_path / "nope.py"), "--print"), "nope.py does not exist")
+    check_error(run_cli("no_such_pkg", "x.launch.py", "--print"),
+                "package 'no_such_pkg' not found")
+    check_error(run_cli("tuilaunch_demos", "x.launch.py", "--print"),
+                "launch file 'x.launch.py' not found in package 'tuilaunch_demos'")
+
+
+def test_value_outside_choices_and_non_boolean_condition():
+    check_error(run_cli(BRINGUP, "--print", "mode:=fly"),
+                "argument 'mode' = 'fly' is not one of its choices: idle, patrol, dock",
+                "bringup.py:")
+    check_error(run_cli(BRINGUP, "--print", "listener:=maybe"),
+                "argument 'listener' = 'maybe'", "pass listener:=true or listener:=false")
+
+
+def test_missing_generate_launch_description(write):
+    path = write("x = 1\n")
+    check_error(run_cli(str(path), "--print"), "defines no generate_launch_description()")
+
+
+@pytest.mark.parametrize("text", ["no_name_here", ":=value"])
+def test_malformed_command_line_argument(text):
+    check_error(run_cli(BRINGUP, text, "--print"))
