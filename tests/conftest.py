@@ -19,6 +19,11 @@ EXAMPLES = ROOT / "examples"
 
 ensure_environment()
 
+# Every test run gets its own DDS domain, and discovery stays on this machine, so parallel
+# runs and other users' nodes never see each other. Set before any ROS process starts.
+os.environ.setdefault("ROS_DOMAIN_ID", str(100 + os.getpid() % 100))
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+
 
 def pytest_configure(config: pytest.Config) -> None:
     if "tuilaunch_demos" not in known_packages():

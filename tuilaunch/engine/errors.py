@@ -25,7 +25,16 @@ class Origin:
     line: int
 
     def __str__(self) -> str:
-        return f"{self.file}:{self.line}"
+        return f"{display_path(self.file)}:{self.line}"
+
+
+def display_path(path: str) -> str:
+    """Relative to the working directory when below it: what the user typed, mostly."""
+    try:
+        relative = os.path.relpath(path)
+    except ValueError:
+        return path
+    return path if relative.startswith("..") else relative
 
 
 _SKIPPED_FILES = {os.path.abspath(contextlib.__file__)}
