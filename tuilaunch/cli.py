@@ -27,6 +27,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("-p", "--print", dest="print_plan", action="store_true",
                         help="print what would run with these arguments and exit")
     parser.add_argument("--json", action="store_true", help="with --print: one JSON object")
+    parser.add_argument("--headless", action="store_true",
+                        help="run without the TUI, printing each line as [process-id] line")
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     return parser
 
@@ -99,9 +101,11 @@ def main(argv: list[str] | None = None) -> int:
             print("tuilaunch: the processes above cannot start: install or source what they "
                   "need, or turn off the arguments that enable them", file=sys.stderr)
         return 3 if problems else 0
-    print("tuilaunch: running a plan comes with the supervisor; use --print or --show-args",
-          file=sys.stderr)
-    return 1
+    for warning in plan.warnings:
+        print(f"tuilaunch: warning: {warning}", file=sys.stderr)
+    from .headless import run_headless
+
+    return run_headless(plan)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,159 @@
+"""Running plans headless with real processes and real rclpy nodes on an isolated domain."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from tuilaunch.engine.output import LineSplitter
+
+from .conftest import EXAMPLES
+
+HEADER = "from simple_launch import SimpleLauncher\n"
+
+STUBBORN = """#!/usr/bin/env python3
+import signal, sys, time
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+signal.signal(signal.SIGTERM, signal.SIG_IGN)
+print('stubborn ready', flush=True)
+time.sleep(600)
+"""
+
+
+def start_headless(*args: str, log_dir: Path) -> subprocess.Popen[str]:
+    env = {**os.environ, "ROS_LOG_DIR": str(log_dir)}
+    return subprocess.Popen([sys.executable, "-m", "tuilaunch", *args, "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=env, start_new_session=True)
+
+
+def read_until(proc: subprocess.Popen[str], *needles: str, limit: float = 60) -> str:
+    """Output lines until every needle has been seen (or the limit, a hang guard only)."""
+    seen = ""
+    deadline = time.monotonic() + limit
+    assert proc.stdout is not None
+    while not all(n in seen for n in needles):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"never saw {needles}:\n{seen}")
+        line = proc.stdout.readline()
+        if not line:
+            raise AssertionError(f"output ended before {needles}:\n{seen}")
+        seen += line
+    return seen
+
+
+def pids_of(log_dir: Path) -> list[int]:
+    text = (next(log_dir.glob("*-tuilaunch-*")) / "launch.log").read_text()
+    return [int(word[4:]) for line in text.splitlines() if " started " in line
+            for word in line.split() if word.startswith("pid=")]
+
+
+def alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as handle:
+            return handle.read().split()[2] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def wait_gone(pids: list[int], limit: float = 30) -> list[int]:
+    deadline = time.monotonic() + limit
+    while time.monotonic() < deadline and any(alive(p) for p in pids):
+        time.sleep(0.1)
+    return [p for p in pids if alive(p)]
+
+
+@pytest.fixture
+def kill_leftovers():
+    started: list[subprocess.Popen[str]] = []
+    yield started
+    for proc in started:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+def test_bringup_runs_real_nodes_with_their_namespaces_and_parameters(tmp_path, kill_leftovers):
+    proc = start_headless(str(EXAMPLES / "bringup.py"), "robot:=r7", "rate:=20",
+                          "services:=false", log_dir=tmp_path)
+    kill_leftovers.append(proc)
+    seen = read_until(proc, '[talker-1] STARTUP {"node": "/r7/talker"',
+                      '[listener-2] [INFO]', 'I heard: "r7 says hi',
+                      '[monitor-5] STARTUP {"node": "/r7/monitor"',
+                      '"chatter": "/r7/chatter"', "[configurable-3] STARTUP")
+    assert '"rate": 20' in seen and '"message": "r7 says hi"' in seen
+    # the event-triggered group starts after the talker it waits for
+    assert seen.index("[INFO] [talker-1]: process started") < seen.index(
+        "[INFO] [configurable-3]: process started")
+    assert "service_server" not in seen
+    os.killpg(proc.pid, signal.SIGINT)
+    rest = proc.communicate(timeout=60)[0]
+    assert "shutdown (received SIGINT)" in rest
+    pids = pids_of(tmp_path)
+    assert len(pids) == 4 and wait_gone(pids) == []
+    logs = next(tmp_path.glob("*-tuilaunch-*"))
+    assert 'I heard: "r7 says hi' in (logs / "listener-2.log").read_text()
+
+
+@pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGHUP, signal.SIGKILL])
+def test_no_process_outlives_tuilaunch(write, tmp_path, kill_leftovers, how):
+    script = tmp_path / "stubborn"
+    script.write_text(STUBBORN)
+    script.chmod(0o755)
+    path = write(HEADER + f"""
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(cmd=['{script}'], name='stubborn'))
+    sl.node('tuilaunch_demos', 'no_such_exe')
+    sl.node('tuilaunch_demos', 'listener')
+    return sl.launch_description()
+""")
+    logs = tmp_path / "logs"
+    proc = start_headless(str(path), log_dir=logs)
+    kill_leftovers.append(proc)
+    seen = read_until(proc, "[stubborn-1] stubborn ready", "[listener-3] STARTUP",
+                      "[ERROR] [no_such_exe-2]: failed to start: executable 'no_such_exe'")
+    assert "available: configurable" in seen
+    pids = pids_of(logs)
+    os.kill(proc.pid, how)
+    proc.wait(timeout=60)
+    # the stubborn process ignores SIGINT and SIGTERM: only SIGKILL (or pdeathsig) ends it
+    assert wait_gone(pids) == []
+
+
+def test_respawn_restarts_a_crashing_process_a_bounded_number_of_times(write, tmp_path,
+                                                                       kill_leftovers):
+    path = write(HEADER + """
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo crash; exit 3'], name='crasher',
+                                 respawn=True, respawn_delay=0.1, respawn_max_retries=2))
+    sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo done; exit 0'], name='clean',
+                                 respawn=True))
+    return sl.launch_description()
+""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    kill_leftovers.append(proc)
+    out = proc.communicate(timeout=60)[0]
+    assert out.count("[crasher-1] crash") == 3  # first run and two respawns
+    assert out.count("respawning") == 2
+    assert out.count("[clean-2] done") == 1  # a clean exit is not respawned
+    assert proc.returncode == 1  # the crash is reported in the exit status
+
+
+def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
+    splitter = LineSplitter()
+    assert splitter.feed(b"hel") == []
+    assert splitter.feed(b"lo\nwor") == ["hello"]
+    assert splitter.feed(b"ld\r\n10%\r50%\r100%\n\xff\xfeok\n") == [
+        "world", "100%", "\ufffd\ufffdok"]
+    assert splitter.feed(b"x" * 200_000) != []  # a huge line is cut, not held forever
+    assert splitter.flush() and splitter.flush() == []
