@@ -56,8 +56,10 @@ async def _run(plan: Plan, log_dir: Path) -> int:
     supervisor.subscribe(Printer(sys.stdout))
     loop = asyncio.get_running_loop()
 
+    stopping: set[asyncio.Task[None]] = set()  # held so the task is not collected mid-run
+
     def on_signal(sig: signal.Signals) -> None:
-        asyncio.ensure_future(supervisor.shutdown(f"received {sig.name}"))
+        stopping.add(asyncio.ensure_future(supervisor.shutdown(f"received {sig.name}")))
 
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         loop.add_signal_handler(sig, on_signal, sig)
