@@ -10,7 +10,7 @@ import traceback
 
 from .engine.errors import LaunchError, PackageError
 from .engine.loader import load_file
-from .engine.packages import ensure_environment, package_share
+from .engine.packages import ensure_environment, find_in_share, package_share
 from .engine.resolve import resolve
 
 
@@ -57,14 +57,12 @@ def find_launch_file(positional: list[str]) -> str:
         return path
     if len(positional) == 2:
         package, name = positional
-        share = package_share(package)
-        for candidate in (share / name, share / "launch" / name):
-            if candidate.is_file():
-                return str(candidate)
-        for root, _dirs, files in os.walk(share):
-            if name in files:
-                return os.path.join(root, name)
-        raise PackageError(f"launch file '{name}' not found in package '{package}' ({share})")
+        share = package_share(package)  # an unknown package reports itself
+        try:
+            return str(find_in_share(package, name))
+        except PackageError:
+            raise PackageError(
+                f"launch file '{name}' not found in package '{package}' ({share})") from None
     raise LaunchError(f"expected FILE or PACKAGE FILE, got {' '.join(positional)!r}",
                       hint="launch arguments are written name:=value")
 

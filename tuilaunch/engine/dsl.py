@@ -27,6 +27,7 @@ from .entities import (
     LogInfo,
     Node,
     SetParameters,
+    pair_list,
 )
 from .errors import DslError, caller_origin
 from .events import When
@@ -453,26 +454,6 @@ def parameter_list(value: Any) -> list[Any]:
             return [dict(value)]
         return list(value)
     return [value]
-
-
-def pair_list(value: Any, what: str) -> list[tuple[Any, Any]]:
-    """Remappings, include and xacro arguments: a dict or (key, value) pairs, as pairs."""
-    if value is None:
-        return []
-    if isinstance(value, dict):
-        return list(value.items())
-    if isinstance(value, list | tuple):
-        out: list[tuple[Any, Any]] = []
-        for item in value:
-            if isinstance(item, dict):
-                out.extend(item.items())
-            elif isinstance(item, list | tuple) and len(item) == 2:
-                out.append((item[0], item[1]))
-            else:
-                raise DslError(f"{what} must be a dict or (key, value) pairs, got {item!r}",
-                               caller_origin())
-        return out
-    raise DslError(f"{what} must be a dict or (key, value) pairs, got {value!r}", caller_origin())
 
 
 __all__ = ["SimpleLauncher", "flatten"]

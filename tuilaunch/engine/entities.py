@@ -383,26 +383,31 @@ class IncludeLaunchDescription(Entity):
             self.location: SubValue = launch_description_source.location
         else:
             self.location = launch_description_source
-        self.launch_arguments: list[tuple[Any, Any]] = _pairs(launch_arguments, self.origin)
+        self.launch_arguments = pair_list(launch_arguments, "launch_arguments", self.origin)
 
     def describe(self) -> str:
         return f"include {describe(self.location)}"
 
 
-def _pairs(value: Any, origin: Origin | None) -> list[tuple[Any, Any]]:
+def pair_list(value: Any, what: str, origin: Origin | None = None) -> list[tuple[Any, Any]]:
+    """Remappings, launch and xacro arguments: a dict or (key, value) pairs, as pairs."""
     if value is None:
         return []
     if isinstance(value, dict):
         return list(value.items())
     pairs: list[tuple[Any, Any]] = []
-    for item in value:
+    try:
+        items = list(value)
+    except TypeError:
+        items = [value]
+    for item in items:
         if isinstance(item, dict):
             pairs.extend(item.items())
         elif isinstance(item, list | tuple) and len(item) == 2:
             pairs.append((item[0], item[1]))
         else:
-            raise DslError(f"launch_arguments must be a dict or (name, value) pairs, got {item!r}",
-                           origin)
+            raise DslError(f"{what} must be a dict or (key, value) pairs, got {item!r}",
+                           origin or caller_origin())
     return pairs
 
 

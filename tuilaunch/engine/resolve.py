@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import shlex
+import shutil
 import sys
 import tempfile
 from collections.abc import Mapping
@@ -43,12 +44,13 @@ from .entities import (
     TimerAction,
     UnsetEnvironmentVariable,
     entity_list,
+    pair_list,
 )
 from .errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
 from .events import When
 from .loader import LoadedFile, compat_modules, known_launch_files, load_file
 from .packages import find_executable
-from .params import ParamValue, flatten_parameters, typed_value, yaml_typed
+from .params import ParamValue, flatten_parameters, typed_value
 from .plan import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .substitutions import PerformContext, describe, perform, perform_optional, text_to_bool
 
@@ -407,7 +409,7 @@ class Resolver:
         name = perform_optional(entity.name, ctx)
         base = name or os.path.basename(cmd[0].split()[0])
         error = None
-        if not entity.shell and "/" not in cmd[0] and _which(cmd[0]) is None:
+        if not entity.shell and "/" not in cmd[0] and shutil.which(cmd[0]) is None:
             error = f"command '{cmd[0]}' not found on PATH"
         return ProcessPlan(self._next_id(base), "process", name, scope.namespace, None, cmd[0],
                            prefix + cmd, {}, [], [], [], error=error, **common)
@@ -427,7 +429,7 @@ class Resolver:
                 exe_path = str(find_executable(package, executable, entity.origin))
             except PackageError as exc:
                 error = exc.message
-        elif _which(executable) is None:
+        elif shutil.which(executable) is None:
             error = f"executable '{executable}' not found on PATH"
         merged: dict[str, ParamValue] = {}
         for key, value in scope.global_parameters:
@@ -452,8 +454,8 @@ class Resolver:
                 error = f"parameter file {path} does not exist"
         if pending:
             generated.append(self._params_file(proc_id, len(generated), pending, params_args))
-        remappings = [[perform(a, ctx), perform(b, ctx)]
-                      for a, b in [*scope.remaps, *_pairs(entity.remappings)]]
+        own_remaps = pair_list(entity.remappings, "remappings", entity.origin)
+        remappings = [[perform(a, ctx), perform(b, ctx)] for a, b in [*scope.remaps, *own_remaps]]
         arguments = [perform(a, ctx) for a in _items(entity.arguments)]
         ros_arguments = [perform(a, ctx) for a in _items(entity.ros_arguments)]
         ros_args = list(ros_arguments)
@@ -492,7 +494,8 @@ class Resolver:
             "namespace": join_namespace(namespace, perform_optional(component.namespace, ctx)),
             "parameters": params,
             "remappings": [[perform(a, ctx), perform(b, ctx)]
-                           for a, b in _pairs(component.remappings)],
+                           for a, b in pair_list(component.remappings, "remappings",
+                                                       component.origin)],
         }
 
     # --- actions ---------------------------------------------------------------------------
@@ -567,20 +570,6 @@ def _items(value: Any) -> list[Any]:
     return [value]
 
 
-def _pairs(value: Any) -> list[tuple[Any, Any]]:
-    if value is None:
-        return []
-    if isinstance(value, dict):
-        return list(value.items())
-    return [(a, b) for a, b in value]
-
-
-def _which(command: str) -> str | None:
-    import shutil
-
-    return shutil.which(command)
-
-
 def _float_or_none(value: Any, ctx: PerformContext) -> float | None:
     return None if value is None else float(perform(value, ctx))
 
@@ -622,4 +611,4 @@ def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
     return resolver.resolve(loaded)
 
 
-__all__ = ["Resolver", "join_namespace", "resolve", "yaml_typed"]
+__all__ = ["Resolver", "join_namespace", "resolve"]
