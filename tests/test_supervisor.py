@@ -79,6 +79,52 @@ def kill_leftovers():
             proc.wait()
 
 
+def test_bringup_service_call_and_parameter_change_take_effect(tmp_path, kill_leftovers):
+    proc = start_headless(str(EXAMPLES / "bringup.py"), "robot:=r8", "mode:=dock",
+                          log_dir=tmp_path)
+    kill_leftovers.append(proc)
+    seen = read_until(proc, "[r8.service_server]: reset called (1 so far)",
+                      "/r8/reset response: {'success': True, 'message': 'reset #1'}",
+                      "[r8.control.configurable]: parameter mode set to 'dock'",
+                      "/r8/control/configurable set mode='dock'")
+    # the call waits for the server the group is triggered by; the parameters wait for
+    # the node that starts a second after the talker
+    assert seen.index("[INFO] [service_server-4]: process started") < seen.index(
+        "reset called")
+    os.killpg(proc.pid, signal.SIGINT)
+    assert proc.wait(timeout=60) == 0
+
+
+def test_event_callbacks_and_shutdown_actions_run(write, tmp_path, kill_leftovers):
+    path = write(HEADER + """
+from launch.actions import LogInfo, ExecuteProcess, RegisterEventHandler
+from launch.event_handlers import OnProcessExit
+from launch.substitutions import LocalSubstitution
+from simple_launch.events import When, OnProcessIO, OnExecutionComplete, OnShutdown
+def generate_launch_description():
+    sl = SimpleLauncher()
+    speaker = sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo one; echo two'],
+                                           name='speaker'))
+    with sl.group(when=When(speaker, OnProcessIO, io='stdout')):
+        sl.add_action(lambda event: LogInfo(msg='heard ' + event.text.decode().strip()))
+    sl.add_action(RegisterEventHandler(OnProcessExit(target_action=speaker,
+        on_exit=lambda event, context: [LogInfo(msg=f'speaker exited')])))
+    with sl.group(when=When(speaker, OnExecutionComplete)):
+        sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo after; sleep 600'], name='after'))
+    with sl.group(when=When(event=OnShutdown)):
+        sl.log_info(['stopping: ', LocalSubstitution('event.reason')])
+    return sl.launch_description()
+""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    kill_leftovers.append(proc)
+    seen = read_until(proc, "heard one", "heard two", "speaker exited", "[after-2] after")
+    os.killpg(proc.pid, signal.SIGTERM)
+    rest = proc.communicate(timeout=60)[0]
+    assert "stopping: received SIGTERM" in rest
+    assert seen.index("[INFO] [speaker-1]: process has finished") < seen.index(
+        "[INFO] [after-2]: process started")
+
+
 def test_bringup_runs_real_nodes_with_their_namespaces_and_parameters(tmp_path, kill_leftovers):
     proc = start_headless(str(EXAMPLES / "bringup.py"), "robot:=r7", "rate:=20",
                           "services:=false", log_dir=tmp_path)

@@ -44,7 +44,7 @@ class Printer:
         elif event.kind == "respawning":
             text = f"[WARN] [{event.process}]: respawning ({event.reason})\n"
         elif event.kind == "log":
-            text = f"[INFO] [launch.user]: {event.reason}\n"
+            text = f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
         else:
             text = f"[INFO] [launch]: {event.kind} ({event.reason})\n"
         self.out.write(text)

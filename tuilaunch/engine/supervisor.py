@@ -17,9 +17,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
+from .entities import Entity, LogInfo, Shutdown, entity_list
+from .messages import MessageError
 from .output import LineSplitter, strip_ansi
 from .params import write_parameter_file
 from .plan import ActionPlan, Plan, ProcessPlan, Trigger
+from .substitutions import PerformContext, perform
+
+ROS_ACTIONS = ("call_service", "set_parameters")
 
 _PR_SET_PDEATHSIG = 1
 
@@ -43,7 +48,19 @@ class Event:
     lines: list[str] = field(default_factory=list)
     code: int | None = None
     reason: str | None = None
+    level: str = "INFO"
     time: float = field(default_factory=time.time)
+
+
+@dataclass
+class LaunchEvent:
+    """What launch-file callbacks receive: `event.text`, `event.returncode`, `event.reason`."""
+
+    process_name: str | None = None
+    pid: int | None = None
+    text: bytes = b""
+    returncode: int | None = None
+    reason: str = ""
 
 
 Consumer = Callable[[Event], None]
@@ -61,14 +78,21 @@ class _Running:
 
 class Supervisor:
     def __init__(self, plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
-                 sigkill_timeout: float = 5.0) -> None:
+                 sigkill_timeout: float = 5.0, bridge: Any = None,
+                 service_timeout: float = 10.0) -> None:
         self.plan = plan
+        self.service_timeout = service_timeout
+        self._bridge = bridge
+        self._owns_bridge = bridge is None
         self.log_dir = log_dir
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
         self.consumers: list[Consumer] = []
         self.states: dict[str, str] = {
             p.id: ("pending" if p.enabled else "skipped") for p in plan.processes}
+        self.states.update({a.id: ("pending" if a.enabled else "skipped") for a in plan.actions})
+        self._io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
+        self._on_shutdown: list[ActionPlan] = []
         self.exit_codes: dict[str, int] = {}
         self._running: dict[str, _Running] = {}
         self._happened: dict[tuple[str, str], asyncio.Event] = {}
@@ -106,15 +130,17 @@ class Supervisor:
             if proc.enabled:
                 self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
         for action in self.plan.actions:
-            if action.enabled and action.kind == "log":
-                self._spawn_task(self._when_ready(action.trigger, self._run_log, action))
+            if action.enabled:
+                self._schedule_action(action)
         while not self._settled():
             self._changed.clear()
             await self._changed.wait()
         await self._drain()
+        if self._bridge is not None and self._owns_bridge:
+            await asyncio.to_thread(self._bridge.close)
         self._launch_log.close()
         self._remove_parameter_files()
-        failed = [pid for pid, state in self.states.items() if state == "failed"]
+        failed = [item for item, state in self.states.items() if state == "failed"]
         bad_exit = [pid for pid, code in self.exit_codes.items() if code != 0]
         return 1 if failed or bad_exit else 0
 
@@ -124,10 +150,13 @@ class Supervisor:
         task.add_done_callback(self._tasks.discard)
 
     def _settled(self) -> bool:
+        if self._shutting_down:
+            # waiting actions, timers and respawns are cancelled when the run drains
+            return not self._running
         if self._running or self._busy:
             return False
-        if self._shutting_down:
-            return True
+        if any(state == "running" for state in self.states.values()):
+            return False  # an action is waiting for its service or node
         # a pending item can still start only if what it waits for is alive or pending
         return not any(state == "pending" for state in self.states.values()) or all(
             not self._can_fire(p.trigger) for p in self.plan.processes
@@ -166,8 +195,138 @@ class Supervisor:
         if asyncio.iscoroutine(result):
             await result
 
-    async def _run_log(self, action: ActionPlan) -> None:
-        self._emit(Event("log", reason=str(action.data)))
+    # --- actions ---------------------------------------------------------------------------
+
+    def _schedule_action(self, action: ActionPlan) -> None:
+        chain = action.trigger
+        while chain is not None and chain.on not in ("io", "shutdown"):
+            chain = chain.after
+        if chain is not None and chain.on == "shutdown":
+            self._on_shutdown.append(action)
+        elif chain is not None and chain.target is not None:
+            key = (chain.target, chain.io or "stdout")
+            self._io_watchers.setdefault(key, []).append(action)
+        else:
+            self._spawn_task(self._when_ready(action.trigger, self._run_action, action))
+
+    async def _run_action(self, action: ActionPlan, event: LaunchEvent | None = None) -> None:
+        self.states[action.id] = "running"
+        self._flag(action.id, "start").set()
+        ok = True
+        try:
+            if action.kind == "call_service":
+                ok = await self._call_service(action)
+            elif action.kind == "set_parameters":
+                ok = await self._set_parameters(action)
+            elif action.kind == "shutdown":
+                self._spawn_task(self.shutdown(str(action.data)))
+            elif action.kind == "log":
+                self._log(action, self._perform(action, action.source.msg, event))
+            elif action.kind == "event_callback":
+                ok = self._run_callbacks(action, event or LaunchEvent())
+            else:
+                self._log(action, f"{action.kind} is not supported yet; skipped", "WARN")
+        except asyncio.CancelledError:
+            self.states[action.id] = "cancelled"
+            raise
+        self.states[action.id] = "done" if ok else "failed"
+        self._flag(action.id, "exit").set()
+        self._changed.set()
+
+    def _log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
+        self._emit(Event("log", action.id, reason=text, level=level))
+
+    def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
+        context = PerformContext(action.configurations, None,
+                                 event_locals={"event": event or LaunchEvent()})
+        return perform(value, context)
+
+    def bridge(self) -> Any:
+        if self._bridge is None:
+            from .ros_bridge import RosBridge
+
+            self._bridge = RosBridge()
+        return self._bridge
+
+    async def _call_service(self, action: ActionPlan) -> bool:
+        from .ros_bridge import RosError
+
+        name = str(action.target)
+        self._log(action, f"waiting for service {name}")
+        try:
+            bridge = self.bridge()
+            service_type = await bridge.wait_for_service(name, None)
+            request, response = await bridge.call_service(
+                name, action.data, self.service_timeout, service_type=service_type)
+        except (RosError, MessageError) as exc:
+            self._log(action, f"call_service {name} failed: {exc}", "ERROR")
+            return False
+        if "req" in action.verbosity:
+            self._log(action, f"{name} ({service_type}) request: {request}")
+        if "res" in action.verbosity:
+            self._log(action, f"{name} response: {response}")
+        return True
+
+    async def _set_parameters(self, action: ActionPlan) -> bool:
+        from .ros_bridge import RosError
+
+        node = str(action.target)
+        self._log(action, f"waiting for node {node}")
+        try:
+            bridge = self.bridge()
+            await bridge.wait_for_service(f"{node}/set_parameters", None)
+            results = await bridge.set_parameters(node, action.data, self.service_timeout)
+        except (RosError, MessageError) as exc:
+            self._log(action, f"set_parameters on {node} failed: {exc}", "ERROR")
+            return False
+        if "req" in action.verbosity:
+            self._log(action, f"{node} parameters requested: {action.data}")
+        for result in results:
+            if not result.successful:
+                self._log(action, f"{node} refused {result.name}="
+                          f"{action.data.get(result.name)!r}: {result.reason}", "ERROR")
+            elif "res" in action.verbosity:
+                self._log(action, f"{node} set {result.name}={action.data.get(result.name)!r}")
+        return all(r.successful for r in results)
+
+    def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
+        """Launch-file functions called with the event; what they return is carried out."""
+        source = action.source
+        launcher = getattr(source, "launcher", None)
+        produced: list[Any] = []
+        try:
+            for callback in source.callbacks:
+                if launcher is not None:
+                    with launcher.capture() as added:
+                        produced += entity_list(callback(event)) + added
+                else:
+                    produced += entity_list(_call_handler(callback, event, action))
+        except Exception as exc:  # a user's callback must never stop the launch
+            self._log(action, f"event callback ({action.origin}) raised "
+                      f"{type(exc).__name__}: {exc}", "ERROR")
+            return False
+        seen: set[int] = set()
+        for entity in produced:
+            if id(entity) in seen:
+                continue
+            seen.add(id(entity))
+            self._carry_out(action, entity, event)
+        return True
+
+    def _carry_out(self, action: ActionPlan, entity: Entity, event: LaunchEvent) -> None:
+        if isinstance(entity, LogInfo):
+            self._log(action, self._perform(action, entity.msg, event))
+        elif isinstance(entity, Shutdown):
+            self._spawn_task(self.shutdown(self._perform(action, entity.reason, event)))
+        else:
+            self._log(action, f"an event callback returned {entity.describe()}, which "
+                      "tuilaunch does not start at run time yet", "WARN")
+
+    def _dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
+        for action in self._io_watchers.get((process_id, stream), []):
+            for line in lines:
+                event = LaunchEvent(process_id, pid, (line + "\n").encode())
+                self._spawn_task(self._run_action(action, event))
 
     async def start(self, process_id: str) -> None:
         """Starts one process (also a stopped or exited one, from the UI)."""
@@ -215,6 +374,8 @@ class Supervisor:
                 stamp = f"{time.time():.6f} {name} "
                 running.log.write("".join(stamp + strip_ansi(line) + "\n" for line in lines))
                 self._emit(Event("output", running.plan.id, stream=name, lines=lines))
+                if self._io_watchers:
+                    self._dispatch_io(running.plan.id, name, lines, running.process.pid)
             if not chunk:
                 return
 
@@ -273,6 +434,8 @@ class Supervisor:
             return
         self._shutting_down = True
         self._emit(Event("shutdown", reason=reason))
+        for action in self._on_shutdown:
+            await self._run_action(action, LaunchEvent(reason=reason))
         await asyncio.gather(*(self._escalate(r) for r in list(self._running.values())))
         self._changed.set()
 
@@ -307,6 +470,19 @@ class Supervisor:
             self.plan.params_dir.rmdir()
         except OSError:
             pass
+
+
+def _call_handler(callback: Any, event: LaunchEvent, action: ActionPlan) -> Any:
+    """Plain launch API handlers take (event, context); simple_launch's take (event)."""
+    import inspect
+
+    try:
+        arity = len(inspect.signature(callback).parameters)
+    except (TypeError, ValueError):
+        arity = 1
+    if arity >= 2:
+        return callback(event, PerformContext(action.configurations))
+    return callback(event)
 
 
 def _describe_exit(code: int) -> str:

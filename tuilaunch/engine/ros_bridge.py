@@ -1,0 +1,231 @@
+"""RosBridge: the launcher's one rclpy context, spinning in its own thread.
+
+Everything here is awaited from asyncio and has a timeout, so an unresponsive node never
+blocks the supervisor's or the UI's loop. Domain and discovery settings come from the
+environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE), as for any node.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+from .messages import MessageError, fill, import_type, to_plain
+
+PARAMETER_TYPES = {0: "not set", 1: "bool", 2: "int", 3: "float", 4: "str", 5: "bytes",
+                   6: "bool[]", 7: "int[]", 8: "float[]", 9: "str[]"}
+
+
+class RosError(Exception):
+    """A ROS operation that did not succeed: timed out, service gone, refused."""
+
+
+@dataclass
+class ParameterInfo:
+    name: str
+    type: str
+    value: Any
+    description: str
+    read_only: bool
+    constraints: str
+
+
+@dataclass
+class SetResult:
+    name: str
+    successful: bool
+    reason: str
+
+
+def parameter_value(value: Any) -> Any:
+    """A Python value as rcl_interfaces/ParameterValue, typed from the value itself."""
+    from rcl_interfaces.msg import ParameterValue
+
+    msg = ParameterValue()
+    if isinstance(value, bool):
+        msg.type, msg.bool_value = 1, value
+    elif isinstance(value, int):
+        msg.type, msg.integer_value = 2, value
+    elif isinstance(value, float):
+        msg.type, msg.double_value = 3, value
+    elif isinstance(value, str):
+        msg.type, msg.string_value = 4, value
+    elif isinstance(value, bytes):
+        msg.type, msg.byte_array_value = 5, list(value)
+    elif isinstance(value, list) and value and all(isinstance(v, bool) for v in value):
+        msg.type, msg.bool_array_value = 6, value
+    elif isinstance(value, list) and value and all(
+            isinstance(v, int) and not isinstance(v, bool) for v in value):
+        msg.type, msg.integer_array_value = 7, value
+    elif isinstance(value, list) and value and all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        msg.type, msg.double_array_value = 8, [float(v) for v in value]
+    elif isinstance(value, list) and all(isinstance(v, str) for v in value):
+        msg.type, msg.string_array_value = 9, value
+    else:
+        raise MessageError(f"value {value!r} has no ROS parameter type")
+    return msg
+
+
+def python_value(msg: Any) -> Any:
+    field = {1: "bool_value", 2: "integer_value", 3: "double_value", 4: "string_value",
+             5: "byte_array_value", 6: "bool_array_value", 7: "integer_array_value",
+             8: "double_array_value", 9: "string_array_value"}.get(msg.type)
+    return None if field is None else to_plain(getattr(msg, field))
+
+
+class RosBridge:
+    def __init__(self, node_name: str = "tuilaunch") -> None:
+        import rclpy
+        from rclpy.context import Context
+        from rclpy.executors import MultiThreadedExecutor
+
+        self._context = Context()
+        # args=[]: otherwise rclpy reads tuilaunch's own argv, where `name:=value` launch
+        # arguments look like (deprecated) remapping rules
+        rclpy.init(args=[], context=self._context, signal_handler_options=_no_signal_handlers())
+        self.node = rclpy.create_node(node_name, context=self._context,
+                                      start_parameter_services=False)
+        self._executor = MultiThreadedExecutor(num_threads=2, context=self._context)
+        self._executor.add_node(self.node)
+        self._thread = threading.Thread(target=self._spin, name="ros-bridge", daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        try:
+            self._executor.spin()
+        except Exception:  # the context was shut down under the executor: nothing to do
+            pass
+
+    def close(self) -> None:
+        self._executor.shutdown(timeout_sec=2)
+        self.node.destroy_node()
+        self._context.try_shutdown()
+        self._thread.join(timeout=5)
+
+    # --- graph ---------------------------------------------------------------------------
+
+    async def list_nodes(self) -> list[str]:
+        pairs = await asyncio.to_thread(self.node.get_node_names_and_namespaces)
+        return sorted((ns.rstrip("/") + "/" + name) for name, ns in pairs
+                      if name != self.node.get_name())
+
+    async def list_services(self) -> list[tuple[str, list[str]]]:
+        found = await asyncio.to_thread(self.node.get_service_names_and_types)
+        return sorted((name, list(types)) for name, types in found)
+
+    async def count_publishers(self, topic: str) -> int:
+        return int(await asyncio.to_thread(self.node.count_publishers, topic))
+
+    async def wait_for_service(self, name: str, timeout: float | None) -> str:
+        """The service's type once it appears on the graph."""
+        loop = asyncio.get_running_loop()
+        deadline = None if timeout is None else loop.time() + timeout
+        while True:
+            for service, types in await self.list_services():
+                if service == name and types:
+                    return types[0]
+            if deadline is not None and loop.time() > deadline:
+                raise RosError(f"service {name} did not appear within {timeout:g} s")
+            await asyncio.sleep(0.1)
+
+    # --- calls ---------------------------------------------------------------------------
+
+    async def call_typed(self, name: str, service_class: Any, request: Any,
+                         timeout: float) -> Any:
+        client = self.node.create_client(service_class, name)
+        try:
+            loop = asyncio.get_running_loop()
+            deadline = loop.time() + timeout
+            while not client.service_is_ready():
+                if loop.time() > deadline:
+                    raise RosError(f"service {name} is not available")
+                await asyncio.sleep(0.05)
+            done: asyncio.Future[Any] = loop.create_future()
+            pending = client.call_async(request)
+
+            def finished(future: Any) -> None:
+                loop.call_soon_threadsafe(_settle, done, future)
+
+            pending.add_done_callback(finished)
+            try:
+                return await asyncio.wait_for(done, max(deadline - loop.time(), 0.1))
+            except TimeoutError:
+                client.remove_pending_request(pending)
+                raise RosError(f"service {name} did not answer within {timeout:g} s") from None
+        finally:
+            self.node.destroy_client(client)
+
+    async def call_service(self, name: str, request: dict[str, Any], timeout: float = 5.0,
+                           wait: float | None = 0.0, service_type: str | None = None)\
+            -> tuple[dict[str, Any], dict[str, Any]]:
+        """Calls a service with a request built from a dict; (request, response) as dicts."""
+        if service_type is None:
+            service_type = await self.wait_for_service(name, wait)
+        service_class = import_type(service_type)
+        message = fill(service_class.Request(), request)
+        response = await self.call_typed(name, service_class, message, timeout)
+        return to_plain(message), to_plain(response)
+
+    # --- parameters ----------------------------------------------------------------------
+
+    async def list_parameters(self, node: str, timeout: float = 5.0) -> list[str]:
+        from rcl_interfaces.srv import ListParameters
+
+        response = await self.call_typed(f"{node}/list_parameters", ListParameters,
+                                         ListParameters.Request(), timeout)
+        return sorted(response.result.names)
+
+    async def get_parameters(self, node: str, names: list[str], timeout: float = 5.0)\
+            -> dict[str, Any]:
+        from rcl_interfaces.srv import GetParameters
+
+        response = await self.call_typed(f"{node}/get_parameters", GetParameters,
+                                         GetParameters.Request(names=names), timeout)
+        return {n: python_value(v) for n, v in zip(names, response.values, strict=False)}
+
+    async def describe_parameters(self, node: str, names: list[str] | None = None,
+                                  timeout: float = 5.0) -> list[ParameterInfo]:
+        from rcl_interfaces.srv import DescribeParameters
+
+        if names is None:
+            names = await self.list_parameters(node, timeout)
+        response = await self.call_typed(f"{node}/describe_parameters", DescribeParameters,
+                                         DescribeParameters.Request(names=names), timeout)
+        values = await self.get_parameters(node, names, timeout)
+        return [ParameterInfo(d.name, PARAMETER_TYPES.get(d.type, str(d.type)),
+                              values.get(d.name), d.description, d.read_only,
+                              d.additional_constraints)
+                for d in response.descriptors]
+
+    async def set_parameters(self, node: str, values: dict[str, Any], timeout: float = 5.0)\
+            -> list[SetResult]:
+        """Each parameter's outcome, with the node's reason when it refused."""
+        from rcl_interfaces.msg import Parameter
+        from rcl_interfaces.srv import SetParameters
+
+        params = [Parameter(name=name, value=parameter_value(value))
+                  for name, value in values.items()]
+        response = await self.call_typed(f"{node}/set_parameters", SetParameters,
+                                         SetParameters.Request(parameters=params), timeout)
+        return [SetResult(p.name, r.successful, r.reason)
+                for p, r in zip(params, response.results, strict=False)]
+
+
+def _settle(done: asyncio.Future[Any], future: Any) -> None:
+    if done.done():
+        return
+    exception = future.exception()
+    if exception is not None:
+        done.set_exception(RosError(f"service call failed: {exception}"))
+    else:
+        done.set_result(future.result())
+
+
+def _no_signal_handlers() -> Any:
+    """rclpy must not take over SIGINT: the supervisor owns shutdown."""
+    from rclpy.signals import SignalHandlerOptions
+
+    return SignalHandlerOptions.NO
