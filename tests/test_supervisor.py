@@ -203,3 +203,43 @@ def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
         "world", "100%", "\ufffd\ufffdok"]
     assert splitter.feed(b"x" * 200_000) != []  # a huge line is cut, not held forever
     assert splitter.flush() and splitter.flush() == []
+
+
+def test_display_buffer_drops_oldest_lines_and_counts_them_but_never_other_events():
+    from tuilaunch.engine.event_buffer import EventBuffer
+    from tuilaunch.engine.supervisor import Event
+
+    buffer = EventBuffer(max_lines=1000)
+    buffer(Event("started", "flood-1", pid=1))
+    for start in range(0, 100_000, 100):
+        buffer(Event("output", "flood-1", stream="stdout",
+                     lines=[str(n) for n in range(start, start + 100)]))
+    buffer(Event("exited", "flood-1", code=0))
+    events = buffer.drain()
+    assert [e.kind for e in events if e.kind != "output"] == ["dropped", "started", "exited"]
+    shown = [line for e in events if e.kind == "output" for line in e.lines]
+    assert shown == [str(n) for n in range(99_000, 100_000)]  # the newest lines, in order
+    assert events[0].code == 99_000 and buffer.total_dropped == 99_000
+    assert buffer.drain() == []
+
+
+def test_flood_loses_no_line_in_the_log_file(write, tmp_path, kill_leftovers):
+    count = 200_000
+    path = write(HEADER + f"""
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    for i in range(2):
+        sl.add_action(ExecuteProcess(cmd=['seq', '1', '{count}'], name=f'flood{{i}}'))
+    return sl.launch_description()
+""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    kill_leftovers.append(proc)
+    out = proc.communicate(timeout=120)[0]
+    assert proc.returncode == 0
+    folder = next(tmp_path.glob("*-tuilaunch-*"))
+    for name in ("flood0-1", "flood1-2"):
+        numbers = [line.split(" ", 2)[2] for line in
+                   (folder / f"{name}.log").read_text().splitlines()]
+        assert numbers == [str(n) for n in range(1, count + 1)]
+        assert out.count(f"[{name}] ") == count

@@ -29,12 +29,16 @@ ROS_ACTIONS = ("call_service", "set_parameters")
 _PR_SET_PDEATHSIG = 1
 
 
+try:  # looked up once here: the child between fork and exec should do as little as possible
+    _prctl: Any = ctypes.CDLL(None, use_errno=True).prctl
+except (OSError, AttributeError):
+    _prctl = None
+
+
 def _die_with_parent() -> None:
     """Runs in the child before exec: SIGKILL it when the launching thread dies."""
-    try:
-        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    except (OSError, AttributeError):
-        pass
+    if _prctl is not None:
+        _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
 
 
 @dataclass

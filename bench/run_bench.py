@@ -1,0 +1,132 @@
+"""Supervisor figures, one run on this machine, each beside its floor.
+
+1. Time from command to all N processes started (N = 10, 100) against a bare Python script
+   spawning the same N.
+2. Lines per second absorbed and logged from 4 processes printing as fast as they can,
+   against `cat` of the same bytes into a file, with the count of lines lost.
+3. tuilaunch's own CPU while 100 quiet processes run (target: under 1% of a core).
+
+    python bench/run_bench.py
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+FLOOD_LINES = 1_000_000
+
+
+def write_launch(folder: Path, name: str, body: str) -> Path:
+    path = folder / name
+    path.write_text("from launch import LaunchDescription\n"
+                    "from launch.actions import ExecuteProcess\n"
+                    f"def generate_launch_description():\n    return LaunchDescription({body})\n")
+    return path
+
+
+def tuilaunch(path: Path, log_dir: Path, out: int | None = subprocess.PIPE) -> subprocess.Popen:
+    env = {**os.environ, "ROS_LOG_DIR": str(log_dir)}
+    return subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                            stdout=out, stderr=subprocess.DEVNULL, text=True, env=env,
+                            start_new_session=True)
+
+
+def stop(proc: subprocess.Popen) -> None:
+    os.killpg(proc.pid, signal.SIGINT)
+    proc.wait(timeout=120)
+
+
+def spawn_time(folder: Path, count: int) -> tuple[float, float]:
+    path = write_launch(folder, f"spawn{count}.py",
+                        f"[ExecuteProcess(cmd=['sleep', '600'], name=f's{{i}}') "
+                        f"for i in range({count})]")
+    start = time.perf_counter()
+    proc = tuilaunch(path, folder / f"log{count}")
+    started = 0
+    assert proc.stdout is not None
+    while started < count:
+        started += "process started" in proc.stdout.readline()
+    ours = time.perf_counter() - start
+    stop(proc)
+    floor_script = ("import subprocess, sys\n"
+                    f"ps = [subprocess.Popen(['sleep', '600']) for _ in range({count})]\n"
+                    "print('all', flush=True)\n"
+                    "sys.stdin.readline()\n"
+                    "[p.kill() for p in ps]\n")
+    start = time.perf_counter()
+    floor = subprocess.Popen([sys.executable, "-c", floor_script], stdin=subprocess.PIPE,
+                             stdout=subprocess.PIPE, text=True)
+    assert floor.stdout is not None and floor.stdin is not None
+    floor.stdout.readline()
+    floor_time = time.perf_counter() - start
+    floor.stdin.write("\n")
+    floor.stdin.close()
+    floor.wait()
+    return ours, floor_time
+
+
+def flood(folder: Path) -> tuple[float, float, int]:
+    path = write_launch(folder, "flood.py",
+                        f"[ExecuteProcess(cmd=['seq', '1', '{FLOOD_LINES}'], name=f'f{{i}}') "
+                        "for i in range(4)]")
+    log_dir = folder / "flood_log"
+    start = time.perf_counter()
+    proc = tuilaunch(path, log_dir, out=subprocess.DEVNULL)
+    proc.wait(timeout=600)
+    ours = 4 * FLOOD_LINES / (time.perf_counter() - start)
+    logged = sum(sum(1 for _ in open(f)) for f in log_dir.glob("*/f*.log"))
+    source = folder / "seq.txt"
+    source.write_text("".join(f"{n}\n" for n in range(1, FLOOD_LINES + 1)))
+    start = time.perf_counter()
+    cats = [subprocess.Popen(f"cat {source} > {folder}/cat{i}.txt", shell=True)
+            for i in range(4)]
+    for cat in cats:
+        cat.wait()
+    floor = 4 * FLOOD_LINES / (time.perf_counter() - start)
+    return ours, floor, 4 * FLOOD_LINES - logged
+
+
+def idle_cpu(folder: Path, seconds: float = 10.0) -> float:
+    path = write_launch(folder, "quiet.py",
+                        "[ExecuteProcess(cmd=['sleep', '600'], name=f'q{i}') for i in range(100)]")
+    proc = tuilaunch(path, folder / "quiet_log")
+    assert proc.stdout is not None
+    started = 0
+    while started < 100:
+        started += "process started" in proc.stdout.readline()
+    time.sleep(1.0)
+
+    def cpu() -> float:
+        fields = Path(f"/proc/{proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+    before = cpu()
+    time.sleep(seconds)
+    used = cpu() - before
+    stop(proc)
+    return 100 * used / seconds
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        for count in (10, 100):
+            ours, floor = spawn_time(folder, count)
+            print(f"start {count:>3} processes: tuilaunch {ours:.3f} s (command to all "
+                  f"started), bare Python spawner {floor:.3f} s, ratio {ours / floor:.1f}x")
+        ours_rate, cat_rate, lost = flood(folder)
+        print(f"4 x {FLOOD_LINES} lines: tuilaunch absorbed and logged {ours_rate:,.0f} lines/s, "
+              f"cat {cat_rate:,.0f} lines/s (ratio {cat_rate / ours_rate:.1f}x), "
+              f"lines lost: {lost}")
+        print(f"CPU of tuilaunch with 100 quiet processes: {idle_cpu(folder):.2f}% of a core "
+              "(target < 1%)")
+
+
+if __name__ == "__main__":
+    main()
