@@ -147,7 +147,8 @@ def test_bringup_runs_real_nodes_with_their_namespaces_and_parameters(tmp_path, 
     assert 'I heard: "r7 says hi' in (logs / "listener-2.log").read_text()
 
 
-@pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGHUP, signal.SIGKILL])
+@pytest.mark.parametrize("how", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP,
+                                 signal.SIGKILL])
 def test_no_process_outlives_tuilaunch(write, tmp_path, kill_leftovers, how):
     script = tmp_path / "stubborn"
     script.write_text(STUBBORN)
@@ -243,3 +244,57 @@ def generate_launch_description():
                    (folder / f"{name}.log").read_text().splitlines()]
         assert numbers == [str(n) for n in range(1, count + 1)]
         assert out.count(f"[{name}] ") == count
+
+
+def test_stop_restart_and_start_one_process_while_the_others_run(write, tmp_path):
+    import asyncio
+
+    from tuilaunch.engine import load_file, resolve
+    from tuilaunch.engine.supervisor import Supervisor
+
+    path = write(HEADER + """
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.node('tuilaunch_demos', 'listener', name='ear', remappings={'chatter': '/news'})
+    sl.node('tuilaunch_demos', 'talker', name='mouth', parameters={'rate': 20.0})
+    return sl.launch_description()
+""")
+    plan = resolve(load_file(str(path)), {}, params_dir=tmp_path / "params")
+    supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=5)
+    events: list = []
+    supervisor.subscribe(events.append)
+
+    def output_of(process: str) -> str:
+        return "".join(line + "\n" for e in events if e.kind == "output" and e.process == process
+                       for line in e.lines)
+
+    async def until(check, limit: float = 60) -> None:
+        deadline = asyncio.get_running_loop().time() + limit
+        while not check():
+            assert asyncio.get_running_loop().time() < deadline, [e.kind for e in events]
+            await asyncio.sleep(0.05)
+
+    async def scenario() -> int:
+        run = asyncio.ensure_future(supervisor.run(keep_alive=True))
+        await until(lambda: '"chatter": "/news"' in output_of("ear-1"))
+        await until(lambda: "Publishing" in output_of("mouth-2"))
+        await supervisor.stop("mouth-2")
+        assert supervisor.states == {"ear-1": "running", "mouth-2": "exited"}
+        await supervisor.restart("ear-1")
+        await until(lambda: supervisor.states["ear-1"] == "running")
+        await supervisor.start("mouth-2")
+        await until(lambda: output_of("mouth-2").count("STARTUP") == 2)
+        await supervisor.stop("ear-1")
+        await supervisor.stop("mouth-2")
+        await asyncio.sleep(0.2)
+        assert not run.done()  # with every process stopped, the operator can still start one
+        await supervisor.shutdown("test done")
+        return await run
+
+    status = asyncio.run(scenario())
+    starts = [e.process for e in events if e.kind == "started"]
+    assert starts == ["ear-1", "mouth-2", "ear-1", "mouth-2"]
+    assert [e.process for e in events if e.kind == "exited"] == [
+        "mouth-2", "ear-1", "ear-1", "mouth-2"]
+    assert output_of("ear-1").count("STARTUP") == 2
+    assert status == 0 and not (tmp_path / "params").exists()  # parameter files are removed

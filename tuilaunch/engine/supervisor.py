@@ -105,6 +105,7 @@ class Supervisor:
         self._shutting_down = False
         self._changed = asyncio.Event()
         self._retries: dict[str, int] = {}
+        self._keep_alive = False
         log_dir.mkdir(parents=True, exist_ok=True)
         self._launch_log = open(log_dir / "launch.log", "a", buffering=1)
 
@@ -128,8 +129,12 @@ class Supervisor:
 
     # --- running ---------------------------------------------------------------------
 
-    async def run(self) -> int:
-        """Runs until nothing can happen any more, or shutdown; returns an exit status."""
+    async def run(self, keep_alive: bool = False) -> int:
+        """Runs until nothing can happen any more, or shutdown; returns an exit status.
+
+        With keep_alive (an interactive UI), only shutdown ends the run: an operator who
+        stops every process still wants to start them again."""
+        self._keep_alive = keep_alive
         for proc in self.plan.processes:
             if proc.enabled:
                 self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
@@ -157,7 +162,7 @@ class Supervisor:
         if self._shutting_down:
             # waiting actions, timers and respawns are cancelled when the run drains
             return not self._running
-        if self._running or self._busy:
+        if self._keep_alive or self._running or self._busy:
             return False
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
@@ -430,8 +435,13 @@ class Supervisor:
             await self._escalate(running)
 
     async def restart(self, process_id: str) -> None:
-        await self.stop(process_id)
-        await self.start(process_id)
+        self._busy += 1  # the run must not look finished between the stop and the start
+        try:
+            await self.stop(process_id)
+            await self.start(process_id)
+        finally:
+            self._busy -= 1
+            self._changed.set()
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         if self._shutting_down:
