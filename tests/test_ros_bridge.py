@@ -138,3 +138,32 @@ def test_every_call_has_a_timeout(nodes):
             await bridge.wait_for_service("/bridge_test/never", 0.5)
 
     run(scenario)
+
+
+CLOCK_PUBLISHER = textwrap.dedent("""
+    import rclpy
+    from rosgraph_msgs.msg import Clock
+    rclpy.init()
+    node = rclpy.create_node('sim_clock')
+    node.create_publisher(Clock, '/clock', 10)
+    print('ready', flush=True)
+    rclpy.spin(node)
+""")
+
+
+def test_use_sim_time_auto_follows_a_live_clock_publisher(monkeypatch):
+    from tuilaunch.engine.sim_clock import clock_is_published
+
+    monkeypatch.delenv("TUILAUNCH_SIM_TIME", raising=False)
+    clock_is_published.cache_clear()
+    assert clock_is_published() is False
+    publisher = subprocess.Popen([sys.executable, "-c", CLOCK_PUBLISHER], stdout=subprocess.PIPE,
+                                 text=True)
+    try:
+        assert publisher.stdout is not None and publisher.stdout.readline()
+        clock_is_published.cache_clear()
+        assert clock_is_published(5.0) is True
+    finally:
+        publisher.terminate()
+        publisher.wait(timeout=30)
+        clock_is_published.cache_clear()
