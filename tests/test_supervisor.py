@@ -281,7 +281,7 @@ def generate_launch_description():
         await supervisor.stop("mouth-2")
         assert supervisor.states == {"ear-1": "running", "mouth-2": "exited"}
         await supervisor.restart("ear-1")
-        await until(lambda: supervisor.states["ear-1"] == "running")
+        await until(lambda: output_of("ear-1").count("STARTUP") == 2)
         await supervisor.start("mouth-2")
         await until(lambda: output_of("mouth-2").count("STARTUP") == 2)
         await supervisor.stop("ear-1")

@@ -28,7 +28,8 @@ def _parser() -> argparse.ArgumentParser:
                         help="print what would run with these arguments and exit")
     parser.add_argument("--json", action="store_true", help="with --print: one JSON object")
     parser.add_argument("--headless", action="store_true",
-                        help="run without the TUI, printing each line as [process-id] line")
+                        help="run without the TUI, printing each line as [process-id] line "
+                        "(the default when not in a terminal)")
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     return parser
 
@@ -101,9 +102,15 @@ def main(argv: list[str] | None = None) -> int:
         return 3 if problems else 0
     for warning in plan.warnings:
         print(f"tuilaunch: warning: {warning}", file=sys.stderr)
-    from .headless import run_headless
+    if options.headless or not (sys.stdout.isatty() and sys.stdin.isatty()):
+        from .headless import run_headless
 
-    return run_headless(plan)
+        return run_headless(plan)
+    from .app import make_app
+    from .headless import run_log_dir
+
+    status = make_app(path, arguments, run_log_dir()).run()
+    return status or 0
 
 
 if __name__ == "__main__":

@@ -34,6 +34,8 @@ class Printer:
             prefix = f"[{event.process}] "
             text = "".join(prefix + (line if self.colour else strip_ansi(line)) + "\n"
                            for line in event.lines)
+        elif event.kind in ("started", "finished") and event.pid is None:
+            return  # an action's progress: its log lines already say what happened
         elif event.kind == "started":
             text = f"[INFO] [{event.process}]: process started with pid [{event.pid}]\n"
         elif event.kind == "exited":

@@ -200,3 +200,44 @@ class Plan:
             "tree": self.tree.to_json(),
             "warnings": self.warnings,
         }
+
+
+def process_signature(proc: ProcessPlan) -> tuple[Any, ...]:
+    """What a running process depends on: same signature, no need to restart it."""
+    params = tuple((path, repr(sorted(values.items())))
+                   for path, values in proc.generated_parameter_files)
+    return (tuple(proc.cmd), tuple(sorted(proc.env.items())), proc.clear_env, proc.cwd, params,
+            proc.respawn)
+
+
+@dataclass
+class PlanDiff:
+    """Which processes a relaunch keeps running, stops, and starts."""
+
+    keep: list[str]
+    stop: list[str]
+    start: list[str]
+
+    @property
+    def empty(self) -> bool:
+        return not self.stop and not self.start
+
+
+def diff_plans(old: Plan, new: Plan, running: set[str] | None = None) -> PlanDiff:
+    """Compares enabled processes by id and signature; `running` limits what can be kept."""
+    old_enabled = {p.id: p for p in old.processes if p.enabled}
+    new_enabled = {p.id: p for p in new.processes if p.enabled}
+    alive = set(old_enabled) if running is None else running
+    keep: list[str] = []
+    stop: list[str] = []
+    start: list[str] = []
+    for pid, proc in old_enabled.items():
+        other = new_enabled.get(pid)
+        if other is not None and process_signature(other) == process_signature(proc):
+            (keep if pid in alive else start).append(pid)
+        else:
+            stop.append(pid)
+            if other is not None:
+                start.append(pid)
+    start += [pid for pid in new_enabled if pid not in old_enabled]
+    return PlanDiff(keep, stop, start)

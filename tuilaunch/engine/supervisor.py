@@ -21,7 +21,7 @@ from .entities import Entity, LogInfo, Shutdown, entity_list
 from .messages import MessageError
 from .output import LineSplitter, strip_ansi
 from .params import write_parameter_file
-from .plan import ActionPlan, Plan, ProcessPlan, Trigger
+from .plan import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
 from .substitutions import PerformContext, perform
 
 ROS_ACTIONS = ("call_service", "set_parameters")
@@ -82,12 +82,13 @@ class _Running:
 
 class Supervisor:
     def __init__(self, plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
-                 sigkill_timeout: float = 5.0, bridge: Any = None,
+                 sigkill_timeout: float = 5.0,
+                 bridge_factory: Callable[[], Any] | None = None,
                  service_timeout: float = 10.0) -> None:
         self.plan = plan
         self.service_timeout = service_timeout
-        self._bridge = bridge
-        self._owns_bridge = bridge is None
+        self._bridge: Any = None
+        self._bridge_factory = bridge_factory  # whoever supplies the bridge also closes it
         self.log_dir = log_dir
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
@@ -145,7 +146,7 @@ class Supervisor:
             self._changed.clear()
             await self._changed.wait()
         await self._drain()
-        if self._bridge is not None and self._owns_bridge:
+        if self._bridge is not None and self._bridge_factory is None:
             await asyncio.to_thread(self._bridge.close)
         self._launch_log.close()
         self._remove_parameter_files()
@@ -220,6 +221,7 @@ class Supervisor:
 
     async def _run_action(self, action: ActionPlan, event: LaunchEvent | None = None) -> None:
         self.states[action.id] = "running"
+        self._emit(Event("started", action.id))
         self._flag(action.id, "start").set()
         ok = True
         try:
@@ -239,8 +241,8 @@ class Supervisor:
             self.states[action.id] = "cancelled"
             raise
         self.states[action.id] = "done" if ok else "failed"
+        self._emit(Event("finished", action.id, reason=self.states[action.id]))
         self._flag(action.id, "exit").set()
-        self._changed.set()
 
     def _log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
         self._emit(Event("log", action.id, reason=text, level=level))
@@ -252,9 +254,12 @@ class Supervisor:
 
     def bridge(self) -> Any:
         if self._bridge is None:
-            from .ros_bridge import RosBridge
+            if self._bridge_factory is not None:
+                self._bridge = self._bridge_factory()
+            else:
+                from .ros_bridge import RosBridge
 
-            self._bridge = RosBridge()
+                self._bridge = RosBridge()
         return self._bridge
 
     async def _call_service(self, action: ActionPlan) -> bool:
@@ -434,6 +439,41 @@ class Supervisor:
             running.stopping = True
             await self._escalate(running)
 
+    async def replace_plan(self, plan: Plan) -> PlanDiff:
+        """Relaunch with new argument values: stop what changed, start what is new.
+
+        Processes whose command, environment and parameters are unchanged keep running;
+        triggers of new processes fire at once when what they wait for already happened.
+        """
+        running = {pid for pid in self._running}
+        diff = diff_plans(self.plan, plan, running)
+        self._busy += 1
+        try:
+            await asyncio.gather(*(self.stop(pid) for pid in diff.stop if pid in running))
+            old_actions = {(a.kind, a.target, repr(a.data)) for a in self.plan.actions
+                           if a.enabled}
+            self.plan = plan
+            for proc in plan.processes:
+                if proc.id not in self._running:
+                    self.states[proc.id] = "pending" if proc.enabled else "skipped"
+            self._io_watchers.clear()
+            self._on_shutdown.clear()
+            for proc in plan.processes:
+                if proc.id in diff.start:
+                    self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
+            for action in plan.actions:
+                self.states.setdefault(action.id, "pending" if action.enabled else "skipped")
+                fresh = (action.kind, action.target, repr(action.data)) not in old_actions
+                on_event = action.trigger is not None and action.trigger.on in ("io", "shutdown")
+                # event watchers were cleared above and come back; one-off actions rerun
+                # only when they are new or their target or data changed
+                if action.enabled and (fresh or on_event):
+                    self._schedule_action(action)
+        finally:
+            self._busy -= 1
+            self._changed.set()
+        return diff
+
     async def restart(self, process_id: str) -> None:
         self._busy += 1  # the run must not look finished between the stop and the start
         try:
@@ -469,6 +509,15 @@ class Supervisor:
                 return
             except TimeoutError:
                 continue
+
+    def kill_all(self) -> None:
+        """Last resort when the caller cannot wait (the UI is being torn down): SIGKILL."""
+        for running in list(self._running.values()):
+            try:
+                os.killpg(running.process.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        self._remove_parameter_files()
 
     async def _drain(self) -> None:
         for task in list(self._tasks):

@@ -1,0 +1,340 @@
+"""Headless pilot tests of every panel against real nodes started from examples/."""
+
+from __future__ import annotations
+
+import os
+import pty
+import select
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+import pytest
+from textual.pilot import Pilot
+from textual.widgets import Checkbox, DataTable, Input
+
+from tuilaunch.app import TuiLaunchApp, make_app
+from tuilaunch.output_store import View
+from tuilaunch.screens.args_panel import ArgsPanel
+from tuilaunch.screens.dialogs import QuitScreen
+from tuilaunch.screens.output_panel import OutputPanel
+from tuilaunch.screens.params_panel import ParamsPanel
+from tuilaunch.screens.services_panel import ServicesPanel
+from tuilaunch.screens.tree_panel import LaunchTree
+
+from .conftest import EXAMPLES
+
+BRINGUP = str(EXAMPLES / "bringup.py")
+
+
+async def until(pilot: Pilot, check: Callable[[], object], limit: float = 60.0,
+                every: Callable[[], object] | None = None) -> None:
+    """Lets the app run until `check` holds, calling `every` once a second (a refresh);
+    the limit only guards against a hang."""
+    waited = 0.0
+    while not check():
+        assert waited < limit, f"condition never held: {check}"
+        if every is not None and int(waited * 20) % 20 == 0:
+            every()
+        await pilot.pause(0.05)
+        waited += 0.05
+
+
+@asynccontextmanager
+async def tui(tmp_path: Path, *args: str, path: str = BRINGUP, size: tuple[int, int] = (100, 32))\
+        -> AsyncIterator[tuple[TuiLaunchApp, Pilot]]:
+    arguments = dict(a.split(":=", 1) for a in args)
+    app = make_app(path, arguments, tmp_path / "log")
+    async with app.run_test(size=size) as pilot:
+        try:
+            yield app, pilot
+        finally:
+            if app.supervisor is not None:
+                await app.supervisor.shutdown("test over")
+
+
+def states(app: TuiLaunchApp) -> dict[str, str]:
+    assert app.supervisor is not None
+    return app.supervisor.states
+
+
+def row_text(app: TuiLaunchApp, ref: str) -> str:
+    return str(app.query_one(LaunchTree).rows[ref].label)
+
+
+def pids(app: TuiLaunchApp) -> dict[str, int]:
+    assert app.supervisor is not None
+    return {pid: r.process.pid for pid, r in app.supervisor._running.items()}
+
+
+async def test_select_a_node_see_its_output_stop_restart_and_search(tmp_path):
+    async with tui(tmp_path, "robot:=tui1", "rate:=20", "services:=false") as (app, pilot):
+        await until(pilot, lambda: "running" in row_text(app, "talker-1"))
+        panel = app.query_one(OutputPanel)
+        # keyboard only: root, "all nodes", "ns /tui1", then the talker
+        await pilot.press("down", "down", "down")
+        assert panel.view.process == "talker-1"
+        await until(pilot, lambda: any("Publishing" in line for line in panel.log_widget.lines))
+        assert not any("[listener-2]" in line or "I heard" in line
+                       for line in panel.log_widget.lines)
+
+        first_pid = pids(app)["talker-1"]
+        await pilot.press("s")
+        await until(pilot, lambda: "exited" in row_text(app, "talker-1"))
+        assert states(app)["listener-2"] == "running"  # the others keep running
+        await pilot.press("r")
+        await until(pilot, lambda: states(app)["talker-1"] == "running")
+        assert pids(app)["talker-1"] != first_pid
+
+        await pilot.press("slash")
+        await pilot.press(*"says hi")
+        await pilot.press("enter")
+        status = str(app.query_one("#output-status").render())
+        assert panel.search == "says hi" and "search 'says hi' 1/" in status
+        await pilot.press("n")
+        assert panel.match_index == 1
+
+        await pilot.press("a")
+        assert panel.view.process is None
+        await until(pilot, lambda: any(line.startswith("[listener-2]")
+                                       for line in panel.log_widget.lines))
+        await pilot.press("l", "l", "l")  # ERROR and above: the INFO chatter is gone
+        assert not any("Publishing" in line for line in panel.log_widget.lines)
+
+
+async def test_editing_an_argument_previews_then_relaunches_only_what_changes(tmp_path):
+    async with tui(tmp_path, "robot:=tui2", "services:=false") as (app, pilot):
+        await until(pilot, lambda: states(app).get("listener-2") == "running"
+                    and states(app).get("talker-1") == "running")
+        talker_pid = pids(app)["talker-1"]
+        await pilot.press("2")
+        app.query_one("#arg-listener", Checkbox).value = False
+        await pilot.pause()
+        preview = str(app.query_one("#args-preview").render())
+        assert "would stop: listener-2" in preview
+        assert row_text(app, "listener-2").startswith("-")
+        assert states(app)["listener-2"] == "running"  # nothing changes before applying
+        assert app.query_one("#row-listener").has_class("changed")
+
+        await pilot.press("f5")
+        await until(pilot, lambda: states(app)["listener-2"] == "skipped")
+        assert app.session.arguments["listener"] == "false"
+        assert pids(app)["talker-1"] == talker_pid  # unaffected nodes keep running
+        assert "Applied. Stopped: listener-2" in str(app.query_one("#args-preview").render())
+
+
+ERRORING = """
+from simple_launch import SimpleLauncher
+sl = SimpleLauncher()
+sl.declare_arg('copies', 1, description='how many talkers (at most 3)')
+def setup():
+    if sl.arg('copies') > 3:
+        raise ValueError('at most 3 copies')
+    for i in range(sl.arg('copies')):
+        sl.node('tuilaunch_demos', 'talker', name=f'copy{i}')
+    return sl.launch_description()
+generate_launch_description = sl.launch_description(opaque_function=setup)
+"""
+
+
+async def test_a_bad_argument_value_shows_its_error_and_applies_nothing(tmp_path, write):
+    path = write(ERRORING)
+    async with tui(tmp_path, path=str(path)) as (app, pilot):
+        await until(pilot, lambda: states(app).get("copy0-1") == "running")
+        await pilot.press("2")
+        field = app.query_one("#arg-copies", Input)
+        field.value = "5"
+        await pilot.pause()
+        preview = app.query_one("#args-preview")
+        assert preview.has_class("error")
+        assert "raised ValueError: at most 3 copies" in str(preview.render())
+        await pilot.press("f5")
+        await pilot.pause()
+        assert app.session.arguments == {} and list(pids(app)) == ["copy0-1"]
+        field.value = "2"
+        await pilot.pause()
+        assert "would start: copy1-2" in str(preview.render())
+
+
+async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
+    async with tui(tmp_path, "robot:=tui3", "listener:=false") as (app, pilot):
+        await until(pilot, lambda: states(app).get("service_server-4") == "running")
+        await pilot.press("3")
+        panel = app.query_one(ServicesPanel)
+        await until(pilot, lambda: "/tui3/enable" in dict(panel.services),
+                    every=panel.refresh_services)
+        await pilot.press(*"tui3/enable")
+        await pilot.press("enter")  # picks the first match and moves to the form
+        assert panel.selected == ("/tui3/enable", "std_srvs/srv/SetBool")
+        await pilot.pause()
+        field = app.query_one("#field-data", Input)
+        assert app.focused is field  # straight into the form
+        assert field.value == "false"  # pre-filled with the type's default
+        field.value = "true"
+        await pilot.press("enter")
+        response = app.query_one("#svc-response")
+        await until(pilot, lambda: "message: enabled" in str(response.render()))
+        assert "success: true" in str(response.render())
+
+        field.value = "yes"
+        field.focus()
+        await pilot.press("enter")
+        await until(pilot, lambda: "needs a boolean" in str(response.render()))
+        assert response.has_class("error")
+
+        assert app.supervisor is not None
+        await app.supervisor.stop("service_server-4")
+        field.value = "true"
+        field.focus()
+        await pilot.press("enter")
+        await until(pilot, lambda: "not available" in str(response.render()), limit=30)
+        assert [r.ok for r in panel.history] == [True, False, False]
+
+
+async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
+    async with tui(tmp_path, "robot:=tui4", "listener:=false", "services:=false") as (app, pilot):
+        await until(pilot, lambda: states(app).get("set_parameters-1") == "done")
+        await pilot.press("4")
+        panel = app.query_one(ParamsPanel)
+        await until(pilot, lambda: "/tui4/control/configurable" in panel.nodes,
+                    every=panel.refresh_nodes)
+        await pilot.press(*"tui4/control")
+        await pilot.press("enter")
+        table = app.query_one(DataTable)
+        await until(pilot, lambda: table.row_count > 0 and "mode" in panel.params)
+        assert panel.params["mode"].value == "patrol"  # set by the launch file's action
+        table.move_cursor(row=list(panel.params).index("mode"))
+        await pilot.pause()
+        assert panel.current == "mode"
+        edit = app.query_one("#prm-edit", Input)
+        result = app.query_one("#prm-result")
+
+        edit.value = "dock"
+        edit.focus()
+        await pilot.press("enter")
+        await until(pilot, lambda: "now reports dock" in str(result.render()))
+        # the node itself logs the change it accepted
+        await until(pilot, lambda: any("parameter mode set to 'dock'" in line
+                                       for line in app.store.text(View("configurable-3"))))
+
+        edit.value = "fly"
+        await pilot.press("enter")
+        await until(pilot, lambda: "refused mode = fly" in str(result.render()))
+        assert "mode must be idle, patrol or dock" in str(result.render())
+
+        table.move_cursor(row=list(panel.params).index("speed"))
+        await pilot.pause()
+        edit.value = "fast"
+        await pilot.press("enter")
+        await until(pilot, lambda: "speed (float)" in str(result.render()))
+        assert result.has_class("error")
+
+
+async def test_quit_asks_while_nodes_run_and_leaves_no_process(tmp_path):
+    async with tui(tmp_path, "robot:=tui5") as (app, pilot):
+        await until(pilot, lambda: len(pids(app)) >= 4)
+        running = list(pids(app).values())
+        await pilot.press("q")
+        assert isinstance(app.screen, QuitScreen)
+        await pilot.press("n")
+        assert not isinstance(app.screen, QuitScreen) and pids(app)
+        await pilot.press("q")
+        await pilot.press("y")
+        await until(pilot, lambda: not pids(app))
+        assert "stopping" in str(app.query_one("#status").render())
+    for pid in running:
+        assert not os.path.exists(f"/proc/{pid}") or open(f"/proc/{pid}/stat").read().split()[
+            2] == "Z"
+
+
+WAITING = """
+from simple_launch import SimpleLauncher
+from simple_launch.events import When
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('sim', False, description='run the simulated base')
+    sl.declare_arg('robot', 'r1', description='robot name')
+    sl.declare_arg('mode', 'idle', choices=['idle', 'patrol'], description='start mode')
+    with sl.group(ns=sl.arg('robot'), when=When(delay=600.0)):
+        sl.node('tuilaunch_demos', 'talker')
+        with sl.group(if_arg='sim'):
+            sl.node('tuilaunch_demos', 'listener', name='base')
+    return sl.launch_description()
+"""
+
+
+@pytest.mark.parametrize("size", [(80, 24), (120, 40)])
+def test_layout_snapshot_nodes_tab(snap_compare, write, tmp_path, size):
+    app = make_app(str(write(WAITING, "layout.py")), {}, tmp_path / "log")
+    assert snap_compare(app, terminal_size=size)
+
+
+def test_layout_snapshot_args_tab(snap_compare, write, tmp_path):
+    app = make_app(str(write(WAITING, "layout.py")), {}, tmp_path / "log")
+    assert snap_compare(app, terminal_size=(80, 24), press=["2"])
+
+
+def test_args_form_editors_follow_argument_types(write, tmp_path):
+    import asyncio
+
+    from textual.widgets import Select
+
+    async def scenario() -> None:
+        app = make_app(str(write(WAITING, "layout.py")), {"sim": "true"}, tmp_path / "log")
+        async with app.run_test(size=(80, 24)):
+            form = app.query_one(ArgsPanel)
+            assert isinstance(form.query_one("#arg-sim"), Checkbox)
+            assert form.query_one("#arg-sim", Checkbox).value is True
+            assert isinstance(form.query_one("#arg-mode"), Select)
+            assert isinstance(form.query_one("#arg-robot"), Input)
+            assert form.query_one("#row-sim").has_class("changed")
+            assert not form.query_one("#row-robot").has_class("changed")
+            if app.supervisor is not None:
+                await app.supervisor.shutdown("test over")
+
+    asyncio.run(scenario())
+
+
+@pytest.mark.parametrize("how", [signal.SIGHUP, signal.SIGTERM])
+def test_tui_in_a_terminal_stops_everything_when_the_terminal_hangs_up(tmp_path, how):
+    """The ssh session drops (SIGHUP) or systemd stops it (SIGTERM): nothing survives."""
+    master, slave = pty.openpty()
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path), "TERM": "xterm-256color"}
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", BRINGUP, "robot:=tui_hup"],
+                            stdin=slave, stdout=slave, stderr=slave, env=env,
+                            start_new_session=True)
+    os.close(slave)
+    screen = b""
+    try:
+        deadline = time.monotonic() + 60
+        while b"5 running" not in screen and time.monotonic() < deadline:
+            ready, _, _ = select.select([master], [], [], 0.5)
+            if ready:
+                screen += os.read(master, 65536)  # a terminal that is read, as a real one
+        assert b"5 running" in screen
+        launch_log = next(tmp_path.glob("*-tuilaunch-*")) / "launch.log"
+        children = [int(w[4:]) for line in launch_log.read_text().splitlines()
+                    if " started " in line for w in line.split() if w.startswith("pid=")]
+        assert len(children) == 5
+        os.kill(proc.pid, how)
+        end = time.monotonic() + 60
+        while proc.poll() is None and time.monotonic() < end:
+            if select.select([master], [], [], 0.2)[0]:
+                try:
+                    os.read(master, 65536)
+                except OSError:
+                    break
+        assert proc.wait(timeout=30) is not None
+        gone = time.monotonic() + 30
+        while any(os.path.exists(f"/proc/{p}") for p in children) and time.monotonic() < gone:
+            time.sleep(0.1)
+        assert not [p for p in children if os.path.exists(f"/proc/{p}")]
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+        os.close(master)

@@ -1,0 +1,140 @@
+"""The argument form: an editor per argument type; edits are previewed before applying."""
+
+from __future__ import annotations
+
+import os
+
+from rich.text import Text
+from textual import on
+from textual.app import ComposeResult
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.message import Message
+from textual.widget import Widget
+from textual.widgets import Button, Checkbox, Input, Label, Select, Static
+
+from ..engine.plan import ArgumentInfo
+from ..engine.substitutions import text_to_bool
+
+
+class ArgsPanel(Vertical):
+    DEFAULT_CSS = """
+    ArgsPanel #args-preview { height: auto; max-height: 4; padding: 0 1; background: $boost; }
+    ArgsPanel #args-preview.error { color: $error; }
+    ArgsPanel #args-actions { height: 1; }
+    ArgsPanel .arg-row { height: auto; padding: 0 1; }
+    ArgsPanel .arg-line { height: 1; }
+    ArgsPanel .arg-name { width: 18; }
+    ArgsPanel .arg-row.changed .arg-name { text-style: bold reverse; }
+    ArgsPanel .arg-editor { width: 1fr; }
+    ArgsPanel Checkbox.arg-editor { width: auto; }
+    ArgsPanel .arg-help { color: $text-muted; padding-left: 18; }
+    """
+
+    class Edited(Message):
+        """The form's values changed: name -> text, for every argument."""
+
+        def __init__(self, values: dict[str, str]) -> None:
+            super().__init__()
+            self.values = values
+
+    class ApplyRequested(Message):
+        pass
+
+    def __init__(self, arguments: list[ArgumentInfo], top_file: str, **kwargs: object) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.arguments = arguments
+        self.top_file = top_file
+
+    def compose(self) -> ComposeResult:
+        yield Static("Edit a value to preview which nodes start or stop; F5 applies.",
+                     id="args-preview")
+        with Horizontal(id="args-actions"):
+            yield Button("Apply (F5)", id="apply", variant="primary", compact=True)
+            yield Button("Defaults", id="defaults", compact=True)
+        with VerticalScroll(id="args-form"):
+            for arg in self.arguments:
+                with Vertical(classes="arg-row", id=f"row-{arg.name}"):
+                    with Horizontal(classes="arg-line"):
+                        yield Label(arg.name, classes="arg-name")
+                        yield self._editor(arg)
+                    yield Static(self._help(arg), classes="arg-help")
+
+    def _help(self, arg: ArgumentInfo) -> str:
+        text = arg.description or "(no description)"
+        text += f"  [default {arg.default!r}, {arg.type}]"
+        if os.path.abspath(arg.file) != os.path.abspath(self.top_file):
+            text += f"  from {os.path.basename(arg.file)}"
+        return text
+
+    def _editor(self, arg: ArgumentInfo) -> Widget:
+        value = arg.value if arg.value is not None else (arg.default or "")
+        name = f"arg-{arg.name}"
+        if arg.choices:
+            options = [(c, c) for c in arg.choices]
+            if value not in arg.choices:
+                options.append((value, value))
+            return Select(options, value=value, allow_blank=False, id=name,
+                          classes="arg-editor", compact=True)
+        if arg.type == "bool" and text_to_bool(value) is not None:
+            state = bool(text_to_bool(value))
+            return Checkbox("true" if state else "false", value=state, id=name,
+                            classes="arg-editor", compact=True)
+        kind = {"int": "integer", "float": "number"}.get(arg.type, "text")
+        return Input(value, type=kind, id=name, classes="arg-editor",  # type: ignore[arg-type]
+                     compact=True)
+
+    def values(self) -> dict[str, str]:
+        out = {}
+        for arg in self.arguments:
+            editor = self.query_one(f"#arg-{arg.name}")
+            if isinstance(editor, Checkbox):
+                # keep the default's spelling when it is unchanged ("True" stays "True")
+                same = text_to_bool(arg.default or "") == editor.value
+                out[arg.name] = arg.default if same and arg.default else str(
+                    editor.value).lower()
+            elif isinstance(editor, Select):
+                out[arg.name] = str(editor.value)
+            elif isinstance(editor, Input):
+                out[arg.name] = editor.value
+        return out
+
+    def mark_changes(self) -> None:
+        values = self.values()
+        for arg in self.arguments:
+            row = self.query_one(f"#row-{arg.name}")
+            row.set_class(values[arg.name] != (arg.default or ""), "changed")
+
+    def set_preview_text(self, text: str, error: bool) -> None:
+        preview = self.query_one("#args-preview", Static)
+        preview.update(Text(text))
+        preview.set_class(error, "error")
+
+    def _edited(self) -> None:
+        self.mark_changes()
+        self.post_message(self.Edited(self.values()))
+
+    @on(Input.Changed)
+    @on(Checkbox.Changed)
+    @on(Select.Changed)
+    def _changed(self, event: Input.Changed | Checkbox.Changed | Select.Changed) -> None:
+        if isinstance(event, Checkbox.Changed):
+            event.checkbox.label = "true" if event.value else "false"
+        if self.is_mounted:
+            self._edited()
+
+    @on(Button.Pressed, "#apply")
+    def _apply(self) -> None:
+        self.post_message(self.ApplyRequested())
+
+    @on(Button.Pressed, "#defaults")
+    def _defaults(self) -> None:
+        for arg in self.arguments:
+            editor = self.query_one(f"#arg-{arg.name}")
+            default = arg.default or ""
+            if isinstance(editor, Checkbox):
+                editor.value = bool(text_to_bool(default))
+            elif isinstance(editor, Select):
+                editor.value = default
+            elif isinstance(editor, Input):
+                editor.value = default
+        self._edited()

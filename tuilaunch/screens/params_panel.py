@@ -1,0 +1,210 @@
+"""The parameter panel: live nodes, their parameters, edit, set, the node's answer."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import yaml
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Button, DataTable, Input, OptionList, Static
+from textual.widgets.option_list import Option
+
+from ..engine.plan import Plan
+from ..engine.ros_bridge import ParameterInfo
+
+
+def show_value(value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    return yaml.safe_dump(value, default_flow_style=True).strip().removesuffix("...").strip()
+
+
+def parse_value(type_name: str, text: str) -> Any:
+    """Text from the edit field in the parameter's declared type, or ValueError saying why."""
+    if type_name == "str":
+        return text
+    if type_name == "bool":
+        lowered = text.strip().lower()
+        if lowered not in ("true", "false"):
+            raise ValueError(f"needs true or false, got {text!r}")
+        return lowered == "true"
+    if type_name == "int":
+        return int(text)
+    if type_name == "float":
+        return float(text)
+    try:
+        value = yaml.safe_load(text)
+    except yaml.YAMLError:
+        raise ValueError(f"{text!r} is not a list like [1, 2]") from None
+    if not isinstance(value, list):
+        raise ValueError(f"needs a list like [1, 2], got {text!r}")
+    if type_name == "float[]":
+        return [float(v) for v in value]
+    if type_name == "int[]":
+        return [int(v) for v in value]
+    if type_name == "bool[]":
+        return [bool(v) for v in value]
+    return [str(v) for v in value]
+
+
+class ParamsPanel(Horizontal):
+    DEFAULT_CSS = """
+    ParamsPanel #prm-left { width: 30; border-right: tall $panel; }
+    ParamsPanel #prm-right { width: 1fr; padding: 0 1; }
+    ParamsPanel #prm-table { height: 1fr; }
+    ParamsPanel #prm-about { height: 2; color: $text-muted; }
+    ParamsPanel #prm-edit-row { height: 3; }
+    ParamsPanel #prm-edit { width: 1fr; }
+    ParamsPanel #prm-result { height: auto; }
+    ParamsPanel #prm-result.error { color: $error; }
+    """
+
+    def __init__(self, bridge: Callable[[], Any], plan: Callable[[], Plan],
+                 timeout: float = 5.0, **kwargs: object) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.bridge = bridge
+        self.plan = plan
+        self.timeout = timeout
+        self.nodes: list[str] = []
+        self.node: str | None = None
+        self.params: dict[str, ParameterInfo] = {}
+        self.current: str | None = None
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="prm-left"):
+            yield Input(placeholder="filter nodes", id="prm-filter")
+            yield OptionList(id="prm-nodes")
+            yield Button("Refresh", id="prm-refresh")
+        with Vertical(id="prm-right"):
+            yield DataTable(id="prm-table", cursor_type="row", zebra_stripes=True)
+            yield Static("Pick a node, then a parameter.", id="prm-about")
+            with Horizontal(id="prm-edit-row"):
+                yield Input(placeholder="new value (enter sets it)", id="prm-edit")
+                yield Button("Set", id="prm-set", variant="primary")
+            yield Static("", id="prm-result")
+
+    def on_mount(self) -> None:
+        table = self.query_one(DataTable)
+        for key, title in (("name", "name"), ("type", "type"), ("value", "value"),
+                           ("ro", "ro"), ("launch", "launch file")):
+            table.add_column(title, key=key)
+        self.refresh_nodes()
+
+    @work(group="params-nodes", exclusive=True, exit_on_error=False)
+    async def refresh_nodes(self) -> None:
+        try:
+            self.nodes = await self.bridge().list_nodes()
+        except Exception as exc:  # the panel reports, the app keeps running
+            self.show_result(f"cannot list nodes: {exc}", ok=False)
+            return
+        self._fill_nodes()
+        if self.node is not None:
+            self.load_node(self.node)
+
+    def _fill_nodes(self) -> None:
+        term = self.query_one("#prm-filter", Input).value.lower()
+        listing = self.query_one("#prm-nodes", OptionList)
+        listing.clear_options()
+        listing.add_options([Option(Text(n, no_wrap=True, overflow="ellipsis"), id=n)
+                             for n in self.nodes if term in n.lower()])
+
+    @on(Input.Changed, "#prm-filter")
+    def _filter(self) -> None:
+        self._fill_nodes()
+
+    @on(Input.Submitted, "#prm-filter")
+    def _filter_submitted(self) -> None:
+        listing = self.query_one("#prm-nodes", OptionList)
+        if listing.option_count:
+            self.load_node(str(listing.get_option_at_index(0).id))
+            self.query_one(DataTable).focus()
+
+    @on(Button.Pressed, "#prm-refresh")
+    def _refresh(self) -> None:
+        self.refresh_nodes()
+
+    @on(OptionList.OptionSelected, "#prm-nodes")
+    def _picked(self, event: OptionList.OptionSelected) -> None:
+        self.load_node(str(event.option.id))
+
+    def launch_values(self, node: str) -> dict[str, Any]:
+        """Parameters the launch file gave this node (inline ones; files are the user's)."""
+        for proc in self.plan().processes:
+            if proc.full_name == node:
+                return proc.parameters
+        return {}
+
+    @work(group="params-load", exclusive=True, exit_on_error=False)
+    async def load_node(self, node: str) -> None:
+        self.node = node
+        try:
+            described = await self.bridge().describe_parameters(node, timeout=self.timeout)
+        except Exception as exc:  # timeouts, vanished nodes: shown, never raised
+            self.show_result(f"{node}: {exc}", ok=False)
+            return
+        self.params = {p.name: p for p in described}
+        launch = self.launch_values(node)
+        table = self.query_one(DataTable)
+        table.clear()
+        for info in described:
+            from_launch = show_value(launch[info.name]) if info.name in launch else ""
+            table.add_row(info.name, info.type, show_value(info.value),
+                          "yes" if info.read_only else "", from_launch, key=info.name)
+        self.show_result(f"{node}: {len(described)} parameters", ok=True)
+
+    @on(DataTable.RowHighlighted)
+    def _highlighted(self, event: DataTable.RowHighlighted) -> None:
+        name = str(event.row_key.value)
+        info = self.params.get(name)
+        if info is None:
+            return
+        self.current = name
+        about = info.description or "(no description)"
+        if info.constraints:
+            about += f"  ({info.constraints})"
+        if info.read_only:
+            about += "  read-only"
+        self.query_one("#prm-about", Static).update(Text(f"{name} [{info.type}]: {about}"))
+        self.query_one("#prm-edit", Input).value = show_value(info.value)
+
+    @on(Button.Pressed, "#prm-set")
+    @on(Input.Submitted, "#prm-edit")
+    def _set(self) -> None:
+        self.set_current(self.query_one("#prm-edit", Input).value)
+
+    @work(group="params-set", exclusive=True, exit_on_error=False)
+    async def set_current(self, text: str) -> None:
+        if self.node is None or self.current is None:
+            self.show_result("pick a node and a parameter first", ok=False)
+            return
+        node, name = self.node, self.current
+        info = self.params[name]
+        try:
+            value = parse_value(info.type, text)
+        except ValueError as exc:
+            self.show_result(f"{name} ({info.type}) {exc}", ok=False)
+            return
+        try:
+            (result,) = await self.bridge().set_parameters(node, {name: value},
+                                                           timeout=self.timeout)
+            now = await self.bridge().get_parameters(node, [name], timeout=self.timeout)
+        except Exception as exc:  # timeouts and vanished nodes are shown in the panel
+            self.show_result(f"{node} {name}: {exc}", ok=False)
+            return
+        if result.successful:
+            self.show_result(f"set {name} = {show_value(value)}; {node} now reports "
+                             f"{show_value(now.get(name))}", ok=True)
+            info.value = now.get(name)
+            self.query_one(DataTable).update_cell(name, "value", show_value(info.value))
+        else:
+            self.show_result(f"{node} refused {name} = {show_value(value)}: {result.reason}",
+                             ok=False)
+
+    def show_result(self, text: str, ok: bool) -> None:
+        result = self.query_one("#prm-result", Static)
+        result.update(Text(text))
+        result.set_class(not ok, "error")

@@ -1,0 +1,262 @@
+"""The service panel: live services, a request form from the type, call, YAML response."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import yaml
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.widgets import Button, Input, Label, OptionList, Static
+from textual.widgets.option_list import Option
+
+from ..engine.messages import FieldInfo, MessageError, describe_fields, import_type
+from ..engine.ros_bridge import RosError
+
+
+@dataclass
+class CallRecord:
+    service: str
+    type: str
+    request: dict[str, Any]
+    outcome: str
+    ok: bool
+
+
+def leaf_fields(fields: list[FieldInfo], prefix: str = "") -> list[tuple[str, FieldInfo]]:
+    """Nested messages flattened to dotted paths: one input per leaf."""
+    out = []
+    for info in fields:
+        if info.children:
+            out += leaf_fields(info.children, f"{prefix}{info.name}.")
+        else:
+            out.append((f"{prefix}{info.name}", info))
+    return out
+
+
+def field_text(info: FieldInfo) -> str:
+    if isinstance(info.default, str) and not info.is_sequence:
+        return info.default
+    return yaml.safe_dump(info.default, default_flow_style=True).strip().removesuffix("...")\
+        .strip()
+
+
+def parse_field(info: FieldInfo, text: str) -> Any:
+    """A form value in the field's type; strings stay text, booleans are true or false
+    (YAML's `yes` is not), and what does not fit names the field."""
+    scalar = not info.is_sequence and not info.children
+    if info.type.startswith(("string", "wstring")) and scalar:
+        return text
+    if info.type == "boolean" and scalar:
+        lowered = text.strip().lower()
+        if lowered not in ("true", "false"):
+            raise MessageError(f"field '{info.name}' needs a boolean (true or false), "
+                               f"got {text!r}")
+        return lowered == "true"
+    try:
+        return yaml.safe_load(text) if text.strip() else info.default
+    except yaml.YAMLError as exc:
+        raise MessageError(f"field '{info.name}': {text!r} is not a value ({exc.problem})")\
+            from None
+
+
+def nest(flat: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for path, value in flat.items():
+        parts = path.split(".")
+        target = out
+        for part in parts[:-1]:
+            target = target.setdefault(part, {})
+        target[parts[-1]] = value
+    return out
+
+
+# services every rclpy/rclcpp node offers: listed only when the filter asks for them
+_STANDARD = ("/describe_parameters", "/get_parameter_types", "/get_parameters",
+             "/list_parameters", "/set_parameters", "/set_parameters_atomically",
+             "/get_type_description")
+
+
+class ServicesPanel(Horizontal):
+    DEFAULT_CSS = """
+    ServicesPanel #svc-left { width: 36; border-right: tall $panel; }
+    ServicesPanel #svc-list { height: 2fr; border-title-align: left; }
+    ServicesPanel #svc-history { height: 1fr; border-top: solid $panel; }
+    ServicesPanel #svc-right { width: 1fr; padding: 0 1; }
+    ServicesPanel #svc-title { height: auto; text-style: bold; }
+    ServicesPanel #svc-form { height: auto; max-height: 12; }
+    ServicesPanel .svc-field { height: 3; }
+    ServicesPanel .svc-field Label { width: 18; padding-top: 1; }
+    ServicesPanel .svc-field Input { width: 1fr; }
+    ServicesPanel #svc-call-row { height: 3; }
+    ServicesPanel #svc-response { height: 1fr; }
+    ServicesPanel #svc-response.error { color: $error; }
+    """
+
+    def __init__(self, bridge: Callable[[], Any], timeout: float = 5.0, **kwargs: object) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.bridge = bridge
+        self.timeout = timeout
+        self.services: list[tuple[str, list[str]]] = []
+        self.selected: tuple[str, str] | None = None
+        self.fields: list[tuple[str, FieldInfo]] = []
+        self.history: list[CallRecord] = []
+
+    def compose(self) -> ComposeResult:
+        with Vertical(id="svc-left"):
+            yield Input(placeholder="filter services", id="svc-filter")
+            yield OptionList(id="svc-list")
+            yield OptionList(id="svc-history")
+        with Vertical(id="svc-right"):
+            yield Static("Pick a service on the left.", id="svc-title")
+            yield VerticalScroll(id="svc-form")
+            with Horizontal(id="svc-call-row"):
+                yield Button("Call", id="svc-call", variant="primary", disabled=True)
+                yield Button("Refresh list", id="svc-refresh")
+            yield Static("", id="svc-response")
+
+    def on_mount(self) -> None:
+        self.query_one("#svc-history", OptionList).border_title = "history"
+        self.refresh_services()
+
+    @work(group="services-list", exclusive=True, exit_on_error=False)
+    async def refresh_services(self) -> None:
+        try:
+            self.services = await self.bridge().list_services()
+        except Exception as exc:  # a graph query must never take the panel down
+            self.show_response(f"cannot list services: {exc}", ok=False)
+            return
+        self._fill_list()
+
+    def _fill_list(self) -> None:
+        term = self.query_one("#svc-filter", Input).value.lower()
+        listing = self.query_one("#svc-list", OptionList)
+        highlighted = listing.highlighted
+        listing.clear_options()
+        shown = [name for name, types in self.services
+                 if (term in name.lower() or any(term in t.lower() for t in types))
+                 and (term or not name.endswith(_STANDARD))]
+        listing.add_options([Option(Text(name, no_wrap=True, overflow="ellipsis"), id=name)
+                             for name in shown])
+        hidden = "" if term else ", node parameter services hidden: type to search all"
+        listing.border_title = f"{len(shown)} services{hidden}"
+        if listing.option_count:
+            keep = highlighted is not None and highlighted < listing.option_count
+            listing.highlighted = highlighted if keep else 0
+
+    @on(Input.Changed, "#svc-filter")
+    def _filter(self) -> None:
+        self._fill_list()
+
+    @on(Input.Submitted, "#svc-filter")
+    def _filter_submitted(self) -> None:
+        """Enter in the filter picks the first match: type a few letters, enter, call."""
+        listing = self.query_one("#svc-list", OptionList)
+        if listing.option_count:
+            name = str(listing.get_option_at_index(listing.highlighted or 0).id)
+            self.select_service(name, (dict(self.services).get(name) or ["?"])[0])
+            self.call_after_refresh(self._focus_form)
+
+    def _focus_form(self) -> None:
+        """Once the form is mounted: the first field, or Call for an empty request."""
+        inputs = self.query("#svc-form Input")
+        (inputs.first() if inputs else self.query_one("#svc-call")).focus()
+
+    @on(Button.Pressed, "#svc-refresh")
+    def _refresh(self) -> None:
+        self.refresh_services()
+
+    @on(OptionList.OptionSelected, "#svc-list")
+    def _picked(self, event: OptionList.OptionSelected) -> None:
+        name = str(event.option.id)
+        types = dict(self.services).get(name) or ["?"]
+        self.select_service(name, types[0])
+
+    def select_service(self, name: str, type_name: str,
+                       values: dict[str, str] | None = None) -> None:
+        title = self.query_one("#svc-title", Static)
+        form = self.query_one("#svc-form", VerticalScroll)
+        form.remove_children()
+        try:
+            fields = describe_fields(import_type(type_name).Request)
+        except MessageError as exc:
+            self.selected = None
+            title.update(Text(f"{name}  {type_name}"))
+            self.show_response(str(exc), ok=False)
+            self.query_one("#svc-call", Button).disabled = True
+            return
+        self.selected = (name, type_name)
+        self.fields = leaf_fields(fields)
+        title.update(Text(f"{name}  {type_name}" + ("" if self.fields else "  (empty request)")))
+        for path, info in self.fields:
+            text = (values or {}).get(path, field_text(info))
+            form.mount(Horizontal(Label(path), Input(text, id=f"field-{path.replace('.', '-')}",
+                                                     tooltip=info.type),
+                                  classes="svc-field"))
+        self.query_one("#svc-call", Button).disabled = False
+
+    def request(self) -> dict[str, Any]:
+        flat = {}
+        for path, info in self.fields:
+            text = self.query_one(f"#field-{path.replace('.', '-')}", Input).value
+            flat[path] = parse_field(info, text)
+        return nest(flat)
+
+    @on(Button.Pressed, "#svc-call")
+    @on(Input.Submitted, "#svc-form Input")
+    def _call(self) -> None:
+        self.call_selected()
+
+    @work(group="services-call", exclusive=True, exit_on_error=False)
+    async def call_selected(self) -> None:
+        if self.selected is None:
+            return
+        name, type_name = self.selected
+        try:
+            request = self.request()
+            self.show_response(f"calling {name} ...", ok=True)
+            _, response = await self.bridge().call_service(
+                name, request, timeout=self.timeout, service_type=type_name)
+        except (MessageError, RosError) as exc:
+            self._record(CallRecord(name, type_name, {}, str(exc), False))
+            return
+        except Exception as exc:  # anything else is shown, never raised into the app
+            self._record(CallRecord(name, type_name, {}, f"{type(exc).__name__}: {exc}", False))
+            return
+        text = yaml.safe_dump(response, sort_keys=False, default_flow_style=False).strip()
+        self._record(CallRecord(name, type_name, request, text, True))
+
+    def _record(self, record: CallRecord) -> None:
+        self.history.append(record)
+        self.show_response(record.outcome, record.ok)
+        mark = "ok" if record.ok else "error"
+        self.query_one("#svc-history", OptionList).add_option(
+            Option(f"{len(self.history)}. {record.service} {mark}", id=str(len(self.history))))
+
+    @on(OptionList.OptionSelected, "#svc-history")
+    def _recall(self, event: OptionList.OptionSelected) -> None:
+        record = self.history[int(str(event.option.id)) - 1]
+        flat = {path: yaml.safe_dump(value, default_flow_style=True).strip().removesuffix(
+            "...").strip() if not isinstance(value, str) else value
+            for path, value in _flatten(record.request).items()}
+        self.select_service(record.service, record.type, flat)
+        self.show_response(record.outcome, record.ok)
+
+    def show_response(self, text: str, ok: bool) -> None:
+        response = self.query_one("#svc-response", Static)
+        response.update(Text(text))
+        response.set_class(not ok, "error")
+
+
+def _flatten(values: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in values.items():
+        if isinstance(value, dict):
+            out.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out

@@ -1,0 +1,135 @@
+"""The group tree: namespaces, conditions, triggers, includes, nodes with live states."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rich.text import Text
+from textual.widgets import Tree
+from textual.widgets.tree import TreeNode
+
+from ..engine.plan import Plan, PlanDiff, TreeItem
+
+ALL = "__all__"
+
+# icon and style per state; the word is always shown too, so 16 colours or NO_COLOR suffice
+STATE_LOOK = {
+    "pending": ("…", "yellow", "waiting"),
+    "running": ("●", "green", "running"),
+    "exited": ("■", "", "exited"),
+    "failed": ("✗", "red", "failed"),
+    "respawning": ("↻", "yellow", "respawning"),
+    "skipped": ("○", "dim", "skipped"),
+    "stopping": ("◌", "yellow", "stopping"),
+    "done": ("✓", "green", "done"),
+    "cancelled": ("○", "dim", "cancelled"),
+}
+# an action "running" is waiting for its service or node
+ACTION_WORDS = {"running": "working", "pending": "waiting"}
+
+
+@dataclass
+class RowData:
+    """What a tree row stands for: a process or action id, a group's processes, or all."""
+
+    kind: str  # "all" | "process" | "action" | "group"
+    ref: str | None
+    processes: list[str]
+
+
+class LaunchTree(Tree[RowData]):
+    DEFAULT_CSS = """
+    LaunchTree { width: 34; min-width: 24; border-right: tall $panel; }
+    """
+
+    def __init__(self, **kwargs: object) -> None:
+        super().__init__("launch", data=RowData("group", None, []), **kwargs)  # type: ignore
+        self.rows: dict[str, TreeNode[RowData]] = {}
+        self.plan: Plan | None = None
+        self.details: dict[str, str] = {}
+        self.action_labels: dict[str, str] = {}
+        self.states: dict[str, str] = {}
+        self.preview: PlanDiff | None = None
+
+    def show_plan(self, plan: Plan, states: dict[str, str]) -> None:
+        self.plan = plan
+        self.states = dict(states)
+        self.clear()
+        self.rows = {}
+        self.root.set_label(plan.file.rsplit("/", 1)[-1])
+        self.root.data = RowData("group", None, [p.id for p in plan.enabled_processes()])
+        self.root.add_leaf("all nodes", RowData("all", ALL, []))
+        for child in plan.tree.children:
+            self._add(self.root, child)
+        self.root.expand_all()
+
+    def _add(self, parent: TreeNode[RowData], item: TreeItem) -> list[str]:
+        if item.kind == "process" and item.ref:
+            node = parent.add_leaf(item.ref, RowData("process", item.ref, [item.ref]))
+            self.rows[item.ref] = node
+            self.refresh_row(item.ref)
+            return [item.ref]
+        if item.kind == "action" and item.ref:
+            node = parent.add_leaf(item.label, RowData("action", item.ref, []))
+            self.rows[item.ref] = node
+            self.action_labels[item.ref] = item.label
+            self.refresh_row(item.ref)
+            return []
+        node = parent.add(self._group_label(item), RowData("group", None, []))
+        processes: list[str] = []
+        for child in item.children:
+            processes += self._add(node, child)
+        assert node.data is not None
+        node.data.processes = processes
+        return processes
+
+    def _group_label(self, item: TreeItem) -> Text:
+        label = Text(item.label)
+        if item.condition is not None:
+            label.append(f" = {item.condition.value}", "bold" if item.enabled else "dim")
+        if item.trigger is not None:
+            label.append(f" ⏱ {item.trigger.describe()}", "italic")
+        if not item.enabled:
+            label.stylize("dim")
+        return label
+
+    def set_state(self, ref: str, state: str, detail: str = "") -> None:
+        self.states[ref] = state
+        if detail:
+            self.details[ref] = detail
+        self.refresh_row(ref)
+
+    def set_preview(self, diff: PlanDiff | None) -> None:
+        old = self.preview
+        self.preview = diff
+        for ref in set(self.rows) & set(_refs(old) | _refs(diff)):
+            self.refresh_row(ref)
+
+    def refresh_row(self, ref: str) -> None:
+        node = self.rows.get(ref)
+        if node is None or self.plan is None:
+            return
+        state = self.states.get(ref, "pending")
+        icon, style, word = STATE_LOOK.get(state, ("?", "", state))
+        if node.data is not None and node.data.kind == "action":
+            word = ACTION_WORDS.get(state, word)
+        label = Text()
+        if self.preview is not None:
+            if ref in self.preview.start:
+                label.append("+", "bold green")
+            elif ref in self.preview.stop:
+                label.append("-", "bold red")
+        label.append(f"{icon} ", style)
+        if node.data is not None and node.data.kind == "process":
+            proc = self.plan.process(ref)
+            label.append(proc.name or ref, "bold" if state == "running" else "")
+            label.append(f" [{ref}]" if proc.name else "", "dim")
+        else:
+            label.append(self.action_labels.get(ref, ref))
+        detail = self.details.get(ref, "")
+        label.append(f" {word}{' ' + detail if detail else ''}", style or "dim")
+        node.set_label(label)
+
+
+def _refs(diff: PlanDiff | None) -> set[str]:
+    return set() if diff is None else set(diff.start) | set(diff.stop)
