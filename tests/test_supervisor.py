@@ -298,3 +298,20 @@ def generate_launch_description():
         "mouth-2", "ear-1", "ear-1", "mouth-2"]
     assert output_of("ear-1").count("STARTUP") == 2
     assert status == 0 and not (tmp_path / "params").exists()  # parameter files are removed
+
+
+def test_log_file_holds_each_line_while_the_process_still_runs(write, tmp_path, kill_leftovers):
+    path = write(HEADER + """
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo first line; sleep 600'], name='slow'))
+    return sl.launch_description()
+""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    kill_leftovers.append(proc)
+    read_until(proc, "[slow-1] first line")
+    log = next(tmp_path.glob("*-tuilaunch-*")) / "slow-1.log"
+    assert log.read_text().endswith(" stdout first line\n")  # not held in a buffer
+    os.killpg(proc.pid, signal.SIGINT)
+    proc.wait(timeout=60)

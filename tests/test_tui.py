@@ -54,7 +54,7 @@ async def tui(tmp_path: Path, *args: str, path: str = BRINGUP, size: tuple[int, 
             yield app, pilot
         finally:
             if app.supervisor is not None:
-                await app.supervisor.shutdown("test over")
+                await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 def states(app: TuiLaunchApp) -> dict[str, str]:
@@ -187,7 +187,7 @@ async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
         assert response.has_class("error")
 
         assert app.supervisor is not None
-        await app.supervisor.stop("service_server-4")
+        await app.engine.run(app.supervisor.stop("service_server-4"))
         field.value = "true"
         field.focus()
         await pilot.press("enter")
@@ -294,7 +294,7 @@ def test_args_form_editors_follow_argument_types(write, tmp_path):
             assert form.query_one("#row-sim").has_class("changed")
             assert not form.query_one("#row-robot").has_class("changed")
             if app.supervisor is not None:
-                await app.supervisor.shutdown("test over")
+                await app.engine.run(app.supervisor.shutdown("test over"))
 
     asyncio.run(scenario())
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
+import sys
+import threading
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -21,6 +23,7 @@ from textual.binding import Binding
 from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane, Tree
 
+from .engine.engine_thread import EngineThread
 from .engine.event_buffer import EventBuffer
 from .engine.ros_bridge import RosBridge
 from .engine.session import Preview, Session
@@ -64,13 +67,16 @@ class TuiLaunchApp(App[int]):
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
         self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
-        self.buffer = EventBuffer(max_lines=scrollback * 4)
+        # lines shown per drain tick at most: 20 ticks/s x 2500 is more than anyone reads;
+        # the rest is counted on screen and kept in the log files
+        self.buffer = EventBuffer(max_lines=2500)
         self.supervisor: Supervisor | None = None
         self.preview: Preview | None = None
         self.exit_status = 0
         self.quitting = False
         self.terminal_lost = False
         self._bridge: RosBridge | None = None
+        self._bridge_lock = threading.Lock()
 
     # --- layout ----------------------------------------------------------------------
 
@@ -92,9 +98,10 @@ class TuiLaunchApp(App[int]):
 
     def bridge(self) -> RosBridge:
         """The one rclpy context, shared by the supervisor's actions and the panels."""
-        if self._bridge is None:
-            self._bridge = RosBridge()
-        return self._bridge
+        with self._bridge_lock:  # the engine thread and the UI may both ask first
+            if self._bridge is None:
+                self._bridge = RosBridge()
+            return self._bridge
 
     def on_mount(self) -> None:
         # held, not queried: App.query_one searches the active screen, which is a modal
@@ -104,8 +111,14 @@ class TuiLaunchApp(App[int]):
         self.args_panel = self.query_one(ArgsPanel)
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
-        self.supervisor = Supervisor(self.session.plan, self.log_dir, self.sigterm_timeout,
-                                     self.sigkill_timeout, bridge_factory=self.bridge)
+        # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
+        sys.setswitchinterval(0.001)
+        self.engine = EngineThread()
+        # built on the engine thread, whose loop its asyncio objects belong to
+        self.supervisor = self.engine.call(lambda: Supervisor(
+            self.session.plan, self.log_dir, sigterm_timeout=self.sigterm_timeout,
+            sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
+        assert self.supervisor is not None
         self.supervisor.subscribe(self.buffer)
         tree = self.launch_tree
         tree.show_plan(self.session.plan, self.supervisor.states)
@@ -121,7 +134,7 @@ class TuiLaunchApp(App[int]):
     @work(group="supervisor", exit_on_error=False)
     async def run_supervisor(self) -> None:
         assert self.supervisor is not None
-        self.exit_status = await self.supervisor.run(keep_alive=True)
+        self.exit_status = await self.engine.run(self.supervisor.run(keep_alive=True))
         if self._bridge is not None:
             await asyncio.to_thread(self._bridge.close)
             self._bridge = None
@@ -137,6 +150,7 @@ class TuiLaunchApp(App[int]):
         # any exit path that skipped the graceful shutdown still leaves no process behind
         if self.supervisor is not None:
             self.supervisor.kill_all()
+            self.engine.stop()
         if self._bridge is not None:
             self._bridge.close()
             self._bridge = None
@@ -245,7 +259,7 @@ class TuiLaunchApp(App[int]):
             if verb in ("stop", "restart") and supervisor.states.get(process) == "running":
                 tree.set_state(process, "stopping")
             coroutine = getattr(supervisor, verb)(process)
-            self.run_worker(coroutine, group="commands", exit_on_error=False)
+            self.run_worker(self.engine.run(coroutine), group="commands", exit_on_error=False)
         self.refresh_bindings()
 
     def action_stop(self) -> None:
@@ -328,7 +342,7 @@ class TuiLaunchApp(App[int]):
     async def relaunch(self, preview: Preview) -> None:
         assert self.supervisor is not None
         plan = self.session.accept(preview)
-        diff = await self.supervisor.replace_plan(plan)
+        diff = await self.engine.run(self.supervisor.replace_plan(plan))
         self.preview = None
         tree = self.launch_tree
         tree.set_preview(None)
@@ -374,8 +388,8 @@ class TuiLaunchApp(App[int]):
             return
         self.quitting = True
         self.update_status()
-        self.run_worker(self.supervisor.shutdown("quit from the UI"), group="shutdown",
-                        exit_on_error=False)
+        self.run_worker(self.engine.run(self.supervisor.shutdown("quit from the UI")),
+                        group="shutdown", exit_on_error=False)
 
     # --- command palette ---------------------------------------------------------------------
 

@@ -7,6 +7,7 @@ files already hold every line. Other events (started, exited, ...) are never dro
 
 from __future__ import annotations
 
+import itertools
 import threading
 from collections import deque
 
@@ -16,7 +17,11 @@ from .supervisor import Event
 class EventBuffer:
     def __init__(self, max_lines: int = 20_000) -> None:
         self.max_lines = max_lines
-        self._events: deque[Event] = deque()
+        # two queues, merged by sequence number on drain, so trimming output is O(1) per
+        # event however much other traffic is waiting
+        self._output: deque[tuple[int, Event]] = deque()
+        self._other: list[tuple[int, Event]] = []
+        self._sequence = itertools.count()
         self._lines = 0
         self._dropped: dict[str, int] = {}
         self._lock = threading.Lock()
@@ -24,39 +29,38 @@ class EventBuffer:
 
     def __call__(self, event: Event) -> None:
         with self._lock:
-            self._events.append(event)
-            if event.kind == "output":
-                self._lines += len(event.lines)
-                if self._lines > self.max_lines:
-                    self._trim()
+            entry = (next(self._sequence), event)
+            if event.kind != "output":
+                self._other.append(entry)
+                return
+            self._output.append(entry)
+            self._lines += len(event.lines)
+            while self._lines > self.max_lines:
+                self._trim_oldest(self._lines - self.max_lines)
 
-    def _trim(self) -> None:
-        excess = self._lines - self.max_lines
-        kept: deque[Event] = deque()
-        for event in self._events:
-            if excess > 0 and event.kind == "output":
-                cut = min(excess, len(event.lines))
-                excess -= cut
-                self._lines -= cut
-                self.total_dropped += cut
-                name = event.process or ""
-                self._dropped[name] = self._dropped.get(name, 0) + cut
-                if cut == len(event.lines):
-                    continue
-                event.lines = event.lines[cut:]
-            kept.append(event)
-        self._events = kept
+    def _trim_oldest(self, excess: int) -> None:
+        _, oldest = self._output[0]
+        cut = min(excess, len(oldest.lines))
+        name = oldest.process or ""
+        self._dropped[name] = self._dropped.get(name, 0) + cut
+        self.total_dropped += cut
+        self._lines -= cut
+        if cut == len(oldest.lines):
+            self._output.popleft()
+        else:
+            oldest.lines = oldest.lines[cut:]
 
     def drain(self) -> list[Event]:
         """Everything buffered, oldest first, after one `dropped` event per process that lost
         lines since the last drain (`code` is the count)."""
         with self._lock:
-            events = list(self._events)
+            entries = sorted([*self._output, *self._other], key=lambda entry: entry[0])
             dropped = self._dropped
-            self._events = deque()
+            self._output = deque()
+            self._other = []
             self._lines = 0
             self._dropped = {}
         notices = [Event("dropped", name, code=count,
                          reason=f"{count} lines not shown (all are in the log file)")
                    for name, count in dropped.items()]
-        return notices + events
+        return notices + [event for _, event in entries]

@@ -387,11 +387,16 @@ class Supervisor:
             if lines:
                 stamp = f"{time.time():.6f} {name} "
                 running.log.write("".join(stamp + strip_ansi(line) + "\n" for line in lines))
+                # on disk at once: a tail -f sees it, and a SIGKILL of tuilaunch loses nothing
+                running.log.flush()
                 self._emit(Event("output", running.plan.id, stream=name, lines=lines))
                 if self._io_watchers:
                     self._dispatch_io(running.plan.id, name, lines, running.process.pid)
             if not chunk:
                 return
+            # a flooding process must not starve the UI sharing this loop: yield between
+            # chunks; the pipe then holds the producer back, and nothing is lost
+            await asyncio.sleep(0)
 
     async def _wait(self, running: _Running) -> None:
         code = await running.process.wait()

@@ -1,0 +1,204 @@
+"""TUI figures, one run on this machine, each beside its floor.
+
+1. Keypress-to-screen latency (median and worst over 40 presses) while 4 processes flood
+   output as fast as they can (`yes`), against the same with 4 quiet processes (target:
+   worst under 100 ms). Measured end to end on a pseudo-terminal: from writing the key `l`
+   until the output pane's status line, redrawn, names the new level.
+2. Memory of the TUI with 100 processes and full scrollbacks (5000 lines each).
+3. Time to first screen on a real pseudo-terminal, against a minimal Textual app's.
+
+    python bench/tui_bench.py
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import pty
+import select
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from tuilaunch.app import make_app
+from tuilaunch.engine.packages import ensure_environment
+from tuilaunch.output_store import View
+
+
+def launch_file(folder: Path, name: str, body: str) -> Path:
+    path = folder / name
+    path.write_text("from launch import LaunchDescription\n"
+                    "from launch.actions import ExecuteProcess\n"
+                    f"def generate_launch_description():\n    return LaunchDescription({body})\n")
+    return path
+
+
+class Terminal:
+    """tuilaunch on a pseudo-terminal, its output read continuously as a terminal would."""
+
+    def __init__(self, argv: list[str], log_dir: Path) -> None:
+        self.master, slave = pty.openpty()
+        env = {**os.environ, "TERM": "xterm-256color", "ROS_LOG_DIR": str(log_dir)}
+        self.proc = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave, env=env,
+                                     start_new_session=True)
+        os.close(slave)
+        self.seen = b""
+
+    def read_until(self, marker: bytes, limit: float = 30.0) -> float:
+        """Seconds until `marker` appears in what is printed from now on."""
+        start = time.perf_counter()
+        window = b""
+        while marker not in window:
+            if time.perf_counter() - start > limit:
+                raise AssertionError(f"{marker!r} never appeared")
+            if select.select([self.master], [], [], 0.05)[0]:
+                window = window[-4096:] + os.read(self.master, 1 << 20)
+        return time.perf_counter() - start
+
+    def press(self, key: bytes) -> None:
+        os.write(self.master, key)
+
+    def close(self) -> None:
+        self.proc.terminate()
+        try:
+            while self.proc.poll() is None:
+                if select.select([self.master], [], [], 0.2)[0]:
+                    os.read(self.master, 1 << 20)
+        except OSError:
+            pass
+        self.proc.wait(timeout=60)
+        os.close(self.master)
+
+
+LEVEL_WORDS = ("INFO", "WARN", "ERROR", "FATAL", "DEBUG")
+
+
+def latency(path: Path, log_dir: Path, presses: int = 40) -> tuple[float, float]:
+    """Key `l` cycles the level filter; its new name in the status line is the redraw."""
+    term = Terminal([sys.executable, "-m", "tuilaunch", str(path)], log_dir)
+    try:
+        term.read_until(b"4 running", limit=60)
+        time.sleep(1.0)  # the flood at its steady state
+        times = []
+        for i in range(presses):
+            term.press(b"l")
+            word = LEVEL_WORDS[i % len(LEVEL_WORDS)].encode()
+            times.append(term.read_until(b"level " + word + b"+"))
+            time.sleep(0.05)
+    finally:
+        term.close()
+    return statistics.median(times) * 1000, max(times) * 1000
+
+
+def rss_mb() -> float:
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return 0.0
+
+
+async def memory(path: Path, log_dir: Path, count: int, lines: int) -> tuple[float, int]:
+    """RSS growth once every process has printed all its lines (the log files say so),
+    and how many lines the scrollbacks then hold."""
+    before = rss_mb()
+    app = make_app(str(path), {}, log_dir, scrollback=5000)
+    async with app.run_test(size=(100, 30)) as pilot:
+        assert app.supervisor is not None
+        deadline = time.monotonic() + 300
+
+        def logged() -> int:
+            return sum(sum(1 for _ in open(f)) for f in log_dir.glob("n*.log"))
+
+        while logged() < count * lines:
+            assert time.monotonic() < deadline, "the printers never finished"
+            await pilot.pause(1.0)
+        await pilot.pause(1.0)  # the last drain ticks
+        held = sum(len(app.store.lines(View(p))) for p in app.supervisor.states)
+        used = rss_mb() - before
+        await app.engine.run(app.supervisor.shutdown("bench over"))
+    return used, held
+
+
+def first_screen(argv: list[str], marker: bytes) -> float:
+    master, slave = pty.openpty()
+    start = time.perf_counter()
+    proc = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave,
+                            env={**os.environ, "TERM": "xterm-256color"},
+                            start_new_session=True)
+    os.close(slave)
+    seen = b""
+    while marker not in seen:
+        if select.select([master], [], [], 30)[0]:
+            seen += os.read(master, 65536)
+        else:
+            raise AssertionError(f"no first screen from {argv}")
+    elapsed = time.perf_counter() - start
+    proc.terminate()
+    try:
+        while select.select([master], [], [], 0.2)[0]:
+            os.read(master, 65536)
+    except OSError:
+        pass
+    proc.wait(timeout=60)
+    os.close(master)
+    return elapsed
+
+
+MINIMAL = """
+from textual.app import App
+from textual.widgets import Static
+class Minimal(App):
+    def compose(self):
+        yield Static("minimal first screen")
+Minimal().run()
+"""
+
+
+def main() -> None:
+    ensure_environment()
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    with tempfile.TemporaryDirectory() as name:
+        folder = Path(name)
+        flood = launch_file(folder, "flood.py", "[ExecuteProcess(cmd=['yes', 'flooding the "
+                            "pane with a line of text'], name=f'flood{i}') for i in range(4)]")
+        quiet = launch_file(folder, "quiet.py", "[ExecuteProcess(cmd=['sleep', '600'], "
+                            "name=f'quiet{i}') for i in range(4)]")
+        q_med, q_max = latency(quiet, folder / "q")
+        f_med, f_max = latency(flood, folder / "f")
+        print(f"keypress latency, 4 quiet processes:    median {q_med:.1f} ms, "
+              f"worst {q_max:.1f} ms")
+        print(f"keypress latency, 4 flooding processes: median {f_med:.1f} ms, "
+              f"worst {f_max:.1f} ms (target: worst < 100 ms)")
+        printer = folder / "printer.py"
+        printer.write_text("import time\nfor i in range(6000):\n"
+                           "    print(f'[INFO] [bench]: line {i} of a typical node log', "
+                           "flush=True)\n    if i % 3 == 0:\n        time.sleep(0.01)\n"
+                           "time.sleep(600)\n")
+        hundred = launch_file(folder, "hundred.py", f"[ExecuteProcess(cmd=['{sys.executable}', "
+                              f"'{printer}'], name=f'n{{i}}') for i in range(100)]")
+        used, held = asyncio.run(memory(hundred, folder / "m", 100, 6000))
+        print(f"memory of the TUI with 100 processes after 6000 lines each (scrollback 5000 "
+              f"per process, {held} lines held): {used:.0f} MB over the Python process "
+              "before the app")
+        waiting = folder / "one.py"
+        waiting.write_text(
+            "from simple_launch import SimpleLauncher\n"
+            "from simple_launch.events import When\n"
+            "def generate_launch_description():\n"
+            "    sl = SimpleLauncher()\n"
+            "    with sl.group(when=When(delay=600.0)):\n"
+            "        sl.node('tuilaunch_demos', 'talker')\n"
+            "    return sl.launch_description()\n")
+        ours = first_screen([sys.executable, "-m", "tuilaunch", str(waiting)], b"1 waiting")
+        minimal_script = folder / "minimal.py"
+        minimal_script.write_text(MINIMAL)
+        floor = first_screen([sys.executable, str(minimal_script)], b"minimal first screen")
+        print(f"time to first screen: tuilaunch {ours:.2f} s, minimal Textual app "
+              f"{floor:.2f} s (ratio {ours / floor:.1f}x)")
+
+
+if __name__ == "__main__":
+    main()
