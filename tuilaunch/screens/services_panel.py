@@ -60,7 +60,8 @@ def parse_field(info: FieldInfo, text: str) -> Any:
     try:
         return yaml.safe_load(text) if text.strip() else info.default
     except yaml.YAMLError as exc:
-        raise MessageError(f"field '{info.name}': {text!r} is not a value ({exc.problem})")\
+        detail = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise MessageError(f"field '{info.name}': {text!r} is not a value ({detail})")\
             from None
 
 
