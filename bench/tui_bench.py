@@ -23,17 +23,11 @@ import tempfile
 import time
 from pathlib import Path
 
+from run_bench import write_launch  # bench/ is on sys.path when run as a script
+
 from tuilaunch.app import make_app
 from tuilaunch.engine.packages import ensure_environment
 from tuilaunch.output_store import View
-
-
-def launch_file(folder: Path, name: str, body: str) -> Path:
-    path = folder / name
-    path.write_text("from launch import LaunchDescription\n"
-                    "from launch.actions import ExecuteProcess\n"
-                    f"def generate_launch_description():\n    return LaunchDescription({body})\n")
-    return path
 
 
 class Terminal:
@@ -162,9 +156,9 @@ def main() -> None:
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
-        flood = launch_file(folder, "flood.py", "[ExecuteProcess(cmd=['yes', 'flooding the "
+        flood = write_launch(folder, "flood.py", "[ExecuteProcess(cmd=['yes', 'flooding the "
                             "pane with a line of text'], name=f'flood{i}') for i in range(4)]")
-        quiet = launch_file(folder, "quiet.py", "[ExecuteProcess(cmd=['sleep', '600'], "
+        quiet = write_launch(folder, "quiet.py", "[ExecuteProcess(cmd=['sleep', '600'], "
                             "name=f'quiet{i}') for i in range(4)]")
         q_med, q_max = latency(quiet, folder / "q")
         f_med, f_max = latency(flood, folder / "f")
@@ -177,7 +171,7 @@ def main() -> None:
                            "    print(f'[INFO] [bench]: line {i} of a typical node log', "
                            "flush=True)\n    if i % 3 == 0:\n        time.sleep(0.01)\n"
                            "time.sleep(600)\n")
-        hundred = launch_file(folder, "hundred.py", f"[ExecuteProcess(cmd=['{sys.executable}', "
+        hundred = write_launch(folder, "hundred.py", f"[ExecuteProcess(cmd=['{sys.executable}', "
                               f"'{printer}'], name=f'n{{i}}') for i in range(100)]")
         used, held = asyncio.run(memory(hundred, folder / "m", 100, 6000))
         print(f"memory of the TUI with 100 processes after 6000 lines each (scrollback 5000 "

@@ -189,11 +189,9 @@ class TuiLaunchApp(App[int]):
         if self.supervisor is None:
             return
         counts: dict[str, int] = {}
-        for ref, state in self.supervisor.states.items():
-            if ref in self.launch_tree.rows and not ref.startswith(
-                    ("call_service", "set_parameters", "log", "event_callback", "shutdown",
-                     "load_components")):
-                counts[state] = counts.get(state, 0) + 1
+        for proc in self.session.plan.processes:
+            state = self.supervisor.states.get(proc.id, "pending")
+            counts[state] = counts.get(state, 0) + 1
         order = ("running", "pending", "exited", "failed", "respawning", "skipped")
         text = "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in order
                          if counts.get(s))

@@ -33,12 +33,12 @@ class OutputHighlighter(Highlighter):
         prefix = _PREFIX_RE.match(plain)
         if prefix:
             text.stylize("cyan", 0, prefix.end())
-        for match in _LEVEL_RE.finditer(plain):
-            style = _LEVEL_STYLES[match.group(1)]
-            if style:
-                text.stylize(style, match.start(), len(plain) if "ERROR" in style or "red"
-                             in style else match.end())
-            break
+        level = _LEVEL_RE.search(plain)
+        if level is not None and _LEVEL_STYLES[level.group(1)]:
+            # errors colour their whole line, so they stand out in a scrolling pane
+            whole = level.group(1) in ("ERROR", "FATAL")
+            text.stylize(_LEVEL_STYLES[level.group(1)], level.start(),
+                         len(plain) if whole else level.end())
         if self.search:
             text.highlight_words([self.search], style="reverse", case_sensitive=False)
 
@@ -228,44 +228,18 @@ class NodesView(Horizontal):
     """The tree beside the output pane: the pane's keys work wherever the focus is."""
 
     BINDINGS = [
-        Binding("slash", "search", "Search", tooltip="Highlight a text; n / N jump"),
-        Binding("n", "next_match", "Next", show=False),
-        Binding("N", "previous_match", "Prev", show=False),
-        Binding("l", "cycle_level", "Level", tooltip="Show only lines from this ROS level up"),
-        Binding("backslash", "filter", "Filter", tooltip="Show only lines containing a text"),
-        Binding("G", "follow", "Follow", show=False, tooltip="Back to the newest line"),
-        Binding("w", "save", "Save", show=False, tooltip="Write this pane to a file"),
-        Binding("y", "copy", "Copy", show=False, tooltip="Copy this pane to the clipboard"),
-        Binding("escape", "clear_search", "Clear", show=False),
+        Binding("slash", "pane('search')", "Search", tooltip="Highlight a text; n / N jump"),
+        Binding("n", "pane('next_match')", "Next", show=False),
+        Binding("N", "pane('previous_match')", "Prev", show=False),
+        Binding("l", "pane('cycle_level')", "Level",
+                tooltip="Show only lines from this ROS level up"),
+        Binding("backslash", "pane('filter')", "Filter",
+                tooltip="Show only lines containing a text"),
+        Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
+        Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
+        Binding("y", "pane('copy')", "Copy", show=False, tooltip="Copy this pane to the clipboard"),
+        Binding("escape", "pane('clear_search')", "Clear", show=False),
     ]
 
-
-    def _pane(self) -> OutputPanel:
-        return self.query_one(OutputPanel)
-
-    def action_search(self) -> None:
-        self._pane().action_search()
-
-    def action_next_match(self) -> None:
-        self._pane().action_next_match()
-
-    def action_previous_match(self) -> None:
-        self._pane().action_previous_match()
-
-    def action_cycle_level(self) -> None:
-        self._pane().action_cycle_level()
-
-    def action_filter(self) -> None:
-        self._pane().action_filter()
-
-    def action_follow(self) -> None:
-        self._pane().action_follow()
-
-    def action_save(self) -> None:
-        self._pane().action_save()
-
-    def action_copy(self) -> None:
-        self._pane().action_copy()
-
-    def action_clear_search(self) -> None:
-        self._pane().action_clear_search()
+    def action_pane(self, name: str) -> None:
+        getattr(self.query_one(OutputPanel), f"action_{name}")()
