@@ -245,7 +245,6 @@ async def test_quit_asks_while_nodes_run_and_leaves_no_process(tmp_path):
         await pilot.press("q")
         await pilot.press("y")
         await until(pilot, lambda: not pids(app))
-        assert "stopping" in str(app.query_one("#status").render())
     for pid in running:
         assert not os.path.exists(f"/proc/{pid}") or open(f"/proc/{pid}/stat").read().split()[
             2] == "Z"
@@ -338,3 +337,25 @@ def test_tui_in_a_terminal_stops_everything_when_the_terminal_hangs_up(tmp_path,
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
         os.close(master)
+
+
+STUBBORN_TUI = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='stubborn', cmd=[
+        'sh', '-c', 'trap "" INT; echo holding out; sleep 600'])])
+"""
+
+
+async def test_quit_shows_which_processes_are_still_stopping(write, tmp_path):
+    app = make_app(str(write(STUBBORN_TUI)), {}, tmp_path / "log", sigterm_timeout=2.0)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await until(pilot, lambda: any("holding out" in line
+                                       for line in app.store.text(View("stubborn-1"))))
+        await pilot.press("q", "y")
+        status = app.query_one("#status")
+        assert "stopping stubborn-1" in str(status.render())
+        assert "stopping" in row_text(app, "stubborn-1")
+        # SIGINT is ignored; SIGTERM after the timeout ends it
+        await until(pilot, lambda: not pids(app), limit=30)

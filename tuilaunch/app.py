@@ -60,7 +60,11 @@ class TuiLaunchApp(App[int]):
 
     def __init__(self, session: Session, log_dir: Path, scrollback: int = 5000,
                  sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0) -> None:
+        no_color = os.environ.get("NO_COLOR")
         super().__init__()
+        if no_color is not None:
+            # Textual takes NO_COLOR out of the environment; the nodes should still see it
+            os.environ["NO_COLOR"] = no_color
         self.session = session
         self.log_dir = log_dir
         self.scrollback = scrollback
@@ -196,7 +200,10 @@ class TuiLaunchApp(App[int]):
         text = "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in order
                          if counts.get(s))
         args = " ".join(f"{k}:={v}" for k, v in self.session.arguments.items())
-        prefix = "stopping... " if self.quitting else ""
+        prefix = ""
+        if self.quitting:
+            still = self.running()
+            prefix = f"stopping {', '.join(still)}... " if still else "stopped. "
         name = Path(self.session.plan.file).name
         self.status_bar.update(Text(f"{prefix}{name}  {text}  {args}"))
 
@@ -385,6 +392,8 @@ class TuiLaunchApp(App[int]):
             self.exit(0)
             return
         self.quitting = True
+        for process in self.running():
+            self.launch_tree.set_state(process, "stopping")
         self.update_status()
         self.run_worker(self.engine.run(self.supervisor.shutdown("quit from the UI")),
                         group="shutdown", exit_on_error=False)

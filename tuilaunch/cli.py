@@ -30,6 +30,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--headless", action="store_true",
                         help="run without the TUI, printing each line as [process-id] line "
                         "(the default when not in a terminal)")
+    parser.add_argument("--scrollback", type=int, default=5000, metavar="LINES",
+                        help="TUI: lines kept per node's pane (log files keep all; "
+                        "default 5000)")
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     return parser
 
@@ -109,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     from .app import make_app
     from .headless import run_log_dir
 
-    status = make_app(path, arguments, run_log_dir()).run()
+    status = make_app(path, arguments, run_log_dir(), scrollback=options.scrollback).run()
     return status or 0
 
 
