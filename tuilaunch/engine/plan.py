@@ -42,7 +42,9 @@ class Trigger:
             "shutdown": "shutdown",
         }[self.on]
         if self.on == "timer" and self.after is not None:
-            event = "armed"
+            # a delay nested in an event group counts from that event
+            outer = self.after.describe().removeprefix("when ")
+            return f"{self.delay:g} s after {outer}" if self.delay else f"when {outer}"
         text = f"{self.delay:g} s after {event}" if self.delay else f"when {event}"
         if self.after is not None:
             text += f", armed {self.after.describe()}"

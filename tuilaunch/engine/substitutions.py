@@ -344,13 +344,15 @@ class LocalSubstitution(Substitution):
         self.description = description
 
     def perform(self, context: PerformContext) -> str:
+        if not context.event_locals:
+            return f"<{self.expression}>"  # resolved into a plan: the event comes later
         value: Any = context.event_locals
         for key in self.expression.split("."):
             if isinstance(value, dict):
                 value = value.get(key, "")
             else:
                 value = getattr(value, key, "")
-        return str(value) if value != {} else f"<{self.expression}>"
+        return str(value)
 
     def describe(self) -> str:
         return f"<{self.expression}>"
