@@ -57,7 +57,7 @@ def generate_launch_description():
 
 
 def test_parameter_file_written_for_a_node_is_ros_yaml(tmp_path):
-    from tuilaunch.engine.params import write_parameter_file
+    from tuilaunch.engine.plan.params import write_parameter_file
 
     target = tmp_path / "p.yaml"
     write_parameter_file(target, {"rate": 2.0, "names": ["a", "b"]})
@@ -98,7 +98,7 @@ def generate_launch_description():
 
 def test_use_sim_time_auto_reads_the_live_graph(write, monkeypatch):
     monkeypatch.setenv("TUILAUNCH_SIM_TIME", "true")
-    from tuilaunch.engine.sim_clock import clock_is_published
+    from tuilaunch.engine.ros.sim_clock import clock_is_published
 
     clock_is_published.cache_clear()
     path = write(HEADER + """

@@ -10,9 +10,9 @@ from collections.abc import Iterator
 
 import pytest
 
-from tuilaunch.engine.messages import MessageError, describe_fields, import_type
-from tuilaunch.engine.packages import package_prefix
-from tuilaunch.engine.ros_bridge import RosBridge, RosError
+from tuilaunch.engine.plan.packages import package_prefix
+from tuilaunch.engine.ros.bridge import RosBridge, RosError
+from tuilaunch.engine.ros.messages import MessageError, describe_fields, import_type
 
 SLOW_SERVER = textwrap.dedent("""
     import time, rclpy
@@ -154,7 +154,7 @@ CLOCK_PUBLISHER = textwrap.dedent("""
 
 
 def test_use_sim_time_auto_follows_a_live_clock_publisher(monkeypatch):
-    from tuilaunch.engine.sim_clock import clock_is_published
+    from tuilaunch.engine.ros.sim_clock import clock_is_published
 
     monkeypatch.delenv("TUILAUNCH_SIM_TIME", raising=False)
     clock_is_published.cache_clear()

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import asyncio
 
-from tuilaunch.engine.session import Session
-from tuilaunch.engine.supervisor import Supervisor
+from tuilaunch.engine.plan.session import Session
+from tuilaunch.engine.run.supervisor import Supervisor
 
 LAUNCH = """
 from simple_launch import SimpleLauncher

@@ -23,11 +23,11 @@ from textual.binding import Binding
 from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane, Tree
 
-from .engine.engine_thread import EngineThread
-from .engine.event_buffer import EventBuffer
-from .engine.ros_bridge import RosBridge
-from .engine.session import Preview, Session
-from .engine.supervisor import Event, Supervisor
+from .engine.plan.session import Preview, Session
+from .engine.ros.bridge import RosBridge
+from .engine.run.engine_thread import EngineThread
+from .engine.run.event_buffer import EventBuffer
+from .engine.run.supervisor import Event, Supervisor
 from .output_store import Line, OutputStore
 from .screens.args_panel import ArgsPanel
 from .screens.dialogs import HelpScreen, QuitScreen

@@ -8,10 +8,10 @@ import os
 import sys
 import traceback
 
+from .engine.describe.loader import load_file
 from .engine.errors import LaunchError, PackageError
-from .engine.loader import load_file
-from .engine.packages import ensure_environment, find_in_share, package_share
-from .engine.resolve import resolve
+from .engine.plan.packages import ensure_environment, find_in_share, package_share
+from .engine.plan.resolve import resolve
 
 
 def _parser() -> argparse.ArgumentParser:

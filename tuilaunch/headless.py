@@ -10,9 +10,9 @@ import time
 from pathlib import Path
 from typing import TextIO
 
-from .engine.output import strip_ansi
-from .engine.plan import Plan
-from .engine.supervisor import Event, Supervisor
+from .engine.plan.model import Plan
+from .engine.run.output import strip_ansi
+from .engine.run.supervisor import Event, Supervisor
 
 
 def run_log_dir() -> Path:

@@ -11,7 +11,7 @@ from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from .engine.output import strip_ansi
+from .engine.run.output import strip_ansi
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 _LEVEL = re.compile(r"^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from .engine.plan import ArgumentInfo, Plan, TreeItem
+from .engine.plan.model import ArgumentInfo, Plan, TreeItem
 
 
 def format_arguments(arguments: list[ArgumentInfo], top_file: str) -> str:

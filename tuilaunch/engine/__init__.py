@@ -1,10 +1,10 @@
 """The launch engine: load a launch file, resolve it into a Plan, run it. No UI in here."""
 
-from .dsl import SimpleLauncher
+from .describe.dsl import SimpleLauncher
+from .describe.loader import LoadedFile, load_file
 from .errors import ArgumentError, DslError, LaunchError, Origin, PackageError
-from .loader import LoadedFile, load_file
-from .plan import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
-from .resolve import resolve
+from .plan.model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
+from .plan.resolve import resolve
 
 __all__ = [
     "ActionPlan",

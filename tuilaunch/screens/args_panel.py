@@ -12,8 +12,8 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
-from ..engine.plan import ArgumentInfo
-from ..engine.substitutions import text_to_bool
+from ..engine.describe.substitutions import text_to_bool
+from ..engine.plan.model import ArgumentInfo
 
 
 class ArgsPanel(Vertical):

@@ -8,7 +8,7 @@ from rich.text import Text
 from textual.widgets import Tree
 from textual.widgets.tree import TreeNode
 
-from ..engine.plan import Plan, PlanDiff, TreeItem
+from ..engine.plan.model import Plan, PlanDiff, TreeItem
 
 ALL = "__all__"
 

@@ -11,8 +11,8 @@ from typing import Any
 
 import yaml
 
-from .errors import LaunchError, Origin
-from .substitutions import PerformContext, Substitution, flatten, perform
+from ..describe.substitutions import PerformContext, Substitution, flatten, perform
+from ..errors import LaunchError, Origin
 
 ParamValue = bool | int | float | str | list[Any]
 

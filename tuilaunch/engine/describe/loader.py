@@ -15,8 +15,8 @@ from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
+from ..errors import DslError, LaunchError, Origin, PackageError, origin_from_traceback
 from .entities import LaunchDescription, entity_list
-from .errors import DslError, LaunchError, Origin, PackageError, origin_from_traceback
 
 _lock = threading.RLock()
 _loaded_files: set[str] = set()

@@ -12,6 +12,9 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
+from ..errors import DslError, caller_origin
+from ..plan.packages import find_in_share, package_share
+from ..plan.xacro_run import Xacro
 from .conditions import IfCondition, UnlessCondition
 from .entities import (
     CallService,
@@ -29,9 +32,7 @@ from .entities import (
     SetParameters,
     pair_list,
 )
-from .errors import DslError, caller_origin
 from .events import When
-from .packages import find_in_share, package_share
 from .substitutions import (
     LaunchConfiguration,
     PathJoin,
@@ -45,7 +46,6 @@ from .substitutions import (
     is_lazy,
     perform,
 )
-from .xacro_run import Xacro
 
 _GZ_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
 
@@ -119,7 +119,7 @@ class SimpleLauncher:
                 "use_sim_time", use_sim_time,
                 description="Force use_sim_time parameter of instantiated nodes")
         elif use_sim_time == "auto":
-            from .sim_clock import clock_is_published
+            from ..ros.sim_clock import clock_is_published
 
             self.sim_time = clock_is_published()
         else:

@@ -11,7 +11,7 @@ import sys
 from functools import lru_cache
 from pathlib import Path
 
-from .errors import Origin, PackageError
+from ..errors import Origin, PackageError
 
 _MARKER = Path("share") / "ament_index" / "resource_index" / "packages"
 

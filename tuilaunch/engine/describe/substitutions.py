@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from .errors import LaunchError, Origin, caller_origin
+from ..errors import LaunchError, Origin, caller_origin
 
 SubValue = Any  # str | int | float | bool | Substitution | nested lists of those
 
@@ -257,7 +257,7 @@ class Command(Substitution):
         text = perform(self.command, context)
         argv = shlex.split(text)
         if argv and argv[0] == "xacro" and shutil.which("xacro") is None:
-            from .xacro_run import run_xacro_argv
+            from ..plan.xacro_run import run_xacro_argv
 
             return run_xacro_argv(argv[1:], self.origin)
         try:
@@ -298,7 +298,7 @@ class FindPackageShare(Substitution):
         self.origin = caller_origin()
 
     def perform(self, context: PerformContext) -> str:
-        from .packages import package_share
+        from ..plan.packages import package_share
 
         return str(package_share(perform(self.package, context), self.origin))
 
@@ -312,7 +312,7 @@ class FindPackagePrefix(Substitution):
         self.origin = caller_origin()
 
     def perform(self, context: PerformContext) -> str:
-        from .packages import package_prefix
+        from ..plan.packages import package_prefix
 
         return str(package_prefix(perform(self.package, context), self.origin))
 

@@ -17,12 +17,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
-from .entities import Entity, LogInfo, Shutdown, entity_list
-from .messages import MessageError
+from ..describe.entities import Entity, LogInfo, Shutdown, entity_list
+from ..describe.substitutions import PerformContext, perform
+from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
+from ..plan.params import write_parameter_file
+from ..ros.messages import MessageError
 from .output import LineSplitter, strip_ansi
-from .params import write_parameter_file
-from .plan import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
-from .substitutions import PerformContext, perform
 
 ROS_ACTIONS = ("call_service", "set_parameters")
 
@@ -257,13 +257,13 @@ class Supervisor:
             if self._bridge_factory is not None:
                 self._bridge = self._bridge_factory()
             else:
-                from .ros_bridge import RosBridge
+                from ..ros.bridge import RosBridge
 
                 self._bridge = RosBridge()
         return self._bridge
 
     async def _call_service(self, action: ActionPlan) -> bool:
-        from .ros_bridge import RosError
+        from ..ros.bridge import RosError
 
         name = str(action.target)
         self._log(action, f"waiting for service {name}")
@@ -282,7 +282,7 @@ class Supervisor:
         return True
 
     async def _set_parameters(self, action: ActionPlan) -> bool:
-        from .ros_bridge import RosError
+        from ..ros.bridge import RosError
 
         node = str(action.target)
         self._log(action, f"waiting for node {node}")

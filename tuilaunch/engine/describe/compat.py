@@ -5,7 +5,8 @@ from __future__ import annotations
 from types import ModuleType
 from typing import Any
 
-from . import conditions, entities, events, params, substitutions
+from ..plan import params
+from . import conditions, entities, events, substitutions
 from .dsl import SimpleLauncher
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ..errors import DslError, caller_origin
 from .entities import (
     OnExecutionComplete,
     OnProcessExit,
@@ -11,7 +12,6 @@ from .entities import (
     OnProcessStart,
     OnShutdown,
 )
-from .errors import DslError, caller_origin
 
 __all__ = [
     "OnExecutionComplete",

@@ -6,8 +6,8 @@ import io
 from contextlib import redirect_stderr
 from typing import Any
 
-from .errors import LaunchError, Origin, caller_origin
-from .substitutions import PerformContext, Substitution, SubValue, describe, perform
+from ..describe.substitutions import PerformContext, Substitution, SubValue, describe, perform
+from ..errors import LaunchError, Origin, caller_origin
 
 
 def run_xacro(path: str, mappings: dict[str, str], origin: Origin | None) -> str:

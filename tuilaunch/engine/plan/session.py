@@ -10,9 +10,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import LaunchError
-from .loader import LoadedFile, load_file
-from .plan import Plan, PlanDiff, diff_plans
+from ..describe.loader import LoadedFile, load_file
+from ..errors import LaunchError
+from .model import Plan, PlanDiff, diff_plans
 from .resolve import default_params_dir, resolve
 
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from .conditions import ConditionOutcome
-from .entities import (
+from ..describe.conditions import ConditionOutcome
+from ..describe.entities import (
     CallService,
     ComposableNode,
     DeclareLaunchArgument,
@@ -46,13 +46,19 @@ from .entities import (
     entity_list,
     pair_list,
 )
-from .errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
-from .events import When
-from .loader import LoadedFile, compat_modules, known_launch_files, load_file
+from ..describe.events import When
+from ..describe.loader import LoadedFile, compat_modules, known_launch_files, load_file
+from ..describe.substitutions import (
+    PerformContext,
+    describe,
+    perform,
+    perform_optional,
+    text_to_bool,
+)
+from ..errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
+from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
-from .plan import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
-from .substitutions import PerformContext, describe, perform, perform_optional, text_to_bool
 
 DEFAULT_RESPAWN_MAX_RETRIES = 10
 

@@ -10,8 +10,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .conditions import ConditionOutcome
-from .errors import Origin
+from ..describe.conditions import ConditionOutcome
+from ..errors import Origin
 
 
 @dataclass

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import ArgumentError, Origin, caller_origin
+from ..errors import ArgumentError, Origin, caller_origin
 from .substitutions import (
     LaunchConfiguration,
     PerformContext,

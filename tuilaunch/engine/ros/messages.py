@@ -10,7 +10,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
-from .errors import LaunchError
+from ..errors import LaunchError
 
 _SEQUENCE = re.compile(r"^sequence<([^,>]+)(?:,\s*\d+)?>$")
 _ARRAY = re.compile(r"^(.+)\[(\d*)\]$")

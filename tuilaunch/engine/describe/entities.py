@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import Any
 
+from ..errors import DslError, Origin, caller_origin
 from .conditions import Condition
-from .errors import DslError, Origin, caller_origin
 from .substitutions import SubValue, describe
 
 

@@ -1,0 +1,1 @@
+"""Running a Plan: the supervisor, process output, the engine thread."""
