@@ -35,6 +35,7 @@ from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.tree_panel import LaunchTree, RowData
+from .session_client import RemoteSupervisor
 
 DRAIN_HZ = 20
 
@@ -53,13 +54,17 @@ class TuiLaunchApp(App[int]):
         Binding("t", "start", "Start", tooltip="Start the selected node or group"),
         Binding("a", "all_output", "All", show=False, tooltip="Output of all nodes"),
         Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
+        Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
+                "opens it again"),
         Binding("question_mark", "help", "Help"),
         Binding("q", "request_quit", "Quit"),
         Binding("ctrl+c", "request_quit", "Quit", show=False, priority=True),
     ]
 
     def __init__(self, session: Session, log_dir: Path, scrollback: int = 5000,
-                 sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0) -> None:
+                 sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
+                 session_name: str | None = None, owner: bool = False,
+                 keep_on_hangup: bool = False) -> None:
         no_color = os.environ.get("NO_COLOR")
         super().__init__()
         if no_color is not None:
@@ -74,7 +79,12 @@ class TuiLaunchApp(App[int]):
         # lines shown per drain tick at most: 20 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
-        self.supervisor: Supervisor | None = None
+        self.supervisor: Supervisor | RemoteSupervisor | None = None
+        # with a session name the launch runs in a session server and this app is a client
+        self.session_name = session_name
+        self.owner = owner
+        self.keep_on_hangup = keep_on_hangup
+        self.detached = False
         self.preview: Preview | None = None
         self.exit_status = 0
         self.quitting = False
@@ -119,14 +129,22 @@ class TuiLaunchApp(App[int]):
         sys.setswitchinterval(0.001)
         self.engine = EngineThread()
         # built on the engine thread, whose loop its asyncio objects belong to
-        self.supervisor = self.engine.call(lambda: Supervisor(
-            self.session.plan, self.log_dir, sigterm_timeout=self.sigterm_timeout,
-            sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
+        if self.session_name is not None:
+            remote = self.engine.submit(RemoteSupervisor.open(
+                self.session_name, self.session, self.scrollback)).result(timeout=60)
+            remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
+            self.supervisor = remote
+        else:
+            self.supervisor = self.engine.call(lambda: Supervisor(
+                self.session.plan, self.log_dir, sigterm_timeout=self.sigterm_timeout,
+                sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
         assert self.supervisor is not None
         self.supervisor.subscribe(self.buffer)
         tree = self.launch_tree
         tree.show_plan(self.session.plan, self.supervisor.states)
         self._describe_waiting()
+        if isinstance(self.supervisor, RemoteSupervisor):
+            self.show_events(self.supervisor.history)  # what was printed before we came
         self.run_supervisor()
         self._drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         loop = asyncio.get_running_loop()
@@ -162,7 +180,9 @@ class TuiLaunchApp(App[int]):
     # --- engine events -------------------------------------------------------------------
 
     def drain(self) -> None:
-        events = self.buffer.drain()
+        self.show_events(self.buffer.drain())
+
+    def show_events(self, events: list[Event]) -> None:
         if not events:
             self.output_panel.update_status()
             return
@@ -178,6 +198,10 @@ class TuiLaunchApp(App[int]):
                 fresh += self.store.add("launch", "stdout",
                                         [f"[{event.level}] [{event.process or 'launch'}] "
                                          f"{event.reason}"])
+            elif event.kind == "relaunched" and self.supervisor is not None:
+                # any client's relaunch: the session already holds the new plan
+                tree.show_plan(self.session.plan, self.supervisor.states)
+                self._describe_waiting()
             elif event.kind == "dropped" and event.process:
                 fresh += self.store.add(event.process, "stderr", [
                     f"[WARN] tuilaunch: {event.reason}"])
@@ -205,6 +229,8 @@ class TuiLaunchApp(App[int]):
             still = self.running()
             prefix = f"stopping {', '.join(still)}... " if still else "stopped. "
         name = Path(self.session.plan.file).name
+        if self.session_name is not None:
+            name = f"[{self.session_name}] {name}"
         self.status_bar.update(Text(f"{prefix}{name}  {text}  {args}"))
 
     def _describe_waiting(self) -> None:
@@ -251,6 +277,8 @@ class TuiLaunchApp(App[int]):
             if action == "start":
                 return True if any(s not in ("running", "skipped") for s in states) else None
             return True if states else None
+        if action == "detach":
+            return self.session_name is not None
         if action == "apply":
             return True if self.preview is not None and self.preview.plan is not None and \
                 self.preview.diff is not None and not self.preview.diff.empty else None
@@ -382,9 +410,23 @@ class TuiLaunchApp(App[int]):
         self.action_request_quit()
 
     def _terminal_hung_up(self) -> None:
-        """SIGHUP: the ssh session or tmux pane is gone; stop everything, then leave."""
+        """SIGHUP: the ssh session or tmux pane is gone. An attached session, or one started
+        with --keep-on-hangup, runs on; otherwise everything stops, then the app leaves. The
+        server does the stopping, so the launch is never left half-stopped."""
         self.terminal_lost = True
-        self.stop_all_and_exit()
+        if self.session_name is not None and (self.keep_on_hangup or not self.owner):
+            self.action_detach()
+        else:
+            self.stop_all_and_exit()
+
+    def action_detach(self) -> None:
+        """Leaves the session running; the supervisor worker then exits the app."""
+        if not isinstance(self.supervisor, RemoteSupervisor):
+            self.notify("only a session can be detached from", severity="warning")
+            return
+        self.detached = True
+        self.run_worker(self.engine.run(self.supervisor.detach()), group="shutdown",
+                        exit_on_error=False)
 
     def stop_all_and_exit(self) -> None:
         """Shutdown escalation runs; the supervisor worker exits the app when all are gone."""

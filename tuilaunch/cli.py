@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import subprocess
 import sys
 import traceback
 
@@ -33,7 +34,18 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--scrollback", type=int, default=5000, metavar="LINES",
                         help="TUI: lines kept per node's pane (log files keep all; "
                         "default 5000)")
+    parser.add_argument("--detach", action="store_true",
+                        help="start the launch as a background session, print its name, and "
+                        "exit (tuilaunch attach NAME opens it)")
+    parser.add_argument("--name", metavar="NAME",
+                        help="the session's name (default: the file's stem and a number)")
+    parser.add_argument("--keep-on-hangup", action="store_true",
+                        help="TUI: a dropped terminal (SIGHUP) detaches instead of stopping "
+                        "the launch")
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
+    parser.epilog = (parser.epilog or "") + (
+        "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
+        "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE (tuilaunch COMMAND -h).")
     return parser
 
 
@@ -71,7 +83,23 @@ def find_launch_file(positional: list[str]) -> str:
                       hint="launch arguments are written name:=value")
 
 
+def is_command(argv: list[str]) -> bool:
+    """A session command, unless the word names an existing file (launched, as it always
+    was); `tuilaunch -- WORD ...` forces the launch form, e.g. for a package named `status`."""
+    from .commands import COMMANDS
+
+    return bool(argv) and argv[0] in COMMANDS and not os.path.exists(argv[0])
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if is_command(argv):
+        from .commands import main as command_main
+
+        ensure_environment()
+        return command_main(argv)
+    if argv[:1] == ["--"]:
+        argv = argv[1:]
     options = _parser().parse_intermixed_args(argv)
     ensure_environment()
     try:
@@ -105,14 +133,50 @@ def main(argv: list[str] | None = None) -> int:
         return 3 if problems else 0
     for warning in plan.warnings:
         print(f"tuilaunch: warning: {warning}", file=sys.stderr)
+    if options.detach:
+        return _start_detached(path, arguments, options)
     if options.headless or not (sys.stdout.isatty() and sys.stdin.isatty()):
         from .headless import run_headless
 
         return run_headless(plan)
-    from .app import make_app
+    return _run_tui(path, arguments, options)
+
+
+def _start_detached(path: str, arguments: dict[str, str], options: argparse.Namespace) -> int:
+    from .commands import start_session
     from .headless import run_log_dir
 
-    status = make_app(path, arguments, run_log_dir(), scrollback=options.scrollback).run()
+    try:
+        name, _ = start_session(path, arguments, options.name, run_log_dir())
+    except LaunchError as exc:
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return 2
+    print(name)
+    return 0
+
+
+def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace) -> int:
+    """The launch runs in a session server; this TUI is its first client."""
+    from .app import make_app
+    from .commands import start_session
+    from .headless import run_log_dir
+
+    log_dir = run_log_dir()
+    try:
+        name, server = start_session(path, arguments, options.name, log_dir)
+    except LaunchError as exc:
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return 2
+    app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
+                   owner=True, keep_on_hangup=options.keep_on_hangup)
+    status = app.run()
+    if app.detached:
+        print(f"detached; session {name} runs on: tuilaunch attach {name}")
+    else:
+        try:
+            server.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            pass  # still stopping its processes on its own; nothing is left half-done
     return status or 0
 
 

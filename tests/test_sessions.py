@@ -1,0 +1,381 @@
+"""Sessions: the launch runs in a background server; the TUI and the commands are clients.
+
+Real processes throughout: the server is started by the command line as a user would, the
+TUI attaches on a pseudo-terminal or through Textual's pilot, and shell scripts drive the
+commands.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import pty
+import select
+import shutil
+import signal
+import socket
+import stat
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from tuilaunch.app import make_app
+from tuilaunch.engine.plan.session import Session
+from tuilaunch.engine.run import session_dir
+from tuilaunch.output_store import View
+from tuilaunch.session_client import RemoteSupervisor
+
+from .conftest import run_cli
+
+LAUNCH = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('word', 'alpha')
+    sl.add_action(ExecuteProcess(name='ticker', cmd=[
+        'sh', '-c', 'i=0; while true; do i=$((i+1)); echo tick $i; sleep 0.1; done']))
+    sl.add_action(ExecuteProcess(name='early', cmd=[
+        'sh', '-c', 'echo early bird; echo "[WARN] careful"']))
+    sl.add_action(ExecuteProcess(name='echo', cmd=[
+        'sh', '-c', 'echo word "$0"; exec sleep 600', sl.arg('word')]))
+    return sl.launch_description()
+"""
+
+
+@pytest.fixture
+def runtime(monkeypatch, tmp_path):
+    """A private session folder (short: socket paths are limited to 108 bytes) and log
+    folder; whatever a failing test left running is stopped afterwards."""
+    folder = Path(tempfile.mkdtemp(prefix="tl"))
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(folder))
+    monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
+    yield folder
+    servers = []
+    for info in (folder / "tuilaunch").glob("*.json"):
+        pid = json.loads(info.read_text())["pid"]
+        servers.append(pid)
+        _signal(pid, signal.SIGTERM)
+    end = time.monotonic() + 30
+    while any(_alive(p) for p in servers) and time.monotonic() < end:
+        time.sleep(0.1)
+    for pid in servers:
+        _signal(pid, signal.SIGKILL)
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+def tl(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
+    done = run_cli(*args)
+    if check:
+        assert done.returncode == 0, done.stderr
+    return done
+
+
+def wait_for(check: Callable[[], object], limit: float = 30.0) -> None:
+    end = time.monotonic() + limit
+    while not check():
+        assert time.monotonic() < end, f"condition never held: {check}"
+        time.sleep(0.05)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as handle:
+            return handle.read().split(") ", 1)[1][0] != "Z"
+    except (OSError, IndexError):
+        return False
+
+
+def _signal(pid: int, sig: int) -> None:
+    try:
+        os.kill(pid, sig)
+    except ProcessLookupError:
+        pass
+
+
+def status(name: str) -> dict:
+    return json.loads(tl("status", name, "--json").stdout)
+
+
+def pids(name: str) -> dict[str, int]:
+    return {p["id"]: p["pid"] for p in status(name)["processes"] if p["pid"]}
+
+
+def start_detached(write, *args: str) -> str:
+    path = write(LAUNCH)
+    name = tl(str(path), "--detach", *args).stdout.strip()
+    tl("wait", name, "echo-3", "running", "--timeout", "30")
+    return name
+
+
+class Terminal:
+    """A command on a pseudo-terminal whose screen is read continuously, as a terminal's."""
+
+    def __init__(self, *args: str) -> None:
+        self.master, slave = pty.openpty()
+        env = {**os.environ, "TERM": "xterm-256color"}
+        self.proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", *args], stdin=slave,
+                                     stdout=slave, stderr=slave, env=env,
+                                     start_new_session=True)
+        os.close(slave)
+        self.screen = b""
+
+    def read_until(self, marker: bytes, limit: float = 60.0) -> None:
+        end = time.monotonic() + limit
+        while marker not in self.screen:
+            assert time.monotonic() < end, f"{marker!r} never appeared: {self.screen[-500:]!r}"
+            self.pump(0.1)
+
+    def pump(self, wait: float) -> None:
+        if select.select([self.master], [], [], wait)[0]:
+            try:
+                self.screen += os.read(self.master, 1 << 16)
+            except OSError:
+                pass
+
+    def wait_exit(self, limit: float = 60.0) -> int:
+        end = time.monotonic() + limit
+        while self.proc.poll() is None:
+            assert time.monotonic() < end, "the TUI never exited"
+            self.pump(0.1)
+        return self.proc.returncode
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+        os.close(self.master)
+
+
+def test_a_shell_script_starts_waits_reads_status_and_stops(runtime, write):
+    script = f"""
+    set -eu
+    TL="{sys.executable} -m tuilaunch"
+    name=$($TL "$1" --detach --name scripted word:=beta)
+    test "$name" = scripted
+    $TL wait "$name" ticker running --timeout 30
+    $TL wait "$name" early-2 exited --timeout 30
+    pid=$($TL status "$name" --json | {sys.executable} -c '
+import json, sys
+print(next(p["pid"] for p in json.load(sys.stdin)["processes"] if p["id"] == "ticker-1"))')
+    kill -0 "$pid"
+    if $TL wait "$name" ticker-1 exited --timeout 0.3; then echo "wait lied"; exit 9; fi
+    $TL logs "$name" echo-3 | grep -qx "word beta"
+    $TL logs "$name" --level WARN | grep -qx "\\[early-2\\] \\[WARN\\] careful"
+    $TL stop "$name"
+    if kill -0 "$pid" 2>/dev/null; then echo "ticker survived"; exit 8; fi
+    test "$($TL ls --json)" = "[]"
+    echo ok
+    """
+    done = subprocess.run(["bash", "-c", script, "script", str(write(LAUNCH))],
+                          capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.strip().endswith("ok")
+    assert "ticker-1 is running, not exited, after 0.3 s" in done.stderr
+
+
+def test_ls_names_sessions_and_the_socket_is_private(runtime, write):
+    name = start_detached(write)
+    assert name == "test_launch-1"
+    second = start_detached(write, "--name", "other", "word:=x")
+    listed = json.loads(tl("ls", "--json").stdout)
+    assert [s["name"] for s in listed] == [name, second]
+    assert listed[1]["arguments"] == {"word": "x"}
+    assert listed[0]["counts"]["running"] == 2  # early-2 printed and exited
+    folder = runtime / "tuilaunch"
+    assert stat.S_IMODE(folder.stat().st_mode) == 0o700
+    assert stat.S_IMODE((folder / f"{name}.sock").stat().st_mode) == 0o600
+    # a session of the same name cannot start twice
+    again = run_cli(str(write(LAUNCH)), "--detach", "--name", "other")
+    assert again.returncode == 2 and "already running" in again.stderr
+    tl("stop", second)
+    tl("stop", name)
+
+
+def test_a_dead_server_leaves_no_node_and_ls_cleans_its_socket(runtime, write):
+    name = start_detached(write)
+    children = pids(name)
+    server = status(name)["pid"]
+    os.kill(server, signal.SIGKILL)
+    wait_for(lambda: not any(_alive(p) for p in [server, *children.values()]))
+    assert (runtime / "tuilaunch" / f"{name}.sock").exists()  # nobody removed it
+    assert tl("ls").stdout.strip() == "no running sessions"
+    assert not list((runtime / "tuilaunch").iterdir())
+    missing = run_cli("status", name)
+    assert missing.returncode == 2 and f"no running session named {name}" in missing.stderr
+
+
+def test_killed_tui_client_leaves_nodes_running_and_attach_shows_what_was_missed(
+        runtime, write):
+    name = start_detached(write)
+    before = pids(name)
+    terminal = Terminal("attach", name)
+    try:
+        terminal.read_until(b"ticker-1")
+        os.kill(terminal.proc.pid, signal.SIGKILL)  # the ssh link and the client die hard
+        terminal.proc.wait()
+    finally:
+        terminal.close()
+    assert status(name)["counts"] == {"running": 2, "exited": 1}
+    assert pids(name) == before  # the very same processes, never restarted
+    log_dir = Path(status(name)["log_dir"])
+    wait_for(lambda: "tick 40" in (log_dir / "ticker-1.log").read_text())
+
+    async def attach_again() -> None:
+        app = make_app(str(write(LAUNCH)), {}, log_dir, session_name=name)
+        async with app.run_test(size=(100, 30)) as pilot:
+            assert app.supervisor is not None
+            assert app.supervisor.states["ticker-1"] == "running"
+            assert app.supervisor.states["early-2"] == "exited"
+            early = [line.text for line in app.store.lines(View("early-2"))]
+            assert early == ["early bird", "[WARN] careful"]
+            ticks = [line.text for line in app.store.lines(View("ticker-1"))]
+            assert ticks[:40] == [f"tick {i}" for i in range(1, 41)]  # none missing
+            # the tree shows states, and new lines keep coming
+            tree_text = str(app.launch_tree.rows["ticker-1"].label)
+            assert "running" in tree_text and str(before["ticker-1"]) in tree_text
+            seen = len(ticks)
+            for _ in range(200):
+                await pilot.pause(0.05)
+                ticks = [line.text for line in app.store.lines(View("ticker-1"))]
+                if len(ticks) > seen + 3:
+                    break
+            assert ticks == [f"tick {i}" for i in range(1, len(ticks) + 1)]  # no gap, no twice
+            await pilot.press("d")
+            await pilot.pause(0.5)
+        assert app.detached
+
+    asyncio.run(attach_again())
+    assert pids(name) == before
+    tl("stop", name)
+
+
+def test_stop_leaves_nothing_behind(runtime, write):
+    path = write(LAUNCH.replace(
+        "sl.declare_arg('word', 'alpha')",
+        "sl.declare_arg('word', 'alpha')\n"
+        "    sl.add_action(ExecuteProcess(name='family', cmd=[\n"
+        "        'sh', '-c', 'sleep 600; echo never']))"))
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, "family-1", "running", "--timeout", "30")
+    info = status(name)
+    group = [int(p) for p in subprocess.run(
+        ["pgrep", "-g", str(info["processes"][0]["pid"])], capture_output=True,
+        text=True).stdout.split()]
+    assert len(group) == 2  # the shell and its sleep
+    done = tl("stop", name)
+    assert done.stdout.strip() == f"session {name} stopped"
+    # stop returns once everything is gone: no waiting needed here
+    leftover = [p for p in [info["pid"], *group, *pids_of(info)] if _alive(p)]
+    assert leftover == []
+    assert not list((runtime / "tuilaunch").iterdir())
+
+
+def pids_of(info: dict) -> list[int]:
+    return [p["pid"] for p in info["processes"] if p["pid"]]
+
+
+def test_two_clients_see_the_same_relaunch(runtime, write):
+    path = str(write(LAUNCH))
+    name = start_detached(write)
+    old_echo = pids(name)["echo-3"]
+    log_dir = Path(status(name)["log_dir"])
+
+    async def scenario() -> None:
+        other = await RemoteSupervisor.open(name, Session(path, {}))
+        seen: list = []
+        other.subscribe(seen.append)
+        other_task = asyncio.ensure_future(other.run())
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(100, 30)) as pilot:
+            # the operator at the TUI edits word and applies
+            preview = app.session.preview({"word": "gamma"})
+            assert preview.diff is not None and preview.diff.stop == ["echo-3"]
+            app.preview = preview
+            await pilot.press("f5")
+            for _ in range(400):
+                await pilot.pause(0.05)
+                if any(e.kind == "started" and e.process == "echo-3" for e in seen):
+                    break
+            # the other client was told, resolved the same plan, and sees the new process
+            assert other.session.arguments == {"word": "gamma"}
+            kinds = [(e.kind, e.process) for e in seen]
+            assert ("relaunched", None) in kinds
+            assert kinds.index(("exited", "echo-3")) < kinds.index(("started", "echo-3"))
+            assert other.states["echo-3"] == "running"
+            # and the TUI shows the new output
+            for _ in range(200):
+                await pilot.pause(0.05)
+                if "word gamma" in [line.text for line in app.store.lines(View("echo-3"))]:
+                    break
+            assert [line.text for line in app.store.lines(View("echo-3"))][-1] == "word gamma"
+            await pilot.press("d")
+            await pilot.pause(0.3)
+        await other.detach()
+        await other_task
+
+    asyncio.run(scenario())
+    now = status(name)
+    assert now["arguments"] == {"word": "gamma"}
+    assert not _alive(old_echo) and pids(name)["echo-3"] != old_echo
+    tl("stop", name)
+
+
+def test_a_client_that_stops_reading_never_holds_up_the_launch(runtime, write):
+    path = write(LAUNCH.replace("sleep 0.1; done", "done"))  # ticker floods
+    name = tl(str(path), "--detach").stdout.strip()
+    log = Path(status(name)["log_dir"]) / "ticker-1.log"
+    stalled = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    stalled.connect(str(runtime / "tuilaunch" / f"{name}.sock"))
+    stalled.sendall(b'{"id": 1, "op": "subscribe"}\n')  # and then never reads
+    try:
+        wait_for(lambda: log.stat().st_size > 0)
+        size = log.stat().st_size
+        wait_for(lambda: log.stat().st_size > size + 5_000_000, 60)  # far past its buffers
+        assert status(name)["counts"]["running"] == 2  # others are answered meanwhile
+        tl("stop", name)
+    finally:
+        stalled.close()
+
+
+def test_hangup_of_a_foreground_tui_stops_all_unless_keep_on_hangup(runtime, write):
+    path = str(write(LAUNCH))
+    terminal = Terminal(path)
+    try:
+        terminal.read_until(b"2 running")
+        name = session_dir.live_sessions()[0]
+        children = pids(name)
+        os.kill(terminal.proc.pid, signal.SIGHUP)
+        terminal.wait_exit()
+        wait_for(lambda: not any(_alive(p) for p in children))
+        assert tl("ls").stdout.strip() == "no running sessions"
+    finally:
+        terminal.close()
+    terminal = Terminal(path, "--keep-on-hangup", "--name", "kept")
+    try:
+        terminal.read_until(b"2 running")
+        children = pids("kept")
+        os.kill(terminal.proc.pid, signal.SIGHUP)
+        terminal.wait_exit()
+        assert pids("kept") == children
+    finally:
+        terminal.close()
+    tl("stop", "kept")
+
+
+def test_a_file_named_like_a_command_is_taken_as_the_file(runtime, write, tmp_path):
+    """An existing file wins over a command word, as it did before commands existed."""
+    (tmp_path / "status").write_text("not a launch file")
+    done = subprocess.run([sys.executable, "-m", "tuilaunch", "status", "--print"],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert done.returncode == 2
+    assert done.stderr.startswith(f"tuilaunch: error: {tmp_path / 'status'}")
+    elsewhere = run_cli("status")
+    assert elsewhere.returncode == 2
+    assert elsewhere.stderr.startswith("tuilaunch status: error: no running session")

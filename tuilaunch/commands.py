@@ -1,0 +1,365 @@
+"""`tuilaunch ls | attach | stop | status | logs | restart | wait`: the session commands.
+
+Each is a short-lived client of a session server; all but `attach` work without a terminal,
+so scripts and CI use them (`--json` where a script reads the answer).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import heapq
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from .engine.errors import LaunchError
+from .engine.run import session_dir
+from .engine.run.log_files import LogLine, read_lines
+from .engine.run.protocol import event_from_dict
+from .engine.run.session_dir import SessionError
+from .output_store import LEVELS, level_of
+from .session_client import Link, format_arguments, resolve_name
+
+COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait")
+PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
+                  "cancelled")
+LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="tuilaunch", description="Control launches running as sessions.")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    ls = commands.add_parser("ls", help="running sessions")
+    ls.add_argument("--json", action="store_true", help="one JSON list")
+    attach = commands.add_parser("attach", help="the TUI on a running session")
+    attach.add_argument("name", nargs="?", help="the session (default: the only one)")
+    attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
+    stop = commands.add_parser("stop", help="stop every process of a session, then exit")
+    stop.add_argument("name", nargs="?")
+    status = commands.add_parser("status", help="each process's state")
+    status.add_argument("name", nargs="?")
+    status.add_argument("--json", action="store_true", help="one JSON object")
+    logs = commands.add_parser("logs", help="the output of a session's processes")
+    logs.add_argument("name", nargs="?")
+    logs.add_argument("process", nargs="?", help="a process id or node name (default: all)")
+    logs.add_argument("-f", "--follow", action="store_true", help="keep printing new lines")
+    logs.add_argument("--since", metavar="T",
+                      help="only lines from T on: 30s, 5m, 2h ago, a unix time, or an ISO "
+                      "time (2026-11-22T08:30:00, or 08:30 today)")
+    logs.add_argument("--level", metavar="L", type=str.upper, choices=LEVELS,
+                      help=f"only lines at this ROS level or above ({', '.join(LEVELS)})")
+    restart = commands.add_parser("restart", help="restart one process")
+    restart.add_argument("name")
+    restart.add_argument("process")
+    wait = commands.add_parser(
+        "wait", help="wait until a process is in a state (exit status 0) or time runs out (1)")
+    wait.add_argument("name")
+    wait.add_argument("process")
+    wait.add_argument("state", help=f"{', '.join(PROCESS_STATES)}, or a lifecycle state: "
+                      f"{', '.join(LIFECYCLE_STATES)}")
+    wait.add_argument("--timeout", type=float, default=None, metavar="S",
+                      help="give up after S seconds (exit status 1)")
+    for sub in (ls, attach, stop, status, logs, restart, wait):
+        sub.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+    return parser
+
+
+def main(argv: list[str]) -> int:
+    options = _parser().parse_args(argv)
+    try:
+        return int(globals()[f"cmd_{options.command}"](options) or 0)
+    except LaunchError as exc:
+        print(f"tuilaunch {options.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:
+        # `tuilaunch logs x | head`: the reader is gone, which is not an error of ours
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except KeyboardInterrupt:
+        return 130
+
+
+# --- starting ------------------------------------------------------------------------------
+
+def start_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
+                  timeout: float = 60.0) -> tuple[str, subprocess.Popen[bytes]]:
+    """Starts a session server in its own session (no terminal) and waits until it answers."""
+    name = session_dir.check_name(name) if name else session_dir.new_name(
+        session_dir.launch_stem(path))
+    if session_dir.is_alive(name):
+        raise SessionError(f"a session named {name} is already running",
+                           hint="choose another --name, or tuilaunch attach " + name)
+    log_dir.mkdir(parents=True, exist_ok=True)
+    server_log = log_dir / "session.log"
+    with open(server_log, "ab") as errors:
+        server = subprocess.Popen(
+            [sys.executable, "-m", "tuilaunch.engine.run.session_server", name,
+             os.path.abspath(path), str(log_dir), json.dumps(arguments)],
+            stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True)
+    deadline = time.monotonic() + timeout
+    while not session_dir.is_alive(name):
+        if server.poll() is not None:
+            text = server_log.read_text(errors="replace").strip()
+            raise SessionError(f"session {name} did not start: "
+                               f"{text.splitlines()[-1] if text else 'no message'}")
+        if time.monotonic() > deadline:
+            server.kill()
+            raise SessionError(f"session {name} did not answer within {timeout:g} s")
+        time.sleep(0.02)
+    return name, server
+
+
+# --- commands ------------------------------------------------------------------------------
+
+def _status(name: str) -> dict[str, Any]:
+    link = Link(name)
+    try:
+        result: dict[str, Any] = link.request("status")
+        return result
+    finally:
+        link.close()
+
+
+def cmd_ls(options: argparse.Namespace) -> int:
+    sessions = []
+    for name in session_dir.live_sessions():
+        try:
+            sessions.append(_status(name))
+        except SessionError:
+            continue  # it ended between the listing and the question
+    if options.json:
+        keys = ("name", "file", "arguments", "pid", "started", "log_dir", "counts")
+        print(json.dumps([{k: s[k] for k in keys} for s in sessions], indent=2))
+        return 0
+    if not sessions:
+        print("no running sessions")
+        return 0
+    rows = [("NAME", "PID", "STARTED", "RUNNING", "FILE", "ARGUMENTS")]
+    for s in sessions:
+        total = sum(n for state, n in s["counts"].items() if state != "skipped")
+        rows.append((s["name"], str(s["pid"]), _clock(s["started"]),
+                     f"{s['counts'].get('running', 0)}/{total}", s["file"],
+                     format_arguments(s["arguments"])))
+    _table(rows)
+    return 0
+
+
+def cmd_attach(options: argparse.Namespace) -> int:
+    name = resolve_name(options.name)
+    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+        raise SessionError("attach needs a terminal",
+                           hint=f"tuilaunch logs {name} -f, or tuilaunch status {name}")
+    info = _status(name)
+    from .app import make_app
+
+    app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
+                   scrollback=options.scrollback, session_name=name)
+    status = app.run() or 0
+    if getattr(app, "detached", False):
+        print(f"detached; session {name} runs on: tuilaunch attach {name}")
+    return status
+
+
+def cmd_stop(options: argparse.Namespace) -> int:
+    name = resolve_name(options.name)
+    link = Link(name, timeout=None)
+    pid = int(link.info["pid"])
+    try:
+        link.request("shutdown", reason="tuilaunch stop")
+        link.wait_closed()  # the server closes its connections once every process is gone
+    finally:
+        link.close()
+    deadline = time.monotonic() + 10
+    while _pid_alive(pid) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    print(f"session {name} stopped")
+    return 0
+
+
+def cmd_status(options: argparse.Namespace) -> int:
+    status = _status(resolve_name(options.name))
+    if options.json:
+        print(json.dumps(status, indent=2))
+        return 0
+    print(f"session {status['name']}  pid {status['pid']}  since {_clock(status['started'])}")
+    print(f"  {status['file']} {format_arguments(status['arguments'])}")
+    print(f"  logs: {status['log_dir']}")
+    rows = [("PROCESS", "STATE", "PID", "NODE", "")]
+    for p in status["processes"]:
+        rows.append((p["id"], p["state"], str(p["pid"] or ""), p["name"] or "",
+                     p["detail"] if p["state"] != "running" and p["detail"] else ""))
+    _table(rows, indent="  ")
+    return 0
+
+
+def cmd_restart(options: argparse.Namespace) -> int:
+    link = Link(resolve_name(options.name), timeout=None)
+    try:
+        result = link.request("restart", process=options.process)
+    finally:
+        link.close()
+    print(f"{result['process']}: {result['state']}")
+    return 0 if result["state"] == "running" else 1
+
+
+def cmd_wait(options: argparse.Namespace) -> int:
+    state = options.state.lower()
+    if state not in PROCESS_STATES + LIFECYCLE_STATES:
+        raise SessionError(f"unknown state {options.state!r}",
+                           hint=f"one of {', '.join(PROCESS_STATES + LIFECYCLE_STATES)}")
+    deadline = None if options.timeout is None else time.monotonic() + options.timeout
+    link = Link(resolve_name(options.name), timeout=None)
+    try:
+        process = link.request("find", process=options.process)
+        if state in LIFECYCLE_STATES:
+            return _wait_lifecycle(link, process, state, deadline)
+        result = link.request("subscribe")
+        current = result["states"].get(process)
+        while current != state:
+            remaining = None if deadline is None else deadline - time.monotonic()
+            if remaining is not None and remaining <= 0:
+                print(f"tuilaunch wait: {process} is {current}, not {state}, after "
+                      f"{options.timeout:g} s", file=sys.stderr)
+                return 1
+            link.sock.settimeout(remaining)
+            try:
+                message = link.receive()
+            except TimeoutError:
+                continue
+            if message is None or message.get("type") == "ended":
+                print(f"tuilaunch wait: the session ended with {process} {current}",
+                      file=sys.stderr)
+                return 1
+            if message.get("type") == "events":
+                current = (message.get("states") or {}).get(process, current)
+        return 0
+    finally:
+        link.close()
+
+
+def _wait_lifecycle(link: Link, process: str, state: str, deadline: float | None) -> int:
+    label = None
+    while True:
+        answer = link.request("lifecycle", process=process)
+        label = answer.get("state")
+        if label == state:
+            return 0
+        if deadline is not None and time.monotonic() >= deadline:
+            print(f"tuilaunch wait: {answer['node']} is {label or 'not answering'}, not "
+                  f"{state}", file=sys.stderr)
+            return 1
+        time.sleep(0.2)
+
+
+def cmd_logs(options: argparse.Namespace) -> int:
+    name = resolve_name(options.name)
+    since = _parse_since(options.since) if options.since else None
+    minimum = LEVELS.index(options.level) if options.level else 0
+    link = Link(name, timeout=None)
+    try:
+        status = link.request("status")
+        log_dir = Path(status["log_dir"])
+        wanted = [p["id"] for p in status["processes"] if p["state"] != "skipped"]
+        if options.process:
+            wanted = [link.request("find", process=options.process)]
+        prefixed = len(wanted) > 1 or not options.process
+        offsets: dict[str, int | None] = dict.fromkeys(wanted)
+        if options.follow:
+            subscribed = link.request("subscribe")
+            offsets = {p: subscribed["offsets"].get(p, 0) for p in wanted}
+        out = sys.stdout
+
+        def show(process: str, line: LogLine) -> None:
+            if since is not None and line.time < since:
+                return
+            if minimum and level_of(line.text, line.stream) < minimum:
+                return
+            out.write(f"[{process}] {line.text}\n" if prefixed else line.text + "\n")
+
+        streams = [_tagged(p, read_lines(log_dir / f"{p}.log", offsets[p])) for p in wanted]
+        for _, process, line in heapq.merge(*streams, key=lambda item: item[0]):
+            show(process, line)
+        out.flush()
+        if not options.follow:
+            return 0
+        for message in link.messages():
+            if message.get("type") != "events":
+                continue
+            for data in message.get("events") or []:
+                event = event_from_dict(data)
+                if event.kind == "output" and event.process in offsets:
+                    for text in event.lines:
+                        show(event.process, LogLine(event.time, event.stream or "stdout",
+                                                    text))
+                elif event.kind == "dropped" and event.process in offsets:
+                    print(f"tuilaunch logs: {event.code} lines of {event.process} skipped "
+                          f"(too slow a reader); they are in {log_dir}", file=sys.stderr)
+            out.flush()
+        return 0
+    finally:
+        link.close()
+
+
+def _tagged(process: str, lines: Iterator[LogLine]) -> Iterator[tuple[float, str, LogLine]]:
+    for line in lines:
+        yield line.time, process, line
+
+
+# --- helpers -------------------------------------------------------------------------------
+
+_DURATION = re.compile(r"^(\d+(?:\.\d+)?)\s*(s|m|h|d)$")
+
+
+def _parse_since(text: str) -> float:
+    match = _DURATION.match(text.strip())
+    if match:
+        unit = {"s": 1, "m": 60, "h": 3600, "d": 86400}[match.group(2)]
+        return time.time() - float(match.group(1)) * unit
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    try:
+        moment = datetime.datetime.fromisoformat(text)
+    except ValueError:
+        try:
+            clock = datetime.time.fromisoformat(text)
+        except ValueError:
+            raise SessionError(f"--since {text!r} is not a time",
+                               hint="30s, 5m, 2h, a unix time, 2026-11-22T08:30:00 or 08:30")\
+                from None
+        moment = datetime.datetime.combine(datetime.date.today(), clock)
+    return moment.timestamp()
+
+
+def _clock(stamp: float) -> str:
+    return time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(stamp))
+
+
+def _table(rows: Sequence[tuple[str, ...]], indent: str = "") -> None:
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        cells = [cell.ljust(width) for cell, width in zip(row, widths, strict=True)]
+        print((indent + "  ".join(cells)).rstrip())
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:  # our own child (the foreground case) is a zombie until reaped
+        return os.waitpid(pid, os.WNOHANG) == (0, 0)
+    except ChildProcessError:
+        return True
+

@@ -1,0 +1,63 @@
+"""The session socket's wire format: one JSON object per line, and Event <-> dict.
+
+JSON escapes every newline inside strings, so a line is always one whole message; a
+message longer than MAX_MESSAGE is refused rather than buffered without bound.
+
+Client to server: `{"id": n, "op": ...}` requests: subscribe, status, find {process},
+  start/stop/restart {process}, shutdown {reason}, apply {arguments}, lifecycle {process}.
+Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
+  "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
+  [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
+  lines are the new `name:=value` arguments); `{"type": "ended", "status": n}` last.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from typing import Any
+
+from .supervisor import Event
+
+MAX_MESSAGE = 64 << 20
+
+_EVENT_FIELDS = {f.name for f in dataclasses.fields(Event)}
+
+
+class ProtocolError(Exception):
+    """A peer sent something that is not a message of this protocol."""
+
+
+def encode(message: dict[str, Any]) -> bytes:
+    return json.dumps(message, separators=(",", ":")).encode() + b"\n"
+
+
+def decode(line: bytes) -> dict[str, Any]:
+    try:
+        message = json.loads(line)
+    except ValueError as exc:
+        raise ProtocolError(f"not a JSON message: {exc}") from None
+    if not isinstance(message, dict):
+        raise ProtocolError("a message must be a JSON object")
+    return message
+
+
+def event_to_dict(event: Event) -> dict[str, Any]:
+    # defaults are left out: an output batch is then mostly its lines
+    data: dict[str, Any] = {"kind": event.kind, "time": event.time}
+    for name in ("process", "pid", "stream", "code", "reason"):
+        value = getattr(event, name)
+        if value is not None:
+            data[name] = value
+    if event.lines:
+        data["lines"] = event.lines
+    if event.level != "INFO":
+        data["level"] = event.level
+    return data
+
+
+def event_from_dict(data: dict[str, Any]) -> Event:
+    fields = {k: v for k, v in data.items() if k in _EVENT_FIELDS}
+    if not isinstance(fields.get("kind"), str):
+        raise ProtocolError(f"an event without a kind: {data!r}")
+    return Event(**fields)

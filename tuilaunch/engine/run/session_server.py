@@ -1,0 +1,375 @@
+"""A launch as a background server: owns the Supervisor, serves clients on a unix socket.
+
+`python -m tuilaunch.engine.run.session_server NAME FILE LOG_DIR ARGUMENTS_JSON` is started by
+the command line in its own session (no terminal: a dropped ssh link never reaches it). The
+TUI, `tuilaunch status/logs/wait/...` are clients. Each subscribed client has a bounded queue:
+past its limit, output lines are dropped for that client only (with a count), and a client
+that stops reading state changes altogether is disconnected, so a stalled or dead client
+never holds up the supervisor. The log files keep every line; a client that subscribes late
+gets, with the states, the log files' sizes at that instant, and reads what came before
+from the files: nothing is missed and nothing is seen twice.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import os
+import signal
+import socket
+import struct
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from ..errors import LaunchError
+from ..plan.session import Session
+from . import session_dir
+from .event_buffer import EventBuffer
+from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
+from .supervisor import Event, Supervisor
+
+CLIENT_MAX_LINES = 20_000
+"""Output lines queued per client before the oldest are dropped for that client."""
+CLIENT_MAX_EVENTS = 10_000
+"""State events queued for a client that reads nothing; past this it is disconnected."""
+RECENT_EVENTS = 2000
+"""Non-output events kept for late clients (states' details and the launch pane)."""
+
+
+class ClientQueue:
+    """One subscriber's bounded queue, drained by its own writer task."""
+
+    def __init__(self) -> None:
+        self.buffer = EventBuffer(max_lines=CLIENT_MAX_LINES)
+        self.events = 0
+        self.ready = asyncio.Event()
+        self.overflowed = False
+
+    def __call__(self, event: Event) -> None:
+        if event.kind != "output":
+            self.events += 1
+            if self.events > CLIENT_MAX_EVENTS:
+                self.overflowed = True
+        self.buffer(event)
+        self.ready.set()
+
+    def take(self) -> list[Event]:
+        self.ready.clear()
+        self.events = 0
+        return self.buffer.drain()
+
+
+class SessionServer:
+    def __init__(self, name: str, session: Session, log_dir: Path,
+                 sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0) -> None:
+        self.name = name
+        self.session = session
+        self.log_dir = log_dir
+        self.supervisor = Supervisor(session.plan, log_dir, sigterm_timeout=sigterm_timeout,
+                                     sigkill_timeout=sigkill_timeout)
+        self.supervisor.subscribe(self._on_event)
+        self.started = time.time()
+        self.pids: dict[str, int] = {}
+        self.details: dict[str, str] = {}
+        self.recent: collections.deque[Event] = collections.deque(maxlen=RECENT_EVENTS)
+        self.queues: set[ClientQueue] = set()
+        self.writers: set[asyncio.StreamWriter] = set()
+        self.apply_lock = asyncio.Lock()  # argument edits from several clients, one at a time
+        self.dropped_clients = 0
+        self._tasks: set[asyncio.Task[Any]] = set()
+
+    # --- the supervisor's events -------------------------------------------------------------
+
+    def _on_event(self, event: Event) -> None:
+        if event.kind != "output":
+            self.recent.append(event)
+            if event.process is not None:
+                if event.kind == "started" and event.pid is not None:
+                    self.pids[event.process] = event.pid
+                if event.reason is not None and event.kind != "log":
+                    self.details[event.process] = event.reason
+        for queue in list(self.queues):
+            queue(event)
+
+    def info(self) -> dict[str, Any]:
+        return {"name": self.name, "file": os.path.abspath(self.session.path),
+                "arguments": self.session.arguments, "pid": os.getpid(),
+                "started": self.started, "log_dir": str(self.log_dir)}
+
+    def status(self) -> dict[str, Any]:
+        states = self.supervisor.states
+        processes = []
+        for proc in self.session.plan.processes:
+            state = states.get(proc.id, "pending")
+            processes.append({
+                "id": proc.id, "name": proc.full_name or proc.label, "state": state,
+                "pid": self.pids.get(proc.id) if state == "running" else None,
+                "exit_code": self.supervisor.exit_codes.get(proc.id),
+                "detail": self.details.get(proc.id)})
+        counts: dict[str, int] = {}
+        for proc in self.session.plan.processes:
+            state = states.get(proc.id, "pending")
+            counts[state] = counts.get(state, 0) + 1
+        actions = [{"id": a.id, "kind": a.kind, "state": states.get(a.id, "pending")}
+                   for a in self.session.plan.actions]
+        return {**self.info(), "counts": counts, "processes": processes, "actions": actions,
+                "dropped_clients": self.dropped_clients}
+
+    # --- serving ---------------------------------------------------------------------------
+
+    async def serve(self) -> int:
+        path = session_dir.socket_path(self.name)
+        if session_dir.is_alive(self.name):
+            raise session_dir.SessionError(f"a session named {self.name} is already running",
+                                           hint="choose another --name")
+        path.unlink(missing_ok=True)
+        old_umask = os.umask(0o177)  # the socket is created 0600, never briefly wider
+        try:
+            server = await asyncio.start_unix_server(self._client, path=str(path),
+                                                     limit=MAX_MESSAGE)
+        finally:
+            os.umask(old_umask)
+        os.chmod(path, 0o600)
+        session_dir.write_info(self.name, self.info())
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, self._signalled, sig)
+        # no terminal: a SIGHUP can only come from someone who means it as "keep going"
+        loop.add_signal_handler(signal.SIGHUP, lambda: None)
+        try:
+            status = await self.supervisor.run(keep_alive=True)
+        finally:
+            server.close()
+            session_dir.remove(self.name)
+        self.status_code = status
+        self.ended = True
+        for queue in list(self.queues):
+            queue.ready.set()  # writers flush what is left, then send "ended"
+        # a client that stopped reading must not keep the server alive
+        await asyncio.wait([*self._tasks], timeout=5.0) if self._tasks else None
+        for writer in list(self.writers):
+            writer.close()
+        return status
+
+    ended = False
+    status_code = 0
+
+    def _signalled(self, sig: signal.Signals) -> None:
+        self._spawn(self.supervisor.shutdown(f"received {sig.name}"))
+
+    def _spawn(self, coroutine: Any) -> asyncio.Task[Any]:
+        task = asyncio.ensure_future(coroutine)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+        return task
+
+    async def _client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        sock = writer.get_extra_info("socket")
+        if sock is not None and not _same_user(sock):
+            writer.close()
+            return
+        self.writers.add(writer)
+        lock = asyncio.Lock()
+        queue: ClientQueue | None = None
+        try:
+            await _send(writer, lock, {"type": "hello", "info": self.info()})
+            while True:
+                try:
+                    line = await reader.readline()
+                except (ValueError, ConnectionError):
+                    return  # longer than MAX_MESSAGE, or the peer vanished
+                if not line:
+                    return
+                try:
+                    message = decode(line)
+                except ProtocolError as exc:
+                    await _send(writer, lock, {"type": "reply", "id": None, "ok": False,
+                                               "error": str(exc)})
+                    continue
+                if message.get("op") == "subscribe" and queue is None:
+                    queue = ClientQueue()
+                    # states and file sizes at the same instant as the subscription: the
+                    # client reads the files up to these sizes, then gets events from here
+                    result = {"states": dict(self.supervisor.states),
+                              "offsets": self._log_sizes(),
+                              "recent": [event_to_dict(e) for e in self.recent],
+                              "arguments": self.session.arguments}
+                    self.queues.add(queue)
+                    await _send(writer, lock, {"type": "reply", "id": message.get("id"),
+                                               "ok": True, "result": result})
+                    self._spawn(self._pump(queue, writer, lock))
+                    continue
+                self._spawn(self._answer(message, writer, lock))
+        except (ConnectionError, OSError):
+            return
+        finally:
+            if queue is not None:
+                self.queues.discard(queue)
+                queue.ready.set()
+            self.writers.discard(writer)
+            writer.close()
+
+    def _log_sizes(self) -> dict[str, int]:
+        sizes = {}
+        for proc in self.session.plan.processes:
+            try:
+                sizes[proc.id] = (self.log_dir / f"{proc.id}.log").stat().st_size
+            except OSError:
+                continue
+        return sizes
+
+    async def _pump(self, queue: ClientQueue, writer: asyncio.StreamWriter,
+                    lock: asyncio.Lock) -> None:
+        """Sends a client its queued events, one batch per round trip of the socket."""
+        try:
+            while queue in self.queues and not self.ended:
+                await queue.ready.wait()
+                if queue.overflowed:
+                    self.dropped_clients += 1
+                    break
+                await self._send_events(queue, writer, lock)
+            if self.ended:
+                await self._send_events(queue, writer, lock)
+                await _send(writer, lock, {"type": "ended", "status": self.status_code})
+        except (ConnectionError, OSError):
+            pass
+        finally:
+            self.queues.discard(queue)
+            writer.close()
+
+    async def _send_events(self, queue: ClientQueue, writer: asyncio.StreamWriter,
+                           lock: asyncio.Lock) -> None:
+        events = queue.take()
+        if not events:
+            return
+        states = self.supervisor.states
+        touched = {e.process: states[e.process] for e in events
+                   if e.process is not None and e.process in states}
+        await _send(writer, lock, {"type": "events", "states": touched,
+                                   "events": [event_to_dict(e) for e in events]})
+
+    async def _answer(self, message: dict[str, Any], writer: asyncio.StreamWriter,
+                      lock: asyncio.Lock) -> None:
+        request_id = message.get("id")
+        try:
+            result = await self._perform(message)
+            reply = {"type": "reply", "id": request_id, "ok": True, "result": result}
+        except (LaunchError, KeyError, TypeError, ValueError) as exc:
+            text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+            reply = {"type": "reply", "id": request_id, "ok": False, "error": str(text)}
+        try:
+            await _send(writer, lock, reply)
+        except (ConnectionError, OSError):
+            pass  # the asker is gone; what it asked for was done all the same
+
+    async def _perform(self, message: dict[str, Any]) -> Any:
+        op = message.get("op")
+        supervisor = self.supervisor
+        if op == "status":
+            return self.status()
+        if op in ("start", "stop", "restart"):
+            process = self.find_process(str(message.get("process")))
+            await getattr(supervisor, op)(process)
+            return {"process": process, "state": supervisor.states.get(process)}
+        if op == "shutdown":
+            await supervisor.shutdown(str(message.get("reason") or "stop requested"))
+            return {}
+        if op == "apply":
+            arguments = message.get("arguments")
+            if not isinstance(arguments, dict):
+                raise ValueError("apply needs arguments as an object")
+            return await self.apply({str(k): str(v) for k, v in arguments.items()})
+        if op == "find":
+            return self.find_process(str(message.get("process")))
+        if op == "lifecycle":
+            return await self.lifecycle_state(self.find_process(str(message.get("process"))))
+        raise ValueError(f"unknown request {op!r}")
+
+    def find_process(self, ref: str) -> str:
+        """A process by id (`talker-1`), full node name (`/r2/talker`) or unique node name."""
+        processes = self.session.plan.processes
+        for item_id in [*(p.id for p in processes), *(a.id for a in self.session.plan.actions)]:
+            if ref == item_id:
+                return item_id
+        matches = [p.id for p in processes if ref in (p.full_name, p.name, p.label)
+                   or (p.full_name or "").rsplit("/", 1)[-1] == ref]
+        if len(matches) == 1:
+            return matches[0]
+        if matches:
+            raise LaunchError(f"{ref!r} names several processes: {', '.join(matches)}",
+                              hint="use a process id")
+        raise LaunchError(f"no process {ref!r} in session {self.name}",
+                          hint=f"processes: {', '.join(p.id for p in processes)}")
+
+    async def apply(self, arguments: dict[str, str]) -> dict[str, Any]:
+        async with self.apply_lock:
+            running = {p for p, s in self.supervisor.states.items() if s == "running"}
+            preview = self.session.preview(arguments, running)
+            if preview.error is not None or preview.plan is None:
+                raise LaunchError(f"cannot apply: {preview.error}")
+            plan = self.session.accept(preview)
+            diff = await self.supervisor.replace_plan(plan)
+            session_dir.write_info(self.name, self.info())
+            self._emit_plan()
+            return {"stop": diff.stop, "start": diff.start}
+
+    def _emit_plan(self) -> None:
+        # an event like the others, so it reaches every client in order with their states
+        self._on_event(Event("relaunched", reason=None, lines=[
+            f"{k}:={v}" for k, v in self.session.arguments.items()]))
+
+    async def lifecycle_state(self, process: str) -> dict[str, Any]:
+        from ..ros.bridge import RosError
+
+        name = self.session.plan.process(process).full_name
+        if not name or "<" in name:
+            raise LaunchError(f"{process}: its node name is not known to the launch file")
+        try:
+            _, response = await self.supervisor.bridge().call_service(
+                f"{name}/get_state", {}, 2.0, service_type="lifecycle_msgs/srv/GetState")
+        except RosError as exc:
+            return {"process": process, "node": name, "state": None, "error": str(exc)}
+        label = (response.get("current_state") or {}).get("label")
+        return {"process": process, "node": name, "state": label}
+
+
+async def _send(writer: asyncio.StreamWriter, lock: asyncio.Lock, message: dict[str, Any]) -> None:
+    async with lock:  # replies and event batches never interleave inside a line
+        writer.write(encode(message))
+        await writer.drain()
+
+
+def _same_user(sock: socket.socket) -> bool:
+    try:
+        raw = sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
+    except (OSError, AttributeError):
+        return False
+    _, uid, _ = struct.unpack("3i", raw)
+    return uid == os.getuid()
+
+
+def main(argv: list[str]) -> int:
+    import json
+
+    from ..plan.packages import ensure_environment
+
+    name, path, log_dir, arguments_json = argv[:4]
+    timeouts = [float(x) for x in argv[4:6]] or [5.0, 5.0]
+    ensure_environment()
+    try:
+        session = Session(path, json.loads(arguments_json))
+    except LaunchError as exc:
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return 2
+    server = SessionServer(name, session, Path(log_dir), *timeouts)
+    try:
+        return asyncio.run(server.serve())
+    except LaunchError as exc:
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,300 @@
+"""Clients of a session server: a blocking `Link` for the commands, and `RemoteSupervisor`,
+which the TUI uses exactly as it uses an in-process Supervisor.
+
+The TUI process then never reads a node's pipe: a flood is read, logged and batched by the
+server, and reaches the UI as one message per batch.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import socket
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+from .engine.plan.model import Plan, PlanDiff
+from .engine.plan.session import Session
+from .engine.run import session_dir
+from .engine.run.log_files import tail_lines
+from .engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
+from .engine.run.session_dir import SessionError
+from .engine.run.supervisor import Event
+
+Consumer = Callable[[Event], None]
+
+
+def resolve_name(name: str | None) -> str:
+    """The named session, or the only one running."""
+    alive = session_dir.live_sessions()
+    if name is not None:
+        session_dir.check_name(name)
+        if name not in alive:
+            raise SessionError(f"no running session named {name}",
+                               hint=f"running: {', '.join(alive)}" if alive else
+                               "tuilaunch ls lists the running sessions")
+        return name
+    if not alive:
+        raise SessionError("no running session", hint="start one with tuilaunch FILE --detach")
+    if len(alive) > 1:
+        raise SessionError(f"several sessions run: {', '.join(alive)}", hint="name one")
+    return alive[0]
+
+
+class Link:
+    """A blocking connection for one-shot commands (status, stop, restart, wait, logs)."""
+
+    def __init__(self, name: str, timeout: float | None = 30.0) -> None:
+        self.name = name
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self.sock.settimeout(timeout)
+        try:
+            self.sock.connect(str(session_dir.socket_path(name)))
+        except OSError as exc:
+            self.sock.close()
+            raise SessionError(f"session {name} does not answer ({exc.strerror or exc})",
+                               hint="tuilaunch ls lists the running sessions") from None
+        self._file = self.sock.makefile("rb")
+        self._next_id = 0
+        self.pending: list[dict[str, Any]] = []  # event batches that came before a reply
+        hello = self.receive()
+        if hello is None or hello.get("type") != "hello":
+            raise SessionError(f"session {name} did not greet")
+        self.info: dict[str, Any] = hello["info"]
+
+    def receive(self) -> dict[str, Any] | None:
+        """The next message, or None when the server closed the connection."""
+        try:
+            line = self._file.readline(MAX_MESSAGE)
+        except ConnectionError:
+            return None
+        if not line:
+            return None
+        return decode(line)
+
+    def request(self, op: str, **fields: Any) -> Any:
+        self._next_id += 1
+        request_id = self._next_id
+        self.sock.sendall(encode({"id": request_id, "op": op, **fields}))
+        while True:
+            message = self.receive()
+            if message is None:
+                raise SessionError(f"session {self.name} closed the connection during {op}")
+            if message.get("type") == "reply" and message.get("id") == request_id:
+                if not message.get("ok"):
+                    raise SessionError(f"session {self.name}: {message.get('error')}")
+                return message.get("result")
+            if message.get("type") == "events":
+                self.pending.append(message)
+
+    def messages(self) -> Iterator[dict[str, Any]]:
+        """Messages as they come (after `subscribe`), until the server closes."""
+        while self.pending:
+            yield self.pending.pop(0)
+        while True:
+            message = self.receive()
+            if message is None:
+                return
+            yield message
+
+    def wait_closed(self) -> None:
+        for _ in self.messages():
+            pass
+
+    def close(self) -> None:
+        self._file.close()
+        self.sock.close()
+
+
+class RemoteSupervisor:
+    """The Supervisor's interface, served by a session server.
+
+    Its coroutines run on the caller's loop (the TUI's engine thread). `states` follows the
+    server's; `history` is what happened before this client came: the tail of each log file
+    and recent state events, in time order, for the panes to show first."""
+
+    def __init__(self, name: str, session: Session, reader: asyncio.StreamReader,
+                 writer: asyncio.StreamWriter, info: dict[str, Any]) -> None:
+        self.name = name
+        self.session = session
+        self.info = info
+        self.log_dir = Path(info["log_dir"])
+        self.states: dict[str, str] = {}
+        self.exit_codes: dict[str, int] = {}
+        self.consumers: list[Consumer] = []
+        self.history: list[Event] = []
+        self.detached = False
+        self.owner = False  # started this session in the foreground
+        self.keep_on_hangup = False
+        self._reader = reader
+        self._writer = writer
+        self._replies: dict[int, asyncio.Future[Any]] = {}
+        self._next_id = 0
+
+    @classmethod
+    async def open(cls, name: str, session: Session, scrollback: int = 5000)\
+            -> RemoteSupervisor:
+        try:
+            reader, writer = await asyncio.open_unix_connection(
+                str(session_dir.socket_path(name)), limit=MAX_MESSAGE)
+        except OSError as exc:
+            raise SessionError(f"session {name} does not answer ({exc.strerror or exc})")\
+                from None
+        hello = decode(await reader.readline())
+        self = cls(name, session, reader, writer, hello["info"])
+        writer.write(encode({"id": 0, "op": "subscribe"}))
+        await writer.drain()
+        while True:
+            message = decode(await reader.readline())
+            if message.get("type") == "reply" and message.get("id") == 0:
+                break
+        result = message["result"]
+        self.states = dict(result["states"])
+        self._adopt(result["arguments"])
+        self.history = self._replay(result["offsets"], result["recent"], scrollback)
+        return self
+
+    @property
+    def plan(self) -> Plan:
+        return self.session.plan
+
+    def _adopt(self, arguments: dict[str, str]) -> None:
+        """Another client relaunched with these values: resolve the same plan here."""
+        if arguments == self.session.arguments:
+            return
+        preview = self.session.preview(arguments)
+        if preview.plan is not None:
+            self.session.accept(preview)
+
+    def _replay(self, offsets: dict[str, int], recent: list[dict[str, Any]],
+                scrollback: int) -> list[Event]:
+        timed: list[tuple[float, int, Event]] = []
+        for process, end in offsets.items():
+            for line in tail_lines(self.log_dir / f"{process}.log", end, scrollback):
+                timed.append((line.time, len(timed), Event(
+                    "output", process, stream=line.stream, lines=[line.text], time=line.time)))
+        for data in recent:
+            event = event_from_dict(data)
+            timed.append((event.time, len(timed), event))
+        timed.sort(key=lambda item: (item[0], item[1]))
+        return _batched([event for _, _, event in timed])
+
+    # --- the Supervisor's interface ----------------------------------------------------------
+
+    def subscribe(self, consumer: Consumer) -> None:
+        self.consumers.append(consumer)
+
+    async def run(self, keep_alive: bool = True) -> int:
+        """Delivers the server's events until it ends (its status) or this client detaches."""
+        status = 1
+        try:
+            while True:
+                try:
+                    line = await self._reader.readline()
+                except (ConnectionError, ValueError):
+                    line = b""
+                if not line:
+                    if not self.detached:
+                        self._deliver(Event("log", reason=f"lost the connection to session "
+                                            f"{self.name}", level="ERROR"))
+                    break
+                try:
+                    message = decode(line)
+                except ProtocolError:
+                    continue
+                kind = message.get("type")
+                if kind == "events":
+                    self.states.update(message.get("states") or {})
+                    for data in message.get("events") or []:
+                        event = event_from_dict(data)
+                        if event.kind == "relaunched":
+                            self._adopt(dict(item.split(":=", 1) for item in event.lines))
+                        if event.kind == "exited" and event.process and event.code is not None:
+                            self.exit_codes[event.process] = event.code
+                        self._deliver(event)
+                elif kind == "reply":
+                    future = self._replies.pop(message.get("id", -1), None)
+                    if future is not None and not future.done():
+                        future.set_result(message)
+                elif kind == "ended":
+                    status = int(message.get("status") or 0)
+                    break
+        finally:
+            for future in self._replies.values():
+                if not future.done():
+                    future.set_exception(SessionError(f"session {self.name} is gone"))
+            self._writer.close()
+        return 0 if self.detached else status
+
+    def _deliver(self, event: Event) -> None:
+        for consumer in list(self.consumers):
+            consumer(event)
+
+    async def _request(self, op: str, **fields: Any) -> Any:
+        self._next_id += 1
+        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        self._replies[self._next_id] = future
+        self._writer.write(encode({"id": self._next_id, "op": op, **fields}))
+        await self._writer.drain()
+        reply = await future
+        if not reply.get("ok"):
+            raise SessionError(f"session {self.name}: {reply.get('error')}")
+        return reply.get("result")
+
+    async def start(self, process_id: str) -> None:
+        await self._request("start", process=process_id)
+
+    async def stop(self, process_id: str) -> None:
+        await self._request("stop", process=process_id)
+
+    async def restart(self, process_id: str) -> None:
+        await self._request("restart", process=process_id)
+
+    async def shutdown(self, reason: str = "shutdown") -> None:
+        await self._request("shutdown", reason=reason)
+
+    async def replace_plan(self, plan: Plan) -> PlanDiff:
+        """Relaunches with the session's accepted arguments (the plan was resolved from them);
+        the server serialises relaunches and tells every client."""
+        result = await self._request("apply", arguments=self.session.arguments)
+        stop, start = list(result["stop"]), list(result["start"])
+        return PlanDiff([], stop, start)
+
+    async def detach(self) -> None:
+        self.detached = True
+        self._writer.close()
+
+    def kill_all(self) -> None:
+        """The UI is torn down without a shutdown: a session it started in the foreground
+        (and not told to outlive a hang-up) is stopped by its server; others run on."""
+        if self.owner and not self.keep_on_hangup and not self.detached:
+            try:
+                with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+                    sock.settimeout(2.0)
+                    sock.connect(str(session_dir.socket_path(self.name)))
+                    sock.sendall(encode({"id": 1, "op": "shutdown", "reason": "the UI ended"}))
+                    sock.recv(4096)  # the hello: the request is read before we hang up
+            except OSError:
+                pass
+
+
+def _batched(events: list[Event]) -> list[Event]:
+    """Consecutive output lines of one process and stream as one event."""
+    out: list[Event] = []
+    for event in events:
+        last = out[-1] if out else None
+        if (event.kind == "output" and last is not None and last.kind == "output"
+                and last.process == event.process and last.stream == event.stream):
+            last.lines.append(*event.lines)
+        else:
+            out.append(event)
+    return out
+
+
+def format_arguments(arguments: dict[str, str]) -> str:
+    return " ".join(f"{k}:={v}" for k, v in arguments.items())
+
+
+def dumps(data: Any) -> str:
+    return json.dumps(data, indent=2)
