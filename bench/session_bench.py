@@ -1,0 +1,156 @@
+"""Session figures, one run on this machine, each beside its in-process counterpart.
+
+1. Keypress-to-screen latency (median and worst over 40 presses) while 4 processes flood
+   output as fast as they can (`yes`): the TUI as a client of a session server (the
+   default since sessions) against the TUI running the supervisor in its own process
+   (the previous design). Measured end to end on a pseudo-terminal: from writing the key
+   `l` until the output pane's status line, redrawn, names the new level.
+2. Time for `tuilaunch attach` to show its first screen on a session whose 4 processes
+   have written 1,000,000 lines each (the panes are filled from the log files' tails),
+   against attaching to a session with empty logs.
+3. Round trip of `tuilaunch status --json` (a fresh Python process each time), against
+   `python -c pass`.
+
+    python bench/session_bench.py
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pty
+import select
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from run_bench import write_launch  # bench/ is on sys.path when run as a script
+
+from tuilaunch.engine.plan.packages import ensure_environment
+
+LEVEL_WORDS = ("INFO", "WARN", "ERROR", "FATAL", "DEBUG")
+IN_PROCESS = ("import sys; from pathlib import Path; from tuilaunch.app import make_app; "
+              "make_app(sys.argv[1], {}, Path(sys.argv[2])).run()")
+
+
+class Terminal:
+    """A program on a pseudo-terminal, its output read continuously as a terminal would."""
+
+    def __init__(self, argv: list[str]) -> None:
+        self.master, slave = pty.openpty()
+        self.proc = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave,
+                                     env={**os.environ, "TERM": "xterm-256color"},
+                                     start_new_session=True)
+        os.close(slave)
+
+    def read_until(self, marker: bytes, limit: float = 60.0) -> float:
+        start = time.perf_counter()
+        window = b""
+        while marker not in window:
+            if time.perf_counter() - start > limit:
+                raise AssertionError(f"{marker!r} never appeared")
+            if select.select([self.master], [], [], 0.05)[0]:
+                window = window[-4096:] + os.read(self.master, 1 << 20)
+        return time.perf_counter() - start
+
+    def close(self, key: bytes | None = None) -> None:
+        if key is not None:
+            os.write(self.master, key)
+        else:
+            self.proc.terminate()
+        try:
+            while self.proc.poll() is None:
+                if select.select([self.master], [], [], 0.2)[0]:
+                    os.read(self.master, 1 << 20)
+        except OSError:
+            pass
+        self.proc.wait(timeout=60)
+        os.close(self.master)
+
+
+def latency(argv: list[str], presses: int = 40) -> tuple[float, float]:
+    term = Terminal(argv)
+    try:
+        term.read_until(b"4 running")
+        time.sleep(1.0)  # the flood at its steady state
+        times = []
+        for i in range(presses):
+            os.write(term.master, b"l")
+            word = LEVEL_WORDS[i % len(LEVEL_WORDS)].encode()
+            times.append(term.read_until(b"level " + word + b"+"))
+            time.sleep(0.05)
+    finally:
+        term.close()
+    return statistics.median(times) * 1000, max(times) * 1000
+
+
+def tl(*args: str) -> str:
+    return subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
+                          text=True, check=True).stdout
+
+
+def attach_time(path: Path, lines: int) -> float:
+    name = tl(str(path), "--detach").strip()
+    try:
+        log_dir = Path(json.loads(tl("status", name, "--json"))["log_dir"])
+        while sum(f.stat().st_size for f in log_dir.glob("p*.log")) < lines * 4 * 8:
+            time.sleep(0.2)  # until the printers are done ("line N\n" is 8+ bytes)
+        term = Terminal([sys.executable, "-m", "tuilaunch", "attach", name])
+        try:
+            return term.read_until(b"4 running")
+        finally:
+            term.close(b"d")
+    finally:
+        tl("stop", name)
+
+
+def main() -> None:
+    ensure_environment()
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    with tempfile.TemporaryDirectory(prefix="tlb") as name:
+        folder = Path(name)
+        os.environ["XDG_RUNTIME_DIR"] = str(folder)
+        os.environ["ROS_LOG_DIR"] = str(folder / "log")
+        flood = write_launch(folder, "flood.py", "[ExecuteProcess(cmd=['yes', 'flooding the "
+                            "pane with a line of text'], name=f'flood{i}') for i in range(4)]")
+        c_med, c_max = latency([sys.executable, "-m", "tuilaunch", str(flood)])
+        i_med, i_max = latency([sys.executable, "-c", IN_PROCESS, str(flood),
+                                str(folder / "inproc")])
+        print(f"keypress latency under 4 floods, TUI as a session client: median "
+              f"{c_med:.1f} ms, worst {c_max:.1f} ms (target: worst < 100 ms)")
+        print(f"keypress latency under 4 floods, supervisor in the TUI process: median "
+              f"{i_med:.1f} ms, worst {i_max:.1f} ms (client/in-process worst: "
+              f"{c_max / i_max:.2f}x)")
+        count = 1_000_000
+        big = write_launch(folder, "big.py", f"[ExecuteProcess(cmd=['sh', '-c', 'seq {count} "
+                          f"| sed s/^/line/; sleep 600'], name=f'p{{i}}') for i in range(4)]")
+        empty = write_launch(folder, "empty.py", "[ExecuteProcess(cmd=['sleep', '600'], "
+                            "name=f'p{i}') for i in range(4)]")
+        full = attach_time(big, count)
+        bare = attach_time(empty, 0)
+        print(f"attach to first screen: 4 logs of {count:,} lines {full:.2f} s, empty logs "
+              f"{bare:.2f} s ({full / bare:.1f}x)")
+        quiet = tl(str(empty), "--detach").strip()
+        try:
+            runs = []
+            for _ in range(5):
+                start = time.perf_counter()
+                tl("status", quiet, "--json")
+                runs.append(time.perf_counter() - start)
+            floor = []
+            for _ in range(5):
+                start = time.perf_counter()
+                subprocess.run([sys.executable, "-c", "pass"], check=True)
+                floor.append(time.perf_counter() - start)
+        finally:
+            tl("stop", quiet)
+        s, f = statistics.median(runs), statistics.median(floor)
+        print(f"tuilaunch status --json: {s * 1000:.0f} ms, python -c pass {f * 1000:.0f} ms "
+              f"({s / f:.1f}x: importing tuilaunch)")
+
+
+if __name__ == "__main__":
+    main()
