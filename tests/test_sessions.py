@@ -24,6 +24,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from textual.widgets import Input
 
 from tuilaunch.app import make_app
 from tuilaunch.engine.plan.session import Session
@@ -315,6 +316,18 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
                 if "word gamma" in [line.text for line in app.store.lines(View("echo-3"))]:
                     break
             assert [line.text for line in app.store.lines(View("echo-3"))][-1] == "word gamma"
+            # now the other operator applies, and the TUI follows: tree, form and output
+            assert other.session.preview({"word": "delta"}).plan is not None
+            other.session.accept(other.session.preview({"word": "delta"}))
+            diff = await other.replace_plan(other.session.plan)
+            assert diff.stop == ["echo-3"] and "echo-3" in diff.start
+            for _ in range(200):
+                await pilot.pause(0.05)
+                if "word delta" in [line.text for line in app.store.lines(View("echo-3"))]:
+                    break
+            assert app.session.arguments == {"word": "delta"}
+            assert app.query_one("#arg-word", Input).value == "delta"
+            assert "word delta" in [line.text for line in app.store.lines(View("echo-3"))]
             await pilot.press("d")
             await pilot.pause(0.3)
         await other.detach()
@@ -322,7 +335,7 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
 
     asyncio.run(scenario())
     now = status(name)
-    assert now["arguments"] == {"word": "gamma"}
+    assert now["arguments"] == {"word": "delta"}
     assert not _alive(old_echo) and pids(name)["echo-3"] != old_echo
     tl("stop", name)
 
@@ -379,3 +392,50 @@ def test_a_file_named_like_a_command_is_taken_as_the_file(runtime, write, tmp_pa
     elsewhere = run_cli("status")
     assert elsewhere.returncode == 2
     assert elsewhere.stderr.startswith("tuilaunch status: error: no running session")
+
+
+LIFECYCLE_NODE = """
+import rclpy
+from rclpy.lifecycle import LifecycleNode
+
+rclpy.init()
+node = LifecycleNode('lc')
+
+def bring_up():
+    timer.cancel()
+    node.trigger_configure()
+    node.trigger_activate()
+    print('active now', flush=True)
+
+timer = node.create_timer(1.0, bring_up)
+try:
+    rclpy.spin(node)
+except BaseException:
+    pass
+"""
+
+
+def test_wait_for_a_lifecycle_state_asks_the_node(runtime, write, tmp_path):
+    script = tmp_path / "lc_node.py"
+    script.write_text(LIFECYCLE_NODE)
+    path = write(f"""
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([ExecuteProcess(name='lc', cmd=[{sys.executable!r},
+                                                                     {str(script)!r}])])
+        """)
+    name = tl(str(path), "--detach").stdout.strip()
+    try:
+        tl("wait", name, "/lc", "active", "--timeout", "60")
+        assert "active now" in tl("logs", name, "lc-1").stdout
+        late = run_cli("wait", name, "lc-1", "finalized", "--timeout", "0.5")
+        assert late.returncode == 1
+        assert late.stderr.strip() == "tuilaunch wait: /lc is active, not finalized"
+        wrong = run_cli("wait", name, "lc-1", "asleep")
+        assert wrong.returncode == 2 and "unknown state 'asleep'" in wrong.stderr
+        missing = run_cli("restart", name, "nobody")
+        assert missing.returncode == 2 and "no process 'nobody'" in missing.stderr
+        assert "lc-1" in missing.stderr  # the hint names the processes there are
+    finally:
+        tl("stop", name)

@@ -85,6 +85,7 @@ class TuiLaunchApp(App[int]):
         self.owner = owner
         self.keep_on_hangup = keep_on_hangup
         self.detached = False
+        self._own_relaunch: list[str] | None = None
         self.preview: Preview | None = None
         self.exit_status = 0
         self.quitting = False
@@ -202,6 +203,9 @@ class TuiLaunchApp(App[int]):
                 # any client's relaunch: the session already holds the new plan
                 tree.show_plan(self.session.plan, self.supervisor.states)
                 self._describe_waiting()
+                if event.lines != self._own_relaunch:
+                    self._relaunched_elsewhere(event.lines)
+                self._own_relaunch = None
             elif event.kind == "dropped" and event.process:
                 fresh += self.store.add(event.process, "stderr", [
                     f"[WARN] tuilaunch: {event.reason}"])
@@ -212,6 +216,16 @@ class TuiLaunchApp(App[int]):
             panel.append(fresh)
         panel.update_status()
         self.update_status()
+
+    def _relaunched_elsewhere(self, arguments: list[str]) -> None:
+        """Another operator applied new values: the form shows them, so an edit here starts
+        from what runs, never silently reverts theirs."""
+        self.preview = None
+        self.launch_tree.set_preview(None)
+        self.args_panel.arguments = self.session.plan.arguments
+        self.args_panel.refresh(recompose=True)
+        self.notify(f"relaunched by another client: {' '.join(arguments) or 'defaults'}")
+        self.refresh_bindings()
 
     def update_status(self) -> None:
         if self.supervisor is None:
@@ -375,6 +389,7 @@ class TuiLaunchApp(App[int]):
     async def relaunch(self, preview: Preview) -> None:
         assert self.supervisor is not None
         plan = self.session.accept(preview)
+        self._own_relaunch = [f"{k}:={v}" for k, v in self.session.arguments.items()]
         diff = await self.engine.run(self.supervisor.replace_plan(plan))
         self.preview = None
         tree = self.launch_tree

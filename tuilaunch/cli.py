@@ -170,9 +170,10 @@ def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace) 
     app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
                    owner=True, keep_on_hangup=options.keep_on_hangup)
     status = app.run()
-    if app.detached:
-        print(f"detached; session {name} runs on: tuilaunch attach {name}")
-    else:
+    from .session_client import report_end
+
+    report_end(app, name)
+    if not app.detached:
         try:
             server.wait(timeout=15)
         except subprocess.TimeoutExpired:

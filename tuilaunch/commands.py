@@ -25,7 +25,7 @@ from .engine.run.log_files import LogLine, read_lines
 from .engine.run.protocol import event_from_dict
 from .engine.run.session_dir import SessionError
 from .output_store import LEVELS, level_of
-from .session_client import Link, format_arguments, resolve_name
+from .session_client import Link, format_arguments, report_end, resolve_name
 
 COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait")
 PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
@@ -163,8 +163,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
     app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
                    scrollback=options.scrollback, session_name=name)
     status = app.run() or 0
-    if getattr(app, "detached", False):
-        print(f"detached; session {name} runs on: tuilaunch attach {name}")
+    report_end(app, name)
     return status
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import json
 import socket
+import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -125,6 +126,7 @@ class RemoteSupervisor:
         self.consumers: list[Consumer] = []
         self.history: list[Event] = []
         self.detached = False
+        self.lost = False  # the server vanished without saying it ended
         self.owner = False  # started this session in the foreground
         self.keep_on_hangup = False
         self._reader = reader
@@ -196,6 +198,7 @@ class RemoteSupervisor:
                     line = b""
                 if not line:
                     if not self.detached:
+                        self.lost = True
                         self._deliver(Event("log", reason=f"lost the connection to session "
                                             f"{self.name}", level="ERROR"))
                     break
@@ -277,6 +280,16 @@ class RemoteSupervisor:
                     sock.recv(4096)  # the hello: the request is read before we hang up
             except OSError:
                 pass
+
+
+def report_end(app: Any, name: str) -> None:
+    """What the command line says after a TUI client closes."""
+    if getattr(app, "detached", False):
+        print(f"detached; session {name} runs on: tuilaunch attach {name}")
+    elif getattr(app.supervisor, "lost", False):
+        log = Path(app.supervisor.log_dir) / "session.log"
+        print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "
+              f"messages: {log})", file=sys.stderr)
 
 
 def _batched(events: list[Event]) -> list[Event]:
