@@ -326,6 +326,10 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
                 if "word delta" in [line.text for line in app.store.lines(View("echo-3"))]:
                     break
             assert app.session.arguments == {"word": "delta"}
+            for _ in range(100):  # the form is rebuilt on the next refresh
+                await pilot.pause(0.05)
+                if app.query_one("#arg-word", Input).value == "delta":
+                    break
             assert app.query_one("#arg-word", Input).value == "delta"
             assert "word delta" in [line.text for line in app.store.lines(View("echo-3"))]
             await pilot.press("d")
@@ -439,3 +443,64 @@ def test_wait_for_a_lifecycle_state_asks_the_node(runtime, write, tmp_path):
         assert "lc-1" in missing.stderr  # the hint names the processes there are
     finally:
         tl("stop", name)
+
+
+def test_logs_follow_joins_the_file_and_the_live_stream_without_gap(runtime, write):
+    name = start_detached(write)
+    tl("wait", name, "ticker-1", "running", "--timeout", "30")
+    follower = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", name, "ticker",
+                                 "-f"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)
+    try:
+        lines = []
+        assert follower.stdout is not None
+        while len(lines) < 30:
+            lines.append(follower.stdout.readline().rstrip("\n"))
+        assert lines == [f"tick {i}" for i in range(1, 31)]
+        old = pids(name)["ticker-1"]
+        assert tl("restart", name, "ticker").stdout.strip() == "ticker-1: running"
+        assert pids(name)["ticker-1"] != old and not _alive(old)
+        while lines[-1] != "tick 1":  # the new process counts from 1 again, in the stream
+            lines.append(follower.stdout.readline().rstrip("\n"))
+        tl("stop", name)
+        _, errors = follower.communicate(timeout=30)  # -f ends with the session
+        assert follower.returncode == 0, errors
+    finally:
+        if follower.poll() is None:
+            follower.kill()
+            follower.wait()
+    assert run_cli("logs", name).returncode == 2  # gone: nothing to read from
+
+
+def test_logs_filters_by_time_and_level(runtime, write):
+    name = start_detached(write)
+    everything = tl("logs", name).stdout.splitlines()
+    assert "[early-2] early bird" in everything and "[echo-3] word alpha" in everything
+    assert tl("logs", name, "--level", "warn").stdout.splitlines() == [
+        "[early-2] [WARN] careful"]
+    later = str(time.time() + 3600)
+    assert tl("logs", name, "--since", later).stdout == ""
+    assert "[early-2] early bird" in tl("logs", name, "--since", "1h").stdout
+    bad = run_cli("logs", name, "--since", "yesterday-ish")
+    assert bad.returncode == 2 and "--since 'yesterday-ish' is not a time" in bad.stderr
+    tl("stop", name)
+
+
+@pytest.mark.skipif(os.getuid() != 0, reason="needs root to connect as another user")
+def test_the_server_refuses_another_users_connection(runtime, write):
+    name = start_detached(write)
+    folder = runtime / "tuilaunch"
+    runtime.chmod(0o711)  # open the folders' and the socket's modes, to reach the uid check
+    folder.chmod(0o711)
+    (folder / f"{name}.sock").chmod(0o666)
+    probe = (
+        "import os, socket, sys\n"
+        "os.setgid(65534); os.setuid(65534)\n"
+        "s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(10)\n"
+        "s.connect(sys.argv[1]); print(repr(s.recv(100)))\n")
+    done = subprocess.run([sys.executable, "-c", probe, str(folder / f"{name}.sock")],
+                          capture_output=True, text=True, timeout=30)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "b''"  # closed at once: no hello, no status, nothing
+    assert status(name)["name"] == name  # its owner is still served
+    tl("stop", name)

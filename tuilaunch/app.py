@@ -132,7 +132,8 @@ class TuiLaunchApp(App[int]):
         # built on the engine thread, whose loop its asyncio objects belong to
         if self.session_name is not None:
             remote = self.engine.submit(RemoteSupervisor.open(
-                self.session_name, self.session, self.scrollback)).result(timeout=60)
+                self.session_name, self.session, self.scrollback,
+                max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)
             remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
             self.supervisor = remote
         else:

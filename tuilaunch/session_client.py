@@ -135,8 +135,10 @@ class RemoteSupervisor:
         self._next_id = 0
 
     @classmethod
-    async def open(cls, name: str, session: Session, scrollback: int = 5000)\
-            -> RemoteSupervisor:
+    async def open(cls, name: str, session: Session, scrollback: int = 5000,
+                   max_lines: int = 0, interval: float = 0.0) -> RemoteSupervisor:
+        """Connects and subscribes; `max_lines` and `interval` bound what a display is sent
+        (what it could not draw anyway is counted, not sent)."""
         try:
             reader, writer = await asyncio.open_unix_connection(
                 str(session_dir.socket_path(name)), limit=MAX_MESSAGE)
@@ -145,7 +147,8 @@ class RemoteSupervisor:
                 from None
         hello = decode(await reader.readline())
         self = cls(name, session, reader, writer, hello["info"])
-        writer.write(encode({"id": 0, "op": "subscribe"}))
+        writer.write(encode({"id": 0, "op": "subscribe", "max_lines": max_lines,
+                             "interval": interval}))
         await writer.drain()
         while True:
             message = decode(await reader.readline())

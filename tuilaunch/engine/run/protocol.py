@@ -3,7 +3,9 @@
 JSON escapes every newline inside strings, so a line is always one whole message; a
 message longer than MAX_MESSAGE is refused rather than buffered without bound.
 
-Client to server: `{"id": n, "op": ...}` requests: subscribe, status, find {process},
+Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
+  most output lines per batch and the least seconds between batches, for a display that
+  cannot show more}, status, find {process},
   start/stop/restart {process}, shutdown {reason}, apply {arguments}, lifecycle {process}.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":

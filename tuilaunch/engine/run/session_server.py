@@ -41,8 +41,9 @@ RECENT_EVENTS = 2000
 class ClientQueue:
     """One subscriber's bounded queue, drained by its own writer task."""
 
-    def __init__(self) -> None:
-        self.buffer = EventBuffer(max_lines=CLIENT_MAX_LINES)
+    def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0) -> None:
+        self.buffer = EventBuffer(max_lines=max_lines)
+        self.interval = interval  # a display asks for no more batches than it draws
         self.events = 0
         self.ready = asyncio.Event()
         self.overflowed = False
@@ -189,7 +190,10 @@ class SessionServer:
                                                "error": str(exc)})
                     continue
                 if message.get("op") == "subscribe" and queue is None:
-                    queue = ClientQueue()
+                    queue = ClientQueue(
+                        max(1, min(int(message.get("max_lines") or CLIENT_MAX_LINES),
+                                   CLIENT_MAX_LINES)),
+                        max(0.0, min(float(message.get("interval") or 0.0), 1.0)))
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result = {"states": dict(self.supervisor.states),
@@ -230,6 +234,8 @@ class SessionServer:
                     self.dropped_clients += 1
                     break
                 await self._send_events(queue, writer, lock)
+                if queue.interval:
+                    await asyncio.sleep(queue.interval)
             if self.ended:
                 await self._send_events(queue, writer, lock)
                 await _send(writer, lock, {"type": "ended", "status": self.status_code})
