@@ -383,6 +383,17 @@ def test_hangup_of_a_foreground_tui_stops_all_unless_keep_on_hangup(runtime, wri
         assert pids("kept") == children
     finally:
         terminal.close()
+    # a TUI that only attached leaves the launch running when its terminal goes or when
+    # it is told to terminate
+    for how in (signal.SIGHUP, signal.SIGTERM):
+        terminal = Terminal("attach", "kept")
+        try:
+            terminal.read_until(b"2 running")
+            os.kill(terminal.proc.pid, how)
+            assert terminal.wait_exit() == 0
+        finally:
+            terminal.close()
+        assert pids("kept") == children
     tl("stop", "kept")
 
 

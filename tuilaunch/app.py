@@ -150,7 +150,7 @@ class TuiLaunchApp(App[int]):
         self.run_supervisor()
         self._drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         loop = asyncio.get_running_loop()
-        loop.add_signal_handler(signal.SIGTERM, self.stop_all_and_exit)
+        loop.add_signal_handler(signal.SIGTERM, self._terminated)
         loop.add_signal_handler(signal.SIGHUP, self._terminal_hung_up)
         self.update_status()
         tree.focus()
@@ -431,6 +431,13 @@ class TuiLaunchApp(App[int]):
         server does the stopping, so the launch is never left half-stopped."""
         self.terminal_lost = True
         if self.session_name is not None and (self.keep_on_hangup or not self.owner):
+            self.action_detach()
+        else:
+            self.stop_all_and_exit()
+
+    def _terminated(self) -> None:
+        """SIGTERM stops what this app started; a client that only attached just leaves."""
+        if self.session_name is not None and not self.owner:
             self.action_detach()
         else:
             self.stop_all_and_exit()

@@ -262,9 +262,11 @@ class SessionServer:
         try:
             result = await self._perform(message)
             reply = {"type": "reply", "id": request_id, "ok": True, "result": result}
-        except (LaunchError, KeyError, TypeError, ValueError) as exc:
-            text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
-            reply = {"type": "reply", "id": request_id, "ok": False, "error": str(text)}
+        except (LaunchError, TypeError, ValueError) as exc:
+            reply = {"type": "reply", "id": request_id, "ok": False, "error": str(exc)}
+        except Exception as exc:  # one bad request must never take the session down
+            reply = {"type": "reply", "id": request_id, "ok": False,
+                     "error": f"{op_name(message)} failed: {type(exc).__name__}: {exc}"}
         try:
             await _send(writer, lock, reply)
         except (ConnectionError, OSError):
@@ -277,6 +279,8 @@ class SessionServer:
             return self.status()
         if op in ("start", "stop", "restart"):
             process = self.find_process(str(message.get("process")))
+            if process not in {p.id for p in self.session.plan.processes}:
+                raise LaunchError(f"{process} is an action, not a process: it cannot {op}")
             await getattr(supervisor, op)(process)
             return {"process": process, "state": supervisor.states.get(process)}
         if op == "shutdown":
@@ -339,6 +343,10 @@ class SessionServer:
             return {"process": process, "node": name, "state": None, "error": str(exc)}
         label = (response.get("current_state") or {}).get("label")
         return {"process": process, "node": name, "state": label}
+
+
+def op_name(message: dict[str, Any]) -> str:
+    return str(message.get("op"))
 
 
 async def _send(writer: asyncio.StreamWriter, lock: asyncio.Lock, message: dict[str, Any]) -> None:
