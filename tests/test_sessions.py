@@ -515,3 +515,24 @@ def test_the_server_refuses_another_users_connection(runtime, write):
     assert done.stdout.strip() == "b''"  # closed at once: no hello, no status, nothing
     assert status(name)["name"] == name  # its owner is still served
     tl("stop", name)
+
+
+def test_a_client_queue_is_bounded_and_cuts_loose_a_client_that_reads_nothing():
+    from tuilaunch.engine.run.session_server import CLIENT_MAX_EVENTS, ClientQueue
+    from tuilaunch.engine.run.supervisor import Event
+
+    async def scenario() -> None:
+        cut: list[bool] = []
+        queue = ClientQueue(max_lines=100, on_overflow=lambda: cut.append(True))
+        for i in range(50):
+            queue(Event("output", "flood", stream="stdout", lines=[f"{i} {n}" for n in
+                                                                   range(10)]))
+        events = queue.take()
+        assert events[0].kind == "dropped" and events[0].code == 400  # counted, not kept
+        assert sum(len(e.lines) for e in events[1:]) == 100
+        assert events[-1].lines[-1] == "49 9"  # the newest lines are the ones kept
+        for _ in range(CLIENT_MAX_EVENTS + 5):
+            queue(Event("respawning", "crashy"))
+        assert cut == [True] and queue.overflowed
+
+    asyncio.run(scenario())

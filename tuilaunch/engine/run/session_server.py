@@ -20,6 +20,7 @@ import socket
 import struct
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -41,8 +42,10 @@ RECENT_EVENTS = 2000
 class ClientQueue:
     """One subscriber's bounded queue, drained by its own writer task."""
 
-    def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0) -> None:
+    def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
+                 on_overflow: Callable[[], None] | None = None) -> None:
         self.buffer = EventBuffer(max_lines=max_lines)
+        self.on_overflow = on_overflow
         self.interval = interval  # a display asks for no more batches than it draws
         self.events = 0
         self.ready = asyncio.Event()
@@ -51,8 +54,10 @@ class ClientQueue:
     def __call__(self, event: Event) -> None:
         if event.kind != "output":
             self.events += 1
-            if self.events > CLIENT_MAX_EVENTS:
+            if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
                 self.overflowed = True
+                if self.on_overflow is not None:
+                    self.on_overflow()  # its writer may be stuck; cut it loose now
         self.buffer(event)
         self.ready.set()
 
@@ -193,7 +198,8 @@ class SessionServer:
                     queue = ClientQueue(
                         max(1, min(int(message.get("max_lines") or CLIENT_MAX_LINES),
                                    CLIENT_MAX_LINES)),
-                        max(0.0, min(float(message.get("interval") or 0.0), 1.0)))
+                        max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
+                        writer.transport.abort)
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result = {"states": dict(self.supervisor.states),
