@@ -84,6 +84,8 @@ class SessionServer:
         self.writers: set[asyncio.StreamWriter] = set()
         self.apply_lock = asyncio.Lock()  # argument edits from several clients, one at a time
         self.dropped_clients = 0
+        self.ended = False  # the supervisor's run is over; writers send "ended" and stop
+        self.status_code = 0
         self._tasks: set[asyncio.Task[Any]] = set()
 
     # --- the supervisor's events -------------------------------------------------------------
@@ -153,14 +155,11 @@ class SessionServer:
         self.ended = True
         for queue in list(self.queues):
             queue.ready.set()  # writers flush what is left, then send "ended"
-        # a client that stopped reading must not keep the server alive
-        await asyncio.wait([*self._tasks], timeout=5.0) if self._tasks else None
+        if self._tasks:  # a client that stopped reading must not keep the server alive
+            await asyncio.wait([*self._tasks], timeout=5.0)
         for writer in list(self.writers):
             writer.close()
         return status
-
-    ended = False
-    status_code = 0
 
     def _signalled(self, sig: signal.Signals) -> None:
         self._spawn(self.supervisor.shutdown(f"received {sig.name}"))
