@@ -536,3 +536,38 @@ def test_a_client_queue_is_bounded_and_cuts_loose_a_client_that_reads_nothing():
         assert cut == [True] and queue.overflowed
 
     asyncio.run(scenario())
+
+
+STUBBORN = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='stubborn', cmd=[
+        'sh', '-c', 'trap "" INT; echo holding out; while true; do sleep 0.1; done'])])
+"""
+
+
+def test_kill_during_a_shutdown_sends_sigkill_at_once(runtime, write):
+    path = str(write(STUBBORN))
+    name = tl(path, "--detach").stdout.strip()
+    tl("wait", name, "stubborn-1", "running", "--timeout", "30")
+
+    async def scenario() -> list:
+        client = await RemoteSupervisor.open(name, Session(path, {}))
+        seen: list = []
+        client.subscribe(seen.append)
+        running = asyncio.ensure_future(client.run())
+        stopping = asyncio.ensure_future(client.shutdown("test"))
+        for _ in range(100):  # SIGINT has been sent and ignored
+            await asyncio.sleep(0.05)
+            if any(e.kind == "shutdown" for e in seen):
+                break
+        client.kill_all()  # what the TUI's second q does: no more waiting
+        await stopping
+        await running  # the session ended
+        return seen
+
+    seen = asyncio.run(scenario())
+    exits = [e for e in seen if e.kind == "exited" and e.process == "stubborn-1"]
+    assert [e.reason for e in exits] == ["killed by SIGKILL"]
+    assert tl("ls").stdout.strip() == "no running sessions"

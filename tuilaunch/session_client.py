@@ -133,6 +133,7 @@ class RemoteSupervisor:
         self._writer = writer
         self._replies: dict[int, asyncio.Future[Any]] = {}
         self._next_id = 0
+        self._stopping = False
 
     @classmethod
     async def open(cls, name: str, session: Session, scrollback: int = 5000,
@@ -258,7 +259,11 @@ class RemoteSupervisor:
         await self._request("restart", process=process_id)
 
     async def shutdown(self, reason: str = "shutdown") -> None:
+        self._stopping = True
         await self._request("shutdown", reason=reason)
+
+    async def run_action(self, action_id: str) -> None:
+        await self._request("run_action", action=action_id)
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """Relaunches with the session's accepted arguments (the plan was resolved from them);
@@ -272,17 +277,24 @@ class RemoteSupervisor:
         self._writer.close()
 
     def kill_all(self) -> None:
-        """The UI is torn down without a shutdown: a session it started in the foreground
-        (and not told to outlive a hang-up) is stopped by its server; others run on."""
-        if self.owner and not self.keep_on_hangup and not self.detached:
-            try:
-                with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
-                    sock.settimeout(2.0)
-                    sock.connect(str(session_dir.socket_path(self.name)))
-                    sock.sendall(encode({"id": 1, "op": "shutdown", "reason": "the UI ended"}))
-                    sock.recv(4096)  # the hello: the request is read before we hang up
-            except OSError:
-                pass
+        """While a shutdown runs: SIGKILL what is left, now. Otherwise the UI is being torn
+        down without a shutdown: a session it started in the foreground (and not told to
+        outlive a hang-up) is stopped by its server; others run on."""
+        if self._stopping:
+            self._send_once({"id": 1, "op": "kill"})
+        elif self.owner and not self.keep_on_hangup and not self.detached:
+            self._send_once({"id": 1, "op": "shutdown", "reason": "the UI ended"})
+
+    def _send_once(self, request: dict[str, Any]) -> None:
+        """A request from a thread without the engine loop (the UI's teardown)."""
+        try:
+            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+                sock.settimeout(2.0)
+                sock.connect(str(session_dir.socket_path(self.name)))
+                sock.sendall(encode(request))
+                sock.recv(4096)  # the hello: the request is read before we hang up
+        except OSError:
+            pass  # the server is gone, and with it what the request was about
 
 
 def report_end(app: Any, name: str) -> None:

@@ -6,7 +6,8 @@ message longer than MAX_MESSAGE is refused rather than buffered without bound.
 Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
   most output lines per batch and the least seconds between batches, for a display that
   cannot show more}, status, find {process},
-  start/stop/restart {process}, shutdown {reason}, apply {arguments}, lifecycle {process}.
+  start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
+  is left), apply {arguments}, lifecycle {process}.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
   [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose

@@ -296,6 +296,15 @@ class SessionServer:
             if not isinstance(arguments, dict):
                 raise ValueError("apply needs arguments as an object")
             return await self.apply({str(k): str(v) for k, v in arguments.items()})
+        if op == "kill":
+            supervisor.kill_all()  # the impatient second `q`: SIGKILL whatever is left
+            return {}
+        if op == "run_action":
+            run_action = getattr(supervisor, "run_action", None)
+            if run_action is None:
+                raise LaunchError("this supervisor cannot run an action again")
+            await run_action(self.find_process(str(message.get("action"))))
+            return {}
         if op == "find":
             return self.find_process(str(message.get("process")))
         if op == "lifecycle":
