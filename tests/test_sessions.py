@@ -571,3 +571,20 @@ def test_kill_during_a_shutdown_sends_sigkill_at_once(runtime, write):
     exits = [e for e in seen if e.kind == "exited" and e.process == "stubborn-1"]
     assert [e.reason for e in exits] == ["killed by SIGKILL"]
     assert tl("ls").stdout.strip() == "no running sessions"
+
+
+def test_log_tails_are_read_backwards_up_to_the_given_size(tmp_path):
+    from tuilaunch.engine.run.log_reader import read_lines, tail_lines
+
+    log = tmp_path / "n-1.log"
+    log.write_text("".join(f"{1000 + i}.5 stdout line {i} {'x' * (i % 50)}\n"
+                           for i in range(20_000)))
+    end = log.read_text().index("16000.5 stdout line 15000 ")  # bytes: the text is ASCII
+    tail = tail_lines(log, end, 5000)
+    assert [line.text.split()[1] for line in tail] == [str(i) for i in range(10_000, 15_000)]
+    assert tail[0].time == 11_000.5 and tail[0].stream == "stdout"
+    assert len(tail_lines(log, end, 100_000)) == 15_000  # asked for more than there is
+    assert [line.text for line in read_lines(log, 150)][:1] == ["line 0 "]
+    with open(log, "a") as handle:
+        handle.write("1.0 stdout half a li")  # being written: not a line yet
+    assert sum(1 for _ in read_lines(log)) == 20_000

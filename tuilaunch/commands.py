@@ -21,7 +21,7 @@ from typing import Any
 
 from .engine.errors import LaunchError
 from .engine.run import session_dir
-from .engine.run.log_files import LogLine, read_lines
+from .engine.run.log_reader import LogLine, read_lines
 from .engine.run.protocol import event_from_dict
 from .engine.run.session_dir import SessionError
 from .output_store import LEVELS, level_of
