@@ -588,3 +588,18 @@ def test_log_tails_are_read_backwards_up_to_the_given_size(tmp_path):
     with open(log, "a") as handle:
         handle.write("1.0 stdout half a li")  # being written: not a line yet
     assert sum(1 for _ in read_lines(log)) == 20_000
+
+
+def test_two_sessions_started_with_one_name_at_once_one_wins(runtime, write):
+    path = str(write(LAUNCH))
+    starts = [subprocess.Popen([sys.executable, "-m", "tuilaunch", path, "--detach", "--name",
+                                "twin"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True) for _ in range(2)]
+    results = sorted((p.wait(timeout=60), *p.communicate()) for p in starts)
+    assert [code for code, _, _ in results] == [0, 2]
+    assert results[0][1].strip() == "twin"
+    assert "a session named twin is already running" in results[1][2]
+    assert [s["name"] for s in json.loads(tl("ls", "--json").stdout)] == ["twin"]
+    assert status("twin")["counts"]["running"] >= 1  # the winner is the one that answers
+    tl("stop", "twin")
+    assert not list((runtime / "tuilaunch").iterdir())

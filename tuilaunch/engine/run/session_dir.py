@@ -8,6 +8,7 @@ so no other user can reach a socket even before the server checks the peer's uid
 from __future__ import annotations
 
 import errno
+import fcntl
 import json
 import os
 import re
@@ -73,9 +74,39 @@ def is_alive(name: str) -> bool:
     return True
 
 
+def claim(name: str) -> int:
+    """Holds `<name>.lock` for the server's lifetime (the returned descriptor): of two
+    servers started with one name at the same instant, the second is refused, instead of
+    taking over the first one's socket path."""
+    path = session_root() / f"{check_name(name)}.lock"
+    fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o600)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        raise SessionError(f"a session named {name} is already running",
+                           hint="choose another --name") from None
+    return fd
+
+
+def _claimed(name: str) -> bool:
+    """Whether a server (maybe still starting) holds the name."""
+    try:
+        fd = os.open(session_root() / f"{name}.lock", os.O_RDWR | os.O_CLOEXEC)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
 def remove(name: str) -> None:
     root = session_root()
-    for suffix in (".sock", ".json"):
+    for suffix in (".sock", ".json", ".lock"):
         (root / f"{name}{suffix}").unlink(missing_ok=True)
 
 
@@ -99,12 +130,14 @@ def live_sessions(clean: bool = True) -> list[str]:
     """Names of the sessions whose server answers, oldest first; with `clean`, the sockets
     and infos of dead ones (a server that was SIGKILLed) are removed."""
     root = session_root()
-    names = {p.stem for p in root.glob("*.sock")} | {p.stem for p in root.glob("*.json")}
+    names = {p.stem for suffix in ("sock", "json", "lock") for p in root.glob(f"*.{suffix}")}
     alive = []
     for name in names:
-        if _NAME.match(name) and is_alive(name):
+        if not _NAME.match(name):
+            continue
+        if is_alive(name):
             alive.append(name)
-        elif clean and _NAME.match(name):
+        elif clean and not _claimed(name):
             remove(name)
     return sorted(alive, key=lambda n: (read_info(n) or {}).get("started", 0.0))
 
@@ -116,7 +149,7 @@ def new_name(stem: str) -> str:
         base = "l" + base
     taken = set(live_sessions())
     number = 1
-    while f"{base}-{number}" in taken or (session_root() / f"{base}-{number}.sock").exists():
+    while f"{base}-{number}" in taken or _claimed(f"{base}-{number}"):
         number += 1
     return f"{base}-{number}"
 

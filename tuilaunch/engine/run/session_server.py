@@ -129,7 +129,9 @@ class SessionServer:
 
     async def serve(self) -> int:
         path = session_dir.socket_path(self.name)
+        lock = session_dir.claim(self.name)  # held until this process ends
         if session_dir.is_alive(self.name):
+            os.close(lock)
             raise session_dir.SessionError(f"a session named {self.name} is already running",
                                            hint="choose another --name")
         path.unlink(missing_ok=True)
