@@ -192,6 +192,11 @@ def test_ls_names_sessions_and_the_socket_is_private(runtime, write):
     folder = runtime / "tuilaunch"
     assert stat.S_IMODE(folder.stat().st_mode) == 0o700
     assert stat.S_IMODE((folder / f"{name}.sock").stat().st_mode) == 0o600
+    several = run_cli("attach")
+    assert several.returncode == 2
+    assert f"several sessions run: {name}, {second}" in several.stderr
+    no_terminal = run_cli("attach", name)  # captured output is no terminal
+    assert no_terminal.returncode == 2 and "attach needs a terminal" in no_terminal.stderr
     # a session of the same name cannot start twice
     again = run_cli(str(write(LAUNCH)), "--detach", "--name", "other")
     assert again.returncode == 2 and "already running" in again.stderr

@@ -301,6 +301,9 @@ def report_end(app: Any, name: str) -> None:
     """What the command line says after a TUI client closes."""
     if getattr(app, "detached", False):
         print(f"detached; session {name} runs on: tuilaunch attach {name}")
+    elif not isinstance(app.supervisor, RemoteSupervisor):
+        print(f"tuilaunch: error: the TUI could not attach to session {name}, which runs on: "
+              f"tuilaunch attach {name}, or tuilaunch stop {name}", file=sys.stderr)
     elif getattr(app.supervisor, "lost", False):
         log = Path(app.supervisor.log_dir) / "session.log"
         print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "
