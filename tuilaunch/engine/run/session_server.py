@@ -326,7 +326,7 @@ class SessionServer:
         if matches:
             raise LaunchError(f"{ref!r} names several processes: {', '.join(matches)}",
                               hint="use a process id")
-        raise LaunchError(f"no process {ref!r} in session {self.name}",
+        raise LaunchError(f"no process {ref!r}",
                           hint=f"processes: {', '.join(p.id for p in processes)}")
 
     async def apply(self, arguments: dict[str, str]) -> dict[str, Any]:
