@@ -474,6 +474,9 @@ class TuiLaunchApp(App[int]):
                             self.action_start)
         yield SystemCommand("Apply arguments", "Relaunch with the edited arguments",
                             self.action_apply)
+        if self.session_name is not None:
+            yield SystemCommand("Detach", "Leave the launch running (tuilaunch attach)",
+                                self.action_detach)
         for tab, title in (("nodes", "Nodes"), ("args", "Arguments"), ("services", "Services"),
                            ("params", "Parameters")):
             yield SystemCommand(f"Open {title}", f"Show the {title} tab",

@@ -14,6 +14,7 @@ KEYS = """\
   1 2 3 4    tabs: Nodes, Args, Services, Params     ?       this help
   q ctrl+c   quit (asks while nodes run)             ctrl+p  command palette
   F5         apply edited arguments (relaunches only what they change)
+  d          detach: the launch runs on; tuilaunch attach opens it again
 [b]Nodes[/b]  (arrows move in the tree, enter folds a group)
   s r t      stop / restart / start the selected node or group
   a          output of all nodes
