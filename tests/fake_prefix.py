@@ -36,20 +36,26 @@ with open(out, "w") as handle:
     json.dump(record, handle)
 """
 
-# Our own stand-in for ros_gz_sim's gz_sim.launch.py: the arguments it declares and the
-# `gz sim` command it runs through a shell.
+# Our own stand-in for ros_gz_sim's gz_sim.launch.py, in its style: arguments declared, then
+# an opaque function reads them and runs `gz sim ARGS --force-version V` through a shell.
 GZ_SIM_LAUNCH = """
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.actions import DeclareLaunchArgument, ExecuteProcess, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
+
+
+def start_gazebo(context, *args, **kwargs):
+    gz_args = LaunchConfiguration('gz_args').perform(context)
+    version = LaunchConfiguration('gz_version').perform(context)
+    return [ExecuteProcess(cmd=['gz sim', gz_args, '--force-version', version], shell=True,
+                           output='screen')]
 
 
 def generate_launch_description():
     return LaunchDescription([
         DeclareLaunchArgument('gz_args', default_value='', description='gz sim arguments'),
         DeclareLaunchArgument('gz_version', default_value='8', description='Gazebo version'),
-        ExecuteProcess(cmd=['gz sim', LaunchConfiguration('gz_args'), '--force-version',
-                            LaunchConfiguration('gz_version')], shell=True, output='screen'),
+        OpaqueFunction(function=start_gazebo),
     ])
 """
 

@@ -433,3 +433,20 @@ def generate_launch_description():
     image = records["image_bridge"][0]["argv"]
     assert image[0] == "/turret/image"
     assert "/turret/image:=image" in image and "__node:=gz_bridge_image" in " ".join(image)
+
+
+def test_spawn_args_may_be_a_string_or_nested_lists(write, gz):
+    path = write("""
+from simple_launch import SimpleLauncher
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_gazebo_axes(x=1.0, y=2.0)
+    sl.spawn_gz_model('a', spawn_args='-z 0.3 -Y 1')
+    sl.spawn_gz_model('b', spawn_args=[sl.gazebo_axes_args(), ['-z', '0.1']])
+    return sl.launch_description()
+""")
+    a, b = by_exe(plan_of(path), "create")
+    assert node_arguments(a) == ["-z", "0.3", "-Y", "1", "-topic", "robot_description",
+                                 "-name", "a"]
+    assert node_arguments(b) == ["-x", "1.0", "-y", "2.0", "-z", "0.1", "-topic",
+                                 "robot_description", "-name", "b"]

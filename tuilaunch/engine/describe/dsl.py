@@ -387,11 +387,15 @@ class SimpleLauncher(GazeboLauncher):
 
     def robot_state_publisher(self, package: SubValue = None, description_file: SubValue = None,
                               description_dir: SubValue = None, xacro_args: Any = None,
-                              **node_args: Any) -> Any:
+                              namespaced_tf: bool = False, **node_args: Any) -> Any:
         description = self.robot_description(package, description_file, description_dir,
                                              xacro_args)
         params = parameter_list(node_args.pop("parameters", []))
         node_args["parameters"] = [*params, {"robot_description": description}]
+        if namespaced_tf:
+            # simple_launch 1.9: /tf and /tf_static stay inside the robot's namespace
+            remaps = pair_list(node_args.pop("remappings", None), "remappings")
+            node_args["remappings"] = [*remaps, ("/tf", "tf"), ("/tf_static", "tf_static")]
         return self.node("robot_state_publisher", "robot_state_publisher", **node_args)
 
     def joint_state_publisher(self, use_gui: Any = True, **node_args: Any) -> None:

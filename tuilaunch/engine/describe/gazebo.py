@@ -20,7 +20,14 @@ from typing import TYPE_CHECKING, Any, Protocol
 from ..errors import DslError, Origin, caller_origin
 from ..plan.packages import known_packages
 from .entities import ExecuteProcess
-from .substitutions import PerformContext, SimpleSubstitution, Substitution, SubValue, perform
+from .substitutions import (
+    PerformContext,
+    SimpleSubstitution,
+    Substitution,
+    SubValue,
+    flatten,
+    perform,
+)
 
 if TYPE_CHECKING:
     from contextlib import AbstractContextManager
@@ -382,7 +389,8 @@ class GazeboLauncher:
 
         `only_new` is accepted as documented; `create` already refuses a name that exists.
         """
-        args = list(spawn_args or [])
+        # a string is split like node arguments; nested lists (axes args) are flattened
+        args = spawn_args.split() if isinstance(spawn_args, str) else flatten(spawn_args)
         if model_file is not None:
             args += ["-file", model_file, "-name", name]
         else:
