@@ -7,6 +7,7 @@ is a stand-in of our own writing.
 
 from __future__ import annotations
 
+import json
 import shlex
 import sys
 from pathlib import Path
@@ -293,6 +294,8 @@ def generate_launch_description():
         "ign_topic_name": "/clock", "ign_type_name": "ignition.msgs.Clock",
         "ros_topic_name": "/clock", "ros_type_name": "rosgraph_msgs/msg/Clock",
         "direction": "IGN_TO_ROS"}]
+    skipped = json.dumps(plan.tree.to_json())
+    assert "ros_ign_gazebo/launch/ign_gazebo.launch.py" in skipped
     # not installed here: each names its package, the others still plan
     assert all("not found" in (p.error or "") for p in plan.processes if p.package)
 
@@ -399,6 +402,7 @@ def test_headless_run_starts_gazebo_spawner_and_bridges_with_their_config(write,
     probes = tmp_path / "probes"
     env = prefix_env(prefix, probes)
     env["ROS_LOG_DIR"] = str(tmp_path / "log")
+    env["TMPDIR"] = str(tmp_path)  # the bridge configs and parameter files go there
     path = write(f"""
 from simple_launch import SimpleLauncher, GazeboBridge
 def generate_launch_description():
@@ -430,6 +434,7 @@ def generate_launch_description():
     assert [(c["gz_topic_name"], c["ros_topic_name"]) for c in turret] == [
         ("/world/shapes/model/turret/joint_state", "joint_states"),
         ("/turret/camera_info", "camera_info")]
+    assert len(list(tmp_path.glob("tuilaunch-gz*.yaml"))) == 2
     image = records["image_bridge"][0]["argv"]
     assert image[0] == "/turret/image"
     assert "/turret/image:=image" in image and "__node:=gz_bridge_image" in " ".join(image)
