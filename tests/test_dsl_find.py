@@ -146,3 +146,17 @@ def generate_launch_description():
     proc = plan_of(path).processes[0]
     assert proc.remappings == [["joint_states", "js"], ["/tf", "tf"], ["/tf_static", "tf_static"]]
     assert proc.namespace == "/r1"
+
+
+def test_removed_prefix_gz_plugins_is_refused_by_name(write, demo):
+    path = write("""
+from simple_launch import SimpleLauncher
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.robot_state_publisher('demo_pkg', 'bot.xacro', prefix_gz_plugins=False)
+    sl.robot_state_publisher('demo_pkg', 'bot.xacro', prefix_gz_plugins=True)
+    return sl.launch_description()
+""")
+    with pytest.raises(LaunchError, match=r"prefix_gz_plugins=True\) is not supported") as err:
+        plan_of(path)
+    assert err.value.origin is not None and err.value.origin.line == 6

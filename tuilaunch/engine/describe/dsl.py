@@ -387,7 +387,12 @@ class SimpleLauncher(GazeboLauncher):
 
     def robot_state_publisher(self, package: SubValue = None, description_file: SubValue = None,
                               description_dir: SubValue = None, xacro_args: Any = None,
-                              namespaced_tf: bool = False, **node_args: Any) -> Any:
+                              namespaced_tf: bool = False, prefix_gz_plugins: bool = False,
+                              **node_args: Any) -> Any:
+        if prefix_gz_plugins:
+            raise DslError("robot_state_publisher(prefix_gz_plugins=True) is not supported "
+                           "(simple_launch 1.10 removed it)", caller_origin(),
+                           hint="remove it; give frame names in the robot's description instead")
         description = self.robot_description(package, description_file, description_dir,
                                              xacro_args)
         params = parameter_list(node_args.pop("parameters", []))
