@@ -455,3 +455,33 @@ def generate_launch_description():
                                  "-name", "a"]
     assert node_arguments(b) == ["-x", "1.0", "-y", "2.0", "-z", "0.1", "-topic",
                                  "robot_description", "-name", "b"]
+
+
+@pytest.mark.parametrize("answer, world", [
+    ("Requesting state for world [arena]...", "arena"),
+    ("Service call timed out for [/world/state]", None),
+])
+def test_world_name_asked_from_a_running_gazebo(write, tmp_path, answer, world):
+    # FAKE `gz`: answers `gz model --list` as a running (or absent) Gazebo would
+    fake_bin = tmp_path / "bin"
+    fake_bin.mkdir()
+    gz_script = fake_bin / "gz"
+    gz_script.write_text(f"#!/bin/sh\n[ \"$1 $2\" = 'model --list' ] && echo '{answer}'\n")
+    gz_script.chmod(0o755)
+    path = write("""
+from simple_launch import SimpleLauncher, GazeboBridge
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.log_info('world is ' + GazeboBridge.world())
+    return sl.launch_description()
+""")
+    env = {"PATH": f"{fake_bin}:{Path(sys.executable).parent}:/usr/bin:/bin",
+           "GZ_VERSION": "harmonic"}
+    done = run_cli(str(path), "--print", "--json", env=env)
+    if world is None:
+        assert "test_launch.py:5: GazeboBridge.world(): the Gazebo world name is unknown" \
+            in done.stderr
+    else:
+        assert done.returncode == 0, done.stderr
+        actions = json.loads(done.stdout)["actions"]
+        assert actions[0]["data"] == f"world is {world}"

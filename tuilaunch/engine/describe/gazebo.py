@@ -164,8 +164,9 @@ def _world_from_running_gazebo() -> str | None:
                                   text=True, timeout=15)
         except (OSError, subprocess.TimeoutExpired):
             continue
-        found = re.search(r"\[([^\]]+)\]", done.stdout + done.stderr)
-        if done.returncode == 0 and found and "timed out" not in done.stdout:
+        output = done.stdout + done.stderr
+        found = re.search(r"\[([^\]]+)\]", output)
+        if done.returncode == 0 and found and "timed out" not in output:
             return found.group(1)
     return None
 
