@@ -105,11 +105,15 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
              os.path.abspath(path), str(log_dir), json.dumps(arguments)],
             stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True)
     deadline = time.monotonic() + timeout
-    while not session_dir.is_alive(name):
+    # ours, not another server that took the name at the same instant
+    while (session_dir.read_info(name) or {}).get("pid") != server.pid or \
+            not session_dir.is_alive(name):
         if server.poll() is not None:
             text = server_log.read_text(errors="replace").strip()
-            raise SessionError(f"session {name} did not start: "
-                               f"{text.splitlines()[-1] if text else 'no message'}")
+            # the server's own one-line error (and its hint), else its last words
+            reason = text.rsplit("tuilaunch: error: ", 1)[-1] if "tuilaunch: error: " in \
+                text else (text.splitlines() or ["no message"])[-1]
+            raise SessionError(f"session {name} did not start: {reason}")
         if time.monotonic() > deadline:
             server.kill()
             raise SessionError(f"session {name} did not answer within {timeout:g} s")
