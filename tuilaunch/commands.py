@@ -22,6 +22,7 @@ from typing import Any
 from .engine.errors import LaunchError
 from .engine.run import session_dir
 from .engine.run.log_reader import LogLine, read_lines
+from .engine.run.output import strip_ansi
 from .engine.run.protocol import event_from_dict
 from .engine.run.session_dir import SessionError
 from .output_store import LEVELS, level_of
@@ -279,13 +280,15 @@ def cmd_logs(options: argparse.Namespace) -> int:
             subscribed = link.request("subscribe")
             offsets = {p: subscribed["offsets"].get(p, 0) for p in wanted}
         out = sys.stdout
+        colour = out.isatty() and not os.environ.get("NO_COLOR")
 
         def show(process: str, line: LogLine) -> None:
             if since is not None and line.time < since:
                 return
-            if minimum and level_of(line.text, line.stream) < minimum:
+            text = line.text if colour else strip_ansi(line.text)
+            if minimum and level_of(text, line.stream) < minimum:
                 return
-            out.write(f"[{process}] {line.text}\n" if prefixed else line.text + "\n")
+            out.write(f"[{process}] {text}\n" if prefixed else text + "\n")
 
         streams = [_tagged(p, read_lines(log_dir / f"{p}.log", offsets[p])) for p in wanted]
         for _, process, line in heapq.merge(*streams, key=lambda item: item[0]):
