@@ -1,8 +1,8 @@
 """Session figures, one run on this machine, each beside its in-process counterpart.
 
-1. Keypress-to-screen latency (median of medians and worst over 2 x 40 presses) while 4 processes flood
-   output as fast as they can (`yes`): the TUI as a client of a session server (the
-   default since sessions) against the TUI running the supervisor in its own process
+1. Keypress-to-screen latency (median of medians and worst over 2 x 40 presses) while
+   4 processes flood output as fast as they can (`yes`): the TUI as a client of a session
+   server (the default since sessions) against the TUI running the supervisor in its own process
    (the previous design). Measured end to end on a pseudo-terminal: from writing the key
    `l` until the output pane's status line, redrawn, names the new level.
 2. Time for `tuilaunch attach` to show its first screen on a session whose 4 processes
@@ -11,7 +11,8 @@
 3. Round trip of `tuilaunch status --json` (a fresh Python process each time), against
    `python -c pass`.
 
-    python bench/session_bench.py
+    python bench/session_bench.py             (everything)
+    python bench/session_bench.py latency 3   (only 1., 3 alternated rounds)
 """
 
 from __future__ import annotations
@@ -108,6 +109,9 @@ def attach_time(path: Path, lines: int) -> float:
 
 
 def main() -> None:
+    """`session_bench.py latency [ROUNDS]` measures only the keypress latency."""
+    only_latency = sys.argv[1:2] == ["latency"]
+    rounds = int(sys.argv[2]) if len(sys.argv) > 2 else 2
     ensure_environment()
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     with tempfile.TemporaryDirectory(prefix="tlb") as name:
@@ -119,7 +123,7 @@ def main() -> None:
         # alternated, so both designs share whatever else the machine is doing
         client: list[tuple[float, float]] = []
         inside: list[tuple[float, float]] = []
-        for _ in range(2):
+        for _ in range(rounds):
             client.append(latency([sys.executable, "-m", "tuilaunch", str(flood)]))
             inside.append(latency([sys.executable, "-c", IN_PROCESS, str(flood),
                                    str(folder / "inproc")]))
@@ -130,6 +134,10 @@ def main() -> None:
         print(f"keypress latency under 4 floods, supervisor in the TUI process: median "
               f"{i_med:.1f} ms, worst {i_max:.1f} ms (client/in-process worst: "
               f"{c_max / i_max:.2f}x)")
+        print(f"(load average while measuring: {os.getloadavg()[0]:.1f} on "
+              f"{os.cpu_count()} cores)")
+        if only_latency:
+            return
         count = 1_000_000
         big = write_launch(folder, "big.py", f"[ExecuteProcess(cmd=['sh', '-c', 'seq {count} "
                           f"| sed s/^/line/; sleep 600'], name=f'p{{i}}') for i in range(4)]")
