@@ -23,9 +23,11 @@ class Origin:
 
     file: str
     line: int
+    column: int | None = None  # XML/YAML errors point at the tag or key, not only its line
 
     def __str__(self) -> str:
-        return f"{display_path(self.file)}:{self.line}"
+        where = f"{display_path(self.file)}:{self.line}"
+        return where if self.column is None else f"{where}:{self.column}"
 
 
 def display_path(path: str) -> str:

@@ -52,6 +52,10 @@ def typed_value(value: Any, context: PerformContext, where: str, origin: Origin 
     if isinstance(value, ParameterValue):
         if value.value_type is str:
             return perform(value.value, context)
+        if isinstance(value.value_type, str):  # a frontend's type=: int, list_of_float, ...
+            from ..describe.frontends.type_utils import typed_parameter
+
+            return typed_parameter(value.value, value.value_type, context, where, origin)
         return typed_value(value.value, context, where, origin)
     if isinstance(value, bool | int | float):
         return value
