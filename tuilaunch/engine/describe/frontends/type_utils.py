@@ -109,8 +109,9 @@ def coerce_text(text: str, spec: TypeSpec, can_be_str: bool = False) -> Any:
 
 def check_yaml_value(value: Any, spec: TypeSpec, can_be_str: bool = True) -> Any:
     """A value from a YAML launch file, checked against the type asked for."""
-    if isinstance(value, str) and spec != "str":
-        # text may still hold substitutions, or be coerced like XML text
+    if isinstance(value, str):
+        if spec in ("str", "yaml") or can_be_str:
+            return value  # YAML quoted it: it is text (maybe with substitutions)
         return coerce_text(value, spec, can_be_str)
     if spec == "str":
         if isinstance(value, bool):

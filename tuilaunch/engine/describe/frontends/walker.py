@@ -18,7 +18,7 @@ from ..substitutions import Substitution, TextSubstitution
 from .element import Element
 from .extra_substitutions import AppendedEnvironment, default_path_separator
 from .subst_parser import Part, SubstitutionSyntaxError, as_value, parse_substitutions
-from .type_utils import check_identifier
+from .type_utils import check_identifier, coerce_text, type_name
 
 # What each process-like tag reads besides its own attributes; for hints in errors.
 _PROCESS_ATTRIBUTES = ("cwd, name, launch-prefix, output, respawn, respawn_delay, "
@@ -277,7 +277,7 @@ class Walker:
         for name in element.attribute_names():
             element.mark_read(name)
         element.children()
-        return [Unsupported(element.tag, "tuilaunch does not perform this action yet")]
+        return [Unsupported(element.tag, "a launch action")]
 
     # --- launch_ros actions ---------------------------------------------------------------
 
@@ -459,11 +459,26 @@ class Walker:
                 lazy = isinstance(parsed, Substitution) or (
                     isinstance(parsed, list) and any(isinstance(v, Substitution)
                                                      for v in parsed))
+                if identifier is not None and not lazy and spec != "str":
+                    parsed = self.coerced(param, parsed, spec)
                 out[name] = ParameterValue(parsed, value_type=spec) \
                     if lazy and identifier is not None else parsed
             else:
                 raise param.error("needs a 'value' or nested <param>s")
         return out
+
+
+    @staticmethod
+    def coerced(param: Element, value: Any, spec: str) -> Any:
+        """A typed value written as text (YAML quotes, or XML text that did not fit)."""
+        try:
+            if isinstance(value, str):
+                return coerce_text(value, spec)
+            if isinstance(value, list) and all(isinstance(v, str) for v in value):
+                return [coerce_text(v, spec[len("list_of_"):]) for v in value]
+        except ValueError as exc:
+            raise param.error(f"value {value!r} is not {type_name(spec)} ({exc})") from None
+        return value
 
 
 def _form_type(default: Any) -> str:
