@@ -326,6 +326,8 @@ def test_containers_and_composable_nodes(write):
   <load_composable_node target="/ns/box">
     <composable_node pkg="composition" plugin="composition::Listener" name="listener"
                      namespace="sub"/>
+    <composable_lifecycle_node pkg="composition" plugin="composition::Server" name="server"
+                               autostart="true"/>
   </load_composable_node>
 """)
     plan = plan_of(path)
@@ -338,7 +340,7 @@ def test_containers_and_composable_nodes(write):
     load = next(a for a in plan.actions if a.kind == "load_components")
     assert load.target == "/ns/box"
     assert [(c["plugin"], c["namespace"]) for c in load.data] == [
-        ("composition::Listener", "/sub")]
+        ("composition::Listener", "/sub"), ("composition::Server", "/")]
 
 
 def test_lifecycle_node_is_a_process_with_its_name_namespace_and_parameters(write):
@@ -401,3 +403,20 @@ def test_on_exit_shutdown_and_unsupported_actions_are_reported(write):
     assert handler.trigger is not None and handler.trigger.target == "once-1"
     assert any(a.kind == "shutdown" for a in plan.actions)
     assert any("<reset_env>" in w and "test.launch.xml:4" in w for w in plan.warnings)
+
+
+def test_the_readme_xml_example_reads_into_the_entities_it_shows(write):
+    from tuilaunch.engine import load_file
+    from tuilaunch.engine.describe import entities
+
+    readme = (EXAMPLES.parent / "README.md").read_text()
+    block = readme.split("```xml\n", 1)[1].split("```", 1)[0]
+    loaded = load_file(str(write(block, "readme.launch.xml")))
+    kinds = [type(e) for e in loaded.entities]
+    assert kinds == [entities.DeclareLaunchArgument, entities.DeclareLaunchArgument,
+                     entities.SetLaunchConfiguration, entities.Group,
+                     entities.IncludeLaunchDescription]
+    group = loaded.entities[3]
+    assert [type(e).__name__ for e in group.children] == ["PushRosNamespace", "Node", "Node",
+                                                          "Node", "Node"]
+    assert group.children[4].condition is not None

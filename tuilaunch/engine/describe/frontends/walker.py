@@ -376,22 +376,30 @@ class Walker:
         if kwargs.get("name") is None or kwargs.get("namespace") is None:
             raise element.error("a node container needs 'name' and 'namespace'",
                                 hint="namespace=\"\" keeps the current namespace")
-        components = [self.composable_node(c) for c in element.nested("composable_node") or []]
+        components = self.components(element)
         container = ent.ComposableNodeContainer(composable_node_descriptions=components,
                                                 **kwargs)
         return [container, *self.on_exit(element, container)]
 
     def load_composable_node(self, element: Element) -> list[Any]:
         target = self.text(element, "target")
-        nested = element.nested("composable_node")
-        if nested is None:
+        components = self.components(element)
+        if not components:
             raise element.error("needs at least one <composable_node>")
-        components = [self.composable_node(c) for c in nested]
         return [ent.LoadComposableNodes(composable_node_descriptions=components,
                                         target_container=target)]
 
+    def components(self, element: Element) -> list[ent.ComposableNode]:
+        """`<composable_node>`s and (newer launch_ros) `<composable_lifecycle_node>`s."""
+        nested = [*(element.nested("composable_node") or []),
+                  *(element.nested("composable_lifecycle_node") or [])]
+        nested.sort(key=lambda e: (e.origin.line, e.origin.column or 0))
+        return [self.composable_node(c) for c in nested]
+
     def composable_node(self, element: Element) -> ent.ComposableNode:
         condition = self.condition(element)
+        if element.tag == "composable_lifecycle_node":
+            element.get("autostart", "bool", optional=True, can_be_str=True)
         extra = self.pairs(element, "extra_arg", "name", "value")
         component = ent.ComposableNode(
             package=self.text(element, "pkg"), plugin=self.text(element, "plugin"),
@@ -403,7 +411,8 @@ class Walker:
             condition=condition)
         component.origin = element.line_origin
         element.check_complete("pkg, plugin, name, namespace, if, unless, <param>, <remap>, "
-                               "<extra_arg>")
+                               "<extra_arg>" + (", autostart" if "lifecycle" in element.tag
+                                                else ""))
         return component
 
     # --- parameters -----------------------------------------------------------------------
