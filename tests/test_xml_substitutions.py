@@ -108,7 +108,9 @@ def test_boolean_substitutions_nest(write):
   <log message="$(if $(var a) yes no)"/>
   <log message="$(any $(var b) $(var b) $(var a))"/>
   <log message="$(all $(var a) $(var a) $(var b))"/>
-""") == ["false", "false", "true", "true", "true", "true", "yes", "true", "false"]
+  <log message="$(equals $(var a) True) $(equals 1.0 1) $(not-equals 1 true) $(equals a A)"/>
+""") == ["false", "false", "true", "true", "true", "true", "yes", "true", "false",
+         "true true false false"]  # launch compares booleans and numbers by value
 
 
 def test_conditions_take_substitutions(write):

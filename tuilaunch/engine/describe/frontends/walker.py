@@ -12,6 +12,7 @@ import shlex
 from collections.abc import Callable
 from typing import Any
 
+from ...errors import LaunchError
 from .. import entities as ent
 from ..conditions import Condition, IfCondition, UnlessCondition
 from ..substitutions import Substitution, TextSubstitution
@@ -96,7 +97,13 @@ class Walker:
                 "extension?); tuilaunch cannot run it",
                 hint="known tags: " + ", ".join(sorted(self.handlers)))
         condition = self.condition(element)
-        made = handler(element)
+        try:
+            made = handler(element)
+        except LaunchError:
+            raise
+        except (TypeError, ValueError, AttributeError, KeyError) as exc:
+            # a shape no check above foresaw: still one line naming the tag
+            raise element.error(f"cannot read this tag: {type(exc).__name__}: {exc}") from None
         element.check_complete(self._takes(element.tag))
         for entity in made:
             # an on_exit handler shares its process's condition, or it would wait forever
