@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from tuilaunch.engine import ArgumentError
+from tuilaunch.engine import ArgumentError, LaunchError
+from tuilaunch.engine.errors import Origin
 from tuilaunch.engine.plan.model import Plan, ProcessPlan
 
 from .conftest import EXAMPLES, plan_of, run_cli
@@ -420,3 +421,24 @@ def test_the_readme_xml_example_reads_into_the_entities_it_shows(write):
     assert [type(e).__name__ for e in group.children] == ["PushRosNamespace", "Node", "Node",
                                                           "Node", "Node"]
     assert group.children[4].condition is not None
+
+
+def test_parameter_files_with_allow_substs_get_their_substitutions_performed(write, tmp_path):
+    source = tmp_path / "subst.yaml"
+    source.write_text("/**:\n  ros__parameters:\n    robot: $(var robot)\n"
+                      "    shell: $(env SHELL_FOR_TEST sh)\n")
+    path = xml(write, f"""
+  <arg name="robot" default="r5"/>
+  <node pkg="tuilaunch_demos" exec="talker">
+    <param from="{source}" allow_substs="true"/>
+    <param from="{source}"/>
+  </node>
+""")
+    substituted, untouched = plan_of(path, robot="r6").processes[0].parameter_files
+    assert untouched == str(source)
+    assert Path(substituted).read_text() == (
+        "/**:\n  ros__parameters:\n    robot: r6\n    shell: sh\n")
+    source.write_text("/**:\n  ros__parameters:\n    robot: $(var robot\n")
+    with pytest.raises(LaunchError, match=r"is not closed") as exc:
+        plan_of(path)
+    assert exc.value.origin == Origin(str(source), 3, 12)  # the `$(` in the YAML file

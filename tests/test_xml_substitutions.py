@@ -61,6 +61,13 @@ def test_find_pkg_share_prefix_exec_and_exec_in_pkg(write):
         logged(write, '<log message="$(find-pkg-share no_such_package)"/>', "bad.launch.xml")
 
 
+def test_file_content(write, tmp_path):
+    (tmp_path / "robot.urdf").write_text("<robot name='r'/>\n")
+    assert logged(write, """
+  <log message="$(file-content $(dirname)/robot.urdf)"/>
+""") == ["<robot name='r'/>\n"]
+
+
 def test_eval_with_quotes_nesting_and_modules(write):
     assert logged(write, """
   <arg name="n" default="3"/>

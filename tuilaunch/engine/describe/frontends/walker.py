@@ -17,7 +17,11 @@ from .. import entities as ent
 from ..conditions import Condition, IfCondition, UnlessCondition
 from ..substitutions import Substitution, TextSubstitution
 from .element import Element
-from .extra_substitutions import AppendedEnvironment, default_path_separator
+from .extra_substitutions import (
+    AppendedEnvironment,
+    SubstitutedParameterFile,
+    default_path_separator,
+)
 from .subst_parser import Part, SubstitutionSyntaxError, as_value, parse_substitutions
 from .type_utils import check_identifier, coerce_text, type_name
 
@@ -434,8 +438,13 @@ class Walker:
             if param.has("from"):
                 if param.has("name"):
                     raise param.error("'name' and 'from' cannot be used together")
-                param.get("allow_substs", "bool", optional=True, can_be_str=True)
-                out.append(self.text(param, "from"))
+                allow = self.typed(param, "allow_substs", "bool")
+                path = self.text(param, "from")
+                if allow is not None and allow is not False:
+                    path = SubstitutedParameterFile(path, str(allow).lower()
+                                                    if isinstance(allow, bool) else allow)
+                    path.origin = param.origin
+                out.append(path)
                 param.check_complete("from, allow_substs")
             elif param.has("name"):
                 out.append(self.parameter_dict([param]))
