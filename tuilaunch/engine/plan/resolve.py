@@ -475,7 +475,8 @@ class Resolver:
         cmd = [*prefix, exe_path, *arguments]
         if ros_args:
             cmd += ["--ros-args", *ros_args]
-        components = [self._component(c, ctx, namespace) for c in entity.components]
+        # launch_ros loads components under the pushed namespace, not the container's own
+        components = [self._component(c, ctx, scope.namespace) for c in entity.components]
         return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
                            merged, user_files, generated, remappings, error=error,
                            components=components, **common)
