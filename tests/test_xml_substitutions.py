@@ -148,3 +148,21 @@ launch:
     plan = plan_of(path)
     assert [a.data for a in plan.actions] == ["4 here x"]
     assert os.path.basename(plan.file) == "subs.launch.yaml"
+
+
+def test_param_reads_a_set_parameter_in_scope(write):
+    path = write("""<launch>
+  <set_parameter name="vehicle_height" value="2.5"/>
+  <arg name="margin" default="0.5"/>
+  <node pkg="tuilaunch_demos" exec="talker">
+    <param name="max_z" value="$(eval '$(param vehicle_height) + $(var margin)')"/>
+    <param name="other" value="$(param missing 7)"/>
+  </node>
+  <log message="$(param nowhere)"/>
+</launch>""", "param.launch.xml")
+    with pytest.raises(LaunchError, match=r"\$\(param nowhere\): no <set_parameter>") as exc:
+        plan_of(path)
+    assert exc.value.origin is not None and exc.value.origin.line == 8
+    path.write_text(path.read_text().replace('  <log message="$(param nowhere)"/>\n', ""))
+    talker = plan_of(path).processes[0]
+    assert talker.parameters == {"vehicle_height": 2.5, "max_z": 3.0, "other": 7}

@@ -29,6 +29,8 @@ class PerformContext:
     launch_file: str | None = None
     environment: Mapping[str, str] = field(default_factory=lambda: os.environ)
     event_locals: dict[str, Any] = field(default_factory=dict)
+    # (name, value) pairs of SetParameter in scope, for launch_ros's `$(param name)`
+    global_parameters: list[tuple[Any, Any]] = field(default_factory=list)
 
 
 class Substitution:

@@ -99,7 +99,8 @@ class Scope:
         )
 
     def context(self) -> PerformContext:
-        return PerformContext(self.configurations, self.launch_file)
+        return PerformContext(self.configurations, self.launch_file,
+                              global_parameters=self.global_parameters)
 
 
 class Resolver:

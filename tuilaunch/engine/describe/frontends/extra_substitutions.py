@@ -129,3 +129,27 @@ class SubstitutedParameterFile(Substitution):
 
     def describe(self) -> str:
         return f"{describe(self.path)} (with substitutions)"
+
+
+class GlobalParameter(Substitution):
+    """launch_ros's `$(param name [default])`: a value set earlier by `<set_parameter>`."""
+
+    def __init__(self, name: SubValue, default: SubValue = None) -> None:
+        self.name = name
+        self.default = default
+
+    def perform(self, context: PerformContext) -> str:
+        from ...plan.params import typed_value
+
+        name = perform(self.name, context)
+        for key, value in context.global_parameters:
+            if perform(key, context) == name:
+                return str(typed_value(value, context, name, self.origin))
+        if self.default is not None:
+            return perform(self.default, context)
+        raise LaunchError(f"$(param {name}): no <set_parameter> named '{name}' comes before",
+                          self.origin, hint="set it with <set_parameter name= value=> first, "
+                          "or give a default: $(param name default)")
+
+    def describe(self) -> str:
+        return f"$(param {describe(self.name)})"

@@ -15,7 +15,7 @@ from typing import Any
 
 from ...errors import Origin
 from .. import substitutions as subs
-from .extra_substitutions import ExecutableInPackage, FileContent
+from .extra_substitutions import ExecutableInPackage, FileContent, GlobalParameter
 
 Part = Any  # str | Substitution
 _IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
@@ -113,6 +113,11 @@ def _any_count(name: str, make: Callable[..., subs.Substitution])\
     return build
 
 
+def _param(a: list[Any]) -> subs.Substitution:
+    _count("param", a, 1, 2)
+    return GlobalParameter(a[0], a[1] if len(a) > 1 else None)
+
+
 def _if(a: list[Any]) -> subs.Substitution:
     _count("if", a, 2, 3)
     return subs.IfElseSubstitution(a[0], a[1], a[2] if len(a) > 2 else "")
@@ -140,6 +145,7 @@ SUBSTITUTIONS: dict[str, Callable[[list[Any]], subs.Substitution]] = {
     "equals": _fixed("equals", 2, subs.EqualsSubstitution),
     "not-equals": _fixed("not-equals", 2, subs.NotEqualsSubstitution),
     "if": _if,
+    "param": _param,
 }
 
 
