@@ -443,3 +443,25 @@ def test_parameter_files_with_allow_substs_get_their_substitutions_performed(wri
     with pytest.raises(LaunchError, match=r"is not closed") as exc:
         plan_of(path)
     assert exc.value.origin == Origin(str(source), 3, 12)  # the `$(` in the YAML file
+
+
+def test_group_without_forwarding_sees_only_what_it_keeps(write):
+    path = xml(write, """
+  <let name="foo" value="FOO"/>
+  <let name="bar" value="BAR"/>
+  <set_env name="OUTER" value="1"/>
+  <group scoped="True" forwarding="False">
+    <keep name="bar" value="$(var bar)"/>
+    <keep name="baz" value="BAZ"/>
+    <log message="$(var foo gone) $(var bar) $(var baz)"/>
+    <executable cmd="true" name="inside"/>
+  </group>
+  <group>
+    <keep name="baz" value="kept"/>
+    <log message="$(var foo) $(var baz)"/>
+  </group>
+  <log message="$(var foo) $(var baz unset)"/>
+""")
+    plan = plan_of(path)
+    assert logs(plan) == ["gone BAR BAZ", "FOO kept", "FOO unset"]
+    assert plan.processes[0].env == {}  # the environment is reset too

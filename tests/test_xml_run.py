@@ -77,7 +77,8 @@ def test_ros2_control_bringup_resolves_like_ros2_launch(control_prefix):
     assert isinstance(description, str) and '<link name="r2/base_link"/>' in description
     assert not rviz.enabled and rviz.full_name == "/rviz2"
     assert broadcaster.cmd[1:] == ["joint_state_broadcaster"]
-    assert forward.cmd[1:] == ["forward_position_controller", "--param-file", controllers]
+    assert forward.cmd[1:] == ["forward_position_controller", "--param-file", controllers,
+                               "--controller-ros-args", "-r ~/commands:=/commands"]
     assert all(p.error is None for p in plan.processes if p.enabled)
     assert plan_of(LAUNCH / "robot_control.launch.xml", gui="true").processes[2].enabled
 

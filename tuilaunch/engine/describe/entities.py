@@ -290,6 +290,7 @@ class Group(Entity):
         self.launch_configurations = launch_configurations or {}
         self.label = label
         self.dsl_owner: Any = None
+        self.forwarding = True  # False: a scoped group starts without the outer configurations
 
     def describe(self) -> str:
         return self.label or "group"
@@ -311,6 +312,7 @@ def GroupAction(
         launch_configurations=launch_configurations,
     )
     group.origin = caller_origin()
+    group.forwarding = forwarding
     return group
 
 

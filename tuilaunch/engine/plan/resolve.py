@@ -243,8 +243,13 @@ class Resolver:
         scope.enabled, scope.skipped_by = enabled, skipped
         ctx = scope.context()
         if enabled:
-            for key, value in group.launch_configurations.items():
-                scope.configurations[perform(key, ctx)] = perform(value, ctx)
+            values = {perform(key, ctx): perform(value, ctx)
+                      for key, value in group.launch_configurations.items()}
+            if group.scoped and not group.forwarding:
+                # launch's forwarding=False: the group sees only what it keeps
+                scope.configurations.clear()
+                scope.env.clear()
+            scope.configurations.update(values)
         if group.namespace is not None and enabled:
             scope.namespace = join_namespace(scope.namespace, perform(group.namespace, ctx))
         if group.when is not None:

@@ -237,7 +237,7 @@ class Walker:
 
     def group(self, element: Element) -> list[Any]:
         scoped = element.get("scoped", "bool", optional=True)
-        element.get("forwarding", "bool", optional=True)
+        forwarding = element.get("forwarding", "bool", optional=True)
         keep = self.pairs(element, "keep", "name", "value")
         namespace = self.text(element, "namespace", optional=True)
         if namespace is None:
@@ -246,6 +246,7 @@ class Walker:
         group = ent.Group(self.actions(children), namespace=namespace,
                           scoped=True if scoped is None else bool(scoped),
                           launch_configurations=dict(keep or []))
+        group.forwarding = forwarding is not False
         return [group]
 
     def push_ros_namespace(self, element: Element) -> list[Any]:
