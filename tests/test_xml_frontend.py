@@ -465,3 +465,9 @@ def test_group_without_forwarding_sees_only_what_it_keeps(write):
     plan = plan_of(path)
     assert logs(plan) == ["gone BAR BAZ", "FOO kept", "FOO unset"]
     assert plan.processes[0].env == {}  # the environment is reset too
+
+
+def test_a_deprecated_launch_file_says_so(write):
+    path = write('<launch deprecated="use new.launch.xml">\n'
+                 '  <node pkg="tuilaunch_demos" exec="talker"/>\n</launch>', "old.launch.xml")
+    assert logs(plan_of(path)) == ["old.launch.xml is deprecated: use new.launch.xml"]

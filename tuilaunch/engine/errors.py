@@ -7,6 +7,7 @@ fault, and what would fix it. Tracebacks are for `--debug` only.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import traceback
@@ -42,6 +43,7 @@ def display_path(path: str) -> str:
 _SKIPPED_FILES = {os.path.abspath(contextlib.__file__)}
 
 
+@functools.lru_cache(maxsize=1024)  # asked for every frame of every entity made
 def _is_ours(filename: str) -> bool:
     """Frames of tuilaunch itself, or of the `with` machinery between the user and us."""
     path = os.path.abspath(filename)

@@ -9,6 +9,7 @@ is expected are taken as their text, as a user would expect).
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 import yaml
@@ -56,11 +57,25 @@ def _numbers_as_floats(value: Any) -> Any:
     return value
 
 
+# libyaml when present: files repeat the same short values thousands of times
+_LOADER: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+@lru_cache(maxsize=4096)
+def _yaml_load_cached(text: str) -> Any:
+    return yaml.load(text, Loader=_LOADER)
+
+
+def _yaml_load(text: str) -> Any:
+    value = _yaml_load_cached(text)
+    return list(value) if isinstance(value, list) else value  # the cache keeps its own copy
+
+
 def _as_yaml(text: str, can_be_str: bool) -> Any:
     if not text:
         return text
     try:
-        value = _numbers_as_floats(yaml.safe_load(text))
+        value = _numbers_as_floats(_yaml_load(text))
     except yaml.YAMLError:
         if can_be_str:
             return text

@@ -8,6 +8,7 @@ of its tag; every error names the file, line, column, tag and attribute at fault
 from __future__ import annotations
 
 import importlib
+import os
 import shlex
 from collections.abc import Callable
 from typing import Any
@@ -83,9 +84,16 @@ class Walker:
     # --- structure ----------------------------------------------------------------------
 
     def description(self, root: Element) -> list[Any]:
+        deprecated = root.get("deprecated", optional=True)
         for name in root.attribute_names():
             root.mark_read(name)  # launch reads none of the root's attributes but `deprecated`
-        return self.actions(root.children())
+        actions = self.actions(root.children())
+        if deprecated is not None:
+            notice = ent.LogInfo(msg=f"{os.path.basename(self.path)} is deprecated: "
+                                 f"{deprecated}")
+            notice.origin = root.line_origin
+            actions.insert(0, notice)
+        return actions
 
     def actions(self, elements: list[Element]) -> list[Any]:
         out: list[Any] = []

@@ -17,11 +17,14 @@ class MarkedDict(dict[Any, Any]):
     positions: dict[str, Origin]
 
 
-def _loader(path: str) -> type[yaml.SafeLoader]:
-    class Loader(yaml.SafeLoader):
+_BASE: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser when present
+
+
+def _loader(path: str) -> Any:
+    class Loader(_BASE):
         pass
 
-    def mapping(loader: yaml.SafeLoader, node: yaml.MappingNode) -> MarkedDict:
+    def mapping(loader: Any, node: yaml.MappingNode) -> MarkedDict:
         loader.flatten_mapping(node)
         out = MarkedDict()
         out.origin = _origin(path, node.start_mark)
