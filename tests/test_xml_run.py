@@ -141,3 +141,15 @@ def test_argument_edits_preview_and_restart_only_what_changes(tmp_path):
     session.accept(swap)
     assert [p.id for p in session.plan.enabled_processes()] == [
         "talker-1", "configurable-3", "monitor-4", "talker-5", "listener-6"]
+
+
+def test_package_and_xml_file_like_ros2_launch(control_prefix):
+    from .conftest import run_cli
+
+    launch_dir = control_prefix / "share" / "controller_manager" / "launch"
+    launch_dir.mkdir()
+    (launch_dir / "manager.launch.xml").write_text(
+        '<launch><node pkg="controller_manager" exec="ros2_control_node" name="cm"/></launch>')
+    done = run_cli("controller_manager", "manager.launch.xml", "--print")
+    assert done.returncode == 0, done.stderr
+    assert "/cm  [cm-1] (controller_manager/ros2_control_node)" in done.stdout

@@ -111,8 +111,11 @@ class Walker:
         condition = self.condition(element)
         try:
             made = handler(element)
-        except LaunchError:
-            raise
+        except LaunchError as exc:
+            if exc.origin is not None and exc.origin.file == element.origin.file:
+                raise
+            # raised by an entity's constructor: point at the tag, not at our code
+            raise element.error(exc.message, hint=exc.hint) from None
         except (TypeError, ValueError, AttributeError, KeyError) as exc:
             # a shape no check above foresaw: still one line naming the tag
             raise element.error(f"cannot read this tag: {type(exc).__name__}: {exc}") from None
