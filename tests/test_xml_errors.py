@@ -118,3 +118,14 @@ def test_a_missing_package_is_a_plan_problem_not_a_load_error(write):
     done = run_cli(str(path), "--print")
     assert done.returncode == 3 and "Traceback" not in done.stderr
     assert "p.launch.xml:2: driver-1" in done.stderr and "no_such_pkg" in done.stderr
+
+
+def test_an_undeclared_variable_names_itself_and_how_to_declare_it(write):
+    path = write('<launch>\n  <node pkg="tuilaunch_demos" exec="talker" name="$(var who)"/>\n'
+                 '</launch>', "v.launch.xml")
+    done = run_cli(str(path), "--print")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "v.launch.xml:2:3: launch argument 'who' is used but has no value" in done.stderr
+    assert 'hint: declare it with <arg name="who" default="..."/> or pass who:=value' in \
+        done.stderr
+    assert run_cli(str(path), "--print", "who:=me").returncode == 0

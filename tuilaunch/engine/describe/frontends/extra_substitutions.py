@@ -9,7 +9,14 @@ import shutil
 import tempfile
 
 from ...errors import LaunchError, Origin
-from ..substitutions import PerformContext, Substitution, SubValue, describe, perform
+from ..substitutions import (
+    LaunchConfiguration,
+    PerformContext,
+    Substitution,
+    SubValue,
+    describe,
+    perform,
+)
 
 
 class ExecutableInPackage(Substitution):
@@ -153,3 +160,16 @@ class GlobalParameter(Substitution):
 
     def describe(self) -> str:
         return f"$(param {describe(self.name)})"
+
+
+class FrontendVariable(LaunchConfiguration):
+    """`$(var name)`: a LaunchConfiguration whose hint speaks XML/YAML."""
+
+    def perform(self, context: PerformContext) -> str:
+        try:
+            return super().perform(context)
+        except LaunchError as exc:
+            name = self.name(context)
+            raise LaunchError(exc.message, exc.origin,
+                              hint=f'declare it with <arg name="{name}" default="..."/> '
+                              f"or pass {name}:=value") from None

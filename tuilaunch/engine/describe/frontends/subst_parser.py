@@ -15,7 +15,12 @@ from typing import Any
 
 from ...errors import Origin
 from .. import substitutions as subs
-from .extra_substitutions import ExecutableInPackage, FileContent, GlobalParameter
+from .extra_substitutions import (
+    ExecutableInPackage,
+    FileContent,
+    FrontendVariable,
+    GlobalParameter,
+)
 
 Part = Any  # str | Substitution
 _IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
@@ -67,7 +72,7 @@ def _count(name: str, args: list[Any], low: int, high: int) -> None:
 
 def _var(a: list[Any]) -> subs.Substitution:
     _count("var", a, 1, 2)
-    return subs.LaunchConfiguration(a[0], a[1] if len(a) > 1 else None)
+    return FrontendVariable(a[0], a[1] if len(a) > 1 else None)
 
 
 def _env(a: list[Any]) -> subs.Substitution:
