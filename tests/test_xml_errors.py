@@ -24,7 +24,7 @@ def error_of(write, text: str, name: str = "bad.launch.xml") -> LaunchError:
     ('<launch>\n <node pakg="tuilaunch_demos" exec="talker"/>\n</launch>', (2, 2),
      "<node>: unexpected attribute(s): pakg"),
     ('<launch>\n  <node exec="talker">\n    <parm name="a" value="1"/>\n  </node>\n</launch>',
-     (2, 3), "<node>: unexpected nested tag(s): <parm>"),
+     (3, 5), "<node>: unexpected nested tag(s): <parm> (did you mean <param>?)"),
     ('<launch>\n  <log message="$(var robot"/>\n</launch>', (2, 3),
      "<log>: attribute 'message': $(var ... is not closed with ')' (at character 1 of "
      "'$(var robot')"),
@@ -61,9 +61,9 @@ def test_xml_mistakes_name_the_place_and_what_is_wrong(write, text, where, messa
 
 @pytest.mark.parametrize("text, where, message", [
     ("launch:\n- node:\n    pkg: tuilaunch_demos\n   exec: talker\n", (4, 4), "not valid YAML"),
-    ("launch:\n- nod:\n    exec: talker\n", (2, 3), "<nod>: unknown tag"),
-    ("launch:\n- node:\n    exec: talker\n    pkgg: x\n", (2, 3),
-     "<node>: unexpected attribute(s): pkgg"),
+    ("launch:\n- nod:\n    exec: talker\n", (2, 3), "<nod>: unknown tag (did you mean <node>?)"),
+    ("launch:\n- node:\n    exec: talker\n    pkgg: x\n", (4, 5),
+     "<node>: unexpected attribute(s): pkgg (did you mean pkg?)"),
     ("launch:\n- node:\n    pkg: tuilaunch_demos\n", (2, 3), "attribute 'exec' is required"),
     ("launch:\n- node:\n    exec: talker\n    param:\n    - name: a\n      value: $(bad)\n",
      (5, 7), "unknown substitution $(bad)"),

@@ -9,6 +9,7 @@ nobody read is reported as an error, as launch does, with the file, line and col
 
 from __future__ import annotations
 
+import difflib
 from typing import Any
 
 from ...errors import DslError, Origin
@@ -28,6 +29,8 @@ class Element:
         self.origin = origin
         self._read: set[str] = set()
         self._read_nested: set[str] = set()
+        self._asked: set[str] = set()  # every attribute the tag's parser looked for
+        self._asked_nested: set[str] = set()
 
     @property
     def line_origin(self) -> Origin:
@@ -35,7 +38,7 @@ class Element:
         return Origin(self.origin.file, self.origin.line)
 
     def error(self, message: str, hint: str | None = None) -> DslError:
-        return DslError(f"<{self.tag}>: {message}", self.origin, hint=hint)
+        return DslError(f"{self.label}: {message}", self.origin, hint=hint)
 
     # --- to implement per format ------------------------------------------------------
 
@@ -68,6 +71,7 @@ class Element:
     def get(self, name: str, data_type: TypeSpec = "str", *, optional: bool = False,
             can_be_str: bool = True) -> Any:
         """An attribute read as launch's `Entity.get_attr` reads it."""
+        self._asked.add(name)
         value = self.raw(name)
         if value is None:
             if optional:
@@ -80,16 +84,33 @@ class Element:
             raise self.error(f"attribute '{name}' = {value!r} is not {type_name(data_type)}"
                              f" ({exc})") from None
 
-    def check_complete(self, takes: str = "") -> None:
-        """Attributes and nested tags nobody read are mistakes: name them."""
+    def check_complete(self) -> None:
+        """Attributes and nested tags nobody read are mistakes: name them, and what fits."""
         unread = [n for n in self.attribute_names() if n not in self._read]
+        takes = sorted(self._asked) + [f"<{n}>" for n in sorted(self._asked_nested)]
+        hint = f"{self.label} takes {', '.join(takes)}" if takes else None
         if unread:
-            hint = f"<{self.tag}> takes {takes}" if takes else None
-            raise self.error(f"unexpected attribute(s): {', '.join(sorted(unread))}", hint=hint)
-        nested = self.unread_nested()
+            guesses = [f"{n} (did you mean {close[0]}?)" if close else n
+                       for n in sorted(unread)
+                       for close in [difflib.get_close_matches(
+                           n, [*self._asked, *self._asked_nested], 1)]]
+            raise DslError(f"{self.label}: unexpected attribute(s): {', '.join(guesses)}",
+                           self.position_of(sorted(unread)[0]), hint=hint)
+        nested = sorted(set(self.unread_nested()))
         if nested:
-            raise self.error(f"unexpected nested tag(s): "
-                             f"{', '.join('<' + n + '>' for n in sorted(set(nested)))}")
+            guesses = [f"<{n}> (did you mean <{close[0]}>?)" if close else f"<{n}>"
+                       for n in nested
+                       for close in [difflib.get_close_matches(n, self._asked_nested, 1)]]
+            raise DslError(f"{self.label}: unexpected nested tag(s): {', '.join(guesses)}",
+                           self.position_of(nested[0]), hint=hint)
+
+    @property
+    def label(self) -> str:
+        return f"<{self.tag}>"
+
+    def position_of(self, name: str) -> Origin:
+        """Where an attribute or nested tag was written, as closely as the format tells."""
+        return self.origin
 
     def mark_read(self, name: str) -> None:
         self._read.add(name)
@@ -120,6 +141,7 @@ class XmlElement(Element):
         return self.attributes[name]
 
     def nested(self, name: str) -> list[Element] | None:
+        self._asked_nested.add(name)
         found: list[Element] = [e for e in self.elements if e.tag == name]
         if not found:
             return None
@@ -132,6 +154,10 @@ class XmlElement(Element):
 
     def unread_nested(self) -> list[str]:
         return [e.tag for e in self.elements if e.tag not in self._read_nested]
+
+    def position_of(self, name: str) -> Origin:
+        # expat places tags, not attributes: a nested tag's own line, else this tag's
+        return next((e.origin for e in self.elements if e.tag == name), self.origin)
 
     def coerce(self, name: str, value: Any, data_type: TypeSpec, can_be_str: bool) -> Any:
         if isinstance(value, list):
@@ -165,6 +191,7 @@ class YamlElement(Element):
         return self.body[name]
 
     def nested(self, name: str) -> list[Element] | None:
+        self._asked_nested.add(name)
         value = self.raw(name)
         if value is None:
             return None
@@ -200,6 +227,9 @@ class YamlElement(Element):
         if isinstance(self.body, list) and not self._children_read and self.body:
             return ["children"]
         return []
+
+    def position_of(self, name: str) -> Origin:
+        return self.positions.get(name, self.origin)
 
     def coerce(self, name: str, value: Any, data_type: TypeSpec, can_be_str: bool) -> Any:
         from .type_utils import check_yaml_value

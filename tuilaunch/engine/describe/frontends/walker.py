@@ -7,6 +7,7 @@ of its tag; every error names the file, line, column, tag and attribute at fault
 
 from __future__ import annotations
 
+import difflib
 import importlib
 import os
 import shlex
@@ -25,13 +26,6 @@ from .extra_substitutions import (
 )
 from .subst_parser import Part, SubstitutionSyntaxError, as_value, parse_substitutions
 from .type_utils import check_identifier, coerce_text, type_name
-
-# What each process-like tag reads besides its own attributes; for hints in errors.
-_PROCESS_ATTRIBUTES = ("cwd, name, launch-prefix, output, respawn, respawn_delay, "
-                       "respawn_max_retries, sigterm_timeout, sigkill_timeout, shell, "
-                       "emulate_tty, on_exit, if, unless, <env>")
-_NODE_ATTRIBUTES = ("pkg, exec, name, namespace, args, ros_args, exec_name, " +
-                    _PROCESS_ATTRIBUTES + ", <param>, <remap>")
 
 
 class Unsupported(ent.Entity):
@@ -104,6 +98,10 @@ class Walker:
     def action(self, element: Element) -> list[Any]:
         handler = self.handlers.get(element.tag)
         if handler is None:
+            close = difflib.get_close_matches(element.tag, self.handlers, 1)
+            if close:
+                raise element.error(f"unknown tag (did you mean <{close[0]}>?)",
+                                    hint="known tags: " + ", ".join(sorted(self.handlers)))
             raise element.error(
                 "unknown tag: not a launch or launch_ros action (a third-party launch "
                 "extension?); tuilaunch cannot run it",
@@ -119,20 +117,12 @@ class Walker:
         except (TypeError, ValueError, AttributeError, KeyError) as exc:
             # a shape no check above foresaw: still one line naming the tag
             raise element.error(f"cannot read this tag: {type(exc).__name__}: {exc}") from None
-        element.check_complete(self._takes(element.tag))
+        element.check_complete()
         for entity in made:
             # an on_exit handler shares its process's condition, or it would wait forever
             entity.condition = condition
             entity.origin = element.line_origin
         return made
-
-    @staticmethod
-    def _takes(tag: str) -> str:
-        if tag in ("node", "node_container", "lifecycle_node"):
-            return _NODE_ATTRIBUTES + (", autostart" if tag == "lifecycle_node" else "")
-        if tag == "executable":
-            return "cmd, " + _PROCESS_ATTRIBUTES
-        return ""
 
     def condition(self, element: Element) -> Condition | None:
         if_text = element.get("if", optional=True)
@@ -213,7 +203,7 @@ class Walker:
             return None
         out = [(self.text(item, first), self.text(item, second)) for item in nested]
         for item in nested:
-            item.check_complete(f"{first}, {second}")
+            item.check_complete()
         return out
 
     # --- launch actions -------------------------------------------------------------------
@@ -227,7 +217,7 @@ class Walker:
         if choices is not None:
             choice_values = [str(c.get("value")) for c in choices]
             for choice in choices:
-                choice.check_complete("value")
+                choice.check_complete()
         default = self.text(element, "default", optional=True)
         if choice_values and isinstance(default, str) and default not in choice_values:
             raise element.error(f"default {default!r} is not one of the choices: "
@@ -433,9 +423,7 @@ class Walker:
             extra_arguments=[{k: v} for k, v in extra] if extra else None,
             condition=condition)
         component.origin = element.line_origin
-        element.check_complete("pkg, plugin, name, namespace, if, unless, <param>, <remap>, "
-                               "<extra_arg>" + (", autostart" if "lifecycle" in element.tag
-                                                else ""))
+        element.check_complete()
         return component
 
     # --- parameters -----------------------------------------------------------------------
@@ -457,7 +445,7 @@ class Walker:
                                                     if isinstance(allow, bool) else allow)
                     path.origin = param.origin
                 out.append(path)
-                param.check_complete("from, allow_substs")
+                param.check_complete()
             elif param.has("name"):
                 out.append(self.parameter_dict([param]))
             else:
@@ -480,7 +468,7 @@ class Walker:
                     raise param.error(str(exc)) from None
             value = param.get("value", spec, optional=True)
             children = param.nested("param")
-            param.check_complete("name, value, type, value-sep, <param>")
+            param.check_complete()
             if value is not None and children:
                 raise param.error("'value' and nested <param>s cannot be used together")
             if children:
