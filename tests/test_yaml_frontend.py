@@ -104,3 +104,40 @@ def test_xml_includes_yaml_and_yaml_includes_xml(write):
                       "    arg: [{name: n, value: '2'}]\n", "p.launch.yaml")
     assert [p.full_name for p in plan_of(from_xml).processes] == ["/y_1"]
     assert [p.full_name for p in plan_of(from_yaml).processes] == ["/x_2"]
+
+
+def test_ros_docs_style_yaml_with_version_header_eval_condition_and_timer(write):
+    path = write("""%YAML 1.2
+---
+launch:
+- arg:
+    name: "sim_ns"
+    default: "sim1"
+- arg:
+    name: "use_red"
+    default: "False"
+- arg:
+    name: "red"
+    default: "200"
+- node:
+    pkg: "tuilaunch_demos"
+    namespace: "$(var sim_ns)"
+    exec: "talker"
+    name: "sim"
+- executable:
+    cmd: "echo call $(var sim_ns)/spawn \\"{x: 2, y: 2}\\""
+- timer:
+    period: 2.0
+    children:
+    - executable:
+        cmd: "echo set $(var sim_ns)/sim red $(var red)"
+        if: "$(eval '$(var red) == 200 and $(var use_red)')"
+""", "docs.launch.yaml")
+    plan = plan_of(path)
+    sim, call, later = plan.processes
+    assert sim.full_name == "/sim1/sim"
+    assert call.cmd == ["echo", "call", "sim1/spawn", "{x: 2, y: 2}"]
+    assert later.cmd == ["echo", "set", "sim1/sim", "red", "200"] and not later.enabled
+    assert later.trigger is not None and later.trigger.delay == 2.0
+    assert plan_of(path, use_red="True").processes[2].enabled
+    assert not plan_of(path, use_red="True", red="100").processes[2].enabled
