@@ -471,3 +471,35 @@ def test_a_deprecated_launch_file_says_so(write):
     path = write('<launch deprecated="use new.launch.xml">\n'
                  '  <node pkg="tuilaunch_demos" exec="talker"/>\n</launch>', "old.launch.xml")
     assert logs(plan_of(path)) == ["old.launch.xml is deprecated: use new.launch.xml"]
+
+
+def test_xml_includes_an_opaque_function_file_and_simple_launch_includes_xml(write):
+    write("""
+from simple_launch import SimpleLauncher
+sl = SimpleLauncher()
+sl.declare_arg('copies', 1)
+def setup():
+    for i in range(sl.arg('copies')):
+        sl.node('tuilaunch_demos', 'talker', name=f'copy{i}')
+    return sl.launch_description()
+generate_launch_description = sl.launch_description(opaque_function=setup)
+""", "opaque.launch.py")
+    parent = xml(write, """
+  <arg name="n" default="2"/>
+  <group>
+    <push-ros-namespace namespace="fleet"/>
+    <include file="$(dirname)/opaque.launch.py"><arg name="copies" value="$(var n)"/></include>
+  </group>
+""", "parent.launch.xml")
+    assert [p.full_name for p in plan_of(parent, n="3").processes] == [
+        "/fleet/copy0", "/fleet/copy1", "/fleet/copy2"]
+    python = write("""
+import os
+from simple_launch import SimpleLauncher
+def generate_launch_description():
+    sl = SimpleLauncher(namespace='top')
+    sl.include(None, os.path.join(os.path.dirname(__file__), 'parent.launch.xml'),
+               launch_arguments={'n': 1})
+    return sl.launch_description()
+""", "top.launch.py")
+    assert [p.full_name for p in plan_of(python).processes] == ["/top/fleet/copy0"]
