@@ -398,13 +398,13 @@ def generate_launch_description():
 def test_on_exit_shutdown_and_unsupported_actions_are_reported(write):
     path = xml(write, """
   <executable cmd="true" name="once" on_exit="shutdown"/>
-  <reset_env/>
+  <set_ros_log_dir new_log_dir="/tmp/elsewhere"/>
 """)
     plan = plan_of(path)
     handler = next(item for item in plan.tree.children if item.label == "on exit")
     assert handler.trigger is not None and handler.trigger.target == "once-1"
     assert any(a.kind == "shutdown" for a in plan.actions)
-    assert any("<reset_env>" in w and "test.launch.xml:4" in w for w in plan.warnings)
+    assert any("<set_ros_log_dir>" in w and "test.launch.xml:4" in w for w in plan.warnings)
 
 
 def test_the_readme_xml_example_reads_into_the_entities_it_shows(write):
@@ -503,3 +503,22 @@ def generate_launch_description():
     return sl.launch_description()
 """, "top.launch.py")
     assert [p.full_name for p in plan_of(python).processes] == ["/top/fleet/copy0"]
+
+
+def test_reset_and_reset_env_forget_what_came_before(write):
+    path = xml(write, """
+  <let name="a" value="A"/>
+  <let name="b" value="B"/>
+  <set_env name="E" value="1"/>
+  <executable cmd="true" name="before"/>
+  <group>
+    <reset><keep name="b" value="$(var b)"/></reset>
+    <reset_env/>
+    <log message="$(var a gone) $(var b)"/>
+    <executable cmd="true" name="after"/>
+  </group>
+  <log message="$(var a)"/>
+""")
+    plan = plan_of(path)
+    assert logs(plan) == ["gone B", "A"]  # the group's scope ends the reset
+    assert [p.env for p in plan.processes] == [{"E": "1"}, {}]

@@ -363,6 +363,22 @@ class SetLaunchConfiguration(Entity):
         self.value = value
 
 
+class ResetLaunchConfigurations(Entity):
+    """Forget every launch configuration of the current scope but the ones given."""
+
+    def __init__(self, launch_configurations: dict[Any, Any] | None = None,
+                 condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.launch_configurations = dict(launch_configurations or {})
+
+
+class ResetEnvironment(Entity):
+    """Undo the environment changes of the current scope (back to tuilaunch's own)."""
+
+    def __init__(self, condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+
+
 class LaunchDescriptionSource:
     def __init__(self, launch_file_path: SubValue) -> None:
         self.location = launch_file_path

@@ -35,6 +35,8 @@ from ..describe.entities import (
     OpaqueFunction,
     PushRosNamespace,
     RegisterEventHandler,
+    ResetEnvironment,
+    ResetLaunchConfigurations,
     SetEnvironmentVariable,
     SetLaunchConfiguration,
     SetParameter,
@@ -198,6 +200,16 @@ class Resolver:
             if self._gate(entity, scope)[0]:
                 ctx = scope.context()
                 scope.configurations[perform(entity.name, ctx)] = perform(entity.value, ctx)
+        elif isinstance(entity, ResetLaunchConfigurations):
+            if self._gate(entity, scope)[0]:
+                ctx = scope.context()
+                kept = {perform(k, ctx): perform(v, ctx)
+                        for k, v in entity.launch_configurations.items()}
+                scope.configurations.clear()
+                scope.configurations.update(kept)
+        elif isinstance(entity, ResetEnvironment):
+            if self._gate(entity, scope)[0]:
+                scope.env.clear()
         elif isinstance(entity, SetParameter):
             if self._gate(entity, scope)[0]:
                 scope.global_parameters.append((entity.name, entity.value))

@@ -71,7 +71,7 @@ class Walker:
             "shutdown": self.shutdown, "node_container": self.node_container,
             "load_composable_node": self.load_composable_node,
             "lifecycle_node": self.lifecycle_node,
-            "reset": self.unsupported, "reset_env": self.unsupported,
+            "reset": self.reset, "reset_env": self.reset_env,
             "set_parameters_from_file": self.unsupported, "set_ros_log_dir": self.unsupported,
         }
 
@@ -285,6 +285,13 @@ class Walker:
     def shutdown(self, element: Element) -> list[Any]:
         reason = self.text(element, "reason", optional=True)
         return [ent.Shutdown(reason="reason not given" if not reason else reason)]
+
+    def reset(self, element: Element) -> list[Any]:
+        keep = self.pairs(element, "keep", "name", "value")
+        return [ent.ResetLaunchConfigurations(dict(keep or []))]
+
+    def reset_env(self, element: Element) -> list[Any]:
+        return [ent.ResetEnvironment()]
 
     def unsupported(self, element: Element) -> list[Any]:
         for name in element.attribute_names():
