@@ -141,3 +141,12 @@ launch:
     assert later.trigger is not None and later.trigger.delay == 2.0
     assert plan_of(path, use_red="True").processes[2].enabled
     assert not plan_of(path, use_red="True", red="100").processes[2].enabled
+
+
+def test_dot_launch_files_are_read_as_xml_or_yaml_by_their_content(write):
+    as_xml = write('<?xml version="1.0"?>\n<launch><node pkg="tuilaunch_demos" exec="talker" '
+                   'name="x"/></launch>', "old_style.launch")
+    as_yaml = write("launch:\n- node: {pkg: tuilaunch_demos, exec: talker, name: y}\n",
+                    "other.launch")
+    assert [p.full_name for p in plan_of(as_xml).processes] == ["/x"]
+    assert [p.full_name for p in plan_of(as_yaml).processes] == ["/y"]
