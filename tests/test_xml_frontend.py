@@ -381,6 +381,7 @@ def test_python_includes_xml_and_yaml_through_their_source_classes(write):
 import os
 from launch import LaunchDescription
 from launch.actions import IncludeLaunchDescription
+from launch.launch_description_sources import FrontendLaunchDescriptionSource
 from launch_xml.launch_description_sources import XMLLaunchDescriptionSource
 from launch_yaml.launch_description_sources import YAMLLaunchDescriptionSource
 here = os.path.dirname(__file__)
@@ -390,9 +391,12 @@ def generate_launch_description():
                                  launch_arguments=[('who', 'from_xml')]),
         IncludeLaunchDescription(
             YAMLLaunchDescriptionSource(os.path.join(here, 'child.launch.yaml'))),
+        IncludeLaunchDescription(
+            FrontendLaunchDescriptionSource(os.path.join(here, 'child.launch.xml'))),
     ])
 """, "parent.launch.py")
-    assert [p.full_name for p in plan_of(path).processes] == ["/from_xml", "/from_yaml"]
+    assert [p.full_name for p in plan_of(path).processes] == [
+        "/from_xml", "/from_yaml", "/from_xml"]  # the argument stays set, as in launch
 
 
 def test_on_exit_shutdown_and_unsupported_actions_are_reported(write):
