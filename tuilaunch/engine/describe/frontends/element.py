@@ -37,8 +37,10 @@ class Element:
         """Where the entity was written, as entities show it (`file:line`)."""
         return Origin(self.origin.file, self.origin.line)
 
-    def error(self, message: str, hint: str | None = None) -> DslError:
-        return DslError(f"{self.label}: {message}", self.origin, hint=hint)
+    def error(self, message: str, hint: str | None = None, at: str | None = None) -> DslError:
+        """An error about this tag, placed at attribute or nested tag `at` when given."""
+        where = self.origin if at is None else self.position_of(at)
+        return DslError(f"{self.label}: {message}", where, hint=hint)
 
     # --- to implement per format ------------------------------------------------------
 
@@ -82,7 +84,7 @@ class Element:
             return self.coerce(name, value, data_type, can_be_str)
         except ValueError as exc:
             raise self.error(f"attribute '{name}' = {value!r} is not {type_name(data_type)}"
-                             f" ({exc})") from None
+                             f" ({exc})", at=name) from None
 
     def check_complete(self) -> None:
         """Attributes and nested tags nobody read are mistakes: name them, and what fits."""
@@ -124,6 +126,7 @@ class XmlElement(Element):
         super().__init__(tag, origin)
         self.attributes = attributes
         self.elements = elements
+        self.attribute_origins: dict[str, Origin] = {}
 
     def attribute_names(self) -> list[str]:
         return list(self.attributes)
@@ -136,7 +139,7 @@ class XmlElement(Element):
         if separator is not None:
             self._read.add(name + "-sep")
             if separator == "":
-                raise self.error(f"attribute '{name}-sep' is empty")
+                raise self.error(f"attribute '{name}-sep' is empty", at=name + "-sep")
             return self.attributes[name].split(separator)
         return self.attributes[name]
 
@@ -156,7 +159,8 @@ class XmlElement(Element):
         return [e.tag for e in self.elements if e.tag not in self._read_nested]
 
     def position_of(self, name: str) -> Origin:
-        # expat places tags, not attributes: a nested tag's own line, else this tag's
+        if name in self.attribute_origins:
+            return self.attribute_origins[name]
         return next((e.origin for e in self.elements if e.tag == name), self.origin)
 
     def coerce(self, name: str, value: Any, data_type: TypeSpec, can_be_str: bool) -> Any:

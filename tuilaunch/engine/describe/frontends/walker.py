@@ -128,7 +128,7 @@ class Walker:
         if_text = element.get("if", optional=True)
         unless_text = element.get("unless", optional=True)
         if if_text is not None and unless_text is not None:
-            raise element.error("'if' and 'unless' cannot be used together")
+            raise element.error("'if' and 'unless' cannot be used together", at="unless")
         condition: Condition | None = None
         if if_text is not None:
             condition = IfCondition(self.parse(element, "if", if_text))
@@ -153,7 +153,8 @@ class Walker:
             return parse_substitutions(raw, element.origin)
         except SubstitutionSyntaxError as exc:
             raise element.error(f"attribute '{name}': {exc.message} "
-                                f"(at character {exc.offset + 1} of {raw!r})") from None
+                                f"(at character {exc.offset + 1} of {raw!r})",
+                                at=name) from None
 
     def text(self, element: Element, name: str, optional: bool = False) -> Any:
         raw = element.get(name, optional=optional)
@@ -175,7 +176,7 @@ class Walker:
             try:
                 tokens = shlex.split(part)
             except ValueError as exc:
-                raise element.error(f"attribute '{name}': {exc} in {raw!r}") from None
+                raise element.error(f"attribute '{name}': {exc} in {raw!r}", at=name) from None
             if not tokens:
                 if current:
                     args.append(current)
@@ -211,7 +212,7 @@ class Walker:
     def arg(self, element: Element) -> list[Any]:
         name = element.get("name")
         if not name:
-            raise element.error("attribute 'name' is empty")
+            raise element.error("attribute 'name' is empty", at="name")
         choices = element.nested("choice")
         choice_values = None
         if choices is not None:
@@ -221,7 +222,7 @@ class Walker:
         default = self.text(element, "default", optional=True)
         if choice_values and isinstance(default, str) and default not in choice_values:
             raise element.error(f"default {default!r} is not one of the choices: "
-                                f"{', '.join(choice_values)}")
+                                f"{', '.join(choice_values)}", at="default")
         return [ent.DeclareLaunchArgument(
             str(name), default_value=default,
             description=element.get("description", optional=True), choices=choice_values,
@@ -331,7 +332,8 @@ class Walker:
             number = element.get(attribute, "float", optional=True)
             if number is not None:
                 if number < 0:
-                    raise element.error(f"attribute '{attribute}' must not be negative")
+                    raise element.error(f"attribute '{attribute}' must not be negative",
+                                        at=attribute)
                 kwargs[attribute] = number
         retries = element.get("respawn_max_retries", "int", optional=True)
         if retries is not None:
@@ -347,7 +349,8 @@ class Walker:
         if action is None:
             return []
         if action != "shutdown":
-            raise element.error(f"on_exit={action!r}: only on_exit=\"shutdown\" exists")
+            raise element.error(f"on_exit={action!r}: only on_exit=\"shutdown\" exists",
+                                at="on_exit")
         handler = ent.OnProcessExit(target_action=process,
                                     on_exit=[ent.Shutdown(reason="on_exit=shutdown")])
         return [ent.RegisterEventHandler(handler)]
@@ -472,7 +475,7 @@ class Walker:
                 try:
                     spec = check_identifier(str(identifier))
                 except ValueError as exc:
-                    raise param.error(str(exc)) from None
+                    raise param.error(str(exc), at="type") from None
             value = param.get("value", spec, optional=True)
             children = param.nested("param")
             param.check_complete()
@@ -509,7 +512,8 @@ class Walker:
             if isinstance(value, list) and all(isinstance(v, str) for v in value):
                 return [coerce_text(v, spec[len("list_of_"):]) for v in value]
         except ValueError as exc:
-            raise param.error(f"value {value!r} is not {type_name(spec)} ({exc})") from None
+            raise param.error(f"value {value!r} is not {type_name(spec)} ({exc})",
+                              at="value") from None
         return value
 
 
