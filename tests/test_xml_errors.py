@@ -125,7 +125,7 @@ def test_an_undeclared_variable_names_itself_and_how_to_declare_it(write):
                  '</launch>', "v.launch.xml")
     done = run_cli(str(path), "--print")
     assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert "v.launch.xml:2:3: launch argument 'who' is used but has no value" in done.stderr
+    assert "v.launch.xml:2:45: launch argument 'who' is used but has no value" in done.stderr
     assert 'hint: declare it with <arg name="who" default="..."/> or pass who:=value' in \
         done.stderr
     assert run_cli(str(path), "--print", "who:=me").returncode == 0

@@ -135,7 +135,7 @@ class Walker:
         elif unless_text is not None:
             condition = UnlessCondition(self.parse(element, "unless", unless_text))
         if condition is not None:
-            condition.origin = element.origin
+            condition.origin = element.position_of("if" if if_text is not None else "unless")
         return condition
 
     # --- values -------------------------------------------------------------------------
@@ -150,7 +150,7 @@ class Walker:
 
     def parts(self, element: Element, name: str, raw: str) -> list[Part]:
         try:
-            return parse_substitutions(raw, element.origin)
+            return parse_substitutions(raw, element.position_of(name))
         except SubstitutionSyntaxError as exc:
             raise element.error(f"attribute '{name}': {exc.message} "
                                 f"(at character {exc.offset + 1} of {raw!r})",
