@@ -526,3 +526,26 @@ def test_reset_and_reset_env_forget_what_came_before(write):
     plan = plan_of(path)
     assert logs(plan) == ["gone B", "A"]  # the group's scope ends the reset
     assert [p.env for p in plan.processes] == [{"E": "1"}, {}]
+
+
+def test_set_parameters_from_file_reaches_the_nodes_that_follow_in_scope(write, tmp_path):
+    shared = tmp_path / "shared.yaml"
+    shared.write_text("/**:\n  ros__parameters:\n    shared: 1\n")
+    path = xml(write, f"""
+  <group>
+    <set_parameter name="first" value="1"/>
+    <set_parameters_from_file filename="{shared}"/>
+    <node pkg="tuilaunch_demos" exec="talker" name="inside">
+      <param name="own" value="2"/>
+    </node>
+  </group>
+  <node pkg="tuilaunch_demos" exec="talker" name="outside"/>
+""")
+    inside, outside = plan_of(path).processes
+    args = ros_args(inside)
+    files = [a for i, a in enumerate(args) if args[i - 1] == "--params-file"]
+    # launch_ros's order: the scope's parameters (values, then the file), then the node's own
+    assert len(files) == 3 and files[1] == str(shared)
+    assert inside.generated_parameter_files[0][1] == {"first": 1}
+    assert inside.generated_parameter_files[1][1] == {"own": 2}
+    assert inside.parameter_files == [str(shared)] and outside.parameter_files == []

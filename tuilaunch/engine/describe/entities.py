@@ -334,6 +334,14 @@ class SetParameter(Entity):
         self.value = value
 
 
+class SetParametersFromFile(Entity):
+    """A parameter file given to every node that follows in the same scope."""
+
+    def __init__(self, filename: SubValue, condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.filename = filename
+
+
 class SetRemap(Entity):
     def __init__(self, src: SubValue, dst: SubValue, condition: Condition | None = None) -> None:
         self._init_entity(condition)

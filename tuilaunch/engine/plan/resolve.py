@@ -41,6 +41,7 @@ from ..describe.entities import (
     SetLaunchConfiguration,
     SetParameter,
     SetParameters,
+    SetParametersFromFile,
     SetRemap,
     Shutdown,
     TimerAction,
@@ -213,6 +214,9 @@ class Resolver:
         elif isinstance(entity, SetParameter):
             if self._gate(entity, scope)[0]:
                 scope.global_parameters.append((entity.name, entity.value))
+        elif isinstance(entity, SetParametersFromFile):
+            if self._gate(entity, scope)[0]:
+                scope.global_parameters.append((None, entity.filename))
         elif isinstance(entity, SetRemap):
             if self._gate(entity, scope)[0]:
                 scope.remaps.append((entity.src, entity.dst))
@@ -456,13 +460,14 @@ class Resolver:
         elif shutil.which(executable) is None:
             error = f"executable '{executable}' not found on PATH"
         merged: dict[str, ParamValue] = {}
-        for key, value in scope.global_parameters:
-            merged[perform(key, ctx)] = typed_value(value, ctx, describe(key), entity.origin)
+        # SetParameter pairs and SetParametersFromFile files (key None) come first, in order
+        global_items = [value if key is None else {key: value}
+                        for key, value in scope.global_parameters]
         user_files: list[str] = []
         generated: list[tuple[str, dict[str, Any]]] = []
         params_args: list[str] = []
-        pending: dict[str, ParamValue] = dict(merged)
-        for item in _items(entity.parameters):
+        pending: dict[str, ParamValue] = {}
+        for item in [*global_items, *_items(entity.parameters)]:
             if isinstance(item, dict):
                 values = flatten_parameters(item, ctx, entity.origin)
                 merged.update(values)

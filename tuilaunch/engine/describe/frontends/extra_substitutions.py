@@ -150,7 +150,7 @@ class GlobalParameter(Substitution):
 
         name = perform(self.name, context)
         for key, value in context.global_parameters:
-            if perform(key, context) == name:
+            if key is not None and perform(key, context) == name:  # None: a parameter file
                 return str(typed_value(value, context, name, self.origin))
         if self.default is not None:
             return perform(self.default, context)

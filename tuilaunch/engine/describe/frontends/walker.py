@@ -72,7 +72,8 @@ class Walker:
             "load_composable_node": self.load_composable_node,
             "lifecycle_node": self.lifecycle_node,
             "reset": self.reset, "reset_env": self.reset_env,
-            "set_parameters_from_file": self.unsupported, "set_ros_log_dir": self.unsupported,
+            "set_parameters_from_file": self.set_parameters_from_file,
+            "set_ros_log_dir": self.unsupported,
         }
 
     # --- structure ----------------------------------------------------------------------
@@ -305,6 +306,9 @@ class Walker:
     def set_parameter(self, element: Element) -> list[Any]:
         return [ent.SetParameter(self.text(element, "name"),
                                  _yaml_typed(self.text(element, "value")))]
+
+    def set_parameters_from_file(self, element: Element) -> list[Any]:
+        return [ent.SetParametersFromFile(self.text(element, "filename"))]
 
     def set_use_sim_time(self, element: Element) -> list[Any]:
         return [ent.SetParameter("use_sim_time", _yaml_typed(self.text(element, "value")))]
