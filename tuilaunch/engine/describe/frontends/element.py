@@ -15,8 +15,6 @@ from typing import Any
 from ...errors import DslError, Origin
 from .type_utils import TypeSpec, coerce_text, type_name
 
-Scalar = str | int | float | bool
-
 
 class Element:
     """A tag with its attributes, nested entities and position."""
