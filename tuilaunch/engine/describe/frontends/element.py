@@ -77,7 +77,7 @@ class Element:
             if optional:
                 return None
             raise self.error(f"attribute '{name}' is required",
-                             hint=f"add {name}=\"...\" to <{self.tag}>")
+                             hint=f"add {self.example(name)} to {self.label}")
         try:
             return self.coerce(name, value, data_type, can_be_str)
         except ValueError as exc:
@@ -111,6 +111,10 @@ class Element:
     def position_of(self, name: str) -> Origin:
         """Where an attribute or nested tag was written, as closely as the format tells."""
         return self.origin
+
+    def example(self, name: str) -> str:
+        """How an attribute is written in this format, for hints."""
+        return f'{name}="..."'
 
     def mark_read(self, name: str) -> None:
         self._read.add(name)
@@ -232,6 +236,9 @@ class YamlElement(Element):
 
     def position_of(self, name: str) -> Origin:
         return self.positions.get(name, self.origin)
+
+    def example(self, name: str) -> str:
+        return f"`{name}: ...`"
 
     def coerce(self, name: str, value: Any, data_type: TypeSpec, can_be_str: bool) -> Any:
         from .type_utils import check_yaml_value
