@@ -83,12 +83,15 @@ def name_problem(name: str, what: str = "node name") -> str | None:
 
 
 def namespace_problem(namespace: str) -> str | None:
-    for token in namespace.strip("/").split("/"):
-        if not token:
-            continue
-        problem = name_problem(token, "namespace part")
-        if problem:
-            return f"namespace {namespace!r}: {problem}"
+    """Why rcl would refuse this (absolute) namespace, naming the bad character."""
+    bad = re.search(r"[^A-Za-z0-9_/]", namespace)
+    if bad:
+        return (f"namespace {namespace!r} has {bad.group()!r} at position {bad.start() + 1} "
+                f"(each part: {_NAME_RULE})")
+    digit = re.search(r"/[0-9]", namespace)
+    if digit:
+        return (f"namespace {namespace!r} has a part starting with the digit "
+                f"{digit.group()[1]!r} at position {digit.start() + 2} (each part: {_NAME_RULE})")
     return None
 
 

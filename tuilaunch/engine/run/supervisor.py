@@ -209,8 +209,9 @@ class Supervisor:
         _to_stderr(f"tuilaunch: {text}; the launch goes on")
 
     def _report_io(self, text: str) -> None:
-        """A log file that cannot be written: said once on stderr and to the consumers."""
-        _to_stderr(f"tuilaunch: {text}")
+        """A log file that cannot be written: said to the consumers (on stderr without)."""
+        if not self.consumers:
+            _to_stderr(f"tuilaunch: {text}")
         event = Event("log", None, reason=text, level="ERROR")
         for consumer in list(self.consumers):
             try:
@@ -288,9 +289,10 @@ class Supervisor:
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
         # a pending item can still start only if what it waits for is alive or pending
-        return not any(state == "pending" for state in self.states.values()) or all(
-            not self._can_fire(p.trigger) for p in self.plan.processes
-            if self.states[p.id] == "pending")
+        waiting = [p.trigger for p in self.plan.processes if self.states[p.id] == "pending"]
+        waiting += [a.trigger for a in self.plan.actions if self.states.get(a.id) == "pending"
+                    and not _on_event(a.trigger)]
+        return not any(self._can_fire(trigger) for trigger in waiting)
 
     def _can_fire(self, trigger: Trigger | None) -> bool:
         while trigger is not None:
@@ -500,10 +502,12 @@ class Supervisor:
             return
         try:
             child = spawn(proc.cmd, env, proc.cwd, _wants_tty(proc))
-        except OSError as exc:
+        except Exception as exc:  # OSError, or ValueError for a NUL byte in an argument
             log.close()
-            what = exc.filename if isinstance(exc.filename, str) else proc.cmd[0]
-            self._fail(process_id, f"cannot start {what}: {exc.strerror or exc}")
+            what = getattr(exc, "filename", None)
+            what = what if isinstance(what, str) else proc.cmd[0]
+            self._fail(process_id, f"cannot start {what}: "
+                       f"{getattr(exc, 'strerror', None) or exc}")
             return
         popen = child.popen
         try:
@@ -729,7 +733,8 @@ class Supervisor:
             hurry: asyncio.Future[Any] = asyncio.ensure_future(self._hurry.wait())
             exited: asyncio.Future[Any] = running.exited
             try:
-                await asyncio.wait([exited, hurry], timeout=waits[stage])
+                await asyncio.wait([exited, hurry], timeout=waits[stage],
+                                   return_when=asyncio.FIRST_COMPLETED)
             finally:
                 hurry.cancel()
             if running.exited.done():
@@ -769,6 +774,15 @@ class Supervisor:
             self.plan.params_dir.rmdir()
         except OSError:
             pass
+
+
+def _on_event(trigger: Trigger | None) -> bool:
+    """Run by an event each time it happens (output, shutdown), not once when ready."""
+    while trigger is not None:
+        if trigger.on in ("io", "shutdown"):
+            return True
+        trigger = trigger.after
+    return False
 
 
 def _wants_tty(proc: ProcessPlan) -> bool:
