@@ -55,8 +55,8 @@ class Printer:
     def format(self, event: Event) -> str:
         if event.kind == "output":
             prefix = f"[{event.process}] "
-            return "".join(prefix + (line if self.colour else strip_ansi(line)) + "\n"
-                           for line in event.lines)
+            text = prefix + ("\n" + prefix).join(event.lines) + "\n"
+            return text if self.colour or "\x1b" not in text else strip_ansi(text)
         if event.kind in ("started", "finished") and event.pid is None:
             return ""  # an action's progress: its log lines already say what happened
         if event.kind == "started":

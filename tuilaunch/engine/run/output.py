@@ -25,6 +25,15 @@ def screen_text(raw: bytes) -> str:
     return raw.decode("utf-8", errors="replace").replace("\x00", "")
 
 
+def screen_lines(block: bytes) -> list[str]:
+    """The screen text of a block of whole lines (each ending in `\n`)."""
+    body = block[:-1]
+    text = body.decode("utf-8", errors="replace")
+    if "\r" in text or "\x00" in text:
+        return [screen_text(line) for line in body.split(b"\n")]
+    return text.split("\n")
+
+
 class LineSplitter:
     """Feeds chunks, yields whole lines; keeps the unfinished tail for the next chunk.
 
@@ -33,6 +42,25 @@ class LineSplitter:
 
     def __init__(self) -> None:
         self._tail = b""
+
+    def feed_block(self, chunk: bytes) -> bytes:
+        """The complete lines this chunk ends, as one block of bytes, each line ending in
+        `\n` (empty when none): a flood is handled a chunk at a time, not a line at a time."""
+        data = self._tail + chunk if self._tail else chunk
+        end = data.rfind(b"\n") + 1
+        block, tail = data[:end], data[end:]
+        if len(tail) > MAX_LINE:
+            pieces = []
+            while len(tail) > MAX_LINE:
+                pieces.append(tail[:MAX_LINE])
+                tail = tail[MAX_LINE:]
+            block += b"\n".join(pieces) + b"\n"
+        self._tail = tail
+        return block
+
+    def flush_block(self) -> bytes:
+        tail, self._tail = self._tail, b""
+        return tail + b"\n" if tail else b""
 
     def feed_raw(self, chunk: bytes) -> list[bytes]:
         data = self._tail + chunk if self._tail else chunk

@@ -28,7 +28,7 @@ from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_
 from ..plan.params import write_parameter_file
 from ..ros.messages import MessageError
 from .logfiles import LogFile
-from .output import LineSplitter, screen_text
+from .output import LineSplitter, screen_lines
 from .spawn import Channel, spawn
 from .watchdog import Watchdog
 
@@ -93,18 +93,19 @@ class _Reader:
         except OSError:
             chunk = b""  # EIO: a pseudo-terminal whose other side is closed
         if chunk:
-            self._deliver(self.splitter.feed_raw(chunk))
+            self._deliver(self.splitter.feed_block(chunk))
         else:
             self.close()
 
-    def _deliver(self, raw_lines: list[bytes]) -> None:
-        if not raw_lines:
+    def _deliver(self, block: bytes) -> None:
+        """Whole lines, as one block: to the log file as bytes, then to the consumers."""
+        if not block:
             return
         supervisor, running = self.supervisor, self.running
         prefix = f"{time.time():.6f}".encode() + self.stamp
-        running.log.write(b"".join(prefix + line + b"\n" for line in raw_lines),
-                          len(raw_lines))
-        lines = [screen_text(line) for line in raw_lines]
+        running.log.write(prefix + block[:-1].replace(b"\n", b"\n" + prefix) + b"\n",
+                          block.count(b"\n"))
+        lines = screen_lines(block)
         supervisor._emit(Event("output", running.plan.id, stream=self.channel.name,
                                lines=lines))
         if supervisor._io_watchers:
@@ -120,7 +121,7 @@ class _Reader:
             pass  # the loop is gone: nothing to unregister
         os.close(self.channel.fd)
         try:
-            self._deliver(self.splitter.flush_raw())
+            self._deliver(self.splitter.flush_block())
         finally:
             self.done.set_result(None)
             self.running.reader_closed()
