@@ -192,6 +192,8 @@ def generate_launch_description():
     out = proc.communicate(timeout=60)[0]
     assert out.count("[crasher-1] crash") == 3  # first run and two respawns
     assert out.count("respawning") == 2
+    assert "[ERROR] [crasher-1]: respawn gives up: it failed 3 times (respawn_max_retries=2)" \
+        in out
     assert out.count("[clean-2] done") == 1  # a clean exit is not respawned
     assert proc.returncode == 1  # the crash is reported in the exit status
 

@@ -11,8 +11,6 @@ import stat
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from ..describe.substitutions import PerformContext, Substitution, flatten, perform
 from ..errors import LaunchError, Origin
 
@@ -37,6 +35,8 @@ def _is_string_typed(value: Any) -> bool:
 
 def yaml_typed(text: str) -> ParamValue:
     """A performed string as ROS would type it: bool, int, float, homogeneous list or str."""
+    import yaml  # here, not at the top: a launch without parameters starts sooner
+
     try:
         loaded = yaml.safe_load(text)
     except yaml.YAMLError:
@@ -99,6 +99,8 @@ def write_parameter_file(path: Path, params: dict[str, ParamValue]) -> None:
 
     Only the user can read it (0600), in a folder only the user can enter; it is created
     afresh (never through a symlink, never into someone else's file)."""
+    import yaml
+
     _private_folder(path.parent)
     path.unlink(missing_ok=True)
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC,

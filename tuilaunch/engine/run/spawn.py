@@ -34,6 +34,18 @@ class Child:
     channels: list[Channel]
 
 
+_size: bytes | None = None
+
+
+def _window_size() -> bytes:
+    """tuilaunch's own terminal size (or 160x48), read once: what `ls` or a progress bar sees."""
+    global _size
+    if _size is None:
+        columns, rows = shutil.get_terminal_size((160, 48))
+        _size = struct.pack("HHHH", rows, columns, 0, 0)
+    return _size
+
+
 def _open_pty() -> tuple[int, int]:
     """A pseudo-terminal that passes bytes through unchanged (no `\\n` -> `\\r\\n`)."""
     master, slave = os.openpty()
@@ -41,8 +53,7 @@ def _open_pty() -> tuple[int, int]:
         attrs = termios.tcgetattr(slave)
         attrs[1] &= ~termios.OPOST
         termios.tcsetattr(slave, termios.TCSANOW, attrs)
-        columns, rows = shutil.get_terminal_size((160, 48))
-        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", rows, columns, 0, 0))
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, _window_size())
     except OSError:
         os.close(master)
         os.close(slave)
@@ -54,6 +65,17 @@ def _channel(name: str, tty: bool) -> tuple[Channel, int]:
     read_end, write_end = _open_pty() if tty else os.pipe()
     os.set_blocking(read_end, False)
     return Channel(name, read_end, tty), write_end
+
+
+_devnull: int | None = None
+
+
+def _stdin() -> int:
+    """One /dev/null for every child's stdin, opened once (an open per child costs time)."""
+    global _devnull
+    if _devnull is None:
+        _devnull = os.open(os.devnull, os.O_RDONLY | os.O_CLOEXEC)
+    return _devnull
 
 
 def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool) -> Child:
@@ -71,7 +93,7 @@ def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool) -> Ch
             ours.append(channel.fd)
             theirs.append(child_end)
             channels.append(channel)
-        popen = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=theirs[0],
+        popen = subprocess.Popen(cmd, stdin=_stdin(), stdout=theirs[0],
                                  stderr=theirs[1], env=env, cwd=cwd, start_new_session=True)
     except BaseException:
         for fd in ours:

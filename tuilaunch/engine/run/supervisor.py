@@ -177,6 +177,7 @@ class Supervisor:
         self._retries: dict[str, int] = {}
         self._keep_alive = False
         self._reported: set[str] = set()
+        self._env_cache: dict[str, str] | None = None
         self.watchdog = Watchdog()
         log_dir.mkdir(parents=True, exist_ok=True)
         self._launch_log = LogFile(log_dir / "launch.log", self._report_io)
@@ -236,7 +237,9 @@ class Supervisor:
         self._keep_alive = keep_alive
         try:
             for proc in self.plan.processes:
-                if proc.enabled:
+                if proc.enabled and proc.trigger is None:
+                    self._start_now(proc.id)  # no task per process: start-up at the floor
+                elif proc.enabled:
                     self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
             for action in self.plan.actions:
                 if action.enabled:
@@ -466,9 +469,11 @@ class Supervisor:
                 self._spawn_task(self._run_action(action, event))
 
     async def start(self, process_id: str) -> None:
-        """Starts one process (also a stopped or exited one, from the UI).
+        """Starts one process (also a stopped or exited one, from the UI)."""
+        self._start_now(process_id)
 
-        From the check that the launch is not shutting down to the registration of the
+    def _start_now(self, process_id: str) -> None:
+        """From the check that the launch is not shutting down to the registration of the
         child nothing awaits, so a shutdown either prevents the start or sees the child."""
         proc = self.plan.process(process_id)
         if process_id in self._running or self._shutting_down:
@@ -483,7 +488,7 @@ class Supervisor:
         except Exception as exc:  # a LaunchError or an OSError: either way, one line
             self._fail(process_id, f"cannot write its parameter file: {exc}")
             return
-        env = {} if proc.clear_env else dict(os.environ)
+        env = {} if proc.clear_env else dict(self._base_env())
         env.update(proc.env)
         env.setdefault("PYTHONUNBUFFERED", "1")
         env.setdefault("RCUTILS_LOGGING_BUFFERED_STREAM", "1")
@@ -533,6 +538,12 @@ class Supervisor:
         self._emit(Event("started", process_id, pid=popen.pid))
         self._flag(process_id, "start").set()
         self._spawn_task(self._wait(running))
+
+    def _base_env(self) -> dict[str, str]:
+        """tuilaunch's environment as it was at the first start: read once, not per child."""
+        if self._env_cache is None:
+            self._env_cache = dict(os.environ)
+        return self._env_cache
 
     def _fail(self, process_id: str, reason: str) -> None:
         self.states[process_id] = "failed"
