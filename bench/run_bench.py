@@ -104,19 +104,25 @@ def spawn_time(folder: Path, count: int) -> tuple[float, float, int]:
     return min(ours), min(floors), threads
 
 
-def flood(folder: Path) -> tuple[float, float, int]:
-    path = write_launch(folder, "flood.py",
-                        f"[ExecuteProcess(cmd=['seq', '1', '{FLOOD_LINES}'], name=f'f{{i}}') "
-                        "for i in range(4)]")
-    log_dir = folder / "flood_log"
+def flood(folder: Path, tty: bool) -> tuple[float, float, int]:
+    """4 x `seq`: through tuilaunch (pseudo-terminals, or pipes), against the same 4 writing
+    straight to files the way they write on that channel: line by line on a terminal
+    (`stdbuf -oL`), in 4 KB blocks on a pipe."""
+    emulate = "None" if tty else "False"
+    name = "tty" if tty else "pipe"
+    path = write_launch(folder, f"flood_{name}.py",
+                        f"[ExecuteProcess(cmd=['seq', '1', '{FLOOD_LINES}'], name=f'f{{i}}', "
+                        f"emulate_tty={emulate}) for i in range(4)]")
+    log_dir = folder / f"flood_log_{name}"
     start = time.perf_counter()
     proc = tuilaunch(path, log_dir, out=subprocess.DEVNULL)
     proc.wait(timeout=600)
     ours = 4 * FLOOD_LINES / (time.perf_counter() - start)
     logged = sum(sum(1 for _ in open(f, "rb")) for f in log_dir.glob("*/f*.log"))
+    buffering = "stdbuf -oL " if tty else ""
     start = time.perf_counter()
-    direct = [subprocess.Popen(f"seq 1 {FLOOD_LINES} > {folder}/direct{i}.txt", shell=True)
-              for i in range(4)]
+    direct = [subprocess.Popen(f"{buffering}seq 1 {FLOOD_LINES} > {folder}/direct{i}.txt",
+                               shell=True) for i in range(4)]
     for writer in direct:
         writer.wait()
     floor = 4 * FLOOD_LINES / (time.perf_counter() - start)
@@ -150,10 +156,13 @@ def main() -> None:
                   f"started, best of {TRIES}), bare Python Popen loop {floor:.3f} s, "
                   f"ratio {ours / floor:.2f}x; tuilaunch threads with {count} children: "
                   f"{threads}")
-        ours_rate, direct_rate, lost = flood(folder)
-        print(f"4 x {FLOOD_LINES:,} lines: tuilaunch absorbed and logged {ours_rate:,.0f} "
-              f"lines/s, the same processes writing straight to files {direct_rate:,.0f} "
-              f"lines/s (ratio {direct_rate / ours_rate:.2f}x), lines lost: {lost}")
+        for tty, channel, floor_how in ((True, "pseudo-terminals (the default)", "line by line"),
+                                        (False, "pipes (emulate_tty=False)", "in blocks")):
+            ours_rate, direct_rate, lost = flood(folder, tty)
+            print(f"4 x {FLOOD_LINES:,} lines through {channel}: tuilaunch absorbed and logged "
+                  f"{ours_rate:,.0f} lines/s (command to end), the same processes writing "
+                  f"straight to files {floor_how} {direct_rate:,.0f} lines/s (ratio "
+                  f"{direct_rate / ours_rate:.2f}x), lines lost: {lost}")
         print(f"CPU of tuilaunch with 100 quiet processes: {idle_cpu(folder):.2f}% of a core "
               "(target < 1%)")
 

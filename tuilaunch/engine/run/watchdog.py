@@ -33,6 +33,7 @@ class Watchdog:
         self.error: str | None = None
         self._process: subprocess.Popen[bytes] | None = None
         self._fd: int | None = None
+        self._pending: list[str] = []
 
     def mark(self, env: dict[str, str]) -> None:
         """Marks a child's environment as part of this launch."""
@@ -65,10 +66,27 @@ class Watchdog:
         self._send(f"-{pgid}\n")
 
     def _send(self, text: str) -> None:
+        """Queued and written once per event-loop turn: a write per process group would
+        wake the watchdog a hundred times while a hundred processes start. A process
+        started just before tuilaunch dies is still found by its mark."""
         if self._fd is None:
             return
+        self._pending.append(text)
+        if len(self._pending) > 1:
+            return  # a flush is already due
+        import asyncio  # the launcher's side only: the watchdog process starts without it
+
         try:
-            os.write(self._fd, text.encode())
+            asyncio.get_running_loop().call_soon(self.flush)
+        except RuntimeError:
+            self.flush()  # no event loop here: at once
+
+    def flush(self) -> None:
+        data, self._pending = "".join(self._pending), []
+        if self._fd is None or not data:
+            return
+        try:
+            os.write(self._fd, data.encode())
         except OSError as exc:
             self.error = f"the watchdog stopped listening: {exc.strerror or exc}"
             self._close_pipe()
@@ -80,6 +98,7 @@ class Watchdog:
 
     def close(self) -> None:
         """Ends the watchdog: it stops whatever of the launch is still there, then exits."""
+        self.flush()
         self._close_pipe()
 
     def finished(self) -> bool:
