@@ -221,8 +221,8 @@ for i in range(100):
     started.append(proc)
     read_until(proc, *[f"[s{i}-{i + 1}]: process started" for i in range(after)])
     os.killpg(proc.pid, signal.SIGINT)
-    proc.communicate(timeout=60)
-    assert proc.returncode == 0  # sleep dies of the SIGINT we sent: a clean stop
+    rest = proc.communicate(timeout=60)[0]
+    assert proc.returncode == 0, rest  # sleep dies of the SIGINT we sent: a clean stop
     pids = pids_of(tmp_path)
     assert wait_gone(pids) == [] and tagged(tag) == []
     text = (log_folder(tmp_path) / "launch.log").read_text()

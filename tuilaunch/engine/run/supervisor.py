@@ -40,6 +40,10 @@ grandchild may hold the pipe for ever: its exit is then reported anyway, and wha
 still prints is read and logged until the launch ends."""
 
 _STAGES = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+STOP_RACE = 2.0
+"""Seconds before a stop within which a child's death by that stop's signal counts as part
+of the stop (see Supervisor._real_crashes)."""
 
 
 @dataclass
@@ -165,6 +169,8 @@ class Supervisor:
         self.exit_codes: dict[str, int] = {}
         self.crashes: dict[str, int] = {}
         """Processes that exited on their own with a non-zero status (not stopped by us)."""
+        self._crash_times: dict[str, float] = {}
+        self._stop_time: float | None = None
         self._running: dict[str, _Running] = {}
         self._lingering: set[_Reader] = set()  # output still open after its process exited
         self._happened: dict[tuple[str, str], asyncio.Event] = {}
@@ -250,7 +256,17 @@ class Supervisor:
         finally:
             await self._finish()
         failed = [item for item, state in self.states.items() if state == "failed"]
-        return 1 if failed or self.crashes else 0
+        return 1 if failed or self._real_crashes() else 0
+
+    def _real_crashes(self) -> dict[str, int]:
+        """Crashes, less the processes that died of the stop signal itself just before the
+        stop was seen: a terminal's Ctrl+C or hang-up reaches a child that is still in
+        tuilaunch's process group for the instant between its fork and its own session."""
+        if self._stop_time is None:
+            return self.crashes
+        return {pid: code for pid, code in self.crashes.items()
+                if not (-code in _STOP_SIGNALS and
+                        self._stop_time - self._crash_times[pid] < STOP_RACE)}
 
     async def _finish(self) -> None:
         """Whatever ended the run: nothing left running, nothing left open."""
@@ -595,6 +611,7 @@ class Supervisor:
         requested = running.stopping or self._shutting_down
         if code != 0 and not requested:
             self.crashes[process_id] = code
+            self._crash_times[process_id] = time.monotonic()
         self.states[process_id] = "exited"
         self._emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=_describe_exit(code)))
@@ -690,6 +707,7 @@ class Supervisor:
         if self._shutting_down:
             return
         self._shutting_down = True
+        self._stop_time = time.monotonic()
         try:
             self._emit(Event("shutdown", reason=reason))
             for action in self._on_shutdown:
