@@ -112,12 +112,20 @@ sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'sleep 1; echo still here; sleep 6
                              name='quiet'))""")
         proc = start_headless(str(path), log_dir=disk)
         started.append(proc)
-        seen = read_until(proc, f"[flood-1] {count}", "[quiet-2] still here")
-        assert "No space left on device" in seen
+        lines: list[str] = []
+        wanted = {f"[flood-1] {count}\n", "[quiet-2] still here\n"}
+        deadline = time.monotonic() + 120
+        assert proc.stdout is not None
+        while wanted and time.monotonic() < deadline:
+            lines.append(proc.stdout.readline())
+            wanted.discard(lines[-1])
+            assert lines[-1], "".join(lines[-20:])
+        assert not wanted
         os.killpg(proc.pid, signal.SIGINT)
         rest = proc.communicate(timeout=60)[0]
         assert proc.returncode == 0
-        everything = seen + rest
+        everything = "".join(lines) + rest
+        assert "No space left on device" in everything
         # one message per file that filled, not one per line
         assert everything.count("cannot write log file") <= 3
         assert f"{log_folder(disk) / 'flood-1.log'}" in everything
