@@ -532,18 +532,24 @@ class Supervisor:
                        f"{getattr(exc, 'strerror', None) or exc}")
             return
         popen = child.popen
+        loop = asyncio.get_running_loop()
+        running = None
         try:
             self.watchdog.watch(popen.pid)
-            loop = asyncio.get_running_loop()
             running = _Running(proc, popen, log, time.monotonic(), loop.create_future())
             self._running[process_id] = running
             self._watch_exit(running)
-            running.readers = [_Reader(self, running, channel) for channel in child.channels]
+            for channel in child.channels:
+                running.readers.append(_Reader(self, running, channel))
         except Exception as exc:
             # nothing may run that nobody reads or stops
             _kill_group(popen.pid, signal.SIGKILL)
             popen.wait()
+            if running is not None and running.pidfd is not None:
+                loop.remove_reader(running.pidfd)
+                _close_quietly(running.pidfd)
             for channel in child.channels:
+                loop.remove_reader(channel.fd)
                 _close_quietly(channel.fd)
             log.close()
             self._running.pop(process_id, None)
