@@ -117,7 +117,7 @@ class Node(Entity):
         cwd: SubValue = None,
         sigterm_timeout: Any = None,
         sigkill_timeout: Any = None,
-        emulate_tty: bool = False,
+        emulate_tty: Any = None,
         node_name: SubValue = None,
         node_executable: SubValue = None,
         node_namespace: SubValue = None,
@@ -157,6 +157,7 @@ class Node(Entity):
         self.cwd = cwd
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
+        self.emulate_tty = emulate_tty
         self.components: list[ComposableNode] = []
 
     def describe(self) -> str:
@@ -183,9 +184,11 @@ class ExecuteProcess(Entity):
         condition: Condition | None = None,
         sigterm_timeout: Any = None,
         sigkill_timeout: Any = None,
+        emulate_tty: Any = None,
         **_: Any,
     ) -> None:
         self._init_entity(condition)
+        self.emulate_tty = emulate_tty
         self.cmd = cmd
         self.name = name
         self.cwd = cwd
