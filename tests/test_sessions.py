@@ -418,11 +418,11 @@ def test_hangup_of_a_foreground_tui_stops_all_unless_keep_on_hangup(runtime, wri
 
 def test_a_file_named_like_a_command_is_taken_as_the_file(runtime, write, tmp_path):
     """An existing file wins over a command word, as it did before commands existed."""
-    (tmp_path / "status").write_text("not a launch file")
+    (tmp_path / "status").write_text(write(LAUNCH).read_text())
     done = subprocess.run([sys.executable, "-m", "tuilaunch", "status", "--print"],
                           capture_output=True, text=True, cwd=tmp_path, timeout=60)
-    assert done.returncode == 2
-    assert done.stderr.startswith(f"tuilaunch: error: {tmp_path / 'status'}")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("status: 3 of 3 processes will run")
     elsewhere = run_cli("status")
     assert elsewhere.returncode == 2
     assert elsewhere.stderr.startswith("tuilaunch status: error: no running session")

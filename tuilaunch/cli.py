@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 import traceback
+from pathlib import Path
 
 from .engine.describe.loader import load_file
 from .engine.errors import LaunchError, PackageError
@@ -67,6 +68,9 @@ def split_items(items: list[str]) -> tuple[list[str], dict[str, str]]:
 def find_launch_file(positional: list[str]) -> str:
     if len(positional) == 1:
         path = positional[0]
+        if os.path.isdir(path):
+            raise PackageError(f"{path} is a directory, not a launch file",
+                               hint="give the launch file inside it, or PACKAGE FILE")
         if not os.path.isfile(path):
             raise PackageError(f"launch file {path} does not exist",
                                hint="give a path, or PACKAGE FILE to search a package's share")
@@ -133,21 +137,30 @@ def main(argv: list[str] | None = None) -> int:
         return 3 if problems else 0
     for warning in plan.warnings:
         print(f"tuilaunch: warning: {warning}", file=sys.stderr)
+    from .headless import run_log_dir
+
+    log_dir = run_log_dir()
+    try:
+        log_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"tuilaunch: error: cannot create the log folder {log_dir} (set by ROS_LOG_DIR, "
+              f"ROS_HOME or ~/.ros): {exc.strerror or exc}", file=sys.stderr)
+        return 2
     if options.detach:
-        return _start_detached(path, arguments, options)
+        return _start_detached(path, arguments, options, log_dir)
     if options.headless or not (sys.stdout.isatty() and sys.stdin.isatty()):
         from .headless import run_headless
 
-        return run_headless(plan)
-    return _run_tui(path, arguments, options)
+        return run_headless(plan, log_dir)
+    return _run_tui(path, arguments, options, log_dir)
 
 
-def _start_detached(path: str, arguments: dict[str, str], options: argparse.Namespace) -> int:
+def _start_detached(path: str, arguments: dict[str, str], options: argparse.Namespace,
+                    log_dir: Path) -> int:
     from .commands import start_session
-    from .headless import run_log_dir
 
     try:
-        name, _ = start_session(path, arguments, options.name, run_log_dir())
+        name, _ = start_session(path, arguments, options.name, log_dir)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
@@ -155,13 +168,12 @@ def _start_detached(path: str, arguments: dict[str, str], options: argparse.Name
     return 0
 
 
-def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace) -> int:
+def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
+             log_dir: Path) -> int:
     """The launch runs in a session server; this TUI is its first client."""
     from .app import make_app
     from .commands import start_session
-    from .headless import run_log_dir
 
-    log_dir = run_log_dir()
     try:
         name, server = start_session(path, arguments, options.name, log_dir)
     except LaunchError as exc:
