@@ -17,13 +17,15 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from ..describe.conditions import ConditionOutcome
+from ..describe.conditions import ConditionOutcome, condition_outcome
 from ..describe.entities import (
+    AppendEnvironmentVariable,
     CallService,
     ComposableNode,
     DeclareLaunchArgument,
     DslOpaque,
     Entity,
+    EnvironmentStack,
     ExecuteProcess,
     Group,
     IncludeLaunchDescription,
@@ -39,15 +41,26 @@ from ..describe.entities import (
     SetLaunchConfiguration,
     SetParameter,
     SetParameters,
+    SetParametersFromFile,
     SetRemap,
     Shutdown,
+    StopProcess,
     TimerAction,
     UnsetEnvironmentVariable,
+    UnsetLaunchConfiguration,
     entity_list,
     pair_list,
 )
 from ..describe.events import When
-from ..describe.loader import LoadedFile, compat_modules, known_launch_files, load_file
+from ..describe.loader import (
+    LoadedFile,
+    compat_modules,
+    known_launch_files,
+    load_file,
+    set_command_line,
+    unsupported_import,
+)
+from ..describe.parameter_files import Parameter, ParameterFile, substitute_text
 from ..describe.substitutions import (
     PerformContext,
     describe,
@@ -55,7 +68,14 @@ from ..describe.substitutions import (
     perform_optional,
     text_to_bool,
 )
-from ..errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
+from ..errors import (
+    ArgumentError,
+    LaunchError,
+    Origin,
+    PackageError,
+    origin_from_traceback,
+    origin_outside_tuilaunch,
+)
 from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
@@ -88,6 +108,9 @@ class Scope:
     global_parameters: list[tuple[Any, Any]] = field(default_factory=list)
     remaps: list[tuple[Any, Any]] = field(default_factory=list)
     env: dict[str, str | None] = field(default_factory=dict)
+    param_files: list[Any] = field(default_factory=list)
+    event_locals: dict[str, Any] = field(default_factory=dict)
+    stacks: dict[str, list[Any]] = field(default_factory=dict)
 
     def child(self, scoped: bool) -> Scope:
         return replace(
@@ -96,23 +119,41 @@ class Scope:
             global_parameters=list(self.global_parameters),
             remaps=list(self.remaps),
             env=dict(self.env),
+            param_files=list(self.param_files),
+            stacks={k: list(v) for k, v in self.stacks.items()},
         )
 
     def context(self) -> PerformContext:
-        return PerformContext(self.configurations, self.launch_file)
+        values = {"global_params": {describe(k): v for k, v in self.global_parameters}}
+        return PerformContext(self.configurations, self.launch_file,
+                              event_locals={**values, **self.event_locals})
+
+
+@dataclass
+class Deferred:
+    """Entities performed when an event happens, with the scope they were written in.
+
+    What a file puts in an event handler, a timer or OnShutdown and cannot be described
+    ahead (an OpaqueFunction, a substitution that fails until then, the body of a handler
+    that applies to every process) is kept like this and performed by the supervisor."""
+
+    entities: list[Any]
+    scope: Scope
+    reason: str
 
 
 class Resolver:
-    def __init__(self, arguments: Mapping[str, str], params_dir: Path) -> None:
+    def __init__(self, arguments: Mapping[str, str], params_dir: Path,
+                 entity_ids: dict[int, str] | None = None, counter: int = 0) -> None:
         self.cli_arguments = dict(arguments)
         self.params_dir = params_dir
         self.processes: list[ProcessPlan] = []
         self.actions: list[ActionPlan] = []
         self.arguments: dict[str, ArgumentInfo] = {}
-        self.entity_ids: dict[int, str] = {}
+        self.entity_ids: dict[int, str] = {} if entity_ids is None else entity_ids
         self.triggers: list[Trigger] = []
         self.warnings: list[str] = []
-        self._counter = 0
+        self._counter = counter
 
     # --- entry -------------------------------------------------------------------------
 
@@ -133,12 +174,57 @@ class Resolver:
                 self.warnings.append(
                     f"argument '{name}' is not declared by {os.path.basename(loaded.path)} "
                     f"or its includes (declared: {', '.join(sorted(declared)) or 'none'})")
-        return Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
+        plan = Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
                     root, self.params_dir, self.warnings)
+        plan.entity_ids = self.entity_ids
+        plan.id_counter = self._counter
+        return plan
+
+    def link_triggers(self) -> None:
+        for trigger in self.triggers:
+            if trigger.target_entity is not None and trigger.target is None:
+                trigger.target = self.entity_ids.get(id(trigger.target_entity))
 
     def walk(self, entities: list[Any], scope: Scope, parent: TreeItem) -> None:
         for entity in entities:
+            if scope.trigger is None or not scope.enabled:
+                self.visit(entity, scope, parent)
+            elif isinstance(entity, OpaqueFunction):
+                self.defer([entity], scope, parent, "runs when the event happens")
+            else:
+                self._visit_or_defer(entity, scope, parent)
+
+    def _visit_or_defer(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        """Inside an event-gated branch, a value that cannot be performed yet (an unset
+        variable, a file made later) only matters if the event happens: as in launch,
+        the branch is then performed at event time, and fails only then."""
+        marks = (len(self.processes), len(self.actions), len(parent.children),
+                 len(self.triggers), dict(self.entity_ids), self._counter)
+        try:
             self.visit(entity, scope, parent)
+        except LaunchError as exc:
+            del self.processes[marks[0]:], self.actions[marks[1]:]
+            del parent.children[marks[2]:], self.triggers[marks[3]:]
+            self.entity_ids.clear()
+            self.entity_ids.update(marks[4])
+            self._counter = marks[5]
+            self.defer([entity], scope, parent, f"resolved when the event happens ({exc.message})")
+
+    def defer(self, entities: list[Any], scope: Scope, parent: TreeItem, reason: str) -> None:
+        enabled = scope.enabled
+        what = ", ".join(describe_entity(e) for e in entities) or "nothing"
+        action_id = f"deferred-{len(self.actions) + 1}"
+        plan = ActionPlan(action_id, "deferred", None, f"{what}: {reason}", scope.namespace, "",
+                          enabled, scope.skipped_by, scope.trigger,
+                          getattr(entities[0], "origin", None) if entities else None,
+                          Deferred(entities, replace(scope, trigger=None), reason),
+                          dict(scope.configurations))
+        self.actions.append(plan)
+        for entity in entities:
+            self.entity_ids[id(entity)] = action_id
+        parent.children.append(TreeItem("action", f"at event time: {what}", enabled,
+                                        scope.namespace, scope.skipped_by, scope.trigger,
+                                        action_id))
 
     def _next_id(self, base: str) -> str:
         self._counter += 1
@@ -157,7 +243,7 @@ class Resolver:
             return False, scope.skipped_by, None
         if condition is None:
             return True, None, None
-        outcome = condition.evaluate(scope.context())
+        outcome = condition_outcome(condition, scope.context())
         return outcome.holds, (None if outcome.holds else outcome), outcome
 
     # --- dispatch ----------------------------------------------------------------------
@@ -178,7 +264,7 @@ class Resolver:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
         elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
-                        | LoadComposableNodes):
+                        | LoadComposableNodes | StopProcess):
             self.action(entity, scope, parent)
         elif isinstance(entity, TimerAction):
             self.timer(entity, scope, parent)
@@ -203,6 +289,13 @@ class Resolver:
         elif isinstance(entity, SetRemap):
             if self._gate(entity, scope)[0]:
                 scope.remaps.append((entity.src, entity.dst))
+        elif isinstance(entity, SetParametersFromFile):
+            if self._gate(entity, scope)[0]:
+                scope.param_files.append(perform(entity.filename, scope.context()))
+        elif isinstance(entity, AppendEnvironmentVariable | EnvironmentStack
+                        | UnsetLaunchConfiguration):
+            if self._gate(entity, scope)[0]:
+                apply_scope_action(entity, scope)
         else:
             where = getattr(entity, "origin", None)
             self.warnings.append(f"{where or scope.launch_file}: ignored {entity!r}, which "
@@ -242,8 +335,12 @@ class Resolver:
         scope.enabled, scope.skipped_by = enabled, skipped
         ctx = scope.context()
         if enabled:
-            for key, value in group.launch_configurations.items():
-                scope.configurations[perform(key, ctx)] = perform(value, ctx)
+            values = {perform(k, ctx): perform(v, ctx)
+                      for k, v in group.launch_configurations.items()}
+            if not group.forwarding:
+                # launch's forwarding=False: the group sees only what it is given
+                scope.configurations = {}
+            scope.configurations.update(values)
         if group.namespace is not None and enabled:
             scope.namespace = join_namespace(scope.namespace, perform(group.namespace, ctx))
         if group.when is not None:
@@ -299,11 +396,28 @@ class Resolver:
         item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
                         scope.trigger)
         parent.children.append(item)
-        body = handler.handler
+        self.handler_body(handler.handler, handler.target is None and handler.on in
+                          ("start", "exit", "io"), scope, item)
+
+    def handler_body(self, body: Any, every_process: bool, scope: Scope, item: TreeItem)\
+            -> None:
         if callable(body) and not isinstance(body, Entity):
             self.action(IoCallbacks([body]), scope, item)
+        elif every_process:
+            # performed again for each process's event, as launch does
+            self.defer(entity_list(body), scope, item, "performed for every process's event")
         else:
             self.walk(entity_list(body), scope, item)
+
+    def on_exit(self, entity: Node | ExecuteProcess, outer: Scope, parent: TreeItem) -> None:
+        """`Node(on_exit=...)`: a handler for this process's exit."""
+        scope = outer.child(False)
+        scope.trigger = Trigger("exit", None, 0.0, None, outer.trigger, entity)
+        self.triggers.append(scope.trigger)
+        item = TreeItem("group", "on exit", scope.enabled, scope.namespace, None,
+                        scope.trigger)
+        parent.children.append(item)
+        self.handler_body(entity.on_exit, False, scope, item)
 
     # --- includes and opaque functions -----------------------------------------------------
 
@@ -341,7 +455,7 @@ class Resolver:
     def opaque(self, entity: DslOpaque | OpaqueFunction, scope: Scope, parent: TreeItem) -> None:
         if not self._gate(entity, scope)[0]:
             return
-        context = LaunchContextShim(scope.configurations, scope.launch_file)
+        context = scope.context()
         try:
             with compat_modules():
                 if isinstance(entity, DslOpaque):
@@ -354,9 +468,13 @@ class Resolver:
         except LaunchError:
             raise
         except Exception as exc:  # user code: report its own file and line
-            origin = origin_from_traceback(sys.exc_info()[2], known_launch_files())
-            raise LaunchError(f"the opaque function raised {type(exc).__name__}: {exc}",
-                              origin or entity.origin) from None
+            tb = sys.exc_info()[2]
+            origin = origin_outside_tuilaunch(tb) or origin_from_traceback(
+                tb, known_launch_files())
+            missing = unsupported_import(exc) if isinstance(exc, ImportError | AttributeError) \
+                else None
+            raise LaunchError(missing or f"the opaque function raised {type(exc).__name__}: "
+                              f"{exc}", origin or entity.origin) from None
         self.walk(produced, scope, parent)
 
     # --- processes -------------------------------------------------------------------------
@@ -377,6 +495,8 @@ class Resolver:
         self.entity_ids[id(entity)] = plan.id
         parent.children.append(TreeItem("process", plan.label, enabled, plan.namespace,
                                         skipped, scope.trigger, plan.id))
+        if entity.on_exit is not None:
+            self.on_exit(entity, scope, parent)
 
     def _process_plan(self, entity: Node | ExecuteProcess, scope: Scope, enabled: bool,
                       skipped: ConditionOutcome | None) -> ProcessPlan:
@@ -444,7 +564,23 @@ class Resolver:
         generated: list[tuple[str, dict[str, Any]]] = []
         params_args: list[str] = []
         pending: dict[str, ParamValue] = dict(merged)
+        for path in scope.param_files:
+            user_files.append(path)
+            params_args += ["--params-file", path]
         for item in _items(entity.parameters):
+            if isinstance(item, Parameter):
+                item = item.as_dict()
+            if isinstance(item, ParameterFile):
+                if pending:
+                    generated.append(self._params_file(proc_id, len(generated), pending,
+                                                       params_args))
+                    pending = {}
+                path = self._parameter_file(item, ctx, proc_id, len(user_files))
+                user_files.append(path)
+                params_args += ["--params-file", path]
+                if not os.path.isfile(path) and error is None:
+                    error = f"parameter file {path} does not exist"
+                continue
             if isinstance(item, dict):
                 values = flatten_parameters(item, ctx, entity.origin)
                 merged.update(values)
@@ -479,6 +615,22 @@ class Resolver:
         return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
                            merged, user_files, generated, remappings, error=error,
                            components=components, **common)
+
+    def _parameter_file(self, item: ParameterFile, ctx: PerformContext, proc_id: str,
+                        index: int) -> str:
+        path = item.path(ctx)
+        if not item.substitutes(ctx):
+            return path
+        try:
+            with open(path, encoding="utf-8") as handle:
+                text = handle.read()
+        except OSError as exc:
+            raise LaunchError(f"parameter file {path} cannot be read: {exc.strerror or exc}",
+                              item.origin) from None
+        out = self.params_dir / f"{proc_id}-file{index + 1}.yaml"
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(substitute_text(text, ctx, item.origin), encoding="utf-8")
+        return str(out)
 
     def _params_file(self, proc_id: str, index: int, params: dict[str, Any],
                      params_args: list[str]) -> tuple[str, dict[str, Any]]:
@@ -534,6 +686,9 @@ class Resolver:
         elif isinstance(entity, Shutdown):
             kind = "shutdown"
             data = perform(entity.reason, ctx) if enabled else describe(entity.reason)
+        elif isinstance(entity, StopProcess):
+            kind = "stop_process"
+            target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
         elif isinstance(entity, LoadComposableNodes):
             kind = "load_components"
             target = describe(entity.target_container)
@@ -551,9 +706,42 @@ class Resolver:
         label = {"log": f"log: {data}", "call_service": f"call {target}",
                  "set_parameters": f"set parameters of {target}",
                  "shutdown": "shutdown", "event_callback": "event callback",
+                 "stop_process": f"stop {target}",
                  "load_components": f"load components into {target}"}[kind]
         parent.children.append(TreeItem("action", label, enabled, scope.namespace, skipped,
                                         scope.trigger, action_id))
+
+
+def apply_scope_action(entity: Any, scope: Scope) -> None:
+    """Environment and launch-configuration edits that change what follows in a scope."""
+    ctx = scope.context()
+    if isinstance(entity, AppendEnvironmentVariable):
+        name, value = perform(entity.name, ctx), perform(entity.value, ctx)
+        old = scope.env[name] if name in scope.env else os.environ.get(name)
+        separator = perform(entity.separator, ctx)
+        prepend = entity.prepend if isinstance(entity.prepend, bool) else \
+            text_to_bool(perform(entity.prepend, ctx)) or False
+        if old:
+            value = value + separator + old if prepend else old + separator + value
+        scope.env[name] = value
+    elif isinstance(entity, UnsetLaunchConfiguration):
+        scope.configurations.pop(perform(entity.name, ctx), None)
+    elif isinstance(entity, EnvironmentStack):
+        target: dict[str, Any] = scope.env if entity.what == "env" else scope.configurations
+        stack = scope.stacks.setdefault(entity.what, [])
+        if entity.op == "push":
+            stack.append(dict(target))
+        elif entity.op == "pop":
+            if not stack:
+                raise LaunchError(f"Pop{'Environment' if entity.what == 'env' else ''}"
+                                  "... without a matching Push", entity.origin)
+            saved = stack.pop()
+            target.clear()
+            target.update(saved)
+        else:
+            values = {perform(k, ctx): perform(v, ctx) for k, v in (entity.values or {}).items()}
+            target.clear()
+            target.update(values)
 
 
 def _request_values(request: dict[str, Any], ctx: PerformContext, namespace: str,
@@ -595,17 +783,6 @@ def group_label(group: Group, scope: Scope, outcome: ConditionOutcome | None) ->
     return ", ".join(parts) or group.label or "group"
 
 
-class LaunchContextShim(PerformContext):
-    """What an OpaqueFunction receives as `context`: launch configurations and perform."""
-
-    @property
-    def launch_configurations(self) -> dict[str, str]:
-        return self.configurations
-
-    def perform_substitution(self, substitution: Any) -> str:
-        return perform(substitution, self)
-
-
 def default_params_dir() -> Path:
     return Path(tempfile.gettempdir()) / f"tuilaunch-{os.getpid()}-params"
 
@@ -614,6 +791,7 @@ def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
             params_dir: Path | None = None) -> Plan:
     """The Plan for these argument values (`name -> text`, as given on the command line)."""
     resolver = Resolver(arguments or {}, params_dir or default_params_dir())
+    set_command_line(arguments=dict(arguments or {}))
     return resolver.resolve(loaded)
 
 
