@@ -22,6 +22,10 @@ class Entity:
     condition: Condition | None = None
     origin: Origin | None = None
 
+    def __init__(self, *, condition: Condition | None = None, **_: Any) -> None:
+        """launch.Action's constructor, for third-party actions (`execute(context)`)."""
+        self._init_entity(condition)
+
     def _init_entity(self, condition: Condition | None) -> None:
         self.condition = condition
         self.origin = caller_origin()

@@ -96,6 +96,8 @@ class ProcessPlan:
     origin: Origin | None
     error: str | None = None
     components: list[dict[str, Any]] = field(default_factory=list)
+    source: Any = field(default=None, repr=False, compare=False)
+    """The Node or ExecuteProcess it came from: what `event.action` is in handlers."""
 
     @property
     def full_name(self) -> str | None:

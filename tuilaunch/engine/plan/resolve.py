@@ -144,7 +144,8 @@ class Deferred:
 
 class Resolver:
     def __init__(self, arguments: Mapping[str, str], params_dir: Path,
-                 entity_ids: dict[int, str] | None = None, counter: int = 0) -> None:
+                 entity_ids: dict[int, str] | None = None, counter: int = 0,
+                 action_offset: int = 0) -> None:
         self.cli_arguments = dict(arguments)
         self.params_dir = params_dir
         self.processes: list[ProcessPlan] = []
@@ -154,6 +155,14 @@ class Resolver:
         self.triggers: list[Trigger] = []
         self.warnings: list[str] = []
         self._counter = counter
+        self._action_offset = action_offset  # ids stay unique when actions join a running plan
+
+    @property
+    def id_counter(self) -> int:
+        return self._counter
+
+    def _action_id(self, kind: str) -> str:
+        return f"{kind}-{self._action_offset + len(self.actions) + 1}"
 
     # --- entry -------------------------------------------------------------------------
 
@@ -189,7 +198,7 @@ class Resolver:
         for entity in entities:
             if scope.trigger is None or not scope.enabled:
                 self.visit(entity, scope, parent)
-            elif isinstance(entity, OpaqueFunction):
+            elif isinstance(entity, OpaqueFunction) or _custom_action(entity):
                 self.defer([entity], scope, parent, "runs when the event happens")
             else:
                 self._visit_or_defer(entity, scope, parent)
@@ -213,7 +222,7 @@ class Resolver:
     def defer(self, entities: list[Any], scope: Scope, parent: TreeItem, reason: str) -> None:
         enabled = scope.enabled
         what = ", ".join(describe_entity(e) for e in entities) or "nothing"
-        action_id = f"deferred-{len(self.actions) + 1}"
+        action_id = self._action_id("deferred")
         plan = ActionPlan(action_id, "deferred", None, f"{what}: {reason}", scope.namespace, "",
                           enabled, scope.skipped_by, scope.trigger,
                           getattr(entities[0], "origin", None) if entities else None,
@@ -270,7 +279,7 @@ class Resolver:
             self.timer(entity, scope, parent)
         elif isinstance(entity, RegisterEventHandler):
             self.event_handler(entity, scope, parent)
-        elif isinstance(entity, DslOpaque | OpaqueFunction):
+        elif isinstance(entity, DslOpaque | OpaqueFunction) or _custom_action(entity):
             self.opaque(entity, scope, parent)
         elif isinstance(entity, SetEnvironmentVariable):
             if self._gate(entity, scope)[0]:
@@ -452,7 +461,8 @@ class Resolver:
         scope.launch_file = loaded.path
         self.walk(loaded.entities, scope, item)
 
-    def opaque(self, entity: DslOpaque | OpaqueFunction, scope: Scope, parent: TreeItem) -> None:
+    def opaque(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        """OpaqueFunctions, SimpleLauncher's opaque mode, and third-party actions' execute()."""
         if not self._gate(entity, scope)[0]:
             return
         context = scope.context()
@@ -462,6 +472,8 @@ class Resolver:
                     with entity.launcher.opaque_scope(context) as root:
                         result = entity.function()
                     produced = entity_list(result) if result is not None else [root]
+                elif not isinstance(entity, OpaqueFunction):
+                    produced = entity_list(entity.execute(context))
                 else:
                     produced = entity_list(entity.function(context, *entity.args,
                                                            **entity.kwargs))
@@ -473,8 +485,10 @@ class Resolver:
                 tb, known_launch_files())
             missing = unsupported_import(exc) if isinstance(exc, ImportError | AttributeError) \
                 else None
-            raise LaunchError(missing or f"the opaque function raised {type(exc).__name__}: "
-                              f"{exc}", origin or entity.origin) from None
+            what = "the opaque function" if isinstance(entity, OpaqueFunction | DslOpaque) \
+                else f"{type(entity).__name__}.execute()"
+            raise LaunchError(missing or f"{what} raised {type(exc).__name__}: {exc}",
+                              origin or entity.origin) from None
         self.walk(produced, scope, parent)
 
     # --- processes -------------------------------------------------------------------------
@@ -491,6 +505,7 @@ class Resolver:
                                base, [], {}, [], [], [], {}, False, None, False, 0.0, 0, None,
                                None, False, skipped, scope.trigger, entity.origin,
                                error=f"not resolved: {exc.message}")
+        plan.source = entity
         self.processes.append(plan)
         self.entity_ids[id(entity)] = plan.id
         parent.children.append(TreeItem("process", plan.label, enabled, plan.namespace,
@@ -697,7 +712,7 @@ class Resolver:
         else:
             kind = "event_callback"
             data = len(entity.callbacks)
-        action_id = f"{kind}-{len(self.actions) + 1}"
+        action_id = self._action_id(kind)
         plan = ActionPlan(action_id, kind, target, data, scope.namespace, verbosity, enabled,
                           skipped, scope.trigger, entity.origin, entity,
                           dict(scope.configurations))
@@ -710,6 +725,11 @@ class Resolver:
                  "load_components": f"load components into {target}"}[kind]
         parent.children.append(TreeItem("action", label, enabled, scope.namespace, skipped,
                                         scope.trigger, action_id))
+
+
+def _custom_action(entity: Any) -> bool:
+    """A launch.Action subclass written outside tuilaunch: it runs through execute()."""
+    return isinstance(entity, Entity) and callable(getattr(entity, "execute", None))
 
 
 def apply_scope_action(entity: Any, scope: Scope) -> None:
