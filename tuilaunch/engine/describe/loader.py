@@ -137,7 +137,7 @@ def load_file(path: str, origin: Origin | None = None) -> LoadedFile:
                                   hint="a launch file must define generate_launch_description() "
                                   "or assign sl.launch_description(opaque_function=...) to it")
             description = generate()
-    except LaunchError:
+    except (LaunchError, BrokenPipeError):  # a closed stdout is the reader's choice
         raise
     except Exception as exc:  # the user's code raised: point at their line
         tb = sys.exc_info()[2]

@@ -477,7 +477,7 @@ class Resolver:
                 else:
                     produced = entity_list(entity.function(context, *entity.args,
                                                            **entity.kwargs))
-        except LaunchError:
+        except (LaunchError, BrokenPipeError):  # a closed stdout is the reader's choice
             raise
         except Exception as exc:  # user code: report its own file and line
             tb = sys.exc_info()[2]

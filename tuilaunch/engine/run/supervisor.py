@@ -251,6 +251,8 @@ class Supervisor:
             state = self.states.get(action.id)
             if state == "running" and action.kind not in ROS_ACTIONS:
                 return True
+            if state == "pending" and action.enabled and action.trigger is None:
+                return True  # performed by a handler just now, about to run
             if state == "pending" and action.enabled and action.trigger is not None:
                 step: Trigger | None = action.trigger
                 due = True
@@ -270,9 +272,11 @@ class Supervisor:
                           action=proc.source, cmd=proc.cmd)
         self._last_event[(process_id, on)] = event
         for action in self._any_watchers.get(on, []):
+            self.states[action.id] = "running"  # due now: the run must not end before it
             self._spawn_task(self._run_action(action, event))
 
-    def add_to_plan(self, processes: list[ProcessPlan], actions: list[ActionPlan]) -> None:
+    def add_to_plan(self, processes: list[ProcessPlan], actions: list[ActionPlan],
+                    event: EventInfo | None = None) -> None:
         """Processes and actions performed at event time join the run."""
         for proc in processes:
             self.states[proc.id] = "pending" if proc.enabled else "skipped"
@@ -280,6 +284,8 @@ class Supervisor:
                 self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
         for action in actions:
             self.states[action.id] = "pending" if action.enabled else "skipped"
+            if event is not None:
+                self._last_event[(action.id, "made")] = event
             if action.enabled:
                 self._schedule_action(action)
         self._changed.set()
@@ -296,11 +302,13 @@ class Supervisor:
             return False
         for warning in performed.warnings:
             self._log(action, warning, "WARN")
-        self.add_to_plan(performed.processes, performed.actions)
+        self.add_to_plan(performed.processes, performed.actions, event)
         return True
 
     def _event_of(self, action: ActionPlan) -> EventInfo:
         """The event an action was triggered by (its process's start or exit, ...)."""
+        if (action.id, "made") in self._last_event:  # performed by an event handler
+            return self._last_event[(action.id, "made")]
         step = action.trigger
         while step is not None:
             if step.target is not None and (step.target, step.on) in self._last_event:
