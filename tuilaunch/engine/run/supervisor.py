@@ -94,6 +94,7 @@ class Supervisor:
         self._on_shutdown: list[ActionPlan] = []
         self._any_watchers: dict[str, list[ActionPlan]] = {}  # handlers without a target
         self._last_event: dict[tuple[str, str], EventInfo] = {}
+        self._shutdown_requested = False
         self.exit_codes: dict[str, int] = {}
         self._running: dict[str, _Running] = {}
         self._happened: dict[tuple[str, str], asyncio.Event] = {}
@@ -166,7 +167,7 @@ class Supervisor:
             # waiting actions, timers and respawns are cancelled when the run drains;
             # exit handlers of the processes being stopped still run, as in launch
             return not self._running and not self._actions_due_in_shutdown()
-        if self._keep_alive or self._running or self._busy:
+        if self._keep_alive or self._running or self._busy or self._shutdown_requested:
             return False
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
@@ -330,7 +331,7 @@ class Supervisor:
             elif action.kind == "set_parameters":
                 ok = await self._set_parameters(action)
             elif action.kind == "shutdown":
-                self._spawn_task(self.shutdown(str(action.data)))
+                self._request_shutdown(str(action.data))
             elif action.kind == "log":
                 self._log(action, self._perform(action, action.source.msg, event))
             elif action.kind == "event_callback":
@@ -349,6 +350,11 @@ class Supervisor:
         self.states[action.id] = "done" if ok else "failed"
         self._emit(Event("finished", action.id, reason=self.states[action.id]))
         self._flag(action.id, "exit").set()
+
+    def _request_shutdown(self, reason: str) -> None:
+        """A Shutdown action: the run must not end before the shutdown has begun."""
+        self._shutdown_requested = True
+        self._spawn_task(self.shutdown(reason))
 
     async def _stop_process(self, action: ActionPlan) -> bool:
         """EmitEvent(ShutdownProcess(process_matcher=matches_action(x)))."""
@@ -449,7 +455,7 @@ class Supervisor:
         if isinstance(entity, LogInfo):
             self._log(action, self._perform(action, entity.msg, event))
         elif isinstance(entity, Shutdown):
-            self._spawn_task(self.shutdown(self._perform(action, entity.reason, event)))
+            self._request_shutdown(self._perform(action, entity.reason, event))
         else:
             return False
         return True
