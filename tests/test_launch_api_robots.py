@@ -327,3 +327,87 @@ def test_multi_robot_simulation_runs_each_robot_and_cleans_up(nav_world, tmp_pat
     assert {r["env"]["PROBE_RESOURCES"] for r in records} == {
         os.pathsep.join([os.path.join(share, "models"), share]) for share in
         [str(tmp_path / "prefix" / "share" / "fake_nav_bringup")]}
+
+
+TB3_FILES = {
+    "param/burger.yaml": """
+        turtlebot3_node:
+          ros__parameters:
+            wheels:
+              separation: 0.160
+        """,
+    "urdf/turtlebot3_burger.urdf": "<robot name='burger'/>\n",
+    "launch/robot.launch.py": """
+        import os
+        from ament_index_python.packages import get_package_share_directory
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument, IncludeLaunchDescription
+        from launch.launch_description_sources import PythonLaunchDescriptionSource
+        from launch.substitutions import LaunchConfiguration, ThisLaunchFileDir
+        from launch_ros.actions import Node
+
+        MODEL = os.environ['PROBE_TB3_MODEL']
+
+        def generate_launch_description():
+            use_sim_time = LaunchConfiguration('use_sim_time', default='false')
+            usb_port = LaunchConfiguration('usb_port', default='/dev/ttyACM0')
+            param_dir = LaunchConfiguration('tb3_param_dir', default=os.path.join(
+                get_package_share_directory('fake_tb3'), 'param', MODEL + '.yaml'))
+            return LaunchDescription([
+                DeclareLaunchArgument('use_sim_time', default_value=use_sim_time),
+                DeclareLaunchArgument('usb_port', default_value=usb_port),
+                IncludeLaunchDescription(
+                    PythonLaunchDescriptionSource([ThisLaunchFileDir(), '/rsp.launch.py']),
+                    launch_arguments={'use_sim_time': use_sim_time}.items()),
+                Node(package='fake_tb3', executable='turtlebot3_ros',
+                     parameters=[param_dir], arguments=['-i', usb_port], output='screen'),
+            ])
+        """,
+    "launch/rsp.launch.py": """
+        import os
+        from ament_index_python.packages import get_package_share_directory
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument
+        from launch.substitutions import Command, LaunchConfiguration
+        from launch_ros.actions import Node
+        from launch_ros.parameter_descriptions import ParameterValue
+
+        def generate_launch_description():
+            urdf_file_name = 'turtlebot3_' + os.environ['PROBE_TB3_MODEL'] + '.urdf'
+            print('urdf_file_name : {}'.format(urdf_file_name))
+            urdf = os.path.join(get_package_share_directory('fake_tb3'), 'urdf', urdf_file_name)
+            return LaunchDescription([
+                DeclareLaunchArgument('use_sim_time', default_value='false'),
+                Node(package='fake_tb3', executable='robot_state_publisher',
+                     name='robot_state_publisher', output='screen',
+                     parameters=[{'use_sim_time': LaunchConfiguration('use_sim_time'),
+                                  'robot_description': ParameterValue(
+                                      Command(['cat ', urdf]), value_type=str)}]),
+            ])
+        """,
+}
+
+
+def test_turtlebot3_style_bringup(tmp_path):
+    prefix = tmp_path / "prefix"
+    share = make_package(prefix, "fake_tb3", ["turtlebot3_ros", "robot_state_publisher"],
+                         files=TB3_FILES)
+    probes = tmp_path / "probes"
+    probes.mkdir()
+    env = {**world_env(prefix, tmp_path, probes), "PROBE_TB3_MODEL": "burger"}
+    done = run_cli("fake_tb3", "robot.launch.py", "use_sim_time:=true", "--print", "--json",
+                   env=env)
+    assert done.returncode == 0, done.stderr
+    assert "urdf_file_name : turtlebot3_burger.urdf" in done.stderr
+    plan = json.loads(done.stdout)
+    rsp, node = plan["processes"]
+    assert rsp["full_name"] == "/robot_state_publisher"
+    assert rsp["parameters"] == {"use_sim_time": True,
+                                 "robot_description": "<robot name='burger'/>\n"}
+    assert node["parameter_files"] == [str(share / "param" / "burger.yaml")]
+    assert node["cmd"][1:3] == ["-i", "/dev/ttyACM0"]
+    run = run_cli("fake_tb3", "robot.launch.py", "--headless", env=env)
+    assert run.returncode == 0, run.stdout + run.stderr
+    records = {r["exe"]: r for r in probe_records(probes)}
+    assert records["turtlebot3_ros"]["params"][str(share / "param" / "burger.yaml")] == {
+        "turtlebot3_node": {"ros__parameters": {"wheels": {"separation": 0.16}}}}
