@@ -303,6 +303,7 @@ NAMES: list[tuple[str, str, Any]] = [
     # simple_launch
     ("simple_launch.simple_launcher", "SimpleLauncher", SimpleLauncher),
     ("simple_launch.simple_substitution", "SimpleSubstitution", s.SimpleSubstitution),
+    ("simple_launch.simple_substitution", "flatten", s.flatten),
 ]
 
 # the module files holding only one class in the real packages, named as launch names them
@@ -320,9 +321,13 @@ def register(module: str, name: str, obj: Any) -> None:
 def _rows() -> list[tuple[str, str, Any]]:
     from . import events as simple_events
 
+    from . import gazebo
+
     rows = list(NAMES)
     rows += [("simple_launch.events", name, getattr(simple_events, name))
              for name in _SIMPLE_EVENTS]
+    rows += [("simple_launch.gazebo", name, getattr(gazebo, name))
+             for name in ("GazeboBridge", "ros_gz_prefix", "only_show_args")]
     return rows + _extra
 
 
