@@ -320,7 +320,6 @@ def register(module: str, name: str, obj: Any) -> None:
 
 def _rows() -> list[tuple[str, str, Any]]:
     from . import events as simple_events
-
     from . import gazebo
 
     rows = list(NAMES)
