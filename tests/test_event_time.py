@@ -249,3 +249,25 @@ def generate_launch_description():
         capture_output=True, text=True, timeout=60, env=os.environ)
     assert shell.stdout.count("\n") == 1
     assert "Traceback" not in shell.stderr and "BrokenPipe" not in shell.stderr
+
+
+def test_timer_opaque_function_runs_when_the_timer_fires(write, tmp_path):
+    env, probes = world(tmp_path)
+    path = write(HEADER + """
+def later(context):
+    return [Node(package='fake_robot', executable='rviz2', name='late_' +
+                 context.launch_configurations['robot'])]
+
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('robot', default_value='r1'),
+        Node(package='fake_robot', executable='driver', name='driver'),
+        TimerAction(period=0.2, actions=[OpaqueFunction(function=later)]),
+    ])
+""")
+    plan = plan_of(path, robot="r9")
+    assert [p.name for p in plan.processes] == ["driver"]  # the function has not run
+    done = headless(path, env, "robot:=r9")
+    assert done.returncode == 0, done.stdout + done.stderr
+    late = [r for r in probe_records(probes) if r["exe"] == "rviz2"]
+    assert len(late) == 1 and "__node:=late_r9" in late[0]["argv"]

@@ -278,3 +278,41 @@ def test_sys_argv_looks_like_ros2_launch(tmp_path):
     logs = [a["data"] for a in json.loads(done.stdout)["actions"]]
     assert logs == ["a at 1.0", "b at 2.5", "ros2 launch fake_multi multi_launch.py"]
     assert share.is_dir()
+
+
+def test_environment_and_configuration_stacks_and_predicate_conditions(write, monkeypatch):
+    monkeypatch.setenv("PROBE_PATHS", "/base")
+    path = write("""
+from launch import Condition, LaunchDescription
+from launch.actions import (AppendEnvironmentVariable, DeclareLaunchArgument, ExecuteProcess,
+                            PopEnvironment, PopLaunchConfigurations, PushEnvironment,
+                            PushLaunchConfigurations, LogInfo, SetEnvironmentVariable,
+                            SetLaunchConfiguration, UnsetLaunchConfiguration)
+from launch.substitutions import LaunchConfiguration
+
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('mode', default_value='fast'),
+        AppendEnvironmentVariable('PROBE_PATHS', '/after'),
+        AppendEnvironmentVariable('PROBE_PATHS', '/before', prepend=True, separator=';'),
+        PushEnvironment(),
+        SetEnvironmentVariable('PROBE_INNER', '1'),
+        ExecuteProcess(cmd=['true'], name='inner'),
+        PopEnvironment(),
+        ExecuteProcess(cmd=['true'], name='outer'),
+        PushLaunchConfigurations(),
+        SetLaunchConfiguration('mode', 'slow'),
+        UnsetLaunchConfiguration('other'),
+        LogInfo(msg=LaunchConfiguration('mode')),
+        PopLaunchConfigurations(),
+        LogInfo(msg=LaunchConfiguration('mode')),
+        LogInfo(msg='only when fast', condition=Condition(
+            predicate=lambda context: context.launch_configurations['mode'] == 'fast')),
+        LogInfo(msg='never', condition=Condition(predicate=lambda context: False)),
+    ])
+""")
+    plan = plan_of(path)
+    inner, outer = plan.processes
+    assert inner.env == {"PROBE_PATHS": "/before;/base:/after", "PROBE_INNER": "1"}
+    assert outer.env == {"PROBE_PATHS": "/before;/base:/after"}
+    assert [a.data for a in plan.actions if a.enabled] == ["slow", "fast", "only when fast"]
