@@ -316,3 +316,38 @@ def generate_launch_description():
     assert inner.env == {"PROBE_PATHS": "/before;/base:/after", "PROBE_INNER": "1"}
     assert outer.env == {"PROBE_PATHS": "/before;/base:/after"}
     assert [a.data for a in plan.actions if a.enabled] == ["slow", "fast", "only when fast"]
+
+
+def test_parameter_substitution_reads_set_parameter(write):
+    path = write("""
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, LogInfo
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import SetParameter, SetUseSimTime
+from launch_ros.substitutions import Parameter
+
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('rate', default_value='10'),
+        SetParameter('rate', LaunchConfiguration('rate')),
+        SetUseSimTime(True),
+        LogInfo(msg=[Parameter('rate'), ' ', Parameter('use_sim_time'), ' ',
+                     Parameter('missing', default='none')]),
+    ])
+""")
+    assert plan_of(path, rate="30").actions[0].data == "30 true none"
+
+
+def test_an_extension_failing_while_the_file_loads_names_both_places(write, tmp_path, extension):
+    path = write("""
+from launch import LaunchDescription
+from fake_nav_common.launch import Broken
+
+def generate_launch_description():
+    Broken().perform(None)
+    return LaunchDescription([])
+""")
+    with pytest.raises(LaunchError) as info:
+        load_file(str(path))
+    text = str(info.value)
+    assert f"{path.name}:6" in text and "extension.py:" in text and "KeyError" in text

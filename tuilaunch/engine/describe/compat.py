@@ -19,24 +19,12 @@ from typing import Any
 
 from ..errors import LaunchError
 from ..plan import params
-from . import (
-    conditions as c,
-)
-from . import (
-    entities as e,
-)
-from . import (
-    launch_events as ev,
-)
-from . import (
-    launch_utilities as u,
-)
-from . import (
-    parameter_files as pf,
-)
-from . import (
-    substitutions as s,
-)
+from . import conditions as c
+from . import entities as e
+from . import launch_events as ev
+from . import launch_utilities as u
+from . import parameter_files as pf
+from . import substitutions as s
 from .dsl import SimpleLauncher
 
 ROOTS = ("launch", "launch_ros", "simple_launch")

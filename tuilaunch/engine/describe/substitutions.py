@@ -620,7 +620,9 @@ class ParameterSubstitution(Substitution):
         name = perform(self.name, context)
         params = context.event_locals.get("global_params", {})
         if name in params:
-            return str(params[name])
+            value = params[name]
+            return value if isinstance(value, str) else perform(value, context) if is_lazy(
+                value) else str(value).lower() if isinstance(value, bool) else str(value)
         if self.default is not None:
             return perform(self.default, context)
         raise LaunchError(f"parameter '{name}' was not set by SetParameter", self.origin)
