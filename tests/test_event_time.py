@@ -271,3 +271,13 @@ def generate_launch_description():
     assert done.returncode == 0, done.stdout + done.stderr
     late = [r for r in probe_records(probes) if r["exe"] == "rviz2"]
     assert len(late) == 1 and "__node:=late_r9" in late[0]["argv"]
+
+
+def test_event_values_show_as_placeholders_in_the_plan(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    p = ExecuteProcess(cmd=['true'], name='job')
+    return LaunchDescription([p, RegisterEventHandler(OnProcessExit(target_action=p, on_exit=[
+        LogInfo(msg=['code ', LocalSubstitution('event.returncode')])]))])
+""")
+    assert plan_of(path).actions[0].data == "code <event.returncode>"

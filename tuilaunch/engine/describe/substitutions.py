@@ -426,7 +426,7 @@ class LocalSubstitution(Substitution):
         self.description = description
 
     def perform(self, context: PerformContext) -> str:
-        if not context.event_locals:
+        if self.expression.split(".")[0] not in context.event_locals:
             return f"<{self.expression}>"  # resolved into a plan: the event comes later
         value: Any = context.event_locals
         for key in self.expression.split("."):
