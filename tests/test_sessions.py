@@ -622,3 +622,19 @@ def test_two_sessions_started_with_one_name_at_once_one_wins(runtime, write):
     assert status("twin")["counts"]["running"] >= 1  # the winner is the one that answers
     tl("stop", "twin")
     assert not list((runtime / "tuilaunch").iterdir())
+
+
+def test_a_session_loads_its_file_with_the_command_line_ros2_launch_would_give(
+        runtime, write):
+    path = write("""
+        import sys
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([ExecuteProcess(name='argv', cmd=[
+                'echo', ' '.join(sys.argv[2:])])])
+        """)
+    name = tl(str(path), "--detach", "robots:=r1;r2").stdout.strip()
+    tl("wait", name, "argv-1", "exited", "--timeout", "30")
+    assert tl("logs", name, "argv-1").stdout == f"{path} robots:=r1;r2\n"
+    tl("stop", name)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import subprocess
@@ -10,7 +11,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from .engine.describe.loader import load_file
+from .engine.describe.loader import load_file, set_command_line
 from .engine.errors import LaunchError, PackageError
 from .engine.plan.packages import ensure_environment, find_in_share, package_share
 from .engine.plan.resolve import resolve
@@ -96,6 +97,18 @@ def is_command(argv: list[str]) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        # `tuilaunch ... | head -1`: the reader is gone, which is no error of ours; point
+        # stdout at /dev/null so the interpreter's final flush stays quiet too
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return 0
+
+
+def _main(argv: list[str] | None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if is_command(argv):
         from .commands import main as command_main
@@ -106,11 +119,16 @@ def main(argv: list[str] | None = None) -> int:
         argv = argv[1:]
     options = _parser().parse_intermixed_args(argv)
     ensure_environment()
+    # a launch file's own print() must not corrupt the JSON a tool reads on stdout
+    file_output = contextlib.redirect_stdout(sys.stderr) if options.print_plan and \
+        options.json else contextlib.nullcontext()
     try:
         positional, arguments = split_items(options.items)
         path = find_launch_file(positional)
-        loaded = load_file(path)
-        plan = resolve(loaded, arguments)
+        set_command_line(positional, arguments)
+        with file_output:
+            loaded = load_file(path)
+            plan = resolve(loaded, arguments)
     except LaunchError as exc:
         if options.debug:
             traceback.print_exc()
@@ -147,20 +165,20 @@ def main(argv: list[str] | None = None) -> int:
               f"ROS_HOME or ~/.ros): {exc.strerror or exc}", file=sys.stderr)
         return 2
     if options.detach:
-        return _start_detached(path, arguments, options, log_dir)
+        return _start_detached(path, arguments, options, log_dir, positional)
     if options.headless or not (sys.stdout.isatty() and sys.stdin.isatty()):
         from .headless import run_headless
 
         return run_headless(plan, log_dir)
-    return _run_tui(path, arguments, options, log_dir)
+    return _run_tui(path, arguments, options, log_dir, positional)
 
 
 def _start_detached(path: str, arguments: dict[str, str], options: argparse.Namespace,
-                    log_dir: Path) -> int:
+                    log_dir: Path, positional: list[str]) -> int:
     from .commands import start_session
 
     try:
-        name, _ = start_session(path, arguments, options.name, log_dir)
+        name, _ = start_session(path, arguments, options.name, log_dir, positional)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
@@ -169,13 +187,13 @@ def _start_detached(path: str, arguments: dict[str, str], options: argparse.Name
 
 
 def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
-             log_dir: Path) -> int:
+             log_dir: Path, positional: list[str]) -> int:
     """The launch runs in a session server; this TUI is its first client."""
     from .app import make_app
     from .commands import start_session
 
     try:
-        name, server = start_session(path, arguments, options.name, log_dir)
+        name, server = start_session(path, arguments, options.name, log_dir, positional)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2

@@ -91,8 +91,10 @@ def main(argv: list[str]) -> int:
 # --- starting ------------------------------------------------------------------------------
 
 def start_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
+                  positional: list[str] | None = None,
                   timeout: float = 60.0) -> tuple[str, subprocess.Popen[bytes]]:
-    """Starts a session server in its own session (no terminal) and waits until it answers."""
+    """Starts a session server in its own session (no terminal) and waits until it answers.
+    `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv."""
     name = session_dir.check_name(name) if name else session_dir.new_name(
         session_dir.launch_stem(path))
     if session_dir.is_alive(name):
@@ -103,7 +105,8 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
     with open(server_log, "ab") as errors:
         server = subprocess.Popen(
             [sys.executable, "-m", "tuilaunch.engine.run.session_server", name,
-             os.path.abspath(path), str(log_dir), json.dumps(arguments)],
+             os.path.abspath(path), str(log_dir), json.dumps(arguments),
+             json.dumps(positional or [path])],
             stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True)
     deadline = time.monotonic() + timeout
     # ours, not another server that took the name at the same instant
@@ -164,7 +167,9 @@ def cmd_attach(options: argparse.Namespace) -> int:
                            hint=f"tuilaunch logs {name} -f, or tuilaunch status {name}")
     info = _status(name)
     from .app import make_app
+    from .engine.describe.loader import set_command_line
 
+    set_command_line(info.get("command") or [info["file"]], info["arguments"])
     app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
                    scrollback=options.scrollback, session_name=name)
     status = app.run() or 0

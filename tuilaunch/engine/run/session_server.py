@@ -24,6 +24,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..describe.loader import set_command_line
 from ..errors import LaunchError
 from ..plan.session import Session
 from . import session_dir
@@ -69,8 +70,10 @@ class ClientQueue:
 
 class SessionServer:
     def __init__(self, name: str, session: Session, log_dir: Path,
-                 sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0) -> None:
+                 sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
+                 command: list[str] | None = None) -> None:
         self.name = name
+        self.command = command or [session.path]  # FILE or PACKAGE FILE, as the user gave
         self.session = session
         self.log_dir = log_dir
         self.supervisor = Supervisor(session.plan, log_dir, sigterm_timeout=sigterm_timeout,
@@ -103,6 +106,7 @@ class SessionServer:
 
     def info(self) -> dict[str, Any]:
         return {"name": self.name, "file": os.path.abspath(self.session.path),
+                "command": self.command,
                 "arguments": self.session.arguments, "pid": os.getpid(),
                 "started": self.started, "log_dir": str(self.log_dir)}
 
@@ -332,6 +336,7 @@ class SessionServer:
     async def apply(self, arguments: dict[str, str]) -> dict[str, Any]:
         async with self.apply_lock:
             running = {p for p, s in self.supervisor.states.items() if s == "running"}
+            set_command_line(None, arguments)  # sys.argv as a file reads it, again
             preview = self.session.preview(arguments, running)
             if preview.error is not None or preview.plan is None:
                 raise LaunchError(f"cannot apply: {preview.error}")
@@ -386,14 +391,16 @@ def main(argv: list[str]) -> int:
     from ..plan.packages import ensure_environment
 
     name, path, log_dir, arguments_json = argv[:4]
-    timeouts = [float(x) for x in argv[4:6]] or [5.0, 5.0]
+    command = json.loads(argv[4]) if len(argv) > 4 else [path]
+    arguments = json.loads(arguments_json)
     ensure_environment()
+    set_command_line(command, arguments)
     try:
-        session = Session(path, json.loads(arguments_json))
+        session = Session(path, arguments)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
-    server = SessionServer(name, session, Path(log_dir), *timeouts)
+    server = SessionServer(name, session, Path(log_dir), command=command)
     try:
         return asyncio.run(server.serve())
     except LaunchError as exc:
