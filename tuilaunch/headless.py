@@ -45,6 +45,14 @@ class Printer:
             text = f"[ERROR] [{event.process}]: failed to start: {event.reason}\n"
         elif event.kind == "respawning":
             text = f"[WARN] [{event.process}]: respawning ({event.reason})\n"
+        elif event.kind == "lifecycle":
+            if not event.reason:
+                return
+            text = f"[INFO] [{event.process}]: lifecycle state {event.reason}\n"
+        elif event.kind == "component":
+            if event.data and event.data.get("state") == "loading":
+                return  # "waiting for the service": the result line follows
+            text = f"[{event.level}] [{event.process}]: {event.reason}\n"
         elif event.kind == "log":
             text = f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
         else:

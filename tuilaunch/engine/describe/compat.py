@@ -6,7 +6,7 @@ from types import ModuleType
 from typing import Any
 
 from ..plan import params
-from . import conditions, entities, events, substitutions
+from . import conditions, entities, events, lifecycle, substitutions
 from .dsl import SimpleLauncher
 
 
@@ -43,6 +43,9 @@ def build_modules() -> dict[str, ModuleType]:
                     "LaunchDescriptionSource")
     ros_actions = _pick(entities, "Node", "PushRosNamespace", "PushROSNamespace", "SetParameter",
                         "SetRemap", "ComposableNodeContainer", "LoadComposableNodes")
+    ros_actions.update(_pick(lifecycle, "LifecycleNode", "LifecycleTransition"))
+    ros_lifecycle_events = _pick(lifecycle, "ChangeState", "StateTransition",
+                                 "matches_node_name")
     ros_subs = _pick(substitutions, "FindPackageShare", "FindPackagePrefix")
     param_value = {"ParameterValue": params.ParameterValue}
 
@@ -55,11 +58,20 @@ def build_modules() -> dict[str, ModuleType]:
         "launch.substitutions": _module("launch.substitutions", **subs),
         "launch.conditions": _module("launch.conditions", **conds),
         "launch.event_handlers": _module("launch.event_handlers", **handlers),
-        "launch.events": _module("launch.events", Shutdown=entities.Shutdown),
+        "launch.events": _module("launch.events", Shutdown=entities.Shutdown,
+                                 matches_action=lifecycle.matches_action),
         "launch.launch_description_sources": _module("launch.launch_description_sources",
                                                      **sources),
         "launch.launch_context": _module("launch.launch_context", LaunchContext=LaunchContext),
         "launch_ros": _module("launch_ros"),
+        "launch_ros.events": _module("launch_ros.events",
+                                     matches_node_name=lifecycle.matches_node_name),
+        "launch_ros.events.lifecycle": _module("launch_ros.events.lifecycle",
+                                               **ros_lifecycle_events),
+        "launch_ros.events.matchers": _module("launch_ros.events.matchers",
+                                              matches_node_name=lifecycle.matches_node_name),
+        "launch_ros.event_handlers": _module("launch_ros.event_handlers",
+                                             OnStateTransition=lifecycle.OnStateTransition),
         "launch_ros.actions": _module("launch_ros.actions", **ros_actions),
         "launch_ros.substitutions": _module("launch_ros.substitutions", FindPackage=ros_subs[
             "FindPackagePrefix"], **ros_subs),

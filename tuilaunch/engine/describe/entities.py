@@ -460,6 +460,9 @@ def EmitEvent(*, event: Any, condition: Condition | None = None, **_: Any) -> En
     if isinstance(event, Shutdown):
         event.condition = condition
         return event
+    if hasattr(event, "as_action"):  # events that request something, e.g. ChangeState
+        action: Entity = event.as_action(condition)
+        return action
     return LogInfo(msg=f"EmitEvent({type(event).__name__}) is not supported, ignored")
 
 

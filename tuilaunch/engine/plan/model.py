@@ -40,6 +40,7 @@ class Trigger:
             "io": f"{self.target} prints on {self.io}",
             "timer": "launch",
             "shutdown": "shutdown",
+            "state": f"{self.target} reaches {_state_text(self.io)}",
         }[self.on]
         if self.on == "timer" and self.after is not None:
             # a delay nested in an event group counts from that event
@@ -49,6 +50,17 @@ class Trigger:
         if self.after is not None:
             text += f", armed {self.after.describe()}"
         return text
+
+
+def _state_text(io: str | None) -> str:
+    """`configure|*|inactive` (a lifecycle state trigger's filter) as words."""
+    transition, start, goal = [*(io or "*|*|*").split("|"), "*", "*"][:3]
+    parts = [goal if goal != "*" else "a state"]
+    if start != "*":
+        parts.append(f"from {start}")
+    if transition != "*":
+        parts.append(f"by {transition}")
+    return " ".join(parts)
 
 
 @dataclass
@@ -95,6 +107,8 @@ class ProcessPlan:
     origin: Origin | None
     error: str | None = None
     components: list[dict[str, Any]] = field(default_factory=list)
+    lifecycle: bool = False
+    autostart: bool = False
 
     @property
     def full_name(self) -> str | None:
@@ -118,6 +132,7 @@ class ProcessPlan:
             "trigger": self.trigger.to_json() if self.trigger else None,
             "origin": str(self.origin) if self.origin else None,
             "error": self.error, "components": self.components,
+            "lifecycle": self.lifecycle, "autostart": self.autostart,
         }
 
 

@@ -20,7 +20,6 @@ from typing import Any
 from ..describe.conditions import ConditionOutcome
 from ..describe.entities import (
     CallService,
-    ComposableNode,
     DeclareLaunchArgument,
     DslOpaque,
     Entity,
@@ -47,6 +46,7 @@ from ..describe.entities import (
     pair_list,
 )
 from ..describe.events import When
+from ..describe.lifecycle import ChangeStateAction, LifecycleTransition
 from ..describe.loader import LoadedFile, compat_modules, known_launch_files, load_file
 from ..describe.substitutions import (
     PerformContext,
@@ -56,6 +56,8 @@ from ..describe.substitutions import (
     text_to_bool,
 )
 from ..errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
+from . import lifecycle as lifecycle_plan
+from .components import component_plan
 from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
@@ -127,6 +129,8 @@ class Resolver:
                     self.warnings.append(
                         f"a trigger waits for {describe_entity(trigger.target_entity)}, which "
                         "this launch never runs: what it triggers will not start")
+        self.warnings += lifecycle_plan.bind_targets(self.processes, self.actions,
+                                                     self.entity_ids, root)
         declared = set(self.arguments)
         for name in self.cli_arguments:
             if name not in declared:
@@ -178,7 +182,7 @@ class Resolver:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
         elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
-                        | LoadComposableNodes):
+                        | LoadComposableNodes | ChangeStateAction | LifecycleTransition):
             self.action(entity, scope, parent)
         elif isinstance(entity, TimerAction):
             self.timer(entity, scope, parent)
@@ -294,7 +298,12 @@ class Resolver:
         enabled, skipped = self._gate(register, outer)
         scope = outer.child(False)
         scope.enabled, scope.skipped_by = enabled, skipped
-        scope.trigger = Trigger(handler.on, None, 0.0, handler.io, outer.trigger, handler.target)
+        io = handler.io
+        if handler.on == "state":
+            io = lifecycle_plan.state_trigger_io(handler, outer.context())  # type: ignore[arg-type]
+        # a state handler without a target node applies to every lifecycle node: "*"
+        target = "*" if handler.on == "state" and handler.target is None else None
+        scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target)
         self.triggers.append(scope.trigger)
         item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
                         scope.trigger)
@@ -475,10 +484,15 @@ class Resolver:
         cmd = [*prefix, exe_path, *arguments]
         if ros_args:
             cmd += ["--ros-args", *ros_args]
-        components = [self._component(c, ctx, namespace) for c in entity.components]
+        container = join_namespace(namespace, name) if name else None
+        components = [component_plan(c, ctx, scope.namespace, scope.global_parameters,
+                                     scope.remaps, f"{proc_id}.{i + 1}", container)
+                      for i, c in enumerate(entity.components)]
+        autostart = text_to_bool(perform(getattr(entity, "autostart", False), ctx)) or False
         return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
                            merged, user_files, generated, remappings, error=error,
-                           components=components, **common)
+                           components=components, lifecycle=getattr(entity, "lifecycle", False),
+                           autostart=autostart, **common)
 
     def _params_file(self, proc_id: str, index: int, params: dict[str, Any],
                      params_args: list[str]) -> tuple[str, dict[str, Any]]:
@@ -486,23 +500,6 @@ class Resolver:
         path = str(self.params_dir / f"{proc_id}{suffix}.yaml")
         params_args += ["--params-file", path]
         return path, dict(params)
-
-    def _component(self, component: ComposableNode, ctx: PerformContext, namespace: str)\
-            -> dict[str, Any]:
-        params: dict[str, Any] = {}
-        for item in _items(component.parameters):
-            if isinstance(item, dict):
-                params.update(flatten_parameters(item, ctx, component.origin))
-        return {
-            "package": perform(component.package, ctx),
-            "plugin": perform(component.plugin, ctx),
-            "name": perform_optional(component.name, ctx),
-            "namespace": join_namespace(namespace, perform_optional(component.namespace, ctx)),
-            "parameters": params,
-            "remappings": [[perform(a, ctx), perform(b, ctx)]
-                           for a, b in pair_list(component.remappings, "remappings",
-                                                       component.origin)],
-        }
 
     # --- actions ---------------------------------------------------------------------------
 
@@ -536,9 +533,12 @@ class Resolver:
             data = perform(entity.reason, ctx) if enabled else describe(entity.reason)
         elif isinstance(entity, LoadComposableNodes):
             kind = "load_components"
-            target = describe(entity.target_container)
-            data = [self._component(c, ctx, scope.namespace) for c in entity.components] \
-                if enabled else []
+            target, data = self._load_components(entity, scope, enabled)
+        elif isinstance(entity, ChangeStateAction | LifecycleTransition):
+            kind = "lifecycle_transition"
+            target, data = lifecycle_plan.transition_action(entity, ctx) if enabled else (
+                describe(getattr(entity, "node_names", "lifecycle nodes")),
+                {"transitions": [], "transition_ids": [], "node_names": [], "targets": []})
         else:
             kind = "event_callback"
             data = len(entity.callbacks)
@@ -551,9 +551,40 @@ class Resolver:
         label = {"log": f"log: {data}", "call_service": f"call {target}",
                  "set_parameters": f"set parameters of {target}",
                  "shutdown": "shutdown", "event_callback": "event callback",
-                 "load_components": f"load components into {target}"}[kind]
+                 "load_components": f"load components into {target}",
+                 "lifecycle_transition": f"{'+'.join(data['transitions'])} {target}"
+                 if kind == "lifecycle_transition" else ""}[kind]
         parent.children.append(TreeItem("action", label, enabled, scope.namespace, skipped,
                                         scope.trigger, action_id))
+
+
+    def _load_components(self, entity: LoadComposableNodes, scope: Scope, enabled: bool)\
+            -> tuple[str, list[dict[str, Any]]]:
+        """The container's full name (as launch_ros resolves it) and each load request."""
+        if not enabled:
+            return describe(entity.target_container), []
+        ctx = scope.context()
+        container = entity.target_container
+        if isinstance(container, Node):
+            target = self._container_name(container, scope)
+        else:
+            text = perform(container, ctx)
+            target = text if text.startswith("/") else "/" + text
+        base = f"load_components-{len(self.actions) + 1}"
+        return target, [component_plan(c, ctx, scope.namespace, scope.global_parameters,
+                                       scope.remaps, f"{base}.{i + 1}", target)
+                        for i, c in enumerate(entity.components)]
+
+    def _container_name(self, container: Node, scope: Scope) -> str:
+        """A container given as the action: its name, once its plan exists."""
+        proc_id = self.entity_ids.get(id(container))
+        for proc in self.processes:
+            if proc.id == proc_id and proc.full_name:
+                return proc.full_name
+        ctx = scope.context()
+        name = perform(container.name, ctx) if container.name is not None else ""
+        ns = join_namespace(scope.namespace, perform_optional(container.namespace, ctx))
+        return join_namespace(ns, name)
 
 
 def _request_values(request: dict[str, Any], ctx: PerformContext, namespace: str,

@@ -21,6 +21,8 @@ from ..describe.entities import Entity, LogInfo, Shutdown, entity_list
 from ..describe.substitutions import PerformContext, perform
 from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
 from ..plan.params import write_parameter_file
+from ..ros.composition import ComponentLoader
+from ..ros.lifecycle import LifecycleTracker
 from ..ros.messages import MessageError
 from .output import LineSplitter, strip_ansi
 
@@ -54,6 +56,7 @@ class Event:
     reason: str | None = None
     level: str = "INFO"
     time: float = field(default_factory=time.time)
+    data: dict[str, Any] | None = None  # lifecycle state or component result details
 
 
 @dataclass
@@ -107,6 +110,8 @@ class Supervisor:
         self._changed = asyncio.Event()
         self._retries: dict[str, int] = {}
         self._keep_alive = False
+        self.lifecycle = LifecycleTracker(self)
+        self.components = ComponentLoader(self)
         log_dir.mkdir(parents=True, exist_ok=True)
         self._launch_log = open(log_dir / "launch.log", "a", buffering=1)
 
@@ -174,8 +179,15 @@ class Supervisor:
 
     def _can_fire(self, trigger: Trigger | None) -> bool:
         while trigger is not None:
-            if trigger.target is not None and trigger.on in ("start", "exit"):
-                done = self._flag(trigger.target, trigger.on).is_set()
+            if trigger.target == "*" and trigger.on == "state":
+                # any lifecycle node of the launch: one of them must still be able to run
+                if not self._flag("*", _flag_name(trigger)).is_set() and not any(
+                        p.lifecycle and self.states.get(p.id) in ("running", "pending")
+                        for p in self.plan.processes):
+                    return False
+            if trigger.target not in (None, "*") and trigger.on in ("start", "exit", "state"):
+                assert trigger.target is not None
+                done = self._flag(trigger.target, _flag_name(trigger)).is_set()
                 if not done and self.states.get(trigger.target) not in ("running", "pending"):
                     return False
             trigger = trigger.after
@@ -191,7 +203,7 @@ class Supervisor:
             if step.on == "shutdown" or step.on == "io":
                 return  # run by their own events, not as a start-up chain
             if step.target is not None:
-                await self._flag(step.target, step.on).wait()
+                await self._flag(step.target, _flag_name(step)).wait()
             if step.delay:
                 self._busy += 1
                 try:
@@ -235,6 +247,10 @@ class Supervisor:
                 self._log(action, self._perform(action, action.source.msg, event))
             elif action.kind == "event_callback":
                 ok = self._run_callbacks(action, event or LaunchEvent())
+            elif action.kind == "lifecycle_transition":
+                ok = await self.lifecycle.run_action(action)
+            elif action.kind == "load_components":
+                ok = await self.components.run_action(action)
             else:
                 self._log(action, f"{action.kind} is not supported yet; skipped", "WARN")
         except asyncio.CancelledError:
@@ -374,6 +390,10 @@ class Supervisor:
         self.states[process_id] = "running"
         self._emit(Event("started", process_id, pid=child.pid))
         self._flag(process_id, "start").set()
+        if proc.lifecycle:
+            self._spawn_task(self.lifecycle.process_started(proc))
+        # any node may be a container (nav2 starts one with Node): it loads what targets it
+        self._spawn_task(self.components.container_started(proc))
         assert child.stdout is not None and child.stderr is not None
         running.readers = [asyncio.ensure_future(self._read(running, child.stdout, "stdout")),
                            asyncio.ensure_future(self._read(running, child.stderr, "stderr"))]
@@ -406,6 +426,7 @@ class Supervisor:
         del self._running[process_id]
         self.exit_codes[process_id] = code
         self.states[process_id] = "exited"
+        self.lifecycle.process_exited(process_id)
         self._emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=_describe_exit(code)))
         self._flag(process_id, "exit").set()
@@ -551,6 +572,11 @@ def _call_handler(callback: Any, event: LaunchEvent, action: ActionPlan) -> Any:
     if arity >= 2:
         return callback(event, PerformContext(action.configurations))
     return callback(event)
+
+
+def _flag_name(trigger: Trigger) -> str:
+    """A lifecycle state trigger waits for its own filter, other triggers for the event."""
+    return f"state:{trigger.io}" if trigger.on == "state" else trigger.on
 
 
 def _describe_exit(code: int) -> str:
