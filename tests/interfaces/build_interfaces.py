@@ -37,7 +37,7 @@ def _prefix() -> pathlib.Path:
 
 def fingerprint() -> str:
     digest = hashlib.sha256()
-    for path in sorted(SOURCE.rglob("*.srv")) + [pathlib.Path(__file__)]:
+    for path in [*sorted(SOURCE.rglob("*.srv")), pathlib.Path(__file__)]:
         digest.update(path.read_bytes())
     digest.update(sys.version.encode())
     return digest.hexdigest()[:16]

@@ -167,6 +167,12 @@ class LifecycleTracker:
             self._report(where, f"'{label}' is not a lifecycle transition "
                          f"({', '.join(TRANSITION_IDS)})", "ERROR")
             return False
+        state = self.states.get(proc_id)
+        if origin == "operator" and state in AVAILABLE and label not in AVAILABLE[state]:
+            # asked of the node anyway, an rclpy lifecycle node dies of it: say no here
+            self._report(where, f"cannot {label} {proc.full_name}: it is {state} (it can "
+                         f"{', '.join(AVAILABLE[state])})", "ERROR")
+            return False
         try:
             from lifecycle_msgs.srv import ChangeState
         except ImportError:
