@@ -18,6 +18,10 @@ if TYPE_CHECKING:
     from ..run.supervisor import Supervisor
 
 LOAD_TIMEOUT = 30.0  # a component's constructor may take a while (maps, models)
+# A container that crashed stays on the graph until its DDS lease ends: a request sent then
+# reaches the dead server only. Unanswered attempts are retried (after checking that the
+# node did not load meanwhile) until LOAD_TIMEOUT.
+ATTEMPT_TIMEOUT = 5.0
 ALIVE = ("pending", "running", "respawning")
 MISSING_INTERFACES = ("composition_interfaces is not installed: source /opt/ros/jazzy (or a "
                       "workspace that has it) to load components")
@@ -133,7 +137,7 @@ class ComponentLoader:
                          "WARN")
             return False
         try:
-            response = await bridge.call_typed(service, load_node, request, LOAD_TIMEOUT)
+            response = await self._call(bridge, container, request, component, proc_id)
         except Exception as exc:
             self._result(owner, component, "failed", f"loading {what} failed: {exc}",
                          "ERROR")
@@ -148,6 +152,44 @@ class ComponentLoader:
                      f"{container}, unique id {response.unique_id}",
                      unique_id=int(response.unique_id), node=response.full_node_name)
         return True
+
+    async def _call(self, bridge: Any, container: str, request: Any,
+                    component: dict[str, Any], proc_id: str | None) -> Any:
+        from .bridge import RosError
+
+        request_kind = type(request).__qualname__  # only for the error text
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + LOAD_TIMEOUT
+        service = f"{container}/_container/load_node"
+        while True:
+            try:
+                return await bridge.call_typed(service, load_node_class(), request,
+                                               ATTEMPT_TIMEOUT)
+            except RosError:
+                alive = proc_id is None or self.supervisor.states.get(proc_id) == "running"
+                if loop.time() > deadline or not alive or self.supervisor._shutting_down:
+                    raise RosError(f"{container} did not answer the {request_kind} request "
+                                   f"within {LOAD_TIMEOUT:g} s") from None
+                found = await self._listed(bridge, container, component.get("full_name"))
+                if found is not None:
+                    return found
+
+    async def _listed(self, bridge: Any, container: str, full_name: str | None) -> Any:
+        """A response for a node the container lists already (an answer that got lost)."""
+        if not full_name:
+            return None
+        try:
+            from composition_interfaces.srv import ListNodes, LoadNode
+
+            listed = await bridge.call_typed(f"{container}/_container/list_nodes", ListNodes,
+                                             ListNodes.Request(), ATTEMPT_TIMEOUT)
+        except Exception:  # no answer either: try loading again
+            return None
+        for name, unique_id in zip(listed.full_node_names, listed.unique_ids, strict=False):
+            if name == full_name:
+                return LoadNode.Response(success=True, full_node_name=name,
+                                         unique_id=int(unique_id))
+        return None
 
     async def _wait_for_service(self, bridge: Any, service: str, proc_id: str | None) -> bool:
         while not self.supervisor._shutting_down:
