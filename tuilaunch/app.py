@@ -25,6 +25,7 @@ from textual.widgets import Footer, Static, TabbedContent, TabPane, Tree
 
 from .engine.plan.session import Preview, Session
 from .engine.ros.bridge import RosBridge
+from .engine.ros.lifecycle import available_transitions
 from .engine.run.engine_thread import EngineThread
 from .engine.run.event_buffer import EventBuffer
 from .engine.run.supervisor import Event, Supervisor
@@ -52,6 +53,10 @@ class TuiLaunchApp(App[int]):
         Binding("r", "restart", "Restart", tooltip="Restart the selected node or group"),
         Binding("t", "start", "Start", tooltip="Start the selected node or group"),
         Binding("a", "all_output", "All", show=False, tooltip="Output of all nodes"),
+        Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up",
+                tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
+        Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down",
+                tooltip="Deactivate an active, clean up an inactive lifecycle node"),
         Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
         Binding("question_mark", "help", "Help"),
         Binding("q", "request_quit", "Quit"),
@@ -178,6 +183,17 @@ class TuiLaunchApp(App[int]):
                 fresh += self.store.add("launch", "stdout",
                                         [f"[{event.level}] [{event.process or 'launch'}] "
                                          f"{event.reason}"])
+            elif event.kind == "lifecycle" and event.process:
+                tree.set_lifecycle(event.process, event.reason or "")
+                self.refresh_bindings()
+            elif event.kind == "component" and event.data:
+                data = event.data
+                short = f"id {data['unique_id']}" if "unique_id" in data else \
+                    str(data.get("error") or data.get("text") or "")
+                tree.set_component(str(data["component"]), str(data["state"]), short)
+                if data["state"] not in ("loading", "waiting"):
+                    fresh += self.store.add("launch", "stdout", [
+                        f"[{event.level}] [{event.process}] {event.reason}"])
             elif event.kind == "dropped" and event.process:
                 fresh += self.store.add(event.process, "stderr", [
                     f"[WARN] tuilaunch: {event.reason}"])
@@ -251,6 +267,10 @@ class TuiLaunchApp(App[int]):
             if action == "start":
                 return True if any(s not in ("running", "skipped") for s in states) else None
             return True if states else None
+        if action == "lifecycle":
+            if self.supervisor is None or self.tabs.active != "nodes":
+                return False
+            return True if self._lifecycle_step(str(parameters[0])) else None
         if action == "apply":
             return True if self.preview is not None and self.preview.plan is not None and \
                 self.preview.diff is not None and not self.preview.diff.empty else None
@@ -275,6 +295,28 @@ class TuiLaunchApp(App[int]):
 
     def action_start(self) -> None:
         self._command("start")
+
+    def _lifecycle_step(self, direction: str) -> tuple[str, str] | None:
+        """(process, transition) that `]` (up) or `[` (down) asks of the selected node."""
+        selected = self.selected()
+        if self.supervisor is None or len(selected) != 1:
+            return None
+        state = self.supervisor.lifecycle.states.get(selected[0])
+        steps = {"up": {"unconfigured": "configure", "inactive": "activate"},
+                 "down": {"active": "deactivate", "inactive": "cleanup"}}[direction]
+        transition = steps.get(state or "")
+        return (selected[0], transition) if transition else None
+
+    def action_lifecycle(self, direction: str) -> None:
+        step = self._lifecycle_step(direction)
+        if step is not None:
+            self.lifecycle_transition(*step)
+
+    def lifecycle_transition(self, process: str, transition: str) -> None:
+        """Asks a lifecycle node for a transition; the result arrives as events."""
+        assert self.supervisor is not None
+        coroutine = self.supervisor.lifecycle.request(process, transition)
+        self.run_worker(self.engine.run(coroutine), group="commands", exit_on_error=False)
 
     def action_all_output(self) -> None:
         tree = self.launch_tree
@@ -409,6 +451,15 @@ class TuiLaunchApp(App[int]):
                             self.action_start)
         yield SystemCommand("Apply arguments", "Relaunch with the edited arguments",
                             self.action_apply)
+        selected = self.selected() if self.supervisor is not None else []
+        if len(selected) == 1 and self.supervisor is not None:
+            process = selected[0]
+            state = self.supervisor.lifecycle.states.get(process)
+            for transition in available_transitions(state):
+                yield SystemCommand(
+                    f"Lifecycle: {transition.replace('_', ' ')} {process}",
+                    f"Ask the lifecycle node (now {state}) for this transition",
+                    lambda t=transition, p=process: self.lifecycle_transition(p, t))
         for tab, title in (("nodes", "Nodes"), ("args", "Arguments"), ("services", "Services"),
                            ("params", "Parameters")):
             yield SystemCommand(f"Open {title}", f"Show the {title} tab",
