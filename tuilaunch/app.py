@@ -242,6 +242,7 @@ class TuiLaunchApp(App[int]):
         data = event.node.data
         if data is None:
             return
+        self.refresh_bindings()  # the lifecycle keys apply to lifecycle nodes only
         if data.kind == "all":
             self.output_panel.show_view(None)
         elif data.kind == "process":
@@ -269,6 +270,10 @@ class TuiLaunchApp(App[int]):
             return True if states else None
         if action == "lifecycle":
             if self.supervisor is None or self.tabs.active != "nodes":
+                return False
+            selected = self.selected()
+            # shown only while a lifecycle node is selected: other launches keep their footer
+            if len(selected) != 1 or selected[0] not in self.supervisor.lifecycle.states:
                 return False
             return True if self._lifecycle_step(str(parameters[0])) else None
         if action == "apply":
