@@ -170,12 +170,17 @@ def generate_launch_description():
     assert data["actions"][0]["data"][0]["request"]["plugin_name"] == "p::A"
 
 
-def test_print_shows_each_container_component(write):
-    out = run_cli(str(write(CONTAINER)), "--print")
+def test_print_shows_each_component_and_whether_it_can_load(write, composition_interfaces):
+    path = str(write(CONTAINER))
+    out = run_cli(path, "--print", env={"PYTHONPATH": ""})
     assert out.returncode == 0, out.stderr
     assert "component /talker_c (tuilaunch_demos::Talker)" in out.stdout
     assert "component /broken (tuilaunch_demos::Nothing)" in out.stdout
     assert "component /listener_c (tuilaunch_demos::Listener)" in out.stdout
+    assert ("warning: composition_interfaces is not installed: the 3 component(s) of this "
+            "launch will not load") in out.stdout
+    found = run_cli(path, "--print", env=with_interfaces(composition_interfaces))
+    assert "composition_interfaces" not in found.stdout
 
 
 def test_a_missing_parameter_file_fails_only_that_component(write, tmp_path):

@@ -9,6 +9,7 @@ each dict or file in order, a file giving its `/**` entry then the entry of the 
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from typing import Any
 
@@ -93,7 +94,8 @@ def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespa
     """One component's load request and what the plan shows about it."""
     origin = component.origin
     condition = getattr(component, "condition", None)
-    enabled = True if condition is None else condition.evaluate(ctx).holds
+    outcome = True if condition is None else condition.evaluate(ctx)
+    enabled = bool(getattr(outcome, "holds", outcome))
     name = perform_optional(component.name, ctx) or ""
     own_ns = perform_optional(component.namespace, ctx)
     pushed = None if scope_namespace == "/" else scope_namespace
@@ -145,6 +147,14 @@ def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespa
         "origin": str(origin) if origin else None,
         "error": error,
     }
+
+
+def interfaces_warning(component_count: int) -> list[str]:
+    """Said at plan time too: without composition_interfaces no component can load."""
+    if component_count and importlib.util.find_spec("composition_interfaces") is None:
+        return [f"composition_interfaces is not installed: the {component_count} "
+                "component(s) of this launch will not load (source /opt/ros/jazzy)"]
+    return []
 
 
 def component_label(component: dict[str, Any]) -> str:

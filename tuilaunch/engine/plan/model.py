@@ -40,7 +40,8 @@ class Trigger:
             "io": f"{self.target} prints on {self.io}",
             "timer": "launch",
             "shutdown": "shutdown",
-            "state": f"{self.target} reaches {_state_text(self.io)}",
+            "state": f"{'a lifecycle node' if self.target == '*' else self.target} reaches "
+                     f"{_state_text(self.io)}",
         }[self.on]
         if self.on == "timer" and self.after is not None:
             # a delay nested in an event group counts from that event

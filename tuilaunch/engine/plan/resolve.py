@@ -57,7 +57,7 @@ from ..describe.substitutions import (
 )
 from ..errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
 from . import lifecycle as lifecycle_plan
-from .components import component_plan
+from .components import component_plan, interfaces_warning
 from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
@@ -131,6 +131,10 @@ class Resolver:
                         "this launch never runs: what it triggers will not start")
         self.warnings += lifecycle_plan.bind_targets(self.processes, self.actions,
                                                      self.entity_ids, root)
+        self.warnings += interfaces_warning(
+            sum(len(p.components) for p in self.processes if p.enabled)
+            + sum(len(a.data) for a in self.actions
+                  if a.enabled and a.kind == "load_components"))
         declared = set(self.arguments)
         for name in self.cli_arguments:
             if name not in declared:
