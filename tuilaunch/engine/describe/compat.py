@@ -6,7 +6,7 @@ from types import ModuleType
 from typing import Any
 
 from ..plan import params
-from . import conditions, entities, events, lifecycle, substitutions
+from . import conditions, entities, events, gazebo, lifecycle, substitutions
 from .dsl import SimpleLauncher
 
 
@@ -80,7 +80,12 @@ def build_modules() -> dict[str, ModuleType]:
         "launch_ros.parameter_descriptions": _module("launch_ros.parameter_descriptions",
                                                      **param_value),
         "simple_launch": _module("simple_launch", SimpleLauncher=SimpleLauncher,
-                                 SimpleSubstitution=substitutions.SimpleSubstitution),
+                                 SimpleSubstitution=substitutions.SimpleSubstitution,
+                                 GazeboBridge=gazebo.GazeboBridge),
+        "simple_launch.gazebo": _module("simple_launch.gazebo", **_pick(
+            gazebo, "GazeboBridge", "ros_gz_prefix", "only_show_args")),
+        "simple_launch.simple_substitution": _module("simple_launch.simple_substitution", **_pick(
+            substitutions, "SimpleSubstitution", "flatten")),
         "simple_launch.events": _module("simple_launch.events", **_pick(
             events, "When", "OnProcessStart", "OnProcessExit", "OnProcessIO",
             "OnExecutionComplete", "OnShutdown")),

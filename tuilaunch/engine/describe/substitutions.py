@@ -54,14 +54,23 @@ class Substitution:
         return SimpleSubstitution(other, self)
 
     def __truediv__(self, other: SubValue) -> SimpleSubstitution:
-        if other is None:
-            return SimpleSubstitution(self)
-        return SimpleSubstitution(PathJoin([self, other]))
+        return slash_join(self, other)
 
     def __rtruediv__(self, other: SubValue) -> SimpleSubstitution:
-        if other is None:
-            return SimpleSubstitution(self)
-        return SimpleSubstitution(PathJoin([other, self]))
+        return slash_join(other, self)
+
+
+def _is_empty(value: SubValue) -> bool:
+    if isinstance(value, SimpleSubstitution):
+        return all(_is_empty(part) for part in value.parts)
+    return value is None or value == ""
+
+
+def slash_join(left: SubValue, right: SubValue) -> SimpleSubstitution:
+    """simple_launch's `/`: a literal '/' between the parts (not os.path.join, so
+    `'/model' / robot / '/pose'` keeps both slashes), none next to a part known empty."""
+    sep = None if _is_empty(left) or _is_empty(right) else "/"
+    return SimpleSubstitution(left, sep, right)
 
 
 def flatten(value: SubValue) -> list[Any]:
