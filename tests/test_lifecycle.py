@@ -100,6 +100,8 @@ def test_print_names_the_transitions_and_the_state_they_wait_for(write):
     assert "configure /demo/lc_talker" in result.stdout
     assert "activate /demo/lc_talker" in result.stdout
     assert "when lc_talker-1 reaches inactive" in result.stdout
+    assert "/demo/lc_talker  [lc_talker-1] (tuilaunch_demos/lifecycle_talker) lifecycle\n" \
+        in result.stdout
     data = json.loads(run_cli(str(write(CONFIGURE_THEN_ACTIVATE)), "--print", "--json").stdout)
     assert data["processes"][0]["lifecycle"] is True
 
@@ -123,6 +125,8 @@ def generate_launch_description():
         EmitEvent(event=ChangeState(
             lifecycle_node_matcher=lambda node: node.node_name.startswith('/robot'),
             transition_id=Transition.TRANSITION_CLEANUP)),
+        EmitEvent(event=ChangeState(lifecycle_node_matcher=lambda action: action is a,
+                                    transition_id=Transition.TRANSITION_ACTIVATE)),
         LifecycleTransition(lifecycle_node_names=['/robot/b', 'a'],
                             transition_ids=[Transition.TRANSITION_CONFIGURE,
                                             Transition.TRANSITION_ACTIVATE]),
@@ -132,9 +136,10 @@ def generate_launch_description():
     a, b = plan.processes
     assert a.autostart and not b.autostart
     assert not plan_of(path, auto="false").processes[0].autostart
-    by_name, by_function, sequence = plan.actions
+    by_name, by_function, by_identity, sequence = plan.actions
     assert by_name.data["targets"] == [b.id]
     assert by_function.data["targets"] == [b.id]
+    assert by_identity.data["targets"] == [a.id]
     assert sequence.data["transitions"] == ["configure", "activate"]
     assert sequence.data["targets"] == [a.id, b.id]
 

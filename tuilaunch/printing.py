@@ -35,6 +35,8 @@ def _annotations(item: TreeItem, plan: Plan) -> str:
         notes.append(f"[{proc.id}]")
         if proc.package:
             notes.append(f"({proc.package}/{proc.executable})")
+        if proc.lifecycle:
+            notes.append("lifecycle, autostart" if proc.autostart else "lifecycle")
         if proc.enabled and proc.error:
             notes.append(f"!! {proc.error}")
     if item.condition is not None:

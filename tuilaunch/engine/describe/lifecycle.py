@@ -64,7 +64,7 @@ class NodeMatcher:
 
     def __call__(self, node: Any) -> bool:
         if self.action is not None:
-            return node is self.action or getattr(node, "action", None) is self.action
+            return node is self.action
         if self.node_name is not None:
             return getattr(node, "node_name", None) == self.node_name
         return self.function is not None and bool(self.function(node))

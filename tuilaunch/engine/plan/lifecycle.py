@@ -1,21 +1,18 @@
 """Lifecycle transitions in a plan: which nodes each request targets, and state triggers.
 
 A `ChangeState` matcher may name a node declared later in the file, so targets are bound
-once the whole launch has been walked. A matcher that is a plain function is called with a
-stand-in for each lifecycle node (`node_name` and `action`), as launch_ros calls it with
-the LifecycleNode action.
+once the whole launch has been walked. A matcher that is a plain function is called with each
+LifecycleNode action, its `node_name` set to the full name, as launch_ros calls it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 from ..describe.lifecycle import (
     TRANSITIONS,
     ChangeStateAction,
     LifecycleTransition,
-    NodeMatcher,
     OnStateTransition,
     describe_matcher,
     state_filter,
@@ -23,14 +20,6 @@ from ..describe.lifecycle import (
 from ..describe.substitutions import PerformContext, perform, perform_optional
 from ..errors import LaunchError
 from .model import ActionPlan, ProcessPlan, TreeItem
-
-
-@dataclass
-class NodeView:
-    """What a user's matcher function sees of a lifecycle node."""
-
-    node_name: str
-    action: Any
 
 
 def transition_ids(values: list[Any], ctx: PerformContext, where: Any) -> list[int]:
@@ -65,7 +54,7 @@ def transition_action(entity: ChangeStateAction | LifecycleTransition, ctx: Perf
 
 
 def bind_targets(processes: list[ProcessPlan], actions: list[ActionPlan],
-                 entity_ids: dict[int, str], tree: TreeItem) -> list[str]:
+                 entities: dict[str, Any], tree: TreeItem) -> list[str]:
     """Fills each transition's `targets` (process ids) and names them in the tree.
 
     Returns a warning for each transition that matches no lifecycle node."""
@@ -78,12 +67,8 @@ def bind_targets(processes: list[ProcessPlan], actions: list[ActionPlan],
         targets: list[str] = []
         if isinstance(source, ChangeStateAction):
             matcher = source.matcher
-            if isinstance(matcher, NodeMatcher) and matcher.action is not None:
-                found = entity_ids.get(id(matcher.action))
-                targets = [found] if found is not None and any(
-                    p.id == found for p in lifecycle) else []
-            else:
-                targets = [p.id for p in lifecycle if _matches(matcher, p)]
+            targets = [p.id for p in lifecycle if p.id in entities
+                       and _matches(matcher, entities[p.id], p)]
         else:
             wanted = set(action.data["node_names"])
             targets = [p.id for p in lifecycle if p.full_name in wanted]
@@ -106,9 +91,14 @@ def _relabel(item: TreeItem, ref: str, label: str) -> None:
         _relabel(child, ref, label)
 
 
-def _matches(matcher: Any, proc: ProcessPlan) -> bool:
+def _matches(matcher: Any, entity: Any, proc: ProcessPlan) -> bool:
+    # launch_ros's LifecycleNode knows its full name once executed; so does this one now
     try:
-        return bool(matcher(NodeView(proc.full_name or "", proc)))
+        entity.node_name = proc.full_name or ""
+    except AttributeError:  # a read-only node_name that already says it
+        pass
+    try:
+        return bool(matcher(entity))
     except Exception:  # a user's matcher that expects more than a name: not this node
         return False
 

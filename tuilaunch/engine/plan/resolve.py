@@ -112,6 +112,7 @@ class Resolver:
         self.actions: list[ActionPlan] = []
         self.arguments: dict[str, ArgumentInfo] = {}
         self.entity_ids: dict[int, str] = {}
+        self.lifecycle_entities: dict[str, Any] = {}  # process id -> LifecycleNode
         self.triggers: list[Trigger] = []
         self.warnings: list[str] = []
         self._counter = 0
@@ -130,7 +131,7 @@ class Resolver:
                         f"a trigger waits for {describe_entity(trigger.target_entity)}, which "
                         "this launch never runs: what it triggers will not start")
         self.warnings += lifecycle_plan.bind_targets(self.processes, self.actions,
-                                                     self.entity_ids, root)
+                                                     self.lifecycle_entities, root)
         self.warnings += interfaces_warning(
             sum(len(p.components) for p in self.processes if p.enabled)
             + sum(len(a.data) for a in self.actions
@@ -388,6 +389,8 @@ class Resolver:
                                error=f"not resolved: {exc.message}")
         self.processes.append(plan)
         self.entity_ids[id(entity)] = plan.id
+        if getattr(entity, "lifecycle", False):
+            self.lifecycle_entities[plan.id] = entity
         parent.children.append(TreeItem("process", plan.label, enabled, plan.namespace,
                                         skipped, scope.trigger, plan.id))
 
