@@ -297,11 +297,14 @@ def generate_launch_description():
 def test_nav2_style_manager_drives_the_nodes_and_tuilaunch_follows(write, tmp_path):
     prefix = fake_lifecycle_manager_prefix(tmp_path)
     env = {"AMENT_PREFIX_PATH": f"{prefix}{os.pathsep}{os.environ.get('AMENT_PREFIX_PATH', '')}"}
-    out = run_headless(write(NAV2_STYLE), until=("all managed nodes are active",),
+    followed = ("[INFO] [first-1]: lifecycle state active",
+                "[INFO] [second-2]: lifecycle state active")
+    out = run_headless(write(NAV2_STYLE), until=("all managed nodes are active", *followed),
                        env=env)
     assert "manager: first transition 3 -> True" in out
-    assert "[INFO] [first-1]: lifecycle state active" in out or \
-        "lifecycle state active" in out.split("[first-1]")[-1]
+    assert "manager: second transition 3 -> True" in out
+    for line in followed:
+        assert line in out, out
 
 
 async def test_operator_transitions_follow_the_live_state(write, tmp_path):

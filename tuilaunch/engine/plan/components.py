@@ -9,8 +9,10 @@ each dict or file in order, a file giving its `/**` entry then the entry of the 
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import os
+from collections.abc import Callable
 from typing import Any
 
 import yaml
@@ -59,11 +61,16 @@ def _node_sections(loaded: Any, keys: list[str] | None = None,
     return found
 
 
-def file_parameters(path: str, node_key: str, origin: Origin | None) -> dict[str, Any]:
-    """The parameters a file gives a component named `node_key` (`ns/name`, no leading /)."""
+def file_parameters(path: str, node_key: str, origin: Origin | None,
+                    substitute: Callable[[str], str] | None = None) -> dict[str, Any]:
+    """The parameters a file gives a component named `node_key` (`ns/name`, no leading /).
+
+    `substitute` performs `$(var x)` and friends in the text first (ParameterFile with
+    allow_substs)."""
     try:
         with open(path) as handle:
-            loaded = yaml.safe_load(handle) or {}
+            text = handle.read()
+        loaded = yaml.safe_load(substitute(text) if substitute else text) or {}
     except OSError as exc:
         raise LaunchError(f"parameter file {path} cannot be read: {exc.strerror}",
                           origin) from None
@@ -88,10 +95,28 @@ def _file_path(item: Any, ctx: PerformContext) -> str:
     return perform(source, ctx)
 
 
+def _substituter(item: Any, ctx: PerformContext, origin: Origin | None)\
+        -> Callable[[str], str] | None:
+    """For a ParameterFile(allow_substs=True): performs the substitutions in its text."""
+    substitutes = getattr(item, "substitutes", None)
+    if not callable(substitutes) or not substitutes(ctx):
+        return None
+    try:  # the launch_ros ParameterFile's own text substitution
+        module = importlib.import_module("tuilaunch.engine.describe.parameter_files")
+        substitute_text = module.substitute_text
+    except (ImportError, AttributeError):
+        return None
+    return lambda text: str(substitute_text(text, ctx, origin))
+
+
 def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespace: str,
                    global_parameters: list[tuple[Any, Any]], remaps: list[tuple[Any, Any]],
-                   component_id: str, container: str | None) -> dict[str, Any]:
-    """One component's load request and what the plan shows about it."""
+                   component_id: str, container: str | None,
+                   global_files: list[str] | None = None) -> dict[str, Any]:
+    """One component's load request and what the plan shows about it.
+
+    `global_files` are the scope's SetParametersFromFile files, applied after the scope's
+    SetParameters and before the component's own parameters."""
     origin = component.origin
     condition = getattr(component, "condition", None)
     outcome = True if condition is None else condition.evaluate(ctx)
@@ -108,7 +133,7 @@ def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespa
     error = None
     for key, value in global_parameters:
         params[perform(key, ctx)] = typed_value(value, ctx, str(key), origin)
-    for item in _items(component.parameters):
+    for item in [*(global_files or []), *_items(component.parameters)]:
         if isinstance(item, dict):
             params.update(flatten_parameters(item, ctx, origin))
             continue
@@ -117,7 +142,7 @@ def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespa
         if not os.path.isfile(path):
             error = f"parameter file {path} does not exist"
             continue
-        params.update(file_parameters(path, node_key, origin))
+        params.update(file_parameters(path, node_key, origin, _substituter(item, ctx, origin)))
     remappings = [[perform(a, ctx), perform(b, ctx)]
                   for a, b in [*remaps, *pair_list(component.remappings, "remappings", origin)]]
     extra: dict[str, ParamValue] = {}

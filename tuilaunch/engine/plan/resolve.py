@@ -493,7 +493,8 @@ class Resolver:
             cmd += ["--ros-args", *ros_args]
         container = join_namespace(namespace, name) if name else None
         components = [component_plan(c, ctx, scope.namespace, scope.global_parameters,
-                                     scope.remaps, f"{proc_id}.{i + 1}", container)
+                                     scope.remaps, f"{proc_id}.{i + 1}", container,
+                                     getattr(scope, "param_files", None))
                       for i, c in enumerate(entity.components)]
         autostart = text_to_bool(perform(getattr(entity, "autostart", False), ctx)) or False
         return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
@@ -579,7 +580,8 @@ class Resolver:
             target = text if text.startswith("/") else "/" + text
         base = f"load_components-{len(self.actions) + 1}"
         return target, [component_plan(c, ctx, scope.namespace, scope.global_parameters,
-                                       scope.remaps, f"{base}.{i + 1}", target)
+                                       scope.remaps, f"{base}.{i + 1}", target,
+                                       getattr(scope, "param_files", None))
                         for i, c in enumerate(entity.components)]
 
     def _container_name(self, container: Node, scope: Scope) -> str:
