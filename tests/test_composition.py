@@ -254,3 +254,16 @@ async def test_a_restarted_or_respawned_container_gets_its_components_back(
     finally:
         await supervisor.shutdown("test over")
         await asyncio.wait_for(run, 30)
+
+
+def test_the_example_runs_lifecycle_nodes_and_components(composition_interfaces):
+    example = Path(__file__).resolve().parent.parent / "examples" / "launch" / \
+        "lifecycle_and_components_launch.py"
+    out = run_headless(example, env=with_interfaces(composition_interfaces), until=(
+        "[INFO] [talker-1]: lifecycle state active", "[INFO] [auto-2]: lifecycle state active",
+        "loaded /composition/talker", "loaded /composition/listener",
+        '[composition.listener]: I heard: "component'))
+    assert "talker is inactive: activating it" in out
+    assert "[INFO] [container-3]: loaded /composition/talker (tuilaunch_demos::Talker) into " \
+        "/composition/container, unique id 1" in out, out
+    assert '[composition.listener]: I heard: "component' in out
