@@ -267,3 +267,25 @@ def test_the_example_runs_lifecycle_nodes_and_components(composition_interfaces)
     assert "[INFO] [container-3]: loaded /composition/talker (tuilaunch_demos::Talker) into " \
         "/composition/container, unique id 1" in out, out
     assert '[composition.listener]: I heard: "component' in out
+
+
+def test_components_loaded_on_the_container_start_event_load_once(write, composition_interfaces):
+    path = write(HEADER + """
+from launch.actions import RegisterEventHandler
+from launch.event_handlers import OnProcessStart
+
+def generate_launch_description():
+    box = ComposableNodeContainer(name='box', namespace='', package='tuilaunch_demos',
+                                  executable='component_container')
+    load = LoadComposableNodes(target_container=box, composable_node_descriptions=[
+        ComposableNode(package='tuilaunch_demos', plugin='tuilaunch_demos::Talker', name='t',
+                       parameters=[{'rate': 20.0}]),
+        ComposableNode(package='tuilaunch_demos', plugin='tuilaunch_demos::Listener',
+                       name='l')])
+    return LaunchDescription([
+        box, RegisterEventHandler(OnProcessStart(target_action=box, on_start=[load]))])
+""")
+    out = run_headless(path, env=with_interfaces(composition_interfaces),
+                       until=("unique id 1", "unique id 2", "[l]: I heard", "hello 5"))
+    assert out.count("]: loaded ") == 2, out
+    assert "unique id 3" not in out

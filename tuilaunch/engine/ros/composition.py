@@ -11,6 +11,7 @@ container gave it, the container's error, or why no request could be sent.
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Coroutine
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -66,13 +67,16 @@ class ComponentLoader:
         self._loaded_by_actions: dict[str, list[tuple[str, dict[str, Any]]]] = {}
         self._locks: dict[str, asyncio.Lock] = {}
 
-    async def container_started(self, proc: ProcessPlan) -> None:
-        """Loads the container's own components, then those actions loaded before."""
+    def container_started(self, proc: ProcessPlan) -> Coroutine[Any, Any, bool] | None:
+        """Loading of the container's own components, then of those actions loaded before.
+
+        What to load is decided now, as the process starts: an action that runs later (an
+        OnProcessStart handler) loads its own components, and must not be loaded twice."""
         owned = [(proc.id, c) for c in proc.components]
-        extra = self._loaded_by_actions.get(proc.full_name or "", [])
+        extra = list(self._loaded_by_actions.get(proc.full_name or "", []))
         if not owned and not extra:
-            return
-        await self._load_all(proc.full_name or "", [*owned, *extra], proc.id)
+            return None
+        return self._load_all(proc.full_name or "", [*owned, *extra], proc.id)
 
     async def run_action(self, action: ActionPlan) -> bool:
         container = str(action.target)

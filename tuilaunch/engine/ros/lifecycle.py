@@ -54,7 +54,7 @@ class LifecycleTracker:
             bridge = await self._bridge()
             await self._subscribe(bridge, proc)
             state = await self._first_state(bridge, proc)
-        except LifecycleError as exc:
+        except Exception as exc:  # no ROS, no lifecycle_msgs, or no answer: say so, go on
             self._report(proc.id, f"lifecycle state of {name} unknown: {exc}", "WARN")
             return
         if state is None:

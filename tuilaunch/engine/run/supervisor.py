@@ -393,7 +393,9 @@ class Supervisor:
         if proc.lifecycle:
             self._spawn_task(self.lifecycle.process_started(proc))
         # any node may be a container (nav2 starts one with Node): it loads what targets it
-        self._spawn_task(self.components.container_started(proc))
+        loading = self.components.container_started(proc)
+        if loading is not None:
+            self._spawn_task(loading)
         assert child.stdout is not None and child.stderr is not None
         running.readers = [asyncio.ensure_future(self._read(running, child.stdout, "stdout")),
                            asyncio.ensure_future(self._read(running, child.stderr, "stderr"))]
