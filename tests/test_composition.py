@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -205,8 +206,10 @@ def test_components_load_into_a_real_container_with_results(write, composition_i
                        env=with_interfaces(composition_interfaces))
     assert "[INFO] [box-1]: loaded /talker_c (tuilaunch_demos::Talker) into /box, unique id 1" \
         in out, out
-    assert ("[ERROR] [box-1]: /box could not load tuilaunch_demos::Nothing into /box: Failed "
-            "to find class with the requested plugin name.") in out
+    # the container's own error, and the file and line of the component
+    assert re.search(r"\[ERROR\] \[box-1\]: /box could not load tuilaunch_demos::Nothing into "
+                     r"/box \(\S*test_launch\.py:18\): Failed to find class with the "
+                     r"requested plugin name\.", out), out
     assert "[INFO] [load_components-1]: loaded /listener_c (tuilaunch_demos::Listener) into " \
         "/box, unique id 2" in out
     startup = next(json.loads(line.split("STARTUP ", 1)[1]) for line in out.splitlines()
@@ -218,9 +221,10 @@ def test_components_load_into_a_real_container_with_results(write, composition_i
 def test_without_composition_interfaces_each_component_says_so(write):
     env = {"PYTHONPATH": os.environ.get("PYTHONPATH", "")}  # never the built package
     out = run_headless(write(CONTAINER), until=("Listener into",), env=env)
-    for plugin in ("Talker", "Nothing", "Listener"):
-        assert (f"cannot load tuilaunch_demos::{plugin} into /box: composition_interfaces is "
-                "not installed") in out, out
+    for plugin, line in (("Talker", 13), ("Nothing", 18), ("Listener", 22)):
+        assert re.search(rf"cannot load tuilaunch_demos::{plugin} into /box \(\S*"
+                         rf"test_launch\.py:{line}\): composition_interfaces is not installed",
+                         out), out
 
 
 async def test_a_restarted_or_respawned_container_gets_its_components_back(

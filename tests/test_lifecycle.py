@@ -289,7 +289,7 @@ def generate_launch_description():
     out = run_headless(path, until=("[auto]: Publishing", "refused transition"))
     assert "[INFO] [auto-1]: lifecycle state active" in out
     assert re.search(r"\[ERROR\] \[stuck-2\]: /stuck refused transition 'configure' "
-                     r"\(autostart\); it is unconfigured", out), out
+                     r"\(autostart, \S*test_launch\.py:\d+\); it is unconfigured", out), out
     assert "[INFO] [stuck-2]: lifecycle state active" not in out
     assert "[auto-1]" in out and 'Publishing: "hello' in out
 

@@ -112,7 +112,9 @@ class ComponentLoader:
 
     async def _load(self, container: str, owner: str, component: dict[str, Any],
                     proc_id: str | None) -> bool:
-        what = f"{component['plugin']} into {container}"
+        # the file and line that declared the component, for every failure
+        what = f"{component['plugin']} into {container}" + (
+            f" ({component['origin']})" if component.get("origin") else "")
         load_node = load_node_class()
         if load_node is None:
             self._result(owner, component, "failed", f"cannot load {what}: "

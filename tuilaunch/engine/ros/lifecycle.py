@@ -64,7 +64,8 @@ class LifecycleTracker:
             self._set_state(proc.id, state)
         if proc.autostart and state == "unconfigured":
             for transition in ("configure", "activate"):
-                if not await self.request(proc.id, transition, origin="autostart"):
+                origin = f"autostart, {proc.origin}" if proc.origin else "autostart"
+                if not await self.request(proc.id, transition, origin=origin):
                     return
 
     async def _bridge(self) -> Any:
