@@ -29,6 +29,8 @@ class PerformContext:
     launch_file: str | None = None
     environment: Mapping[str, str] = field(default_factory=lambda: os.environ)
     event_locals: dict[str, Any] = field(default_factory=dict)
+    # (name, value) pairs of SetParameter in scope, for launch_ros's `$(param name)`
+    global_parameters: list[tuple[Any, Any]] = field(default_factory=list)
 
 
 class Substitution:
@@ -431,12 +433,25 @@ class EqualsSubstitution(Substitution):
         self.left, self.right = left, right
 
     def perform(self, context: PerformContext) -> str:
-        return str(perform(self.left, context) == perform(self.right, context)).lower()
+        return str(_texts_equal(perform(self.left, context), perform(self.right, context)))\
+            .lower()
 
 
 class NotEqualsSubstitution(EqualsSubstitution):
     def perform(self, context: PerformContext) -> str:
-        return str(perform(self.left, context) != perform(self.right, context)).lower()
+        return str(not _texts_equal(perform(self.left, context), perform(self.right, context)))\
+            .lower()
+
+
+def _texts_equal(left: str, right: str) -> bool:
+    """launch's equality: booleans by value (True = true = 1), numbers within rounding."""
+    left_bool, right_bool = text_to_bool(left), text_to_bool(right)
+    if left_bool is not None and right_bool is not None:
+        return left_bool == right_bool
+    try:
+        return math.isclose(float(left), float(right))
+    except ValueError:
+        return left == right
 
 
 class IfElseSubstitution(Substitution):

@@ -20,7 +20,7 @@ import yaml
 from ..describe.entities import ComposableNode, pair_list
 from ..describe.substitutions import PerformContext, perform, perform_optional
 from ..errors import LaunchError, Origin
-from .params import ParamValue, flatten_parameters, typed_value
+from .params import ParamValue, flatten_parameters
 
 
 def _join(base: str, ns: str | None) -> str:
@@ -111,12 +111,11 @@ def _substituter(item: Any, ctx: PerformContext, origin: Origin | None)\
 
 def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespace: str,
                    global_parameters: list[tuple[Any, Any]], remaps: list[tuple[Any, Any]],
-                   component_id: str, container: str | None,
-                   global_files: list[str] | None = None) -> dict[str, Any]:
+                   component_id: str, container: str | None) -> dict[str, Any]:
     """One component's load request and what the plan shows about it.
 
-    `global_files` are the scope's SetParametersFromFile files, applied after the scope's
-    SetParameters and before the component's own parameters."""
+    `global_parameters` are the scope's SetParameter pairs and SetParametersFromFile files
+    (key None), in order, applied before the component's own parameters."""
     origin = component.origin
     condition = getattr(component, "condition", None)
     outcome = True if condition is None else condition.evaluate(ctx)
@@ -131,9 +130,8 @@ def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespa
     params: dict[str, ParamValue] = {}
     files: list[str] = []
     error = None
-    for key, value in global_parameters:
-        params[perform(key, ctx)] = typed_value(value, ctx, str(key), origin)
-    for item in [*(global_files or []), *_items(component.parameters)]:
+    global_items = [value if key is None else {key: value} for key, value in global_parameters]
+    for item in [*global_items, *_items(component.parameters)]:
         if isinstance(item, dict):
             params.update(flatten_parameters(item, ctx, origin))
             continue
