@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.run.supervisor import Event, Supervisor
 
 from .conftest import plan_of, run_cli
@@ -230,7 +231,8 @@ def test_without_composition_interfaces_each_component_says_so(write):
 async def test_a_restarted_or_respawned_container_gets_its_components_back(
         write, tmp_path, composition_interfaces, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", with_interfaces(composition_interfaces)["PYTHONPATH"])
-    plan = plan_of(write(CONTAINER))
+    # its own parameter folder: a run removes its folder at the end
+    plan = resolve(load_file(str(write(CONTAINER))), {}, tmp_path / "params")
     (box,) = plan.processes
     supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=3)
     loaded: asyncio.Queue[str] = asyncio.Queue()
