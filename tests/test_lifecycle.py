@@ -265,7 +265,8 @@ def fake_lifecycle_manager_prefix(tmp_path: Path) -> Path:
 
 
 def test_configure_then_activate_on_inactive_with_a_real_lifecycle_node(write):
-    out = run_headless(write(CONFIGURE_THEN_ACTIVATE), until=('Publishing: "hello 3"',))
+    out = run_headless(write(CONFIGURE_THEN_ACTIVATE),
+                       until=('Publishing: "hello 3"', "lifecycle state active"))
     lines = out.splitlines()
 
     def first(text: str) -> int:
@@ -289,7 +290,8 @@ def generate_launch_description():
                       namespace='', autostart=True, parameters=[{'fail_configure': True}]),
     ])
 """)
-    out = run_headless(path, until=("[auto]: Publishing", "refused transition"))
+    out = run_headless(path, until=("[auto]: Publishing", "refused transition",
+                                    "[INFO] [auto-1]: lifecycle state active"))
     assert "[INFO] [auto-1]: lifecycle state active" in out
     assert re.search(r"\[ERROR\] \[stuck-2\]: /stuck refused transition 'configure' "
                      r"\(autostart, \S*test_launch\.py:\d+\); it is unconfigured", out), out
