@@ -203,7 +203,7 @@ def generate_launch_description():
 
 
 def test_components_load_into_a_real_container_with_results(write, composition_interfaces):
-    out = run_headless(write(CONTAINER), until=("I heard", "could not load"),
+    out = run_headless(write(CONTAINER), until=("I heard", "could not load", "unique id 2"),
                        env=with_interfaces(composition_interfaces))
     assert "[INFO] [box-1]: loaded /talker_c (tuilaunch_demos::Talker) into /box, unique id 1" \
         in out, out

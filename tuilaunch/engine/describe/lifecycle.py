@@ -13,7 +13,7 @@ from typing import Any
 
 from ..errors import DslError, caller_origin
 from .conditions import Condition
-from .entities import Entity, EventHandler, Node
+from .entities import EMITTED_EVENTS, Entity, EventHandler, Node
 from .substitutions import SubValue
 
 # lifecycle_msgs/msg/Transition ids and lifecycle_msgs/msg/State ids, as in the message
@@ -75,11 +75,6 @@ class NodeMatcher:
         return self.node_name or "nodes matched by a function"
 
 
-def matches_action(target_action: Any) -> NodeMatcher:
-    """launch.events.matches_action: the event applies to that very action."""
-    return NodeMatcher(action=target_action)
-
-
 def matches_node_name(node_name: str) -> NodeMatcher:
     """launch_ros.events.matches_node_name: by full node name (`/` prepended if missing)."""
     if not node_name.startswith("/"):
@@ -131,6 +126,9 @@ class ChangeStateAction(Entity):
 def describe_matcher(matcher: Any) -> str:
     if isinstance(matcher, NodeMatcher):
         return matcher.describe()
+    target = getattr(matcher, "target", None)  # launch.events.matches_action(node)
+    if target is not None and hasattr(target, "describe"):
+        return str(target.describe())
     return "nodes matched by a function"
 
 
@@ -196,6 +194,23 @@ def state_keys(transition: str, start_state: str, goal_state: str) -> list[str]:
     return keys
 
 
+# EmitEvent(event=ChangeState(...)) stands for a ChangeStateAction in a Description
+EMITTED_EVENTS[ChangeState] = lambda event, condition: event.as_action(condition)
+
+# where launch_ros defines each name (compat.py builds the module tree from such rows)
+COMPAT_ROWS: list[tuple[str, str, Any]] = [
+    ("launch_ros.actions.lifecycle_node", "LifecycleNode", LifecycleNode),
+    ("launch_ros.actions.lifecycle_transition", "LifecycleTransition", LifecycleTransition),
+    ("launch_ros.events.lifecycle.change_state", "ChangeState", ChangeState),
+    ("launch_ros.events.lifecycle.state_transition", "StateTransition", StateTransition),
+    ("launch_ros.events.lifecycle.lifecycle_node_matchers", "matches_node_name",
+     matches_node_name),
+    ("launch_ros.events.matchers.matches_node_name", "matches_node_name", matches_node_name),
+    ("launch_ros.events", "matches_node_name", matches_node_name),
+    ("launch_ros.event_handlers.on_state_transition", "OnStateTransition",
+     OnStateTransition),
+]
+
 __all__ = [
     "ChangeState",
     "ChangeStateAction",
@@ -204,6 +219,5 @@ __all__ = [
     "NodeMatcher",
     "OnStateTransition",
     "StateTransition",
-    "matches_action",
     "matches_node_name",
 ]
