@@ -295,3 +295,29 @@ def generate_launch_description():
                        until=("unique id 1", "unique id 2", "[l]: I heard", "hello 5"))
     assert out.count("]: loaded ") == 2, out
     assert "unique id 3" not in out
+
+
+def test_parameter_files_with_substitutions_and_set_parameters_from_file(write, tmp_path):
+    scoped = tmp_path / "scoped.yaml"
+    scoped.write_text("/**:\n  ros__parameters:\n    from_scope: 1\n    fps: 5\n")
+    templated = tmp_path / "templated.yaml"
+    templated.write_text("cam:\n  ros__parameters:\n    fps: $(var fps)\n    frame: $(var frame)\n")
+    plan = plan_of(write(HEADER + f"""
+from launch_ros.actions import SetParametersFromFile
+from launch_ros.descriptions import ParameterFile
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('fps', default_value='30'),
+        DeclareLaunchArgument('frame', default_value='camera_link'),
+        SetParametersFromFile('{scoped}'),
+        ComposableNodeContainer(
+            name='box', namespace='', package='tuilaunch_demos',
+            executable='component_container', composable_node_descriptions=[
+                ComposableNode(package='cams', plugin='cams::Camera', name='cam',
+                               parameters=[ParameterFile('{templated}', allow_substs=True)])]),
+    ])
+"""), fps=60)
+    (cam,) = plan.processes[0].components
+    # the scope's file first, then the component's own, its $(var ...) performed
+    assert cam["parameters"] == {"from_scope": 1, "fps": 60, "frame": "camera_link"}
+    assert cam["parameter_files"] == [str(scoped), str(templated)]
