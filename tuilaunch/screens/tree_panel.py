@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 from rich.text import Text
@@ -24,8 +25,16 @@ STATE_LOOK = {
     "done": ("✓", "green", "done"),
     "cancelled": ("○", "dim", "cancelled"),
 }
+# the Linux console's font lacks most of those: plain ASCII there
+ASCII_ICONS = {"pending": ".", "running": "*", "exited": "#", "failed": "x",
+               "respawning": "~", "skipped": "o", "stopping": "-", "done": "+",
+               "cancelled": "o"}
 # an action "running" is waiting for its service or node
 ACTION_WORDS = {"running": "working", "pending": "waiting"}
+
+
+def ascii_terminal() -> bool:
+    return os.environ.get("TERM", "") in ("linux", "vt100", "vt102", "vt220", "ansi")
 
 
 @dataclass
@@ -39,17 +48,24 @@ class RowData:
 
 class LaunchTree(Tree[RowData]):
     DEFAULT_CSS = """
-    LaunchTree { width: 34; min-width: 24; border-right: tall $panel; }
+    LaunchTree { width: 30; min-width: 12; border-right: tall $panel; overflow-x: hidden; }
     """
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__("launch", data=RowData("group", None, []), **kwargs)  # type: ignore
+        self.guide_depth = 2  # narrow indents: the names keep the width
+        self.ascii = ascii_terminal()
+        if self.ascii:
+            self.ICON_NODE = "+ "
+            self.ICON_NODE_EXPANDED = "- "
         self.rows: dict[str, TreeNode[RowData]] = {}
         self.plan: Plan | None = None
         self.details: dict[str, str] = {}
         self.action_labels: dict[str, str] = {}
         self.states: dict[str, str] = {}
         self.preview: PlanDiff | None = None
+        # names processes report in their log lines (OutputStore.reported_names)
+        self.reported: dict[str, set[str]] = {}
 
     def show_plan(self, plan: Plan, states: dict[str, str]) -> None:
         self.plan = plan
@@ -88,7 +104,8 @@ class LaunchTree(Tree[RowData]):
         if item.condition is not None:
             label.append(f" = {item.condition.value}", "bold" if item.enabled else "dim")
         if item.trigger is not None:
-            label.append(f" ⏱ {item.trigger.describe()}", "italic")
+            clock = "@" if ascii_terminal() else "⏱"
+            label.append(f" {clock} {item.trigger.describe()}", "italic")
         if not item.enabled:
             label.stylize("dim")
         return label
@@ -111,6 +128,8 @@ class LaunchTree(Tree[RowData]):
             return
         state = self.states.get(ref, "pending")
         icon, style, word = STATE_LOOK.get(state, ("?", "", state))
+        if self.ascii:
+            icon = ASCII_ICONS.get(state, "?")
         if node.data is not None and node.data.kind == "action":
             word = ACTION_WORDS.get(state, word)
         label = Text()
@@ -128,7 +147,31 @@ class LaunchTree(Tree[RowData]):
             label.append(self.action_labels.get(ref, ref))
         detail = self.details.get(ref, "")
         label.append(f" {word}{' ' + detail if detail else ''}", style or "dim")
-        node.set_label(label)
+        if node.label != label:  # an unchanged row is not repainted
+            node.set_label(label)
+
+    def describe(self, node: TreeNode[RowData]) -> str:
+        """The whole story of a row, for the detail line: never cut by the tree's width."""
+        data = node.data
+        if data is None or self.plan is None:
+            return ""
+        if data.kind == "all":
+            return "all nodes: every process's output, with its id"
+        if data.kind == "group":
+            label = node.label.plain if isinstance(node.label, Text) else str(node.label)
+            running = sum(1 for p in data.processes if self.states.get(p) == "running")
+            return f"{label}: {running}/{len(data.processes)} running"
+        ref = data.ref or ""
+        state = self.states.get(ref, "pending")
+        word = STATE_LOOK.get(state, ("", "", state))[2]
+        if data.kind == "action":
+            word = ACTION_WORDS.get(state, word)
+            text = f"{self.action_labels.get(ref, ref)} [{ref}]: {word}"
+        else:
+            proc = self.plan.process(ref)
+            text = f"{ref} ({proc.label}): {word}"
+        detail = self.details.get(ref, "")
+        return f"{text} {detail}".rstrip()
 
 
 def _refs(diff: PlanDiff | None) -> set[str]:
