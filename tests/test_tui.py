@@ -94,7 +94,7 @@ async def test_select_a_node_see_its_output_stop_restart_and_search(tmp_path):
         await pilot.press(*"says hi")
         await pilot.press("enter")
         status = str(app.query_one("#output-status").render())
-        assert panel.search == "says hi" and "search 'says hi' 1/" in status
+        assert panel.search == "says hi" and "/says hi 1/" in status
         await pilot.press("n")
         assert panel.match_index == 1
 

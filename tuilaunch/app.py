@@ -23,6 +23,7 @@ from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.containers import Vertical
 from textual.screen import Screen
+from textual.widget import Widget
 from textual.widgets import Button, Footer, OptionList, Static, TabbedContent, TabPane, Tree
 
 from .engine.plan.session import Preview, Session
@@ -70,6 +71,8 @@ class TuiLaunchApp(App[int]):
                  pane_fps: float = PANE_FPS) -> None:
         no_color = os.environ.get("NO_COLOR")
         super().__init__()
+        # no animated tab underlines or scrolling: every frame is bytes over ssh
+        self.animation_level = "none"
         if no_color is not None:
             # Textual takes NO_COLOR out of the environment; the nodes should still see it
             os.environ["NO_COLOR"] = no_color
@@ -431,41 +434,42 @@ class TuiLaunchApp(App[int]):
 
     def action_leave_field(self) -> None:
         """Escape in a text field: out of it, to where the tab's work starts, so the next
-        keys (1-4, s, q, ...) are commands again."""
+        keys (1-4, s, q, ...) are commands again. The focus moves at once, not on the next
+        tick, so keys typed right after escape go to the new place."""
         focused = self.focused
         if isinstance(focused, Field) and focused.id in ("search-input", "filter-input"):
             self.output_panel.action_clear_search()
-            self.output_panel.line_view.focus()
+            self.screen.set_focus(self.output_panel.line_view)
             return
-        self._focus_home(self.tabs.active)
+        self.screen.set_focus(self._home(self.tabs.active))
 
-    def _focus_home(self, pane: str) -> None:
-        if pane == "nodes":
-            self.launch_tree.focus()
-        elif pane == "args":
-            self.query_one("#apply", Button).focus()
-        elif pane == "services":
-            self.query_one("#svc-list", OptionList).focus()
-        elif pane == "params":
-            self.query_one("#prm-nodes", OptionList).focus()
+    def _home(self, pane: str) -> Widget:
+        if pane == "args":
+            return self.query_one("#apply", Button)
+        if pane == "services":
+            return self.query_one("#svc-list", OptionList)
+        if pane == "params":
+            return self.query_one("#prm-nodes", OptionList)
+        return self.launch_tree
 
     @on(TabbedContent.TabActivated)
     def _tab_changed(self, event: TabbedContent.TabActivated) -> None:
         self.refresh_bindings()
         pane = event.pane.id
-        # keyboard first: each tab puts the cursor where work starts
+        # keyboard first: each tab puts the cursor where work starts, at once (keys typed
+        # right after the tab appears go there)
         if pane == "nodes":
-            self.launch_tree.focus()
+            self.screen.set_focus(self.launch_tree)
         elif pane == "args":
             editors = self.args_panel.query(".arg-editor")
             if editors:
-                editors.first().focus()
+                self.screen.set_focus(editors.first())
         elif pane == "services":
             self.query_one(ServicesPanel).refresh_services()
-            self.query_one("#svc-filter").focus()
+            self.screen.set_focus(self.query_one("#svc-filter"))
         elif pane == "params":
             self.query_one(ParamsPanel).refresh_nodes()
-            self.query_one("#prm-filter").focus()
+            self.screen.set_focus(self.query_one("#prm-filter"))
 
     def action_help(self) -> None:
         self.push_screen(HelpScreen())

@@ -4,7 +4,9 @@ Over ssh several keys often arrive in one read. Textual's Input inserts printabl
 they reach it, but its editing keys (backspace, ctrl+u, ...) are bindings that run only after
 the key has bubbled up to the app, so `ctrl+u 3` in one read could insert `3` first and then
 erase it. Here the field runs its own bindings as the key arrives, before the next key.
-Escape leaves the field at once, so the keys typed after it are not typed into it.
+Escape leaves the field at once (and enter, for a field that closes on submit); keys that
+reached the field after it lost the focus go back to the app, in order, for the widget that
+has the focus now, instead of being typed into a field the user has left.
 """
 
 from __future__ import annotations
@@ -20,12 +22,24 @@ class Field(Input):
     Field:focus { border: tall $accent; background-tint: $accent 12%; }
     """
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, leave_on_enter: bool = False, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         # a blinking cursor repaints the field twice a second for nothing: bytes over ssh
         self.cursor_blink = False
+        self.leave_on_enter = leave_on_enter
 
     async def _on_key(self, event: events.Key) -> None:
+        if self.screen.focused is not self:
+            event.stop()
+            event.prevent_default()
+            self.app.post_message(events.Key(event.key, event.character))
+            return
+        if event.key == "enter" and self.leave_on_enter:
+            event.stop()
+            event.prevent_default()
+            await self.action_submit()
+            await self.run_action("app.leave_field")
+            return
         if event.is_printable:
             await super()._on_key(event)
             return

@@ -48,9 +48,10 @@ class OutputPanel(Vertical):
     def compose(self) -> ComposeResult:
         yield self._status
         yield self._lines
-        yield Field(placeholder="search (enter: find, esc: cancel)", id="search-input")
+        yield Field(placeholder="search (enter: find, esc: cancel)", id="search-input",
+                    leave_on_enter=True)
         yield Field(placeholder="show only lines containing... (empty: all)",
-                    id="filter-input")
+                    id="filter-input", leave_on_enter=True)
 
     def on_mount(self) -> None:
         self.show_view(None)
@@ -131,14 +132,12 @@ class OutputPanel(Vertical):
     def _search_submitted(self, event: Field.Submitted) -> None:
         event.input.remove_class("shown")
         self.set_search(event.value)
-        self._lines.focus()
 
     @on(Field.Submitted, "#filter-input")
     def _filter_submitted(self, event: Field.Submitted) -> None:
         self.view.text = event.value
         event.input.remove_class("shown")
         self._rebuild()
-        self._lines.focus()
 
     def set_search(self, term: str) -> None:
         self.search = term
@@ -260,6 +259,6 @@ class NodesView(Horizontal):
     def action_resize(self, step: int) -> None:
         from .tree_panel import LaunchTree
 
-        current = self.query_one(LaunchTree).size.width or self.adaptive_width()
+        current = self.query_one(LaunchTree).outer_size.width or self.adaptive_width()
         self.tree_width = current + step
         self._apply_width()

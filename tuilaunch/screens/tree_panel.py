@@ -160,7 +160,7 @@ class LaunchTree(Tree[RowData]):
         if data.kind == "group":
             label = node.label.plain if isinstance(node.label, Text) else str(node.label)
             running = sum(1 for p in data.processes if self.states.get(p) == "running")
-            return f"{label}: {running}/{len(data.processes)} running"
+            return f"{label}: {running} of {len(data.processes)} processes running"
         ref = data.ref or ""
         state = self.states.get(ref, "pending")
         word = STATE_LOOK.get(state, ("", "", state))[2]
