@@ -433,7 +433,7 @@ async def test_escape_leaves_any_field_and_digits_then_switch_tabs(tmp_path):
         await until(pilot, lambda: app.tabs.active == "params")
         burst(app, "escape", "1")
         await until(pilot, lambda: app.tabs.active == "nodes")
-        assert isinstance(app.focused, LaunchTree)
+        assert isinstance(app.focused, LaunchTree), app.focused
         await pilot.press("slash", *"abc")
         burst(app, "escape", "2")
         await until(pilot, lambda: app.tabs.active == "args")
@@ -454,7 +454,8 @@ async def test_follow_holds_across_node_switches_resizes_and_a_cancelled_search(
             return view.visible_text()[-1].endswith(view.lines[-1].message)
 
         await pilot.press("down", "down", "down")  # talker
-        assert view.following and panel.unseen == 0 and at_newest()
+        assert view.following and panel.unseen == 0
+        await until(pilot, at_newest)
         await pilot.press("up", "up")  # all nodes
         assert view.following and panel.unseen == 0
         await until(pilot, at_newest)

@@ -47,6 +47,17 @@ DRAIN_HZ = 10
 PANE_FPS = 1.0
 
 
+class LaunchTabs(TabbedContent):
+    """Tabs that change only when asked (keys 1-4, a click on a tab).
+
+    TabbedContent also switches to whichever pane a widget was focused in, when its
+    message arrives: with keys that arrive together (escape, 3) that message is late and
+    flips the tab back."""
+
+    def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
+        event.stop()
+
+
 class TuiLaunchApp(App[int]):
     CSS_PATH = "screens/app.tcss"
     TITLE = "tuilaunch"
@@ -103,7 +114,7 @@ class TuiLaunchApp(App[int]):
 
     def compose(self) -> ComposeResult:
         yield Static("", id="status")
-        with TabbedContent(initial="nodes"):
+        with LaunchTabs(initial="nodes"):
             with TabPane("1 Nodes", id="nodes"), Vertical(id="nodes-tab"):
                 yield Static("", id="detail")
                 with NodesView(id="nodes-split"):
@@ -429,7 +440,9 @@ class TuiLaunchApp(App[int]):
         self.output_panel.show_view(None)
 
     def action_tab(self, tab: str) -> None:
-        self.tabs.active = tab
+        if self.tabs.active != tab:
+            self.tabs.active = tab
+            self._enter_tab(tab)
         self.refresh_bindings()
 
     def action_leave_field(self) -> None:
@@ -455,21 +468,36 @@ class TuiLaunchApp(App[int]):
     @on(TabbedContent.TabActivated)
     def _tab_changed(self, event: TabbedContent.TabActivated) -> None:
         self.refresh_bindings()
-        pane = event.pane.id
-        # keyboard first: each tab puts the cursor where work starts, at once (keys typed
-        # right after the tab appears go there)
+        pane = event.pane.id or "nodes"
+        focused = self.focused
+        if not (isinstance(focused, Widget) and pane_of(focused) == pane):
+            self._enter_tab(pane)  # a click on a tab: the keys did this already
+
+    def _enter_tab(self, pane: str) -> None:
+        """Keyboard first: each tab puts the cursor where work starts, at once, so keys
+        typed right after the tab key go there; again once the tab is laid out."""
+        target: Widget | None = None
         if pane == "nodes":
-            self.screen.set_focus(self.launch_tree)
+            target = self.launch_tree
         elif pane == "args":
             editors = self.args_panel.query(".arg-editor")
-            if editors:
-                self.screen.set_focus(editors.first())
+            target = editors.first() if editors else self.query_one("#apply", Button)
         elif pane == "services":
             self.query_one(ServicesPanel).refresh_services()
-            self.screen.set_focus(self.query_one("#svc-filter"))
+            target = self.query_one("#svc-filter")
         elif pane == "params":
             self.query_one(ParamsPanel).refresh_nodes()
-            self.screen.set_focus(self.query_one("#prm-filter"))
+            target = self.query_one("#prm-filter")
+        if target is not None:
+            self.screen.set_focus(target)
+            self.call_after_refresh(self._refocus, pane, target)
+
+    def _refocus(self, pane: str, target: Widget) -> None:
+        if not self.is_running or not self.screen_stack:
+            return
+        if self.tabs.active == pane and self.focused is not target and not (
+                isinstance(self.focused, Widget) and pane_of(self.focused) == pane):
+            self.screen.set_focus(target)
 
     def action_help(self) -> None:
         self.push_screen(HelpScreen())
@@ -619,6 +647,14 @@ def _detail(event: Event) -> str:
     if event.kind in ("exited", "failed", "respawning") and event.reason:
         return f"({event.reason})"
     return ""
+
+
+def pane_of(widget: Widget) -> str | None:
+    """The id of the tab pane a widget is in."""
+    for node in widget.ancestors_with_self:
+        if isinstance(node, TabPane):
+            return node.id
+    return None
 
 
 def _detail_style(text: str) -> str:
