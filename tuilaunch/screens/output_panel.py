@@ -89,9 +89,7 @@ class OutputPanel(Vertical):
 
     def update_status(self) -> None:
         lines = self._lines
-        parts = [self.view.process or "all nodes"]
-        if self.view.min_level:
-            parts.append(f"{LEVELS[self.view.min_level]}+")
+        parts = [self.view.process or "all nodes", f"{LEVELS[self.view.min_level]}+"]
         if self.view.text:
             parts.append(f"only '{self.view.text}'")
         if self.search:

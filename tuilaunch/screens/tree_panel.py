@@ -169,7 +169,9 @@ class LaunchTree(Tree[RowData]):
             text = f"{self.action_labels.get(ref, ref)} [{ref}]: {word}"
         else:
             proc = self.plan.process(ref)
-            text = f"{ref} ({proc.label}): {word}"
+            reported = sorted(self.reported.get(ref, ()))
+            name = proc.full_name or (reported[0] if reported else proc.label)
+            text = f"{ref} ({name}): {word}"
         detail = self.details.get(ref, "")
         return f"{text} {detail}".rstrip()
 
