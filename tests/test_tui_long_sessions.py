@@ -622,3 +622,29 @@ def test_a_linux_console_gets_ascii_state_icons(monkeypatch, write, tmp_path):
             await app.engine.run(app.supervisor.shutdown("test over"))
 
     asyncio.run(scenario())
+
+
+async def test_focus_shows_in_reverse_video_and_one_new_line_is_singular(write, tmp_path):
+    path = write(COUNTER.format(count=40, pause=0.0, copies=1, python=sys.executable)
+                 .replace("time.sleep(0.0)", "time.sleep(0 if i < 30 else 1.5)"),
+                 "slow.py")
+    app = make_app(str(path), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        tree = app.query_one(LaunchTree)
+        await pilot.pause()
+        # the focused tree's cursor row is drawn in reverse video: visible with 8 colours
+        assert any(seg.style is not None and seg.style.reverse
+                   for seg in tree.render_line(0)._segments)
+        await pilot.press("down", "down")
+        await until(pilot, lambda: last_number(app) >= 30)
+        view = panel_of(app).line_view
+        view.focus()
+        await pilot.press("up")  # one line up: the newest is just below the pane
+        assert not view.following
+        status = app.query_one("#output-status")
+        assert "1 new line (G: follow)" in str(status.render())
+        start = view.total
+        await until(pilot, lambda: view.total == start + 1)  # one more arrives below
+        await until(pilot, lambda: "2 new lines (G: follow)" in str(status.render()))
+        assert app.supervisor is not None
+        await app.engine.run(app.supervisor.shutdown("test over"))

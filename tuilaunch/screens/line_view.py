@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from rich.cells import cell_len
 from rich.segment import Segment
@@ -90,6 +90,8 @@ class LineView(Widget, can_focus=True):
         self._frame: list[Strip] | None = None
         self._frame_key: tuple[int, int] | None = None
         self.repaints = 0  # for tests and the benchmark: how often the pane was drawn
+        # told when the user moves the view, so the owner's status line says so at once
+        self.on_move: Callable[[], None] | None = None
 
     # --- content ---------------------------------------------------------------------
 
@@ -246,7 +248,7 @@ class LineView(Widget, can_focus=True):
         self.top = max(min(top + step, self.total - 1), self.first)
         # at the newest line (scrolled back down, or nothing to scroll): follow
         self.following = self._bottom() >= self.total - 1
-        self._invalidate(now=True)
+        self._moved()
 
     def action_page(self, direction: int) -> None:
         self.action_scroll(direction * max(self.size.height - 1, 1))
@@ -254,11 +256,16 @@ class LineView(Widget, can_focus=True):
     def action_top(self) -> None:
         self.following = False
         self.top = self.first
-        self._invalidate(now=True)
+        self._moved()
 
     def action_follow(self) -> None:
         self.following = True
+        self._moved()
+
+    def _moved(self) -> None:
         self._invalidate(now=True)
+        if self.on_move is not None:
+            self.on_move()
 
     def action_pan(self, step: int) -> None:
         if self.wrap:

@@ -44,6 +44,7 @@ class OutputPanel(Vertical):
         self._status = Static(id="output-status")
         self._status_text = ""
         self._lines = LineView(max_lines=max_lines, max_fps=max_fps, id="output-lines")
+        self._lines.on_move = self.update_status
 
     def compose(self) -> ComposeResult:
         yield self._status
