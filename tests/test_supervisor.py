@@ -192,6 +192,8 @@ def generate_launch_description():
     out = proc.communicate(timeout=60)[0]
     assert out.count("[crasher-1] crash") == 3  # first run and two respawns
     assert out.count("respawning") == 2
+    assert "[ERROR] [crasher-1]: respawn gives up: it failed 3 times (respawn_max_retries=2)" \
+        in out
     assert out.count("[clean-2] done") == 1  # a clean exit is not respawned
     assert proc.returncode == 1  # the crash is reported in the exit status
 
@@ -315,3 +317,16 @@ def generate_launch_description():
     assert log.read_text().endswith(" stdout first line\n")  # not held in a buffer
     os.killpg(proc.pid, signal.SIGINT)
     proc.wait(timeout=60)
+
+
+def test_line_splitter_blocks_keep_bytes_and_cut_endless_lines():
+    from tuilaunch.engine.run.output import MAX_LINE, screen_lines
+
+    splitter = LineSplitter()
+    assert splitter.feed_block(b"par") == b""
+    assert splitter.feed_block(b"tial\nnext\r50%\r100%\nx") == b"partial\nnext\r50%\r100%\n"
+    assert screen_lines(b"partial\nnext\r50%\r100%\n") == ["partial", "100%"]
+    assert screen_lines(b"a\x00b\n\xff\n") == ["ab", "\ufffd"]
+    block = splitter.feed_block(b"y" * (2 * MAX_LINE + 5))
+    assert block == b"x" + b"y" * (MAX_LINE - 1) + b"\n" + b"y" * MAX_LINE + b"\n"
+    assert splitter.flush_block() == b"y" * 6 + b"\n" and splitter.flush_block() == b""

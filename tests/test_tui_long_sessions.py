@@ -252,7 +252,7 @@ async def test_the_preview_refuses_bad_numbers_and_names_and_f5_applies_nothing(
         preview = app.query_one("#args-preview")
         for name, value, why in (("rate", "", "needs a number"),
                                  ("rate", "fast", "needs a number"),
-                                 ("robot", "bad ns!", "not a valid ROS namespace")):
+                                 ("robot", "bad ns!", "namespace '/bad ns!'")):
             field = app.query_one(f"#arg-{name}", Field)
             field.value = value
             await pilot.pause()

@@ -55,6 +55,9 @@ def split_items(items: list[str]) -> tuple[list[str], dict[str, str]]:
 def find_launch_file(positional: list[str]) -> str:
     if len(positional) == 1:
         path = positional[0]
+        if os.path.isdir(path):
+            raise PackageError(f"{path} is a directory, not a launch file",
+                               hint="give the launch file inside it, or PACKAGE FILE")
         if not os.path.isfile(path):
             raise PackageError(f"launch file {path} does not exist",
                                hint="give a path, or PACKAGE FILE to search a package's share")
@@ -105,14 +108,22 @@ def main(argv: list[str] | None = None) -> int:
         return 3 if problems else 0
     for warning in plan.warnings:
         print(f"tuilaunch: warning: {warning}", file=sys.stderr)
+    from .headless import run_log_dir
+
+    log_dir = run_log_dir()
+    try:
+        log_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"tuilaunch: error: cannot create the log folder {log_dir} (set by ROS_LOG_DIR, "
+              f"ROS_HOME or ~/.ros): {exc.strerror or exc}", file=sys.stderr)
+        return 2
     if options.headless or not (sys.stdout.isatty() and sys.stdin.isatty()):
         from .headless import run_headless
 
-        return run_headless(plan)
+        return run_headless(plan, log_dir)
     from .app import make_app
-    from .headless import run_log_dir
 
-    status = make_app(path, arguments, run_log_dir(), scrollback=options.scrollback).run()
+    status = make_app(path, arguments, log_dir, scrollback=options.scrollback).run()
     return status or 0
 
 

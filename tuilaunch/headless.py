@@ -1,4 +1,10 @@
-"""`--headless`: run the plan and print every line as `[id] line`, like ros2 launch."""
+"""`--headless`: run the plan and print every line as `[id] line`, like ros2 launch.
+
+Ctrl+C stops the launch (SIGINT to every process, then SIGTERM and SIGKILL after their
+timeouts, each step announced); a second Ctrl+C sends SIGTERM at once, a third SIGKILL.
+A closed or dead stdout (`| head`, a dropped ssh link) is said once on stderr and changes
+nothing else: the nodes run on and every line still goes to their log files.
+"""
 
 from __future__ import annotations
 
@@ -25,49 +31,96 @@ def run_log_dir() -> Path:
 class Printer:
     """Writes events to a stream; strips colour codes unless the stream is a terminal."""
 
-    def __init__(self, out: TextIO) -> None:
+    def __init__(self, out: TextIO, log_dir: Path | None = None) -> None:
         self.out = out
-        self.colour = out.isatty() and not os.environ.get("NO_COLOR")
+        self.log_dir = log_dir
+        self.broken: str | None = None
+        try:
+            self.colour = out.isatty() and not os.environ.get("NO_COLOR")
+        except ValueError:
+            self.colour = False
 
     def __call__(self, event: Event) -> None:
+        if self.broken is not None:
+            return
+        text = self.format(event)
+        if not text:
+            return
+        try:
+            self.out.write(text)
+            self.out.flush()
+        except (OSError, ValueError) as exc:
+            self._give_up(exc)
+
+    def format(self, event: Event) -> str:
         if event.kind == "output":
             prefix = f"[{event.process}] "
-            text = "".join(prefix + (line if self.colour else strip_ansi(line)) + "\n"
-                           for line in event.lines)
-        elif event.kind in ("started", "finished") and event.pid is None:
-            return  # an action's progress: its log lines already say what happened
-        elif event.kind == "started":
-            text = f"[INFO] [{event.process}]: process started with pid [{event.pid}]\n"
-        elif event.kind == "exited":
+            text = prefix + ("\n" + prefix).join(event.lines) + "\n"
+            return text if self.colour or "\x1b" not in text else strip_ansi(text)
+        if event.kind in ("started", "finished") and event.pid is None:
+            return ""  # an action's progress: its log lines already say what happened
+        if event.kind == "started":
+            return f"[INFO] [{event.process}]: process started with pid [{event.pid}]\n"
+        if event.kind == "exited":
             level = "INFO" if event.code == 0 else "ERROR"
-            text = f"[{level}] [{event.process}]: process has finished ({event.reason})\n"
-        elif event.kind == "failed":
-            text = f"[ERROR] [{event.process}]: failed to start: {event.reason}\n"
-        elif event.kind == "respawning":
-            text = f"[WARN] [{event.process}]: respawning ({event.reason})\n"
-        elif event.kind == "log":
-            text = f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
-        else:
-            text = f"[INFO] [launch]: {event.kind} ({event.reason})\n"
-        self.out.write(text)
-        self.out.flush()
+            return f"[{level}] [{event.process}]: process has finished ({event.reason})\n"
+        if event.kind == "failed":
+            return f"[ERROR] [{event.process}]: failed to start: {event.reason}\n"
+        if event.kind == "respawning":
+            return f"[WARN] [{event.process}]: respawning ({event.reason})\n"
+        if event.kind == "log":
+            return f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
+        return f"[INFO] [launch]: {event.kind} ({event.reason})\n"
+
+    def say(self, text: str) -> None:
+        self(Event("log", "launch", reason=text))
+
+    def _give_up(self, exc: Exception) -> None:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        self.broken = reason
+        where = f" below {self.log_dir}" if self.log_dir else ""
+        try:
+            sys.stderr.write(f"tuilaunch: cannot write to stdout ({reason}): the launch goes "
+                             f"on; every node's output is in its log file{where}\n")
+            sys.stderr.flush()
+        except (OSError, ValueError):
+            pass  # the terminal is gone altogether
+        # what is still buffered must not fail again at exit
+        try:
+            fd = self.out.fileno()
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, fd)
+            os.close(devnull)
+        except (OSError, ValueError, AttributeError):
+            pass
 
 
 async def _run(plan: Plan, log_dir: Path) -> int:
     supervisor = Supervisor(plan, log_dir)
-    supervisor.subscribe(Printer(sys.stdout))
+    printer = Printer(sys.stdout, log_dir)
+    supervisor.subscribe(printer)
     loop = asyncio.get_running_loop()
 
     stopping: set[asyncio.Task[None]] = set()  # held so the task is not collected mid-run
+    asked = 0
 
     def on_signal(sig: signal.Signals) -> None:
-        stopping.add(asyncio.ensure_future(supervisor.shutdown(f"received {sig.name}")))
+        nonlocal asked
+        asked += 1
+        if asked == 1:
+            stopping.add(asyncio.ensure_future(supervisor.shutdown(f"received {sig.name}")))
+            if sig == signal.SIGINT:
+                printer.say("stopping: Ctrl+C again sends SIGTERM now, a third time SIGKILL")
+            return
+        sent = supervisor.escalate_now()
+        if sent is not None:
+            printer.say(f"received {sig.name} again: sending {sent} now")
 
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         loop.add_signal_handler(sig, on_signal, sig)
-    print(f"[INFO] [launch]: All log files can be found below {log_dir}", flush=True)
+    printer(Event("log", "launch", reason=f"All log files can be found below {log_dir}"))
     return await supervisor.run()
 
 
-def run_headless(plan: Plan) -> int:
-    return asyncio.run(_run(plan, run_log_dir()))
+def run_headless(plan: Plan, log_dir: Path | None = None) -> int:
+    return asyncio.run(_run(plan, log_dir or run_log_dir()))

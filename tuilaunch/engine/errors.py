@@ -7,6 +7,7 @@ fault, and what would fix it. Tracebacks are for `--debug` only.
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import traceback
@@ -23,9 +24,11 @@ class Origin:
 
     file: str
     line: int
+    column: int | None = None  # XML/YAML errors point at the tag or key, not only its line
 
     def __str__(self) -> str:
-        return f"{display_path(self.file)}:{self.line}"
+        where = f"{display_path(self.file)}:{self.line}"
+        return where if self.column is None else f"{where}:{self.column}"
 
 
 def display_path(path: str) -> str:
@@ -40,6 +43,7 @@ def display_path(path: str) -> str:
 _SKIPPED_FILES = {os.path.abspath(contextlib.__file__)}
 
 
+@functools.lru_cache(maxsize=1024)  # asked for every frame of every entity made
 def _is_ours(filename: str) -> bool:
     """Frames of tuilaunch itself, or of the `with` machinery between the user and us."""
     path = os.path.abspath(filename)

@@ -6,7 +6,7 @@ from types import ModuleType
 from typing import Any
 
 from ..plan import params
-from . import conditions, entities, events, substitutions
+from . import conditions, entities, events, gazebo, substitutions
 from .dsl import SimpleLauncher
 
 
@@ -41,6 +41,10 @@ def build_modules() -> dict[str, ModuleType]:
                   "LaunchConfigurationNotEquals", "Condition")
     sources = _pick(entities, "PythonLaunchDescriptionSource", "AnyLaunchDescriptionSource",
                     "LaunchDescriptionSource")
+    # XML and YAML files are read by extension whatever source class names them
+    sources["FrontendLaunchDescriptionSource"] = entities.LaunchDescriptionSource
+    xml_source = {"XMLLaunchDescriptionSource": entities.LaunchDescriptionSource}
+    yaml_source = {"YAMLLaunchDescriptionSource": entities.LaunchDescriptionSource}
     ros_actions = _pick(entities, "Node", "PushRosNamespace", "PushROSNamespace", "SetParameter",
                         "SetRemap", "ComposableNodeContainer", "LoadComposableNodes")
     ros_subs = _pick(substitutions, "FindPackageShare", "FindPackagePrefix")
@@ -67,8 +71,19 @@ def build_modules() -> dict[str, ModuleType]:
                                            ComposableNode=entities.ComposableNode, **param_value),
         "launch_ros.parameter_descriptions": _module("launch_ros.parameter_descriptions",
                                                      **param_value),
+        "launch_xml": _module("launch_xml"),
+        "launch_xml.launch_description_sources": _module(
+            "launch_xml.launch_description_sources", **xml_source),
+        "launch_yaml": _module("launch_yaml"),
+        "launch_yaml.launch_description_sources": _module(
+            "launch_yaml.launch_description_sources", **yaml_source),
         "simple_launch": _module("simple_launch", SimpleLauncher=SimpleLauncher,
-                                 SimpleSubstitution=substitutions.SimpleSubstitution),
+                                 SimpleSubstitution=substitutions.SimpleSubstitution,
+                                 GazeboBridge=gazebo.GazeboBridge),
+        "simple_launch.gazebo": _module("simple_launch.gazebo", **_pick(
+            gazebo, "GazeboBridge", "ros_gz_prefix", "only_show_args")),
+        "simple_launch.simple_substitution": _module("simple_launch.simple_substitution", **_pick(
+            substitutions, "SimpleSubstitution", "flatten")),
         "simple_launch.events": _module("simple_launch.events", **_pick(
             events, "When", "OnProcessStart", "OnProcessExit", "OnProcessIO",
             "OnExecutionComplete", "OnShutdown")),

@@ -12,8 +12,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
 
-from ..errors import DslError, caller_origin
-from ..plan.packages import find_in_share, package_share
+from ..errors import DslError, Origin, PackageError, caller_origin
+from ..plan.packages import package_share
 from ..plan.xacro_run import Xacro
 from .conditions import IfCondition, UnlessCondition
 from .entities import (
@@ -33,6 +33,7 @@ from .entities import (
     pair_list,
 )
 from .events import When
+from .gazebo import GZ_AXES, GazeboBridge, GazeboLauncher
 from .substitutions import (
     LaunchConfiguration,
     PathJoin,
@@ -45,9 +46,8 @@ from .substitutions import (
     flatten,
     is_lazy,
     perform,
+    slash_join,
 )
-
-_GZ_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
 
 
 def _raw_default(value: Any) -> tuple[Any, str]:
@@ -77,6 +77,19 @@ def literal(text: str) -> Any:
         return text
 
 
+def share_file(package: str, file_name: str, origin: Origin | None = None) -> str:
+    """A file found below a package's share, the deepest folders first, as simple_launch's
+    `find` walks it (`os.walk(..., topdown=False)`): `share/launch/x.py` wins over `share/x.py`.
+    """
+    share = package_share(package, origin)
+    for root, _dirs, files in os.walk(share, topdown=False):
+        if file_name in files:
+            return os.path.join(root, file_name)
+    raise PackageError(
+        f"file '{file_name}' not found in the share of package '{package}' ({share})", origin,
+        hint="give its folder (file_dir= / launch_dir=) or check the file name")
+
+
 class _FindFile(Substitution):
     """simple_launch's `find` when some part is only known at resolve time."""
 
@@ -90,7 +103,7 @@ class _FindFile(Substitution):
             return file_name
         package = perform(self.package, context)
         if self.file_dir is None:
-            return str(find_in_share(package, file_name, self.origin))
+            return share_file(package, file_name, self.origin)
         return os.path.join(package_share(package, self.origin), perform(self.file_dir, context),
                             file_name)
 
@@ -99,15 +112,15 @@ class _FindFile(Substitution):
         return f"$(find {'/'.join(parts)})"
 
 
-class SimpleLauncher:
-    """The entry point of the simple_launch DSL."""
+class SimpleLauncher(GazeboLauncher):
+    """The entry point of the simple_launch DSL (the Gazebo helpers come from gazebo.py)."""
 
     def __init__(self, namespace: SubValue = "", use_sim_time: Any = None,
                  scope_included_files: bool = False) -> None:
         self.namespace = namespace or ""
         self.scope_included_files = scope_included_files
         self.sim_time: Any = None
-        self.gz_axes: tuple[str, ...] = _GZ_AXES
+        self.gz_axes: tuple[str, ...] = GZ_AXES
         self._context: PerformContext | None = None
         self._root = Group(namespace=self.namespace or None, scoped=False, label="root")
         self._stack: list[Group] = [self._root]
@@ -374,11 +387,20 @@ class SimpleLauncher:
 
     def robot_state_publisher(self, package: SubValue = None, description_file: SubValue = None,
                               description_dir: SubValue = None, xacro_args: Any = None,
+                              namespaced_tf: bool = False, prefix_gz_plugins: bool = False,
                               **node_args: Any) -> Any:
+        if prefix_gz_plugins:
+            raise DslError("robot_state_publisher(prefix_gz_plugins=True) is not supported "
+                           "(simple_launch 1.10 removed it)", caller_origin(),
+                           hint="remove it; give frame names in the robot's description instead")
         description = self.robot_description(package, description_file, description_dir,
                                              xacro_args)
         params = parameter_list(node_args.pop("parameters", []))
         node_args["parameters"] = [*params, {"robot_description": description}]
+        if namespaced_tf:
+            # simple_launch 1.9: /tf and /tf_static stay inside the robot's namespace
+            remaps = pair_list(node_args.pop("remappings", None), "remappings")
+            node_args["remappings"] = [*remaps, ("/tf", "tf"), ("/tf_static", "tf_static")]
         return self.node("robot_state_publisher", "robot_state_publisher", **node_args)
 
     def joint_state_publisher(self, use_gui: Any = True, **node_args: Any) -> None:
@@ -410,37 +432,20 @@ class SimpleLauncher:
         if file_dir is not None:
             return os.path.join(package_share(str(package), origin), str(file_dir),
                                 str(file_name))
-        return str(find_in_share(str(package), str(file_name), origin))
+        return share_file(str(package), str(file_name), origin)
 
     def name_join(self, *elems: Any) -> Any:
         return self._try_perform(SimpleSubstitution(list(elems)))
 
     def path_join(self, *paths: Any) -> Any:
-        return self._try_perform(SimpleSubstitution(PathJoin([p for p in paths if p is not None])))
+        joined = SimpleSubstitution()
+        for path in paths:
+            joined = slash_join(joined, path)
+        return self._try_perform(joined)
 
     @staticmethod
     def ros_version() -> str:
         return os.environ.get("ROS_DISTRO", "jazzy")
-
-    # --- Gazebo axes (the launch-argument part; the simulator helpers need Gazebo) ---------
-
-    def declare_gazebo_axes(self, **axes: Any) -> None:
-        if axes:
-            self.gz_axes = tuple(a for a in _GZ_AXES if a in axes)
-            for axis in self.gz_axes:
-                self.declare_arg(axis, default_value=axes[axis])
-            return
-        self.gz_axes = _GZ_AXES
-        for axis in self.gz_axes:
-            self.declare_arg(axis, default_value=0.0)
-
-    def gazebo_axes_args(self) -> list[Any]:
-        tags = {"x": "x", "y": "y", "z": "z", "roll": "R", "pitch": "P", "yaw": "Y"}
-        out: list[Any] = []
-        for axis, tag in tags.items():
-            if axis in self.gz_axes:
-                out += ["-" + tag, self.arg(axis)]
-        return out
 
 
 def parameter_list(value: Any) -> list[Any]:
@@ -456,4 +461,4 @@ def parameter_list(value: Any) -> list[Any]:
     return [value]
 
 
-__all__ = ["SimpleLauncher", "flatten"]
+__all__ = ["GazeboBridge", "SimpleLauncher", "flatten", "share_file"]

@@ -117,7 +117,7 @@ class Node(Entity):
         cwd: SubValue = None,
         sigterm_timeout: Any = None,
         sigkill_timeout: Any = None,
-        emulate_tty: bool = False,
+        emulate_tty: Any = None,
         node_name: SubValue = None,
         node_executable: SubValue = None,
         node_namespace: SubValue = None,
@@ -157,6 +157,7 @@ class Node(Entity):
         self.cwd = cwd
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
+        self.emulate_tty = emulate_tty
         self.components: list[ComposableNode] = []
 
     def describe(self) -> str:
@@ -183,9 +184,11 @@ class ExecuteProcess(Entity):
         condition: Condition | None = None,
         sigterm_timeout: Any = None,
         sigkill_timeout: Any = None,
+        emulate_tty: Any = None,
         **_: Any,
     ) -> None:
         self._init_entity(condition)
+        self.emulate_tty = emulate_tty
         self.cmd = cmd
         self.name = name
         self.cwd = cwd
@@ -290,6 +293,7 @@ class Group(Entity):
         self.launch_configurations = launch_configurations or {}
         self.label = label
         self.dsl_owner: Any = None
+        self.forwarding = True  # False: a scoped group starts without the outer configurations
 
     def describe(self) -> str:
         return self.label or "group"
@@ -311,6 +315,7 @@ def GroupAction(
         launch_configurations=launch_configurations,
     )
     group.origin = caller_origin()
+    group.forwarding = forwarding
     return group
 
 
@@ -330,6 +335,14 @@ class SetParameter(Entity):
         self._init_entity(condition)
         self.name = name
         self.value = value
+
+
+class SetParametersFromFile(Entity):
+    """A parameter file given to every node that follows in the same scope."""
+
+    def __init__(self, filename: SubValue, condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.filename = filename
 
 
 class SetRemap(Entity):
@@ -359,6 +372,22 @@ class SetLaunchConfiguration(Entity):
         self._init_entity(condition)
         self.name = name
         self.value = value
+
+
+class ResetLaunchConfigurations(Entity):
+    """Forget every launch configuration of the current scope but the ones given."""
+
+    def __init__(self, launch_configurations: dict[Any, Any] | None = None,
+                 condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.launch_configurations = dict(launch_configurations or {})
+
+
+class ResetEnvironment(Entity):
+    """Undo the environment changes of the current scope (back to tuilaunch's own)."""
+
+    def __init__(self, condition: Condition | None = None) -> None:
+        self._init_entity(condition)
 
 
 class LaunchDescriptionSource:

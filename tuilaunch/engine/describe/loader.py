@@ -54,14 +54,17 @@ def compat_modules() -> Iterator[None]:
 
 
 def load_file(path: str, origin: Origin | None = None) -> LoadedFile:
-    """Execute a Python launch file and call its generate_launch_description()."""
+    """Read an XML or YAML launch file, or execute a Python one and call its
+    generate_launch_description() (any other extension is taken as Python, as launch does)."""
     path = os.path.abspath(path)
     if not os.path.isfile(path):
         raise PackageError(f"launch file {path} does not exist", origin)
-    if not path.endswith(".py"):
-        raise LaunchError(f"{path}: only Python launch files are supported", origin,
-                          hint="XML and YAML launch files are not read by tuilaunch yet")
     _loaded_files.add(path)
+    from .frontends import frontend_of, load_frontend_file
+
+    kind = frontend_of(path)
+    if kind is not None:
+        return LoadedFile(path, load_frontend_file(path, kind, origin))
     try:
         with open(path, encoding="utf-8") as handle:
             source = handle.read()

@@ -29,6 +29,8 @@ class PerformContext:
     launch_file: str | None = None
     environment: Mapping[str, str] = field(default_factory=lambda: os.environ)
     event_locals: dict[str, Any] = field(default_factory=dict)
+    # (name, value) pairs of SetParameter in scope, for launch_ros's `$(param name)`
+    global_parameters: list[tuple[Any, Any]] = field(default_factory=list)
 
 
 class Substitution:
@@ -54,14 +56,23 @@ class Substitution:
         return SimpleSubstitution(other, self)
 
     def __truediv__(self, other: SubValue) -> SimpleSubstitution:
-        if other is None:
-            return SimpleSubstitution(self)
-        return SimpleSubstitution(PathJoin([self, other]))
+        return slash_join(self, other)
 
     def __rtruediv__(self, other: SubValue) -> SimpleSubstitution:
-        if other is None:
-            return SimpleSubstitution(self)
-        return SimpleSubstitution(PathJoin([other, self]))
+        return slash_join(other, self)
+
+
+def _is_empty(value: SubValue) -> bool:
+    if isinstance(value, SimpleSubstitution):
+        return all(_is_empty(part) for part in value.parts)
+    return value is None or value == ""
+
+
+def slash_join(left: SubValue, right: SubValue) -> SimpleSubstitution:
+    """simple_launch's `/`: a literal '/' between the parts (not os.path.join, so
+    `'/model' / robot / '/pose'` keeps both slashes), none next to a part known empty."""
+    sep = None if _is_empty(left) or _is_empty(right) else "/"
+    return SimpleSubstitution(left, sep, right)
 
 
 def flatten(value: SubValue) -> list[Any]:
@@ -422,12 +433,25 @@ class EqualsSubstitution(Substitution):
         self.left, self.right = left, right
 
     def perform(self, context: PerformContext) -> str:
-        return str(perform(self.left, context) == perform(self.right, context)).lower()
+        return str(_texts_equal(perform(self.left, context), perform(self.right, context)))\
+            .lower()
 
 
 class NotEqualsSubstitution(EqualsSubstitution):
     def perform(self, context: PerformContext) -> str:
-        return str(perform(self.left, context) != perform(self.right, context)).lower()
+        return str(not _texts_equal(perform(self.left, context), perform(self.right, context)))\
+            .lower()
+
+
+def _texts_equal(left: str, right: str) -> bool:
+    """launch's equality: booleans by value (True = true = 1), numbers within rounding."""
+    left_bool, right_bool = text_to_bool(left), text_to_bool(right)
+    if left_bool is not None and right_bool is not None:
+        return left_bool == right_bool
+    try:
+        return math.isclose(float(left), float(right))
+    except ValueError:
+        return left == right
 
 
 class IfElseSubstitution(Substitution):

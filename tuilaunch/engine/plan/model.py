@@ -95,6 +95,8 @@ class ProcessPlan:
     origin: Origin | None
     error: str | None = None
     components: list[dict[str, Any]] = field(default_factory=list)
+    output: str = "screen"
+    emulate_tty: bool | None = None  # None: a terminal when the output is shown
 
     @property
     def full_name(self) -> str | None:

@@ -6,10 +6,10 @@ Values known only as substitutions are read as YAML once performed, as launch_ro
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 from typing import Any
-
-import yaml
 
 from ..describe.substitutions import PerformContext, Substitution, flatten, perform
 from ..errors import LaunchError, Origin
@@ -35,6 +35,8 @@ def _is_string_typed(value: Any) -> bool:
 
 def yaml_typed(text: str) -> ParamValue:
     """A performed string as ROS would type it: bool, int, float, homogeneous list or str."""
+    import yaml  # here, not at the top: a launch without parameters starts sooner
+
     try:
         loaded = yaml.safe_load(text)
     except yaml.YAMLError:
@@ -52,6 +54,10 @@ def typed_value(value: Any, context: PerformContext, where: str, origin: Origin 
     if isinstance(value, ParameterValue):
         if value.value_type is str:
             return perform(value.value, context)
+        if isinstance(value.value_type, str):  # a frontend's type=: int, list_of_float, ...
+            from ..describe.frontends.type_utils import typed_parameter
+
+            return typed_parameter(value.value, value.value_type, context, where, origin)
         return typed_value(value.value, context, where, origin)
     if isinstance(value, bool | int | float):
         return value
@@ -93,8 +99,28 @@ def flatten_parameters(params: dict[Any, Any], context: PerformContext, origin: 
 
 
 def write_parameter_file(path: Path, params: dict[str, ParamValue]) -> None:
-    """A `--params-file` for one node; `/**` so the values apply whatever the node's name."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w") as handle:
+    """A `--params-file` for one node; `/**` so the values apply whatever the node's name.
+
+    Only the user can read it (0600), in a folder only the user can enter; it is created
+    afresh (never through a symlink, never into someone else's file)."""
+    import yaml
+
+    _private_folder(path.parent)
+    path.unlink(missing_ok=True)
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC,
+                 0o600)
+    with os.fdopen(fd, "w") as handle:
         yaml.safe_dump({"/**": {"ros__parameters": params}}, handle, default_flow_style=False,
                        sort_keys=False)
+
+
+def _private_folder(folder: Path) -> None:
+    try:
+        folder.mkdir(mode=0o700, parents=True)
+        return
+    except FileExistsError:
+        pass
+    info = os.lstat(folder)
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.geteuid() or info.st_mode & 0o077:
+        raise LaunchError(f"parameter folder {folder} is not a private folder of this user "
+                          "(a symlink, another owner, or open to others): not writing there")

@@ -7,7 +7,9 @@ default when the argument has no value yet.
 
 from __future__ import annotations
 
+import atexit
 import os
+import re
 import shlex
 import shutil
 import sys
@@ -35,10 +37,13 @@ from ..describe.entities import (
     OpaqueFunction,
     PushRosNamespace,
     RegisterEventHandler,
+    ResetEnvironment,
+    ResetLaunchConfigurations,
     SetEnvironmentVariable,
     SetLaunchConfiguration,
     SetParameter,
     SetParameters,
+    SetParametersFromFile,
     SetRemap,
     Shutdown,
     TimerAction,
@@ -61,6 +66,44 @@ from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
 
 DEFAULT_RESPAWN_MAX_RETRIES = 10
+
+_UNSAFE_ID = re.compile(r"[^A-Za-z0-9_.+-]")
+_NAME_CHAR = re.compile(r"[^A-Za-z0-9_]")
+_NAME_RULE = "letters, digits and _, not starting with a digit"
+
+
+def name_problem(name: str, what: str = "node name") -> str | None:
+    """Why rcl would refuse this node name, naming the bad character; None when valid."""
+    if not name:
+        return f"{what} is empty"
+    bad = _NAME_CHAR.search(name)
+    if bad:
+        return (f"{what} {name!r} has {bad.group()!r} at position {bad.start() + 1} "
+                f"({_NAME_RULE})")
+    if name[0].isdigit():
+        return f"{what} {name!r} starts with the digit {name[0]!r} ({_NAME_RULE})"
+    return None
+
+
+def namespace_problem(namespace: str) -> str | None:
+    """Why rcl would refuse this (absolute) namespace, naming the bad character."""
+    bad = re.search(r"[^A-Za-z0-9_/]", namespace)
+    if bad:
+        return (f"namespace {namespace!r} has {bad.group()!r} at position {bad.start() + 1} "
+                f"(each part: {_NAME_RULE})")
+    digit = re.search(r"/[0-9]", namespace)
+    if digit:
+        return (f"namespace {namespace!r} has a part starting with the digit "
+                f"{digit.group()[1]!r} at position {digit.start() + 2} (each part: {_NAME_RULE})")
+    return None
+
+
+def _seconds(value: Any, ctx: PerformContext, what: str, origin: Origin | None) -> float:
+    text = perform(value, ctx)
+    try:
+        return float(text)
+    except ValueError:
+        raise LaunchError(f"{what} {text!r} is not a number of seconds", origin) from None
 
 
 def join_namespace(base: str, ns: str | None) -> str:
@@ -99,7 +142,8 @@ class Scope:
         )
 
     def context(self) -> PerformContext:
-        return PerformContext(self.configurations, self.launch_file)
+        return PerformContext(self.configurations, self.launch_file,
+                              global_parameters=self.global_parameters)
 
 
 class Resolver:
@@ -113,12 +157,14 @@ class Resolver:
         self.triggers: list[Trigger] = []
         self.warnings: list[str] = []
         self._counter = 0
+        self._include_stack: list[str] = []
 
     # --- entry -------------------------------------------------------------------------
 
     def resolve(self, loaded: LoadedFile) -> Plan:
         scope = Scope(dict(self.cli_arguments), loaded.path)
         root = TreeItem("group", os.path.basename(loaded.path), True)
+        self._include_stack = [os.path.realpath(loaded.path)]
         self.walk(loaded.entities, scope, root)
         for trigger in self.triggers:
             if trigger.target_entity is not None:
@@ -141,8 +187,10 @@ class Resolver:
             self.visit(entity, scope, parent)
 
     def _next_id(self, base: str) -> str:
+        """A process id is a file name too (its log, its parameters): never a path."""
         self._counter += 1
-        return f"{base}-{self._counter}"
+        safe = _UNSAFE_ID.sub("_", base).lstrip(".") or "process"
+        return f"{safe}-{self._counter}"
 
     def _gate(self, entity: Any, scope: Scope) -> tuple[bool, ConditionOutcome | None]:
         """Whether an entity runs, and the condition that stops it if it does not."""
@@ -197,9 +245,22 @@ class Resolver:
             if self._gate(entity, scope)[0]:
                 ctx = scope.context()
                 scope.configurations[perform(entity.name, ctx)] = perform(entity.value, ctx)
+        elif isinstance(entity, ResetLaunchConfigurations):
+            if self._gate(entity, scope)[0]:
+                ctx = scope.context()
+                kept = {perform(k, ctx): perform(v, ctx)
+                        for k, v in entity.launch_configurations.items()}
+                scope.configurations.clear()
+                scope.configurations.update(kept)
+        elif isinstance(entity, ResetEnvironment):
+            if self._gate(entity, scope)[0]:
+                scope.env.clear()
         elif isinstance(entity, SetParameter):
             if self._gate(entity, scope)[0]:
                 scope.global_parameters.append((entity.name, entity.value))
+        elif isinstance(entity, SetParametersFromFile):
+            if self._gate(entity, scope)[0]:
+                scope.global_parameters.append((None, entity.filename))
         elif isinstance(entity, SetRemap):
             if self._gate(entity, scope)[0]:
                 scope.remaps.append((entity.src, entity.dst))
@@ -242,8 +303,13 @@ class Resolver:
         scope.enabled, scope.skipped_by = enabled, skipped
         ctx = scope.context()
         if enabled:
-            for key, value in group.launch_configurations.items():
-                scope.configurations[perform(key, ctx)] = perform(value, ctx)
+            values = {perform(key, ctx): perform(value, ctx)
+                      for key, value in group.launch_configurations.items()}
+            if group.scoped and not group.forwarding:
+                # launch's forwarding=False: the group sees only what it keeps
+                scope.configurations.clear()
+                scope.env.clear()
+            scope.configurations.update(values)
         if group.namespace is not None and enabled:
             scope.namespace = join_namespace(scope.namespace, perform(group.namespace, ctx))
         if group.when is not None:
@@ -336,7 +402,18 @@ class Resolver:
                 raise
             return
         scope.launch_file = loaded.path
-        self.walk(loaded.entities, scope, item)
+        real = os.path.realpath(loaded.path)
+        if real in self._include_stack:
+            if not enabled:
+                return  # a skipped include is shown, not followed round its cycle
+            cycle = [*self._include_stack[self._include_stack.index(real):], real]
+            raise LaunchError("include cycle: " + " -> ".join(map(os.path.basename, cycle)),
+                              include.origin, hint="an included file includes its includer")
+        self._include_stack.append(real)
+        try:
+            self.walk(loaded.entities, scope, item)
+        finally:
+            self._include_stack.pop()
 
     def opaque(self, entity: DslOpaque | OpaqueFunction, scope: Scope, parent: TreeItem) -> None:
         if not self._gate(entity, scope)[0]:
@@ -389,15 +466,20 @@ class Resolver:
             env = {perform(k, ctx): perform(v, ctx) for k, v in entity.env.items()}
         prefix = shlex.split(perform(entity.prefix, ctx)) if entity.prefix is not None else []
         respawn = text_to_bool(perform(entity.respawn, ctx)) or False
-        respawn_delay = float(perform(entity.respawn_delay, ctx)) if entity.respawn_delay \
-            is not None else 0.0
+        respawn_delay = _seconds(entity.respawn_delay, ctx, "respawn_delay", entity.origin) \
+            if entity.respawn_delay is not None else 0.0
         retries = entity.respawn_max_retries
         common = dict(
             env=env, clear_env=clear_env, cwd=perform_optional(entity.cwd, ctx),
             respawn=respawn, respawn_delay=respawn_delay,
             respawn_max_retries=DEFAULT_RESPAWN_MAX_RETRIES if retries is None else retries,
-            sigterm_timeout=_float_or_none(entity.sigterm_timeout, ctx),
-            sigkill_timeout=_float_or_none(entity.sigkill_timeout, ctx),
+            sigterm_timeout=_float_or_none(entity.sigterm_timeout, ctx, "sigterm_timeout",
+                                           entity.origin),
+            sigkill_timeout=_float_or_none(entity.sigkill_timeout, ctx, "sigkill_timeout",
+                                           entity.origin),
+            output=str(perform(entity.output, ctx)) if entity.output is not None else "screen",
+            emulate_tty=None if getattr(entity, "emulate_tty", None) is None
+            else bool(text_to_bool(perform(entity.emulate_tty, ctx))),
             enabled=enabled, skipped_by=skipped, trigger=scope.trigger, origin=entity.origin,
         )
         if isinstance(entity, ExecuteProcess):
@@ -428,23 +510,24 @@ class Resolver:
         namespace = join_namespace(scope.namespace, perform_optional(entity.namespace, ctx))
         # the node's name when it has one: `[monitor-5]` says more than `[listener-5]`
         proc_id = self._next_id(name or os.path.basename(executable))
-        error = None
+        error = (name_problem(name) if name else None) or namespace_problem(namespace)
         exe_path = executable
         if package is not None:
             try:
                 exe_path = str(find_executable(package, executable, entity.origin))
             except PackageError as exc:
-                error = exc.message
+                error = error or exc.message
         elif shutil.which(executable) is None:
-            error = f"executable '{executable}' not found on PATH"
+            error = error or f"executable '{executable}' not found on PATH"
         merged: dict[str, ParamValue] = {}
-        for key, value in scope.global_parameters:
-            merged[perform(key, ctx)] = typed_value(value, ctx, describe(key), entity.origin)
+        # SetParameter pairs and SetParametersFromFile files (key None) come first, in order
+        global_items = [value if key is None else {key: value}
+                        for key, value in scope.global_parameters]
         user_files: list[str] = []
         generated: list[tuple[str, dict[str, Any]]] = []
         params_args: list[str] = []
-        pending: dict[str, ParamValue] = dict(merged)
-        for item in _items(entity.parameters):
+        pending: dict[str, ParamValue] = {}
+        for item in [*global_items, *_items(entity.parameters)]:
             if isinstance(item, dict):
                 values = flatten_parameters(item, ctx, entity.origin)
                 merged.update(values)
@@ -475,7 +558,8 @@ class Resolver:
         cmd = [*prefix, exe_path, *arguments]
         if ros_args:
             cmd += ["--ros-args", *ros_args]
-        components = [self._component(c, ctx, namespace) for c in entity.components]
+        # launch_ros loads components under the pushed namespace, not the container's own
+        components = [self._component(c, ctx, scope.namespace) for c in entity.components]
         return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
                            merged, user_files, generated, remappings, error=error,
                            components=components, **common)
@@ -576,8 +660,9 @@ def _items(value: Any) -> list[Any]:
     return [value]
 
 
-def _float_or_none(value: Any, ctx: PerformContext) -> float | None:
-    return None if value is None else float(perform(value, ctx))
+def _float_or_none(value: Any, ctx: PerformContext, what: str, origin: Origin | None)\
+        -> float | None:
+    return None if value is None else _seconds(value, ctx, what, origin)
 
 
 def describe_entity(entity: Any) -> str:
@@ -606,8 +691,16 @@ class LaunchContextShim(PerformContext):
         return perform(substitution, self)
 
 
+_params_dir: Path | None = None
+
+
 def default_params_dir() -> Path:
-    return Path(tempfile.gettempdir()) / f"tuilaunch-{os.getpid()}-params"
+    """One private folder per tuilaunch process (mkdtemp: 0700, a name nobody can guess)."""
+    global _params_dir
+    if _params_dir is None:
+        _params_dir = Path(tempfile.mkdtemp(prefix=f"tuilaunch-{os.getpid()}-params-"))
+        atexit.register(shutil.rmtree, _params_dir, True)
+    return _params_dir
 
 
 def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,

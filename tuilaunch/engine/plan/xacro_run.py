@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import shlex
 from contextlib import redirect_stderr
 from typing import Any
 
@@ -48,8 +49,27 @@ class Xacro(Substitution):
         self.origin = caller_origin()
 
     def perform(self, context: PerformContext) -> str:
-        mappings = {perform(k, context): perform(v, context) for k, v in self.arguments}
-        return run_xacro(perform(self.path, context), mappings, self.origin)
+        return run_xacro(perform(self.path, context), self.mappings(context), self.origin)
+
+    def mappings(self, context: PerformContext) -> dict[str, str]:
+        """`name:=value` words as simple_launch's `xacro FILE name:=value ...` command line
+        becomes them: split as a shell would, so `rgb:='0 1 0'` gives xacro `0 1 0`."""
+        text = " ".join(f"{perform(k, context)}:={perform(v, context)}"
+                        for k, v in self.arguments)
+        try:
+            words = shlex.split(text)
+        except ValueError as exc:
+            raise LaunchError(f"xacro arguments {text!r} cannot be split as a shell would: "
+                              f"{exc}", self.origin) from None
+        mappings: dict[str, str] = {}
+        for word in words:
+            name, sep, value = word.partition(":=")
+            if not sep:
+                raise LaunchError(
+                    f"xacro argument word {word!r} is not name:=value (in {text!r})",
+                    self.origin, hint="quote a value that holds spaces: \"'0 1 0'\"")
+            mappings[name] = value
+        return mappings
 
     def describe(self) -> str:
         args = " ".join(f"{describe(k)}:={describe(v)}" for k, v in self.arguments)

@@ -1,4 +1,8 @@
-"""Turning a process's raw bytes into lines: partial lines, `\\r` progress, bad UTF-8."""
+"""Turning a process's raw bytes into lines: partial lines, `\\r` progress, bad UTF-8.
+
+Log files keep each line's bytes as the process wrote them (`feed_raw`); what a screen
+shows is cleaned once, here (`screen_text`).
+"""
 
 from __future__ import annotations
 
@@ -12,33 +16,68 @@ def strip_ansi(text: str) -> str:
     return ANSI.sub("", text)
 
 
+def screen_text(raw: bytes) -> str:
+    """What a terminal would leave on the line: a bare `\\r` rewinds it, NULs show nothing."""
+    if raw.endswith(b"\r"):
+        raw = raw[:-1]
+    if b"\r" in raw:
+        raw = raw.rsplit(b"\r", 1)[1]
+    return raw.decode("utf-8", errors="replace").replace("\x00", "")
+
+
+def screen_lines(block: bytes) -> list[str]:
+    """The screen text of a block of whole lines (each ending in `\n`)."""
+    body = block[:-1]
+    text = body.decode("utf-8", errors="replace")
+    if "\r" in text or "\x00" in text:
+        return [screen_text(line) for line in body.split(b"\n")]
+    return text.split("\n")
+
+
 class LineSplitter:
     """Feeds chunks, yields whole lines; keeps the unfinished tail for the next chunk.
 
-    A bare `\\r` rewinds the line as a terminal would, so a progress bar becomes one line,
-    not thousands; a line longer than MAX_LINE is cut into pieces rather than held forever.
+    A line longer than MAX_LINE is cut into pieces rather than held forever.
     """
 
     def __init__(self) -> None:
         self._tail = b""
 
-    def feed(self, chunk: bytes) -> list[str]:
-        data = self._tail + chunk
+    def feed_block(self, chunk: bytes) -> bytes:
+        """The complete lines this chunk ends, as one block of bytes, each line ending in
+        `\n` (empty when none): a flood is handled a chunk at a time, not a line at a time."""
+        data = self._tail + chunk if self._tail else chunk
+        end = data.rfind(b"\n") + 1
+        block, tail = data[:end], data[end:]
+        if len(tail) > MAX_LINE:
+            pieces = []
+            while len(tail) > MAX_LINE:
+                pieces.append(tail[:MAX_LINE])
+                tail = tail[MAX_LINE:]
+            block += b"\n".join(pieces) + b"\n"
+        self._tail = tail
+        return block
+
+    def flush_block(self) -> bytes:
+        tail, self._tail = self._tail, b""
+        return tail + b"\n" if tail else b""
+
+    def feed_raw(self, chunk: bytes) -> list[bytes]:
+        data = self._tail + chunk if self._tail else chunk
         parts = data.split(b"\n")
         self._tail = parts.pop()
         while len(self._tail) > MAX_LINE:
             parts.append(self._tail[:MAX_LINE])
             self._tail = self._tail[MAX_LINE:]
-        return [self._decode(p) for p in parts]
+        return parts
+
+    def flush_raw(self) -> list[bytes]:
+        tail, self._tail = self._tail, b""
+        return [tail] if tail else []
+
+    def feed(self, chunk: bytes) -> list[str]:
+        """Screen lines: a progress bar drawn with `\\r` becomes one line, not thousands."""
+        return [screen_text(p) for p in self.feed_raw(chunk)]
 
     def flush(self) -> list[str]:
-        tail, self._tail = self._tail, b""
-        return [self._decode(tail)] if tail else []
-
-    @staticmethod
-    def _decode(raw: bytes) -> str:
-        if raw.endswith(b"\r"):
-            raw = raw[:-1]
-        if b"\r" in raw:
-            raw = raw.rsplit(b"\r", 1)[1]
-        return raw.decode("utf-8", errors="replace").replace("\x00", "")
+        return [screen_text(p) for p in self.flush_raw()]

@@ -1,51 +1,56 @@
 """Run a Plan: start processes, read their output, fire triggers, respawn, shut down.
 
-Each process gets its own process group and dies with tuilaunch even if tuilaunch is
-killed (PR_SET_PDEATHSIG). Every output line goes to the process's log file before any
-consumer sees it; consumers only get events.
+Each process leads its own process group (its own session); the supervisor signals the
+group as one. A watchdog process stops every process of the launch if tuilaunch dies,
+however it dies (run/watchdog.py). Every output line goes to the process's log file before
+any consumer sees it; consumers only get events, and a consumer that fails (a closed stdout,
+a dead terminal) never stops the reading of a pipe nor a shutdown.
+
+No thread per child: each child's exit is watched through a pidfd on the event loop, and
+its output through non-blocking reads on the same loop.
 """
 
 from __future__ import annotations
 
 import asyncio
-import ctypes
 import os
 import signal
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 from ..describe.entities import Entity, LogInfo, Shutdown, entity_list
 from ..describe.substitutions import PerformContext, perform
 from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
 from ..plan.params import write_parameter_file
 from ..ros.messages import MessageError
-from .output import LineSplitter, strip_ansi
+from .logfiles import LogFile
+from .output import LineSplitter, screen_lines
+from .spawn import Channel, spawn
+from .watchdog import Watchdog
 
 ROS_ACTIONS = ("call_service", "set_parameters")
 
-_PR_SET_PDEATHSIG = 1
+EOF_GRACE = 1.0
+"""Seconds to wait, once a process is reaped, for the end of its output. A daemonised
+grandchild may hold the pipe for ever: its exit is then reported anyway, and whatever it
+still prints is read and logged until the launch ends."""
 
-
-try:  # looked up once here: the child between fork and exec should do as little as possible
-    _prctl: Any = ctypes.CDLL(None, use_errno=True).prctl
-except (OSError, AttributeError):
-    _prctl = None
-
-
-def _die_with_parent() -> None:
-    """Runs in the child before exec: SIGKILL it when the launching thread dies."""
-    if _prctl is not None:
-        _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+_STAGES = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+STOP_RACE = 2.0
+"""Seconds before a stop within which a child's death by that stop's signal counts as part
+of the stop (see Supervisor._real_crashes)."""
 
 
 @dataclass
 class Event:
     """What consumers (the headless printer, the TUI) are told."""
 
-    kind: str  # started | output | exited | failed | respawning | log | shutdown
+    kind: str  # started | output | exited | failed | respawning | log | shutdown | finished
     process: str | None = None
     pid: int | None = None
     stream: str | None = None
@@ -70,14 +75,77 @@ class LaunchEvent:
 Consumer = Callable[[Event], None]
 
 
+class _Reader:
+    """One output channel of a child, read on the loop until its end."""
+
+    def __init__(self, supervisor: Supervisor, running: _Running, channel: Channel) -> None:
+        self.supervisor = supervisor
+        self.running = running
+        self.channel = channel
+        self.splitter = LineSplitter()
+        self.done: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self.stamp = b" " + channel.name.encode() + b" "
+        asyncio.get_running_loop().add_reader(channel.fd, self._readable)
+
+    def _readable(self) -> None:
+        # one chunk per wake-up: a flooding process shares the loop with the others and
+        # the UI; its pipe holds it back meanwhile, and nothing is lost
+        try:
+            chunk = os.read(self.channel.fd, 1 << 16)
+        except BlockingIOError:
+            return
+        except OSError:
+            chunk = b""  # EIO: a pseudo-terminal whose other side is closed
+        if chunk:
+            self._deliver(self.splitter.feed_block(chunk))
+        else:
+            self.close()
+
+    def _deliver(self, block: bytes) -> None:
+        """Whole lines, as one block: to the log file as bytes, then to the consumers."""
+        if not block:
+            return
+        supervisor, running = self.supervisor, self.running
+        prefix = f"{time.time():.6f}".encode() + self.stamp
+        running.log.write(prefix + block[:-1].replace(b"\n", b"\n" + prefix) + b"\n",
+                          block.count(b"\n"))
+        lines = screen_lines(block)
+        supervisor._emit(Event("output", running.plan.id, stream=self.channel.name,
+                               lines=lines))
+        if supervisor._io_watchers:
+            supervisor._dispatch_io(running.plan.id, self.channel.name, lines,
+                                    running.process.pid)
+
+    def close(self) -> None:
+        if self.done.done():
+            return
+        try:
+            asyncio.get_running_loop().remove_reader(self.channel.fd)
+        except RuntimeError:
+            pass  # the loop is gone: nothing to unregister
+        os.close(self.channel.fd)
+        try:
+            self._deliver(self.splitter.flush_block())
+        finally:
+            self.done.set_result(None)
+            self.running.reader_closed()
+
+
 @dataclass
 class _Running:
     plan: ProcessPlan
-    process: asyncio.subprocess.Process
-    log: IO[str]
+    process: Any  # subprocess.Popen[bytes]: pid and returncode as asyncio's Process had
+    log: LogFile
     started: float
+    exited: asyncio.Future[int]
     stopping: bool = False
-    readers: list[asyncio.Task[None]] = field(default_factory=list)
+    readers: list[_Reader] = field(default_factory=list)
+    pidfd: int | None = None
+    reaped: bool = False
+
+    def reader_closed(self) -> None:
+        if self.reaped and all(r.done.done() for r in self.readers):
+            self.log.close()
 
 
 class Supervisor:
@@ -99,16 +167,26 @@ class Supervisor:
         self._io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
         self._on_shutdown: list[ActionPlan] = []
         self.exit_codes: dict[str, int] = {}
+        self.crashes: dict[str, int] = {}
+        """Processes that exited on their own with a non-zero status (not stopped by us)."""
+        self._crash_times: dict[str, float] = {}
+        self._stop_time: float | None = None
         self._running: dict[str, _Running] = {}
+        self._lingering: set[_Reader] = set()  # output still open after its process exited
         self._happened: dict[tuple[str, str], asyncio.Event] = {}
         self._busy = 0  # triggers sleeping or respawns scheduled
         self._tasks: set[asyncio.Task[Any]] = set()
         self._shutting_down = False
+        self._urgency = 0  # 0: SIGINT first; 1: SIGTERM now; 2: SIGKILL now
+        self._hurry: asyncio.Event | None = None
         self._changed = asyncio.Event()
         self._retries: dict[str, int] = {}
         self._keep_alive = False
+        self._reported: set[str] = set()
+        self._env_cache: dict[str, str] | None = None
+        self.watchdog = Watchdog()
         log_dir.mkdir(parents=True, exist_ok=True)
-        self._launch_log = open(log_dir / "launch.log", "a", buffering=1)
+        self._launch_log = LogFile(log_dir / "launch.log", self._report_io)
 
     # --- events ----------------------------------------------------------------------
 
@@ -116,14 +194,38 @@ class Supervisor:
         self.consumers.append(consumer)
 
     def _emit(self, event: Event) -> None:
+        """Tells every consumer; one that raises is reported once and never stops us."""
         if event.kind != "output":
             detail = " ".join(f"{k}={v}" for k, v in (("pid", event.pid), ("code", event.code),
                                                        ("reason", event.reason)) if v is not None)
             self._launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
-                                   f"{detail}\n")
+                                   f"{detail}\n".encode())
         for consumer in list(self.consumers):
-            consumer(event)
+            try:
+                consumer(event)
+            except Exception as exc:
+                self._consumer_failed(consumer, exc)
         self._changed.set()
+
+    def _consumer_failed(self, consumer: Consumer, exc: Exception) -> None:
+        name = getattr(consumer, "__qualname__", type(consumer).__name__)
+        text = f"{name} failed on an event: {type(exc).__name__}: {exc}"
+        if text in self._reported:
+            return
+        self._reported.add(text)
+        self._launch_log.write(f"{time.time():.3f} error  reason={text}\n".encode())
+        _to_stderr(f"tuilaunch: {text}; the launch goes on")
+
+    def _report_io(self, text: str) -> None:
+        """A log file that cannot be written: said to the consumers (on stderr without)."""
+        if not self.consumers:
+            _to_stderr(f"tuilaunch: {text}")
+        event = Event("log", None, reason=text, level="ERROR")
+        for consumer in list(self.consumers):
+            try:
+                consumer(event)
+            except Exception as exc:
+                self._consumer_failed(consumer, exc)
 
     def _flag(self, process_id: str, what: str) -> asyncio.Event:
         return self._happened.setdefault((process_id, what), asyncio.Event())
@@ -133,31 +235,70 @@ class Supervisor:
     async def run(self, keep_alive: bool = False) -> int:
         """Runs until nothing can happen any more, or shutdown; returns an exit status.
 
+        0 when every process ended well or was stopped on request (whatever signal it died
+        of); 1 when a process could not start or exited on its own with a failure.
+
         With keep_alive (an interactive UI), only shutdown ends the run: an operator who
         stops every process still wants to start them again."""
         self._keep_alive = keep_alive
-        for proc in self.plan.processes:
-            if proc.enabled:
-                self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
-        for action in self.plan.actions:
-            if action.enabled:
-                self._schedule_action(action)
-        while not self._settled():
-            self._changed.clear()
-            await self._changed.wait()
+        try:
+            for proc in self.plan.processes:
+                if proc.enabled and proc.trigger is None:
+                    self._start_now(proc.id)  # no task per process: start-up at the floor
+                elif proc.enabled:
+                    self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
+            for action in self.plan.actions:
+                if action.enabled:
+                    self._schedule_action(action)
+            while not self._settled():
+                self._changed.clear()
+                await self._changed.wait()
+        finally:
+            await self._finish()
+        failed = [item for item, state in self.states.items() if state == "failed"]
+        return 1 if failed or self._real_crashes() else 0
+
+    def _real_crashes(self) -> dict[str, int]:
+        """Crashes, less the processes that died of the stop signal itself just before the
+        stop was seen: a terminal's Ctrl+C or hang-up reaches a child that is still in
+        tuilaunch's process group for the instant between its fork and its own session."""
+        if self._stop_time is None:
+            return self.crashes
+        return {pid: code for pid, code in self.crashes.items()
+                if not (-code in _STOP_SIGNALS and
+                        self._stop_time - self._crash_times[pid] < STOP_RACE)}
+
+    async def _finish(self) -> None:
+        """Whatever ended the run: nothing left running, nothing left open."""
+        if self._running:  # cancelled from outside: stop what still runs, quickly
+            self._shutting_down = True
+            self._urgency = max(self._urgency, 1)
+            await asyncio.gather(*(self._escalate(r) for r in list(self._running.values())),
+                                 return_exceptions=True)
         await self._drain()
+        for reader in list(self._lingering):
+            reader.close()
         if self._bridge is not None and self._bridge_factory is None:
             await asyncio.to_thread(self._bridge.close)
         self._launch_log.close()
         self._remove_parameter_files()
-        failed = [item for item, state in self.states.items() if state == "failed"]
-        bad_exit = [pid for pid, code in self.exit_codes.items() if code != 0]
-        return 1 if failed or bad_exit else 0
+        # the watchdog stops what a node left behind (daemons, stray group members)
+        self.watchdog.close()
+        deadline = time.monotonic() + self.watchdog.grace + 3.0
+        while not self.watchdog.finished() and time.monotonic() < deadline:
+            await asyncio.sleep(0.02)
 
     def _spawn_task(self, coro: Any) -> None:
         task = asyncio.ensure_future(coro)
         self._tasks.add(task)
-        task.add_done_callback(self._tasks.discard)
+        task.add_done_callback(self._task_done)
+
+    def _task_done(self, task: asyncio.Task[Any]) -> None:
+        self._tasks.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            exc = task.exception()
+            self._report_io(f"internal error: {type(exc).__name__}: {exc}")
+            self._changed.set()
 
     def _settled(self) -> bool:
         if self._shutting_down:
@@ -168,9 +309,10 @@ class Supervisor:
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
         # a pending item can still start only if what it waits for is alive or pending
-        return not any(state == "pending" for state in self.states.values()) or all(
-            not self._can_fire(p.trigger) for p in self.plan.processes
-            if self.states[p.id] == "pending")
+        waiting = [p.trigger for p in self.plan.processes if self.states[p.id] == "pending"]
+        waiting += [a.trigger for a in self.plan.actions if self.states.get(a.id) == "pending"
+                    and not _on_event(a.trigger)]
+        return not any(self._can_fire(trigger) for trigger in waiting)
 
     def _can_fire(self, trigger: Trigger | None) -> bool:
         while trigger is not None:
@@ -344,73 +486,152 @@ class Supervisor:
 
     async def start(self, process_id: str) -> None:
         """Starts one process (also a stopped or exited one, from the UI)."""
+        self._start_now(process_id)
+
+    def _start_now(self, process_id: str) -> None:
+        """From the check that the launch is not shutting down to the registration of the
+        child nothing awaits, so a shutdown either prevents the start or sees the child."""
         proc = self.plan.process(process_id)
         if process_id in self._running or self._shutting_down:
             return
         if proc.error:
-            self.states[process_id] = "failed"
-            self._emit(Event("failed", process_id, reason=proc.error))
+            where = f" ({proc.origin})" if proc.origin else ""
+            self._fail(process_id, proc.error + where)
             return
-        for path, values in proc.generated_parameter_files:
-            write_parameter_file(Path(path), values)
-        env = {} if proc.clear_env else dict(os.environ)
+        try:
+            for path, values in proc.generated_parameter_files:
+                write_parameter_file(Path(path), values)
+        except Exception as exc:  # a LaunchError or an OSError: either way, one line
+            self._fail(process_id, f"cannot write its parameter file: {exc}")
+            return
+        env = {} if proc.clear_env else dict(self._base_env())
         env.update(proc.env)
         env.setdefault("PYTHONUNBUFFERED", "1")
         env.setdefault("RCUTILS_LOGGING_BUFFERED_STREAM", "1")
         env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0" if os.environ.get("NO_COLOR") else "1")
+        self.watchdog.start()
+        if self.watchdog.error and "watchdog" not in self._reported:
+            self._reported.add("watchdog")
+            self._report_io(f"{self.watchdog.error}: processes may outlive a crash of "
+                            "tuilaunch")
+        self.watchdog.mark(env)
+        log_path = self.log_dir / f"{process_id}.log"
         try:
-            child = await asyncio.create_subprocess_exec(
-                *proc.cmd, stdin=asyncio.subprocess.DEVNULL, stdout=asyncio.subprocess.PIPE,
-                stderr=asyncio.subprocess.PIPE, env=env, cwd=proc.cwd, start_new_session=True,
-                preexec_fn=_die_with_parent)
+            log = LogFile(log_path, self._report_io)
         except OSError as exc:
-            self.states[process_id] = "failed"
-            self._emit(Event("failed", process_id, reason=f"cannot start {proc.cmd[0]}: "
-                             f"{exc.strerror or exc}"))
+            self._fail(process_id, f"cannot open its log file {log_path}: "
+                       f"{exc.strerror or exc}")
             return
-        log = open(self.log_dir / f"{process_id}.log", "a", buffering=1 << 16)
-        running = _Running(proc, child, log, time.monotonic())
-        self._running[process_id] = running
+        try:
+            child = spawn(proc.cmd, env, proc.cwd, _wants_tty(proc))
+        except Exception as exc:  # OSError, or ValueError for a NUL byte in an argument
+            log.close()
+            what = getattr(exc, "filename", None)
+            what = what if isinstance(what, str) else proc.cmd[0]
+            self._fail(process_id, f"cannot start {what}: "
+                       f"{getattr(exc, 'strerror', None) or exc}")
+            return
+        popen = child.popen
+        loop = asyncio.get_running_loop()
+        running = None
+        try:
+            self.watchdog.watch(popen.pid)
+            running = _Running(proc, popen, log, time.monotonic(), loop.create_future())
+            self._running[process_id] = running
+            self._watch_exit(running)
+            for channel in child.channels:
+                running.readers.append(_Reader(self, running, channel))
+        except Exception as exc:
+            # nothing may run that nobody reads or stops
+            _kill_group(popen.pid, signal.SIGKILL)
+            popen.wait()
+            if running is not None and running.pidfd is not None:
+                loop.remove_reader(running.pidfd)
+                _close_quietly(running.pidfd)
+            for channel in child.channels:
+                loop.remove_reader(channel.fd)
+                _close_quietly(channel.fd)
+            log.close()
+            self._running.pop(process_id, None)
+            self._fail(process_id, f"could not be tracked and was killed: "
+                       f"{type(exc).__name__}: {exc}")
+            return
         self.states[process_id] = "running"
-        self._emit(Event("started", process_id, pid=child.pid))
+        self._emit(Event("started", process_id, pid=popen.pid))
         self._flag(process_id, "start").set()
-        assert child.stdout is not None and child.stderr is not None
-        running.readers = [asyncio.ensure_future(self._read(running, child.stdout, "stdout")),
-                           asyncio.ensure_future(self._read(running, child.stderr, "stderr"))]
         self._spawn_task(self._wait(running))
 
-    async def _read(self, running: _Running, stream: asyncio.StreamReader, name: str) -> None:
-        splitter = LineSplitter()
-        while True:
-            chunk = await stream.read(1 << 16)
-            lines = splitter.feed(chunk) if chunk else splitter.flush()
-            if lines:
-                stamp = f"{time.time():.6f} {name} "
-                running.log.write("".join(stamp + strip_ansi(line) + "\n" for line in lines))
-                # on disk at once: a tail -f sees it, and a SIGKILL of tuilaunch loses nothing
-                running.log.flush()
-                self._emit(Event("output", running.plan.id, stream=name, lines=lines))
-                if self._io_watchers:
-                    self._dispatch_io(running.plan.id, name, lines, running.process.pid)
-            if not chunk:
-                return
-            # a flooding process must not starve the UI sharing this loop: yield between
-            # chunks; the pipe then holds the producer back, and nothing is lost
-            await asyncio.sleep(0)
+    def _base_env(self) -> dict[str, str]:
+        """tuilaunch's environment as it was at the first start: read once, not per child."""
+        if self._env_cache is None:
+            self._env_cache = dict(os.environ)
+        return self._env_cache
+
+    def _fail(self, process_id: str, reason: str) -> None:
+        self.states[process_id] = "failed"
+        self._emit(Event("failed", process_id, reason=reason))
+
+    def _watch_exit(self, running: _Running) -> None:
+        """The child's exit wakes the loop through a pidfd: no thread per child."""
+        loop = asyncio.get_running_loop()
+        try:
+            running.pidfd = os.pidfd_open(running.process.pid)
+        except (OSError, AttributeError):
+            running.pidfd = None  # old kernel, or no descriptor left: poll instead
+            loop.call_later(0.05, self._poll_exit, running)
+            return
+        loop.add_reader(running.pidfd, self._reap, running)
+
+    def _poll_exit(self, running: _Running) -> None:
+        if running.process.poll() is not None:
+            self._reap(running)
+        else:
+            asyncio.get_running_loop().call_later(0.05, self._poll_exit, running)
+
+    def _reap(self, running: _Running) -> None:
+        if running.pidfd is not None:
+            asyncio.get_running_loop().remove_reader(running.pidfd)
+            os.close(running.pidfd)
+            running.pidfd = None
+        code = running.process.wait()  # a zombie by now: does not block
+        if not running.exited.done():
+            running.exited.set_result(code)
 
     async def _wait(self, running: _Running) -> None:
-        code = await running.process.wait()
-        await asyncio.gather(*running.readers)
-        running.log.close()
+        code = await running.exited
+        running.reaped = True
+        pending = [r.done for r in running.readers if not r.done.done()]
+        if pending:
+            await asyncio.wait(pending, timeout=EOF_GRACE)
+        lingering = [r for r in running.readers if not r.done.done()]
+        self._lingering.update(lingering)
+        for reader in lingering:
+            reader.done.add_done_callback(self._forget_reader(reader))
+        if not lingering:
+            running.log.close()
+        if not _group_alive(running.process.pid):
+            self.watchdog.forget(running.process.pid)
         process_id = running.plan.id
         del self._running[process_id]
         self.exit_codes[process_id] = code
+        requested = running.stopping or self._shutting_down
+        if code != 0 and not requested:
+            self.crashes[process_id] = code
+            self._crash_times[process_id] = time.monotonic()
         self.states[process_id] = "exited"
         self._emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=_describe_exit(code)))
         self._flag(process_id, "exit").set()
         if self._should_respawn(running, code):
             await self._respawn(running)
+        elif running.plan.respawn and code != 0 and not requested:
+            tries = self._retries.get(process_id, 0)
+            self._emit(Event("log", process_id, level="ERROR", reason=(
+                f"respawn gives up: it failed {tries + 1} times "
+                f"(respawn_max_retries={running.plan.respawn_max_retries})")))
+
+    def _forget_reader(self, reader: _Reader) -> Callable[[asyncio.Future[None]], None]:
+        return lambda _: self._lingering.discard(reader)
 
     def _should_respawn(self, running: _Running, code: int) -> bool:
         proc = running.plan
@@ -504,37 +725,88 @@ class Supervisor:
         if self._shutting_down:
             return
         self._shutting_down = True
-        self._emit(Event("shutdown", reason=reason))
-        for action in self._on_shutdown:
-            await self._run_action(action, LaunchEvent(reason=reason))
-        await asyncio.gather(*(self._escalate(r) for r in list(self._running.values())))
-        self._changed.set()
+        self._stop_time = time.monotonic()
+        try:
+            self._emit(Event("shutdown", reason=reason))
+            for action in self._on_shutdown:
+                try:
+                    await self._run_action(action, LaunchEvent(reason=reason))
+                except Exception as exc:  # an OnShutdown action never stops the shutdown
+                    self._report_io(f"on-shutdown action {action.id} raised "
+                                    f"{type(exc).__name__}: {exc}")
+        finally:
+            await asyncio.gather(*(self._escalate(r) for r in list(self._running.values())),
+                                 return_exceptions=True)
+            self._changed.set()
+
+    def escalate_now(self) -> str | None:
+        """The operator insists (a second Ctrl+C): SIGTERM now; once more: SIGKILL.
+
+        Returns the signal's name now sent, or None when nothing is left to stop."""
+        if not self._running:
+            return None
+        self._urgency = min(self._urgency + 1, len(_STAGES) - 1)
+        if self._hurry is not None:
+            self._hurry.set()
+        self._hurry = None
+        if not self._shutting_down:
+            self._spawn_task(self.shutdown("stop requested again"))
+        return _STAGES[self._urgency].name
 
     async def _escalate(self, running: _Running) -> None:
-        """SIGINT, then SIGTERM, then SIGKILL, to the whole process group."""
+        """SIGINT, then SIGTERM, then SIGKILL, to the whole process group.
+
+        The waits are the process's own sigterm_timeout / sigkill_timeout when it sets them;
+        each step is announced; `escalate_now` skips the wait."""
         running.stopping = True
-        for sig, wait in ((signal.SIGINT, self.sigterm_timeout),
-                          (signal.SIGTERM, self.sigkill_timeout), (signal.SIGKILL, None)):
-            if running.process.returncode is not None:
-                return
+        proc = running.plan
+        waits = (proc.sigterm_timeout if proc.sigterm_timeout is not None
+                 else self.sigterm_timeout,
+                 proc.sigkill_timeout if proc.sigkill_timeout is not None
+                 else self.sigkill_timeout, 10.0)
+        sent = -1
+        stage = 0
+        why = ""
+        while not running.exited.done():
+            stage = max(stage, self._urgency if self._shutting_down else 0)
+            if stage > sent:
+                if stage > 0:
+                    self._emit(Event("log", proc.id, level="WARN", reason=(
+                        f"{why}sending {_STAGES[stage].name} to its process group")))
+                if not _kill_group(running.process.pid, _STAGES[stage]):
+                    break  # the whole group is gone; the exit arrives through the pidfd
+                sent = stage
+            if self._hurry is None:
+                self._hurry = asyncio.Event()
+            hurry: asyncio.Future[Any] = asyncio.ensure_future(self._hurry.wait())
+            exited: asyncio.Future[Any] = running.exited
             try:
-                os.killpg(running.process.pid, sig)
-            except ProcessLookupError:
+                await asyncio.wait([exited, hurry], timeout=waits[stage],
+                                   return_when=asyncio.FIRST_COMPLETED)
+            finally:
+                hurry.cancel()
+            if running.exited.done():
+                break
+            if stage == len(_STAGES) - 1:
+                self._emit(Event("log", proc.id, level="ERROR", reason=(
+                    f"still there {waits[stage]:g} s after SIGKILL (stuck in the kernel?); "
+                    "no longer waiting for it")))
                 return
-            try:
-                await asyncio.wait_for(asyncio.shield(running.process.wait()), wait)
-                return
-            except TimeoutError:
-                continue
+            if self._urgency > stage and self._shutting_down:
+                why = "asked again: "
+            else:
+                why = f"still running {waits[stage]:g} s after {_STAGES[stage].name}: "
+                stage += 1
+        await asyncio.shield(running.exited)
 
     def kill_all(self) -> None:
-        """Last resort when the caller cannot wait (the UI is being torn down): SIGKILL."""
+        """Last resort when the caller cannot wait (the UI is being torn down): SIGKILL,
+        and the watchdog sweeps what the processes left behind."""
+        self._shutting_down = True
         for running in list(self._running.values()):
-            try:
-                os.killpg(running.process.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+            _kill_group(running.process.pid, signal.SIGKILL)
         self._remove_parameter_files()
+        self.watchdog.close()
 
     async def _drain(self) -> None:
         for task in list(self._tasks):
@@ -550,6 +822,60 @@ class Supervisor:
             self.plan.params_dir.rmdir()
         except OSError:
             pass
+
+
+def _on_event(trigger: Trigger | None) -> bool:
+    """Run by an event each time it happens (output, shutdown), not once when ready."""
+    while trigger is not None:
+        if trigger.on in ("io", "shutdown"):
+            return True
+        trigger = trigger.after
+    return False
+
+
+def _wants_tty(proc: ProcessPlan) -> bool:
+    """emulate_tty when the file says; else a terminal for every process whose output is
+    shown, so C/C++ programs print line by line instead of in bursts at exit."""
+    explicit = getattr(proc, "emulate_tty", None)
+    if explicit is not None:
+        return bool(explicit)
+    return getattr(proc, "output", "screen") in ("screen", "both")
+
+
+def _kill_group(pgid: int, sig: signal.Signals) -> bool:
+    try:
+        os.killpg(pgid, sig)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # a member changed user (sudo in a wrapper): the others got it
+    return True
+
+
+def _group_alive(pgid: int) -> bool:
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _close_quietly(fd: int) -> None:
+    try:
+        os.close(fd)
+    except OSError:
+        pass
+
+
+def _to_stderr(text: str) -> None:
+    """A message for the operator; a dead terminal must not turn it into a failure."""
+    try:
+        sys.stderr.write(text + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
 
 
 def _call_handler(callback: Any, event: LaunchEvent, action: ActionPlan) -> Any:

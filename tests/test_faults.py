@@ -1,0 +1,530 @@
+"""The supervisor under faults, each reproduced with real processes: a consumer that fails,
+a full disk, a dead terminal, daemons holding pipes, signals during bring-up, tuilaunch
+killed outright, and what an operator sees while a launch stops."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+import uuid
+from pathlib import Path
+
+import pytest
+
+from tuilaunch.engine import load_file, resolve
+from tuilaunch.engine.run.supervisor import Event, Supervisor
+
+from .conftest import run_cli
+from .test_supervisor import HEADER, STUBBORN, alive, pids_of, read_until, start_headless, wait_gone
+
+PROCESS_HEADER = HEADER + "from launch.actions import ExecuteProcess\n"
+
+
+def tagged(tag: str) -> list[int]:
+    """Live processes whose command line holds the tag (what a test started, by any path)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                cmdline = Path(f"/proc/{entry}/cmdline").read_bytes()
+            except OSError:
+                continue
+            if tag.encode() in cmdline and alive(int(entry)):
+                found.append(int(entry))
+    return found
+
+
+@pytest.fixture
+def launches(tmp_path):
+    """Every tuilaunch a test starts, and every process carrying the test's tag, ends with it.
+
+    The tag is also a `sleep` under another name: `{tag} 600` sleeps, and says whose it is."""
+    started: list[subprocess.Popen[str]] = []
+    tag = f"tl{uuid.uuid4().hex[:10]}"
+    (tmp_path / tag).symlink_to(shutil.which("sleep") or "/bin/sleep")
+    os.environ["PATH"] = f"{tmp_path}{os.pathsep}{os.environ['PATH']}"
+    yield started, tag
+    os.environ["PATH"] = os.environ["PATH"].split(os.pathsep, 1)[1]
+    for proc in started:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    for pid in tagged(tag):
+        os.kill(pid, signal.SIGKILL)
+
+
+def launch_file(write, body: str) -> Path:
+    lines = "\n".join("    " + line for line in body.strip().splitlines())
+    return write(PROCESS_HEADER + "def generate_launch_description():\n    sl = SimpleLauncher()\n"
+                 + lines + "\n    return sl.launch_description()\n")
+
+
+def log_folder(root: Path) -> Path:
+    return next(root.glob("*-tuilaunch-*"))
+
+
+# --- a failing consumer never stops a node's pipe nor a shutdown ------------------------------
+
+
+def test_closed_stdout_loses_no_line_and_the_launch_runs_to_its_end(write, tmp_path, launches):
+    started, _ = launches
+    count = 200_000
+    path = launch_file(write, f"sl.add_action(ExecuteProcess(cmd=['seq', '1', '{count}'], "
+                              "name='flood'))")
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path)}
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
+    started.append(proc)
+    assert proc.stdout is not None and proc.stderr is not None
+    head = [proc.stdout.readline() for _ in range(3)]  # `| head -3`
+    proc.stdout.close()
+    assert "All log files" in head[0]
+    assert proc.wait(timeout=120) == 0
+    errors = proc.stderr.read()
+    assert errors.count("cannot write to stdout (Broken pipe)") == 1, errors
+    assert "Traceback" not in errors
+    logged = (log_folder(tmp_path) / "flood-1.log").read_bytes().splitlines()
+    assert [line.split(b" ", 2)[2] for line in logged] == [
+        str(n).encode() for n in range(1, count + 1)]
+
+
+def test_a_full_disk_is_said_once_and_neither_the_node_nor_the_stop_hangs(write, tmp_path,
+                                                                         launches):
+    started, _ = launches
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(disk)],
+                             capture_output=True)
+    if mounted.returncode != 0:
+        pytest.skip("a small tmpfs needs root: " + mounted.stderr.decode().strip())
+    try:
+        count = 100_000
+        path = launch_file(write, f"""
+sl.add_action(ExecuteProcess(cmd=['seq', '1', '{count}'], name='flood'))
+sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'sleep 1; echo still here; sleep 600'],
+                             name='quiet'))""")
+        proc = start_headless(str(path), log_dir=disk)
+        started.append(proc)
+        lines: list[str] = []
+        wanted = {f"[flood-1] {count}\n", "[quiet-2] still here\n"}
+        deadline = time.monotonic() + 120
+        assert proc.stdout is not None
+        while wanted and time.monotonic() < deadline:
+            lines.append(proc.stdout.readline())
+            wanted.discard(lines[-1])
+            assert lines[-1], "".join(lines[-20:])
+        assert not wanted
+        os.killpg(proc.pid, signal.SIGINT)
+        rest = proc.communicate(timeout=60)[0]
+        assert proc.returncode == 0
+        everything = "".join(lines) + rest
+        assert "No space left on device" in everything
+        # one message per file that filled, not one per line
+        assert everything.count("cannot write log file") <= 3
+        assert f"{log_folder(disk) / 'flood-1.log'}" in everything
+        assert everything.count("[flood-1] ") == count  # the screen still got every line
+    finally:
+        subprocess.run(["umount", "-l", str(disk)], check=False)
+
+
+def test_a_consumer_that_raises_never_stops_reading_nor_the_shutdown(write, tmp_path):
+    path = launch_file(write, """
+sl.add_action(ExecuteProcess(cmd=['seq', '1', '50000'], name='flood'))
+sl.add_action(ExecuteProcess(cmd=['sleep', '600'], name='sleeper'))""")
+    plan = resolve(load_file(str(path)), {}, params_dir=tmp_path / "params")
+    supervisor = Supervisor(plan, tmp_path / "log")
+    events: list[Event] = []
+
+    def broken(event: Event) -> None:
+        raise OSError(5, "Input/output error")
+
+    supervisor.subscribe(broken)
+    supervisor.subscribe(events.append)
+
+    async def scenario() -> int:
+        run = asyncio.ensure_future(supervisor.run())
+        deadline = time.monotonic() + 60
+        while not any(e.kind == "exited" and e.process == "flood-1" for e in events):
+            assert time.monotonic() < deadline
+            await asyncio.sleep(0.05)
+        await supervisor.shutdown("test done")
+        return await run
+
+    assert asyncio.run(scenario()) == 0
+    lines = [line for e in events if e.kind == "output" for line in e.lines]
+    assert lines[-1] == "50000" and len(lines) == 50000
+    assert len((tmp_path / "log" / "flood-1.log").read_bytes().splitlines()) == 50000
+    assert [e.process for e in events if e.kind == "exited"] == ["flood-1", "sleeper-2"]
+
+
+def test_sighup_with_the_terminal_gone_stops_every_node(write, tmp_path, launches):
+    started, tag = launches
+    script = tmp_path / "stubborn"
+    script.write_text(STUBBORN)
+    script.chmod(0o755)
+    path = launch_file(write, f"""
+sl.add_action(ExecuteProcess(cmd=['{tag}', '600'], name='sleeper'))
+sl.add_action(ExecuteProcess(cmd=['{script}', '{tag}'], name='stubborn',
+                             sigterm_timeout='0.5', sigkill_timeout='0.5'))""")
+    master, slave = os.openpty()
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path)}
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                            stdin=slave, stdout=slave, stderr=slave, env=env,
+                            start_new_session=True, text=True)
+    started.append(proc)
+    os.close(slave)
+    seen = b""
+    deadline = time.monotonic() + 60
+    while b"stubborn ready" not in seen:
+        assert time.monotonic() < deadline, seen
+        seen += os.read(master, 4096)
+    os.close(master)  # the ssh link drops: every later write to the terminal fails
+    os.kill(proc.pid, signal.SIGHUP)
+    assert proc.wait(timeout=60) == 0
+    assert wait_gone(tagged(tag)) == []
+    text = (log_folder(tmp_path) / "launch.log").read_text()
+    assert "shutdown  reason=received SIGHUP" in text
+    assert "exited stubborn-2" in text and "killed by SIGKILL" in text
+
+
+# --- exits are reported at once; nothing is left untracked -------------------------------------
+
+
+def test_a_daemon_holding_the_pipe_does_not_delay_the_exit_and_is_stopped_at_the_end(
+        write, tmp_path, launches):
+    started, tag = launches
+    path = launch_file(write, f"""
+from launch.actions import LogInfo, RegisterEventHandler
+from launch.event_handlers import OnProcessExit
+parent = sl.add_action(ExecuteProcess(cmd=['sh', '-c',
+    'setsid sh -c "echo daemon \\\\$\\\\$; exec {tag} 600" & sleep 0.2; echo parent done'],
+    name='parent'))
+sl.add_action(RegisterEventHandler(OnProcessExit(target_action=parent,
+    on_exit=lambda event, context: [LogInfo(msg='saw the exit')])))""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    started.append(proc)
+    seen = read_until(proc, "saw the exit", limit=30)
+    daemon = int(seen.split("[parent-1] daemon ")[1].split()[0])
+    assert "[INFO] [parent-1]: process has finished (exit code 0)" in seen
+    assert alive(daemon)  # the exit was reported while the daemon still held the pipe
+    assert proc.wait(timeout=30) == 0
+    assert wait_gone([daemon]) == []  # and the launch did not leave it behind
+
+
+@pytest.mark.parametrize("after", [1, 40])
+def test_sigint_during_bringup_of_100_processes_signals_every_one(write, tmp_path, launches,
+                                                                  after):
+    started, tag = launches
+    path = launch_file(write, f"""
+for i in range(100):
+    sl.add_action(ExecuteProcess(cmd=['{tag}', '600'], name=f's{{i}}'))""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    started.append(proc)
+    read_until(proc, *[f"[s{i}-{i + 1}]: process started" for i in range(after)])
+    os.killpg(proc.pid, signal.SIGINT)
+    rest = proc.communicate(timeout=60)[0]
+    assert proc.returncode == 0, rest  # sleep dies of the SIGINT we sent: a clean stop
+    pids = pids_of(tmp_path)
+    assert wait_gone(pids) == [] and tagged(tag) == []
+    text = (log_folder(tmp_path) / "launch.log").read_text()
+    exits = [line for line in text.splitlines() if " exited " in line]
+    assert len(exits) == len(pids)
+    assert all("killed by SIGINT" in line for line in exits), exits
+
+
+def test_a_log_file_that_cannot_be_opened_starts_no_process(write, tmp_path):
+    marker = tmp_path / "ran"
+    path = launch_file(write, f"""
+sl.add_action(ExecuteProcess(cmd=['touch', '{marker}'], name='blocked'))
+sl.add_action(ExecuteProcess(cmd=['true'], name='fine'))
+sl.add_action(ExecuteProcess(cmd=['echo', 'a' + chr(0) + 'b'], name='nul'))""")
+    plan = resolve(load_file(str(path)), {}, params_dir=tmp_path / "params")
+    (tmp_path / "log" / "blocked-1.log").mkdir(parents=True)  # the log file cannot be opened
+    supervisor = Supervisor(plan, tmp_path / "log")
+    events: list[Event] = []
+    supervisor.subscribe(events.append)
+    assert asyncio.run(supervisor.run()) == 1
+    failed = [e for e in events if e.kind == "failed"]
+    assert [e.process for e in failed] == ["blocked-1", "nul-3"]
+    assert "cannot open its log file" in (failed[0].reason or "")
+    assert "Is a directory" in (failed[0].reason or "")
+    assert "embedded null byte" in (failed[1].reason or "")  # said, not a hang
+    assert not marker.exists()
+    assert [e.process for e in events if e.kind == "exited"] == ["fine-2"]
+
+
+def test_the_open_file_limit_fails_some_processes_and_leaves_none_untracked(write, tmp_path,
+                                                                          launches):
+    started, tag = launches
+    path = launch_file(write, f"""
+for i in range(60):
+    sl.add_action(ExecuteProcess(cmd=['{tag}', '600'], name=f's{{i}}'))""")
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path)}
+    import resource
+
+    def low_limit() -> None:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (120, 120))
+
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=env, start_new_session=True, preexec_fn=low_limit)
+    started.append(proc)
+    seen = read_until(proc, "Too many open files", "[s59-60]")
+    os.killpg(proc.pid, signal.SIGINT)
+    rest = proc.communicate(timeout=60)[0]
+    assert proc.returncode == 1  # a process that could not start is a failure
+    assert "Traceback" not in seen + rest and "never retrieved" not in seen + rest
+    running = (seen + rest).count(": process started")
+    assert 0 < running < 60
+    assert wait_gone(pids_of(tmp_path)) == [] and tagged(tag) == []
+
+
+# --- nothing survives the launcher -------------------------------------------------------------
+
+
+def test_sigkill_of_tuilaunch_leaves_no_grandchild(write, tmp_path, launches):
+    started, tag = launches
+    path = launch_file(write, f"""
+sl.add_action(ExecuteProcess(cmd=['sh', '-c', '{tag} 600 & wait'], name='wrapper'))
+sl.add_action(ExecuteProcess(cmd=['{tag}', '600'], name='timed',
+                             prefix='timeout 900'))
+sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'setsid {tag} 600 & echo spawned; wait'],
+                             name='daemonizer'))""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    started.append(proc)
+    read_until(proc, "[daemonizer-3] spawned")
+    deadline = time.monotonic() + 30
+    while len(tagged(tag)) < 6:  # three sleeps, the wrapper shells and timeout
+        assert time.monotonic() < deadline, tagged(tag)
+        time.sleep(0.05)
+    victims = tagged(tag)
+    os.killpg(proc.pid, signal.SIGKILL)  # tuilaunch cannot clean up anything itself
+    proc.wait()
+    assert wait_gone(victims) == []
+
+
+# --- safe files ---------------------------------------------------------------------------------
+
+
+def test_a_process_name_cannot_escape_the_log_folder(write, tmp_path, launches):
+    started, _ = launches
+    path = launch_file(write, """
+sl.declare_arg('robot', 'r1')
+sl.add_action(ExecuteProcess(cmd=['echo', 'hello'], name=sl.arg('robot')))""")
+    logs = tmp_path / "a" / "b" / "c"
+    proc = start_headless(str(path), "robot:=../../../ESCAPED", log_dir=logs)
+    started.append(proc)
+    out = proc.communicate(timeout=60)[0]
+    assert proc.returncode == 0, out
+    escaped = [p for p in tmp_path.rglob("*ESCAPED*")]
+    assert [p.parent for p in escaped] == [log_folder(logs)]  # its log, inside the folder
+    assert escaped[0].read_text().endswith(" stdout hello\n")
+
+
+def test_parameter_files_are_private_and_never_follow_a_symlink(write, tmp_path):
+    from tuilaunch.engine.plan.params import write_parameter_file
+    from tuilaunch.engine.plan.resolve import default_params_dir
+
+    folder = default_params_dir()
+    assert folder.stat().st_mode & 0o777 == 0o700
+    assert default_params_dir() == folder  # one folder per tuilaunch process
+    target = tmp_path / "precious"
+    target.write_text("keep me")
+    trap = folder / "node-1.yaml"
+    trap.symlink_to(target)
+    write_parameter_file(trap, {"a": 1})
+    assert target.read_text() == "keep me"
+    assert trap.stat().st_mode & 0o777 == 0o600 and not trap.is_symlink()
+    assert "a: 1" in trap.read_text()
+    trap.unlink()
+
+
+# --- what an operator sees and gets back -------------------------------------------------------
+
+
+def test_per_process_timeouts_are_honoured_and_each_step_is_announced(write, tmp_path,
+                                                                      launches):
+    started, _ = launches
+    script = tmp_path / "stubborn"
+    script.write_text(STUBBORN)
+    script.chmod(0o755)
+    path = launch_file(write, f"""
+sl.add_action(ExecuteProcess(cmd=['{script}'], name='stubborn', sigterm_timeout='0.4',
+                             sigkill_timeout='0.6'))""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    started.append(proc)
+    read_until(proc, "stubborn ready")
+    os.killpg(proc.pid, signal.SIGINT)
+    out = proc.communicate(timeout=60)[0]
+    assert "[WARN] [stubborn-1]: still running 0.4 s after SIGINT: sending SIGTERM" in out
+    assert "[WARN] [stubborn-1]: still running 0.6 s after SIGTERM: sending SIGKILL" in out
+    assert "process has finished (killed by SIGKILL)" in out
+    assert proc.returncode == 0  # stopped as asked
+
+
+def test_second_and_third_ctrl_c_escalate_at_once(write, tmp_path, launches):
+    started, _ = launches
+    script = tmp_path / "stubborn"
+    script.write_text(STUBBORN)
+    script.chmod(0o755)
+    path = launch_file(write, f"sl.add_action(ExecuteProcess(cmd=['{script}'], "
+                              "name='stubborn', sigterm_timeout='60', sigkill_timeout='60'))")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    started.append(proc)
+    read_until(proc, "stubborn ready")
+    os.kill(proc.pid, signal.SIGINT)
+    read_until(proc, "Ctrl+C again sends SIGTERM now")
+    os.kill(proc.pid, signal.SIGINT)
+    read_until(proc, "received SIGINT again: sending SIGTERM now",
+               "[WARN] [stubborn-1]: asked again: sending SIGTERM")
+    os.kill(proc.pid, signal.SIGINT)
+    out = read_until(proc, "sending SIGKILL now", "process has finished (killed by SIGKILL)")
+    assert "still running" not in out  # no timeout was waited for
+    proc.communicate(timeout=30)
+    assert proc.returncode == 0
+
+
+def test_exit_status_tells_a_clean_stop_from_a_lost_child(write, tmp_path, launches):
+    started, _ = launches
+    path = launch_file(write, """
+sl.add_action(ExecuteProcess(cmd=['python3', '-c', 'import time; print("up", flush=True); '
+                                  'time.sleep(600)'], name='plain'))""")
+    proc = start_headless(str(path), log_dir=tmp_path / "clean")
+    started.append(proc)
+    read_until(proc, "[plain-1] up")
+    os.killpg(proc.pid, signal.SIGINT)
+    out = proc.communicate(timeout=60)[0]
+    assert "KeyboardInterrupt" in out  # the script died of the SIGINT tuilaunch sent
+    assert proc.returncode == 0
+    path = launch_file(write, """
+sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; kill -9 $$'], name='lost'))
+sl.add_action(ExecuteProcess(cmd=['sleep', '600'], name='other'))""")
+    proc = start_headless(str(path), log_dir=tmp_path / "lost")
+    started.append(proc)
+    read_until(proc, "[lost-1]: process has finished (killed by SIGKILL)")
+    os.killpg(proc.pid, signal.SIGINT)
+    proc.communicate(timeout=60)
+    assert proc.returncode == 1
+
+
+def test_log_files_keep_the_bytes_the_screen_shows_clean_lines(write, tmp_path, launches):
+    started, _ = launches
+    path = launch_file(write, r"""
+sl.add_action(ExecuteProcess(name='bytes', cmd=[
+    'printf', '10%%\\r50%%\\r100%%\\nnul\\000byte\\n\\033[31mred\\033[0m\\n']))""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    started.append(proc)
+    out = proc.communicate(timeout=60)[0]
+    assert "[bytes-1] 100%\n" in out and "[bytes-1] nulbyte\n" in out
+    assert "[bytes-1] red\n" in out  # not a terminal: colour codes are stripped
+    logged = [line.split(b" ", 2)[2] for line in
+              (log_folder(tmp_path) / "bytes-1.log").read_bytes().split(b"\n")[:-1]]
+    assert logged == [b"10%\r50%\r100%", b"nul\x00byte", b"\x1b[31mred\x1b[0m"]
+
+
+# --- a terminal per node -----------------------------------------------------------------------
+
+
+def test_a_c_program_that_never_flushes_prints_live_through_its_terminal(write, tmp_path,
+                                                                          launches):
+    started, _ = launches
+    source = tmp_path / "noflush.c"
+    source.write_text('#include <stdio.h>\n#include <unistd.h>\n'
+                      'int main(void) { printf("live %d\\n", isatty(1)); '
+                      'fprintf(stderr, "apart %d\\n", isatty(2)); sleep(600); return 0; }\n')
+    binary = tmp_path / "noflush"
+    subprocess.run(["gcc", "-o", str(binary), str(source)], check=True)
+    path = launch_file(write, f"""
+sl.add_action(ExecuteProcess(cmd=['{binary}'], name='shown'))
+sl.add_action(ExecuteProcess(cmd=['{binary}'], name='piped', emulate_tty=False))
+sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'sleep 1; echo piped checked'], name='later'))""")
+    proc = start_headless(str(path), log_dir=tmp_path)
+    started.append(proc)
+    seen = read_until(proc, "[shown-1] live 1", "[shown-1] apart 1", "[piped-2] apart 0",
+                      "[later-3] piped checked")
+    # with a pipe, printf holds its line in a buffer until exit: what launch#188 is about
+    assert "[piped-2] live" not in seen
+    log = (log_folder(tmp_path) / "shown-1.log").read_text()
+    assert " stdout live 1\n" in log and " stderr apart 1\n" in log  # stderr kept apart
+    os.killpg(proc.pid, signal.SIGINT)
+    assert proc.wait(timeout=60) == 0
+
+
+def test_threads_stay_constant_whatever_the_number_of_children(write, tmp_path):
+    path = launch_file(write, """
+for i in range(30):
+    sl.add_action(ExecuteProcess(cmd=['sleep', '600'], name=f's{i}'))""")
+    plan = resolve(load_file(str(path)), {}, params_dir=tmp_path / "params")
+    supervisor = Supervisor(plan, tmp_path / "log")
+    before = threading.active_count()
+    during: list[int] = []
+
+    async def scenario() -> int:
+        run = asyncio.ensure_future(supervisor.run())
+        deadline = time.monotonic() + 60
+        while list(supervisor.states.values()).count("running") < 30:
+            assert time.monotonic() < deadline
+            await asyncio.sleep(0.05)
+        during.append(threading.active_count())
+        await supervisor.shutdown("test done")
+        return await run
+
+    assert asyncio.run(scenario()) == 0
+    assert during == [before]
+
+
+# --- one-line errors -------------------------------------------------------------------------
+
+
+def test_bad_names_and_values_get_one_line_naming_file_line_and_character(write, tmp_path):
+    path = write(HEADER + """
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.node('tuilaunch_demos', 'talker', name='my node')
+    sl.node('tuilaunch_demos', 'talker', name='9lives')
+    sl.node('tuilaunch_demos', 'talker', name='ok', namespace='/robot/été')
+    sl.node('tuilaunch_demos', 'talker', name='fine', namespace='good_ns')
+    return sl.launch_description()
+""")
+    result = run_cli(str(path), "--print")
+    assert result.returncode == 3
+    errors = [line for line in result.stderr.splitlines() if line.startswith("tuilaunch: error")]
+    assert "test_launch.py:5:" in errors[0] and "' ' at position 3" in errors[0]
+    assert "test_launch.py:6:" in errors[1] and "starts with the digit '9'" in errors[1]
+    assert "test_launch.py:7:" in errors[2] and "'é' at position 8" in errors[2]
+    assert len(errors) == 3  # /good_ns/fine is valid
+    assert "Traceback" not in result.stderr
+
+
+def test_include_cycle_respawn_delay_directory_and_log_folder_are_one_line(write, tmp_path):
+    write(HEADER + "from launch.actions import IncludeLaunchDescription\n"
+          "def generate_launch_description():\n    sl = SimpleLauncher()\n"
+          f"    sl.include(launch_file='{tmp_path}/b.py')\n    return sl.launch_description()\n",
+          "a.py")
+    write(HEADER + "def generate_launch_description():\n    sl = SimpleLauncher()\n"
+          f"    sl.include(launch_file='{tmp_path}/a.py')\n    return sl.launch_description()\n",
+          "b.py")
+    cycle = run_cli(str(tmp_path / "a.py"), "--print")
+    assert cycle.returncode == 2 and "Traceback" not in cycle.stderr
+    assert "include cycle: a.py -> b.py -> a.py" in cycle.stderr.splitlines()[0]
+    soon = launch_file(write, "sl.add_action(ExecuteProcess(cmd=['true'], respawn=True, "
+                              "respawn_delay='soon'))")
+    result = run_cli(str(soon), "--print")
+    assert result.returncode == 2
+    assert "test_launch.py:" in result.stderr and "respawn_delay 'soon' is not a number" in \
+        result.stderr and "Traceback" not in result.stderr
+    folder = run_cli(str(tmp_path), "--headless")
+    assert folder.returncode == 2 and "is a directory, not a launch file" in folder.stderr
+    (tmp_path / "afile").write_text("")
+    fine = launch_file(write, "sl.add_action(ExecuteProcess(cmd=['true']))")
+    logs = run_cli(str(fine), "--headless",
+                   env={"ROS_LOG_DIR": str(tmp_path / "afile" / "logs")})
+    assert logs.returncode == 2 and "Traceback" not in logs.stderr
+    assert "cannot create the log folder" in logs.stderr and "Not a directory" in logs.stderr
