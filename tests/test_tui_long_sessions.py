@@ -648,3 +648,25 @@ async def test_focus_shows_in_reverse_video_and_one_new_line_is_singular(write, 
         await until(pilot, lambda: "2 new lines (G: follow)" in str(status.render()))
         assert app.supervisor is not None
         await app.engine.run(app.supervisor.shutdown("test over"))
+
+
+def test_escape_and_a_digit_in_one_write_leave_the_field_and_switch_tabs(write, tmp_path):
+    """Over a real terminal ESC+3 in one read is parsed as one key: still leave, then 3."""
+    path = write("""
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument, ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([DeclareLaunchArgument('label', default_value='x'),
+                                      ExecuteProcess(name='quiet', cmd=['sleep', '600'])])
+        """)
+    proc, master = start_on_pty(tmp_path, str(path))
+    try:
+        read_until(master, b"1 running")
+        os.write(master, b"2")
+        read_until(master, b"Apply (F5)")
+        read_for(master, 0.3)
+        os.write(master, b"\x1b3")
+        screen = read_until(master, b"services")
+        assert "£".encode() not in screen
+    finally:
+        stop_pty(proc, master)

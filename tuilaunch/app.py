@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from rich.text import Text
-from textual import on, work
+from textual import events, on, work
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.containers import Vertical
@@ -34,7 +34,7 @@ from .engine.run.supervisor import Event, Supervisor
 from .output_store import ERROR, INFO, WARN, Line, OutputStore
 from .screens.args_panel import ArgsPanel, check_plan, check_values
 from .screens.dialogs import ConfirmScreen, HelpScreen, QuitScreen
-from .screens.fields import Field
+from .screens.fields import ESC_DIGITS, Field
 from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
@@ -444,6 +444,14 @@ class TuiLaunchApp(App[int]):
             self.tabs.active = tab
             self._enter_tab(tab)
         self.refresh_bindings()
+
+    def on_key(self, event: events.Key) -> None:
+        """ESC and a digit read together arrive as one character (see fields.py): outside
+        a field that is the digit's tab."""
+        digit = ESC_DIGITS.get(event.character or "")
+        if digit in ("1", "2", "3", "4"):
+            event.stop()
+            self.action_tab(("nodes", "args", "services", "params")[int(digit) - 1])
 
     def action_leave_field(self) -> None:
         """Escape in a text field: out of it, to where the tab's work starts, so the next

@@ -16,6 +16,11 @@ from typing import Any
 from textual import events
 from textual.widgets import Input
 
+# Textual reads ESC and a digit arriving in one read (esc then 3, typed fast over ssh or sent
+# by tmux) as the character macOS's option key gives: in a field that is "leave, then 3"
+ESC_DIGITS = {"¡": "1", "™": "2", "£": "3", "¢": "4", "∞": "5", "§": "6", "¶": "7",
+              "•": "8", "ª": "9", "º": "0"}
+
 
 class Field(Input):
     DEFAULT_CSS = """
@@ -42,13 +47,16 @@ class Field(Input):
             await self.action_submit()
             await self.run_action("app.leave_field")
             return
-        if event.is_printable:
-            await super()._on_key(event)
-            return
-        if event.key == "escape":
+        if event.key == "escape" or event.character in ESC_DIGITS:
             event.stop()
             event.prevent_default()
             await self.run_action("app.leave_field")
+            if event.character in ESC_DIGITS:
+                digit = ESC_DIGITS[event.character]
+                self.app.post_message(events.Key(digit, digit))
+            return
+        if event.is_printable:
+            await super()._on_key(event)
             return
         for binding in self._bindings.key_to_bindings.get(event.key, ()):
             if self.check_action(binding.action, ()) is False:
