@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
 import traceback
 
-from .engine.describe.loader import load_file
+from .engine.describe.loader import load_file, set_command_line
 from .engine.errors import LaunchError, PackageError
 from .engine.plan.packages import ensure_environment, find_in_share, package_share
 from .engine.plan.resolve import resolve
@@ -75,13 +76,30 @@ def find_launch_file(positional: list[str]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        # `tuilaunch ... | head -1`: the reader is gone, which is no error of ours; point
+        # stdout at /dev/null so the interpreter's final flush stays quiet too
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return 0
+
+
+def _main(argv: list[str] | None) -> int:
     options = _parser().parse_intermixed_args(argv)
     ensure_environment()
+    # a launch file's own print() must not corrupt the JSON a tool reads on stdout
+    file_output = contextlib.redirect_stdout(sys.stderr) if options.print_plan and \
+        options.json else contextlib.nullcontext()
     try:
         positional, arguments = split_items(options.items)
         path = find_launch_file(positional)
-        loaded = load_file(path)
-        plan = resolve(loaded, arguments)
+        set_command_line(positional, arguments)
+        with file_output:
+            loaded = load_file(path)
+            plan = resolve(loaded, arguments)
     except LaunchError as exc:
         if options.debug:
             traceback.print_exc()

@@ -97,3 +97,26 @@ class PackageError(LaunchError):
 
 class DslError(LaunchError):
     """A SimpleLauncher or launch API call with arguments it cannot take."""
+
+
+def _stdlib_dirs() -> tuple[str, ...]:
+    import sysconfig
+
+    paths = sysconfig.get_paths()
+    return tuple(os.path.abspath(paths[key]) + os.sep for key in ("stdlib", "platstdlib"))
+
+
+def origin_outside_tuilaunch(tb: TracebackType | None) -> Origin | None:
+    """The innermost frame of code that is neither tuilaunch nor the standard library.
+
+    That is the line at fault when a user's or a third-party extension's code raises
+    (nav2_common's RewrittenYaml reading a params file, a custom Substitution, ...)."""
+    stdlib = _stdlib_dirs()
+    found: Origin | None = None
+    for frame_summary in traceback.extract_tb(tb):
+        path = os.path.abspath(frame_summary.filename)
+        in_stdlib = path.startswith(stdlib) and "-packages" + os.sep not in path
+        if _is_ours(path) or in_stdlib or frame_summary.filename.startswith("<"):
+            continue
+        found = Origin(frame_summary.filename, frame_summary.lineno or 0)
+    return found

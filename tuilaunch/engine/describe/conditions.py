@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
-from ..errors import ArgumentError, Origin, caller_origin
+from ..errors import ArgumentError, LaunchError, Origin, caller_origin
 from .substitutions import (
     LaunchConfiguration,
     PerformContext,
@@ -39,13 +40,69 @@ def _argument_name(predicate: SubValue) -> str | None:
 
 
 class Condition:
+    """launch.Condition: `evaluate(context)` is a bool, as launch's is.
+
+    Third-party conditions pass `predicate=` (a function of the context) or override
+    `evaluate`; ours override `outcome`, which also says what was read, for the tree."""
+
     origin: Origin | None = None
 
-    def evaluate(self, context: PerformContext) -> ConditionOutcome:
-        raise NotImplementedError
+    def __init__(self, *, predicate: Any = None) -> None:
+        self._predicate = predicate
+        self.origin = caller_origin()
+
+    def outcome(self, context: PerformContext) -> ConditionOutcome:
+        predicate = getattr(self, "_predicate", None)
+        if predicate is None:
+            return ConditionOutcome(self.describe(), "", True)
+        holds = _guarded(lambda: bool(predicate(context)), self, "predicate")
+        return ConditionOutcome(self.describe(), str(holds).lower(), holds)
+
+    def evaluate(self, context: PerformContext) -> bool:
+        return self.outcome(context).holds
 
     def describe(self) -> str:
         return type(self).__name__
+
+
+def condition_outcome(condition: Any, context: PerformContext) -> ConditionOutcome:
+    """What a condition decided, whoever wrote it (ours, a subclass, a duck-typed one)."""
+    if isinstance(condition, Condition) and type(condition).evaluate is Condition.evaluate:
+        return condition.outcome(context)
+    holds = _guarded(lambda: bool(condition.evaluate(context)), condition, "evaluate()")
+    text = condition.describe() if hasattr(condition, "describe") else type(condition).__name__
+    return ConditionOutcome(text, str(holds).lower(), holds)
+
+
+def _guarded(call: Any, condition: Any, what: str) -> bool:
+    import sys
+
+    try:
+        return bool(call())
+    except LaunchError:
+        raise
+    except Exception as exc:  # a third-party condition's own error, at its own line
+        from ..errors import origin_outside_tuilaunch
+
+        where = origin_outside_tuilaunch(sys.exc_info()[2]) or getattr(condition, "origin", None)
+        raise LaunchError(f"{type(condition).__name__} {what} raised "
+                          f"{type(exc).__name__}: {exc}", where) from None
+
+
+class InvalidConditionExpressionError(ArgumentError):
+    """launch.conditions.InvalidConditionExpressionError."""
+
+    def __init__(self, expression: str, *_: Any) -> None:
+        super().__init__(f"condition {expression!r} is not a boolean", caller_origin())
+
+
+def evaluate_condition_expression(context: PerformContext, expression: SubValue) -> bool:
+    """launch.conditions.evaluate_condition_expression: true/false/1/0, any case."""
+    text = perform(expression, context)
+    value = text_to_bool(text)
+    if value is None:
+        raise InvalidConditionExpressionError(text)
+    return value
 
 
 class IfCondition(Condition):
@@ -59,7 +116,7 @@ class IfCondition(Condition):
         word = "unless" if self.negate else "if"
         return f"{word} {describe(self.predicate)}"
 
-    def evaluate(self, context: PerformContext) -> ConditionOutcome:
+    def outcome(self, context: PerformContext) -> ConditionOutcome:
         if isinstance(self.predicate, bool):
             text = str(self.predicate).lower()
         else:
@@ -98,7 +155,7 @@ class LaunchConfigurationEquals(Condition):
         op = "!=" if self.negate else "=="
         return f"$(var {self.name}) {op} {describe(self.expected)!r}"
 
-    def evaluate(self, context: PerformContext) -> ConditionOutcome:
+    def outcome(self, context: PerformContext) -> ConditionOutcome:
         value = context.configurations.get(self.name, "")
         expected = "" if self.expected is None else perform(self.expected, context)
         equal = value == expected

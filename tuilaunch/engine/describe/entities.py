@@ -22,6 +22,10 @@ class Entity:
     condition: Condition | None = None
     origin: Origin | None = None
 
+    def __init__(self, *, condition: Condition | None = None, **_: Any) -> None:
+        """launch.Action's constructor, for third-party actions (`execute(context)`)."""
+        self._init_entity(condition)
+
     def _init_entity(self, condition: Condition | None) -> None:
         self.condition = condition
         self.origin = caller_origin()
@@ -124,7 +128,7 @@ class Node(Entity):
         **unknown: Any,
     ) -> None:
         self._init_entity(condition)
-        unknown.pop("on_exit", None)
+        self.on_exit: Any = unknown.pop("on_exit", None)
         unknown.pop("log_cmd", None)
         if unknown:
             names = ", ".join(sorted(unknown))
@@ -185,10 +189,12 @@ class ExecuteProcess(Entity):
         sigterm_timeout: Any = None,
         sigkill_timeout: Any = None,
         emulate_tty: Any = None,
+        on_exit: Any = None,
         **_: Any,
     ) -> None:
         self._init_entity(condition)
         self.emulate_tty = emulate_tty
+        self.on_exit = on_exit
         self.cmd = cmd
         self.name = name
         self.cwd = cwd
@@ -284,8 +290,10 @@ class Group(Entity):
         scoped: bool = True,
         launch_configurations: dict[Any, Any] | None = None,
         label: str | None = None,
+        forwarding: bool = True,
     ) -> None:
         self._init_entity(condition)
+        self.forwarding = forwarding
         self.children: list[Any] = list(children or [])
         self.namespace = namespace
         self.when = when
@@ -293,7 +301,6 @@ class Group(Entity):
         self.launch_configurations = launch_configurations or {}
         self.label = label
         self.dsl_owner: Any = None
-        self.forwarding = True  # False: a scoped group starts without the outer configurations
 
     def describe(self) -> str:
         return self.label or "group"
@@ -311,11 +318,11 @@ def GroupAction(
     group = Group(
         entity_list(list(actions)),
         condition=condition,
-        scoped=scoped,
+        scoped=scoped or not forwarding,
         launch_configurations=launch_configurations,
+        forwarding=forwarding,
     )
     group.origin = caller_origin()
-    group.forwarding = forwarding
     return group
 
 
@@ -340,7 +347,7 @@ class SetParameter(Entity):
 class SetParametersFromFile(Entity):
     """A parameter file given to every node that follows in the same scope."""
 
-    def __init__(self, filename: SubValue, condition: Condition | None = None) -> None:
+    def __init__(self, filename: SubValue, condition: Condition | None = None, **_: Any) -> None:
         self._init_entity(condition)
         self.filename = filename
 
@@ -372,22 +379,6 @@ class SetLaunchConfiguration(Entity):
         self._init_entity(condition)
         self.name = name
         self.value = value
-
-
-class ResetLaunchConfigurations(Entity):
-    """Forget every launch configuration of the current scope but the ones given."""
-
-    def __init__(self, launch_configurations: dict[Any, Any] | None = None,
-                 condition: Condition | None = None) -> None:
-        self._init_entity(condition)
-        self.launch_configurations = dict(launch_configurations or {})
-
-
-class ResetEnvironment(Entity):
-    """Undo the environment changes of the current scope (back to tuilaunch's own)."""
-
-    def __init__(self, condition: Condition | None = None) -> None:
-        self._init_entity(condition)
 
 
 class LaunchDescriptionSource:
@@ -471,6 +462,7 @@ class SetParameters(Entity):
 class TimerAction(Entity):
     def __init__(self, *, period: Any, actions: Iterable[Any],
                  condition: Condition | None = None, **_: Any) -> None:
+        # launch_ros's RosTimer counts ROS time; tuilaunch counts wall time for both
         self._init_entity(condition)
         self.period = period
         self.actions = entity_list(list(actions))
@@ -485,15 +477,141 @@ class Shutdown(Entity):
         self.reason = reason
 
 
+EMITTED_EVENTS: dict[type, Callable[[Any, Condition | None], Entity]] = {}
+"""Event class -> the entity that performs `EmitEvent(event=...)`; one line per event kind."""
+
+
 def EmitEvent(*, event: Any, condition: Condition | None = None, **_: Any) -> Entity:
     if isinstance(event, Shutdown):
         event.condition = condition
+        event.origin = caller_origin()
         return event
-    return LogInfo(msg=f"EmitEvent({type(event).__name__}) is not supported, ignored")
+    for kind, make in EMITTED_EVENTS.items():
+        if isinstance(event, kind):
+            entity = make(event, condition)
+            entity.origin = caller_origin()
+            return entity
+    raise DslError(f"tuilaunch does not support EmitEvent({type(event).__name__}) yet",
+                   caller_origin())
+
+
+class ActionMatcher:
+    """launch.events.matches_action(action): picks the process an event is about."""
+
+    def __init__(self, action: Any) -> None:
+        self.target = action
+
+    def __call__(self, candidate: Any) -> bool:
+        return candidate is self.target
+
+
+def matches_action(target_action: Any) -> ActionMatcher:
+    return ActionMatcher(target_action)
+
+
+class ShutdownProcess:
+    """launch.events.process.ShutdownProcess: stop one process (SIGINT, then escalate)."""
+
+    def __init__(self, *, process_matcher: Any) -> None:
+        self.process_matcher = process_matcher
+
+
+class StopProcess(Entity):
+    """What EmitEvent(ShutdownProcess(...)) does: stop the matched process."""
+
+    def __init__(self, target: Any, condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.target = target
+
+
+EMITTED_EVENTS[ShutdownProcess] = lambda event, condition: StopProcess(
+    getattr(event.process_matcher, "target", None), condition)
+
+
+class AppendEnvironmentVariable(Entity):
+    """Adds to a variable's value with a separator (launch.actions.AppendEnvironmentVariable)."""
+
+    def __init__(self, name: SubValue, value: SubValue, prepend: Any = False,
+                 separator: SubValue = ":", condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.name, self.value = name, value
+        self.prepend, self.separator = prepend, separator
+
+
+class EnvironmentStack(Entity):
+    """PushEnvironment / PopEnvironment / ResetEnvironment and the launch-configuration ones."""
+
+    def __init__(self, what: str, op: str, values: dict[Any, Any] | None = None,
+                 condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.what, self.op, self.values = what, op, values
+
+
+def PushEnvironment(condition: Condition | None = None, **_: Any) -> EnvironmentStack:
+    return EnvironmentStack("env", "push", condition=condition)
+
+
+def PopEnvironment(condition: Condition | None = None, **_: Any) -> EnvironmentStack:
+    return EnvironmentStack("env", "pop", condition=condition)
+
+
+def ResetEnvironment(condition: Condition | None = None, **_: Any) -> EnvironmentStack:
+    return EnvironmentStack("env", "reset", condition=condition)
+
+
+def PushLaunchConfigurations(condition: Condition | None = None, **_: Any) -> EnvironmentStack:
+    return EnvironmentStack("config", "push", condition=condition)
+
+
+def PopLaunchConfigurations(condition: Condition | None = None, **_: Any) -> EnvironmentStack:
+    return EnvironmentStack("config", "pop", condition=condition)
+
+
+def ResetLaunchConfigurations(launch_configurations: dict[Any, Any] | None = None,
+                              condition: Condition | None = None, **_: Any) -> EnvironmentStack:
+    return EnvironmentStack("config", "reset", launch_configurations or {}, condition)
+
+
+class UnsetLaunchConfiguration(Entity):
+    def __init__(self, name: SubValue, condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.name = name
+
+
+class Executable:
+    """launch.descriptions.Executable: what ExecuteLocal runs."""
+
+    def __init__(self, *, cmd: Any, prefix: Any = None, name: SubValue = None,
+                 cwd: SubValue = None, env: dict[Any, Any] | None = None,
+                 additional_env: dict[Any, Any] | None = None, **_: Any) -> None:
+        self.cmd, self.prefix, self.name = cmd, prefix, name
+        self.cwd, self.env, self.additional_env = cwd, env, additional_env
+
+
+def ExecuteLocal(*, process_description: Executable, **kwargs: Any) -> ExecuteProcess:
+    d = process_description
+    process = ExecuteProcess(cmd=d.cmd, prefix=d.prefix, name=d.name, cwd=d.cwd, env=d.env,
+                             additional_env=d.additional_env, **kwargs)
+    process.origin = caller_origin()
+    return process
+
+
+def SetUseSimTime(value: Any, condition: Condition | None = None, **_: Any) -> SetParameter:
+    action = SetParameter("use_sim_time", value, condition)
+    action.origin = caller_origin()
+    return action
+
+
+def SetROSLogDir(new_log_dir: SubValue, condition: Condition | None = None, **_: Any)\
+        -> SetEnvironmentVariable:
+    action = SetEnvironmentVariable("ROS_LOG_DIR", new_log_dir, condition)
+    action.origin = caller_origin()
+    return action
 
 
 class OpaqueFunction(Entity):
-    """A Python function run at resolve time with the performed arguments."""
+    """A Python function run with the launch context: at resolve time, or, inside an event
+    handler, a timer or OnShutdown, by the supervisor when that event happens."""
 
     def __init__(self, *, function: Callable[..., Any], args: Iterable[Any] | None = None,
                  kwargs: dict[str, Any] | None = None, condition: Condition | None = None)\

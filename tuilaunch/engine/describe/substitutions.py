@@ -21,9 +21,20 @@ from ..errors import LaunchError, Origin, caller_origin
 SubValue = Any  # str | int | float | bool | Substitution | nested lists of those
 
 
+class _Locals:
+    """`context.locals`: the current event and file, as attributes."""
+
+    def __init__(self, values: dict[str, Any]) -> None:
+        self.__dict__.update(values)
+
+
 @dataclass
 class PerformContext:
-    """What substitutions may read while a plan is resolved."""
+    """What substitutions may read while a plan is resolved.
+
+    It also offers the part of launch's LaunchContext that extensions call (nav2_common's
+    RewrittenYaml, OpaqueFunctions, custom Substitutions), so one object serves both.
+    """
 
     configurations: dict[str, str]
     launch_file: str | None = None
@@ -31,12 +42,51 @@ class PerformContext:
     event_locals: dict[str, Any] = field(default_factory=dict)
     # (name, value) pairs of SetParameter in scope, for launch_ros's `$(param name)`
     global_parameters: list[tuple[Any, Any]] = field(default_factory=list)
+    is_shutdown: bool = False
+
+    @property
+    def launch_configurations(self) -> dict[str, str]:
+        return self.configurations
+
+    def perform_substitution(self, substitution: Any) -> str:
+        return perform(substitution, self)
+
+    def perform_substitutions(self, substitutions: Any) -> str:
+        return perform(substitutions, self)
+
+    def get_locals_as_dict(self) -> dict[str, Any]:
+        values: dict[str, Any] = {}
+        if self.launch_file:
+            values["current_launch_file_path"] = self.launch_file
+            values["current_launch_file_directory"] = os.path.dirname(self.launch_file)
+        values.update(self.event_locals)
+        return values
+
+    @property
+    def locals(self) -> _Locals:
+        return _Locals(self.get_locals_as_dict())
+
+    def extend_locals(self, values: dict[str, Any]) -> None:
+        self.event_locals.update(values)
+
+    def extend_globals(self, values: dict[str, Any]) -> None:
+        self.event_locals.update(values)
+
+    @property
+    def launch_logger(self) -> Any:
+        import logging
+
+        return logging.getLogger("launch.user")
 
 
 class Substitution:
     """A value known only once argument values are: performed to a string."""
 
     origin: Origin | None = None
+
+    def __init__(self) -> None:
+        """Third-party subclasses call super().__init__(): remember where they were made."""
+        self.origin = caller_origin()
 
     def perform(self, context: PerformContext) -> str:
         raise NotImplementedError
@@ -92,9 +142,32 @@ def is_lazy(value: SubValue) -> bool:
 def perform(value: SubValue, context: PerformContext) -> str:
     """Any text-like value (str, number, substitution, list of them) as one string."""
     return "".join(
-        part.perform(context) if isinstance(part, Substitution) else _plain_text(part)
+        _perform_one(part, context) if isinstance(part, Substitution) else _plain_text(part)
         for part in flatten(value)
     )
+
+
+def _perform_one(part: Substitution, context: PerformContext) -> str:
+    if type(part).__module__.startswith(_OUR_PACKAGE):
+        return part.perform(context)
+    # a Substitution written outside tuilaunch (nav2_common, a user's file): its errors
+    # are reported at its own line, never as a traceback
+    try:
+        result = part.perform(context)
+    except LaunchError:
+        raise
+    except Exception as exc:
+        import sys
+
+        from ..errors import origin_outside_tuilaunch
+
+        where = origin_outside_tuilaunch(sys.exc_info()[2]) or part.origin
+        raise LaunchError(f"{type(part).__name__}.perform() raised {type(exc).__name__}: {exc}",
+                          where) from None
+    return result if isinstance(result, str) else str(result)
+
+
+_OUR_PACKAGE = __name__.split(".")[0] + "."
 
 
 def perform_optional(value: SubValue, context: PerformContext) -> str | None:
@@ -355,7 +428,7 @@ class LocalSubstitution(Substitution):
         self.description = description
 
     def perform(self, context: PerformContext) -> str:
-        if not context.event_locals:
+        if self.expression.split(".")[0] not in context.event_locals:
             return f"<{self.expression}>"  # resolved into a plan: the event comes later
         value: Any = context.event_locals
         for key in self.expression.split("."):
@@ -467,3 +540,107 @@ class IfElseSubstitution(Substitution):
             raise LaunchError(f"IfElseSubstitution condition {text!r} is not a boolean",
                               self.origin)
         return perform(self.if_value if value else self.else_value, context)
+
+
+class AllSubstitution(_BoolSubstitution):
+    def perform(self, context: PerformContext) -> str:
+        return str(all(self._bool(v, context) for v in self.operands)).lower()
+
+
+class AnySubstitution(_BoolSubstitution):
+    def perform(self, context: PerformContext) -> str:
+        return str(any(self._bool(v, context) for v in self.operands)).lower()
+
+
+class SubstitutionFailure(LaunchError):
+    """launch.substitutions.SubstitutionFailure: what a substitution raises when it cannot."""
+
+    def __init__(self, message: str = "substitution failed", *_: Any) -> None:
+        super().__init__(str(message), caller_origin())
+
+
+class FileContent(Substitution):
+    """The text of a file, read when performed."""
+
+    def __init__(self, path: SubValue) -> None:
+        self.path = path
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        path = perform(self.path, context)
+        try:
+            with open(path, encoding="utf-8") as handle:
+                return handle.read()
+        except OSError as exc:
+            raise LaunchError(f"FileContent cannot read {path}: {exc.strerror or exc}",
+                              self.origin) from None
+
+    def describe(self) -> str:
+        return f"$(file-content {describe(self.path)})"
+
+
+class PathSubstitution(Substitution):
+    """A path that joins with `/`, as pathlib does (launch's PathSubstitution)."""
+
+    def __init__(self, path: SubValue) -> None:
+        self.path = path
+
+    def perform(self, context: PerformContext) -> str:
+        return perform(self.path, context)
+
+    def describe(self) -> str:
+        return describe(self.path)
+
+    def __truediv__(self, other: SubValue) -> PathSubstitution:  # type: ignore[override]
+        return PathSubstitution(PathJoin([self.path, other]))
+
+
+class LaunchLogDir(Substitution):
+    """Where this launch's log files go (`$(launch-log-dir)`)."""
+
+    def perform(self, context: PerformContext) -> str:
+        base = context.environment.get("ROS_LOG_DIR") or os.path.join(
+            context.environment.get("ROS_HOME") or os.path.expanduser("~/.ros"), "log")
+        return base
+
+    def describe(self) -> str:
+        return "$(launch-log-dir)"
+
+
+class ExecutableInPackage(Substitution):
+    """launch_ros.substitutions.ExecutableInPackage: the path of a package's executable."""
+
+    def __init__(self, executable: SubValue, package: SubValue) -> None:
+        self.executable, self.package = executable, package
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        from ..plan.packages import find_executable
+
+        return str(find_executable(perform(self.package, context),
+                                   perform(self.executable, context), self.origin))
+
+    def describe(self) -> str:
+        return f"$(exec-in-pkg {describe(self.executable)} {describe(self.package)})"
+
+
+class ParameterSubstitution(Substitution):
+    """launch_ros.substitutions.Parameter: a value given earlier by SetParameter."""
+
+    def __init__(self, name: SubValue, *, default: SubValue = None) -> None:
+        self.name, self.default = name, default
+        self.origin = caller_origin()
+
+    def perform(self, context: PerformContext) -> str:
+        name = perform(self.name, context)
+        params = context.event_locals.get("global_params", {})
+        if name in params:
+            value = params[name]
+            return value if isinstance(value, str) else perform(value, context) if is_lazy(
+                value) else str(value).lower() if isinstance(value, bool) else str(value)
+        if self.default is not None:
+            return perform(self.default, context)
+        raise LaunchError(f"parameter '{name}' was not set by SetParameter", self.origin)
+
+    def describe(self) -> str:
+        return f"$(param {describe(self.name)})"

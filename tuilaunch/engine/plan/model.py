@@ -34,10 +34,11 @@ class Trigger:
         return out
 
     def describe(self) -> str:
+        who = self.target or "any process"
         event = {
-            "start": f"{self.target} starts",
-            "exit": f"{self.target} exits",
-            "io": f"{self.target} prints on {self.io}",
+            "start": f"{who} starts",
+            "exit": f"{who} exits",
+            "io": f"{who} prints on {self.io}",
             "timer": "launch",
             "shutdown": "shutdown",
         }[self.on]
@@ -97,6 +98,8 @@ class ProcessPlan:
     components: list[dict[str, Any]] = field(default_factory=list)
     output: str = "screen"
     emulate_tty: bool | None = None  # None: a terminal when the output is shown
+    source: Any = field(default=None, repr=False, compare=False)
+    """The Node or ExecuteProcess it came from: what `event.action` is in handlers."""
 
     @property
     def full_name(self) -> str | None:
@@ -126,7 +129,8 @@ class ProcessPlan:
 @dataclass
 class ActionPlan:
     id: str
-    kind: str  # "call_service" | "set_parameters" | "log" | "event_callback" | "shutdown"
+    kind: str  # call_service | set_parameters | log | event_callback | shutdown | deferred
+    # | stop_process | load_components
     target: str | None
     data: Any
     namespace: str
@@ -180,6 +184,10 @@ class Plan:
     tree: TreeItem
     params_dir: Path
     warnings: list[str] = field(default_factory=list)
+    entity_ids: dict[int, str] = field(default_factory=dict, repr=False, compare=False)
+    """Which process or action each entity became: event-time entities find their targets."""
+    id_counter: int = 0
+    """The last number given to a process id; ids made at event time continue from it."""
 
     def process(self, process_id: str) -> ProcessPlan:
         for proc in self.processes:

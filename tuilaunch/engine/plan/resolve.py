@@ -19,13 +19,15 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from ..describe.conditions import ConditionOutcome
+from ..describe.conditions import ConditionOutcome, condition_outcome
 from ..describe.entities import (
+    AppendEnvironmentVariable,
     CallService,
     ComposableNode,
     DeclareLaunchArgument,
     DslOpaque,
     Entity,
+    EnvironmentStack,
     ExecuteProcess,
     Group,
     IncludeLaunchDescription,
@@ -37,8 +39,6 @@ from ..describe.entities import (
     OpaqueFunction,
     PushRosNamespace,
     RegisterEventHandler,
-    ResetEnvironment,
-    ResetLaunchConfigurations,
     SetEnvironmentVariable,
     SetLaunchConfiguration,
     SetParameter,
@@ -46,13 +46,23 @@ from ..describe.entities import (
     SetParametersFromFile,
     SetRemap,
     Shutdown,
+    StopProcess,
     TimerAction,
     UnsetEnvironmentVariable,
+    UnsetLaunchConfiguration,
     entity_list,
     pair_list,
 )
 from ..describe.events import When
-from ..describe.loader import LoadedFile, compat_modules, known_launch_files, load_file
+from ..describe.loader import (
+    LoadedFile,
+    compat_modules,
+    known_launch_files,
+    load_file,
+    set_command_line,
+    unsupported_import,
+)
+from ..describe.parameter_files import Parameter, ParameterFile, substitute_text
 from ..describe.substitutions import (
     PerformContext,
     describe,
@@ -60,7 +70,14 @@ from ..describe.substitutions import (
     perform_optional,
     text_to_bool,
 )
-from ..errors import ArgumentError, LaunchError, Origin, PackageError, origin_from_traceback
+from ..errors import (
+    ArgumentError,
+    LaunchError,
+    Origin,
+    PackageError,
+    origin_from_traceback,
+    origin_outside_tuilaunch,
+)
 from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
@@ -131,6 +148,8 @@ class Scope:
     global_parameters: list[tuple[Any, Any]] = field(default_factory=list)
     remaps: list[tuple[Any, Any]] = field(default_factory=list)
     env: dict[str, str | None] = field(default_factory=dict)
+    event_locals: dict[str, Any] = field(default_factory=dict)
+    stacks: dict[str, list[Any]] = field(default_factory=dict)
 
     def child(self, scoped: bool) -> Scope:
         return replace(
@@ -139,25 +158,52 @@ class Scope:
             global_parameters=list(self.global_parameters),
             remaps=list(self.remaps),
             env=dict(self.env),
+            stacks={k: list(v) for k, v in self.stacks.items()},
         )
 
     def context(self) -> PerformContext:
+        values = {"global_params": {describe(k): v for k, v in self.global_parameters
+                                    if k is not None}}
         return PerformContext(self.configurations, self.launch_file,
-                              global_parameters=self.global_parameters)
+                              global_parameters=self.global_parameters,
+                              event_locals={**values, **self.event_locals})
+
+
+@dataclass
+class Deferred:
+    """Entities performed when an event happens, with the scope they were written in.
+
+    What a file puts in an event handler, a timer or OnShutdown and cannot be described
+    ahead (an OpaqueFunction, a substitution that fails until then, the body of a handler
+    that applies to every process) is kept like this and performed by the supervisor."""
+
+    entities: list[Any]
+    scope: Scope
+    reason: str
 
 
 class Resolver:
-    def __init__(self, arguments: Mapping[str, str], params_dir: Path) -> None:
+    def __init__(self, arguments: Mapping[str, str], params_dir: Path,
+                 entity_ids: dict[int, str] | None = None, counter: int = 0,
+                 action_offset: int = 0) -> None:
         self.cli_arguments = dict(arguments)
         self.params_dir = params_dir
         self.processes: list[ProcessPlan] = []
         self.actions: list[ActionPlan] = []
         self.arguments: dict[str, ArgumentInfo] = {}
-        self.entity_ids: dict[int, str] = {}
+        self.entity_ids: dict[int, str] = {} if entity_ids is None else entity_ids
         self.triggers: list[Trigger] = []
         self.warnings: list[str] = []
-        self._counter = 0
         self._include_stack: list[str] = []
+        self._counter = counter
+        self._action_offset = action_offset  # ids stay unique when actions join a running plan
+
+    @property
+    def id_counter(self) -> int:
+        return self._counter
+
+    def _action_id(self, kind: str) -> str:
+        return f"{kind}-{self._action_offset + len(self.actions) + 1}"
 
     # --- entry -------------------------------------------------------------------------
 
@@ -179,12 +225,57 @@ class Resolver:
                 self.warnings.append(
                     f"argument '{name}' is not declared by {os.path.basename(loaded.path)} "
                     f"or its includes (declared: {', '.join(sorted(declared)) or 'none'})")
-        return Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
+        plan = Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
                     root, self.params_dir, self.warnings)
+        plan.entity_ids = self.entity_ids
+        plan.id_counter = self._counter
+        return plan
+
+    def link_triggers(self) -> None:
+        for trigger in self.triggers:
+            if trigger.target_entity is not None and trigger.target is None:
+                trigger.target = self.entity_ids.get(id(trigger.target_entity))
 
     def walk(self, entities: list[Any], scope: Scope, parent: TreeItem) -> None:
         for entity in entities:
+            if scope.trigger is None or not scope.enabled:
+                self.visit(entity, scope, parent)
+            elif isinstance(entity, OpaqueFunction) or _custom_action(entity):
+                self.defer([entity], scope, parent, "runs when the event happens")
+            else:
+                self._visit_or_defer(entity, scope, parent)
+
+    def _visit_or_defer(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        """Inside an event-gated branch, a value that cannot be performed yet (an unset
+        variable, a file made later) only matters if the event happens: as in launch,
+        the branch is then performed at event time, and fails only then."""
+        marks = (len(self.processes), len(self.actions), len(parent.children),
+                 len(self.triggers), dict(self.entity_ids), self._counter)
+        try:
             self.visit(entity, scope, parent)
+        except LaunchError as exc:
+            del self.processes[marks[0]:], self.actions[marks[1]:]
+            del parent.children[marks[2]:], self.triggers[marks[3]:]
+            self.entity_ids.clear()
+            self.entity_ids.update(marks[4])
+            self._counter = marks[5]
+            self.defer([entity], scope, parent, f"resolved when the event happens ({exc.message})")
+
+    def defer(self, entities: list[Any], scope: Scope, parent: TreeItem, reason: str) -> None:
+        enabled = scope.enabled
+        what = ", ".join(describe_entity(e) for e in entities) or "nothing"
+        action_id = self._action_id("deferred")
+        plan = ActionPlan(action_id, "deferred", None, f"{what}: {reason}", scope.namespace, "",
+                          enabled, scope.skipped_by, scope.trigger,
+                          getattr(entities[0], "origin", None) if entities else None,
+                          Deferred(entities, replace(scope, trigger=None), reason),
+                          dict(scope.configurations))
+        self.actions.append(plan)
+        for entity in entities:
+            self.entity_ids[id(entity)] = action_id
+        parent.children.append(TreeItem("action", f"at event time: {what}", enabled,
+                                        scope.namespace, scope.skipped_by, scope.trigger,
+                                        action_id))
 
     def _next_id(self, base: str) -> str:
         """A process id is a file name too (its log, its parameters): never a path."""
@@ -205,7 +296,7 @@ class Resolver:
             return False, scope.skipped_by, None
         if condition is None:
             return True, None, None
-        outcome = condition.evaluate(scope.context())
+        outcome = condition_outcome(condition, scope.context())
         return outcome.holds, (None if outcome.holds else outcome), outcome
 
     # --- dispatch ----------------------------------------------------------------------
@@ -226,13 +317,13 @@ class Resolver:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
         elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
-                        | LoadComposableNodes):
+                        | LoadComposableNodes | StopProcess):
             self.action(entity, scope, parent)
         elif isinstance(entity, TimerAction):
             self.timer(entity, scope, parent)
         elif isinstance(entity, RegisterEventHandler):
             self.event_handler(entity, scope, parent)
-        elif isinstance(entity, DslOpaque | OpaqueFunction):
+        elif isinstance(entity, DslOpaque | OpaqueFunction) or _custom_action(entity):
             self.opaque(entity, scope, parent)
         elif isinstance(entity, SetEnvironmentVariable):
             if self._gate(entity, scope)[0]:
@@ -245,16 +336,6 @@ class Resolver:
             if self._gate(entity, scope)[0]:
                 ctx = scope.context()
                 scope.configurations[perform(entity.name, ctx)] = perform(entity.value, ctx)
-        elif isinstance(entity, ResetLaunchConfigurations):
-            if self._gate(entity, scope)[0]:
-                ctx = scope.context()
-                kept = {perform(k, ctx): perform(v, ctx)
-                        for k, v in entity.launch_configurations.items()}
-                scope.configurations.clear()
-                scope.configurations.update(kept)
-        elif isinstance(entity, ResetEnvironment):
-            if self._gate(entity, scope)[0]:
-                scope.env.clear()
         elif isinstance(entity, SetParameter):
             if self._gate(entity, scope)[0]:
                 scope.global_parameters.append((entity.name, entity.value))
@@ -264,6 +345,10 @@ class Resolver:
         elif isinstance(entity, SetRemap):
             if self._gate(entity, scope)[0]:
                 scope.remaps.append((entity.src, entity.dst))
+        elif isinstance(entity, AppendEnvironmentVariable | EnvironmentStack
+                        | UnsetLaunchConfiguration):
+            if self._gate(entity, scope)[0]:
+                apply_scope_action(entity, scope)
         else:
             where = getattr(entity, "origin", None)
             self.warnings.append(f"{where or scope.launch_file}: ignored {entity!r}, which "
@@ -365,11 +450,28 @@ class Resolver:
         item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
                         scope.trigger)
         parent.children.append(item)
-        body = handler.handler
+        self.handler_body(handler.handler, handler.target is None and handler.on in
+                          ("start", "exit", "io"), scope, item)
+
+    def handler_body(self, body: Any, every_process: bool, scope: Scope, item: TreeItem)\
+            -> None:
         if callable(body) and not isinstance(body, Entity):
             self.action(IoCallbacks([body]), scope, item)
+        elif every_process:
+            # performed again for each process's event, as launch does
+            self.defer(entity_list(body), scope, item, "performed for every process's event")
         else:
             self.walk(entity_list(body), scope, item)
+
+    def on_exit(self, entity: Node | ExecuteProcess, outer: Scope, parent: TreeItem) -> None:
+        """`Node(on_exit=...)`: a handler for this process's exit."""
+        scope = outer.child(False)
+        scope.trigger = Trigger("exit", None, 0.0, None, outer.trigger, entity)
+        self.triggers.append(scope.trigger)
+        item = TreeItem("group", "on exit", scope.enabled, scope.namespace, None,
+                        scope.trigger)
+        parent.children.append(item)
+        self.handler_body(entity.on_exit, False, scope, item)
 
     # --- includes and opaque functions -----------------------------------------------------
 
@@ -415,24 +517,33 @@ class Resolver:
         finally:
             self._include_stack.pop()
 
-    def opaque(self, entity: DslOpaque | OpaqueFunction, scope: Scope, parent: TreeItem) -> None:
+    def opaque(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        """OpaqueFunctions, SimpleLauncher's opaque mode, and third-party actions' execute()."""
         if not self._gate(entity, scope)[0]:
             return
-        context = LaunchContextShim(scope.configurations, scope.launch_file)
+        context = scope.context()
         try:
             with compat_modules():
                 if isinstance(entity, DslOpaque):
                     with entity.launcher.opaque_scope(context) as root:
                         result = entity.function()
                     produced = entity_list(result) if result is not None else [root]
+                elif not isinstance(entity, OpaqueFunction):
+                    produced = entity_list(entity.execute(context))
                 else:
                     produced = entity_list(entity.function(context, *entity.args,
                                                            **entity.kwargs))
-        except LaunchError:
+        except (LaunchError, BrokenPipeError):  # a closed stdout is the reader's choice
             raise
         except Exception as exc:  # user code: report its own file and line
-            origin = origin_from_traceback(sys.exc_info()[2], known_launch_files())
-            raise LaunchError(f"the opaque function raised {type(exc).__name__}: {exc}",
+            tb = sys.exc_info()[2]
+            origin = origin_outside_tuilaunch(tb) or origin_from_traceback(
+                tb, known_launch_files())
+            missing = unsupported_import(exc) if isinstance(exc, ImportError | AttributeError) \
+                else None
+            what = "the opaque function" if isinstance(entity, OpaqueFunction | DslOpaque) \
+                else f"{type(entity).__name__}.execute()"
+            raise LaunchError(missing or f"{what} raised {type(exc).__name__}: {exc}",
                               origin or entity.origin) from None
         self.walk(produced, scope, parent)
 
@@ -450,10 +561,13 @@ class Resolver:
                                base, [], {}, [], [], [], {}, False, None, False, 0.0, 0, None,
                                None, False, skipped, scope.trigger, entity.origin,
                                error=f"not resolved: {exc.message}")
+        plan.source = entity
         self.processes.append(plan)
         self.entity_ids[id(entity)] = plan.id
         parent.children.append(TreeItem("process", plan.label, enabled, plan.namespace,
                                         skipped, scope.trigger, plan.id))
+        if entity.on_exit is not None:
+            self.on_exit(entity, scope, parent)
 
     def _process_plan(self, entity: Node | ExecuteProcess, scope: Scope, enabled: bool,
                       skipped: ConditionOutcome | None) -> ProcessPlan:
@@ -528,6 +642,19 @@ class Resolver:
         params_args: list[str] = []
         pending: dict[str, ParamValue] = {}
         for item in [*global_items, *_items(entity.parameters)]:
+            if isinstance(item, Parameter):
+                item = item.as_dict()
+            if isinstance(item, ParameterFile):
+                if pending:
+                    generated.append(self._params_file(proc_id, len(generated), pending,
+                                                       params_args))
+                    pending = {}
+                path = self._parameter_file(item, ctx, proc_id, len(user_files))
+                user_files.append(path)
+                params_args += ["--params-file", path]
+                if not os.path.isfile(path) and error is None:
+                    error = f"parameter file {path} does not exist"
+                continue
             if isinstance(item, dict):
                 values = flatten_parameters(item, ctx, entity.origin)
                 merged.update(values)
@@ -563,6 +690,22 @@ class Resolver:
         return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
                            merged, user_files, generated, remappings, error=error,
                            components=components, **common)
+
+    def _parameter_file(self, item: ParameterFile, ctx: PerformContext, proc_id: str,
+                        index: int) -> str:
+        path = item.path(ctx)
+        if not item.substitutes(ctx):
+            return path
+        try:
+            with open(path, encoding="utf-8") as handle:
+                text = handle.read()
+        except OSError as exc:
+            raise LaunchError(f"parameter file {path} cannot be read: {exc.strerror or exc}",
+                              item.origin) from None
+        out = self.params_dir / f"{proc_id}-file{index + 1}.yaml"
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(substitute_text(text, ctx, item.origin), encoding="utf-8")
+        return str(out)
 
     def _params_file(self, proc_id: str, index: int, params: dict[str, Any],
                      params_args: list[str]) -> tuple[str, dict[str, Any]]:
@@ -618,6 +761,9 @@ class Resolver:
         elif isinstance(entity, Shutdown):
             kind = "shutdown"
             data = perform(entity.reason, ctx) if enabled else describe(entity.reason)
+        elif isinstance(entity, StopProcess):
+            kind = "stop_process"
+            target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
         elif isinstance(entity, LoadComposableNodes):
             kind = "load_components"
             target = describe(entity.target_container)
@@ -626,7 +772,7 @@ class Resolver:
         else:
             kind = "event_callback"
             data = len(entity.callbacks)
-        action_id = f"{kind}-{len(self.actions) + 1}"
+        action_id = self._action_id(kind)
         plan = ActionPlan(action_id, kind, target, data, scope.namespace, verbosity, enabled,
                           skipped, scope.trigger, entity.origin, entity,
                           dict(scope.configurations))
@@ -635,9 +781,47 @@ class Resolver:
         label = {"log": f"log: {data}", "call_service": f"call {target}",
                  "set_parameters": f"set parameters of {target}",
                  "shutdown": "shutdown", "event_callback": "event callback",
+                 "stop_process": f"stop {target}",
                  "load_components": f"load components into {target}"}[kind]
         parent.children.append(TreeItem("action", label, enabled, scope.namespace, skipped,
                                         scope.trigger, action_id))
+
+
+def _custom_action(entity: Any) -> bool:
+    """A launch.Action subclass written outside tuilaunch: it runs through execute()."""
+    return isinstance(entity, Entity) and callable(getattr(entity, "execute", None))
+
+
+def apply_scope_action(entity: Any, scope: Scope) -> None:
+    """Environment and launch-configuration edits that change what follows in a scope."""
+    ctx = scope.context()
+    if isinstance(entity, AppendEnvironmentVariable):
+        name, value = perform(entity.name, ctx), perform(entity.value, ctx)
+        old = scope.env[name] if name in scope.env else os.environ.get(name)
+        separator = perform(entity.separator, ctx)
+        prepend = entity.prepend if isinstance(entity.prepend, bool) else \
+            text_to_bool(perform(entity.prepend, ctx)) or False
+        if old:
+            value = value + separator + old if prepend else old + separator + value
+        scope.env[name] = value
+    elif isinstance(entity, UnsetLaunchConfiguration):
+        scope.configurations.pop(perform(entity.name, ctx), None)
+    elif isinstance(entity, EnvironmentStack):
+        target: dict[str, Any] = scope.env if entity.what == "env" else scope.configurations
+        stack = scope.stacks.setdefault(entity.what, [])
+        if entity.op == "push":
+            stack.append(dict(target))
+        elif entity.op == "pop":
+            if not stack:
+                raise LaunchError(f"Pop{'Environment' if entity.what == 'env' else ''}"
+                                  "... without a matching Push", entity.origin)
+            saved = stack.pop()
+            target.clear()
+            target.update(saved)
+        else:
+            values = {perform(k, ctx): perform(v, ctx) for k, v in (entity.values or {}).items()}
+            target.clear()
+            target.update(values)
 
 
 def _request_values(request: dict[str, Any], ctx: PerformContext, namespace: str,
@@ -680,17 +864,6 @@ def group_label(group: Group, scope: Scope, outcome: ConditionOutcome | None) ->
     return ", ".join(parts) or group.label or "group"
 
 
-class LaunchContextShim(PerformContext):
-    """What an OpaqueFunction receives as `context`: launch configurations and perform."""
-
-    @property
-    def launch_configurations(self) -> dict[str, str]:
-        return self.configurations
-
-    def perform_substitution(self, substitution: Any) -> str:
-        return perform(substitution, self)
-
-
 _params_dir: Path | None = None
 
 
@@ -707,6 +880,7 @@ def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
             params_dir: Path | None = None) -> Plan:
     """The Plan for these argument values (`name -> text`, as given on the command line)."""
     resolver = Resolver(arguments or {}, params_dir or default_params_dir())
+    set_command_line(arguments=dict(arguments or {}))
     return resolver.resolve(loaded)
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from ..describe.entities import Entity, LogInfo, Shutdown, entity_list
+from ..describe.launch_events import EventInfo, event_for
 from ..describe.substitutions import PerformContext, perform
 from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
 from ..plan.params import write_parameter_file
@@ -61,15 +62,8 @@ class Event:
     time: float = field(default_factory=time.time)
 
 
-@dataclass
-class LaunchEvent:
-    """What launch-file callbacks receive: `event.text`, `event.returncode`, `event.reason`."""
-
-    process_name: str | None = None
-    pid: int | None = None
-    text: bytes = b""
-    returncode: int | None = None
-    reason: str = ""
+LaunchEvent = EventInfo
+"""What launch-file callbacks receive: `event.text`, `event.returncode`, `event.reason`."""
 
 
 Consumer = Callable[[Event], None]
@@ -112,7 +106,7 @@ class _Reader:
         lines = screen_lines(block)
         supervisor._emit(Event("output", running.plan.id, stream=self.channel.name,
                                lines=lines))
-        if supervisor._io_watchers:
+        if supervisor._io_watchers or supervisor._any_watchers:
             supervisor._dispatch_io(running.plan.id, self.channel.name, lines,
                                     running.process.pid)
 
@@ -166,6 +160,9 @@ class Supervisor:
         self.states.update({a.id: ("pending" if a.enabled else "skipped") for a in plan.actions})
         self._io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
         self._on_shutdown: list[ActionPlan] = []
+        self._any_watchers: dict[str, list[ActionPlan]] = {}  # handlers without a target
+        self._last_event: dict[tuple[str, str], EventInfo] = {}
+        self._shutdown_requested = False
         self.exit_codes: dict[str, int] = {}
         self.crashes: dict[str, int] = {}
         """Processes that exited on their own with a non-zero status (not stopped by us)."""
@@ -253,6 +250,12 @@ class Supervisor:
             while not self._settled():
                 self._changed.clear()
                 await self._changed.wait()
+            if not self._shutting_down and self._on_shutdown:
+                # as launch does when nothing is left to run: OnShutdown handlers see it
+                await self.shutdown("idle")
+                while not self._settled():
+                    self._changed.clear()
+                    await self._changed.wait()
         finally:
             await self._finish()
         failed = [item for item, state in self.states.items() if state == "failed"]
@@ -302,17 +305,18 @@ class Supervisor:
 
     def _settled(self) -> bool:
         if self._shutting_down:
-            # waiting actions, timers and respawns are cancelled when the run drains
-            return not self._running
-        if self._keep_alive or self._running or self._busy:
+            # waiting actions, timers and respawns are cancelled when the run drains;
+            # exit handlers of the processes being stopped still run, as in launch
+            return not self._running and not self._actions_due_in_shutdown()
+        if self._keep_alive or self._running or self._busy or self._shutdown_requested:
             return False
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
         # a pending item can still start only if what it waits for is alive or pending
         waiting = [p.trigger for p in self.plan.processes if self.states[p.id] == "pending"]
-        waiting += [a.trigger for a in self.plan.actions if self.states.get(a.id) == "pending"
-                    and not _on_event(a.trigger)]
-        return not any(self._can_fire(trigger) for trigger in waiting)
+        return not any(self._can_fire(trigger) for trigger in waiting) and not any(
+            self._action_can_fire(a) for a in self.plan.actions
+            if self.states.get(a.id) == "pending")
 
     def _can_fire(self, trigger: Trigger | None) -> bool:
         while trigger is not None:
@@ -341,7 +345,7 @@ class Supervisor:
                 finally:
                     self._busy -= 1
                     self._changed.set()
-            if self._shutting_down:
+            if self._shutting_down and not _runs_in_shutdown(step, item):
                 return
         result = then(item)
         if asyncio.iscoroutine(result):
@@ -353,15 +357,110 @@ class Supervisor:
         chain = action.trigger
         while chain is not None and chain.on not in ("io", "shutdown"):
             chain = chain.after
+        first = action.trigger
         if chain is not None and chain.on == "shutdown":
             self._on_shutdown.append(action)
+        elif first is not None and first.target is None and first.on in ("start", "exit", "io"):
+            # a handler without target_action: every process's event runs it
+            kind = f"io:{first.io or 'stdout'}" if first.on == "io" else first.on
+            self._any_watchers.setdefault(kind, []).append(action)
         elif chain is not None and chain.target is not None:
             key = (chain.target, chain.io or "stdout")
             self._io_watchers.setdefault(key, []).append(action)
         else:
             self._spawn_task(self._when_ready(action.trigger, self._run_action, action))
 
-    async def _run_action(self, action: ActionPlan, event: LaunchEvent | None = None) -> None:
+    def _action_can_fire(self, action: ActionPlan) -> bool:
+        """Whether a pending action may still run before the launch goes idle."""
+        trigger = action.trigger
+        if trigger is not None and trigger.target is None and trigger.on in ("start", "exit",
+                                                                              "io"):
+            return False  # runs per event; it never holds the launch open by itself
+        chain = trigger
+        while chain is not None:
+            if chain.on == "shutdown":
+                return False
+            if chain.on == "io" and chain.target is not None and \
+                    self.states.get(chain.target) not in ("running", "pending"):
+                return False
+            chain = chain.after
+        return self._can_fire(trigger)
+
+    def _actions_due_in_shutdown(self) -> bool:
+        """Exit handlers whose process has just stopped, or that are still running."""
+        for action in self.plan.actions:
+            state = self.states.get(action.id)
+            if state == "running" and action.kind not in ROS_ACTIONS:
+                return True
+            if state == "pending" and action.enabled and action.trigger is None:
+                return True  # performed by a handler just now, about to run
+            if state == "pending" and action.enabled and action.trigger is not None:
+                step: Trigger | None = action.trigger
+                due = True
+                while step is not None and due:
+                    due = (step.on == "exit" and not step.delay and step.target is not None
+                           and self._flag(step.target, "exit").is_set())
+                    step = step.after
+                if due:
+                    return True
+        return False
+
+    def _process_event(self, process_id: str, on: str, pid: int | None = None,
+                       returncode: int | None = None) -> None:
+        """A process started or exited: remember the event and run handlers without target."""
+        proc = self.plan.process(process_id)
+        event = event_for(on, process_name=process_id, pid=pid, returncode=returncode,
+                          action=proc.source, cmd=proc.cmd)
+        self._last_event[(process_id, on)] = event
+        for action in self._any_watchers.get(on, []):
+            self.states[action.id] = "running"  # due now: the run must not end before it
+            self._spawn_task(self._run_action(action, event))
+
+    def add_to_plan(self, processes: list[ProcessPlan], actions: list[ActionPlan],
+                    event: EventInfo | None = None) -> None:
+        """Processes and actions performed at event time join the run."""
+        for proc in processes:
+            self.states[proc.id] = "pending" if proc.enabled else "skipped"
+            if proc.enabled and not self._shutting_down:  # launch starts nothing in shutdown
+                self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
+        for action in actions:
+            self.states[action.id] = "pending" if action.enabled else "skipped"
+            if event is not None:
+                self._last_event[(action.id, "made")] = event
+            if action.enabled:
+                self._schedule_action(action)
+        self._changed.set()
+
+    def _perform_at_event(self, action: ActionPlan, entities: list[Any],
+                          event: EventInfo) -> bool:
+        from ..errors import LaunchError
+        from .event_actions import perform_entities
+
+        try:
+            performed = perform_entities(self.plan, action, entities, event)
+        except LaunchError as exc:  # only this handler fails, as in launch
+            self._log(action, str(exc).replace("\n", " "), "ERROR")
+            return False
+        for warning in performed.warnings:
+            self._log(action, warning, "WARN")
+        self.add_to_plan(performed.processes, performed.actions, event)
+        return True
+
+    def _event_of(self, action: ActionPlan) -> EventInfo:
+        """The event an action was triggered by (its process's start or exit, ...)."""
+        if (action.id, "made") in self._last_event:  # performed by an event handler
+            return self._last_event[(action.id, "made")]
+        step = action.trigger
+        while step is not None:
+            if step.target is not None and (step.target, step.on) in self._last_event:
+                return self._last_event[(step.target, step.on)]
+            step = step.after
+        on = action.trigger.on if action.trigger is not None else "timer"
+        return event_for(on)
+
+    async def _run_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
+        if event is None:
+            event = self._event_of(action)
         self.states[action.id] = "running"
         self._emit(Event("started", action.id))
         self._flag(action.id, "start").set()
@@ -372,11 +471,17 @@ class Supervisor:
             elif action.kind == "set_parameters":
                 ok = await self._set_parameters(action)
             elif action.kind == "shutdown":
-                self._spawn_task(self.shutdown(str(action.data)))
+                self._request_shutdown(str(action.data))
             elif action.kind == "log":
                 self._log(action, self._perform(action, action.source.msg, event))
             elif action.kind == "event_callback":
                 ok = self._run_callbacks(action, event or LaunchEvent())
+            elif action.kind == "deferred":
+                from .event_actions import deferred_entities
+
+                ok = self._perform_at_event(action, deferred_entities(action), event)
+            elif action.kind == "stop_process":
+                ok = await self._stop_process(action)
             else:
                 self._log(action, f"{action.kind} is not supported yet; skipped", "WARN")
         except asyncio.CancelledError:
@@ -385,6 +490,20 @@ class Supervisor:
         self.states[action.id] = "done" if ok else "failed"
         self._emit(Event("finished", action.id, reason=self.states[action.id]))
         self._flag(action.id, "exit").set()
+
+    def _request_shutdown(self, reason: str) -> None:
+        """A Shutdown action: the run must not end before the shutdown has begun."""
+        self._shutdown_requested = True
+        self._spawn_task(self.shutdown(reason))
+
+    async def _stop_process(self, action: ActionPlan) -> bool:
+        """EmitEvent(ShutdownProcess(process_matcher=matches_action(x)))."""
+        target = str(action.target)
+        if target not in self.states:
+            self._log(action, f"cannot stop {target}: this launch does not run it", "WARN")
+            return False
+        self._spawn_task(self.stop(target))
+        return True
 
     def _log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
         self._emit(Event("log", action.id, reason=text, level=level))
@@ -462,26 +581,33 @@ class Supervisor:
                       f"{type(exc).__name__}: {exc}", "ERROR")
             return False
         seen: set[int] = set()
+        rest: list[Any] = []
         for entity in produced:
             if id(entity) in seen:
                 continue
             seen.add(id(entity))
-            self._carry_out(action, entity, event)
-        return True
+            if not self._carry_out(action, entity, event):
+                rest.append(entity)
+        return self._perform_at_event(action, rest, event) if rest else True
 
-    def _carry_out(self, action: ActionPlan, entity: Entity, event: LaunchEvent) -> None:
+    def _carry_out(self, action: ActionPlan, entity: Entity, event: EventInfo) -> bool:
+        """Log lines and shutdown at once; False for what must be resolved into the plan."""
         if isinstance(entity, LogInfo):
             self._log(action, self._perform(action, entity.msg, event))
         elif isinstance(entity, Shutdown):
-            self._spawn_task(self.shutdown(self._perform(action, entity.reason, event)))
+            self._request_shutdown(self._perform(action, entity.reason, event))
         else:
-            self._log(action, f"an event callback returned {entity.describe()}, which "
-                      "tuilaunch does not start at run time yet", "WARN")
+            return False
+        return True
 
     def _dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
-        for action in self._io_watchers.get((process_id, stream), []):
+        watchers = [*self._io_watchers.get((process_id, stream), []),
+                    *self._any_watchers.get(f"io:{stream}", [])]
+        source = self.plan.process(process_id).source if watchers else None
+        for action in watchers:
             for line in lines:
-                event = LaunchEvent(process_id, pid, (line + "\n").encode())
+                event = event_for("io", stream, process_name=process_id, pid=pid,
+                                  text=(line + "\n").encode(), action=source)
                 self._spawn_task(self._run_action(action, event))
 
     async def start(self, process_id: str) -> None:
@@ -558,6 +684,7 @@ class Supervisor:
             return
         self.states[process_id] = "running"
         self._emit(Event("started", process_id, pid=popen.pid))
+        self._process_event(process_id, "start", popen.pid)
         self._flag(process_id, "start").set()
         self._spawn_task(self._wait(running))
 
@@ -621,6 +748,7 @@ class Supervisor:
         self.states[process_id] = "exited"
         self._emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=_describe_exit(code)))
+        self._process_event(process_id, "exit", running.process.pid, code)
         self._flag(process_id, "exit").set()
         if self._should_respawn(running, code):
             await self._respawn(running)
@@ -684,6 +812,7 @@ class Supervisor:
                     self.states[proc.id] = "pending" if proc.enabled else "skipped"
             self._io_watchers.clear()
             self._on_shutdown.clear()
+            self._any_watchers.clear()
             for proc in plan.processes:
                 if proc.id in diff.start:
                     self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
@@ -824,15 +953,6 @@ class Supervisor:
             pass
 
 
-def _on_event(trigger: Trigger | None) -> bool:
-    """Run by an event each time it happens (output, shutdown), not once when ready."""
-    while trigger is not None:
-        if trigger.on in ("io", "shutdown"):
-            return True
-        trigger = trigger.after
-    return False
-
-
 def _wants_tty(proc: ProcessPlan) -> bool:
     """emulate_tty when the file says; else a terminal for every process whose output is
     shown, so C/C++ programs print line by line instead of in bursts at exit."""
@@ -878,7 +998,12 @@ def _to_stderr(text: str) -> None:
         pass
 
 
-def _call_handler(callback: Any, event: LaunchEvent, action: ActionPlan) -> Any:
+def _runs_in_shutdown(step: Trigger, item: Any) -> bool:
+    """Exit handlers run while launch shuts down (their process stopped because of it)."""
+    return isinstance(item, ActionPlan) and step.on == "exit" and not step.delay
+
+
+def _call_handler(callback: Any, event: EventInfo, action: ActionPlan) -> Any:
     """Plain launch API handlers take (event, context); simple_launch's take (event)."""
     import inspect
 
@@ -887,7 +1012,8 @@ def _call_handler(callback: Any, event: LaunchEvent, action: ActionPlan) -> Any:
     except (TypeError, ValueError):
         arity = 1
     if arity >= 2:
-        return callback(event, PerformContext(action.configurations))
+        return callback(event, PerformContext(action.configurations,
+                                              event_locals={"event": event}))
     return callback(event)
 
 
