@@ -93,8 +93,9 @@ class ParamsPanel(Horizontal):
 
     def on_mount(self) -> None:
         table = self.query_one(DataTable)
-        for key, title in (("name", "name"), ("type", "type"), ("value", "value"),
-                           ("ro", "ro"), ("launch", "launch file")):
+        # the value beside what the launch file gave: the comparison fits 80 columns
+        for key, title in (("name", "name"), ("value", "value"), ("launch", "launch file"),
+                           ("type", "type"), ("ro", "ro")):
             table.add_column(title, key=key)
         self.refresh_nodes()
 
@@ -164,8 +165,8 @@ class ParamsPanel(Horizontal):
         table.clear()
         for info in described:
             from_launch = show_value(launch[info.name]) if info.name in launch else ""
-            table.add_row(info.name, info.type, show_value(info.value),
-                          "yes" if info.read_only else "", from_launch, key=info.name)
+            table.add_row(info.name, show_value(info.value), from_launch, info.type,
+                          "yes" if info.read_only else "", key=info.name)
         self.show_result(f"{node}: {len(described)} parameters", ok=True)
 
     @on(DataTable.RowHighlighted)
