@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,6 +27,10 @@ STATE_LOOK = {
     "done": ("✓", "green", "done"),
     "cancelled": ("○", "dim", "cancelled"),
 }
+# the Linux console's font lacks most of those: plain ASCII there
+ASCII_ICONS = {"pending": ".", "running": "*", "exited": "#", "failed": "x",
+               "respawning": "~", "skipped": "o", "stopping": "-", "done": "+",
+               "cancelled": "o"}
 # an action "running" is waiting for its service or node
 ACTION_WORDS = {"running": "working", "pending": "waiting"}
 # a lifecycle node's state, shown after its process state
@@ -35,6 +40,10 @@ LIFECYCLE_LOOK = {"unconfigured": "yellow", "inactive": "cyan", "active": "bold 
 COMPONENT_LOOK = {"waiting": ("…", "yellow"), "loading": ("…", "yellow"),
                   "loaded": ("✓", "green"), "failed": ("✗", "red"),
                   "cancelled": ("○", "dim"), "skipped": ("○", "dim")}
+
+
+def ascii_terminal() -> bool:
+    return os.environ.get("TERM", "") in ("linux", "vt100", "vt102", "vt220", "ansi")
 
 
 @dataclass
@@ -48,11 +57,16 @@ class RowData:
 
 class LaunchTree(Tree[RowData]):
     DEFAULT_CSS = """
-    LaunchTree { width: 34; min-width: 24; border-right: tall $panel; }
+    LaunchTree { width: 30; min-width: 12; border-right: tall $panel; overflow-x: hidden; }
     """
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__("launch", data=RowData("group", None, []), **kwargs)  # type: ignore
+        self.guide_depth = 2  # narrow indents: the names keep the width
+        self.ascii = ascii_terminal()
+        if self.ascii:
+            self.ICON_NODE = "+ "
+            self.ICON_NODE_EXPANDED = "- "
         self.rows: dict[str, TreeNode[RowData]] = {}
         self.plan: Plan | None = None
         self.details: dict[str, str] = {}
@@ -62,6 +76,8 @@ class LaunchTree(Tree[RowData]):
         self.lifecycle: dict[str, str] = {}
         self.component_rows: dict[str, TreeNode[RowData]] = {}
         self.component_labels: dict[str, str] = {}
+        # names processes report in their log lines (OutputStore.reported_names)
+        self.reported: dict[str, set[str]] = {}
 
     def show_plan(self, plan: Plan, states: dict[str, str]) -> None:
         self.plan = plan
@@ -144,7 +160,8 @@ class LaunchTree(Tree[RowData]):
         if item.condition is not None:
             label.append(f" = {item.condition.value}", "bold" if item.enabled else "dim")
         if item.trigger is not None:
-            label.append(f" ⏱ {item.trigger.describe()}", "italic")
+            clock = "@" if ascii_terminal() else "⏱"
+            label.append(f" {clock} {item.trigger.describe()}", "italic")
         if not item.enabled:
             label.stylize("dim")
         return label
@@ -167,6 +184,8 @@ class LaunchTree(Tree[RowData]):
             return
         state = self.states.get(ref, "pending")
         icon, style, word = STATE_LOOK.get(state, ("?", "", state))
+        if self.ascii:
+            icon = ASCII_ICONS.get(state, "?")
         if node.data is not None and node.data.kind == "action":
             word = ACTION_WORDS.get(state, word)
         label = Text()
@@ -187,7 +206,38 @@ class LaunchTree(Tree[RowData]):
         lifecycle = self.lifecycle.get(ref)
         if lifecycle:
             label.append(f" · {lifecycle}", LIFECYCLE_LOOK.get(lifecycle, "italic"))
-        node.set_label(label)
+        if node.label != label:  # an unchanged row is not repainted
+            node.set_label(label)
+
+    def describe(self, node: TreeNode[RowData]) -> str:
+        """The whole story of a row, for the detail line: never cut by the tree's width."""
+        data = node.data
+        if data is None or self.plan is None:
+            return ""
+        if data.kind == "all":
+            return "all nodes: every process's output, with its id"
+        if data.kind == "group":
+            label = node.label.plain if isinstance(node.label, Text) else str(node.label)
+            running = sum(1 for p in data.processes if self.states.get(p) == "running")
+            return f"{label}: {running} of {len(data.processes)} processes running"
+        ref = data.ref or ""
+        state = self.states.get(ref, "pending")
+        word = STATE_LOOK.get(state, ("", "", state))[2]
+        if data.kind == "component":
+            # a component's row says it all: plugin, name, load result
+            return node.label.plain if isinstance(node.label, Text) else str(node.label)
+        if data.kind == "action":
+            word = ACTION_WORDS.get(state, word)
+            text = f"{self.action_labels.get(ref, ref)} [{ref}]: {word}"
+        else:
+            proc = self.plan.process(ref)
+            reported = sorted(self.reported.get(ref, ()))
+            name = proc.full_name or (reported[0] if reported else proc.label)
+            text = f"{ref} ({name}): {word}"
+            if self.lifecycle.get(ref):
+                text += f", lifecycle state {self.lifecycle[ref]}"
+        detail = self.details.get(ref, "")
+        return f"{text} {detail}".rstrip()
 
 
 def _refs(diff: PlanDiff | None) -> set[str]:

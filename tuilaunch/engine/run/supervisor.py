@@ -861,6 +861,18 @@ class Supervisor:
             self._busy -= 1
             self._changed.set()
 
+    async def run_action(self, action_id: str) -> None:
+        """Performs one action of the plan again (the UI restarted its group)."""
+        action = next((a for a in self.plan.actions if a.id == action_id), None)
+        if action is None or not action.enabled or self._shutting_down:
+            return
+        self._busy += 1
+        try:
+            await self._run_action(action)
+        finally:
+            self._busy -= 1
+            self._changed.set()
+
     async def shutdown(self, reason: str = "shutdown") -> None:
         if self._shutting_down:
             return
