@@ -1,11 +1,17 @@
 """TUI figures, one run on this machine, each beside its floor.
 
-1. Keypress-to-screen latency (median and worst over 40 presses) while 4 processes flood
+1. Bytes on the wire: what each program writes to an 80x24 (and 120x40) terminal per second,
+   read from a pseudo-terminal as a terminal would: tuilaunch running the demo bringup
+   (its all-nodes pane shows every line), the same with every node stopped, and under 4
+   flooding processes; beside `ros2 launch -a`'s stand-in (ros2 launch is not installed
+   here: `tuilaunch --headless` prints the same demo as plain `[id] line` lines, as
+   `ros2 launch` does) and htop (default 1.5 s refresh) measured in the same run.
+2. Keypress-to-screen latency (median and worst over 40 presses) while 4 processes flood
    output as fast as they can (`yes`), against the same with 4 quiet processes (target:
    worst under 100 ms). Measured end to end on a pseudo-terminal: from writing the key `l`
    until the output pane's status line, redrawn, names the new level.
-2. Memory of the TUI with 100 processes and full scrollbacks (5000 lines each).
-3. Time to first screen on a real pseudo-terminal, against a minimal Textual app's.
+3. Memory of the TUI with 100 processes and full scrollbacks (5000 lines each).
+4. Time to first screen on a real pseudo-terminal, against a minimal Textual app's.
 
     python bench/tui_bench.py
 """
@@ -13,13 +19,17 @@
 from __future__ import annotations
 
 import asyncio
+import fcntl
 import os
 import pty
 import select
+import shutil
 import statistics
+import struct
 import subprocess
 import sys
 import tempfile
+import termios
 import time
 from pathlib import Path
 
@@ -31,11 +41,14 @@ from tuilaunch.output_store import View
 
 
 class Terminal:
-    """tuilaunch on a pseudo-terminal, its output read continuously as a terminal would."""
+    """A program on a pseudo-terminal, its output read continuously as a terminal would."""
 
-    def __init__(self, argv: list[str], log_dir: Path) -> None:
+    def __init__(self, argv: list[str], log_dir: Path, size: tuple[int, int] = (100, 30)) \
+            -> None:
         self.master, slave = pty.openpty()
-        env = {**os.environ, "TERM": "xterm-256color", "ROS_LOG_DIR": str(log_dir)}
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", size[1], size[0], 0, 0))
+        env = {**os.environ, "TERM": "xterm-256color", "ROS_LOG_DIR": str(log_dir),
+               "COLUMNS": str(size[0]), "LINES": str(size[1])}
         self.proc = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave, env=env,
                                      start_new_session=True)
         os.close(slave)
@@ -55,6 +68,21 @@ class Terminal:
     def press(self, key: bytes) -> None:
         os.write(self.master, key)
 
+    def rate(self, seconds: float) -> float:
+        """Bytes per second written to the terminal over the next `seconds`."""
+        count = 0
+        end = time.perf_counter() + seconds
+        while (left := end - time.perf_counter()) > 0:
+            if select.select([self.master], [], [], min(left, 0.1))[0]:
+                try:
+                    count += len(os.read(self.master, 1 << 20))
+                except OSError:
+                    break
+        return count / seconds
+
+    def settle(self, seconds: float) -> None:
+        self.rate(seconds)
+
     def close(self) -> None:
         self.proc.terminate()
         try:
@@ -65,6 +93,67 @@ class Terminal:
             pass
         self.proc.wait(timeout=60)
         os.close(self.master)
+
+
+TUI = [sys.executable, "-m", "tuilaunch"]
+WINDOW = 10.0  # seconds each rate is measured over
+
+
+def tui_rates(path: Path, log_dir: Path, size: tuple[int, int]) -> tuple[float, float]:
+    """tuilaunch with the demo: bytes/s while it runs, then with every node stopped."""
+    term = Terminal([*TUI, str(path)], log_dir, size)
+    try:
+        term.read_until(b"5 running", limit=60)
+        term.settle(3.0)  # the actions finish, the first screen is out
+        running = term.rate(WINDOW)
+        term.press(b"s")  # on the root row: stop everything (it asks first)
+        term.settle(0.5)
+        term.press(b"y")
+        term.read_until(b"5 exited", limit=60)
+        term.settle(2.0)
+        stopped = term.rate(WINDOW)
+    finally:
+        term.close()
+    return running, stopped
+
+
+def rate_of(argv: list[str], log_dir: Path, marker: bytes | None, size: tuple[int, int],
+            settle: float = 3.0) -> float:
+    term = Terminal(argv, log_dir, size)
+    try:
+        if marker is not None:
+            term.read_until(marker, limit=60)
+        term.settle(settle)
+        return term.rate(WINDOW)
+    finally:
+        term.close()
+
+
+def wire(folder: Path, flood: Path) -> None:
+    bringup = Path(__file__).resolve().parent.parent / "examples" / "bringup.py"
+    headless = [*TUI, "--headless", str(bringup)]
+    stand_in = rate_of(headless, folder / "w0", b"Publishing", (80, 24))
+    htop = rate_of(["htop"], folder / "w1", None, (80, 24)) if shutil.which("htop") else None
+    running, stopped = tui_rates(bringup, folder / "w2", (80, 24))
+    wide, _ = tui_rates(bringup, folder / "w3", (120, 40))
+    flood_tui = rate_of([*TUI, str(flood)], folder / "w4", b"4 running", (80, 24))
+    flood_plain = rate_of([*TUI, "--headless", str(flood)], folder / "w5", b"flooding",
+                          (80, 24), settle=1.0)
+
+    def vs(value: float, floor: float | None) -> str:
+        return f"{value / floor:.1f}x" if floor else "n/a"
+
+    htop_text = f"{htop:,.0f} B/s" if htop is not None else "not installed"
+    print("bytes to the terminal, 80x24 unless said (ros2 launch -a stand-in: "
+          "tuilaunch --headless, plain [id] lines)")
+    print(f"  demo running:        tuilaunch {running:,.0f} B/s (target <= 2,000), stand-in "
+          f"{stand_in:,.0f} B/s ({vs(running, stand_in)}), htop {htop_text} "
+          f"({vs(running, htop)})")
+    print(f"  demo at 120x40:      tuilaunch {wide:,.0f} B/s")
+    print(f"  every node stopped:  tuilaunch {stopped:,.0f} B/s (target <= 300), stand-in 0 "
+          f"B/s, htop {htop_text} ({vs(stopped, htop)})")
+    print(f"  4 flooders (yes):    tuilaunch {flood_tui:,.0f} B/s, stand-in "
+          f"{flood_plain:,.0f} B/s (tuilaunch writes {vs(flood_plain, flood_tui)} less)")
 
 
 LEVEL_WORDS = ("INFO", "WARN", "ERROR", "FATAL", "DEBUG")
@@ -80,7 +169,7 @@ def latency(path: Path, log_dir: Path, presses: int = 40) -> tuple[float, float]
         for i in range(presses):
             term.press(b"l")
             word = LEVEL_WORDS[i % len(LEVEL_WORDS)].encode()
-            times.append(term.read_until(b"level " + word + b"+"))
+            times.append(term.read_until(b"  " + word + b"+"))
             time.sleep(0.05)
     finally:
         term.close()
@@ -154,12 +243,14 @@ Minimal().run()
 def main() -> None:
     ensure_environment()
     os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    os.environ.setdefault("ROS_DOMAIN_ID", str(150 + os.getpid() % 50))
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
         flood = write_launch(folder, "flood.py", "[ExecuteProcess(cmd=['yes', 'flooding the "
                             "pane with a line of text'], name=f'flood{i}') for i in range(4)]")
         quiet = write_launch(folder, "quiet.py", "[ExecuteProcess(cmd=['sleep', '600'], "
                             "name=f'quiet{i}') for i in range(4)]")
+        wire(folder, flood)
         q_med, q_max = latency(quiet, folder / "q")
         f_med, f_max = latency(flood, folder / "f")
         print(f"keypress latency, 4 quiet processes:    median {q_med:.1f} ms, "

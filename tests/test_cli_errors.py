@@ -111,7 +111,8 @@ def generate_launch_description():
     result = run_cli(str(path), "--print", "--json")
     check_error(result, "package 'no_such_pkg' not found in the ament index",
                 "executable 'no_such_exe' not found in package 'tuilaunch_demos'",
-                "available: configurable, listener, service_server, talker")
+                "available: component_container, configurable, lifecycle_talker, listener, "
+                "service_server, talker")
     plan = json.loads(result.stdout)  # the plan is still printed whole
     assert [p["error"] is None for p in plan["processes"]] == [False, False, True]
 

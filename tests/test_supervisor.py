@@ -167,7 +167,7 @@ def generate_launch_description():
     kill_leftovers.append(proc)
     seen = read_until(proc, "[stubborn-1] stubborn ready", "[listener-3] STARTUP",
                       "[ERROR] [no_such_exe-2]: failed to start: executable 'no_such_exe'")
-    assert "available: configurable" in seen
+    assert "available: component_container, configurable" in seen
     pids = pids_of(logs)
     os.kill(proc.pid, how)
     proc.wait(timeout=60)

@@ -78,9 +78,9 @@ async def test_select_a_node_see_its_output_stop_restart_and_search(tmp_path):
         # keyboard only: root, "all nodes", "ns /tui1", then the talker
         await pilot.press("down", "down", "down")
         assert panel.view.process == "talker-1"
-        await until(pilot, lambda: any("Publishing" in line for line in panel.log_widget.lines))
+        await until(pilot, lambda: any("Publishing" in line for line in panel.pane_lines()))
         assert not any("[listener-2]" in line or "I heard" in line
-                       for line in panel.log_widget.lines)
+                       for line in panel.pane_lines())
 
         first_pid = pids(app)["talker-1"]
         await pilot.press("s")
@@ -94,16 +94,16 @@ async def test_select_a_node_see_its_output_stop_restart_and_search(tmp_path):
         await pilot.press(*"says hi")
         await pilot.press("enter")
         status = str(app.query_one("#output-status").render())
-        assert panel.search == "says hi" and "search 'says hi' 1/" in status
+        assert panel.search == "says hi" and "/says hi 1/" in status
         await pilot.press("n")
         assert panel.match_index == 1
 
         await pilot.press("a")
         assert panel.view.process is None
         await until(pilot, lambda: any(line.startswith("[listener-2]")
-                                       for line in panel.log_widget.lines))
+                                       for line in panel.pane_lines()))
         await pilot.press("l", "l", "l")  # ERROR and above: the INFO chatter is gone
-        assert not any("Publishing" in line for line in panel.log_widget.lines)
+        assert not any("Publishing" in line for line in panel.pane_lines())
 
 
 async def test_editing_an_argument_previews_then_relaunches_only_what_changes(tmp_path):

@@ -336,9 +336,11 @@ def test_containers_and_composable_nodes(write):
     assert (box.kind, box.full_name, box.package) == ("container", "/ns/box",
                                                       "rclcpp_components")
     # a component takes the pushed namespace, not its container's (launch_ros does so)
-    assert box.components == [{"package": "composition", "plugin": "composition::Talker",
-                               "name": "talker", "namespace": "/",
-                               "parameters": {"rate": 2}, "remappings": [["chatter", "out"]]}]
+    (talker,) = box.components
+    assert {k: talker[k] for k in ("package", "plugin", "name", "namespace", "parameters",
+                                   "remappings")} == {
+        "package": "composition", "plugin": "composition::Talker", "name": "talker",
+        "namespace": "/", "parameters": {"rate": 2}, "remappings": [["chatter", "out"]]}
     load = next(a for a in plan.actions if a.kind == "load_components")
     assert load.target == "/ns/box"
     assert [(c["plugin"], c["namespace"]) for c in load.data] == [

@@ -12,32 +12,52 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 from rich.text import Text
-from textual import on, work
+from textual import events, on, work
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
+from textual.containers import Vertical
 from textual.screen import Screen
-from textual.widgets import Footer, Static, TabbedContent, TabPane, Tree
+from textual.widget import Widget
+from textual.widgets import Button, Footer, OptionList, Static, TabbedContent, TabPane, Tree
 
 from .engine.plan.session import Preview, Session
 from .engine.ros.bridge import RosBridge
+from .engine.ros.lifecycle import available_transitions
 from .engine.run.engine_thread import EngineThread
 from .engine.run.event_buffer import EventBuffer
 from .engine.run.supervisor import Event, Supervisor
-from .output_store import Line, OutputStore
-from .screens.args_panel import ArgsPanel
-from .screens.dialogs import HelpScreen, QuitScreen
+from .output_store import ERROR, INFO, WARN, Line, OutputStore
+from .screens.args_panel import ArgsPanel, check_plan, check_values
+from .screens.dialogs import ConfirmScreen, HelpScreen, QuitScreen
+from .screens.fields import ESC_DIGITS, Field
 from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.tree_panel import LaunchTree, RowData
 from .session_client import RemoteSupervisor
 
-DRAIN_HZ = 20
+# the UI's tick: events are taken from the engine this often; the output pane repaints at
+# most PANE_FPS times a second and only when what it shows changed, so a terminal over ssh
+# gets little more than what changed on screen
+DRAIN_HZ = 10
+PANE_FPS = 1.0
+
+
+class LaunchTabs(TabbedContent):
+    """Tabs that change only when asked (keys 1-4, a click on a tab).
+
+    TabbedContent also switches to whichever pane a widget was focused in, when its
+    message arrives: with keys that arrive together (escape, 3) that message is late and
+    flips the tab back."""
+
+    def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
+        event.stop()
 
 
 class TuiLaunchApp(App[int]):
@@ -53,6 +73,10 @@ class TuiLaunchApp(App[int]):
         Binding("r", "restart", "Restart", tooltip="Restart the selected node or group"),
         Binding("t", "start", "Start", tooltip="Start the selected node or group"),
         Binding("a", "all_output", "All", show=False, tooltip="Output of all nodes"),
+        Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up",
+                tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
+        Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down",
+                tooltip="Deactivate an active, clean up an inactive lifecycle node"),
         Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
         Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
                 "opens it again"),
@@ -63,10 +87,12 @@ class TuiLaunchApp(App[int]):
 
     def __init__(self, session: Session, log_dir: Path, scrollback: int = 5000,
                  sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
-                 session_name: str | None = None, owner: bool = False,
-                 keep_on_hangup: bool = False) -> None:
+                 pane_fps: float = PANE_FPS, session_name: str | None = None,
+                 owner: bool = False, keep_on_hangup: bool = False) -> None:
         no_color = os.environ.get("NO_COLOR")
         super().__init__()
+        # no animated tab underlines or scrolling: every frame is bytes over ssh
+        self.animation_level = "none"
         if no_color is not None:
             # Textual takes NO_COLOR out of the environment; the nodes should still see it
             os.environ["NO_COLOR"] = no_color
@@ -75,8 +101,9 @@ class TuiLaunchApp(App[int]):
         self.scrollback = scrollback
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
+        self.pane_fps = pane_fps
         self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
-        # lines shown per drain tick at most: 20 ticks/s x 2500 is more than anyone reads;
+        # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
         self.supervisor: Supervisor | RemoteSupervisor | None = None
@@ -92,23 +119,32 @@ class TuiLaunchApp(App[int]):
         self.terminal_lost = False
         self._bridge: RosBridge | None = None
         self._bridge_lock = threading.Lock()
+        # stops the operator asked for: their non-zero exit is not a failure
+        self._stopping: set[str] = set()
+        self._quit_started: float | None = None
+        self._status_text = ""
+        self._detail_text = ""
 
     # --- layout ----------------------------------------------------------------------
 
     def compose(self) -> ComposeResult:
         yield Static("", id="status")
-        with TabbedContent(initial="nodes"):
-            with TabPane("1 Nodes", id="nodes"), NodesView(id="nodes-split"):
-                yield LaunchTree(id="tree")
-                yield OutputPanel(self.store, self.log_dir, max_lines=self.scrollback,
-                                  id="output")
+        with LaunchTabs(initial="nodes"):
+            with TabPane("1 Nodes", id="nodes"), Vertical(id="nodes-tab"):
+                yield Static("", id="detail")
+                with NodesView(id="nodes-split"):
+                    yield LaunchTree(id="tree")
+                    yield OutputPanel(self.store, self.log_dir, max_lines=self.scrollback,
+                                      max_fps=self.pane_fps, id="output")
             with TabPane("2 Args", id="args"):
                 yield ArgsPanel(self.session.plan.arguments, self.session.plan.file,
                                 id="args-panel")
             with TabPane("3 Services", id="services"):
                 yield ServicesPanel(self.bridge, id="services-panel")
             with TabPane("4 Params", id="params"):
-                yield ParamsPanel(self.bridge, lambda: self.session.plan, id="params-panel")
+                yield ParamsPanel(self.bridge, lambda: self.session.plan,
+                                  reported=lambda: self.store.reported_names,
+                                  id="params-panel")
         yield Footer()
 
     def bridge(self) -> RosBridge:
@@ -126,6 +162,8 @@ class TuiLaunchApp(App[int]):
         self.args_panel = self.query_one(ArgsPanel)
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
+        self.detail_bar = self.query_one("#detail", Static)
+        self.launch_tree.reported = self.store.reported_names
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
         sys.setswitchinterval(0.001)
         self.engine = EngineThread()
@@ -185,9 +223,6 @@ class TuiLaunchApp(App[int]):
         self.show_events(self.buffer.drain())
 
     def show_events(self, events: list[Event]) -> None:
-        if not events:
-            self.output_panel.update_status()
-            return
         tree = self.launch_tree
         panel = self.output_panel
         fresh: list[Line] = []
@@ -197,9 +232,21 @@ class TuiLaunchApp(App[int]):
             elif event.kind == "log":
                 if event.process and self.supervisor is not None:
                     tree.set_state(event.process, self.supervisor.states.get(event.process, ""))
-                fresh += self.store.add("launch", "stdout",
-                                        [f"[{event.level}] [{event.process or 'launch'}] "
-                                         f"{event.reason}"])
+                level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
+                fresh += self.store.add_event(event.process or "launch", event.reason or "",
+                                              level)
+            elif event.kind == "lifecycle" and event.process:
+                tree.set_lifecycle(event.process, event.reason or "")
+                self.refresh_bindings()
+            elif event.kind == "component" and event.data:
+                data = event.data
+                short = f"id {data['unique_id']}" if "unique_id" in data else \
+                    str(data.get("error") or data.get("text") or "")
+                tree.set_component(str(data["component"]), str(data["state"]), short)
+                if data["state"] not in ("loading", "waiting"):
+                    level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
+                    fresh += self.store.add_event(event.process or "launch",
+                                                  event.reason or "", level)
             elif event.kind == "relaunched" and self.supervisor is not None:
                 # any client's relaunch: the session already holds the new plan
                 tree.show_plan(self.session.plan, self.supervisor.states)
@@ -208,15 +255,53 @@ class TuiLaunchApp(App[int]):
                     self._relaunched_elsewhere(event.lines)
                 self._own_relaunch = None
             elif event.kind == "dropped" and event.process:
-                fresh += self.store.add(event.process, "stderr", [
-                    f"[WARN] tuilaunch: {event.reason}"])
+                # counted in the pane's status line, not written as lines of their own
+                self.store.count_dropped(event.process, event.code or 0)
             elif event.process and self.supervisor is not None:
-                state = self.supervisor.states.get(event.process, event.kind)
-                tree.set_state(event.process, state, _detail(event))
+                fresh += self._process_event(event)
         if fresh:
             panel.append(fresh)
-        panel.update_status()
-        self.update_status()
+        panel.flush()
+        if events:
+            self.update_status()
+            self.update_detail()
+        elif self._quit_started is not None:
+            self.update_status()  # the signal stage moves on with time
+
+    def _process_event(self, event: Event) -> list[Line]:
+        """A state change: the tree row, and a line in the node's pane as ros2 launch
+        prints it ("process started with pid", "process has died [pid, exit code]")."""
+        assert self.supervisor is not None and event.process is not None
+        process = event.process
+        tree = self.launch_tree
+        state = self.supervisor.states.get(process, event.kind)
+        is_process = any(p.id == process for p in self.session.plan.processes)
+        if event.kind == "started":
+            self._stopping.discard(process)
+            tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
+            if is_process:
+                return self.store.add_event(process, f"process started with pid [{event.pid}]")
+            return []
+        if event.kind == "exited":
+            code = event.code if event.code is not None else 0
+            asked = process in self._stopping or self.quitting
+            if code != 0 and not asked and state == "exited":
+                state = "failed"  # a crash, not the operator's stop
+            tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
+            if code == 0:
+                text, level = f"process has finished cleanly [pid {event.pid}]", INFO
+            else:
+                text = f"process has died [pid {event.pid}, {event.reason}]"
+                level = WARN if asked else ERROR
+            return self.store.add_event(process, text, level)
+        if event.kind == "failed":
+            tree.set_state(process, state, f"({event.reason})")
+            return self.store.add_event(process, f"failed: {event.reason}", ERROR)
+        if event.kind == "respawning":
+            tree.set_state(process, state, f"({event.reason})")
+            return self.store.add_event(process, f"respawning: {event.reason}", WARN)
+        tree.set_state(process, state, _detail(event))
+        return []
 
     def _relaunched_elsewhere(self, arguments: list[str]) -> None:
         """Another operator applied new values: the form shows them, so an edit here starts
@@ -232,21 +317,48 @@ class TuiLaunchApp(App[int]):
         if self.supervisor is None:
             return
         counts: dict[str, int] = {}
+        shown = self.launch_tree.states
         for proc in self.session.plan.processes:
-            state = self.supervisor.states.get(proc.id, "pending")
+            state = shown.get(proc.id) or self.supervisor.states.get(proc.id, "pending")
             counts[state] = counts.get(state, 0) + 1
-        order = ("running", "pending", "exited", "failed", "respawning", "skipped")
+        order = ("running", "pending", "stopping", "exited", "failed", "respawning", "skipped")
         text = "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in order
                          if counts.get(s))
         args = " ".join(f"{k}:={v}" for k, v in self.session.arguments.items())
         prefix = ""
         if self.quitting:
             still = self.running()
-            prefix = f"stopping {', '.join(still)}... " if still else "stopped. "
+            prefix = f"stopping {', '.join(still)} ({self._signal_stage()})... " if still \
+                else "stopped. "
         name = Path(self.session.plan.file).name
         if self.session_name is not None:
             name = f"[{self.session_name}] {name}"
-        self.status_bar.update(Text(f"{prefix}{name}  {text}  {args}"))
+        line = f"{prefix}{name}  {text}  {args}"
+        if line != self._status_text:  # an unchanged line is not sent to the terminal again
+            self._status_text = line
+            self.status_bar.update(Text(line))
+
+    def _signal_stage(self) -> str:
+        """Where the SIGINT -> SIGTERM -> SIGKILL escalation is, from the timeouts."""
+        if self._quit_started is None:
+            return "SIGINT sent"
+        elapsed = time.monotonic() - self._quit_started
+        if elapsed < self.sigterm_timeout:
+            return f"SIGINT sent, SIGTERM in {self.sigterm_timeout - elapsed:.0f} s; q: kill now"
+        elapsed -= self.sigterm_timeout
+        if elapsed < self.sigkill_timeout:
+            return f"SIGTERM sent, SIGKILL in {self.sigkill_timeout - elapsed:.0f} s; " \
+                   "q: kill now"
+        return "SIGKILL sent"
+
+    def update_detail(self) -> None:
+        """The selected row in full, above the tree and the pane: state, pid, exit code,
+        failure reason or condition, whatever the tree's width cuts."""
+        node = self.launch_tree.cursor_node
+        text = self.launch_tree.describe(node) if node is not None else ""
+        if text != self._detail_text:
+            self._detail_text = text
+            self.detail_bar.update(Text(text, style=_detail_style(text)))
 
     def _describe_waiting(self) -> None:
         tree = self.launch_tree
@@ -265,8 +377,10 @@ class TuiLaunchApp(App[int]):
     @on(Tree.NodeHighlighted, "#tree")
     def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
         data = event.node.data
+        self.update_detail()
         if data is None:
             return
+        self.refresh_bindings()  # the lifecycle keys apply to lifecycle nodes only
         if data.kind == "all":
             self.output_panel.show_view(None)
         elif data.kind == "process":
@@ -294,21 +408,90 @@ class TuiLaunchApp(App[int]):
             return True if states else None
         if action == "detach":
             return self.session_name is not None
-        if action == "apply":
-            return True if self.preview is not None and self.preview.plan is not None and \
-                self.preview.diff is not None and not self.preview.diff.empty else None
+        if action == "lifecycle":
+            if self.supervisor is None or self.tabs.active != "nodes":
+                return False
+            selected = self.selected()
+            # shown only while a lifecycle node is selected: other launches keep their footer
+            if len(selected) != 1 or selected[0] not in self.supervisor.lifecycle.states:
+                return False
+            return True if self._lifecycle_step(str(parameters[0])) else None
         return True
 
     def _command(self, verb: str) -> None:
         assert self.supervisor is not None
         supervisor = self.supervisor
+        processes = self.selected()
+        node = self.launch_tree.cursor_node
+        everything = node is not None and node.data is not None and (
+            node.data.kind == "all" or node is self.launch_tree.root)
+        if verb == "stop" and everything and len(processes) > 1:
+            running = [p for p in processes if supervisor.states.get(p) == "running"]
+
+            def answered(yes: bool | None) -> None:
+                if yes:
+                    self._run_command(verb, processes)
+
+            self.push_screen(ConfirmScreen(
+                f"Stop all {len(running)} running processes: {', '.join(running[:6])}"
+                f"{' ...' if len(running) > 6 else ''}?", "Stop them (y)"), answered)
+            return
+        self._run_command(verb, processes)
+
+    def _run_command(self, verb: str, processes: list[str]) -> None:
+        assert self.supervisor is not None
+        supervisor = self.supervisor
         tree = self.launch_tree
-        for process in self.selected():
-            if verb in ("stop", "restart") and supervisor.states.get(process) == "running":
-                tree.set_state(process, "stopping")
-            coroutine = getattr(supervisor, verb)(process)
-            self.run_worker(self.engine.run(coroutine), group="commands", exit_on_error=False)
+        commands = []
+        for process in processes:
+            if verb in ("stop", "restart"):
+                self._stopping.add(process)
+                if supervisor.states.get(process) == "running":
+                    tree.set_state(process, "stopping")
+            commands.append(getattr(supervisor, verb)(process))
+        actions = self._actions_to_rerun(processes) if verb in ("restart", "start") else []
+        self.run_worker(self._carry_out(commands, actions), group="commands",
+                        exit_on_error=False)
         self.refresh_bindings()
+
+    async def _carry_out(self, commands: list[Any], actions: list[str]) -> None:
+        """The commands together; then the group's actions (set_parameters, call_service)
+        again, so a restarted node gets what the launch file gave it after its start."""
+        assert self.supervisor is not None
+        await asyncio.gather(*(self.engine.run(c) for c in commands))
+        for action in actions:
+            self.run_worker(self.engine.run(self.supervisor.run_action(action)),
+                            group="commands", exit_on_error=False)
+
+    def _actions_to_rerun(self, processes: list[str]) -> list[str]:
+        """The enabled one-off actions of the selected group, or for one node those of its
+        group that wait for it or address it by name."""
+        node = self.launch_tree.cursor_node
+        if node is None or node.data is None or node.data.kind == "action":
+            return []
+        plan = self.session.plan
+        enabled = {a.id: a for a in plan.actions if a.enabled and a.kind in (
+            "set_parameters", "call_service") and (a.trigger is None or a.trigger.on not in (
+                "io", "shutdown"))}
+        if node.data.kind in ("group", "all"):
+            return [ref for ref in _action_refs(node) if ref in enabled]
+        process = node.data.ref
+        parent = node.parent
+        if process is None or parent is None:
+            return []
+        proc = plan.process(process)
+        names = {proc.full_name} | self.store.reported_names.get(process, set())
+        chosen = []
+        for ref in _action_refs(parent):
+            action = enabled.get(ref)
+            if action is None:
+                continue
+            waits_for = action.trigger is not None and _trigger_targets(action.trigger,
+                                                                        process)
+            addressed = action.kind == "set_parameters" and str(action.target) in names
+            if waits_for or addressed:
+                chosen.append(ref)
+        return chosen
 
     def action_stop(self) -> None:
         self._command("stop")
@@ -319,32 +502,100 @@ class TuiLaunchApp(App[int]):
     def action_start(self) -> None:
         self._command("start")
 
+    def _lifecycle_step(self, direction: str) -> tuple[str, str] | None:
+        """(process, transition) that `]` (up) or `[` (down) asks of the selected node."""
+        selected = self.selected()
+        if self.supervisor is None or len(selected) != 1:
+            return None
+        state = self.supervisor.lifecycle.states.get(selected[0])
+        steps = {"up": {"unconfigured": "configure", "inactive": "activate"},
+                 "down": {"active": "deactivate", "inactive": "cleanup"}}[direction]
+        transition = steps.get(state or "")
+        return (selected[0], transition) if transition else None
+
+    def action_lifecycle(self, direction: str) -> None:
+        step = self._lifecycle_step(direction)
+        if step is not None:
+            self.lifecycle_transition(*step)
+
+    def lifecycle_transition(self, process: str, transition: str) -> None:
+        """Asks a lifecycle node for a transition; the result arrives as events."""
+        assert self.supervisor is not None
+        coroutine = self.supervisor.lifecycle.request(process, transition)
+        self.run_worker(self.engine.run(coroutine), group="commands", exit_on_error=False)
+
     def action_all_output(self) -> None:
         tree = self.launch_tree
         tree.move_cursor(tree.root.children[0])
         self.output_panel.show_view(None)
 
     def action_tab(self, tab: str) -> None:
-        self.tabs.active = tab
+        if self.tabs.active != tab:
+            self.tabs.active = tab
+            self._enter_tab(tab)
         self.refresh_bindings()
+
+    def on_key(self, event: events.Key) -> None:
+        """ESC and a digit read together arrive as one character (see fields.py): outside
+        a field that is the digit's tab."""
+        digit = ESC_DIGITS.get(event.character or "")
+        if digit in ("1", "2", "3", "4"):
+            event.stop()
+            self.action_tab(("nodes", "args", "services", "params")[int(digit) - 1])
+
+    def action_leave_field(self) -> None:
+        """Escape in a text field: out of it, to where the tab's work starts, so the next
+        keys (1-4, s, q, ...) are commands again. The focus moves at once, not on the next
+        tick, so keys typed right after escape go to the new place."""
+        focused = self.focused
+        if isinstance(focused, Field) and focused.id in ("search-input", "filter-input"):
+            self.output_panel.action_clear_search()
+            self.screen.set_focus(self.output_panel.line_view)
+            return
+        self.screen.set_focus(self._home(self.tabs.active))
+
+    def _home(self, pane: str) -> Widget:
+        if pane == "args":
+            return self.query_one("#apply", Button)
+        if pane == "services":
+            return self.query_one("#svc-list", OptionList)
+        if pane == "params":
+            return self.query_one("#prm-nodes", OptionList)
+        return self.launch_tree
 
     @on(TabbedContent.TabActivated)
     def _tab_changed(self, event: TabbedContent.TabActivated) -> None:
         self.refresh_bindings()
-        pane = event.pane.id
-        # keyboard first: each tab puts the cursor where work starts
+        pane = event.pane.id or "nodes"
+        focused = self.focused
+        if not (isinstance(focused, Widget) and pane_of(focused) == pane):
+            self._enter_tab(pane)  # a click on a tab: the keys did this already
+
+    def _enter_tab(self, pane: str) -> None:
+        """Keyboard first: each tab puts the cursor where work starts, at once, so keys
+        typed right after the tab key go there; again once the tab is laid out."""
+        target: Widget | None = None
         if pane == "nodes":
-            self.launch_tree.focus()
+            target = self.launch_tree
         elif pane == "args":
             editors = self.args_panel.query(".arg-editor")
-            if editors:
-                editors.first().focus()
+            target = editors.first() if editors else self.query_one("#apply", Button)
         elif pane == "services":
             self.query_one(ServicesPanel).refresh_services()
-            self.query_one("#svc-filter").focus()
+            target = self.query_one("#svc-filter")
         elif pane == "params":
             self.query_one(ParamsPanel).refresh_nodes()
-            self.query_one("#prm-filter").focus()
+            target = self.query_one("#prm-filter")
+        if target is not None:
+            self.screen.set_focus(target)
+            self.call_after_refresh(self._refocus, pane, target)
+
+    def _refocus(self, pane: str, target: Widget) -> None:
+        if not self.is_running or not self.screen_stack:
+            return
+        if self.tabs.active == pane and self.focused is not target and not (
+                isinstance(self.focused, Widget) and pane_of(self.focused) == pane):
+            self.screen.set_focus(target)
 
     def action_help(self) -> None:
         self.push_screen(HelpScreen())
@@ -353,8 +604,13 @@ class TuiLaunchApp(App[int]):
 
     @on(ArgsPanel.Edited)
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
+        self.preview_values(event.values)
+
+    def preview_values(self, values: dict[str, str]) -> None:
+        """What these form values would do; a value the plan cannot use is an error here,
+        and F5 never applies it."""
         current = {a.name: a.value for a in self.session.plan.arguments}
-        edits = {k: v for k, v in event.values.items() if v != current.get(k)}
+        edits = {k: v for k, v in values.items() if v != current.get(k)}
         panel = self.args_panel
         tree = self.launch_tree
         if not edits:
@@ -365,7 +621,15 @@ class TuiLaunchApp(App[int]):
             return
         running = {p for p, s in (self.supervisor.states.items() if self.supervisor else ())
                    if s == "running"}
-        self.preview = self.session.preview(edits, running)
+        problem = check_values(self.session.plan.arguments, edits)
+        if problem is None:
+            self.preview = self.session.preview(edits, running)
+            if self.preview.plan is not None:
+                problem = check_plan(self.preview.plan)
+        else:
+            self.preview = Preview({**self.session.arguments, **edits}, None, None, problem)
+        if problem is not None:
+            self.preview = Preview(self.preview.arguments, None, None, problem)
         if self.preview.error is not None or self.preview.diff is None:
             tree.set_preview(None)
             panel.set_preview_text(f"Cannot apply: {self.preview.error}", error=True)
@@ -379,6 +643,8 @@ class TuiLaunchApp(App[int]):
         self.action_apply()
 
     def action_apply(self) -> None:
+        # the form as it is now: keys typed just before F5 may not have been previewed yet
+        self.preview_values(self.args_panel.values())
         preview = self.preview
         if preview is None or preview.plan is None or preview.diff is None:
             self.notify("nothing to apply" if preview is None else
@@ -412,6 +678,10 @@ class TuiLaunchApp(App[int]):
 
     def action_request_quit(self) -> None:
         running = self.running()
+        if self.quitting:
+            if running and not isinstance(self.screen, ConfirmScreen):
+                self._offer_kill(running)
+            return
         if not running:
             self.stop_all_and_exit()
             return
@@ -424,6 +694,16 @@ class TuiLaunchApp(App[int]):
 
     async def action_quit(self) -> None:
         self.action_request_quit()
+
+    def _offer_kill(self, running: list[str]) -> None:
+        """A second q while stubborn processes stop: SIGKILL them now, or keep waiting."""
+        def answered(yes: bool | None) -> None:
+            if yes and self.supervisor is not None:
+                self.supervisor.kill_all()
+
+        self.push_screen(ConfirmScreen(
+            f"Still stopping: {', '.join(running[:6])} ({self._signal_stage()}).\n"
+            "Kill them now with SIGKILL?", "Kill now (y)", "Keep waiting (n)"), answered)
 
     def _terminal_hung_up(self) -> None:
         """SIGHUP: the ssh session or tmux pane is gone. An attached session, or one started
@@ -457,6 +737,7 @@ class TuiLaunchApp(App[int]):
             self.exit(0)
             return
         self.quitting = True
+        self._quit_started = time.monotonic()
         for process in self.running():
             self.launch_tree.set_state(process, "stopping")
         self.update_status()
@@ -477,6 +758,15 @@ class TuiLaunchApp(App[int]):
         if self.session_name is not None:
             yield SystemCommand("Detach", "Leave the launch running (tuilaunch attach)",
                                 self.action_detach)
+        selected = self.selected() if self.supervisor is not None else []
+        if len(selected) == 1 and self.supervisor is not None:
+            process = selected[0]
+            state = self.supervisor.lifecycle.states.get(process)
+            for transition in available_transitions(state):
+                yield SystemCommand(
+                    f"Lifecycle: {transition.replace('_', ' ')} {process}",
+                    f"Ask the lifecycle node (now {state}) for this transition",
+                    lambda t=transition, p=process: self.lifecycle_transition(p, t))
         for tab, title in (("nodes", "Nodes"), ("args", "Arguments"), ("services", "Services"),
                            ("params", "Parameters")):
             yield SystemCommand(f"Open {title}", f"Show the {title} tab",
@@ -484,11 +774,44 @@ class TuiLaunchApp(App[int]):
 
 
 def _detail(event: Event) -> str:
-    if event.kind == "started":
+    if event.kind == "started" and event.pid is not None:
         return f"pid {event.pid}"
-    if event.kind in ("exited", "failed", "respawning"):
+    if event.kind in ("exited", "failed", "respawning") and event.reason:
         return f"({event.reason})"
     return ""
+
+
+def pane_of(widget: Widget) -> str | None:
+    """The id of the tab pane a widget is in."""
+    for node in widget.ancestors_with_self:
+        if isinstance(node, TabPane):
+            return node.id
+    return None
+
+
+def _detail_style(text: str) -> str:
+    if ": failed" in text or "refused" in text:
+        return "bold red"
+    return ""
+
+
+def _action_refs(node: Any) -> list[str]:
+    """Action ids in a tree row's subtree, in the tree's order."""
+    refs = []
+    for child in node.children:
+        data = child.data
+        if data is not None and data.kind == "action" and data.ref:
+            refs.append(data.ref)
+        refs += _action_refs(child)
+    return refs
+
+
+def _trigger_targets(trigger: Any, process: str) -> bool:
+    while trigger is not None:
+        if trigger.target == process:
+            return True
+        trigger = trigger.after
+    return False
 
 
 def _describe_diff(preview: Preview) -> str:

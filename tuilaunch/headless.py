@@ -68,6 +68,13 @@ class Printer:
             return f"[ERROR] [{event.process}]: failed to start: {event.reason}\n"
         if event.kind == "respawning":
             return f"[WARN] [{event.process}]: respawning ({event.reason})\n"
+        if event.kind == "lifecycle":
+            return f"[INFO] [{event.process}]: lifecycle state {event.reason}\n" \
+                if event.reason else ""
+        if event.kind == "component":
+            if event.data and event.data.get("state") == "loading":
+                return ""  # "waiting for the service": the result line follows
+            return f"[{event.level}] [{event.process}]: {event.reason}\n"
         if event.kind == "log":
             return f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
         return f"[INFO] [launch]: {event.kind} ({event.reason})\n"

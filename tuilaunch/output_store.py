@@ -1,39 +1,67 @@
 """Scrollback for the output panes: bounded per process, filterable by ROS level and text.
 
 Plain Python, so the views can be tested without a terminal; the log files keep what the
-bounds drop.
+bounds drop. Each line is parsed once on arrival (level, ROS stamp, logger, message) so a
+pane can show a compact form without parsing again on every repaint.
 """
 
 from __future__ import annotations
 
 import re
+import time
 from collections import deque
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .engine.run.output import strip_ansi
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
-_LEVEL = re.compile(r"^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]")
+INFO = 1
+WARN = 2
+ERROR = 3
+# `[INFO] [1795323834.940123] [r1.talker]: message`, rcutils' default console format
+_ROS_PREFIX = re.compile(
+    r"^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]\s*(?:\[(\d+(?:\.\d+)?)\]\s*)?"
+    r"(?:\[([^\]\s]*)\]:?\s?)?")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Line:
     process: str
-    text: str
+    text: str  # as the process printed it, without colour codes
     level: int  # index into LEVELS
+    stamp: float = 0.0  # the ROS stamp when the line has one, else the arrival time
+    body: int = 0  # where the message starts after the `[LEVEL] [stamp] [logger]:` prefix
+    event: bool = False  # written by tuilaunch (started, died, respawning), not by the process
 
     def formatted(self, prefixed: bool) -> str:
+        """The full line, as saved or copied: `[id] ` before it in the all-nodes view."""
         return f"[{self.process}] {self.text}" if prefixed else self.text
+
+    @property
+    def message(self) -> str:
+        return self.text[self.body:]
 
 
 def level_of(text: str, stream: str) -> int:
-    match = _LEVEL.match(text)
+    match = _ROS_PREFIX.match(text)
     if match:
         name = match.group(1)
         return LEVELS.index("WARN" if name == "WARNING" else name)
     # unlevelled: print() output is INFO; stderr without a level (tracebacks) is WARN
-    return LEVELS.index("WARN") if stream == "stderr" else LEVELS.index("INFO")
+    return WARN if stream == "stderr" else INFO
+
+
+def parse(process: str, raw: str, stream: str, now: float) -> tuple[Line, str | None]:
+    """A Line, and the logger name it reports (`r1.talker`), if it has the ROS prefix."""
+    text = strip_ansi(raw)  # colours are shown by level, never as raw escapes
+    match = _ROS_PREFIX.match(text)
+    if not match:
+        return Line(process, text, WARN if stream == "stderr" else INFO, now), None
+    name = match.group(1)
+    stamp = float(match.group(2)) if match.group(2) else now
+    return (Line(process, text, LEVELS.index("WARN" if name == "WARNING" else name), stamp,
+                 match.end()), match.group(3) or None)
 
 
 @dataclass
@@ -50,17 +78,45 @@ class View:
                 and (not self.text or self.text.lower() in line.text.lower()))
 
 
+@dataclass
+class Dropped:
+    """Lines a flood kept off the screen (all of them are in the log files)."""
+
+    per_process: dict[str, int] = field(default_factory=dict)
+    total: int = 0
+
+
 class OutputStore:
     def __init__(self, scrollback: int = 5000, all_scrollback: int = 20000) -> None:
         self.scrollback = scrollback
         self._per_process: dict[str, deque[Line]] = {}
         self._all: deque[Line] = deque(maxlen=all_scrollback)
+        self.dropped = Dropped()
+        # the node names processes report in their log lines' logger field, for nodes whose
+        # launch file does not name them: process id -> {`/ns/name`, ...} (a few at most)
+        self.reported_names: dict[str, set[str]] = {}
 
     def add(self, process: str, stream: str, texts: Iterable[str]) -> list[Line]:
+        now = time.time()
         lines = []
         for raw in texts:
-            text = strip_ansi(raw)  # colours are shown by level, never as raw escapes
-            lines.append(Line(process, text, level_of(text, stream)))
+            line, logger = parse(process, raw, stream, now)
+            if logger:
+                names = self.reported_names.setdefault(process, set())
+                if len(names) < 8:
+                    names.add("/" + logger.replace(".", "/"))
+            lines.append(line)
+        return self._keep(process, lines)
+
+    def add_event(self, process: str, text: str, level: int = INFO) -> list[Line]:
+        """A line from tuilaunch about the process (it started, died, respawns)."""
+        return self._keep(process, [Line(process, text, level, time.time(), 0, True)])
+
+    def count_dropped(self, process: str, count: int) -> None:
+        self.dropped.per_process[process] = self.dropped.per_process.get(process, 0) + count
+        self.dropped.total += count
+
+    def _keep(self, process: str, lines: list[Line]) -> list[Line]:
         bucket = self._per_process.setdefault(process, deque(maxlen=self.scrollback))
         bucket.extend(lines)
         self._all.extend(lines)

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import os
+from typing import Any
 
+from .engine.plan.components import component_label
 from .engine.plan.model import ArgumentInfo, Plan, TreeItem
 
 
@@ -33,6 +35,8 @@ def _annotations(item: TreeItem, plan: Plan) -> str:
         notes.append(f"[{proc.id}]")
         if proc.package:
             notes.append(f"({proc.package}/{proc.executable})")
+        if proc.lifecycle:
+            notes.append("lifecycle, autostart" if proc.autostart else "lifecycle")
         if proc.enabled and proc.error:
             notes.append(f"!! {proc.error}")
     if item.condition is not None:
@@ -43,6 +47,29 @@ def _annotations(item: TreeItem, plan: Plan) -> str:
     if item.trigger is not None and item.kind == "group":
         notes.append(f"<{item.trigger.describe()}>")
     return " ".join(notes)
+
+
+def _components(item: TreeItem, plan: Plan) -> list[dict[str, Any]]:
+    """What a container process or a LoadComposableNodes action will load."""
+    if not item.ref or not item.enabled:
+        return []
+    if item.kind == "process":
+        return plan.process(item.ref).components
+    action = next((a for a in plan.actions if a.id == item.ref), None)
+    if action is not None and action.kind == "load_components":
+        return list(action.data or [])
+    return []
+
+
+def _component_line(component: dict[str, Any]) -> str:
+    text = f"component {component_label(component)}"
+    if not component.get("enabled", True):
+        return "(skipped) " + text
+    if component.get("parameters"):
+        text += f"  {len(component['parameters'])} parameter(s)"
+    if component.get("error"):
+        text += f"  !! {component['error']}"
+    return text
 
 
 def format_tree(plan: Plan) -> str:
@@ -56,7 +83,12 @@ def format_tree(plan: Plan) -> str:
             notes = _annotations(child, plan)
             lines.append(f"{prefix}{'└─ ' if last else '├─ '}{mark}{child.label}"
                          + (f"  {notes}" if notes else ""))
-            walk(child, prefix + ("   " if last else "│  "))
+            inner = prefix + ("   " if last else "│  ")
+            components = _components(child, plan)
+            for number, component in enumerate(components):
+                end = number == len(components) - 1 and not child.children
+                lines.append(f"{inner}{'└─ ' if end else '├─ '}{_component_line(component)}")
+            walk(child, inner)
 
     walk(plan.tree, "")
     skipped = [p for p in plan.processes if not p.enabled and p.skipped_by is not None]

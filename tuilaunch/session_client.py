@@ -134,6 +134,7 @@ class RemoteSupervisor:
         self._replies: dict[int, asyncio.Future[Any]] = {}
         self._next_id = 0
         self._stopping = False
+        self.lifecycle = RemoteLifecycle()
 
     @classmethod
     async def open(cls, name: str, session: Session, scrollback: int = 5000,
@@ -295,6 +296,18 @@ class RemoteSupervisor:
                 sock.recv(4096)  # the hello: the request is read before we hang up
         except OSError:
             pass  # the server is gone, and with it what the request was about
+
+
+class RemoteLifecycle:
+    """Lifecycle states are not yet carried over the socket: a session's TUI shows none and
+    offers no transitions (`tuilaunch wait NAME NODE active` asks the node instead)."""
+
+    def __init__(self) -> None:
+        self.states: dict[str, str] = {}
+
+    async def request(self, process: str, transition: str) -> None:
+        raise SessionError(f"lifecycle transitions of {process} are not available in a "
+                           "session's TUI yet")
 
 
 def report_end(app: Any, name: str) -> None:

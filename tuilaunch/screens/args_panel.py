@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 
 from rich.text import Text
 from textual import on
@@ -13,7 +14,51 @@ from textual.widget import Widget
 from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
 from ..engine.describe.substitutions import text_to_bool
-from ..engine.plan.model import ArgumentInfo
+from ..engine.plan.model import ArgumentInfo, Plan
+from .fields import Field
+
+# ROS 2 name rules (rcl's validate_namespace / validate_node_name)
+_NAMESPACE = re.compile(r"^(/|(/[A-Za-z_][A-Za-z0-9_]*)+)$")
+_NODE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def check_values(arguments: list[ArgumentInfo], values: dict[str, str]) -> str | None:
+    """Why a typed value cannot be used for its argument's type, or None."""
+    types = {a.name: a for a in arguments}
+    for name, text in values.items():
+        arg = types.get(name)
+        if arg is None:
+            continue
+        if arg.choices and text not in arg.choices:
+            return f"argument '{name}' must be one of {', '.join(arg.choices)}, got {text!r}"
+        if arg.type == "int":
+            try:
+                int(text.strip())
+            except ValueError:
+                return f"argument '{name}' needs a whole number, got {text!r}"
+        elif arg.type == "float":
+            try:
+                float(text.strip())
+            except ValueError:
+                return f"argument '{name}' needs a number, got {text!r}"
+        elif arg.type == "bool" and text_to_bool(text) is None:
+            return f"argument '{name}' needs true or false, got {text!r}"
+    return None
+
+
+def check_plan(plan: Plan) -> str | None:
+    """What in a resolved plan could not start: a bad namespace or node name, an error."""
+    for proc in plan.processes:
+        if not proc.enabled:
+            continue
+        if proc.error:
+            return f"{proc.id}: {proc.error}"
+        namespace = proc.namespace
+        if proc.kind == "node" and namespace and not _NAMESPACE.match(namespace):
+            return f"{proc.id}: namespace {namespace!r} is not a valid ROS namespace"
+        if proc.kind == "node" and proc.name and not _NODE_NAME.match(proc.name):
+            return f"{proc.id}: node name {proc.name!r} is not a valid ROS name"
+    return None
 
 
 class ArgsPanel(Vertical):
@@ -57,7 +102,7 @@ class ArgsPanel(Vertical):
                     with Horizontal(classes="arg-line"):
                         yield Label(arg.name, classes="arg-name")
                         yield self._editor(arg)
-                    yield Static(self._help(arg), classes="arg-help")
+                    yield Static(Text(self._help(arg)), classes="arg-help")
 
     def _help(self, arg: ArgumentInfo) -> str:
         text = arg.description or "(no description)"
@@ -79,9 +124,9 @@ class ArgsPanel(Vertical):
             state = bool(text_to_bool(value))
             return Checkbox("true" if state else "false", value=state, id=name,
                             classes="arg-editor", compact=True)
-        kind = {"int": "integer", "float": "number"}.get(arg.type, "text")
-        return Input(value, type=kind, id=name, classes="arg-editor",  # type: ignore[arg-type]
-                     compact=True)
+        # typed as text and checked as a whole by the preview: Input's number types drop
+        # a refused character silently (1.5 in an int field became 15)
+        return Field(value, id=name, classes="arg-editor", compact=True)
 
     def values(self) -> dict[str, str]:
         out = {}

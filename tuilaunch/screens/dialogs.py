@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding
@@ -10,21 +11,23 @@ from textual.screen import ModalScreen
 from textual.widgets import Button, Static
 
 KEYS = """\
-[b]Anywhere[/b]
-  1 2 3 4    tabs: Nodes, Args, Services, Params     ?       this help
-  q ctrl+c   quit (asks while nodes run)             ctrl+p  command palette
-  F5         apply edited arguments (relaunches only what they change)
-  d          detach: the launch runs on; tuilaunch attach opens it again
-[b]Nodes[/b]  (arrows move in the tree, enter folds a group)
-  s r t      stop / restart / start the selected node or group
-  a          output of all nodes
-  / n N      search the pane, next / previous match  esc     clear
-  l          level filter: DEBUG+ INFO+ WARN+ ERROR+ FATAL
-  \\          text filter: only lines containing ...
-  G          follow the newest line
-  w y        save the pane to a file / copy it (OSC 52)
+[b]Anywhere[/b] (in a text field, esc leaves it first)
+  1 2 3 4   tabs: Nodes Args Services Params   ? help
+  q ctrl+c  quit (asks while nodes run;        ctrl+p palette
+            again while stopping: kill now)
+  F5        apply edited arguments
+  d         detach: the launch runs on (tuilaunch attach)
+[b]Nodes[/b] (arrows: tree; tab: into the pane)
+  s r t     stop / restart / start node or group
+  a         all nodes' output
+  / n N     search, next / previous match; esc clears
+  l  \\      level filter / text filter
+  G         follow the newest line (end too)
+  z T f     wrap / timestamps / lines as printed
+  < >       narrower / wider tree
+  w y       save the pane / copy it (OSC 52)
 [b]Args, Services, Params[/b]
-  tab / shift+tab between fields; enter calls a service or sets a parameter
+  tab shift+tab between fields; enter calls or sets
 """
 
 
@@ -38,6 +41,38 @@ class HelpScreen(ModalScreen[None]):
 
     def compose(self) -> ComposeResult:
         yield Static(KEYS)
+
+
+class ConfirmScreen(ModalScreen[bool]):
+    """A yes/no question with the keys on its buttons."""
+
+    DEFAULT_CSS = """
+    ConfirmScreen { align: center middle; }
+    ConfirmScreen > Vertical { width: 60; max-width: 100%; height: auto; padding: 1 2;
+                               border: round $warning; background: $surface; }
+    ConfirmScreen Horizontal { height: 3; }
+    """
+    BINDINGS = [Binding("y", "answer(True)", "Yes"), Binding("n,escape", "answer(False)", "No")]
+
+    def __init__(self, question: str, yes: str = "Yes (y)", no: str = "No (n)") -> None:
+        super().__init__()
+        self.question = question
+        self.yes = yes
+        self.no = no
+
+    def compose(self) -> ComposeResult:
+        with Vertical():
+            yield Static(Text(self.question))
+            with Horizontal():
+                yield Button(self.yes, id="yes", variant="error")
+                yield Button(self.no, id="no")
+
+    def action_answer(self, answer: bool) -> None:
+        self.dismiss(answer)
+
+    @on(Button.Pressed)
+    def _pressed(self, event: Button.Pressed) -> None:
+        self.dismiss(event.button.id == "yes")
 
 
 class QuitScreen(ModalScreen[bool]):

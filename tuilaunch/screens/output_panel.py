@@ -2,59 +2,23 @@
 
 from __future__ import annotations
 
-import re
 import time
 from pathlib import Path
 
-from rich.highlighter import Highlighter
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
-from textual.widgets import Input, Log, Static
+from textual.widgets import Static
 
 from ..output_store import LEVELS, Line, OutputStore, View
-
-_LEVEL_STYLES = {"DEBUG": "green", "INFO": "", "WARN": "yellow", "WARNING": "yellow",
-                 "ERROR": "bold red", "FATAL": "bold white on red"}
-_LEVEL_RE = re.compile(r"\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]")
-_PREFIX_RE = re.compile(r"^\[[\w.-]+-\d+\]")
+from .fields import Field
+from .line_view import LineView
 
 
-class OutputHighlighter(Highlighter):
-    """ROS levels in colour, the `[process-id]` prefix, and search matches reversed."""
-
-    def __init__(self) -> None:
-        self.search = ""
-
-    def highlight(self, text: Text) -> None:
-        plain = text.plain
-        prefix = _PREFIX_RE.match(plain)
-        if prefix:
-            text.stylize("cyan", 0, prefix.end())
-        level = _LEVEL_RE.search(plain)
-        if level is not None and _LEVEL_STYLES[level.group(1)]:
-            # errors colour their whole line, so they stand out in a scrolling pane
-            whole = level.group(1) in ("ERROR", "FATAL")
-            text.stylize(_LEVEL_STYLES[level.group(1)], level.start(),
-                         len(plain) if whole else level.end())
-        if self.search:
-            text.highlight_words([self.search], style="reverse", case_sensitive=False)
-
-
-class OutputLog(Log):
-    """A Log whose highlighting can change (search term) without rewriting its lines."""
-
-    def __init__(self, **kwargs: object) -> None:
-        super().__init__(highlight=True, **kwargs)  # type: ignore[arg-type]
-        self.output_highlighter = OutputHighlighter()
-        self.highlighter = self.output_highlighter
-
-    def set_search(self, term: str) -> None:
-        self.output_highlighter.search = term
-        self._render_line_cache.clear()
-        self.refresh()
+def plural(count: int, word: str) -> str:
+    return f"{count} {word}" if count == 1 else f"{count} {word}s"
 
 
 class OutputPanel(Vertical):
@@ -63,133 +27,142 @@ class OutputPanel(Vertical):
     DEFAULT_CSS = """
     OutputPanel { height: 1fr; }
     OutputPanel #output-status { height: 1; background: $boost; color: $text-muted; }
-    OutputPanel OutputLog { height: 1fr; }
-    OutputPanel Input { display: none; height: 3; }
-    OutputPanel Input.shown { display: block; }
+    OutputPanel Field { display: none; }
+    OutputPanel Field.shown { display: block; }
     """
 
     def __init__(self, store: OutputStore, save_dir: Path, max_lines: int = 5000,
-                 **kwargs: object) -> None:
+                 max_fps: float = 2.0, **kwargs: object) -> None:
         super().__init__(**kwargs)  # type: ignore[arg-type]
         self.store = store
         self.save_dir = save_dir
         self.view = View()
         self.search = ""
         self.match_index = -1
-        self.unseen = 0
         self.max_lines = max_lines
         # held rather than queried: the app feeds the pane on a timer, even mid-teardown
         self._status = Static(id="output-status")
-        self._log = OutputLog(max_lines=max_lines, id="output-log")
+        self._status_text = ""
+        self._lines = LineView(max_lines=max_lines, max_fps=max_fps, id="output-lines")
+        self._lines.on_move = self.update_status
 
     def compose(self) -> ComposeResult:
         yield self._status
-        yield self._log
-        yield Input(placeholder="search (enter: find, esc: clear)", id="search-input")
-        yield Input(placeholder="show only lines containing... (empty: all)",
-                    id="filter-input")
+        yield self._lines
+        yield Field(placeholder="search (enter: find, esc: cancel)", id="search-input",
+                    leave_on_enter=True)
+        yield Field(placeholder="show only lines containing... (empty: all)",
+                    id="filter-input", leave_on_enter=True)
 
     def on_mount(self) -> None:
         self.show_view(None)
 
     @property
-    def log_widget(self) -> OutputLog:
-        return self._log
+    def line_view(self) -> LineView:
+        return self._lines
+
+    @property
+    def unseen(self) -> int:
+        return self._lines.unseen
 
     # --- feeding -----------------------------------------------------------------------
 
     def show_view(self, process: str | None) -> None:
+        """Another node (or all): its newest lines, followed."""
         self.view.process = process
+        self._lines.prefixed = process is None
         self._rebuild()
 
     def _rebuild(self) -> None:
-        log = self.log_widget
-        log.clear()
-        log.write_lines(self.store.text(self.view), scroll_end=True)
-        self.unseen = 0
+        self._lines.reset(self.store.lines(self.view))
+        if self.search:
+            self._lines.search = self.search
+        self.match_index = -1
         self.update_status()
 
     def append(self, lines: list[Line]) -> None:
-        shown = [line.formatted(self.view.process is None) for line in lines
-                 if self.view.accepts(line)]
-        if not shown:
-            return
-        log = self.log_widget
-        following = log.is_vertical_scroll_end
-        log.write_lines(shown)
-        if not following:
-            self.unseen += len(shown)
+        self._lines.append([line for line in lines if self.view.accepts(line)])
+
+    def flush(self) -> None:
+        """Called on the app's tick: repaints what changed, at the pane's rate."""
+        self._lines.flush()
+        self.update_status()
 
     def update_status(self) -> None:
-        log = self.log_widget
-        if log.is_vertical_scroll_end:
-            self.unseen = 0
-        parts = [f"output: {self.view.process or 'all nodes'}",
-                 f"level {LEVELS[self.view.min_level]}+"]
+        lines = self._lines
+        parts = [self.view.process or "all nodes", f"{LEVELS[self.view.min_level]}+"]
         if self.view.text:
-            parts.append(f"filter '{self.view.text}'")
+            parts.append(f"only '{self.view.text}'")
         if self.search:
-            matches = self._matches()
+            matches = lines.matches()
             where = f"{self.match_index + 1}/{len(matches)}" if matches else "no match"
-            parts.append(f"search '{self.search}' {where}")
-        if self.unseen:
-            parts.append(f"{self.unseen} new lines (G: follow)")
-        self._status.update(Text("  ".join(parts)))
+            parts.append(f"/{self.search} {where}")
+        if lines.wrap:
+            parts.append("wrap")
+        if not lines.following:
+            unseen = lines.unseen
+            parts.append(f"{plural(unseen, 'new line')} (G: follow)" if unseen
+                         else "paused (G: follow)")
+        dropped = self.store.dropped
+        hidden = dropped.total if self.view.process is None else \
+            dropped.per_process.get(self.view.process, 0)
+        if hidden:
+            parts.append(f"{hidden} not drawn (in log)")
+        text = "  ".join(parts)
+        if text != self._status_text:  # an unchanged line is not sent to the terminal again
+            self._status_text = text
+            self._status.update(Text(text))
 
     # --- search and filters --------------------------------------------------------------
 
-    def _matches(self) -> list[int]:
-        term = self.search.lower()
-        return [i for i, line in enumerate(self.log_widget.lines) if term in line.lower()]
-
     def action_search(self) -> None:
-        field = self.query_one("#search-input", Input)
+        field = self.query_one("#search-input", Field)
         field.add_class("shown")
         field.value = self.search
         field.focus()
 
     def action_filter(self) -> None:
-        field = self.query_one("#filter-input", Input)
+        field = self.query_one("#filter-input", Field)
         field.add_class("shown")
         field.value = self.view.text
         field.focus()
 
-    @on(Input.Submitted, "#search-input")
-    def _search_submitted(self, event: Input.Submitted) -> None:
-        self.set_search(event.value)
+    @on(Field.Submitted, "#search-input")
+    def _search_submitted(self, event: Field.Submitted) -> None:
         event.input.remove_class("shown")
-        self.log_widget.focus()
+        self.set_search(event.value)
 
-    @on(Input.Submitted, "#filter-input")
-    def _filter_submitted(self, event: Input.Submitted) -> None:
+    @on(Field.Submitted, "#filter-input")
+    def _filter_submitted(self, event: Field.Submitted) -> None:
         self.view.text = event.value
         event.input.remove_class("shown")
         self._rebuild()
-        self.log_widget.focus()
 
     def set_search(self, term: str) -> None:
         self.search = term
-        self.log_widget.set_search(term)
+        self._lines.set_options(search=term)
         self.match_index = -1
         if term:
             self.action_next_match()
         self.update_status()
 
     def action_clear_search(self) -> None:
-        for field in self.query(Input):
+        """Escape: closes an open field, else clears the search."""
+        open_fields = [f for f in self.query(Field) if f.has_class("shown")]
+        for field in open_fields:
             field.remove_class("shown")
-        self.set_search("")
-        self.log_widget.focus()
+        if not open_fields:
+            self.set_search("")
+        self.update_status()
 
     def _jump(self, step: int) -> None:
-        matches = self._matches()
+        matches = self._lines.matches()
         if not matches:
             self.match_index = -1
         else:
             self.match_index = (self.match_index + step) % len(matches)
-            line = matches[self.match_index]
-            self.log_widget.scroll_to(y=max(line - self.log_widget.size.height // 2, 0),
-                                      animate=False)
+            self._lines.current_match = matches[self.match_index]
+            self._lines.scroll_to_line(matches[self.match_index])
         self.update_status()
 
     def action_next_match(self) -> None:
@@ -203,14 +176,28 @@ class OutputPanel(Vertical):
         self._rebuild()
 
     def action_follow(self) -> None:
-        self.log_widget.scroll_end(animate=False)
-        self.unseen = 0
+        self._lines.action_follow()
         self.update_status()
+
+    def action_wrap(self) -> None:
+        self._lines.set_options(wrap=not self._lines.wrap)
+        self.update_status()
+
+    def action_time(self) -> None:
+        self._lines.set_options(show_time=not self._lines.show_time)
+
+    def action_raw(self) -> None:
+        self._lines.set_options(raw=not self._lines.raw)
 
     # --- export --------------------------------------------------------------------------
 
+    def pane_lines(self) -> list[str]:
+        """The pane's lines in full, as the processes printed them."""
+        prefixed = self.view.process is None
+        return [line.formatted(prefixed) for line in self._lines.lines]
+
     def pane_text(self) -> str:
-        return "\n".join(self.log_widget.lines) + "\n"
+        return "\n".join(self.pane_lines()) + "\n"
 
     def action_save(self) -> None:
         self.save_dir.mkdir(parents=True, exist_ok=True)
@@ -221,7 +208,7 @@ class OutputPanel(Vertical):
 
     def action_copy(self) -> None:
         self.app.copy_to_clipboard(self.pane_text())
-        self.notify(f"copied {len(self.log_widget.lines)} lines (OSC 52 clipboard)")
+        self.notify(f"copied {len(self._lines.lines)} lines (OSC 52 clipboard)")
 
 
 class NodesView(Horizontal):
@@ -236,10 +223,41 @@ class NodesView(Horizontal):
         Binding("backslash", "pane('filter')", "Filter",
                 tooltip="Show only lines containing a text"),
         Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
+        Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
+        Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
+        Binding("f", "pane('raw')", "Format", show=False,
+                tooltip="Lines as printed, or compact"),
         Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
         Binding("y", "pane('copy')", "Copy", show=False, tooltip="Copy this pane to the clipboard"),
         Binding("escape", "pane('clear_search')", "Clear", show=False),
+        Binding("less_than_sign", "resize(-4)", "Narrower tree", show=False),
+        Binding("greater_than_sign", "resize(4)", "Wider tree", show=False),
     ]
+
+    tree_width: int | None = None  # None: adapts to the terminal's width
 
     def action_pane(self, name: str) -> None:
         getattr(self.query_one(OutputPanel), f"action_{name}")()
+
+    def on_resize(self) -> None:
+        self._apply_width()
+
+    def adaptive_width(self) -> int:
+        """About a third of the width, 22 to 44 columns: the pane keeps the rest."""
+        return max(22, min(44, self.size.width * 35 // 100))
+
+    def _apply_width(self) -> None:
+        from .tree_panel import LaunchTree
+
+        width = self.tree_width if self.tree_width is not None else self.adaptive_width()
+        width = max(12, min(width, max(self.size.width - 20, 12)))
+        tree = self.query_one(LaunchTree)
+        if tree.styles.width is None or tree.styles.width.value != width:
+            tree.styles.width = width
+
+    def action_resize(self, step: int) -> None:
+        from .tree_panel import LaunchTree
+
+        current = self.query_one(LaunchTree).outer_size.width or self.adaptive_width()
+        self.tree_width = current + step
+        self._apply_width()

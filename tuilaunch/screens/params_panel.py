@@ -15,6 +15,7 @@ from textual.widgets.option_list import Option
 
 from ..engine.plan.model import Plan
 from ..engine.ros.bridge import ParameterInfo
+from .fields import Field
 
 
 def show_value(value: Any) -> str:
@@ -53,7 +54,7 @@ def parse_value(type_name: str, text: str) -> Any:
 
 class ParamsPanel(Horizontal):
     DEFAULT_CSS = """
-    ParamsPanel #prm-left { width: 30; border-right: tall $panel; }
+    ParamsPanel #prm-left { width: 26; border-right: tall $panel; }
     ParamsPanel #prm-right { width: 1fr; padding: 0 1; }
     ParamsPanel #prm-table { height: 1fr; }
     ParamsPanel #prm-about { height: 2; color: $text-muted; }
@@ -64,10 +65,13 @@ class ParamsPanel(Horizontal):
     """
 
     def __init__(self, bridge: Callable[[], Any], plan: Callable[[], Plan],
-                 timeout: float = 5.0, **kwargs: object) -> None:
+                 timeout: float = 5.0,
+                 reported: Callable[[], dict[str, set[str]]] | None = None,
+                 **kwargs: object) -> None:
         super().__init__(**kwargs)  # type: ignore[arg-type]
         self.bridge = bridge
         self.plan = plan
+        self.reported = reported or dict
         self.timeout = timeout
         self.nodes: list[str] = []
         self.node: str | None = None
@@ -76,21 +80,22 @@ class ParamsPanel(Horizontal):
 
     def compose(self) -> ComposeResult:
         with Vertical(id="prm-left"):
-            yield Input(placeholder="filter nodes", id="prm-filter")
+            yield Field(placeholder="filter nodes", id="prm-filter")
             yield OptionList(id="prm-nodes")
             yield Button("Refresh", id="prm-refresh")
         with Vertical(id="prm-right"):
             yield DataTable(id="prm-table", cursor_type="row", zebra_stripes=True)
             yield Static("Pick a node, then a parameter.", id="prm-about")
             with Horizontal(id="prm-edit-row"):
-                yield Input(placeholder="new value (enter sets it)", id="prm-edit")
+                yield Field(placeholder="new value (enter sets it)", id="prm-edit")
                 yield Button("Set", id="prm-set", variant="primary")
             yield Static("", id="prm-result")
 
     def on_mount(self) -> None:
         table = self.query_one(DataTable)
-        for key, title in (("name", "name"), ("type", "type"), ("value", "value"),
-                           ("ro", "ro"), ("launch", "launch file")):
+        # the value beside what the launch file gave: the comparison fits 80 columns
+        for key, title in (("name", "name"), ("value", "value"), ("launch", "launch file"),
+                           ("type", "type"), ("ro", "ro")):
             table.add_column(title, key=key)
         self.refresh_nodes()
 
@@ -132,9 +137,17 @@ class ParamsPanel(Horizontal):
         self.load_node(str(event.option.id))
 
     def launch_values(self, node: str) -> dict[str, Any]:
-        """Parameters the launch file gave this node (inline ones; files are the user's)."""
-        for proc in self.plan().processes:
+        """Parameters the launch file gave this node (inline ones; files are the user's).
+
+        A node named by its own code has no name in the plan: it is matched by the name
+        its process reports in its log lines."""
+        processes = self.plan().processes
+        for proc in processes:
             if proc.full_name == node:
+                return proc.parameters
+        reported = self.reported()
+        for proc in processes:
+            if proc.full_name is None and node in reported.get(proc.id, ()):
                 return proc.parameters
         return {}
 
@@ -152,8 +165,8 @@ class ParamsPanel(Horizontal):
         table.clear()
         for info in described:
             from_launch = show_value(launch[info.name]) if info.name in launch else ""
-            table.add_row(info.name, info.type, show_value(info.value),
-                          "yes" if info.read_only else "", from_launch, key=info.name)
+            table.add_row(info.name, show_value(info.value), from_launch, info.type,
+                          "yes" if info.read_only else "", key=info.name)
         self.show_result(f"{node}: {len(described)} parameters", ok=True)
 
     @on(DataTable.RowHighlighted)
@@ -200,6 +213,8 @@ class ParamsPanel(Horizontal):
                              f"{show_value(now.get(name))}", ok=True)
             info.value = now.get(name)
             self.query_one(DataTable).update_cell(name, "value", show_value(info.value))
+            # the next value typed replaces this one rather than being appended to it
+            self.query_one("#prm-edit", Field).select_all()
         else:
             self.show_result(f"{node} refused {name} = {show_value(value)}: {result.reason}",
                              ok=False)

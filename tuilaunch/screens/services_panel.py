@@ -16,6 +16,7 @@ from textual.widgets.option_list import Option
 
 from ..engine.ros.bridge import RosError
 from ..engine.ros.messages import FieldInfo, MessageError, describe_fields, import_type
+from .fields import Field
 
 
 @dataclass
@@ -109,7 +110,7 @@ class ServicesPanel(Horizontal):
 
     def compose(self) -> ComposeResult:
         with Vertical(id="svc-left"):
-            yield Input(placeholder="filter services", id="svc-filter")
+            yield Field(placeholder="filter services", id="svc-filter")
             yield OptionList(id="svc-list")
             yield OptionList(id="svc-history")
         with Vertical(id="svc-right"):
@@ -195,7 +196,7 @@ class ServicesPanel(Horizontal):
         title.update(Text(f"{name}  {type_name}" + ("" if self.fields else "  (empty request)")))
         for path, info in self.fields:
             text = (values or {}).get(path, field_text(info))
-            form.mount(Horizontal(Label(path), Input(text, id=f"field-{path.replace('.', '-')}",
+            form.mount(Horizontal(Label(path), Field(text, id=f"field-{path.replace('.', '-')}",
                                                      tooltip=info.type),
                                   classes="svc-field"))
         self.query_one("#svc-call", Button).disabled = False

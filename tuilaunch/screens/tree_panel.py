@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
+from typing import Any
 
 from rich.text import Text
 from textual.widgets import Tree
 from textual.widgets.tree import TreeNode
 
+from ..engine.plan.components import component_label
 from ..engine.plan.model import Plan, PlanDiff, TreeItem
 
 ALL = "__all__"
@@ -24,38 +27,64 @@ STATE_LOOK = {
     "done": ("✓", "green", "done"),
     "cancelled": ("○", "dim", "cancelled"),
 }
+# the Linux console's font lacks most of those: plain ASCII there
+ASCII_ICONS = {"pending": ".", "running": "*", "exited": "#", "failed": "x",
+               "respawning": "~", "skipped": "o", "stopping": "-", "done": "+",
+               "cancelled": "o"}
 # an action "running" is waiting for its service or node
 ACTION_WORDS = {"running": "working", "pending": "waiting"}
+# a lifecycle node's state, shown after its process state
+LIFECYCLE_LOOK = {"unconfigured": "yellow", "inactive": "cyan", "active": "bold green",
+                  "finalized": "dim"}
+# a component's load result
+COMPONENT_LOOK = {"waiting": ("…", "yellow"), "loading": ("…", "yellow"),
+                  "loaded": ("✓", "green"), "failed": ("✗", "red"),
+                  "cancelled": ("○", "dim"), "skipped": ("○", "dim")}
+
+
+def ascii_terminal() -> bool:
+    return os.environ.get("TERM", "") in ("linux", "vt100", "vt102", "vt220", "ansi")
 
 
 @dataclass
 class RowData:
     """What a tree row stands for: a process or action id, a group's processes, or all."""
 
-    kind: str  # "all" | "process" | "action" | "group"
+    kind: str  # "all" | "process" | "action" | "group" | "component"
     ref: str | None
     processes: list[str]
 
 
 class LaunchTree(Tree[RowData]):
     DEFAULT_CSS = """
-    LaunchTree { width: 34; min-width: 24; border-right: tall $panel; }
+    LaunchTree { width: 30; min-width: 12; border-right: tall $panel; overflow-x: hidden; }
     """
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__("launch", data=RowData("group", None, []), **kwargs)  # type: ignore
+        self.guide_depth = 2  # narrow indents: the names keep the width
+        self.ascii = ascii_terminal()
+        if self.ascii:
+            self.ICON_NODE = "+ "
+            self.ICON_NODE_EXPANDED = "- "
         self.rows: dict[str, TreeNode[RowData]] = {}
         self.plan: Plan | None = None
         self.details: dict[str, str] = {}
         self.action_labels: dict[str, str] = {}
         self.states: dict[str, str] = {}
         self.preview: PlanDiff | None = None
+        self.lifecycle: dict[str, str] = {}
+        self.component_rows: dict[str, TreeNode[RowData]] = {}
+        self.component_labels: dict[str, str] = {}
+        # names processes report in their log lines (OutputStore.reported_names)
+        self.reported: dict[str, set[str]] = {}
 
     def show_plan(self, plan: Plan, states: dict[str, str]) -> None:
         self.plan = plan
         self.states = dict(states)
         self.clear()
         self.rows = {}
+        self.component_rows = {}
         self.root.set_label(plan.file.rsplit("/", 1)[-1])
         self.root.data = RowData("group", None, [p.id for p in plan.enabled_processes()])
         self.root.add_leaf("all nodes", RowData("all", ALL, []))
@@ -65,15 +94,25 @@ class LaunchTree(Tree[RowData]):
 
     def _add(self, parent: TreeNode[RowData], item: TreeItem) -> list[str]:
         if item.kind == "process" and item.ref:
-            node = parent.add_leaf(item.ref, RowData("process", item.ref, [item.ref]))
+            components = self.plan.process(item.ref).components if self.plan else []
+            data = RowData("process", item.ref, [item.ref])
+            node = parent.add(item.ref, data) if components else parent.add_leaf(item.ref, data)
             self.rows[item.ref] = node
             self.refresh_row(item.ref)
+            self._add_components(node, components if item.enabled else [])
             return [item.ref]
         if item.kind == "action" and item.ref:
-            node = parent.add_leaf(item.label, RowData("action", item.ref, []))
+            action = next((a for a in self.plan.actions if a.id == item.ref), None) \
+                if self.plan else None
+            components = list(action.data or []) if action is not None and \
+                action.kind == "load_components" else []
+            data = RowData("action", item.ref, [])
+            node = parent.add(item.label, data) if components else \
+                parent.add_leaf(item.label, data)
             self.rows[item.ref] = node
             self.action_labels[item.ref] = item.label
             self.refresh_row(item.ref)
+            self._add_components(node, components)
             return []
         node = parent.add(self._group_label(item), RowData("group", None, []))
         processes: list[str] = []
@@ -83,12 +122,46 @@ class LaunchTree(Tree[RowData]):
         node.data.processes = processes
         return processes
 
+    def _add_components(self, parent: TreeNode[RowData], components: list[dict[str, Any]])\
+            -> None:
+        """A container's (or a LoadComposableNodes action's) components, under its row."""
+        for component in components:
+            ref = str(component["id"])
+            self.component_labels[ref] = component_label(component)
+            state = "waiting" if component.get("enabled", True) else "skipped"
+            self.component_rows[ref] = parent.add_leaf(
+                "", RowData("component", ref, []))
+            self.set_component(ref, state, "")
+
+    def set_component(self, ref: str, state: str, text: str) -> None:
+        """A component's load result: unique id, the container's error, or why not sent."""
+        node = self.component_rows.get(ref)
+        if node is None:
+            return
+        icon, style = COMPONENT_LOOK.get(state, ("?", ""))
+        label = Text()
+        label.append(f"{icon} ", style)
+        label.append(self.component_labels.get(ref, ref))
+        label.append(f" {state}", style or "dim")
+        if text and state in ("loaded", "failed", "cancelled"):
+            label.append(f" {text}", "dim" if state == "loaded" else style)
+        node.set_label(label)
+
+    def set_lifecycle(self, ref: str, state: str) -> None:
+        """The live lifecycle state of a lifecycle node's process ('' once it is gone)."""
+        if state:
+            self.lifecycle[ref] = state
+        else:
+            self.lifecycle.pop(ref, None)
+        self.refresh_row(ref)
+
     def _group_label(self, item: TreeItem) -> Text:
         label = Text(item.label)
         if item.condition is not None:
             label.append(f" = {item.condition.value}", "bold" if item.enabled else "dim")
         if item.trigger is not None:
-            label.append(f" ⏱ {item.trigger.describe()}", "italic")
+            clock = "@" if ascii_terminal() else "⏱"
+            label.append(f" {clock} {item.trigger.describe()}", "italic")
         if not item.enabled:
             label.stylize("dim")
         return label
@@ -111,6 +184,8 @@ class LaunchTree(Tree[RowData]):
             return
         state = self.states.get(ref, "pending")
         icon, style, word = STATE_LOOK.get(state, ("?", "", state))
+        if self.ascii:
+            icon = ASCII_ICONS.get(state, "?")
         if node.data is not None and node.data.kind == "action":
             word = ACTION_WORDS.get(state, word)
         label = Text()
@@ -128,7 +203,41 @@ class LaunchTree(Tree[RowData]):
             label.append(self.action_labels.get(ref, ref))
         detail = self.details.get(ref, "")
         label.append(f" {word}{' ' + detail if detail else ''}", style or "dim")
-        node.set_label(label)
+        lifecycle = self.lifecycle.get(ref)
+        if lifecycle:
+            label.append(f" · {lifecycle}", LIFECYCLE_LOOK.get(lifecycle, "italic"))
+        if node.label != label:  # an unchanged row is not repainted
+            node.set_label(label)
+
+    def describe(self, node: TreeNode[RowData]) -> str:
+        """The whole story of a row, for the detail line: never cut by the tree's width."""
+        data = node.data
+        if data is None or self.plan is None:
+            return ""
+        if data.kind == "all":
+            return "all nodes: every process's output, with its id"
+        if data.kind == "group":
+            label = node.label.plain if isinstance(node.label, Text) else str(node.label)
+            running = sum(1 for p in data.processes if self.states.get(p) == "running")
+            return f"{label}: {running} of {len(data.processes)} processes running"
+        ref = data.ref or ""
+        state = self.states.get(ref, "pending")
+        word = STATE_LOOK.get(state, ("", "", state))[2]
+        if data.kind == "component":
+            # a component's row says it all: plugin, name, load result
+            return node.label.plain if isinstance(node.label, Text) else str(node.label)
+        if data.kind == "action":
+            word = ACTION_WORDS.get(state, word)
+            text = f"{self.action_labels.get(ref, ref)} [{ref}]: {word}"
+        else:
+            proc = self.plan.process(ref)
+            reported = sorted(self.reported.get(ref, ()))
+            name = proc.full_name or (reported[0] if reported else proc.label)
+            text = f"{ref} ({name}): {word}"
+            if self.lifecycle.get(ref):
+                text += f", lifecycle state {self.lifecycle[ref]}"
+        detail = self.details.get(ref, "")
+        return f"{text} {detail}".rstrip()
 
 
 def _refs(diff: PlanDiff | None) -> set[str]:

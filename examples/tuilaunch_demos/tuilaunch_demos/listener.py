@@ -7,8 +7,8 @@ from .common import report_startup, spin
 
 
 class Listener(Node):
-    def __init__(self) -> None:
-        super().__init__("listener")
+    def __init__(self, **node_options) -> None:
+        super().__init__("listener", **node_options)
         self.subscription = self.create_subscription(String, "chatter", self.heard, 10)
         report_startup(self, {"chatter": self.subscription.topic_name})
 

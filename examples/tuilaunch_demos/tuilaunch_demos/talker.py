@@ -10,8 +10,8 @@ from .common import report_startup, spin
 
 
 class Talker(Node):
-    def __init__(self) -> None:
-        super().__init__("talker")
+    def __init__(self, **node_options) -> None:
+        super().__init__("talker", **node_options)
         self.message = self.declare_parameter("message", "hello").value
         # dynamic typing: `rate:=5` arrives as an integer from a launch argument
         rate = float(self.declare_parameter(

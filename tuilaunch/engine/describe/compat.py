@@ -235,7 +235,6 @@ NAMES: list[tuple[str, str, Any]] = [
     # launch_ros.actions
     ("launch_ros.actions.composable_node_container", "ComposableNodeContainer",
      e.ComposableNodeContainer),
-    ("launch_ros.actions.lifecycle_transition", "LifecycleTransition", UNSUPPORTED),
     ("launch_ros.actions.load_composable_nodes", "LoadComposableNodes", e.LoadComposableNodes),
     ("launch_ros.actions.node", "Node", e.Node),
     ("launch_ros.actions.push_ros_namespace", "PushROSNamespace", e.PushROSNamespace),
@@ -264,8 +263,7 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch_ros.remap_rule_type", "SomeRemapRules", Any),
     ("launch_ros.remap_rule_type", "SomeRemapRule", Any),
     ("launch_ros.remap_rule_type", "RemapRules", Any),
-    # launch_ros.events (lifecycle events are registered by the lifecycle module)
-    ("launch_ros.events.matchers.matches_node_name", "matches_node_name", UNSUPPORTED),
+    # launch_ros lifecycle actions and events: describe/lifecycle.py's COMPAT_ROWS
     ("launch_ros.ros_adapters", "get_ros_node", UNSUPPORTED),
     ("launch_ros.ros_adapters", "get_ros_adapter", UNSUPPORTED),
     # launch_ros.substitutions
@@ -320,7 +318,9 @@ def _rows() -> list[tuple[str, str, Any]]:
              for name in _SIMPLE_EVENTS]
     rows += [("simple_launch.gazebo", name, getattr(gazebo, name))
              for name in ("GazeboBridge", "ros_gz_prefix", "only_show_args")]
-    return rows + _extra
+    from .lifecycle import COMPAT_ROWS as lifecycle_rows
+
+    return rows + lifecycle_rows + _extra
 
 
 class CompatModule(ModuleType):

@@ -41,6 +41,8 @@ class Trigger:
             "io": f"{who} prints on {self.io}",
             "timer": "launch",
             "shutdown": "shutdown",
+            "state": f"{'a lifecycle node' if self.target == '*' else self.target} reaches "
+                     f"{_state_text(self.io)}",
         }[self.on]
         if self.on == "timer" and self.after is not None:
             # a delay nested in an event group counts from that event
@@ -50,6 +52,17 @@ class Trigger:
         if self.after is not None:
             text += f", armed {self.after.describe()}"
         return text
+
+
+def _state_text(io: str | None) -> str:
+    """`configure|*|inactive` (a lifecycle state trigger's filter) as words."""
+    transition, start, goal = [*(io or "*|*|*").split("|"), "*", "*"][:3]
+    parts = [goal if goal != "*" else "a state"]
+    if start != "*":
+        parts.append(f"from {start}")
+    if transition != "*":
+        parts.append(f"by {transition}")
+    return " ".join(parts)
 
 
 @dataclass
@@ -100,6 +113,8 @@ class ProcessPlan:
     emulate_tty: bool | None = None  # None: a terminal when the output is shown
     source: Any = field(default=None, repr=False, compare=False)
     """The Node or ExecuteProcess it came from: what `event.action` is in handlers."""
+    lifecycle: bool = False
+    autostart: bool = False
 
     @property
     def full_name(self) -> str | None:
@@ -123,6 +138,7 @@ class ProcessPlan:
             "trigger": self.trigger.to_json() if self.trigger else None,
             "origin": str(self.origin) if self.origin else None,
             "error": self.error, "components": self.components,
+            "lifecycle": self.lifecycle, "autostart": self.autostart,
         }
 
 

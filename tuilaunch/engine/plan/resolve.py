@@ -23,7 +23,6 @@ from ..describe.conditions import ConditionOutcome, condition_outcome
 from ..describe.entities import (
     AppendEnvironmentVariable,
     CallService,
-    ComposableNode,
     DeclareLaunchArgument,
     DslOpaque,
     Entity,
@@ -54,6 +53,7 @@ from ..describe.entities import (
     pair_list,
 )
 from ..describe.events import When
+from ..describe.lifecycle import ChangeStateAction, LifecycleTransition
 from ..describe.loader import (
     LoadedFile,
     compat_modules,
@@ -78,6 +78,8 @@ from ..errors import (
     origin_from_traceback,
     origin_outside_tuilaunch,
 )
+from . import lifecycle as lifecycle_plan
+from .components import component_plan, interfaces_warning
 from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
@@ -192,6 +194,7 @@ class Resolver:
         self.actions: list[ActionPlan] = []
         self.arguments: dict[str, ArgumentInfo] = {}
         self.entity_ids: dict[int, str] = {} if entity_ids is None else entity_ids
+        self.lifecycle_entities: dict[str, Any] = {}  # process id -> LifecycleNode
         self.triggers: list[Trigger] = []
         self.warnings: list[str] = []
         self._include_stack: list[str] = []
@@ -219,6 +222,12 @@ class Resolver:
                     self.warnings.append(
                         f"a trigger waits for {describe_entity(trigger.target_entity)}, which "
                         "this launch never runs: what it triggers will not start")
+        self.warnings += lifecycle_plan.bind_targets(self.processes, self.actions,
+                                                     self.lifecycle_entities, root)
+        self.warnings += interfaces_warning(
+            sum(len(p.components) for p in self.processes if p.enabled)
+            + sum(len(a.data) for a in self.actions
+                  if a.enabled and a.kind == "load_components"))
         declared = set(self.arguments)
         for name in self.cli_arguments:
             if name not in declared:
@@ -317,7 +326,8 @@ class Resolver:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
         elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
-                        | LoadComposableNodes | StopProcess):
+                        | LoadComposableNodes | StopProcess | ChangeStateAction
+                        | LifecycleTransition):
             self.action(entity, scope, parent)
         elif isinstance(entity, TimerAction):
             self.timer(entity, scope, parent)
@@ -445,7 +455,12 @@ class Resolver:
         enabled, skipped = self._gate(register, outer)
         scope = outer.child(False)
         scope.enabled, scope.skipped_by = enabled, skipped
-        scope.trigger = Trigger(handler.on, None, 0.0, handler.io, outer.trigger, handler.target)
+        io = handler.io
+        if handler.on == "state":
+            io = lifecycle_plan.state_trigger_io(handler, outer.context())  # type: ignore[arg-type]
+        # a state handler without a target node applies to every lifecycle node: "*"
+        target = "*" if handler.on == "state" and handler.target is None else None
+        scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target)
         self.triggers.append(scope.trigger)
         item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
                         scope.trigger)
@@ -564,6 +579,8 @@ class Resolver:
         plan.source = entity
         self.processes.append(plan)
         self.entity_ids[id(entity)] = plan.id
+        if getattr(entity, "lifecycle", False):
+            self.lifecycle_entities[plan.id] = entity
         parent.children.append(TreeItem("process", plan.label, enabled, plan.namespace,
                                         skipped, scope.trigger, plan.id))
         if entity.on_exit is not None:
@@ -686,10 +703,15 @@ class Resolver:
         if ros_args:
             cmd += ["--ros-args", *ros_args]
         # launch_ros loads components under the pushed namespace, not the container's own
-        components = [self._component(c, ctx, scope.namespace) for c in entity.components]
+        container = join_namespace(namespace, name) if name else None
+        components = [component_plan(c, ctx, scope.namespace, scope.global_parameters,
+                                     scope.remaps, f"{proc_id}.{i + 1}", container)
+                      for i, c in enumerate(entity.components)]
+        autostart = text_to_bool(perform(getattr(entity, "autostart", False), ctx)) or False
         return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
                            merged, user_files, generated, remappings, error=error,
-                           components=components, **common)
+                           components=components, lifecycle=getattr(entity, "lifecycle", False),
+                           autostart=autostart, **common)
 
     def _parameter_file(self, item: ParameterFile, ctx: PerformContext, proc_id: str,
                         index: int) -> str:
@@ -713,23 +735,6 @@ class Resolver:
         path = str(self.params_dir / f"{proc_id}{suffix}.yaml")
         params_args += ["--params-file", path]
         return path, dict(params)
-
-    def _component(self, component: ComposableNode, ctx: PerformContext, namespace: str)\
-            -> dict[str, Any]:
-        params: dict[str, Any] = {}
-        for item in _items(component.parameters):
-            if isinstance(item, dict):
-                params.update(flatten_parameters(item, ctx, component.origin))
-        return {
-            "package": perform(component.package, ctx),
-            "plugin": perform(component.plugin, ctx),
-            "name": perform_optional(component.name, ctx),
-            "namespace": join_namespace(namespace, perform_optional(component.namespace, ctx)),
-            "parameters": params,
-            "remappings": [[perform(a, ctx), perform(b, ctx)]
-                           for a, b in pair_list(component.remappings, "remappings",
-                                                       component.origin)],
-        }
 
     # --- actions ---------------------------------------------------------------------------
 
@@ -766,9 +771,12 @@ class Resolver:
             target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
         elif isinstance(entity, LoadComposableNodes):
             kind = "load_components"
-            target = describe(entity.target_container)
-            data = [self._component(c, ctx, scope.namespace) for c in entity.components] \
-                if enabled else []
+            target, data = self._load_components(entity, scope, enabled)
+        elif isinstance(entity, ChangeStateAction | LifecycleTransition):
+            kind = "lifecycle_transition"
+            target, data = lifecycle_plan.transition_action(entity, ctx) if enabled else (
+                describe(getattr(entity, "node_names", "lifecycle nodes")),
+                {"transitions": [], "transition_ids": [], "node_names": [], "targets": []})
         else:
             kind = "event_callback"
             data = len(entity.callbacks)
@@ -782,9 +790,40 @@ class Resolver:
                  "set_parameters": f"set parameters of {target}",
                  "shutdown": "shutdown", "event_callback": "event callback",
                  "stop_process": f"stop {target}",
-                 "load_components": f"load components into {target}"}[kind]
+                 "load_components": f"load components into {target}",
+                 "lifecycle_transition": f"{'+'.join(data['transitions'])} {target}"
+                 if kind == "lifecycle_transition" else ""}[kind]
         parent.children.append(TreeItem("action", label, enabled, scope.namespace, skipped,
                                         scope.trigger, action_id))
+
+
+    def _load_components(self, entity: LoadComposableNodes, scope: Scope, enabled: bool)\
+            -> tuple[str, list[dict[str, Any]]]:
+        """The container's full name (as launch_ros resolves it) and each load request."""
+        if not enabled:
+            return describe(entity.target_container), []
+        ctx = scope.context()
+        container = entity.target_container
+        if isinstance(container, Node):
+            target = self._container_name(container, scope)
+        else:
+            text = perform(container, ctx)
+            target = text if text.startswith("/") else "/" + text
+        base = self._action_id("load_components")
+        return target, [component_plan(c, ctx, scope.namespace, scope.global_parameters,
+                                       scope.remaps, f"{base}.{i + 1}", target)
+                        for i, c in enumerate(entity.components)]
+
+    def _container_name(self, container: Node, scope: Scope) -> str:
+        """A container given as the action: its name, once its plan exists."""
+        proc_id = self.entity_ids.get(id(container))
+        for proc in self.processes:
+            if proc.id == proc_id and proc.full_name:
+                return proc.full_name
+        ctx = scope.context()
+        name = perform(container.name, ctx) if container.name is not None else ""
+        ns = join_namespace(scope.namespace, perform_optional(container.namespace, ctx))
+        return join_namespace(ns, name)
 
 
 def _custom_action(entity: Any) -> bool:

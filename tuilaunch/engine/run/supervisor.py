@@ -27,6 +27,8 @@ from ..describe.launch_events import EventInfo, event_for
 from ..describe.substitutions import PerformContext, perform
 from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
 from ..plan.params import write_parameter_file
+from ..ros.composition import ComponentLoader
+from ..ros.lifecycle import LifecycleTracker
 from ..ros.messages import MessageError
 from .logfiles import LogFile
 from .output import LineSplitter, screen_lines
@@ -60,6 +62,7 @@ class Event:
     reason: str | None = None
     level: str = "INFO"
     time: float = field(default_factory=time.time)
+    data: dict[str, Any] | None = None  # lifecycle state or component result details
 
 
 LaunchEvent = EventInfo
@@ -182,6 +185,8 @@ class Supervisor:
         self._reported: set[str] = set()
         self._env_cache: dict[str, str] | None = None
         self.watchdog = Watchdog()
+        self.lifecycle = LifecycleTracker(self)
+        self.components = ComponentLoader(self)
         log_dir.mkdir(parents=True, exist_ok=True)
         self._launch_log = LogFile(log_dir / "launch.log", self._report_io)
 
@@ -320,8 +325,15 @@ class Supervisor:
 
     def _can_fire(self, trigger: Trigger | None) -> bool:
         while trigger is not None:
-            if trigger.target is not None and trigger.on in ("start", "exit"):
-                done = self._flag(trigger.target, trigger.on).is_set()
+            if trigger.target == "*" and trigger.on == "state":
+                # any lifecycle node of the launch: one of them must still be able to run
+                if not self._flag("*", _flag_name(trigger)).is_set() and not any(
+                        p.lifecycle and self.states.get(p.id) in ("running", "pending")
+                        for p in self.plan.processes):
+                    return False
+            if trigger.target not in (None, "*") and trigger.on in ("start", "exit", "state"):
+                assert trigger.target is not None
+                done = self._flag(trigger.target, _flag_name(trigger)).is_set()
                 if not done and self.states.get(trigger.target) not in ("running", "pending"):
                     return False
             trigger = trigger.after
@@ -337,7 +349,7 @@ class Supervisor:
             if step.on == "shutdown" or step.on == "io":
                 return  # run by their own events, not as a start-up chain
             if step.target is not None:
-                await self._flag(step.target, step.on).wait()
+                await self._flag(step.target, _flag_name(step)).wait()
             if step.delay:
                 self._busy += 1
                 try:
@@ -476,6 +488,10 @@ class Supervisor:
                 self._log(action, self._perform(action, action.source.msg, event))
             elif action.kind == "event_callback":
                 ok = self._run_callbacks(action, event or LaunchEvent())
+            elif action.kind == "lifecycle_transition":
+                ok = await self.lifecycle.run_action(action)
+            elif action.kind == "load_components":
+                ok = await self.components.run_action(action)
             elif action.kind == "deferred":
                 from .event_actions import deferred_entities
 
@@ -686,6 +702,12 @@ class Supervisor:
         self._emit(Event("started", process_id, pid=popen.pid))
         self._process_event(process_id, "start", popen.pid)
         self._flag(process_id, "start").set()
+        if proc.lifecycle:
+            self._spawn_task(self.lifecycle.process_started(proc))
+        # any node may be a container (nav2 starts one with Node): it loads what targets it
+        loading = self.components.container_started(proc)
+        if loading is not None:
+            self._spawn_task(loading)
         self._spawn_task(self._wait(running))
 
     def _base_env(self) -> dict[str, str]:
@@ -746,6 +768,7 @@ class Supervisor:
             self.crashes[process_id] = code
             self._crash_times[process_id] = time.monotonic()
         self.states[process_id] = "exited"
+        self.lifecycle.process_exited(process_id)
         self._emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=_describe_exit(code)))
         self._process_event(process_id, "exit", running.process.pid, code)
@@ -834,6 +857,18 @@ class Supervisor:
         try:
             await self.stop(process_id)
             await self.start(process_id)
+        finally:
+            self._busy -= 1
+            self._changed.set()
+
+    async def run_action(self, action_id: str) -> None:
+        """Performs one action of the plan again (the UI restarted its group)."""
+        action = next((a for a in self.plan.actions if a.id == action_id), None)
+        if action is None or not action.enabled or self._shutting_down:
+            return
+        self._busy += 1
+        try:
+            await self._run_action(action)
         finally:
             self._busy -= 1
             self._changed.set()
@@ -1003,6 +1038,11 @@ def _call_handler(callback: Any, event: EventInfo, action: ActionPlan) -> Any:
         return callback(event, PerformContext(action.configurations,
                                               event_locals={"event": event}))
     return callback(event)
+
+
+def _flag_name(trigger: Trigger) -> str:
+    """A lifecycle state trigger waits for its own filter, other triggers for the event."""
+    return f"state:{trigger.io}" if trigger.on == "state" else trigger.on
 
 
 def _describe_exit(code: int) -> str:

@@ -1,0 +1,350 @@
+"""Lifecycle nodes: plans of launch_ros's lifecycle API, and real rclpy lifecycle nodes run."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from tuilaunch.engine import load_file, resolve
+from tuilaunch.engine.errors import LaunchError
+from tuilaunch.engine.run.supervisor import Event, Supervisor
+
+from .conftest import plan_of, run_cli
+
+HEADER = """\
+from launch import LaunchDescription
+from launch.actions import EmitEvent, RegisterEventHandler, LogInfo
+from launch.events import matches_action
+from launch_ros.actions import LifecycleNode, Node
+from launch_ros.events.lifecycle import ChangeState
+from launch_ros.event_handlers import OnStateTransition
+from lifecycle_msgs.msg import Transition
+"""
+
+# the pattern of ros2 demos' lifecycle launch file: configure at start, activate once inactive
+CONFIGURE_THEN_ACTIVATE = HEADER + """
+talker = LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker',
+                       name='lc_talker', namespace='demo', parameters=[{'rate': 20.0}])
+configure = EmitEvent(event=ChangeState(lifecycle_node_matcher=matches_action(talker),
+                                        transition_id=Transition.TRANSITION_CONFIGURE))
+on_inactive = RegisterEventHandler(OnStateTransition(
+    target_lifecycle_node=talker, goal_state='inactive',
+    entities=[LogInfo(msg='talker is inactive, activating'),
+              EmitEvent(event=ChangeState(lifecycle_node_matcher=matches_action(talker),
+                                          transition_id=Transition.TRANSITION_ACTIVATE))]))
+def generate_launch_description():
+    return LaunchDescription([on_inactive, talker, configure])
+"""
+
+
+def run_headless(path: Path, *args: str, timeout: float = 40, until: tuple[str, ...] = (),
+                 env: dict[str, str] | None = None) -> str:
+    """Runs the file headless until every text in `until` was printed, then sends SIGINT.
+
+    The timeout only guards against a hang; the assertions then say what was missing."""
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), *args, "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env={**os.environ, **(env or {})}, start_new_session=True)
+    seen: list[str] = []
+    assert proc.stdout is not None
+    try:
+        limit = time.monotonic() + timeout
+        for line in proc.stdout:
+            seen.append(line)
+            if all(any(text in earlier for earlier in seen) for text in until):
+                break
+            if time.monotonic() > limit:
+                break
+        proc.send_signal(2)
+        rest, _ = proc.communicate(timeout=30)
+        seen.append(rest)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, 9)
+            proc.wait()
+    return "".join(seen)
+
+
+# --- plans -------------------------------------------------------------------------------
+
+
+def test_change_state_targets_the_matched_node_and_state_handler_waits_for_it(write):
+    plan = plan_of(write(CONFIGURE_THEN_ACTIVATE))
+    (talker,) = plan.processes
+    assert talker.lifecycle and not talker.autostart
+    assert talker.full_name == "/demo/lc_talker"
+    by_kind = {}
+    for action in plan.actions:
+        by_kind.setdefault(action.kind, []).append(action)
+    configure, activate = sorted(by_kind["lifecycle_transition"],
+                                 key=lambda a: a.data["transitions"][0] != "configure")
+    assert configure.data["transitions"] == ["configure"]
+    assert configure.data["targets"] == [talker.id]
+    assert configure.trigger is None  # at launch start, as EmitEvent runs
+    assert activate.data["targets"] == [talker.id]
+    assert activate.trigger.to_json() == {"on": "state", "target": talker.id, "delay": 0.0,
+                                          "io": "*|*|inactive"}
+    assert activate.target == "/demo/lc_talker"
+
+
+def test_print_names_the_transitions_and_the_state_they_wait_for(write):
+    result = run_cli(str(write(CONFIGURE_THEN_ACTIVATE)), "--print")
+    assert result.returncode == 0, result.stderr
+    assert "configure /demo/lc_talker" in result.stdout
+    assert "activate /demo/lc_talker" in result.stdout
+    assert "when lc_talker-1 reaches inactive" in result.stdout
+    assert "/demo/lc_talker  [lc_talker-1] (tuilaunch_demos/lifecycle_talker) lifecycle\n" \
+        in result.stdout
+    data = json.loads(run_cli(str(write(CONFIGURE_THEN_ACTIVATE)), "--print", "--json").stdout)
+    assert data["processes"][0]["lifecycle"] is True
+
+
+def test_matches_node_name_lifecycle_transition_and_autostart(write):
+    path = write(HEADER + """
+from launch_ros.actions import LifecycleTransition
+from launch_ros.events import matches_node_name
+from launch.actions import DeclareLaunchArgument
+from launch.substitutions import LaunchConfiguration
+a = LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name='a',
+                  namespace='', autostart=LaunchConfiguration('auto'))
+b = LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name='b',
+                  namespace='/robot')
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('auto', default_value='true'),
+        a, b,
+        EmitEvent(event=ChangeState(lifecycle_node_matcher=matches_node_name('robot/b'),
+                                    transition_id=Transition.TRANSITION_CONFIGURE)),
+        EmitEvent(event=ChangeState(
+            lifecycle_node_matcher=lambda node: node.node_name.startswith('/robot'),
+            transition_id=Transition.TRANSITION_CLEANUP)),
+        EmitEvent(event=ChangeState(lifecycle_node_matcher=lambda action: action is a,
+                                    transition_id=Transition.TRANSITION_ACTIVATE)),
+        LifecycleTransition(lifecycle_node_names=['/robot/b', 'a'],
+                            transition_ids=[Transition.TRANSITION_CONFIGURE,
+                                            Transition.TRANSITION_ACTIVATE]),
+    ])
+""")
+    plan = plan_of(path)
+    a, b = plan.processes
+    assert a.autostart and not b.autostart
+    assert not plan_of(path, auto="false").processes[0].autostart
+    by_name, by_function, by_identity, sequence = plan.actions
+    assert by_name.data["targets"] == [b.id]
+    assert by_function.data["targets"] == [b.id]
+    assert by_identity.data["targets"] == [a.id]
+    assert sequence.data["transitions"] == ["configure", "activate"]
+    assert sequence.data["targets"] == [a.id, b.id]
+
+
+def test_bad_transition_and_nameless_lifecycle_node_name_the_line(write):
+    path = write(HEADER + """
+node = LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name='n',
+                     namespace='')
+def generate_launch_description():
+    return LaunchDescription([node, EmitEvent(event=ChangeState(
+        lifecycle_node_matcher=matches_action(node), transition_id=42))])
+""")
+    with pytest.raises(LaunchError) as caught:
+        plan_of(path)
+    assert "transition_id=42" in caught.value.message
+    assert caught.value.origin is not None and caught.value.origin.line == 12
+    nameless = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([LifecycleNode(package='tuilaunch_demos',
+                                            executable='lifecycle_talker', namespace='')])
+""", "nameless.py")
+    result = run_cli(str(nameless), "--print")
+    assert result.returncode != 0
+    assert "LifecycleNode() needs a name" in result.stderr
+    assert "nameless.py:10" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_a_transition_matching_no_node_is_a_warning(write):
+    path = write(HEADER + """
+from launch_ros.events import matches_node_name
+def generate_launch_description():
+    return LaunchDescription([EmitEvent(event=ChangeState(
+        lifecycle_node_matcher=matches_node_name('/nobody'),
+        transition_id=Transition.TRANSITION_CONFIGURE))])
+""")
+    plan = plan_of(path)
+    assert any("matches no lifecycle node" in w and "/nobody" in w for w in plan.warnings)
+
+
+def test_nav2_style_lifecycle_manager_is_a_plain_node_with_typed_parameters(
+        write, tmp_path, monkeypatch):
+    prefix = fake_lifecycle_manager_prefix(tmp_path)
+    monkeypatch.setenv("AMENT_PREFIX_PATH",
+                       f"{prefix}{os.pathsep}{os.environ.get('AMENT_PREFIX_PATH', '')}")
+    plan = plan_of(write(NAV2_STYLE))
+    assert not plan.problems()
+    manager = next(p for p in plan.processes if p.name == "lifecycle_manager_test")
+    assert not manager.lifecycle
+    assert manager.parameters == {"autostart": True, "node_names": ["first", "second"],
+                                  "bond_timeout": 0.0}
+    assert {p.full_name for p in plan.processes if p.lifecycle} == {"/first", "/second"}
+
+
+NAV2_STYLE = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import LifecycleNode, Node
+
+def generate_launch_description():
+    autostart = LaunchConfiguration('autostart')
+    nodes = ['first', 'second']
+    return LaunchDescription([
+        DeclareLaunchArgument('autostart', default_value='true'),
+        *[LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name=n,
+                        namespace='', parameters=[{'rate': 20.0}]) for n in nodes],
+        Node(package='nav2_lifecycle_manager', executable='lifecycle_manager',
+             name='lifecycle_manager_test', output='screen',
+             parameters=[{'autostart': autostart, 'node_names': nodes,
+                          'bond_timeout': 0.0}]),
+    ])
+"""
+
+# A test double for nav2's lifecycle manager (a C++ node, not installable here): reads the
+# same parameters and drives the nodes through the same services.
+FAKE_MANAGER = """#!/usr/bin/env python3
+import sys
+import rclpy
+from rclpy.node import Node
+from lifecycle_msgs.srv import ChangeState
+
+rclpy.init(args=sys.argv)
+node = Node('lifecycle_manager')
+names = node.declare_parameter('node_names', ['']).value
+autostart = node.declare_parameter('autostart', False).value
+node.declare_parameter('bond_timeout', 4.0)
+if autostart:
+    for transition in (1, 3):
+        for name in names:
+            client = node.create_client(ChangeState, f'/{name}/change_state')
+            client.wait_for_service()
+            request = ChangeState.Request()
+            request.transition.id = transition
+            future = client.call_async(request)
+            rclpy.spin_until_future_complete(node, future)
+            print(f'manager: {name} transition {transition} ->',
+                  future.result().success, flush=True)
+print('manager: all managed nodes are active', flush=True)
+try:
+    rclpy.spin(node)
+except Exception:
+    pass
+"""
+
+
+def fake_lifecycle_manager_prefix(tmp_path: Path) -> Path:
+    prefix = tmp_path / "prefix"
+    pkg = "nav2_lifecycle_manager"
+    (prefix / "share/ament_index/resource_index/packages").mkdir(parents=True)
+    (prefix / "share/ament_index/resource_index/packages" / pkg).write_text("")
+    (prefix / "share" / pkg).mkdir(parents=True)
+    (prefix / "share" / pkg / "package.xml").write_text(f"<package><name>{pkg}</name></package>")
+    exe = prefix / "lib" / pkg / "lifecycle_manager"
+    exe.parent.mkdir(parents=True)
+    exe.write_text(FAKE_MANAGER)
+    exe.chmod(0o755)
+    return prefix
+
+
+# --- real lifecycle nodes ------------------------------------------------------------------
+
+
+def test_configure_then_activate_on_inactive_with_a_real_lifecycle_node(write):
+    out = run_headless(write(CONFIGURE_THEN_ACTIVATE),
+                       until=('Publishing: "hello 3"', "lifecycle state active"))
+    lines = out.splitlines()
+
+    def first(text: str) -> int:
+        return next(i for i, line in enumerate(lines) if text in line)
+
+    # the handler runs on the state tuilaunch saw; the node publishes only once active
+    # (how soon tuilaunch hears "active" against the node's first publication is a race)
+    assert first("lifecycle state inactive") < first("talker is inactive, activating")
+    assert first("configure done") < first("activate done")
+    assert "[INFO] [lc_talker-1]: lifecycle state active" in out
+    assert first("]: configured") < first("]: activated") < first('Publishing: "hello 1"')
+
+
+def test_autostart_activates_and_a_refused_transition_says_so(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name='auto',
+                      namespace='', autostart=True, parameters=[{'rate': 20.0}]),
+        LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name='stuck',
+                      namespace='', autostart=True, parameters=[{'fail_configure': True}]),
+    ])
+""")
+    out = run_headless(path, until=("[auto]: Publishing", "refused transition",
+                                    "[INFO] [auto-1]: lifecycle state active"))
+    assert "[INFO] [auto-1]: lifecycle state active" in out
+    assert re.search(r"\[ERROR\] \[stuck-2\]: /stuck refused transition 'configure' "
+                     r"\(autostart, \S*test_launch\.py:\d+\); it is unconfigured", out), out
+    assert "[INFO] [stuck-2]: lifecycle state active" not in out
+    assert "[auto-1]" in out and 'Publishing: "hello' in out
+
+
+def test_nav2_style_manager_drives_the_nodes_and_tuilaunch_follows(write, tmp_path):
+    prefix = fake_lifecycle_manager_prefix(tmp_path)
+    env = {"AMENT_PREFIX_PATH": f"{prefix}{os.pathsep}{os.environ.get('AMENT_PREFIX_PATH', '')}"}
+    followed = ("[INFO] [first-1]: lifecycle state active",
+                "[INFO] [second-2]: lifecycle state active")
+    out = run_headless(write(NAV2_STYLE), until=("all managed nodes are active", *followed),
+                       env=env)
+    assert "manager: first transition 3 -> True" in out
+    assert "manager: second transition 3 -> True" in out
+    for line in followed:
+        assert line in out, out
+
+
+async def test_operator_transitions_follow_the_live_state(write, tmp_path):
+    # its own parameter folder: a run removes its folder at the end
+    plan = resolve(load_file(str(write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name='op',
+                      namespace='', autostart=True)])
+"""))), {}, tmp_path / "params")
+    supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=3)
+    events: list[Event] = []
+    supervisor.subscribe(events.append)
+    states = asyncio.Queue[str]()
+    supervisor.subscribe(lambda e: states.put_nowait(e.reason or "")
+                         if e.kind == "lifecycle" else None)
+    run = asyncio.ensure_future(supervisor.run())
+    (proc,) = plan.processes
+
+    async def reach(state: str) -> None:
+        while await asyncio.wait_for(states.get(), 30) != state:
+            pass
+
+    try:
+        await reach("active")
+        assert await supervisor.lifecycle.request(proc.id, "deactivate")
+        await reach("inactive")
+        assert supervisor.lifecycle.states[proc.id] == "inactive"
+        # not from inactive: refused before it reaches the node (an rclpy node dies of it)
+        assert not await supervisor.lifecycle.request(proc.id, "deactivate")
+        assert any(e.kind == "log" and e.reason == "cannot deactivate /op: it is inactive "
+                   "(it can activate, cleanup, inactive_shutdown)" for e in events)
+        assert await supervisor.lifecycle.request(proc.id, "inactive_shutdown")
+        await reach("finalized")
+    finally:
+        await supervisor.shutdown("test over")
+        await asyncio.wait_for(run, 30)
+    assert proc.id not in supervisor.lifecycle.states  # exited: no state any more

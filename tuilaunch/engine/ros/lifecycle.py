@@ -1,0 +1,231 @@
+"""Following and driving lifecycle nodes: `<node>/get_state`, `change_state`, `transition_event`.
+
+One `LifecycleTracker` per supervisor. When a lifecycle node's process starts, the tracker
+subscribes to its `transition_event` topic, asks `get_state` once the service is up, and
+reports every state as a `lifecycle` event; with `autostart` it then configures and
+activates the node. Transition requests (from `ChangeState` actions or the operator) wait for
+the node's `change_state` service as long as its process lives, as launch_ros waits for it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import TYPE_CHECKING, Any
+
+from ..describe.lifecycle import STATES, TRANSITIONS, state_keys
+
+if TYPE_CHECKING:
+    from ..plan.model import ActionPlan, ProcessPlan
+    from ..run.supervisor import Supervisor
+
+# transitions an operator can ask for, by the state a node is in
+AVAILABLE: dict[str, list[str]] = {
+    "unconfigured": ["configure", "unconfigured_shutdown"],
+    "inactive": ["activate", "cleanup", "inactive_shutdown"],
+    "active": ["deactivate", "active_shutdown"],
+}
+TRANSITION_IDS = {label: number for number, label in TRANSITIONS.items()}
+ALIVE = ("pending", "running", "respawning")
+
+
+class LifecycleError(Exception):
+    """A transition that could not be asked for or was refused."""
+
+
+class LifecycleTracker:
+    """Lifecycle state of each lifecycle process, and the transitions asked of it."""
+
+    def __init__(self, supervisor: Supervisor) -> None:
+        self.supervisor = supervisor
+        self.states: dict[str, str] = {}
+        self._subscriptions: dict[str, Any] = {}
+        self._heard: set[str] = set()  # processes whose transition events arrived
+
+    # --- following -------------------------------------------------------------------------
+
+    async def process_started(self, proc: ProcessPlan) -> None:
+        """Subscribes to its transitions, reads its state, and autostarts it if asked."""
+        name = proc.full_name
+        if name is None:
+            return
+        self.states.pop(proc.id, None)
+        self._heard.discard(proc.id)
+        try:
+            bridge = await self._bridge()
+            await self._subscribe(bridge, proc)
+            state = await self._first_state(bridge, proc)
+        except Exception as exc:  # no ROS, no lifecycle_msgs, or no answer: say so, go on
+            self._report(proc.id, f"lifecycle state of {name} unknown: {exc}", "WARN")
+            return
+        if state is None:
+            return  # the process ended first
+        if proc.id not in self._heard:
+            # a transition event that came first is newer than this answer
+            self._set_state(proc.id, state)
+        if proc.autostart and state == "unconfigured":
+            for transition in ("configure", "activate"):
+                origin = f"autostart, {proc.origin}" if proc.origin else "autostart"
+                if not await self.request(proc.id, transition, origin=origin):
+                    return
+
+    async def _bridge(self) -> Any:
+        try:
+            # on the loop, not in a worker thread: two tasks must never build two bridges
+            return self.supervisor.bridge()
+        except Exception as exc:  # rclpy missing or not initialisable
+            raise LifecycleError(f"no ROS connection ({exc})") from None
+
+    async def _subscribe(self, bridge: Any, proc: ProcessPlan) -> None:
+        try:
+            from lifecycle_msgs.msg import TransitionEvent
+        except ImportError:
+            raise LifecycleError("lifecycle_msgs is not installed") from None
+        loop = asyncio.get_running_loop()
+        old = self._subscriptions.pop(proc.id, None)
+        if old is not None:
+            bridge.node.destroy_subscription(old)
+
+        def on_event(msg: Any) -> None:  # in the ROS thread
+            loop.call_soon_threadsafe(self._on_transition, proc.id, msg.transition.label,
+                                      msg.start_state.label, msg.goal_state.label)
+
+        self._subscriptions[proc.id] = await asyncio.to_thread(
+            bridge.node.create_subscription, TransitionEvent,
+            f"{proc.full_name}/transition_event", on_event, 10)
+
+    async def _first_state(self, bridge: Any, proc: ProcessPlan) -> str | None:
+        from lifecycle_msgs.srv import GetState
+
+        service = f"{proc.full_name}/get_state"
+        if not await self._wait_for_service(bridge, service, proc.id):
+            return None
+        response = await bridge.call_typed(service, GetState, GetState.Request(),
+                                           self.supervisor.service_timeout)
+        return str(response.current_state.label or STATES.get(response.current_state.id))
+
+    async def _wait_for_service(self, bridge: Any, service: str, proc_id: str) -> bool:
+        """Waits while the process lives; False once it is gone or the launch ends."""
+        while True:
+            if self.supervisor.states.get(proc_id) not in ALIVE:
+                return False
+            if self.supervisor._shutting_down:
+                return False
+            try:
+                await bridge.wait_for_service(service, 1.0)
+                return True
+            except Exception:  # not there yet
+                continue
+
+    def _on_transition(self, proc_id: str, transition: str, start: str, goal: str) -> None:
+        self._heard.add(proc_id)
+        self._set_state(proc_id, goal, {"transition": transition, "start": start})
+        for key in state_keys(transition, start, goal):
+            self.supervisor._flag(proc_id, "state:" + key).set()
+            self.supervisor._flag("*", "state:" + key).set()
+
+    def _set_state(self, proc_id: str, state: str, detail: dict[str, str] | None = None)\
+            -> None:
+        if self.states.get(proc_id) == state and detail is None:
+            return
+        self.states[proc_id] = state
+        from ..run.supervisor import Event
+
+        data = {"state": state, **(detail or {})}
+        self.supervisor._emit(Event("lifecycle", proc_id, reason=state, data=data))
+
+    def _report(self, item: str, text: str, level: str = "INFO") -> None:
+        from ..run.supervisor import Event
+
+        self.supervisor._emit(Event("log", item, reason=text, level=level))
+
+    def process_exited(self, proc_id: str) -> None:
+        """A node that is gone has no lifecycle state any more."""
+        sub = self._subscriptions.pop(proc_id, None)
+        if sub is not None and self.supervisor._bridge is not None:
+            try:
+                self.supervisor._bridge.node.destroy_subscription(sub)
+            except Exception:  # the bridge is closing
+                pass
+        if self.states.pop(proc_id, None) is not None:
+            from ..run.supervisor import Event
+
+            self.supervisor._emit(Event("lifecycle", proc_id, reason="",
+                                        data={"state": ""}))
+
+    # --- driving ---------------------------------------------------------------------------
+
+    async def request(self, proc_id: str, transition: str | int, origin: str = "operator",
+                      report_to: str | None = None) -> bool:
+        """Asks a lifecycle process for one transition; True when the node made it."""
+        label = TRANSITIONS.get(transition, str(transition)) if isinstance(transition, int) \
+            else transition
+        where = report_to or proc_id
+        proc = self.supervisor.plan.process(proc_id)
+        if not proc.lifecycle or proc.full_name is None:
+            self._report(where, f"{proc_id} is not a lifecycle node", "ERROR")
+            return False
+        if label not in TRANSITION_IDS:
+            self._report(where, f"'{label}' is not a lifecycle transition "
+                         f"({', '.join(TRANSITION_IDS)})", "ERROR")
+            return False
+        state = self.states.get(proc_id)
+        if origin == "operator" and state in AVAILABLE and label not in AVAILABLE[state]:
+            # asked of the node anyway, an rclpy lifecycle node dies of it: say no here
+            self._report(where, f"cannot {label} {proc.full_name}: it is {state} (it can "
+                         f"{', '.join(AVAILABLE[state])})", "ERROR")
+            return False
+        try:
+            from lifecycle_msgs.srv import ChangeState
+        except ImportError:
+            self._report(where, "lifecycle_msgs is not installed: cannot change the state of "
+                         f"{proc.full_name}", "ERROR")
+            return False
+        try:
+            bridge = await self._bridge()
+        except LifecycleError as exc:
+            self._report(where, f"{label} {proc.full_name} failed: {exc}", "ERROR")
+            return False
+        service = f"{proc.full_name}/change_state"
+        if not await self._wait_for_service(bridge, service, proc_id):
+            self._report(where, f"{label} {proc.full_name} abandoned: the node is not "
+                         "running", "WARN")
+            return False
+        request = ChangeState.Request()
+        request.transition.id = TRANSITION_IDS[label]
+        try:
+            response = await bridge.call_typed(service, ChangeState, request,
+                                               self.supervisor.service_timeout)
+        except Exception as exc:
+            self._report(where, f"{label} {proc.full_name} failed: {exc}", "ERROR")
+            return False
+        if not response.success:
+            self._report(where, f"{proc.full_name} refused transition '{label}' ({origin}); "
+                         f"it is {self.states.get(proc_id, 'in an unknown state')}", "ERROR")
+            return False
+        self._report(where, f"{proc.full_name}: {label} done ({origin})")
+        return True
+
+    async def run_action(self, action: ActionPlan) -> bool:
+        """A `ChangeState` / `LifecycleTransition` of the launch file, for each target."""
+        targets: list[str] = action.data.get("targets", [])
+        if not targets:
+            self._report(action.id, f"{'+'.join(action.data.get('transitions', []))} "
+                         f"{action.target}: no lifecycle node of this launch matches", "WARN")
+            return False
+        results = await asyncio.gather(*(self._transitions(action, pid) for pid in targets))
+        return all(results)
+
+    async def _transitions(self, action: ActionPlan, proc_id: str) -> bool:
+        for label in action.data.get("transitions", []):
+            if not await self.request(proc_id, label, origin=f"{action.origin or action.id}",
+                                      report_to=action.id):
+                return False
+        return True
+
+
+def available_transitions(state: str | None) -> list[str]:
+    """What an operator can ask of a node in this state."""
+    return list(AVAILABLE.get(state or "", []))
+
+
+__all__ = ["LifecycleTracker", "available_transitions"]
