@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 from typing import Any
 
@@ -56,3 +58,31 @@ def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 60) 
         subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
                           text=True, timeout=timeout, env={**os.environ, **(env or {})})
+
+
+def run_headless(path: Path, *args: str, timeout: float = 40, until: tuple[str, ...] = (),
+                 env: dict[str, str] | None = None) -> str:
+    """Runs the file headless until every text in `until` was printed, then sends SIGINT.
+
+    The timeout only guards against a hang; the assertions then say what was missing."""
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), *args, "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env={**os.environ, **(env or {})}, start_new_session=True)
+    seen: list[str] = []
+    assert proc.stdout is not None
+    try:
+        limit = time.monotonic() + timeout
+        for line in proc.stdout:
+            seen.append(line)
+            if all(any(text in earlier for earlier in seen) for text in until):
+                break
+            if time.monotonic() > limit:
+                break
+        proc.send_signal(signal.SIGINT)
+        rest, _ = proc.communicate(timeout=30)
+        seen.append(rest)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return "".join(seen)

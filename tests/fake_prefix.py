@@ -14,6 +14,8 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
+from .launch_world import make_package
+
 PROBE = f"""#!{sys.executable}
 # FAKE executable for tests: records how it was started, then exits
 import json, os, sys, time
@@ -72,17 +74,8 @@ def make_prefix(root: Path, packages: dict[str, list[str]] | None = None,
                 share_files: dict[str, str] | None = None) -> Path:
     """An ament prefix under root: packages with probe executables, `bin/gz`, share files."""
     prefix = root / "fake_prefix"
-    index = prefix / "share" / "ament_index" / "resource_index" / "packages"
-    index.mkdir(parents=True, exist_ok=True)
     for package, executables in (packages or PACKAGES).items():
-        (index / package).write_text("")
-        share = prefix / "share" / package
-        share.mkdir(parents=True, exist_ok=True)
-        (share / "package.xml").write_text(f"<package><name>{package}</name></package>\n")
-        lib = prefix / "lib" / package
-        lib.mkdir(parents=True, exist_ok=True)
-        for exe in executables:
-            _script(lib / exe, PROBE)
+        make_package(prefix, package, executables, probe=PROBE)
     if "ros_gz_sim" in (packages or PACKAGES):
         launch = prefix / "share" / "ros_gz_sim" / "launch"
         launch.mkdir(parents=True, exist_ok=True)

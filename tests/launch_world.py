@@ -156,8 +156,9 @@ class EchoAction(launch.Action):
 
 
 def make_package(prefix: Path, package: str, executables: list[str] = (),
-                 files: dict[str, str] | None = None) -> Path:
-    """An ament package in `prefix`: index marker, package.xml, probe executables, share files."""
+                 files: dict[str, str] | None = None, probe: str | None = None) -> Path:
+    """An ament package in `prefix`: index marker, package.xml, probe executables (this
+    module's PROBE unless another script is given), share files."""
     index = prefix / "share" / "ament_index" / "resource_index" / "packages"
     index.mkdir(parents=True, exist_ok=True)
     (index / package).write_text("")
@@ -168,7 +169,7 @@ def make_package(prefix: Path, package: str, executables: list[str] = (),
     lib.mkdir(parents=True, exist_ok=True)
     for exe in executables:
         path = lib / exe
-        path.write_text(PROBE.format(python=sys.executable))
+        path.write_text(probe if probe is not None else PROBE.format(python=sys.executable))
         path.chmod(path.stat().st_mode | stat.S_IXUSR | stat.S_IXGRP | stat.S_IXOTH)
     for relative, text in (files or {}).items():
         target = share / relative

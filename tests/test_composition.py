@@ -13,9 +13,7 @@ import json
 import os
 import re
 import signal
-import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -23,7 +21,7 @@ import pytest
 from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.run.supervisor import Event, Supervisor
 
-from .conftest import plan_of, run_cli
+from .conftest import plan_of, run_cli, run_headless
 from .interfaces.build_interfaces import build, default_cache
 
 HEADER = """\
@@ -52,30 +50,6 @@ def with_interfaces(folder: str) -> dict[str, str]:
                                           if p)}
 
 
-def run_headless(path: Path, until: tuple[str, ...], env: dict[str, str],
-                 timeout: float = 40) -> str:
-    """Headless run until every text in `until` was printed (timeout: a hang guard only)."""
-    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            env={**os.environ, **env}, start_new_session=True)
-    seen: list[str] = []
-    assert proc.stdout is not None
-    try:
-        limit = time.monotonic() + timeout
-        for line in proc.stdout:
-            seen.append(line)
-            if all(any(text in earlier for earlier in seen) for text in until):
-                break
-            if time.monotonic() > limit:
-                break
-        proc.send_signal(signal.SIGINT)
-        rest, _ = proc.communicate(timeout=30)
-        seen.append(rest)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    return "".join(seen)
 
 
 CONTAINER = HEADER + """

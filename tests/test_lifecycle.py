@@ -6,9 +6,6 @@ import asyncio
 import json
 import os
 import re
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -17,7 +14,7 @@ from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.errors import LaunchError
 from tuilaunch.engine.run.supervisor import Event, Supervisor
 
-from .conftest import plan_of, run_cli
+from .conftest import plan_of, run_cli, run_headless
 
 HEADER = """\
 from launch import LaunchDescription
@@ -45,32 +42,6 @@ def generate_launch_description():
 """
 
 
-def run_headless(path: Path, *args: str, timeout: float = 40, until: tuple[str, ...] = (),
-                 env: dict[str, str] | None = None) -> str:
-    """Runs the file headless until every text in `until` was printed, then sends SIGINT.
-
-    The timeout only guards against a hang; the assertions then say what was missing."""
-    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), *args, "--headless"],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            env={**os.environ, **(env or {})}, start_new_session=True)
-    seen: list[str] = []
-    assert proc.stdout is not None
-    try:
-        limit = time.monotonic() + timeout
-        for line in proc.stdout:
-            seen.append(line)
-            if all(any(text in earlier for earlier in seen) for text in until):
-                break
-            if time.monotonic() > limit:
-                break
-        proc.send_signal(2)
-        rest, _ = proc.communicate(timeout=30)
-        seen.append(rest)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, 9)
-            proc.wait()
-    return "".join(seen)
 
 
 # --- plans -------------------------------------------------------------------------------

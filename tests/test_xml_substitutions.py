@@ -160,7 +160,7 @@ def test_param_reads_a_set_parameter_in_scope(write):
   </node>
   <log message="$(param nowhere)"/>
 </launch>""", "param.launch.xml")
-    with pytest.raises(LaunchError, match=r"\$\(param nowhere\): no <set_parameter>") as exc:
+    with pytest.raises(LaunchError, match=r"\$\(param nowhere\): no SetParameter") as exc:
         plan_of(path)
     assert exc.value.origin is not None and exc.value.origin.line == 8
     path.write_text(path.read_text().replace('  <log message="$(param nowhere)"/>\n', ""))

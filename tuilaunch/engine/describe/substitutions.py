@@ -571,8 +571,9 @@ class FileContent(Substitution):
         try:
             with open(path, encoding="utf-8") as handle:
                 return handle.read()
-        except OSError as exc:
-            raise LaunchError(f"FileContent cannot read {path}: {exc.strerror or exc}",
+        except (OSError, UnicodeDecodeError) as exc:
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+            raise LaunchError(f"$(file-content): cannot read {path}: {reason}",
                               self.origin) from None
 
     def describe(self) -> str:
@@ -625,22 +626,26 @@ class ExecutableInPackage(Substitution):
 
 
 class ParameterSubstitution(Substitution):
-    """launch_ros.substitutions.Parameter: a value given earlier by SetParameter."""
+    """launch_ros.substitutions.Parameter, `$(param name [default])`: a value given earlier in
+    scope by SetParameter (or `<set_parameter>`)."""
 
-    def __init__(self, name: SubValue, *, default: SubValue = None) -> None:
+    def __init__(self, name: SubValue, default: SubValue = None) -> None:
         self.name, self.default = name, default
         self.origin = caller_origin()
 
     def perform(self, context: PerformContext) -> str:
+        from ..plan.params import typed_value
+
         name = perform(self.name, context)
-        params = context.event_locals.get("global_params", {})
-        if name in params:
-            value = params[name]
-            return value if isinstance(value, str) else perform(value, context) if is_lazy(
-                value) else str(value).lower() if isinstance(value, bool) else str(value)
+        for key, value in context.global_parameters:
+            if key is not None and perform(key, context) == name:  # None: a parameter file
+                typed = typed_value(value, context, name, self.origin)
+                return str(typed).lower() if isinstance(typed, bool) else str(typed)
         if self.default is not None:
             return perform(self.default, context)
-        raise LaunchError(f"parameter '{name}' was not set by SetParameter", self.origin)
+        raise LaunchError(f"$(param {name}): no SetParameter named '{name}' comes before",
+                          self.origin, hint="set it first (SetParameter, <set_parameter "
+                          "name= value=>), or give a default: $(param name default)")
 
     def describe(self) -> str:
         return f"$(param {describe(self.name)})"

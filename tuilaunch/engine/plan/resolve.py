@@ -164,11 +164,9 @@ class Scope:
         )
 
     def context(self) -> PerformContext:
-        values = {"global_params": {describe(k): v for k, v in self.global_parameters
-                                    if k is not None}}
         return PerformContext(self.configurations, self.launch_file,
                               global_parameters=self.global_parameters,
-                              event_locals={**values, **self.event_locals})
+                              event_locals=dict(self.event_locals))
 
 
 @dataclass

@@ -141,9 +141,9 @@ class LifecycleTracker:
     def process_exited(self, proc_id: str) -> None:
         """A node that is gone has no lifecycle state any more."""
         sub = self._subscriptions.pop(proc_id, None)
-        if sub is not None and self.supervisor._bridge is not None:
+        if sub is not None and self.supervisor.ros.made is not None:
             try:
-                self.supervisor._bridge.node.destroy_subscription(sub)
+                self.supervisor.ros.made.node.destroy_subscription(sub)
             except Exception:  # the bridge is closing
                 pass
         if self.states.pop(proc_id, None) is not None:

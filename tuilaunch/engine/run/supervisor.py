@@ -29,10 +29,10 @@ from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_
 from ..plan.params import write_parameter_file
 from ..ros.composition import ComponentLoader
 from ..ros.lifecycle import LifecycleTracker
-from ..ros.messages import MessageError
 from .logfiles import LogFile
-from .output import LineSplitter, screen_lines
-from .spawn import Channel, spawn
+from .readers import ChannelReader, Running
+from .ros_actions import RosActions
+from .spawn import spawn
 from .watchdog import Watchdog
 
 ROS_ACTIONS = ("call_service", "set_parameters")
@@ -72,79 +72,6 @@ LaunchEvent = EventInfo
 Consumer = Callable[[Event], None]
 
 
-class _Reader:
-    """One output channel of a child, read on the loop until its end."""
-
-    def __init__(self, supervisor: Supervisor, running: _Running, channel: Channel) -> None:
-        self.supervisor = supervisor
-        self.running = running
-        self.channel = channel
-        self.splitter = LineSplitter()
-        self.done: asyncio.Future[None] = asyncio.get_running_loop().create_future()
-        self.stamp = b" " + channel.name.encode() + b" "
-        asyncio.get_running_loop().add_reader(channel.fd, self._readable)
-
-    def _readable(self) -> None:
-        # one chunk per wake-up: a flooding process shares the loop with the others and
-        # the UI; its pipe holds it back meanwhile, and nothing is lost
-        try:
-            chunk = os.read(self.channel.fd, 1 << 16)
-        except BlockingIOError:
-            return
-        except OSError:
-            chunk = b""  # EIO: a pseudo-terminal whose other side is closed
-        if chunk:
-            self._deliver(self.splitter.feed_block(chunk))
-        else:
-            self.close()
-
-    def _deliver(self, block: bytes) -> None:
-        """Whole lines, as one block: to the log file as bytes, then to the consumers."""
-        if not block:
-            return
-        supervisor, running = self.supervisor, self.running
-        prefix = f"{time.time():.6f}".encode() + self.stamp
-        running.log.write(prefix + block[:-1].replace(b"\n", b"\n" + prefix) + b"\n",
-                          block.count(b"\n"))
-        lines = screen_lines(block)
-        supervisor._emit(Event("output", running.plan.id, stream=self.channel.name,
-                               lines=lines))
-        if supervisor._io_watchers or supervisor._any_watchers:
-            supervisor._dispatch_io(running.plan.id, self.channel.name, lines,
-                                    running.process.pid)
-
-    def close(self) -> None:
-        if self.done.done():
-            return
-        try:
-            asyncio.get_running_loop().remove_reader(self.channel.fd)
-        except RuntimeError:
-            pass  # the loop is gone: nothing to unregister
-        os.close(self.channel.fd)
-        try:
-            self._deliver(self.splitter.flush_block())
-        finally:
-            self.done.set_result(None)
-            self.running.reader_closed()
-
-
-@dataclass
-class _Running:
-    plan: ProcessPlan
-    process: Any  # subprocess.Popen[bytes]: pid and returncode as asyncio's Process had
-    log: LogFile
-    started: float
-    exited: asyncio.Future[int]
-    stopping: bool = False
-    readers: list[_Reader] = field(default_factory=list)
-    pidfd: int | None = None
-    reaped: bool = False
-
-    def reader_closed(self) -> None:
-        if self.reaped and all(r.done.done() for r in self.readers):
-            self.log.close()
-
-
 class Supervisor:
     def __init__(self, plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
                  sigkill_timeout: float = 5.0,
@@ -152,8 +79,7 @@ class Supervisor:
                  service_timeout: float = 10.0) -> None:
         self.plan = plan
         self.service_timeout = service_timeout
-        self._bridge: Any = None
-        self._bridge_factory = bridge_factory  # whoever supplies the bridge also closes it
+        self.ros = RosActions(bridge_factory, service_timeout, self._log)
         self.log_dir = log_dir
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
@@ -171,8 +97,8 @@ class Supervisor:
         """Processes that exited on their own with a non-zero status (not stopped by us)."""
         self._crash_times: dict[str, float] = {}
         self._stop_time: float | None = None
-        self._running: dict[str, _Running] = {}
-        self._lingering: set[_Reader] = set()  # output still open after its process exited
+        self._running: dict[str, Running] = {}
+        self._lingering: set[ChannelReader] = set()  # output still open after its process exited
         self._happened: dict[tuple[str, str], asyncio.Event] = {}
         self._busy = 0  # triggers sleeping or respawns scheduled
         self._tasks: set[asyncio.Task[Any]] = set()
@@ -286,8 +212,7 @@ class Supervisor:
         await self._drain()
         for reader in list(self._lingering):
             reader.close()
-        if self._bridge is not None and self._bridge_factory is None:
-            await asyncio.to_thread(self._bridge.close)
+        await self.ros.close()
         self._launch_log.close()
         self._remove_parameter_files()
         # the watchdog stops what a node left behind (daemons, stray group members)
@@ -479,9 +404,9 @@ class Supervisor:
         ok = True
         try:
             if action.kind == "call_service":
-                ok = await self._call_service(action)
+                ok = await self.ros.call_service(action)
             elif action.kind == "set_parameters":
-                ok = await self._set_parameters(action)
+                ok = await self.ros.set_parameters(action)
             elif action.kind == "shutdown":
                 self._request_shutdown(str(action.data))
             elif action.kind == "log":
@@ -530,55 +455,8 @@ class Supervisor:
         return perform(value, context)
 
     def bridge(self) -> Any:
-        if self._bridge is None:
-            if self._bridge_factory is not None:
-                self._bridge = self._bridge_factory()
-            else:
-                from ..ros.bridge import RosBridge
-
-                self._bridge = RosBridge()
-        return self._bridge
-
-    async def _call_service(self, action: ActionPlan) -> bool:
-        from ..ros.bridge import RosError
-
-        name = str(action.target)
-        self._log(action, f"waiting for service {name}")
-        try:
-            bridge = self.bridge()
-            service_type = await bridge.wait_for_service(name, None)
-            request, response = await bridge.call_service(
-                name, action.data, self.service_timeout, service_type=service_type)
-        except (RosError, MessageError) as exc:
-            self._log(action, f"call_service {name} failed: {exc}", "ERROR")
-            return False
-        if "req" in action.verbosity:
-            self._log(action, f"{name} ({service_type}) request: {request}")
-        if "res" in action.verbosity:
-            self._log(action, f"{name} response: {response}")
-        return True
-
-    async def _set_parameters(self, action: ActionPlan) -> bool:
-        from ..ros.bridge import RosError
-
-        node = str(action.target)
-        self._log(action, f"waiting for node {node}")
-        try:
-            bridge = self.bridge()
-            await bridge.wait_for_service(f"{node}/set_parameters", None)
-            results = await bridge.set_parameters(node, action.data, self.service_timeout)
-        except (RosError, MessageError) as exc:
-            self._log(action, f"set_parameters on {node} failed: {exc}", "ERROR")
-            return False
-        if "req" in action.verbosity:
-            self._log(action, f"{node} parameters requested: {action.data}")
-        for result in results:
-            if not result.successful:
-                self._log(action, f"{node} refused {result.name}="
-                          f"{action.data.get(result.name)!r}: {result.reason}", "ERROR")
-            elif "res" in action.verbosity:
-                self._log(action, f"{node} set {result.name}={action.data.get(result.name)!r}")
-        return all(r.successful for r in results)
+        """The rclpy bridge the launch's ROS actions use (made on first use)."""
+        return self.ros.bridge()
 
     def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
         """Launch-file functions called with the event; what they return is carried out."""
@@ -615,6 +493,12 @@ class Supervisor:
         else:
             return False
         return True
+
+    def _deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
+        """A block of a process's output, already in its log file: to the consumers."""
+        self._emit(Event("output", running.plan.id, stream=stream, lines=lines))
+        if self._io_watchers or self._any_watchers:
+            self._dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
     def _dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
         watchers = [*self._io_watchers.get((process_id, stream), []),
@@ -678,11 +562,11 @@ class Supervisor:
         running = None
         try:
             self.watchdog.watch(popen.pid)
-            running = _Running(proc, popen, log, time.monotonic(), loop.create_future())
+            running = Running(proc, popen, log, time.monotonic(), loop.create_future())
             self._running[process_id] = running
             self._watch_exit(running)
             for channel in child.channels:
-                running.readers.append(_Reader(self, running, channel))
+                running.readers.append(ChannelReader(running, channel, self._deliver_lines))
         except Exception as exc:
             # nothing may run that nobody reads or stops
             _kill_group(popen.pid, signal.SIGKILL)
@@ -720,7 +604,7 @@ class Supervisor:
         self.states[process_id] = "failed"
         self._emit(Event("failed", process_id, reason=reason))
 
-    def _watch_exit(self, running: _Running) -> None:
+    def _watch_exit(self, running: Running) -> None:
         """The child's exit wakes the loop through a pidfd: no thread per child."""
         loop = asyncio.get_running_loop()
         try:
@@ -731,13 +615,13 @@ class Supervisor:
             return
         loop.add_reader(running.pidfd, self._reap, running)
 
-    def _poll_exit(self, running: _Running) -> None:
+    def _poll_exit(self, running: Running) -> None:
         if running.process.poll() is not None:
             self._reap(running)
         else:
             asyncio.get_running_loop().call_later(0.05, self._poll_exit, running)
 
-    def _reap(self, running: _Running) -> None:
+    def _reap(self, running: Running) -> None:
         if running.pidfd is not None:
             asyncio.get_running_loop().remove_reader(running.pidfd)
             os.close(running.pidfd)
@@ -746,7 +630,7 @@ class Supervisor:
         if not running.exited.done():
             running.exited.set_result(code)
 
-    async def _wait(self, running: _Running) -> None:
+    async def _wait(self, running: Running) -> None:
         code = await running.exited
         running.reaped = True
         pending = [r.done for r in running.readers if not r.done.done()]
@@ -781,17 +665,17 @@ class Supervisor:
                 f"respawn gives up: it failed {tries + 1} times "
                 f"(respawn_max_retries={running.plan.respawn_max_retries})")))
 
-    def _forget_reader(self, reader: _Reader) -> Callable[[asyncio.Future[None]], None]:
+    def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:
         return lambda _: self._lingering.discard(reader)
 
-    def _should_respawn(self, running: _Running, code: int) -> bool:
+    def _should_respawn(self, running: Running, code: int) -> bool:
         proc = running.plan
         if not proc.respawn or running.stopping or self._shutting_down or code == 0:
             return False  # a clean exit is a finished job, not a crash
         limit = proc.respawn_max_retries
         return limit < 0 or self._retries.get(proc.id, 0) < limit
 
-    async def _respawn(self, running: _Running) -> None:
+    async def _respawn(self, running: Running) -> None:
         proc = running.plan
         tries = self._retries[proc.id] = self._retries.get(proc.id, 0) + 1
         quick = time.monotonic() - running.started < 2.0
@@ -905,7 +789,7 @@ class Supervisor:
             self._spawn_task(self.shutdown("stop requested again"))
         return _STAGES[self._urgency].name
 
-    async def _escalate(self, running: _Running) -> None:
+    async def _escalate(self, running: Running) -> None:
         """SIGINT, then SIGTERM, then SIGKILL, to the whole process group.
 
         The waits are the process's own sigterm_timeout / sigkill_timeout when it sets them;

@@ -19,42 +19,6 @@ from ..substitutions import (
 )
 
 
-class ExecutableInPackage(Substitution):
-    """`$(exec-in-pkg EXE PKG)`: the path of an executable in a package's lib folder."""
-
-    def __init__(self, executable: SubValue, package: SubValue) -> None:
-        self.executable = executable
-        self.package = package
-
-    def perform(self, context: PerformContext) -> str:
-        from ...plan.packages import find_executable
-
-        return str(find_executable(perform(self.package, context),
-                                   perform(self.executable, context), self.origin))
-
-    def describe(self) -> str:
-        return f"$(exec-in-pkg {describe(self.executable)} {describe(self.package)})"
-
-
-class FileContent(Substitution):
-    """`$(file-content PATH)`: a file's text, read when the plan is resolved."""
-
-    def __init__(self, path: SubValue) -> None:
-        self.path = path
-
-    def perform(self, context: PerformContext) -> str:
-        path = perform(self.path, context)
-        try:
-            with open(path, encoding="utf-8") as handle:
-                return handle.read()
-        except (OSError, UnicodeDecodeError) as exc:
-            raise LaunchError(f"$(file-content): cannot read {path}: {exc}", self.origin)\
-                from None
-
-    def describe(self) -> str:
-        return f"$(file-content {describe(self.path)})"
-
-
 class AppendedEnvironment(Substitution):
     """The value `<append_env>` gives a variable: the old value, a separator, the new one."""
 
@@ -136,30 +100,6 @@ class SubstitutedParameterFile(Substitution):
 
     def describe(self) -> str:
         return f"{describe(self.path)} (with substitutions)"
-
-
-class GlobalParameter(Substitution):
-    """launch_ros's `$(param name [default])`: a value set earlier by `<set_parameter>`."""
-
-    def __init__(self, name: SubValue, default: SubValue = None) -> None:
-        self.name = name
-        self.default = default
-
-    def perform(self, context: PerformContext) -> str:
-        from ...plan.params import typed_value
-
-        name = perform(self.name, context)
-        for key, value in context.global_parameters:
-            if key is not None and perform(key, context) == name:  # None: a parameter file
-                return str(typed_value(value, context, name, self.origin))
-        if self.default is not None:
-            return perform(self.default, context)
-        raise LaunchError(f"$(param {name}): no <set_parameter> named '{name}' comes before",
-                          self.origin, hint="set it with <set_parameter name= value=> first, "
-                          "or give a default: $(param name default)")
-
-    def describe(self) -> str:
-        return f"$(param {describe(self.name)})"
 
 
 class FrontendVariable(LaunchConfiguration):

@@ -16,10 +16,7 @@ from typing import Any
 from ...errors import Origin
 from .. import substitutions as subs
 from .extra_substitutions import (
-    ExecutableInPackage,
-    FileContent,
     FrontendVariable,
-    GlobalParameter,
 )
 
 Part = Any  # str | Substitution
@@ -120,7 +117,7 @@ def _any_count(name: str, make: Callable[..., subs.Substitution])\
 
 def _param(a: list[Any]) -> subs.Substitution:
     _count("param", a, 1, 2)
-    return GlobalParameter(a[0], a[1] if len(a) > 1 else None)
+    return subs.ParameterSubstitution(a[0], a[1] if len(a) > 1 else None)
 
 
 def _if(a: list[Any]) -> subs.Substitution:
@@ -135,13 +132,13 @@ SUBSTITUTIONS: dict[str, Callable[[list[Any]], subs.Substitution]] = {
     "find-pkg-share": _fixed("find-pkg-share", 1, subs.FindPackageShare),
     "find-pkg-prefix": _fixed("find-pkg-prefix", 1, subs.FindPackagePrefix),
     "find-exec": _fixed("find-exec", 1, lambda n: subs.FindExecutable(name=n)),
-    "exec-in-pkg": _fixed("exec-in-pkg", 2, ExecutableInPackage),
+    "exec-in-pkg": _fixed("exec-in-pkg", 2, subs.ExecutableInPackage),
     "eval": _eval,
     "command": _command,
     "anon": _fixed("anon", 1, subs.AnonName),
     "dirname": _fixed("dirname", 0, subs.ThisLaunchFileDir),
     "filename": _fixed("filename", 0, subs.ThisLaunchFile),
-    "file-content": _fixed("file-content", 1, FileContent),
+    "file-content": _fixed("file-content", 1, subs.FileContent),
     "not": _fixed("not", 1, subs.NotSubstitution),
     "and": _fixed("and", 2, subs.AndSubstitution),
     "or": _fixed("or", 2, subs.OrSubstitution),

@@ -1,0 +1,89 @@
+"""The launch's own ROS actions: `call_service` and `set_parameters` through the bridge.
+
+The bridge (rclpy in its own thread) is made on first use, or supplied by the caller (the
+TUI shares its own), and only closed here when it was made here.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable
+from typing import Any
+
+from ..plan.model import ActionPlan
+from ..ros.messages import MessageError
+
+Log = Callable[[ActionPlan, str, str], None]
+
+
+class RosActions:
+    def __init__(self, bridge_factory: Callable[[], Any] | None, service_timeout: float,
+                 log: Log) -> None:
+        self._bridge: Any = None
+        self._bridge_factory = bridge_factory  # whoever supplies the bridge also closes it
+        self.service_timeout = service_timeout
+        self._log_to = log
+
+    def log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
+        self._log_to(action, text, level)
+
+    @property
+    def made(self) -> Any:
+        """The bridge if one exists already, else None (never makes one)."""
+        return self._bridge
+
+    async def close(self) -> None:
+        if self._bridge is not None and self._bridge_factory is None:
+            await asyncio.to_thread(self._bridge.close)
+
+    def bridge(self) -> Any:
+        """Made on first use: a launch without ROS actions never starts rclpy here."""
+        if self._bridge is None:
+            if self._bridge_factory is not None:
+                self._bridge = self._bridge_factory()
+            else:
+                from ..ros.bridge import RosBridge
+
+                self._bridge = RosBridge()
+        return self._bridge
+
+    async def call_service(self, action: ActionPlan) -> bool:
+        from ..ros.bridge import RosError
+
+        name = str(action.target)
+        self.log(action, f"waiting for service {name}")
+        try:
+            bridge = self.bridge()
+            service_type = await bridge.wait_for_service(name, None)
+            request, response = await bridge.call_service(
+                name, action.data, self.service_timeout, service_type=service_type)
+        except (RosError, MessageError) as exc:
+            self.log(action, f"call_service {name} failed: {exc}", "ERROR")
+            return False
+        if "req" in action.verbosity:
+            self.log(action, f"{name} ({service_type}) request: {request}")
+        if "res" in action.verbosity:
+            self.log(action, f"{name} response: {response}")
+        return True
+
+    async def set_parameters(self, action: ActionPlan) -> bool:
+        from ..ros.bridge import RosError
+
+        node = str(action.target)
+        self.log(action, f"waiting for node {node}")
+        try:
+            bridge = self.bridge()
+            await bridge.wait_for_service(f"{node}/set_parameters", None)
+            results = await bridge.set_parameters(node, action.data, self.service_timeout)
+        except (RosError, MessageError) as exc:
+            self.log(action, f"set_parameters on {node} failed: {exc}", "ERROR")
+            return False
+        if "req" in action.verbosity:
+            self.log(action, f"{node} parameters requested: {action.data}")
+        for result in results:
+            if not result.successful:
+                self.log(action, f"{node} refused {result.name}="
+                          f"{action.data.get(result.name)!r}: {result.reason}", "ERROR")
+            elif "res" in action.verbosity:
+                self.log(action, f"{node} set {result.name}={action.data.get(result.name)!r}")
+        return all(r.successful for r in results)
