@@ -642,3 +642,51 @@ def test_a_session_loads_its_file_with_the_command_line_ros2_launch_would_give(
     tl("wait", name, "argv-1", "exited", "--timeout", "30")
     assert tl("logs", name, "argv-1").stdout == f"{path} robots:=r1;r2\n"
     tl("stop", name)
+
+
+LIFECYCLE_SESSION = """
+from launch import LaunchDescription
+from launch_ros.actions import LifecycleNode
+def generate_launch_description():
+    return LaunchDescription([LifecycleNode(package='tuilaunch_demos',
+                                            executable='lifecycle_talker', name='lc',
+                                            namespace='')])
+"""
+
+
+def test_an_attached_client_follows_lifecycle_states_and_asks_for_transitions(
+        runtime, write):
+    path = str(write(LIFECYCLE_SESSION))
+    name = tl(path, "--detach").stdout.strip()
+    try:
+        tl("wait", name, "/lc", "unconfigured", "--timeout", "60")
+
+        async def scenario() -> tuple[dict, dict, bool, bool]:
+            client = await RemoteSupervisor.open(name, Session(path, {}))
+            seen: list = []
+            client.subscribe(seen.append)
+            running = asyncio.ensure_future(client.run())
+            for _ in range(200):  # the server's tracker has heard the node by now, or soon
+                if client.lifecycle.states.get("lc-1") == "unconfigured":
+                    break
+                await asyncio.sleep(0.05)
+            before = dict(client.lifecycle.states)
+            configured = await client.lifecycle.request("lc-1", "configure")
+            for _ in range(200):
+                if client.lifecycle.states.get("lc-1") == "inactive":
+                    break
+                await asyncio.sleep(0.05)
+            after = dict(client.lifecycle.states)
+            # a transition the node's state does not offer is refused, not sent
+            refused = await client.lifecycle.request("lc-1", "deactivate")
+            await client.detach()
+            await running
+            return before, after, configured, refused
+
+        before, after, configured, refused = asyncio.run(scenario())
+        assert before == {"lc-1": "unconfigured"}
+        assert configured is True and after == {"lc-1": "inactive"}
+        assert refused is False
+        tl("wait", name, "/lc", "inactive", "--timeout", "10")
+    finally:
+        tl("stop", name)

@@ -185,6 +185,8 @@ class TuiLaunchApp(App[int]):
         self._describe_waiting()
         if isinstance(self.supervisor, RemoteSupervisor):
             self.show_events(self.supervisor.history)  # what was printed before we came
+            for process, state in self.supervisor.lifecycle.states.items():
+                tree.set_lifecycle(process, state)  # states reached before we came
         self.run_supervisor()
         self._drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         loop = asyncio.get_running_loop()

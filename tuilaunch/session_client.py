@@ -134,7 +134,7 @@ class RemoteSupervisor:
         self._replies: dict[int, asyncio.Future[Any]] = {}
         self._next_id = 0
         self._stopping = False
-        self.lifecycle = RemoteLifecycle()
+        self.lifecycle = RemoteLifecycle(self)
 
     @classmethod
     async def open(cls, name: str, session: Session, scrollback: int = 5000,
@@ -158,6 +158,7 @@ class RemoteSupervisor:
                 break
         result = message["result"]
         self.states = dict(result["states"])
+        self.lifecycle.states.update(result.get("lifecycle") or {})
         self._adopt(result["arguments"])
         self.history = self._replay(result["offsets"], result["recent"], scrollback)
         return self
@@ -220,6 +221,8 @@ class RemoteSupervisor:
                             self._adopt(dict(item.split(":=", 1) for item in event.lines))
                         if event.kind == "exited" and event.process and event.code is not None:
                             self.exit_codes[event.process] = event.code
+                        if event.kind == "lifecycle" and event.process:
+                            self.lifecycle.follow(event.process, event.reason or "")
                         self._deliver(event)
                 elif kind == "reply":
                     future = self._replies.pop(message.get("id", -1), None)
@@ -299,15 +302,23 @@ class RemoteSupervisor:
 
 
 class RemoteLifecycle:
-    """Lifecycle states are not yet carried over the socket: a session's TUI shows none and
-    offers no transitions (`tuilaunch wait NAME NODE active` asks the node instead)."""
+    """The lifecycle states of the session's nodes, as its server's events report them, and
+    the operator's transitions, asked of the server (which asks the node)."""
 
-    def __init__(self) -> None:
+    def __init__(self, remote: RemoteSupervisor) -> None:
+        self.remote = remote
         self.states: dict[str, str] = {}
 
-    async def request(self, process: str, transition: str) -> None:
-        raise SessionError(f"lifecycle transitions of {process} are not available in a "
-                           "session's TUI yet")
+    def follow(self, process: str, state: str) -> None:
+        if state:
+            self.states[process] = state
+        else:
+            self.states.pop(process, None)  # the node is gone
+
+    async def request(self, process: str, transition: str) -> bool:
+        result = await self.remote._request("transition", process=process,
+                                            transition=transition)
+        return bool(result.get("done"))
 
 
 def report_end(app: Any, name: str) -> None:

@@ -210,6 +210,7 @@ class SessionServer:
                     result = {"states": dict(self.supervisor.states),
                               "offsets": self._log_sizes(),
                               "recent": [event_to_dict(e) for e in self.recent],
+                              "lifecycle": dict(self.supervisor.lifecycle.states),
                               "arguments": self.session.arguments}
                     self.queues.add(queue)
                     await _send(writer, lock, {"type": "reply", "id": message.get("id"),
@@ -315,6 +316,12 @@ class SessionServer:
             return self.find_process(str(message.get("process")))
         if op == "lifecycle":
             return await self.lifecycle_state(self.find_process(str(message.get("process"))))
+        if op == "transition":
+            # an operator's transition from an attached TUI; the node's answer and its new
+            # state reach every client as lifecycle and log events
+            process = self.find_process(str(message.get("process")))
+            done = await supervisor.lifecycle.request(process, str(message.get("transition")))
+            return {"process": process, "done": done}
         raise ValueError(f"unknown request {op!r}")
 
     def find_process(self, ref: str) -> str:
