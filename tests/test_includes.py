@@ -6,7 +6,7 @@ import pytest
 
 from tuilaunch.engine import PackageError
 
-from .conftest import plan_of
+from .conftest import plan_of, run_cli
 
 HEADER = "from simple_launch import SimpleLauncher\n"
 
@@ -98,3 +98,28 @@ def generate_launch_description():
     assert [p.enabled for p in plan.processes] == [True]
     with pytest.raises(PackageError, match="gazebo_not_installed"):
         plan_of(path, sim="true")
+
+
+TWICE = HEADER + """
+import os
+def generate_launch_description():
+    sl = SimpleLauncher(scope_included_files=True)
+    child = os.path.join(os.path.dirname(__file__), 'child.py')
+    sl.include(None, child, launch_arguments={'robot': 'r1'})
+    sl.include(None, child, launch_arguments={'robot': 'r2'})
+    return sl.launch_description()
+"""
+
+
+def test_a_file_included_twice_shows_each_value_of_its_argument(write):
+    write(CHILD, "child.py")
+    path = write(TWICE, "twice.py")
+    plan = plan_of(path)
+    assert [p.name for p in plan.processes] == ["r1", "r2"]
+    robot = next(a for a in plan.arguments if a.name == "robot")
+    # one row per name in the form; the second include's value is shown beside it
+    assert robot.value == "r1"
+    assert robot.elsewhere == ["'r2' in child.py:5"]
+    assert plan.to_json()["arguments"][0]["elsewhere"] == ["'r2' in child.py:5"]
+    shown = run_cli(str(path), "--show-args")
+    assert "declared again with 'r2' in child.py:5" in shown.stdout

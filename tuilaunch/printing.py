@@ -24,6 +24,8 @@ def format_arguments(arguments: list[ArgumentInfo], top_file: str) -> str:
             lines.append(f"        (default: '{arg.default}', type: {arg.type})")
         if os.path.abspath(arg.file) != os.path.abspath(top_file):
             lines.append(f"        declared in {arg.file}")
+        for other in arg.elsewhere:
+            lines.append(f"        declared again with {other}")
         lines.append("")
     return "\n".join(lines)
 

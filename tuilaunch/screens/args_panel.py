@@ -109,6 +109,8 @@ class ArgsPanel(Vertical):
         text += f"  [default {arg.default!r}, {arg.type}]"
         if os.path.abspath(arg.file) != os.path.abspath(self.top_file):
             text += f"  from {os.path.basename(arg.file)}"
+        if arg.elsewhere:
+            text += f"  (also {', '.join(arg.elsewhere)})"
         return text
 
     def _editor(self, arg: ArgumentInfo) -> Widget:

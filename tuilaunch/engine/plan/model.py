@@ -75,11 +75,14 @@ class ArgumentInfo:
     type: str
     file: str
     line: int | None
+    elsewhere: list[str] = field(default_factory=list)
+    """Other values the same name has where it is declared again (a file included twice
+    with other arguments): `'r2' in robot.launch.py:4`, in file order."""
 
     def to_json(self) -> dict[str, Any]:
         return {"name": self.name, "default": self.default, "value": self.value,
                 "description": self.description, "choices": self.choices, "type": self.type,
-                "file": self.file, "line": self.line}
+                "file": self.file, "line": self.line, "elsewhere": self.elsewhere}
 
 
 @dataclass

@@ -370,11 +370,21 @@ class Resolver:
         if decl.name not in scope.configurations and default is not None:
             scope.configurations[decl.name] = default
         value = scope.configurations.get(decl.name)
-        if decl.name not in self.arguments:
+        known = self.arguments.get(decl.name)
+        if known is None:
             self.arguments[decl.name] = ArgumentInfo(
                 decl.name, default, value, decl.description, decl.choices,
                 decl.py_type or "str", scope.launch_file,
                 decl.origin.line if decl.origin else None)
+        elif scope.enabled and value is not None and value != known.value:
+            # the argument form edits one value per name; a second declaration that holds
+            # another value (the same file included again with other arguments) is shown
+            where = os.path.basename(scope.launch_file)
+            if decl.origin is not None:
+                where += f":{decl.origin.line}"
+            note = f"{value!r} in {where}"
+            if note not in known.elsewhere:
+                known.elsewhere.append(note)
         if not scope.enabled:
             return
         if value is None:
