@@ -1,4 +1,5 @@
-"""`tuilaunch FILE [name:=value ...]` and `tuilaunch PACKAGE FILE [...]`."""
+"""`tuilaunch FILE [name:=value ...]`, `tuilaunch PACKAGE FILE [...]`, and the session
+commands (`ls`, `attach`, `stop`, ...: see commands.py)."""
 
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ from .engine.plan.resolve import resolve
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tuilaunch",
-        description="Run a ROS 2 launch file (SimpleLauncher DSL or launch API) in a terminal UI.",
+        description="Run a ROS 2 launch file (SimpleLauncher DSL, launch API, XML or YAML) in "
+        "a terminal UI.",
         epilog="Arguments are given as name:=value, as with ros2 launch.")
     parser.add_argument("items", nargs="+", metavar="FILE | PACKAGE FILE | name:=value",
                         help="a launch file, or a package and a launch file in its share, "
