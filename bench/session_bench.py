@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import json
 import os
-import pty
-import select
 import statistics
 import subprocess
 import sys
@@ -29,6 +27,7 @@ import time
 from pathlib import Path
 
 from run_bench import write_launch  # bench/ is on sys.path when run as a script
+from tui_bench import Terminal
 
 from tuilaunch.engine.plan.packages import ensure_environment
 
@@ -37,51 +36,16 @@ IN_PROCESS = ("import sys; from pathlib import Path; from tuilaunch.app import m
               "make_app(sys.argv[1], {}, Path(sys.argv[2])).run()")
 
 
-class Terminal:
-    """A program on a pseudo-terminal, its output read continuously as a terminal would."""
-
-    def __init__(self, argv: list[str]) -> None:
-        self.master, slave = pty.openpty()
-        self.proc = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave,
-                                     env={**os.environ, "TERM": "xterm-256color"},
-                                     start_new_session=True)
-        os.close(slave)
-
-    def read_until(self, marker: bytes, limit: float = 60.0) -> float:
-        start = time.perf_counter()
-        window = b""
-        while marker not in window:
-            if time.perf_counter() - start > limit:
-                raise AssertionError(f"{marker!r} never appeared")
-            if select.select([self.master], [], [], 0.05)[0]:
-                window = window[-4096:] + os.read(self.master, 1 << 20)
-        return time.perf_counter() - start
-
-    def close(self, key: bytes | None = None) -> None:
-        if key is not None:
-            os.write(self.master, key)
-        else:
-            self.proc.terminate()
-        try:
-            while self.proc.poll() is None:
-                if select.select([self.master], [], [], 0.2)[0]:
-                    os.read(self.master, 1 << 20)
-        except OSError:
-            pass
-        self.proc.wait(timeout=60)
-        os.close(self.master)
-
-
 def latency(argv: list[str], presses: int = 40) -> tuple[float, float]:
-    term = Terminal(argv)
+    term = Terminal(argv, size=(80, 24))
     try:
         term.read_until(b"4 running")
         time.sleep(1.0)  # the flood at its steady state
         times = []
         for i in range(presses):
-            os.write(term.master, b"l")
+            term.press(b"l")
             word = LEVEL_WORDS[i % len(LEVEL_WORDS)].encode()
-            times.append(term.read_until(b"level " + word + b"+"))
+            times.append(term.read_until(b"  " + word + b"+"))
             time.sleep(0.05)
     finally:
         term.close()
@@ -99,7 +63,7 @@ def attach_time(path: Path, lines: int) -> float:
         log_dir = Path(json.loads(tl("status", name, "--json"))["log_dir"])
         while sum(f.stat().st_size for f in log_dir.glob("p*.log")) < lines * 4 * 8:
             time.sleep(0.2)  # until the printers are done ("line N\n" is 8+ bytes)
-        term = Terminal([sys.executable, "-m", "tuilaunch", "attach", name])
+        term = Terminal([sys.executable, "-m", "tuilaunch", "attach", name], size=(80, 24))
         try:
             return term.read_until(b"4 running")
         finally:

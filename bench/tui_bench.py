@@ -43,12 +43,14 @@ from tuilaunch.output_store import View
 class Terminal:
     """A program on a pseudo-terminal, its output read continuously as a terminal would."""
 
-    def __init__(self, argv: list[str], log_dir: Path, size: tuple[int, int] = (100, 30)) \
-            -> None:
+    def __init__(self, argv: list[str], log_dir: Path | None = None,
+                 size: tuple[int, int] = (100, 30)) -> None:
         self.master, slave = pty.openpty()
         fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", size[1], size[0], 0, 0))
-        env = {**os.environ, "TERM": "xterm-256color", "ROS_LOG_DIR": str(log_dir),
+        env = {**os.environ, "TERM": "xterm-256color",
                "COLUMNS": str(size[0]), "LINES": str(size[1])}
+        if log_dir is not None:  # else the program's own (a session's, for attach)
+            env["ROS_LOG_DIR"] = str(log_dir)
         self.proc = subprocess.Popen(argv, stdin=slave, stdout=slave, stderr=slave, env=env,
                                      start_new_session=True)
         os.close(slave)
@@ -83,8 +85,12 @@ class Terminal:
     def settle(self, seconds: float) -> None:
         self.rate(seconds)
 
-    def close(self) -> None:
-        self.proc.terminate()
+    def close(self, key: bytes | None = None) -> None:
+        """Ends the program: with `key` typed (e.g. `d` to detach), else SIGTERM."""
+        if key is not None:
+            os.write(self.master, key)
+        else:
+            self.proc.terminate()
         try:
             while self.proc.poll() is None:
                 if select.select([self.master], [], [], 0.2)[0]:
