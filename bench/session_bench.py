@@ -27,29 +27,12 @@ import time
 from pathlib import Path
 
 from run_bench import write_launch  # bench/ is on sys.path when run as a script
-from tui_bench import Terminal
+from tui_bench import Terminal, latency
 
 from tuilaunch.engine.plan.packages import ensure_environment
 
-LEVEL_WORDS = ("INFO", "WARN", "ERROR", "FATAL", "DEBUG")
 IN_PROCESS = ("import sys; from pathlib import Path; from tuilaunch.app import make_app; "
               "make_app(sys.argv[1], {}, Path(sys.argv[2])).run()")
-
-
-def latency(argv: list[str], presses: int = 40) -> tuple[float, float]:
-    term = Terminal(argv, size=(80, 24))
-    try:
-        term.read_until(b"4 running")
-        time.sleep(1.0)  # the flood at its steady state
-        times = []
-        for i in range(presses):
-            term.press(b"l")
-            word = LEVEL_WORDS[i % len(LEVEL_WORDS)].encode()
-            times.append(term.read_until(b"  " + word + b"+"))
-            time.sleep(0.05)
-    finally:
-        term.close()
-    return statistics.median(times) * 1000, max(times) * 1000
 
 
 def tl(*args: str) -> str:
@@ -88,9 +71,9 @@ def main() -> None:
         client: list[tuple[float, float]] = []
         inside: list[tuple[float, float]] = []
         for _ in range(rounds):
-            client.append(latency([sys.executable, "-m", "tuilaunch", str(flood)]))
+            client.append(latency([sys.executable, "-m", "tuilaunch", str(flood)], size=(80, 24)))
             inside.append(latency([sys.executable, "-c", IN_PROCESS, str(flood),
-                                   str(folder / "inproc")]))
+                                   str(folder / "inproc")], size=(80, 24)))
         c_med, c_max = statistics.median(m for m, _ in client), max(w for _, w in client)
         i_med, i_max = statistics.median(m for m, _ in inside), max(w for _, w in inside)
         print(f"keypress latency under 4 floods, TUI as a session client: median "

@@ -165,9 +165,11 @@ def wire(folder: Path, flood: Path) -> None:
 LEVEL_WORDS = ("INFO", "WARN", "ERROR", "FATAL", "DEBUG")
 
 
-def latency(path: Path, log_dir: Path, presses: int = 40) -> tuple[float, float]:
-    """Key `l` cycles the level filter; its new name in the status line is the redraw."""
-    term = Terminal([sys.executable, "-m", "tuilaunch", str(path)], log_dir)
+def latency(argv: list[str], log_dir: Path | None = None, size: tuple[int, int] = (100, 30),
+            presses: int = 40) -> tuple[float, float]:
+    """Median and worst ms from a key to its redraw, for the TUI that `argv` starts: key `l`
+    cycles the level filter, and its new name in the status line is the redraw."""
+    term = Terminal(argv, log_dir, size)
     try:
         term.read_until(b"4 running", limit=60)
         time.sleep(1.0)  # the flood at its steady state
@@ -257,8 +259,8 @@ def main() -> None:
         quiet = write_launch(folder, "quiet.py", "[ExecuteProcess(cmd=['sleep', '600'], "
                             "name=f'quiet{i}') for i in range(4)]")
         wire(folder, flood)
-        q_med, q_max = latency(quiet, folder / "q")
-        f_med, f_max = latency(flood, folder / "f")
+        q_med, q_max = latency([*TUI, str(quiet)], folder / "q")
+        f_med, f_max = latency([*TUI, str(flood)], folder / "f")
         print(f"keypress latency, 4 quiet processes:    median {q_med:.1f} ms, "
               f"worst {q_max:.1f} ms")
         print(f"keypress latency, 4 flooding processes: median {f_med:.1f} ms, "
