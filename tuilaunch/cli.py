@@ -175,16 +175,25 @@ def _main(argv: list[str] | None) -> int:
     return _run_tui(path, arguments, options, log_dir, positional)
 
 
-def _start_detached(path: str, arguments: dict[str, str], options: argparse.Namespace,
-                    log_dir: Path, positional: list[str]) -> int:
+def _start_server(path: str, arguments: dict[str, str], options: argparse.Namespace,
+                  log_dir: Path, positional: list[str])\
+        -> tuple[str, subprocess.Popen[bytes]] | None:
+    """The launch's session server, started; None once its error is said."""
     from .commands import start_session
 
     try:
-        name, _ = start_session(path, arguments, options.name, log_dir, positional)
+        return start_session(path, arguments, options.name, log_dir, positional)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return None
+
+
+def _start_detached(path: str, arguments: dict[str, str], options: argparse.Namespace,
+                    log_dir: Path, positional: list[str]) -> int:
+    started = _start_server(path, arguments, options, log_dir, positional)
+    if started is None:
         return 2
-    print(name)
+    print(started[0])
     return 0
 
 
@@ -192,13 +201,11 @@ def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
              log_dir: Path, positional: list[str]) -> int:
     """The launch runs in a session server; this TUI is its first client."""
     from .app import make_app
-    from .commands import start_session
 
-    try:
-        name, server = start_session(path, arguments, options.name, log_dir, positional)
-    except LaunchError as exc:
-        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+    started = _start_server(path, arguments, options, log_dir, positional)
+    if started is None:
         return 2
+    name, server = started
     app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
                    owner=True, keep_on_hangup=options.keep_on_hangup)
     status = app.run()
