@@ -237,14 +237,16 @@ def fake_lifecycle_manager_prefix(tmp_path: Path) -> Path:
 
 def test_configure_then_activate_on_inactive_with_a_real_lifecycle_node(write):
     out = run_headless(write(CONFIGURE_THEN_ACTIVATE),
-                       until=('Publishing: "hello 3"', "lifecycle state active"))
+                       until=('Publishing: "hello 3"', "lifecycle state active",
+                              "activate done"))
     lines = out.splitlines()
 
     def first(text: str) -> int:
         return next(i for i, line in enumerate(lines) if text in line)
 
     # the handler runs on the state tuilaunch saw; the node publishes only once active
-    # (how soon tuilaunch hears "active" against the node's first publication is a race)
+    # (how soon tuilaunch hears "active" against the node's first publication is a race, and
+    # so is the transition event against the service's reply: the test waits for both)
     assert first("lifecycle state inactive") < first("talker is inactive, activating")
     assert first("configure done") < first("activate done")
     assert "[INFO] [lc_talker-1]: lifecycle state active" in out
