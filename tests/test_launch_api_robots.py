@@ -324,7 +324,8 @@ def test_multi_robot_simulation_runs_each_robot_and_cleans_up(nav_world, tmp_pat
     assert logs == ["Launching namespace=robot1 init_pose={'x': 0.5}",
                         "Launching namespace=robot2 init_pose={'x': -1.5}"]
     spawns = [p["cmd"][1:] for p in plan["processes"] if p["executable"] == "spawn"]
-    assert spawns == [["-name", "robot1", "-x", "0.5"], ["-name", "robot2", "-x", "-1.5"]]
+    assert spawns == [["-name", "robot1", "-x", "0.5", "--ros-args"],
+                      ["-name", "robot2", "-x", "-1.5", "--ros-args"]]
     rsp = [p for p in plan["processes"] if p["executable"] == "robot_state_publisher"]
     assert [p["namespace"] for p in rsp] == ["/robot1", "/robot2"]
     amcls = [p for p in plan["processes"] if p["name"] == "amcl" and p["enabled"]]

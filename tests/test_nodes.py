@@ -22,11 +22,13 @@ def generate_launch_description():
     proc = plan_of(path).processes[0]
     assert proc.cmd[0].endswith("lib/tuilaunch_demos/talker")
     assert proc.cmd[1:3] == ["--one", "two"]  # a string of arguments is split
+    # as launch_ros builds it: the user's ros_arguments in their own --ros-args block, then
+    # another for the name, namespace, parameters and remappings
     ros = proc.cmd[proc.cmd.index("--ros-args") + 1:]
-    assert ros[:2] == ["--log-level", "debug"]
-    assert ["-r", "__node:=t"] == ros[2:4] and ["-r", "__ns:=/r1"] == ros[4:6]
-    assert ros[6] == "--params-file" and ros[7].endswith("t-1.yaml")
-    assert ros[8:] == ["-r", "chatter:=news"]
+    assert ros[:3] == ["--log-level", "debug", "--ros-args"]
+    assert ["-r", "__node:=t"] == ros[3:5] and ["-r", "__ns:=/r1"] == ros[5:7]
+    assert ros[7] == "--params-file" and ros[8].endswith("t-1.yaml")
+    assert ros[9:] == ["-r", "chatter:=news"]
     assert proc.remappings == [["chatter", "news"]]
 
 
@@ -144,7 +146,7 @@ def generate_launch_description():
     jsp, gui, rviz, loud = plan_of(path).processes
     assert jsp.enabled and not gui.enabled and jsp.parameters == {"rate": 10}
     assert gui.package == "joint_state_publisher_gui"
-    assert rviz.cmd[1:] == ["-d", "cfg.rviz", "--ros-args", "--log-level", "FATAL"]
-    assert loud.cmd[1:] == []
+    assert rviz.cmd[1:] == ["-d", "cfg.rviz", "--ros-args", "--log-level", "FATAL", "--ros-args"]
+    assert loud.cmd[1:] == ["--ros-args"]
     assert {p.id for p in plan_of(path, gui="true").processes if p.enabled} == {
         gui.id, rviz.id, loud.id}

@@ -38,8 +38,10 @@ def test_ros2_demos_talker_listener_runs_the_two_demo_nodes():
     assert (talker.package, talker.executable, talker.name, talker.namespace) == (
         "tuilaunch_demos", "talker", None, "/")
     assert (listener.package, listener.executable) == ("tuilaunch_demos", "listener")
-    # no name, namespace or parameters given: the node's own code names it, no --ros-args
-    assert talker.cmd[-1].endswith("lib/tuilaunch_demos/talker") and len(talker.cmd) == 1
+    # no name, namespace or parameters given: the node's own code names it; launch_ros
+    # still ends the command with an empty --ros-args block
+    assert talker.cmd[0].endswith("lib/tuilaunch_demos/talker")
+    assert talker.cmd[1:] == ["--ros-args"]
     assert talker.error is None and listener.error is None
     assert talker.origin is not None and talker.origin.line == 3
 
@@ -184,8 +186,8 @@ def test_node_attributes_map_onto_the_command_line(write):
     assert talker.cmd[:3] == ["nice", "-n", "5"]
     assert talker.cmd[3].endswith("lib/tuilaunch_demos/talker")
     assert talker.cmd[4:9] == ["--one", "r2_x", "two words", "--three=r2", "--ros-args"]
-    assert ros_args(talker) == ["--log-level", "debug", "-r", "__node:=talk_r2", "-r",
-                                "__ns:=/ns1", "-r", "chatter:=/r2/chatter"]
+    assert ros_args(talker) == ["--log-level", "debug", "--ros-args", "-r", "__node:=talk_r2",
+                                "-r", "__ns:=/ns1", "-r", "chatter:=/r2/chatter"]
     assert talker.env == {"MY_VAR": "r2"} and not talker.clear_env
     assert (talker.respawn, talker.respawn_delay, talker.respawn_max_retries) == (True, 2.5, 3)
     assert listener.namespace == "/other" and listener.name is None

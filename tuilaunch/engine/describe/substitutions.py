@@ -386,6 +386,12 @@ class FindPackageShare(Substitution):
 
         return str(package_share(perform(self.package, context), self.origin))
 
+    def find(self, package_name: str) -> str:
+        """launch_ros's FindPackageShare.find: files call it while they load."""
+        from ..plan.packages import package_share
+
+        return str(package_share(package_name, self.origin))
+
     def describe(self) -> str:
         return f"$(find-pkg-share {describe(self.package)})"
 
@@ -399,6 +405,12 @@ class FindPackagePrefix(Substitution):
         from ..plan.packages import package_prefix
 
         return str(package_prefix(perform(self.package, context), self.origin))
+
+    def find(self, package_name: str) -> str:
+        """launch_ros's FindPackagePrefix.find."""
+        from ..plan.packages import package_prefix
+
+        return str(package_prefix(package_name, self.origin))
 
     def describe(self) -> str:
         return f"$(find-pkg-prefix {describe(self.package)})"

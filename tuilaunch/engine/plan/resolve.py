@@ -144,6 +144,8 @@ class Scope:
     configurations: dict[str, str]
     launch_file: str
     namespace: str = "/"
+    # launch_ros passes `-r __ns:=` once a namespace was pushed, even "/"
+    namespace_pushed: bool = False
     enabled: bool = True
     skipped_by: ConditionOutcome | None = None
     trigger: Trigger | None = None
@@ -323,6 +325,7 @@ class Resolver:
             if scope.enabled:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
+                scope.namespace_pushed = True
         elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
                         | LoadComposableNodes | StopProcess | ChangeStateAction
                         | LifecycleTransition):
@@ -415,6 +418,7 @@ class Resolver:
             scope.configurations.update(values)
         if group.namespace is not None and enabled:
             scope.namespace = join_namespace(scope.namespace, perform(group.namespace, ctx))
+            scope.namespace_pushed = True
         if group.when is not None:
             scope.trigger = self.when_trigger(group.when, scope)
         item = TreeItem("group", group_label(group, scope, outcome), enabled, scope.namespace,
@@ -646,7 +650,8 @@ class Resolver:
         package = perform_optional(entity.package, ctx)
         executable = perform(entity.executable, ctx)
         name = perform_optional(entity.name, ctx) or None
-        namespace = join_namespace(scope.namespace, perform_optional(entity.namespace, ctx))
+        own_namespace = perform_optional(entity.namespace, ctx)
+        namespace = join_namespace(scope.namespace, own_namespace)
         # the node's name when it has one: `[monitor-5]` says more than `[listener-5]`
         proc_id = self._next_id(name or os.path.basename(executable))
         error = (name_problem(name) if name else None) or namespace_problem(namespace)
@@ -699,17 +704,19 @@ class Resolver:
         remappings = [[perform(a, ctx), perform(b, ctx)] for a, b in [*scope.remaps, *own_remaps]]
         arguments = [perform(a, ctx) for a in _items(entity.arguments)]
         ros_arguments = [perform(a, ctx) for a in _items(entity.ros_arguments)]
-        ros_args = list(ros_arguments)
-        if name:
-            ros_args += ["-r", f"__node:={name}"]
-        if namespace != "/":
-            ros_args += ["-r", f"__ns:={namespace}"]
-        ros_args += params_args
-        for src, dst in remappings:
-            ros_args += ["-r", f"{src}:={dst}"]
+        # launch_ros: the user's ros_arguments in a block of their own, then always a
+        # `--ros-args` block for the name, namespace, parameters and remappings
         cmd = [*prefix, exe_path, *arguments]
-        if ros_args:
-            cmd += ["--ros-args", *ros_args]
+        if entity.ros_arguments is not None:
+            cmd += ["--ros-args", *ros_arguments]
+        cmd.append("--ros-args")
+        if name:
+            cmd += ["-r", f"__node:={name}"]
+        if own_namespace is not None or scope.namespace_pushed:
+            cmd += ["-r", f"__ns:={namespace}"]
+        cmd += params_args
+        for src, dst in remappings:
+            cmd += ["-r", f"{src}:={dst}"]
         # launch_ros loads components under the pushed namespace, not the container's own
         container = join_namespace(namespace, name) if name else None
         components = [component_plan(c, ctx, scope.namespace, scope.global_parameters,

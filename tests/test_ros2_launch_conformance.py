@@ -1,0 +1,86 @@
+"""What reaches each process as `ros2 launch` (launch 3.x, launch_ros Jazzy) would give it.
+
+Each launch file here is written for the test, in the pattern real bringups use (nav2's
+`PushROSNamespace(namespace)` with an empty default, the ros2 demos' containers with
+`namespace=''`, ...); the expectations are what launch_ros puts on the command line.
+"""
+
+from __future__ import annotations
+
+from .conftest import plan_of
+
+PY = """\
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess, GroupAction
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import Node, PushROSNamespace
+from launch_ros.substitutions import FindPackageShare
+"""
+
+
+def ros_part(cmd: list[str]) -> list[str]:
+    return cmd[cmd.index("--ros-args"):]
+
+
+def test_every_node_command_ends_with_a_ros_args_block(write):
+    path = write(PY + """
+def generate_launch_description():
+    return LaunchDescription([
+        Node(package='tuilaunch_demos', executable='talker'),
+        Node(package='tuilaunch_demos', executable='talker', arguments=['one', 'two'],
+             ros_arguments=['--log-level', 'debug'], name='t'),
+        ExecuteProcess(cmd=['true', 'x']),
+    ])
+""")
+    bare, with_args, process = plan_of(path).processes
+    # launch_ros always appends --ros-args, even with nothing after it
+    assert bare.cmd[1:] == ["--ros-args"]
+    # the user's ros_arguments get a block of their own, before launch_ros's
+    assert with_args.cmd[1:] == ["one", "two", "--ros-args", "--log-level", "debug",
+                                 "--ros-args", "-r", "__node:=t"]
+    # a plain process gets nothing added
+    assert process.cmd == ["true", "x"]
+
+
+def test_a_namespace_pushed_or_given_empty_is_passed_as_root(write):
+    path = write(PY + """
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('namespace', default_value=''),
+        Node(package='tuilaunch_demos', executable='talker', name='given_empty', namespace=''),
+        Node(package='tuilaunch_demos', executable='talker', name='not_given'),
+        GroupAction([
+            PushROSNamespace(LaunchConfiguration('namespace')),
+            Node(package='tuilaunch_demos', executable='talker', name='pushed_empty'),
+        ]),
+        GroupAction([
+            PushROSNamespace('r1'),
+            Node(package='tuilaunch_demos', executable='talker', name='pushed',
+                 namespace='sub'),
+        ]),
+    ])
+""")
+    by_name = {p.name: p for p in plan_of(path).processes}
+    assert ros_part(by_name["given_empty"].cmd) == ["--ros-args", "-r", "__node:=given_empty",
+                                                    "-r", "__ns:=/"]
+    assert ros_part(by_name["not_given"].cmd) == ["--ros-args", "-r", "__node:=not_given"]
+    assert ros_part(by_name["pushed_empty"].cmd) == ["--ros-args", "-r",
+                                                     "__node:=pushed_empty", "-r", "__ns:=/"]
+    assert ros_part(by_name["pushed"].cmd) == ["--ros-args", "-r", "__node:=pushed", "-r",
+                                               "__ns:=/r1/sub"]
+    assert by_name["pushed"].full_name == "/r1/sub/pushed"
+
+
+def test_find_package_share_find_works_while_the_file_loads(write):
+    path = write(PY + """
+import os
+
+def generate_launch_description():
+    share = FindPackageShare('tuilaunch_demos').find('tuilaunch_demos')
+    assert os.path.isdir(share), share
+    return LaunchDescription([
+        ExecuteProcess(cmd=['ls', os.path.join(share, 'package.xml')]),
+    ])
+""")
+    (process,) = plan_of(path).processes
+    assert process.cmd[1].endswith("share/tuilaunch_demos/package.xml")
