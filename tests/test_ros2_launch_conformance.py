@@ -7,6 +7,8 @@ Each launch file here is written for the test, in the pattern real bringups use 
 
 from __future__ import annotations
 
+import itertools
+
 from .conftest import plan_of
 
 PY = """\
@@ -84,3 +86,58 @@ def generate_launch_description():
 """)
     (process,) = plan_of(path).processes
     assert process.cmd[1].endswith("share/tuilaunch_demos/package.xml")
+
+
+def test_a_push_ros_namespace_whose_condition_is_false_pushes_nothing(write):
+    # nav2's bringup: PushROSNamespace(condition=IfCondition(use_namespace), namespace=...)
+    path = write(PY + """
+from launch.conditions import IfCondition
+
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('namespace', default_value='robot1'),
+        DeclareLaunchArgument('use_namespace', default_value='false'),
+        GroupAction([
+            PushROSNamespace(condition=IfCondition(LaunchConfiguration('use_namespace')),
+                             namespace=LaunchConfiguration('namespace')),
+            Node(package='tuilaunch_demos', executable='talker', name='amcl'),
+        ]),
+    ])
+""")
+    (off,) = plan_of(path).processes
+    assert off.full_name == "/amcl" and ros_part(off.cmd) == ["--ros-args", "-r", "__node:=amcl"]
+    (on,) = plan_of(path, use_namespace="true").processes
+    assert on.full_name == "/robot1/amcl"
+    assert ros_part(on.cmd) == ["--ros-args", "-r", "__node:=amcl", "-r", "__ns:=/robot1"]
+
+
+def test_parameters_reach_the_command_line_in_launch_ros_order(write, tmp_path):
+    shared = tmp_path / "shared.yaml"
+    shared.write_text("/**:\n  ros__parameters:\n    from_file: 1\n")
+    path = write(PY + f"""
+from launch_ros.actions import SetParameter, SetParametersFromFile
+from launch_ros.descriptions import ParameterValue
+from launch_ros.parameter_descriptions import Parameter
+
+def generate_launch_description():
+    return LaunchDescription([
+        SetParameter(name='use_sim_time', value=True),
+        SetParametersFromFile('{shared}'),
+        Node(package='tuilaunch_demos', executable='talker', name='t', parameters=[
+            {{'a': 1}}, {{'b': 'x'}}, '{shared}',
+            Parameter('c', ParameterValue('true', value_type=str))]),
+    ])
+""")
+    (proc,) = plan_of(path).processes
+    ros = ros_part(proc.cmd)
+    # SetParameter as -p (Python's text of the value), SetParametersFromFile, then each dict
+    # in a file of its own, the file where it stands, a Parameter as -p with YAML text
+    assert ros[:5] == ["--ros-args", "-r", "__node:=t", "-p", "use_sim_time:=True"]
+    kinds = [(a, b) for a, b in itertools.pairwise(ros) if a in ("-p", "--params-file")]
+    assert [k for k, _ in kinds] == ["-p", "--params-file", "--params-file", "--params-file",
+                                     "--params-file", "-p"]
+    assert kinds[1][1] == str(shared) and kinds[4][1] == str(shared)
+    assert [values for _, values in proc.generated_parameter_files] == [{"a": 1}, {"b": "x"}]
+    assert [path for path, _ in proc.generated_parameter_files] == [kinds[2][1], kinds[3][1]]
+    assert kinds[5][1].startswith("c:='true'")  # stays text for rcl
+    assert proc.parameters == {"use_sim_time": True, "a": 1, "b": "x", "c": "true"}

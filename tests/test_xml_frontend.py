@@ -231,9 +231,10 @@ def test_parameters_values_types_nesting_and_files(write, tmp_path):
         "sep_list": [1, 2, 3], "sep_words": [7, 8], "typed_list": [1.0, 2.0],
         "outer.inner": 3, "outer.deeper.leaf": "x", "after_file": 2}
     assert isinstance(proc.parameters["forced_float"], float)
-    # the file keeps its place between the generated ones, as launch_ros orders them
+    # as launch_ros: each <param name=> is a file of its own, and the `from=` file keeps its
+    # place between them
     files = [a for i, a in enumerate(ros_args(proc)) if ros_args(proc)[i - 1] == "--params-file"]
-    assert files[1] == str(params_file) and len(files) == 3
+    assert len(files) == 19 and files[17] == str(params_file)
     assert proc.parameter_files == [str(params_file)]
 
 
@@ -548,8 +549,11 @@ def test_set_parameters_from_file_reaches_the_nodes_that_follow_in_scope(write, 
     inside, outside = plan_of(path).processes
     args = ros_args(inside)
     files = [a for i, a in enumerate(args) if args[i - 1] == "--params-file"]
-    # launch_ros's order: the scope's parameters (values, then the file), then the node's own
-    assert len(files) == 3 and files[1] == str(shared)
-    assert inside.generated_parameter_files[0][1] == {"first": 1}
-    assert inside.generated_parameter_files[1][1] == {"own": 2}
+    # launch_ros's order: the scope's parameters (values as -p, then the file), then the
+    # node's own
+    assert args[args.index("-p"):args.index("-p") + 2] == ["-p", "first:=1"]
+    assert args.index("-p") < args.index(str(shared))
+    assert len(files) == 2 and files[0] == str(shared)
+    assert inside.generated_parameter_files[0][1] == {"own": 2}
+    assert inside.parameters == {"first": 1, "own": 2}  # the file's values stay in the file
     assert inside.parameter_files == [str(shared)] and outside.parameter_files == []

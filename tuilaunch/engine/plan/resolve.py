@@ -125,6 +125,18 @@ def _seconds(value: Any, ctx: PerformContext, what: str, origin: Origin | None) 
         raise LaunchError(f"{what} {text!r} is not a number of seconds", origin) from None
 
 
+def _rule_text(value: ParamValue) -> str:
+    """A SetParameter value as launch_ros writes it after `-p name:=`: Python's str."""
+    return str(value)
+
+
+def _yaml_rule_text(value: ParamValue) -> str:
+    """A launch_ros Parameter's value after `-p name:=`: YAML, so text stays text."""
+    import yaml
+
+    return str(yaml.safe_dump(value))
+
+
 def join_namespace(base: str, ns: str | None) -> str:
     """Relative namespaces append, absolute ones reset; the result is absolute."""
     if not ns:
@@ -322,7 +334,7 @@ class Resolver:
         elif isinstance(entity, IncludeLaunchDescription):
             self.include(entity, scope, parent)
         elif isinstance(entity, PushRosNamespace):
-            if scope.enabled:
+            if self._gate(entity, scope)[0]:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
                 scope.namespace_pushed = True
@@ -664,42 +676,40 @@ class Resolver:
         elif shutil.which(executable) is None:
             error = error or f"executable '{executable}' not found on PATH"
         merged: dict[str, ParamValue] = {}
-        # SetParameter pairs and SetParametersFromFile files (key None) come first, in order
-        global_items = [value if key is None else {key: value}
-                        for key, value in scope.global_parameters]
         user_files: list[str] = []
         generated: list[tuple[str, dict[str, Any]]] = []
         params_args: list[str] = []
-        pending: dict[str, ParamValue] = {}
-        for item in [*global_items, *_items(entity.parameters)]:
+        # launch_ros: SetParameter pairs as `-p name:=value` and SetParametersFromFile files
+        # first, in order; then each of the node's own dicts in a file of its own, each
+        # Parameter as `-p`, each file as it is
+        items: list[Any] = [("global", value if key is None else {key: value})
+                            for key, value in scope.global_parameters]
+        items += [("own", item) for item in _items(entity.parameters)]
+        for origin_kind, item in items:
             if isinstance(item, Parameter):
-                item = item.as_dict()
-            if isinstance(item, ParameterFile):
-                if pending:
-                    generated.append(self._params_file(proc_id, len(generated), pending,
-                                                       params_args))
-                    pending = {}
-                path = self._parameter_file(item, ctx, proc_id, len(user_files))
-                user_files.append(path)
-                params_args += ["--params-file", path]
-                if not os.path.isfile(path) and error is None:
-                    error = f"parameter file {path} does not exist"
+                values = flatten_parameters(item.as_dict(), ctx, entity.origin)
+                merged.update(values)
+                params_args += [a for name, value in values.items()
+                                for a in ("-p", f"{name}:={_yaml_rule_text(value)}")]
                 continue
             if isinstance(item, dict):
                 values = flatten_parameters(item, ctx, entity.origin)
                 merged.update(values)
-                pending.update(values)
+                if origin_kind == "global":
+                    params_args += [a for name, value in values.items()
+                                    for a in ("-p", f"{name}:={_rule_text(value)}")]
+                else:
+                    generated.append(self._params_file(proc_id, len(generated), values,
+                                                       params_args))
                 continue
-            if pending:
-                generated.append(self._params_file(proc_id, len(generated), pending, params_args))
-                pending = {}
-            path = perform(item, ctx)
+            if isinstance(item, ParameterFile):
+                path = self._parameter_file(item, ctx, proc_id, len(user_files))
+            else:
+                path = perform(item, ctx)
             user_files.append(path)
             params_args += ["--params-file", path]
             if not os.path.isfile(path) and error is None:
                 error = f"parameter file {path} does not exist"
-        if pending:
-            generated.append(self._params_file(proc_id, len(generated), pending, params_args))
         own_remaps = pair_list(entity.remappings, "remappings", entity.origin)
         remappings = [[perform(a, ctx), perform(b, ctx)] for a, b in [*scope.remaps, *own_remaps]]
         arguments = [perform(a, ctx) for a in _items(entity.arguments)]
