@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
 
 import pytest
 
 from .conftest import EXAMPLES, run_cli
+from .launch_world import make_package
 
 HEADER = "from simple_launch import SimpleLauncher\n"
 BRINGUP = str(EXAMPLES / "bringup.py")
@@ -123,6 +125,21 @@ def test_unknown_launch_file_and_package_on_the_command_line(tmp_path):
                 "package 'no_such_pkg' not found")
     check_error(run_cli("tuilaunch_demos", "x.launch.py", "--print"),
                 "launch file 'x.launch.py' not found in package 'tuilaunch_demos'")
+
+
+def test_a_launch_file_name_found_twice_in_a_package_is_an_error_naming_both(tmp_path):
+    # as ros2 launch: a built package whose share holds the source tree as well as the
+    # installed launch folder has the file twice, and neither is silently chosen
+    text = "<launch><log message='hi'/></launch>\n"
+    make_package(tmp_path, "twice_pkg", files={"launch/a.launch.xml": text,
+                                               "bringup/launch/a.launch.xml": text,
+                                               "launch/b.launch.xml": text})
+    env = {"AMENT_PREFIX_PATH": os.pathsep.join([str(tmp_path),
+                                                 os.environ.get("AMENT_PREFIX_PATH", "")])}
+    result = run_cli("twice_pkg", "a.launch.xml", "--print", env=env)
+    check_error(result, "launch file 'a.launch.xml' is in package 'twice_pkg' more than once",
+                "bringup/launch/a.launch.xml", "share/twice_pkg/launch/a.launch.xml")
+    assert "log: hi" in run_cli("twice_pkg", "b.launch.xml", "--print", env=env).stdout
 
 
 def test_value_outside_choices_and_non_boolean_condition():

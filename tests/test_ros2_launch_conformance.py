@@ -141,3 +141,19 @@ def generate_launch_description():
     assert [path for path, _ in proc.generated_parameter_files] == [kinds[2][1], kinds[3][1]]
     assert kinds[5][1].startswith("c:='true'")  # stays text for rcl
     assert proc.parameters == {"use_sim_time": True, "a": 1, "b": "x", "c": "true"}
+
+
+def test_a_parameter_file_that_is_not_there_is_a_warning_and_the_node_starts(write, tmp_path):
+    path = write(PY + f"""
+def generate_launch_description():
+    return LaunchDescription([
+        Node(package='tuilaunch_demos', executable='talker', name='t',
+             parameters=['{tmp_path}/missing.yaml', {{'a': 1}}]),
+    ])
+""")
+    plan = plan_of(path)
+    (proc,) = plan.processes
+    assert proc.error is None and str(tmp_path / "missing.yaml") not in proc.cmd
+    assert proc.parameter_files == [] and proc.parameters == {"a": 1}
+    assert any("missing.yaml is not a file: t starts without it" in w and "test_launch.py:9" in w
+               for w in plan.warnings), plan.warnings

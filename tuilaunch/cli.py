@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .engine.describe.loader import load_file, set_command_line
 from .engine.errors import LaunchError, PackageError
-from .engine.plan.packages import ensure_environment, find_in_share, package_share
+from .engine.plan.packages import ensure_environment, find_launch_file_in_share
 from .engine.plan.resolve import resolve
 
 
@@ -80,12 +80,7 @@ def find_launch_file(positional: list[str]) -> str:
         return path
     if len(positional) == 2:
         package, name = positional
-        share = package_share(package)  # an unknown package reports itself
-        try:
-            return str(find_in_share(package, name))
-        except PackageError:
-            raise PackageError(
-                f"launch file '{name}' not found in package '{package}' ({share})") from None
+        return str(find_launch_file_in_share(package, name))
     raise LaunchError(f"expected FILE or PACKAGE FILE, got {' '.join(positional)!r}",
                       hint="launch arguments are written name:=value")
 

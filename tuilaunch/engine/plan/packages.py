@@ -103,3 +103,20 @@ def find_in_share(package: str, file_name: str, origin: Origin | None = None) ->
     raise PackageError(
         f"file '{file_name}' not found in the share of package '{package}' ({share})", origin
     )
+
+
+def find_launch_file_in_share(package: str, file_name: str) -> Path:
+    """`ros2 launch PACKAGE FILE`: the one file of that name below the package's share.
+
+    As ros2 launch does, a name found in two places is an error naming both, not a guess."""
+    share = package_share(package)
+    found = sorted(Path(root) / file_name for root, _dirs, files in os.walk(share)
+                   if file_name in files)
+    if not found:
+        raise PackageError(f"launch file '{file_name}' not found in package '{package}' ({share})")
+    if len(found) > 1:
+        raise PackageError(
+            f"launch file '{file_name}' is in package '{package}' more than once: "
+            + ", ".join(str(p) for p in found),
+            hint="give the path of the one to launch")
+    return found[0]

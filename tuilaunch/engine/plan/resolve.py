@@ -706,10 +706,15 @@ class Resolver:
                 path = self._parameter_file(item, ctx, proc_id, len(user_files))
             else:
                 path = perform(item, ctx)
+            if not os.path.isfile(path):
+                # launch_ros warns and starts the node without it
+                if common["enabled"]:
+                    where = f" ({entity.origin})" if entity.origin else ""
+                    self.warnings.append(f"parameter file {path} is not a file: "
+                                         f"{name or executable} starts without it{where}")
+                continue
             user_files.append(path)
             params_args += ["--params-file", path]
-            if not os.path.isfile(path) and error is None:
-                error = f"parameter file {path} does not exist"
         own_remaps = pair_list(entity.remappings, "remappings", entity.origin)
         remappings = [[perform(a, ctx), perform(b, ctx)] for a, b in [*scope.remaps, *own_remaps]]
         arguments = [perform(a, ctx) for a in _items(entity.arguments)]
