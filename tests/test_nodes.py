@@ -130,6 +130,9 @@ def generate_launch_description():
     description = proc.parameters["robot_description"]
     assert isinstance(description, str)
     assert 'link name="r9/base_link"' in description and 'xyz="2.5 0 0"' in description
+    # simple_launch hands launch_ros the output in single quotes, read as YAML: one string
+    # whose line breaks are folded to spaces, as ros2 launch gives it to the node
+    assert "\n" not in description and "<robot" in description
     assert proc.package == "robot_state_publisher" and proc.remappings == [["joint_states", "js"]]
 
 

@@ -49,6 +49,18 @@ def yaml_typed(text: str) -> ParamValue:
     return text
 
 
+def yaml_single_quoted(text: str) -> str:
+    """simple_launch's xacro output, which it wraps in single quotes for launch_ros to read
+    as YAML: always a string, with line breaks folded to spaces as YAML folds them."""
+    import yaml
+
+    try:
+        loaded = yaml.safe_load("'" + text + "'")
+    except yaml.YAMLError:
+        return text
+    return loaded if isinstance(loaded, str) else text
+
+
 def typed_value(value: Any, context: PerformContext, where: str, origin: Origin | None)\
         -> ParamValue:
     if isinstance(value, ParameterValue):
@@ -65,7 +77,7 @@ def typed_value(value: Any, context: PerformContext, where: str, origin: Origin 
         return value
     if isinstance(value, Substitution):
         text = perform(value, context)
-        return text if _is_string_typed(value) else yaml_typed(text)
+        return yaml_single_quoted(text) if _is_string_typed(value) else yaml_typed(text)
     if isinstance(value, list | tuple):
         if any(isinstance(v, Substitution) for v in value) and all(
                 isinstance(v, str | Substitution) for v in value) and not all(
