@@ -157,3 +157,19 @@ def generate_launch_description():
     assert proc.parameter_files == [] and proc.parameters == {"a": 1}
     assert any("missing.yaml is not a file: t starts without it" in w and "test_launch.py:9" in w
                for w in plan.warnings), plan.warnings
+
+
+def test_simple_launch_joint_state_publisher_without_keywords_gets_an_empty_file(write):
+    path = write("""
+from simple_launch import SimpleLauncher
+
+def generate_launch_description():
+    sl = SimpleLauncher()
+    with sl.group(ns='r5'):
+        sl.joint_state_publisher(use_gui=False)
+    return sl.launch_description()
+""")
+    jsp = next(p for p in plan_of(path).processes if p.enabled)
+    # simple_launch gives Node(parameters={}) and launch_ros writes it as a file of its own
+    assert ros_part(jsp.cmd)[:4] == ["--ros-args", "-r", "__ns:=/r5", "--params-file"]
+    assert [values for _, values in jsp.generated_parameter_files] == [{}]

@@ -405,7 +405,8 @@ class SimpleLauncher(GazeboLauncher):
 
     def joint_state_publisher(self, use_gui: Any = True, **node_args: Any) -> None:
         gui = str(use_gui) if isinstance(use_gui, bool) else use_gui
-        params = [node_args] if node_args else None
+        # simple_launch passes the keywords as one dict, even an empty one (an empty file)
+        params = [node_args]
         self.node("joint_state_publisher", parameters=params, condition=UnlessCondition(gui))
         self.node("joint_state_publisher_gui", parameters=params, condition=IfCondition(gui))
 
