@@ -173,3 +173,20 @@ def generate_launch_description():
     # simple_launch gives Node(parameters={}) and launch_ros writes it as a file of its own
     assert ros_part(jsp.cmd)[:4] == ["--ros-args", "-r", "__ns:=/r5", "--params-file"]
     assert [values for _, values in jsp.generated_parameter_files] == [{}]
+
+
+def test_simple_launch_container_has_the_empty_namespace_simple_launch_gives_it(write):
+    path = write("""
+from simple_launch import SimpleLauncher
+
+def generate_launch_description():
+    sl = SimpleLauncher()
+    with sl.container(name='my_container'):
+        sl.node(package='tuilaunch_demos', plugin='Talker', name='talker')
+    return sl.launch_description()
+""")
+    (container,) = plan_of(path).processes
+    # simple_launch: ComposableNodeContainer(namespace='') -> launch_ros passes __ns:=/
+    assert ros_part(container.cmd) == ["--ros-args", "-r", "__node:=my_container", "-r",
+                                       "__ns:=/"]
+    assert [c["request"]["node_name"] for c in container.components] == ["talker"]

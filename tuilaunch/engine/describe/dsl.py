@@ -285,7 +285,7 @@ class SimpleLauncher(GazeboLauncher):
                                                 target_container=name))
         else:
             self.add_action(ComposableNodeContainer(
-                name=name, namespace=namespace or None, package=package, executable=executable,
+                name=name, namespace=namespace, package=package, executable=executable,
                 composable_node_descriptions=components, **container_args))
 
     def add_action(self, action: Any) -> Any:
