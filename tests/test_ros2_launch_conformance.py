@@ -190,3 +190,89 @@ def generate_launch_description():
     assert ros_part(container.cmd) == ["--ros-args", "-r", "__node:=my_container", "-r",
                                        "__ns:=/"]
     assert [c["request"]["node_name"] for c in container.components] == ["talker"]
+
+
+SCOPES = PY + """
+from launch.actions import SetEnvironmentVariable, SetLaunchConfiguration
+from launch_ros.actions import SetParameter, SetRemap
+
+def generate_launch_description():
+    return LaunchDescription([
+        SetRemap(src='/tf', dst='tf'),
+        GroupAction(scoped=False, actions=[
+            PushROSNamespace('r1'),
+            SetParameter(name='use_sim_time', value=True),
+            SetEnvironmentVariable('FROM_UNSCOPED', 'yes'),
+        ]),
+        Node(package='tuilaunch_demos', executable='talker', name='after_unscoped'),
+        GroupAction([
+            PushROSNamespace('inner'),
+            SetRemap(src='chatter', dst='chat'),
+            SetParameter(name='inner_param', value=1),
+            SetEnvironmentVariable('FROM_SCOPED', 'yes'),
+            Node(package='tuilaunch_demos', executable='talker', name='inside'),
+        ]),
+        Node(package='tuilaunch_demos', executable='talker', name='after_scoped'),
+        GroupAction(forwarding=False, launch_configurations={'kept': 'k'}, actions=[
+            Node(package='tuilaunch_demos', executable='talker', name='reset'),
+        ]),
+    ])
+"""
+
+
+def test_group_scopes_as_launch_has_them(write):
+    by_name = {p.name: p for p in plan_of(write(SCOPES)).processes}
+    # an unscoped group's namespace, SetParameter and environment stay after it
+    after = by_name["after_unscoped"]
+    assert after.full_name == "/r1/after_unscoped"
+    assert after.parameters == {"use_sim_time": True} and after.env == {"FROM_UNSCOPED": "yes"}
+    assert ros_part(after.cmd) == ["--ros-args", "-r", "__node:=after_unscoped", "-r",
+                                   "__ns:=/r1", "-p", "use_sim_time:=True", "-r", "/tf:=tf"]
+    # a scoped group's namespace and environment end with it; launch_ros appends its
+    # SetParameter and SetRemap to the lists the launch already holds, so those stay
+    # (ros2 launch gives after_scoped chatter:=chat and inner_param too)
+    inside, later = by_name["inside"], by_name["after_scoped"]
+    assert inside.full_name == "/r1/inner/inside" and later.full_name == "/r1/after_scoped"
+    assert later.env == {"FROM_UNSCOPED": "yes"}
+    assert later.remappings == [["/tf", "tf"], ["chatter", "chat"]]
+    assert later.parameters == {"use_sim_time": True, "inner_param": 1}
+    # forwarding=False: nothing pushed before reaches the group
+    reset = by_name["reset"]
+    assert reset.full_name == "/reset" and reset.parameters == {} and reset.remappings == []
+    assert ros_part(reset.cmd) == ["--ros-args", "-r", "__node:=reset"]
+
+
+def test_what_an_included_file_pushes_stays_pushed_after_it(write, tmp_path):
+    (tmp_path / "child.launch.py").write_text(PY + """
+from launch_ros.actions import SetRemap
+
+def generate_launch_description():
+    return LaunchDescription([PushROSNamespace('from_child'), SetRemap(src='a', dst='b')])
+""")
+    path = write(PY + """
+from launch.actions import IncludeLaunchDescription
+from launch.launch_description_sources import PythonLaunchDescriptionSource
+from launch.substitutions import ThisLaunchFileDir
+
+def generate_launch_description():
+    return LaunchDescription([
+        IncludeLaunchDescription(PythonLaunchDescriptionSource(
+            [ThisLaunchFileDir(), '/child.launch.py'])),
+        Node(package='tuilaunch_demos', executable='talker', name='after'),
+    ])
+""")
+    (after,) = plan_of(path).processes
+    assert after.full_name == "/from_child/after" and after.remappings == [["a", "b"]]
+
+
+def test_xml_extra_arg_values_are_read_as_yaml(write):
+    path = write("""<launch>
+  <node_container pkg="tuilaunch_demos" exec="component_container" name="box" namespace="">
+    <composable_node pkg="tuilaunch_demos" plugin="tuilaunch_demos::Talker" name="t">
+      <extra_arg name="use_intra_process_comms" value="true"/>
+    </composable_node>
+  </node_container>
+</launch>
+""", name="box.launch.xml")
+    (component,) = plan_of(path).processes[0].components
+    assert component["extra_arguments"] == {"use_intra_process_comms": True}

@@ -183,6 +183,15 @@ class Scope:
                               event_locals=dict(self.event_locals))
 
 
+def leak_back(inner: Scope, outer: Scope) -> None:
+    """What an unscoped group or an included file pushed stays pushed after it, as in launch:
+    the namespace, SetParameter, SetRemap and the environment (launch configurations are
+    already the same dict)."""
+    outer.namespace, outer.namespace_pushed = inner.namespace, inner.namespace_pushed
+    outer.global_parameters, outer.remaps = inner.global_parameters, inner.remaps
+    outer.env = inner.env
+
+
 @dataclass
 class Deferred:
     """Entities performed when an event happens, with the scope they were written in.
@@ -424,9 +433,20 @@ class Resolver:
             values = {perform(key, ctx): perform(value, ctx)
                       for key, value in group.launch_configurations.items()}
             if group.scoped and not group.forwarding:
-                # launch's forwarding=False: the group sees only what it keeps
+                # launch's forwarding=False: the group sees only what it keeps; the pushed
+                # namespace, SetParameter and SetRemap are launch configurations too
                 scope.configurations.clear()
                 scope.env.clear()
+                scope.namespace, scope.namespace_pushed = "/", False
+                scope.global_parameters, scope.remaps = [], []
+            elif group.scoped:
+                # launch_ros appends SetParameter / SetRemap values to the list the scope
+                # already holds, so a scoped group adds to its parent's list when there is
+                # one (ros2 launch behaves so): share it
+                if outer.global_parameters:
+                    scope.global_parameters = outer.global_parameters
+                if outer.remaps:
+                    scope.remaps = outer.remaps
             scope.configurations.update(values)
         if group.namespace is not None and enabled:
             scope.namespace = join_namespace(scope.namespace, perform(group.namespace, ctx))
@@ -441,6 +461,8 @@ class Resolver:
         else:
             parent.children.append(item)
         self.walk(group.children, scope, item)
+        if not group.scoped and enabled:
+            leak_back(scope, outer)
 
     def when_trigger(self, when: When, scope: Scope) -> Trigger:
         delay = 0.0
@@ -555,6 +577,8 @@ class Resolver:
             self.walk(loaded.entities, scope, item)
         finally:
             self._include_stack.pop()
+        if enabled:
+            leak_back(scope, outer)  # an include is not a scope: what it pushes stays
 
     def opaque(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
         """OpaqueFunctions, SimpleLauncher's opaque mode, and third-party actions' execute()."""

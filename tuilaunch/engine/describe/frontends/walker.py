@@ -434,7 +434,9 @@ class Walker:
             namespace=self.text(element, "namespace", optional=True),
             parameters=self.parameters(element),
             remappings=self.pairs(element, "remap", "from", "to"),
-            extra_arguments=[{k: v} for k, v in extra] if extra else None,
+            # launch_ros reads <extra_arg value=> as YAML, like a parameter: "true" is a bool
+            extra_arguments=[{k: v if isinstance(v, Substitution) else TextSubstitution(str(v))}
+                             for k, v in extra] if extra else None,
             condition=condition)
         component.origin = element.line_origin
         element.check_complete()
