@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import itertools
 
-from .conftest import plan_of
+from .conftest import plan_of, run_cli
 
 PY = """\
 from launch import LaunchDescription
@@ -276,3 +276,39 @@ def test_xml_extra_arg_values_are_read_as_yaml(write):
 """, name="box.launch.xml")
     (component,) = plan_of(path).processes[0].components
     assert component["extra_arguments"] == {"use_intra_process_comms": True}
+
+
+def test_node_keywords_launch_ros_passes_to_execute_process(write):
+    # controller_manager's launch helpers: Node(..., shell=True) runs through /bin/sh
+    path = write(PY + """
+def generate_launch_description():
+    return LaunchDescription([
+        Node(package='tuilaunch_demos', executable='talker', arguments=['a', 'b c'],
+             shell=True, output_format='[{this.process_description.final_name}] {line}',
+             cached_output=False),
+    ])
+""")
+    (proc,) = plan_of(path).processes
+    assert proc.cmd[:2] == ["/bin/sh", "-c"] and len(proc.cmd) == 3
+    assert proc.cmd[2].endswith("lib/tuilaunch_demos/talker a b c --ros-args")
+
+
+def test_show_args_lists_arguments_that_have_no_value_yet(write):
+    # ros2 launch --show-args needs no values: ros_gz_sim's and autoware's files declare
+    # arguments without defaults and include files named by them
+    path = write("""<launch>
+  <arg name="world" description="the world to load"/>
+  <arg name="mode" default="a"><choice value="a"/><choice value="b"/></arg>
+  <include file="$(var world)/missing.launch.xml"/>
+  <arg name="after" default="x" description="declared after the include"/>
+</launch>
+""", name="needs.launch.xml")
+    result = run_cli(str(path), "--show-args")
+    assert result.returncode == 0, result.stderr
+    out = result.stdout
+    assert "'world':" in out and "the world to load" in out and "(required)" in out
+    assert "'mode':" in out and "'after':" in out and "declared after the include" in out
+    assert "some arguments may be missing" in result.stderr and "missing.launch.xml" in \
+        result.stderr
+    # launching still needs the value
+    assert run_cli(str(path), "--print").returncode == 2

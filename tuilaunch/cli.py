@@ -12,10 +12,10 @@ import sys
 import traceback
 from pathlib import Path
 
-from .engine.describe.loader import load_file, set_command_line
+from .engine.describe.loader import LoadedFile, load_file, set_command_line
 from .engine.errors import LaunchError, PackageError
 from .engine.plan.packages import ensure_environment, find_launch_file_in_share
-from .engine.plan.resolve import resolve
+from .engine.plan.resolve import declared_arguments, resolve
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -85,6 +85,19 @@ def find_launch_file(positional: list[str]) -> str:
                       hint="launch arguments are written name:=value")
 
 
+def _show_arguments(loaded: LoadedFile, arguments: dict[str, str]) -> int:
+    """`--show-args`: listed without values for the required ones, as ros2 launch lists them;
+    what could not be followed (an include that needs a value) is a warning."""
+    from .printing import format_arguments
+
+    found, stopped = declared_arguments(loaded, arguments)
+    print(format_arguments(found, loaded.path), end="")
+    if stopped is not None:
+        print(f"tuilaunch: warning: some arguments may be missing: {stopped}",
+              file=sys.stderr)
+    return 0
+
+
 def is_command(argv: list[str]) -> bool:
     """A session command, unless the word names an existing file (launched, as it always
     was); `tuilaunch -- WORD ...` forces the launch form, e.g. for a package named `status`."""
@@ -125,17 +138,14 @@ def _main(argv: list[str] | None) -> int:
         set_command_line(positional, arguments)
         with file_output:
             loaded = load_file(path)
+            if options.show_args:
+                return _show_arguments(loaded, arguments)
             plan = resolve(loaded, arguments)
     except LaunchError as exc:
         if options.debug:
             traceback.print_exc()
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
-    if options.show_args:
-        from .printing import format_arguments
-
-        print(format_arguments(plan.arguments, plan.file), end="")
-        return 0
     if options.print_plan:
         if options.json:
             print(json.dumps(plan.to_json(), indent=2))

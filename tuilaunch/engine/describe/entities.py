@@ -129,7 +129,12 @@ class Node(Entity):
     ) -> None:
         self._init_entity(condition)
         self.on_exit: Any = unknown.pop("on_exit", None)
-        unknown.pop("log_cmd", None)
+        # launch_ros hands the rest to ExecuteProcess: shell runs the command through
+        # /bin/sh (controller_manager's spawner helpers set it); the others only format
+        # launch's own output
+        self.shell = bool(unknown.pop("shell", False))
+        for formatting in ("log_cmd", "output_format", "cached_output"):
+            unknown.pop(formatting, None)
         if unknown:
             names = ", ".join(sorted(unknown))
             raise DslError(

@@ -221,6 +221,10 @@ class Resolver:
         self._include_stack: list[str] = []
         self._counter = counter
         self._action_offset = action_offset  # ids stay unique when actions join a running plan
+        # --show-args: a required argument without a value, or a value outside the choices,
+        # does not stop the walk (ros2 launch lists arguments without values)
+        self.lenient = False
+        self.first_error: LaunchError | None = None
 
     @property
     def id_counter(self) -> int:
@@ -268,12 +272,24 @@ class Resolver:
 
     def walk(self, entities: list[Any], scope: Scope, parent: TreeItem) -> None:
         for entity in entities:
-            if scope.trigger is None or not scope.enabled:
+            if self.lenient:
+                self._visit_leniently(entity, scope, parent)
+            elif scope.trigger is None or not scope.enabled:
                 self.visit(entity, scope, parent)
             elif isinstance(entity, OpaqueFunction) or _custom_action(entity):
                 self.defer([entity], scope, parent, "runs when the event happens")
             else:
                 self._visit_or_defer(entity, scope, parent)
+
+    def _visit_leniently(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        """--show-args: an entity that cannot be resolved without the values the user has
+        not given (an include path, a package) is passed over, as ros2 launch passes over
+        what it cannot read without a context; the first such error is kept."""
+        try:
+            self.visit(entity, scope, parent)
+        except LaunchError as exc:
+            if self.first_error is None:
+                self.first_error = exc
 
     def _visit_or_defer(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
         """Inside an event-gated branch, a value that cannot be performed yet (an unset
@@ -410,6 +426,10 @@ class Resolver:
             if note not in known.elsewhere:
                 known.elsewhere.append(note)
         if not scope.enabled:
+            return
+        if self.lenient:
+            if value is None:
+                scope.configurations[decl.name] = ""
             return
         if value is None:
             raise ArgumentError(
@@ -756,6 +776,8 @@ class Resolver:
         cmd += params_args
         for src, dst in remappings:
             cmd += ["-r", f"{src}:={dst}"]
+        if getattr(entity, "shell", False):
+            cmd = ["/bin/sh", "-c", " ".join(cmd)]
         # launch_ros loads components under the pushed namespace, not the container's own
         container = join_namespace(namespace, name) if name else None
         components = [component_plan(c, ctx, scope.namespace, scope.global_parameters,
@@ -969,6 +991,20 @@ def default_params_dir() -> Path:
     return _params_dir
 
 
+def declared_arguments(loaded: LoadedFile, arguments: Mapping[str, str] | None = None)\
+        -> tuple[list[ArgumentInfo], LaunchError | None]:
+    """Every argument the file and its includes declare, for `--show-args`, found without
+    values for the required ones; the first error that hid some of them, if one did."""
+    resolver = Resolver(arguments or {}, default_params_dir())
+    resolver.lenient = True
+    set_command_line(arguments=dict(arguments or {}))
+    try:
+        resolver.resolve(loaded)
+    except LaunchError as exc:
+        return list(resolver.arguments.values()), exc
+    return list(resolver.arguments.values()), resolver.first_error
+
+
 def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
             params_dir: Path | None = None) -> Plan:
     """The Plan for these argument values (`name -> text`, as given on the command line)."""
@@ -977,4 +1013,4 @@ def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
     return resolver.resolve(loaded)
 
 
-__all__ = ["Resolver", "join_namespace", "resolve"]
+__all__ = ["Resolver", "declared_arguments", "join_namespace", "resolve"]
