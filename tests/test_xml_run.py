@@ -76,9 +76,10 @@ def test_ros2_control_bringup_resolves_like_ros2_launch(control_prefix):
     description = publisher.parameters["robot_description"]
     assert isinstance(description, str) and '<link name="r2/base_link"/>' in description
     assert not rviz.enabled and rviz.full_name == "/rviz2"
-    assert broadcaster.cmd[1:] == ["joint_state_broadcaster"]
+    assert broadcaster.cmd[1:] == ["joint_state_broadcaster", "--ros-args"]
     assert forward.cmd[1:] == ["forward_position_controller", "--param-file", controllers,
-                               "--controller-ros-args", "-r ~/commands:=/commands"]
+                               "--controller-ros-args", "-r ~/commands:=/commands",
+                               "--ros-args"]
     assert all(p.error is None for p in plan.processes if p.enabled)
     assert plan_of(LAUNCH / "robot_control.launch.xml", gui="true").processes[2].enabled
 
