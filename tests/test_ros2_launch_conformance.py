@@ -312,3 +312,35 @@ def test_show_args_lists_arguments_that_have_no_value_yet(write):
         result.stderr
     # launching still needs the value
     assert run_cli(str(path), "--print").returncode == 2
+
+
+def test_simple_launch_parameters_and_use_sim_time_reach_one_file_as_simple_launch_builds_it(
+        write, tmp_path):
+    yaml_with = tmp_path / "with.yaml"
+    yaml_with.write_text("/**:\n  ros__parameters:\n    use_sim_time: false\n")
+    yaml_without = tmp_path / "without.yaml"
+    yaml_without.write_text("/**:\n  ros__parameters:\n    rate: 2\n")
+    path = write(f"""
+from simple_launch import SimpleLauncher
+
+def generate_launch_description():
+    sl = SimpleLauncher(use_sim_time=True)
+    sl.node('tuilaunch_demos', 'talker', name='dicts', parameters=[{{'a': 1}}, {{'b': 2}}])
+    sl.node('tuilaunch_demos', 'talker', name='own', parameters={{'use_sim_time': False}})
+    sl.node('tuilaunch_demos', 'talker', name='file_with', parameters=['{yaml_with}'])
+    sl.node('tuilaunch_demos', 'talker', name='file_without', parameters=['{yaml_without}'])
+    sl.node('tuilaunch_demos', 'talker', name='none')
+    return sl.launch_description()
+""")
+    by_name = {p.name: p for p in plan_of(path).processes}
+
+    def files(name: str) -> list[dict]:
+        return [values for _, values in by_name[name].generated_parameter_files]
+
+    # simple_launch merges a list of dicts into one, and adds use_sim_time into the first
+    assert files("dicts") == [{"a": 1, "b": 2, "use_sim_time": True}]
+    assert files("own") == [{"use_sim_time": False}]
+    # after a first YAML file: only when the file does not set it
+    assert files("file_with") == [] and by_name["file_with"].parameter_files == [str(yaml_with)]
+    assert files("file_without") == [{"use_sim_time": True}]
+    assert files("none") == [{"use_sim_time": True}]

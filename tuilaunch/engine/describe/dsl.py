@@ -315,8 +315,8 @@ class SimpleLauncher(GazeboLauncher):
         if isinstance(node_args.get("arguments"), str):
             node_args["arguments"] = node_args["arguments"].split()
         if self.sim_time is not None:
-            node_args["parameters"] = [{"use_sim_time": self.sim_time},
-                                       *node_args.get("parameters", [])]
+            node_args["parameters"] = with_sim_time(node_args.get("parameters", []),
+                                                    self.sim_time)
         if self._container is not None:
             if plugin is None:
                 raise DslError("a node in a container needs plugin=...", origin)
@@ -456,10 +456,33 @@ def parameter_list(value: Any) -> list[Any]:
     if isinstance(value, dict | str | Substitution):
         return [value]
     if isinstance(value, list | tuple):
+        if value and all(isinstance(v, dict) for v in value):
+            # simple_launch merges a list of dicts into one (one parameter file)
+            return [{k: v for item in value for k, v in item.items()}]
         if value and all(isinstance(v, list | tuple) and len(v) == 2 for v in value):
             return [dict(value)]
         return list(value)
     return [value]
+
+
+def with_sim_time(params: list[Any], sim_time: Any) -> list[Any]:
+    """use_sim_time as simple_launch adds it: into the first dict unless it sets it, after a
+    first YAML file that does not mention it, never after a first substitution."""
+    if not params:
+        return [{"use_sim_time": sim_time}]
+    first = params[0]
+    if isinstance(first, dict):
+        if "use_sim_time" in first:
+            return params
+        return [{**first, "use_sim_time": sim_time}, *params[1:]]
+    if isinstance(first, str):
+        try:
+            with open(first, encoding="utf-8") as handle:
+                mentioned = any(line.strip().startswith("use_sim_time") for line in handle)
+        except OSError:
+            return params
+        return params if mentioned else [*params, {"use_sim_time": sim_time}]
+    return params
 
 
 __all__ = ["GazeboBridge", "SimpleLauncher", "flatten", "share_file"]
