@@ -164,7 +164,9 @@ def test_use_sim_time_auto_follows_a_live_clock_publisher(monkeypatch):
     try:
         assert publisher.stdout is not None and publisher.stdout.readline()
         clock_is_published.cache_clear()
-        assert clock_is_published(5.0) is True
+        # the probe answers as soon as it discovers the publisher; the bound is for a
+        # loaded machine, where discovery can take seconds
+        assert clock_is_published(30.0) is True
     finally:
         publisher.terminate()
         publisher.wait(timeout=30)

@@ -213,11 +213,23 @@ class TuiLaunchApp(App[int]):
     def on_unmount(self) -> None:
         # any exit path that skipped the graceful shutdown still leaves no process behind
         if self.supervisor is not None:
-            self.supervisor.kill_all()
+            self._kill_all()
             self.engine.stop()
         if self._bridge is not None:
             self._bridge.close()
             self._bridge = None
+
+    def _kill_all(self) -> None:
+        """SIGKILL what is left, on the engine's thread: the supervisor (its process table,
+        its watchdog pipe) belongs to that thread while its loop runs."""
+        assert self.supervisor is not None
+        if self.engine.loop.is_running():
+            try:
+                self.engine.call(self.supervisor.kill_all)
+                return
+            except Exception:
+                pass  # the loop ended meanwhile: nothing runs there any more
+        self.supervisor.kill_all()
 
     # --- engine events -------------------------------------------------------------------
 
@@ -701,7 +713,7 @@ class TuiLaunchApp(App[int]):
         """A second q while stubborn processes stop: SIGKILL them now, or keep waiting."""
         def answered(yes: bool | None) -> None:
             if yes and self.supervisor is not None:
-                self.supervisor.kill_all()
+                self._kill_all()
 
         self.push_screen(ConfirmScreen(
             f"Still stopping: {', '.join(running[:6])} ({self._signal_stage()}).\n"

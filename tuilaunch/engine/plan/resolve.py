@@ -985,7 +985,8 @@ _params_dir: Path | None = None
 def default_params_dir() -> Path:
     """One private folder per tuilaunch process (mkdtemp: 0700, a name nobody can guess)."""
     global _params_dir
-    if _params_dir is None:
+    # made anew when a finished run removed it (a launcher may plan several runs)
+    if _params_dir is None or not _params_dir.is_dir():
         _params_dir = Path(tempfile.mkdtemp(prefix=f"tuilaunch-{os.getpid()}-params-"))
         atexit.register(shutil.rmtree, _params_dir, True)
     return _params_dir

@@ -17,6 +17,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 MARK = "TUILAUNCH_LAUNCH_ID"
@@ -34,6 +35,10 @@ class Watchdog:
         self._process: subprocess.Popen[bytes] | None = None
         self._fd: int | None = None
         self._pending: list[str] = []
+        # the UI thread may end the launch (kill_all) while the engine thread writes: one
+        # writer at a time, and the pipe is closed exactly once (a second close could hit
+        # a descriptor the number was given to meanwhile)
+        self._lock = threading.Lock()
 
     def mark(self, env: dict[str, str]) -> None:
         """Marks a child's environment as part of this launch."""
@@ -69,11 +74,12 @@ class Watchdog:
         """Queued and written once per event-loop turn: a write per process group would
         wake the watchdog a hundred times while a hundred processes start. A process
         started just before tuilaunch dies is still found by its mark."""
-        if self._fd is None:
-            return
-        self._pending.append(text)
-        if len(self._pending) > 1:
-            return  # a flush is already due
+        with self._lock:
+            if self._fd is None:
+                return
+            self._pending.append(text)
+            if len(self._pending) > 1:
+                return  # a flush is already due
         import asyncio  # the launcher's side only: the watchdog process starts without it
 
         try:
@@ -82,6 +88,10 @@ class Watchdog:
             self.flush()  # no event loop here: at once
 
     def flush(self) -> None:
+        with self._lock:
+            self._flush_locked()
+
+    def _flush_locked(self) -> None:
         data, self._pending = "".join(self._pending), []
         if self._fd is None or not data:
             return
@@ -89,17 +99,18 @@ class Watchdog:
             os.write(self._fd, data.encode())
         except OSError as exc:
             self.error = f"the watchdog stopped listening: {exc.strerror or exc}"
-            self._close_pipe()
+            self._close_pipe_locked()
 
-    def _close_pipe(self) -> None:
-        if self._fd is not None:
-            os.close(self._fd)
-            self._fd = None
+    def _close_pipe_locked(self) -> None:
+        fd, self._fd = self._fd, None
+        if fd is not None:
+            os.close(fd)
 
     def close(self) -> None:
         """Ends the watchdog: it stops whatever of the launch is still there, then exits."""
-        self.flush()
-        self._close_pipe()
+        with self._lock:
+            self._flush_locked()
+            self._close_pipe_locked()
 
     def finished(self) -> bool:
         return self._process is None or self._process.poll() is not None
