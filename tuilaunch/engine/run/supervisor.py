@@ -703,8 +703,9 @@ class Supervisor:
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """Relaunch with new argument values: stop what changed, start what is new.
 
-        Processes whose command, environment and parameters are unchanged keep running;
-        triggers of new processes fire at once when what they wait for already happened.
+        Processes whose command, environment and parameters are unchanged are left as they
+        are (running, finished or waiting for their trigger); triggers of new processes fire
+        at once when what they wait for already happened.
         """
         running = {pid for pid in self._running}
         diff = diff_plans(self.plan, plan, running)
@@ -715,7 +716,8 @@ class Supervisor:
                            if a.enabled}
             self.plan = plan
             for proc in plan.processes:
-                if proc.id not in self._running:
+                # a kept process keeps its state: finished, failed, or still waiting
+                if proc.id not in self._running and proc.id not in diff.keep:
                     self.states[proc.id] = "pending" if proc.enabled else "skipped"
             self._io_watchers.clear()
             self._on_shutdown.clear()
