@@ -24,6 +24,7 @@ class Trigger:
     io: str | None = None
     after: Trigger | None = None
     target_entity: Any = field(default=None, repr=False, compare=False)
+    repeat: bool = False  # a state trigger: fires on every matching transition, not once
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"on": self.on, "target": self.target, "delay": self.delay}
