@@ -8,6 +8,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -60,9 +61,11 @@ def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 60) 
                           text=True, timeout=timeout, env={**os.environ, **(env or {})})
 
 
-def run_headless(path: Path, *args: str, timeout: float = 40, until: tuple[str, ...] = (),
+def run_headless(path: Path, *args: str, timeout: float = 40,
+                 until: tuple[str, ...] | Callable[[str], bool] = (),
                  env: dict[str, str] | None = None) -> str:
-    """Runs the file headless until every text in `until` was printed, then sends SIGINT.
+    """Runs the file headless until every text in `until` was printed (or `until(output)`
+    holds), then sends SIGINT.
 
     The timeout only guards against a hang; the assertions then say what was missing."""
     proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), *args, "--headless"],
@@ -74,7 +77,10 @@ def run_headless(path: Path, *args: str, timeout: float = 40, until: tuple[str, 
         limit = time.monotonic() + timeout
         for line in proc.stdout:
             seen.append(line)
-            if all(any(text in earlier for earlier in seen) for text in until):
+            if callable(until):
+                if until("".join(seen)):
+                    break
+            elif all(any(text in earlier for earlier in seen) for text in until):
                 break
             if time.monotonic() > limit:
                 break

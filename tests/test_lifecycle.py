@@ -253,6 +253,41 @@ def test_configure_then_activate_on_inactive_with_a_real_lifecycle_node(write):
     assert first("]: configured") < first("]: activated") < first('Publishing: "hello 1"')
 
 
+# deactivated once it is active (handle_once), the node reaches inactive again: launch_ros
+# runs the inactive handler on every matching transition, so it is activated a second time
+CYCLE = HEADER + """
+talker = LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker',
+                       name='cycler', namespace='', parameters=[{'rate': 20.0}])
+def change(transition):
+    return EmitEvent(event=ChangeState(lifecycle_node_matcher=matches_action(talker),
+                                       transition_id=transition))
+def generate_launch_description():
+    return LaunchDescription([
+        RegisterEventHandler(OnStateTransition(
+            target_lifecycle_node=talker, goal_state='inactive',
+            entities=[LogInfo(msg='inactive: activating'),
+                      change(Transition.TRANSITION_ACTIVATE)])),
+        RegisterEventHandler(OnStateTransition(
+            target_lifecycle_node=talker, goal_state='active', handle_once=True,
+            entities=[LogInfo(msg='active: deactivating once'),
+                      change(Transition.TRANSITION_DEACTIVATE)])),
+        talker, change(Transition.TRANSITION_CONFIGURE)])
+"""
+
+
+def test_a_state_handler_runs_on_every_matching_transition_unless_handle_once(write):
+    def twice_active(out: str) -> bool:
+        second = out.split("inactive: activating", 2)
+        return len(second) == 3 and "lifecycle state active" in second[2]
+
+    out = run_headless(write(CYCLE), until=twice_active)
+    assert out.count("inactive: activating") == 2, out
+    assert out.count("active: deactivating once") == 1, out
+    assert twice_active(out), out
+    # the second activation came after the deactivation the once-handler asked for
+    assert out.index("active: deactivating once") < out.rindex("inactive: activating")
+
+
 def test_autostart_activates_and_a_refused_transition_says_so(write):
     path = write(HEADER + """
 def generate_launch_description():

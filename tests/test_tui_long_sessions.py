@@ -689,3 +689,28 @@ def test_escape_and_a_digit_in_one_write_leave_the_field_and_switch_tabs(write, 
         assert "£".encode() not in screen
     finally:
         stop_pty(proc, master)
+
+
+def test_escape_and_a_letter_in_one_write_leave_the_field_then_act(write, tmp_path):
+    """ESC+/ in one read (escape then `/` typed fast over ssh) is parsed as alt+/: it leaves
+    the field, then `/` opens the search, instead of typing `/` into the field."""
+    path = write("""
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument, ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([DeclareLaunchArgument('label', default_value='x'),
+                                      ExecuteProcess(name='quiet', cmd=['sleep', '600'])])
+        """)
+    proc, master = start_on_pty(tmp_path, str(path))
+    try:
+        read_until(master, b"1 running")
+        os.write(master, b"2")
+        read_until(master, b"Apply (F5)")
+        read_for(master, 0.3)
+        os.write(master, b"\t")  # into the label field
+        read_for(master, 0.3)
+        os.write(master, b"y\x1bq")  # type y, then escape and q together: leave, then quit
+        screen = read_until(master, b"Stop them all and quit?")
+        assert b"yq" not in screen  # the q was not typed into the field
+    finally:
+        stop_pty(proc, master)

@@ -22,7 +22,7 @@ from textual import events, on, work
 from textual.app import App, ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.containers import Vertical
-from textual.screen import Screen
+from textual.screen import ModalScreen, Screen
 from textual.widget import Widget
 from textual.widgets import Button, Footer, OptionList, Static, TabbedContent, TabPane, Tree
 
@@ -35,7 +35,7 @@ from .engine.run.supervisor import Event, Supervisor
 from .output_store import ERROR, INFO, WARN, Line, OutputStore
 from .screens.args_panel import ArgsPanel, check_plan, check_values
 from .screens.dialogs import ConfirmScreen, HelpScreen, QuitScreen
-from .screens.fields import ESC_DIGITS, Field
+from .screens.fields import Field, after_escape
 from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
@@ -550,12 +550,17 @@ class TuiLaunchApp(App[int]):
         self.refresh_bindings()
 
     def on_key(self, event: events.Key) -> None:
-        """ESC and a digit read together arrive as one character (see fields.py): outside
-        a field that is the digit's tab."""
-        digit = ESC_DIGITS.get(event.character or "")
-        if digit in ("1", "2", "3", "4"):
-            event.stop()
-            self.action_tab(("nodes", "args", "services", "params")[int(digit) - 1])
+        """ESC and a key read together arrive as one key (see fields.py): outside a field,
+        where escape leaves nothing, that is the key alone. Not in a dialog: there escape
+        answers no, and the key must not answer again."""
+        following = after_escape(event)
+        if following is None or isinstance(self.screen, ModalScreen):
+            return
+        event.stop()
+        if following.key in ("1", "2", "3", "4"):
+            self.action_tab(("nodes", "args", "services", "params")[int(following.key) - 1])
+        else:
+            self.post_message(following)
 
     def action_leave_field(self) -> None:
         """Escape in a text field: out of it, to where the tab's work starts, so the next

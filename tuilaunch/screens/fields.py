@@ -14,12 +14,26 @@ from __future__ import annotations
 from typing import Any
 
 from textual import events
+from textual.keys import _character_to_key
 from textual.widgets import Input
 
 # Textual reads ESC and a digit arriving in one read (esc then 3, typed fast over ssh or sent
 # by tmux) as the character macOS's option key gives: in a field that is "leave, then 3"
 ESC_DIGITS = {"¡": "1", "™": "2", "£": "3", "¢": "4", "∞": "5", "§": "6", "¶": "7",
               "•": "8", "ª": "9", "º": "0"}
+
+
+def after_escape(event: events.Key) -> events.Key | None:
+    """The key typed right after escape, when both came in one read: ESC and a digit read
+    as the option-key character, ESC and another key as `alt+KEY` (no alt binding of ours
+    or of Input's uses a printable key)."""
+    character = event.character or ""
+    if character in ESC_DIGITS:
+        digit = ESC_DIGITS[character]
+        return events.Key(digit, digit)
+    if event.key.startswith("alt+") and len(character) == 1 and character.isprintable():
+        return events.Key(_character_to_key(character), character)
+    return None
 
 
 class Field(Input):
@@ -47,13 +61,13 @@ class Field(Input):
             await self.action_submit()
             await self.run_action("app.leave_field")
             return
-        if event.key == "escape" or event.character in ESC_DIGITS:
+        following = after_escape(event)
+        if event.key == "escape" or following is not None:
             event.stop()
             event.prevent_default()
             await self.run_action("app.leave_field")
-            if event.character in ESC_DIGITS:
-                digit = ESC_DIGITS[event.character]
-                self.app.post_message(events.Key(digit, digit))
+            if following is not None:
+                self.app.post_message(following)
             return
         if event.is_printable:
             await super()._on_key(event)

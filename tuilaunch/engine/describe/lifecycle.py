@@ -176,6 +176,8 @@ class OnStateTransition(EventHandler):
         self.start_state = start_state
         self.goal_state = goal_state
         self.matcher = matcher
+        # launch_ros runs the entities on every matching transition unless told once
+        self.handle_once = bool(kwargs.get("handle_once", False))
 
 
 def state_filter(transition: str | None, start_state: str | None, goal_state: str | None)\
@@ -191,7 +193,8 @@ def state_keys(transition: str, start_state: str, goal_state: str) -> list[str]:
         for s in (start_state, None):
             for g in (goal_state, None):
                 keys.append(state_filter(t, s, g))
-    return keys
+    # an empty label (rcl's intermediate transitions have none) reads as "any": each key once
+    return list(dict.fromkeys(keys))
 
 
 # EmitEvent(event=ChangeState(...)) stands for a ChangeStateAction in a Description

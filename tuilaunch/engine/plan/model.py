@@ -24,6 +24,7 @@ class Trigger:
     io: str | None = None
     after: Trigger | None = None
     target_entity: Any = field(default=None, repr=False, compare=False)
+    repeat: bool = False  # a state trigger: fires on every matching transition, not once
 
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"on": self.on, "target": self.target, "delay": self.delay}
@@ -255,7 +256,12 @@ class PlanDiff:
 
 
 def diff_plans(old: Plan, new: Plan, running: set[str] | None = None) -> PlanDiff:
-    """Compares enabled processes by id and signature; `running` limits what can be kept."""
+    """Compares enabled processes by id and signature.
+
+    An unchanged process is left as it is, running or not: a one-shot that finished (a
+    spawner, a map loader) does not run again, and one that failed waits for the operator's
+    restart, as if the relaunch had not touched it. A changed one that is not in `running`
+    (None: all are) only starts, as there is nothing to stop."""
     old_enabled = {p.id: p for p in old.processes if p.enabled}
     new_enabled = {p.id: p for p in new.processes if p.enabled}
     alive = set(old_enabled) if running is None else running
@@ -265,10 +271,11 @@ def diff_plans(old: Plan, new: Plan, running: set[str] | None = None) -> PlanDif
     for pid, proc in old_enabled.items():
         other = new_enabled.get(pid)
         if other is not None and process_signature(other) == process_signature(proc):
-            (keep if pid in alive else start).append(pid)
-        else:
+            keep.append(pid)
+            continue
+        if pid in alive:
             stop.append(pid)
-            if other is not None:
-                start.append(pid)
+        if other is not None:
+            start.append(pid)
     start += [pid for pid in new_enabled if pid not in old_enabled]
     return PlanDiff(keep, stop, start)

@@ -526,7 +526,9 @@ class Resolver:
             io = lifecycle_plan.state_trigger_io(handler, outer.context())  # type: ignore[arg-type]
         # a state handler without a target node applies to every lifecycle node: "*"
         target = "*" if handler.on == "state" and handler.target is None else None
-        scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target)
+        scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target,
+                                repeat=handler.on == "state" and
+                                not getattr(handler, "handle_once", False))
         self.triggers.append(scope.trigger)
         item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
                         scope.trigger)

@@ -120,8 +120,8 @@ class LifecycleTracker:
         self._heard.add(proc_id)
         self._set_state(proc_id, goal, {"transition": transition, "start": start})
         for key in state_keys(transition, start, goal):
-            self.supervisor._flag(proc_id, "state:" + key).set()
-            self.supervisor._flag("*", "state:" + key).set()
+            self.supervisor.state_reached(proc_id, "state:" + key)
+            self.supervisor.state_reached("*", "state:" + key)
 
     def _set_state(self, proc_id: str, state: str, detail: dict[str, str] | None = None)\
             -> None:

@@ -100,6 +100,10 @@ class Supervisor:
         self._running: dict[str, Running] = {}
         self._lingering: set[ChannelReader] = set()  # output still open after its process exited
         self._happened: dict[tuple[str, str], asyncio.Event] = {}
+        # lifecycle transitions seen per (node or "*", state filter), and an event pulsed at
+        # each: what re-runs the actions of an OnStateTransition on every match
+        self._occurrences: dict[tuple[str, str], int] = {}
+        self._pulses: dict[tuple[str, str], asyncio.Event] = {}
         self._busy = 0  # triggers sleeping or respawns scheduled
         self._tasks: set[asyncio.Task[Any]] = set()
         self._shutting_down = False
@@ -157,6 +161,35 @@ class Supervisor:
 
     def _flag(self, process_id: str, what: str) -> asyncio.Event:
         return self._happened.setdefault((process_id, what), asyncio.Event())
+
+    def state_reached(self, process_id: str, what: str) -> None:
+        """A lifecycle transition matching `what`: once for start-up chains, and counted
+        for the handlers that run on each match."""
+        key = (process_id, what)
+        self._flag(process_id, what).set()
+        self._occurrences[key] = self._occurrences.get(key, 0) + 1
+        pulse = self._pulses.pop(key, None)
+        if pulse is not None:
+            pulse.set()
+
+    async def _on_every_state(self, action: ActionPlan) -> None:
+        """launch_ros's OnStateTransition: the entities run on the first matching
+        transition and again on each later one (a node cycled by the operator or a
+        manager), until shutdown."""
+        trigger = action.trigger
+        assert trigger is not None and trigger.target is not None
+        key = (trigger.target, _flag_name(trigger))
+        await self._when_ready(trigger, self._run_action, action)
+        seen = self._occurrences.get(key, 0)
+        while not self._shutting_down:
+            while self._occurrences.get(key, 0) <= seen:
+                await self._pulses.setdefault(key, asyncio.Event()).wait()
+            seen += 1
+            if self._shutting_down or not action.enabled:
+                return
+            if trigger.delay:
+                await asyncio.sleep(trigger.delay)
+            await self._run_action(action)
 
     # --- running ---------------------------------------------------------------------
 
@@ -304,6 +337,9 @@ class Supervisor:
         elif chain is not None and chain.target is not None:
             key = (chain.target, chain.io or "stdout")
             self._io_watchers.setdefault(key, []).append(action)
+        elif first is not None and first.on == "state" and first.repeat and \
+                first.target is not None:
+            self._spawn_task(self._on_every_state(action))
         else:
             self._spawn_task(self._when_ready(action.trigger, self._run_action, action))
 
@@ -703,8 +739,9 @@ class Supervisor:
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """Relaunch with new argument values: stop what changed, start what is new.
 
-        Processes whose command, environment and parameters are unchanged keep running;
-        triggers of new processes fire at once when what they wait for already happened.
+        Processes whose command, environment and parameters are unchanged are left as they
+        are (running, finished or waiting for their trigger); triggers of new processes fire
+        at once when what they wait for already happened.
         """
         running = {pid for pid in self._running}
         diff = diff_plans(self.plan, plan, running)
@@ -715,7 +752,8 @@ class Supervisor:
                            if a.enabled}
             self.plan = plan
             for proc in plan.processes:
-                if proc.id not in self._running:
+                # a kept process keeps its state: finished, failed, or still waiting
+                if proc.id not in self._running and proc.id not in diff.keep:
                     self.states[proc.id] = "pending" if proc.enabled else "skipped"
             self._io_watchers.clear()
             self._on_shutdown.clear()
