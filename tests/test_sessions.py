@@ -690,3 +690,32 @@ def test_an_attached_client_follows_lifecycle_states_and_asks_for_transitions(
         tl("wait", name, "/lc", "inactive", "--timeout", "10")
     finally:
         tl("stop", name)
+
+
+def test_attach_shows_progress_bars_and_bad_bytes_as_the_live_pane_does(runtime, write):
+    """The lines printed before attaching come from the log files, which keep the raw bytes;
+    the pane shows them as a terminal would: a `\\r` progress bar as its last state."""
+    path = write("""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='bar', cmd=['printf',
+        'load 10%%\\\\rload 50%%\\\\rload 100%%\\\\n\\\\377bad\\\\000byte\\\\ndone\\\\n'])])
+""")
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, "bar-1", "exited", "--timeout", "30")
+    log_dir = Path(status(name)["log_dir"])
+    assert b"load 10%\rload 50%\rload 100%" in (log_dir / "bar-1.log").read_bytes()
+
+    async def attach() -> None:
+        app = make_app(str(path), {}, log_dir, session_name=name)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.pause()
+            shown = [line.text for line in app.store.lines(View("bar-1"))
+                     if "process" not in line.text]
+            assert shown == ["load 100%", "\ufffdbadbyte", "done"]
+            await pilot.press("d")
+            await pilot.pause(0.5)
+
+    asyncio.run(attach())
+    tl("stop", name)
