@@ -29,7 +29,7 @@ from textual.widgets import Input
 from tuilaunch.app import make_app
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run import session_dir
-from tuilaunch.output_store import View
+from tuilaunch.output_store import LEVELS, View
 from tuilaunch.session_client import RemoteSupervisor
 
 from .conftest import run_cli
@@ -719,3 +719,38 @@ def generate_launch_description():
 
     asyncio.run(attach())
     tl("stop", name)
+
+
+def test_a_stop_asked_elsewhere_is_not_shown_as_a_crash(runtime, write):
+    """Another operator stops a node, or `tuilaunch stop` stops the session: an attached TUI
+    shows those processes stopped (a warning line), not failed in red as a crash would be."""
+    path = str(write(LAUNCH))
+    name = start_detached(write)
+    log_dir = Path(status(name)["log_dir"])
+
+    async def scenario() -> None:
+        other = await RemoteSupervisor.open(name, Session(path, {}))
+        other_task = asyncio.ensure_future(other.run())
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await other.stop("ticker-1")
+            died: list = []
+            for _ in range(600):
+                await pilot.pause(0.05)
+                died = [line for line in app.store.lines(View("ticker-1"))
+                        if line.event and "died" in line.text]
+                if died:
+                    break
+            assert died and LEVELS[died[-1].level] == "WARN", died
+            assert app.launch_tree.states["ticker-1"] == "exited"
+            stopper = await asyncio.create_subprocess_exec(
+                sys.executable, "-m", "tuilaunch", "stop", name)
+            for _ in range(600):
+                await pilot.pause(0.05)
+                if app.launch_tree.states.get("echo-3") != "running":
+                    break
+            assert app.launch_tree.states["echo-3"] == "exited"
+            assert await stopper.wait() == 0
+        await other_task
+
+    asyncio.run(scenario())
