@@ -29,7 +29,7 @@ from textual.widgets import Input
 from tuilaunch.app import make_app
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run import session_dir
-from tuilaunch.output_store import View
+from tuilaunch.output_store import LEVELS, View
 from tuilaunch.session_client import RemoteSupervisor
 
 from .conftest import run_cli
@@ -690,3 +690,67 @@ def test_an_attached_client_follows_lifecycle_states_and_asks_for_transitions(
         tl("wait", name, "/lc", "inactive", "--timeout", "10")
     finally:
         tl("stop", name)
+
+
+def test_attach_shows_progress_bars_and_bad_bytes_as_the_live_pane_does(runtime, write):
+    """The lines printed before attaching come from the log files, which keep the raw bytes;
+    the pane shows them as a terminal would: a `\\r` progress bar as its last state."""
+    path = write("""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='bar', cmd=['printf',
+        'load 10%%\\\\rload 50%%\\\\rload 100%%\\\\n\\\\377bad\\\\000byte\\\\ndone\\\\n'])])
+""")
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, "bar-1", "exited", "--timeout", "30")
+    log_dir = Path(status(name)["log_dir"])
+    assert b"load 10%\rload 50%\rload 100%" in (log_dir / "bar-1.log").read_bytes()
+
+    async def attach() -> None:
+        app = make_app(str(path), {}, log_dir, session_name=name)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.pause()
+            shown = [line.text for line in app.store.lines(View("bar-1"))
+                     if "process" not in line.text]
+            assert shown == ["load 100%", "\ufffdbadbyte", "done"]
+            await pilot.press("d")
+            await pilot.pause(0.5)
+
+    asyncio.run(attach())
+    tl("stop", name)
+
+
+def test_a_stop_asked_elsewhere_is_not_shown_as_a_crash(runtime, write):
+    """Another operator stops a node, or `tuilaunch stop` stops the session: an attached TUI
+    shows those processes stopped (a warning line), not failed in red as a crash would be."""
+    path = str(write(LAUNCH))
+    name = start_detached(write)
+    log_dir = Path(status(name)["log_dir"])
+
+    async def scenario() -> None:
+        other = await RemoteSupervisor.open(name, Session(path, {}))
+        other_task = asyncio.ensure_future(other.run())
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await other.stop("ticker-1")
+            died: list = []
+            for _ in range(600):
+                await pilot.pause(0.05)
+                died = [line for line in app.store.lines(View("ticker-1"))
+                        if line.event and "died" in line.text]
+                if died:
+                    break
+            assert died and LEVELS[died[-1].level] == "WARN", died
+            assert app.launch_tree.states["ticker-1"] == "exited"
+            stopper = await asyncio.create_subprocess_exec(
+                sys.executable, "-m", "tuilaunch", "stop", name)
+            for _ in range(600):
+                await pilot.pause(0.05)
+                if app.launch_tree.states.get("echo-3") != "running":
+                    break
+            assert app.launch_tree.states["echo-3"] == "exited"
+            assert await stopper.wait() == 0
+        await other_task
+
+    asyncio.run(scenario())

@@ -298,7 +298,10 @@ class TuiLaunchApp(App[int]):
             return []
         if event.kind == "exited":
             code = event.code if event.code is not None else 0
-            asked = process in self._stopping or self.quitting
+            # the server says whether anyone asked for the stop (another client, a
+            # `tuilaunch stop`, a stop begun before this client attached)
+            asked = process in self._stopping or self.quitting or bool(
+                event.data and event.data.get("requested"))
             if code != 0 and not asked and state == "exited":
                 state = "failed"  # a crash, not the operator's stop
             tree.set_state(process, state, f"({event.reason}, pid {event.pid})")

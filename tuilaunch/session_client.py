@@ -19,6 +19,7 @@ from .engine.plan.model import Plan, PlanDiff
 from .engine.plan.session import Session
 from .engine.run import session_dir
 from .engine.run.log_reader import tail_lines
+from .engine.run.output import screen_str
 from .engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
 from .engine.run.session_dir import SessionError
 from .engine.run.supervisor import Event
@@ -181,7 +182,8 @@ class RemoteSupervisor:
         for process, end in offsets.items():
             for line in tail_lines(self.log_dir / f"{process}.log", end, scrollback):
                 timed.append((line.time, len(timed), Event(
-                    "output", process, stream=line.stream, lines=[line.text], time=line.time)))
+                    "output", process, stream=line.stream, lines=[screen_str(line.text)],
+                    time=line.time)))
         for data in recent:
             event = event_from_dict(data)
             timed.append((event.time, len(timed), event))

@@ -25,6 +25,15 @@ def screen_text(raw: bytes) -> str:
     return raw.decode("utf-8", errors="replace").replace("\x00", "")
 
 
+def screen_str(text: str) -> str:
+    """`screen_text` of a line already decoded, as the log files' lines are read back."""
+    if "\r" not in text and "\x00" not in text:
+        return text
+    if text.endswith("\r"):
+        text = text[:-1]
+    return text.rsplit("\r", 1)[-1].replace("\x00", "")
+
+
 def screen_lines(block: bytes) -> list[str]:
     """The screen text of a block of whole lines (each ending in `\n`)."""
     body = block[:-1]

@@ -32,7 +32,9 @@ class ProtocolError(Exception):
 
 
 def encode(message: dict[str, Any]) -> bytes:
-    return json.dumps(message, separators=(",", ":")).encode() + b"\n"
+    # default=str: a detail that is not JSON (a path, an enum) is sent as its text, never
+    # stops the events that follow it
+    return json.dumps(message, separators=(",", ":"), default=str).encode() + b"\n"
 
 
 def decode(line: bytes) -> dict[str, Any]:
@@ -56,6 +58,8 @@ def event_to_dict(event: Event) -> dict[str, Any]:
         data["lines"] = event.lines
     if event.level != "INFO":
         data["level"] = event.level
+    if event.data is not None:
+        data["data"] = event.data  # a component's result, a lifecycle state, a stop asked
     return data
 
 

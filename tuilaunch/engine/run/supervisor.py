@@ -689,8 +689,9 @@ class Supervisor:
             self._crash_times[process_id] = time.monotonic()
         self.states[process_id] = "exited"
         self.lifecycle.process_exited(process_id)
+        # `requested`: a stop asked by anyone (another client, `tuilaunch stop`), not a crash
         self._emit(Event("exited", process_id, pid=running.process.pid, code=code,
-                         reason=_describe_exit(code)))
+                         reason=_describe_exit(code), data={"requested": requested}))
         self._process_event(process_id, "exit", running.process.pid, code)
         self._flag(process_id, "exit").set()
         if self._should_respawn(running, code):
