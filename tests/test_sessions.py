@@ -754,3 +754,39 @@ def test_a_stop_asked_elsewhere_is_not_shown_as_a_crash(runtime, write):
         await other_task
 
     asyncio.run(scenario())
+
+
+def test_a_session_whose_files_were_removed_puts_them_back(runtime, write):
+    """logind removes $XDG_RUNTIME_DIR when the user's last login ends (the ssh logout after
+    --detach); a tmp cleaner or an rm removes a socket. The session stays reachable."""
+    name = start_detached(write)
+    before = pids(name)
+    shutil.rmtree(runtime / "tuilaunch")
+    wait_for(lambda: run_cli("status", name).returncode == 0)
+    assert pids(name) == before
+    assert stat.S_IMODE(os.stat(runtime / "tuilaunch").st_mode) == 0o700
+    assert stat.S_IMODE(os.stat(runtime / "tuilaunch" / f"{name}.sock").st_mode) == 0o600
+    assert tl("ls").stdout.count(name) == 1
+    (runtime / "tuilaunch" / f"{name}.sock").unlink()  # only the socket, this time
+    wait_for(lambda: run_cli("status", name).returncode == 0)
+    tl("stop", name)
+    assert not any(_alive(pid) for pid in before.values())
+    assert not list((runtime / "tuilaunch").iterdir())  # and it cleans up after itself
+
+
+def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, write,
+                                                                     monkeypatch, tmp_path):
+    """The ssh logout after --detach: logind unmounts $XDG_RUNTIME_DIR and makes it anew,
+    empty, at the next login. The session is found there again."""
+    monkeypatch.setenv("ROS_HOME", str(tmp_path / "ros_home"))  # the fallback in between
+    name = start_detached(write)
+    before = pids(name)
+    shutil.rmtree(runtime)
+    time.sleep(2.5)  # the server looks while the folder is away, too
+    runtime.mkdir(mode=0o700)  # the next login
+    wait_for(lambda: run_cli("status", name).returncode == 0)
+    assert pids(name) == before
+    assert tl("ls").stdout.count(name) == 1
+    assert not list((tmp_path / "ros_home" / "tuilaunch").iterdir())  # nothing left there
+    tl("stop", name)
+    assert not any(_alive(pid) for pid in before.values())

@@ -36,6 +36,8 @@ CLIENT_MAX_LINES = 20_000
 """Output lines queued per client before the oldest are dropped for that client."""
 CLIENT_MAX_EVENTS = 10_000
 """State events queued for a client that reads nothing; past this it is disconnected."""
+REACHABLE_CHECK = 1.0
+"""Seconds between checks that the session's socket is still where clients look."""
 RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
 
@@ -90,6 +92,10 @@ class SessionServer:
         self.ended = False  # the supervisor's run is over; writers send "ended" and stop
         self.status_code = 0
         self._tasks: set[asyncio.Task[Any]] = set()
+        self._server: asyncio.AbstractServer | None = None
+        self._bound: tuple[int, int] | None = None  # the socket file we listen on
+        self._bound_path: Path | None = None
+        self._lock = -1  # the descriptor holding `<name>.lock`
 
     # --- the supervisor's events -------------------------------------------------------------
 
@@ -132,31 +138,26 @@ class SessionServer:
     # --- serving ---------------------------------------------------------------------------
 
     async def serve(self) -> int:
-        path = session_dir.socket_path(self.name)
-        lock = session_dir.claim(self.name)  # held until this process ends
+        self._lock = session_dir.claim(self.name)  # held until this process ends
         if session_dir.is_alive(self.name):
-            os.close(lock)
+            os.close(self._lock)
             raise session_dir.SessionError(f"a session named {self.name} is already running",
                                            hint="choose another --name")
-        path.unlink(missing_ok=True)
-        old_umask = os.umask(0o177)  # the socket is created 0600, never briefly wider
-        try:
-            server = await asyncio.start_unix_server(self._client, path=str(path),
-                                                     limit=MAX_MESSAGE)
-        finally:
-            os.umask(old_umask)
-        os.chmod(path, 0o600)
-        session_dir.write_info(self.name, self.info())
+        await self._bind()
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, self._signalled, sig)
         # no terminal: a SIGHUP can only come from someone who means it as "keep going"
         loop.add_signal_handler(signal.SIGHUP, lambda: None)
+        keeper = asyncio.ensure_future(self._stay_reachable())
         try:
             status = await self.supervisor.run(keep_alive=True)
         finally:
-            server.close()
-            session_dir.remove(self.name)
+            keeper.cancel()
+            if self._server is not None:
+                self._server.close()
+            if self._owns_name():  # never the files of a later session given our name
+                session_dir.remove(self.name)
         self.status_code = status
         self.ended = True
         for queue in list(self.queues):
@@ -166,6 +167,66 @@ class SessionServer:
         for writer in list(self.writers):
             writer.close()
         return status
+
+    async def _bind(self) -> None:
+        """Listens on the session's socket path (anew: the old socket, if any, is closed)."""
+        if self._server is not None:
+            self._server.close()
+            self._server = None
+        path = session_dir.socket_path(self.name)
+        old = self._bound_path
+        if old is not None and old.parent != path.parent and _identity_or_none(old) == self._bound:
+            # the folder moved ($XDG_RUNTIME_DIR came back): no stale files left behind
+            for suffix in (".sock", ".json", ".lock"):
+                old.with_suffix(suffix).unlink(missing_ok=True)
+        path.unlink(missing_ok=True)
+        old_umask = os.umask(0o177)  # the socket is created 0600, never briefly wider
+        try:
+            self._server = await asyncio.start_unix_server(self._client, path=str(path),
+                                                           limit=MAX_MESSAGE)
+        finally:
+            os.umask(old_umask)
+        os.chmod(path, 0o600)
+        self._bound = _identity(path)
+        self._bound_path = path
+        session_dir.write_info(self.name, self.info())
+
+    def _owns_name(self) -> bool:
+        try:
+            lock_path = session_dir.session_root() / f"{self.name}.lock"
+            return _identity(lock_path) == _identity_fd(self._lock)
+        except (OSError, LaunchError):
+            return False
+
+    async def _stay_reachable(self) -> None:
+        """Puts the session's files back when someone removed them: logind removes
+        $XDG_RUNTIME_DIR when the user's last login ends (the ssh logout after --detach),
+        a tmp cleaner or an `rm` removes a socket. Without this, the launch would run on
+        with no way to attach, stop or even list it. One stat a second is the whole cost."""
+        warned = False
+        while True:
+            await asyncio.sleep(REACHABLE_CHECK)
+            try:
+                if not self._owns_name():
+                    try:
+                        lock = session_dir.claim(self.name)
+                    except session_dir.SessionError:
+                        continue  # a newer session took the name; it keeps it
+                    os.close(self._lock)
+                    self._lock = lock
+                if _identity_or_none(
+                        session_dir.socket_path(self.name)) != self._bound:
+                    await self._bind()
+                    self._log(f"session {self.name}: its socket was removed; "
+                              f"listening again at {session_dir.socket_path(self.name)}")
+                warned = False
+            except (OSError, LaunchError) as exc:
+                if not warned:  # e.g. the folder cannot be made; try again, say it once
+                    self._log(f"session {self.name}: cannot put its socket back: {exc}", "ERROR")
+                    warned = True
+
+    def _log(self, text: str, level: str = "WARN") -> None:
+        self.supervisor.log(text, level)
 
     def _signalled(self, sig: signal.Signals) -> None:
         self._spawn(self.supervisor.shutdown(f"received {sig.name}"))
@@ -381,6 +442,23 @@ async def _send(writer: asyncio.StreamWriter, lock: asyncio.Lock, message: dict[
     async with lock:  # replies and event batches never interleave inside a line
         writer.write(encode(message))
         await writer.drain()
+
+
+def _identity(path: Path) -> tuple[int, int]:
+    info = os.stat(path)
+    return info.st_dev, info.st_ino
+
+
+def _identity_or_none(path: Path) -> tuple[int, int] | None:
+    try:
+        return _identity(path)
+    except FileNotFoundError:
+        return None
+
+
+def _identity_fd(fd: int) -> tuple[int, int]:
+    info = os.fstat(fd)
+    return info.st_dev, info.st_ino
 
 
 def _same_user(sock: socket.socket) -> bool:

@@ -139,6 +139,10 @@ class Supervisor:
                 self._consumer_failed(consumer, exc)
         self._changed.set()
 
+    def log(self, text: str, level: str = "INFO") -> None:
+        """A line for the launch pane and launch.log from whoever runs the supervisor."""
+        self._emit(Event("log", None, reason=text, level=level))
+
     def _consumer_failed(self, consumer: Consumer, exc: Exception) -> None:
         name = getattr(consumer, "__qualname__", type(consumer).__name__)
         text = f"{name} failed on an event: {type(exc).__name__}: {exc}"
