@@ -95,6 +95,35 @@ def test_closed_stdout_loses_no_line_and_the_launch_runs_to_its_end(write, tmp_p
         str(n).encode() for n in range(1, count + 1)]
 
 
+@pytest.mark.parametrize("closed", [(1,), (0, 1), (2,)], ids=["stdout", "stdin+stdout",
+                                                              "stderr"])
+def test_a_launch_started_with_closed_std_fds_runs_and_logs_every_line(write, tmp_path,
+                                                                       launches, closed):
+    """`tuilaunch f.py --headless >&-` (a cron line, a service unit): no traceback, the nodes
+    run, and the log files hold what they printed, not what tuilaunch meant for the terminal."""
+    started, _ = launches
+    path = launch_file(write, "sl.add_action(ExecuteProcess(cmd=['seq', '1', '500'], "
+                              "name='counter'))")
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path)}
+    errors = tmp_path / "errors.txt"
+    redirections = " ".join(f"{fd}>&-" if fd else "<&-" for fd in closed)
+    if 2 not in closed:
+        redirections += f" 2>{errors}"
+    proc = subprocess.Popen(["sh", "-c", f'exec "$0" -m tuilaunch "$1" --headless {redirections}',
+                             sys.executable, str(path)], env=env, start_new_session=True)
+    started.append(proc)
+    assert proc.wait(timeout=60) == 0
+    logged = (log_folder(tmp_path) / "counter-1.log").read_bytes().splitlines()
+    assert [line.split(b" ", 2)[2] for line in logged] == [
+        str(n).encode() for n in range(1, 501)]
+    launch_log = (log_folder(tmp_path) / "launch.log").read_text()
+    assert "exited counter-1" in launch_log and "All log files" not in launch_log
+    if 2 not in closed:
+        said = errors.read_text()
+        assert "Traceback" not in said
+        assert said.count("stdout is closed") == (1 if 1 in closed else 0), said
+
+
 def test_a_full_disk_is_said_once_and_neither_the_node_nor_the_stop_hangs(write, tmp_path,
                                                                          launches):
     started, _ = launches

@@ -106,7 +106,31 @@ def is_command(argv: list[str]) -> bool:
     return bool(argv) and argv[0] in COMMANDS and not os.path.exists(argv[0])
 
 
+def _reopen_closed_std_streams() -> None:
+    """`tuilaunch ... >&-` (or `<&-`, `2>&-`): a closed 0, 1 or 2 would be handed to the next
+    file opened, so a log file or a node's pipe would receive what is meant for the
+    terminal. Each one closed becomes /dev/null, and a closed stdout is said once."""
+    closed = []
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            closed.append(fd)
+            null = os.open(os.devnull, os.O_RDWR)
+            if null != fd:  # the lowest free number: it is fd itself unless a lower one was
+                os.dup2(null, fd)
+                os.close(null)
+    for fd, name in ((0, "stdin"), (1, "stdout"), (2, "stderr")):
+        if fd in closed or getattr(sys, name) is None:
+            setattr(sys, name, open(fd, "r" if fd == 0 else "w", closefd=False,
+                                    errors="backslashreplace"))
+    if 1 in closed:
+        print("tuilaunch: stdout is closed: nothing is printed; every node's output is in "
+              "its log file", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
+    _reopen_closed_std_streams()
     try:
         return _main(argv)
     except BrokenPipeError:
