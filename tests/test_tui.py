@@ -332,6 +332,8 @@ def test_tui_in_a_terminal_stops_everything_when_the_terminal_hangs_up(tmp_path,
         while any(os.path.exists(f"/proc/{p}") for p in children) and time.monotonic() < gone:
             time.sleep(0.1)
         assert not [p for p in children if os.path.exists(f"/proc/{p}")]
+        said = {signal.SIGHUP: "the terminal hung up (SIGHUP)", signal.SIGTERM: "SIGTERM"}[how]
+        assert f"shutdown  reason={said}" in launch_log.read_text()  # why, for later
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)

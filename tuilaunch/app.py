@@ -735,14 +735,14 @@ class TuiLaunchApp(App[int]):
         if self.session_name is not None and (self.keep_on_hangup or not self.owner):
             self.action_detach()
         else:
-            self.stop_all_and_exit()
+            self.stop_all_and_exit("the terminal hung up (SIGHUP)")
 
     def _terminated(self) -> None:
         """SIGTERM stops what this app started; a client that only attached just leaves."""
         if self.session_name is not None and not self.owner:
             self.action_detach()
         else:
-            self.stop_all_and_exit()
+            self.stop_all_and_exit("SIGTERM")
 
     def action_detach(self) -> None:
         """Leaves the session running; the supervisor worker then exits the app."""
@@ -753,8 +753,10 @@ class TuiLaunchApp(App[int]):
         self.run_worker(self.engine.run(self.supervisor.detach()), group="shutdown",
                         exit_on_error=False)
 
-    def stop_all_and_exit(self) -> None:
-        """Shutdown escalation runs; the supervisor worker exits the app when all are gone."""
+    def stop_all_and_exit(self, reason: str = "quit from the UI") -> None:
+        """Shutdown escalation runs; the supervisor worker exits the app when all are gone.
+        The reason goes into launch.log, so a stop nobody asked for at the keyboard is told
+        apart later."""
         if self.supervisor is None:
             self.exit(0)
             return
@@ -763,7 +765,7 @@ class TuiLaunchApp(App[int]):
         for process in self.running():
             self.launch_tree.set_state(process, "stopping")
         self.update_status()
-        self.run_worker(self.engine.run(self.supervisor.shutdown("quit from the UI")),
+        self.run_worker(self.engine.run(self.supervisor.shutdown(reason)),
                         group="shutdown", exit_on_error=False)
 
     # --- command palette ---------------------------------------------------------------------
