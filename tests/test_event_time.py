@@ -117,7 +117,7 @@ def generate_launch_description():
 """)
     done = headless(path, env)
     lines = lines_of(done)
-    stop = index_of(lines, "driver-1]: process has finished")
+    stop = index_of(lines, "[INFO] [driver-1]: process stopped")  # a stop, not a crash
     assert index_of(lines, "shutdown (enough)") < stop < index_of(lines, "driver stopped with")
     assert "driver complete" in done.stdout
 
@@ -201,7 +201,7 @@ def generate_launch_description():
     done = headless(path, env, timeout=40)
     lines = lines_of(done)
     assert index_of(lines, "[driver-2]: process has finished") < index_of(
-        lines, "[sleeper-1]: process has finished")
+        lines, "[INFO] [sleeper-1]: process stopped")
     assert done.returncode != 0 or "killed by SIGINT" in done.stdout or "exit code" in done.stdout
 
 

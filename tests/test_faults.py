@@ -394,8 +394,9 @@ sl.add_action(ExecuteProcess(cmd=['{script}'], name='stubborn', sigterm_timeout=
     out = proc.communicate(timeout=60)[0]
     assert "[WARN] [stubborn-1]: still running 0.4 s after SIGINT: sending SIGTERM" in out
     assert "[WARN] [stubborn-1]: still running 0.6 s after SIGTERM: sending SIGKILL" in out
-    assert "process has finished (killed by SIGKILL)" in out
-    assert proc.returncode == 0  # stopped as asked
+    # stopped as asked: said as a stop, not as an error, and a clean exit status
+    assert "[INFO] [stubborn-1]: process stopped (killed by SIGKILL)" in out
+    assert proc.returncode == 0
 
 
 def test_second_and_third_ctrl_c_escalate_at_once(write, tmp_path, launches):
@@ -414,7 +415,7 @@ def test_second_and_third_ctrl_c_escalate_at_once(write, tmp_path, launches):
     read_until(proc, "received SIGINT again: sending SIGTERM now",
                "[WARN] [stubborn-1]: asked again: sending SIGTERM")
     os.kill(proc.pid, signal.SIGINT)
-    out = read_until(proc, "sending SIGKILL now", "process has finished (killed by SIGKILL)")
+    out = read_until(proc, "sending SIGKILL now", "process stopped (killed by SIGKILL)")
     assert "still running" not in out  # no timeout was waited for
     proc.communicate(timeout=30)
     assert proc.returncode == 0
@@ -431,6 +432,7 @@ sl.add_action(ExecuteProcess(cmd=['python3', '-c', 'import time; print("up", flu
     os.killpg(proc.pid, signal.SIGINT)
     out = proc.communicate(timeout=60)[0]
     assert "KeyboardInterrupt" in out  # the script died of the SIGINT tuilaunch sent
+    assert "[INFO] [plain-1]: process stopped (killed by SIGINT)" in out
     assert proc.returncode == 0
     path = launch_file(write, """
 sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; kill -9 $$'], name='lost'))

@@ -62,8 +62,12 @@ class Printer:
         if event.kind == "started":
             return f"[INFO] [{event.process}]: process started with pid [{event.pid}]\n"
         if event.kind == "exited":
-            level = "INFO" if event.code == 0 else "ERROR"
-            return f"[{level}] [{event.process}]: process has finished ({event.reason})\n"
+            if event.code == 0:
+                return f"[INFO] [{event.process}]: process has finished ({event.reason})\n"
+            if (event.data or {}).get("requested"):
+                # the stop asked for (Ctrl+C, `tuilaunch stop`): its end is no error to report
+                return f"[INFO] [{event.process}]: process stopped ({event.reason})\n"
+            return f"[ERROR] [{event.process}]: process has finished ({event.reason})\n"
         if event.kind == "failed":
             return f"[ERROR] [{event.process}]: failed to start: {event.reason}\n"
         if event.kind == "respawning":
