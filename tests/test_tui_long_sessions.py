@@ -404,6 +404,11 @@ async def test_a_failed_nodes_pane_says_how_it_died_and_its_reason_is_on_screen(
         await pilot.press("down")
         await until(pilot, lambda: "not found" in str(app.query_one("#detail").render()))
         assert any("failed:" in line for line in app.store.text(View("absent-2")))
+        await pilot.press("down", "s")  # the operator stops `fine`: a stop, not a death
+        await until(pilot, lambda: any("process stopped [pid" in line
+                                       for line in app.store.text(View("fine-3"))))
+        assert not any("process has died" in line for line in app.store.text(View("fine-3")))
+        assert "failed" not in row_text(app, "fine-3")
         assert app.supervisor is not None
         await app.engine.run(app.supervisor.shutdown("test over"))
 

@@ -307,9 +307,10 @@ class TuiLaunchApp(App[int]):
             tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
             if code == 0:
                 text, level = f"process has finished cleanly [pid {event.pid}]", INFO
+            elif asked:
+                text, level = f"process stopped [pid {event.pid}, {event.reason}]", INFO
             else:
-                text = f"process has died [pid {event.pid}, {event.reason}]"
-                level = WARN if asked else ERROR
+                text, level = f"process has died [pid {event.pid}, {event.reason}]", ERROR
             return self.store.add_event(process, text, level)
         if event.kind == "failed":
             tree.set_state(process, state, f"({event.reason})")
