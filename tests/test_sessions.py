@@ -231,6 +231,33 @@ def test_a_dead_server_leaves_no_node_and_ls_cleans_its_socket(runtime, write):
     assert missing.returncode == 2 and f"no running session named {name}" in missing.stderr
 
 
+def test_a_stopped_server_makes_no_command_hang(runtime, write):
+    """A stray Ctrl+Z or `kill -STOP` on the server: its socket still accepts, nothing
+    answers. `ls` lists it as not answering, the others say so in one line; none hangs."""
+    name = start_detached(write)
+    server = status(name)["pid"]
+    os.kill(server, signal.SIGSTOP)
+    try:
+        started = time.monotonic()
+        listed = run_cli("ls")
+        assert listed.returncode == 0
+        row = next(line.split() for line in listed.stdout.splitlines() if line.startswith(name))
+        assert row[1] == str(server) and row[4] == "?"
+        assert f"session {name} did not answer within 3 s: its server (pid {server}) is " \
+            "stopped" in listed.stderr
+        assert f"kill -CONT {server}" in listed.stderr
+        assert json.loads(tl("ls", "--json").stdout)[0]["answering"] is False
+        asked = run_cli("status", name)
+        assert asked.returncode == 2 and "Traceback" not in asked.stderr
+        assert asked.stderr.startswith(f"tuilaunch status: error: session {name} did not "
+                                       "answer within 10 s")
+        assert time.monotonic() - started < 60
+    finally:
+        os.kill(server, signal.SIGCONT)
+    assert json.loads(tl("ls", "--json").stdout)[0]["answering"] is True
+    tl("stop", name)
+
+
 def test_killed_tui_client_leaves_nodes_running_and_attach_shows_what_was_missed(
         runtime, write):
     name = start_detached(write)
@@ -723,7 +750,7 @@ def generate_launch_description():
 
 def test_a_stop_asked_elsewhere_is_not_shown_as_a_crash(runtime, write):
     """Another operator stops a node, or `tuilaunch stop` stops the session: an attached TUI
-    shows those processes stopped (a warning line), not failed in red as a crash would be."""
+    shows those processes stopped (an INFO line), not failed in red as a crash would be."""
     path = str(write(LAUNCH))
     name = start_detached(write)
     log_dir = Path(status(name)["log_dir"])
@@ -738,10 +765,11 @@ def test_a_stop_asked_elsewhere_is_not_shown_as_a_crash(runtime, write):
             for _ in range(600):
                 await pilot.pause(0.05)
                 died = [line for line in app.store.lines(View("ticker-1"))
-                        if line.event and "died" in line.text]
+                        if line.event and ("died" in line.text or "stopped" in line.text)]
                 if died:
                     break
-            assert died and LEVELS[died[-1].level] == "WARN", died
+            assert died and LEVELS[died[-1].level] == "INFO", died
+            assert "process stopped [pid" in died[-1].text
             assert app.launch_tree.states["ticker-1"] == "exited"
             stopper = await asyncio.create_subprocess_exec(
                 sys.executable, "-m", "tuilaunch", "stop", name)

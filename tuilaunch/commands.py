@@ -26,7 +26,7 @@ from .engine.run.output import strip_ansi
 from .engine.run.protocol import event_from_dict
 from .engine.run.session_dir import SessionError
 from .output_store import LEVELS, level_of
-from .session_client import Link, format_arguments, report_end, resolve_name
+from .session_client import ANSWER_TIMEOUT, Link, format_arguments, report_end, resolve_name
 
 COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait")
 PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
@@ -127,24 +127,43 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
 
 # --- commands ------------------------------------------------------------------------------
 
-def _status(name: str) -> dict[str, Any]:
-    link = Link(name)
+LS_ANSWER_TIMEOUT = 3.0  # `ls` asks every session in turn: a stopped one costs this, once
+
+
+def _status(name: str, answer_timeout: float = ANSWER_TIMEOUT) -> dict[str, Any]:
+    link = Link(name, answer_timeout=answer_timeout)
     try:
-        result: dict[str, Any] = link.request("status")
+        result: dict[str, Any] = link.request("status", short=True)
         return result
     finally:
         link.close()
+
+
+def _silent_session(name: str, error: SessionError) -> dict[str, Any] | None:
+    """An `ls` row for a session whose socket accepts but whose server does not answer,
+    from the info it wrote when it started; None when it is gone."""
+    info = session_dir.read_info(name)
+    if info is None or not _pid_alive(int(info.get("pid") or 0)):
+        return None
+    return {"name": name, "file": info.get("file", "?"), "arguments": info.get("arguments", {}),
+            "pid": info.get("pid"), "started": info.get("started", 0.0),
+            "log_dir": info.get("log_dir", ""), "counts": {}, "answering": False,
+            "problem": str(error)}
 
 
 def cmd_ls(options: argparse.Namespace) -> int:
     sessions = []
     for name in session_dir.live_sessions():
         try:
-            sessions.append(_status(name))
-        except SessionError:
-            continue  # it ended between the listing and the question
+            sessions.append({**_status(name, LS_ANSWER_TIMEOUT), "answering": True})
+        except SessionError as exc:
+            # a stopped or stuck server is listed as such; one that ended meanwhile is not
+            silent = _silent_session(name, exc)
+            if silent is not None:
+                sessions.append(silent)
     if options.json:
-        keys = ("name", "file", "arguments", "pid", "started", "log_dir", "counts")
+        keys = ("name", "file", "arguments", "pid", "started", "log_dir", "counts",
+                "answering")
         print(json.dumps([{k: s[k] for k in keys} for s in sessions], indent=2))
         return 0
     if not sessions:
@@ -153,10 +172,13 @@ def cmd_ls(options: argparse.Namespace) -> int:
     rows = [("NAME", "PID", "STARTED", "RUNNING", "FILE", "ARGUMENTS")]
     for s in sessions:
         total = sum(n for state, n in s["counts"].items() if state != "skipped")
-        rows.append((s["name"], str(s["pid"]), _clock(s["started"]),
-                     f"{s['counts'].get('running', 0)}/{total}", s["file"],
+        running = f"{s['counts'].get('running', 0)}/{total}" if s["answering"] else "?"
+        rows.append((s["name"], str(s["pid"]), _clock(s["started"]), running, s["file"],
                      format_arguments(s["arguments"])))
     _table(rows)
+    for s in sessions:
+        if not s["answering"]:
+            print(f"tuilaunch: {s['problem']}", file=sys.stderr)
     return 0
 
 
@@ -225,9 +247,12 @@ def cmd_wait(options: argparse.Namespace) -> int:
         raise SessionError(f"unknown state {options.state!r}",
                            hint=f"one of {', '.join(PROCESS_STATES + LIFECYCLE_STATES)}")
     deadline = None if options.timeout is None else time.monotonic() + options.timeout
-    link = Link(resolve_name(options.name), timeout=None)
+    # a server that does not answer is said within the wait's own time (at least 1 s)
+    answer = ANSWER_TIMEOUT if options.timeout is None else min(
+        ANSWER_TIMEOUT, max(1.0, options.timeout))
+    link = Link(resolve_name(options.name), timeout=None, answer_timeout=answer)
     try:
-        process = link.request("find", process=options.process)
+        process = link.request("find", short=True, process=options.process)
         if state in LIFECYCLE_STATES:
             return _wait_lifecycle(link, process, state, deadline)
         result = link.request("subscribe")
@@ -274,15 +299,15 @@ def cmd_logs(options: argparse.Namespace) -> int:
     minimum = LEVELS.index(options.level) if options.level else 0
     link = Link(name, timeout=None)
     try:
-        status = link.request("status")
+        status = link.request("status", short=True)
         log_dir = Path(status["log_dir"])
         wanted = [p["id"] for p in status["processes"] if p["state"] != "skipped"]
         if options.process:
-            wanted = [link.request("find", process=options.process)]
+            wanted = [link.request("find", short=True, process=options.process)]
         prefixed = len(wanted) > 1 or not options.process
         offsets: dict[str, int | None] = dict.fromkeys(wanted)
         if options.follow:
-            subscribed = link.request("subscribe")
+            subscribed = link.request("subscribe", short=True)
             offsets = {p: subscribed["offsets"].get(p, 0) for p in wanted}
         out = sys.stdout
         colour = out.isatty() and not os.environ.get("NO_COLOR")
@@ -363,6 +388,8 @@ def _table(rows: Sequence[tuple[str, ...]], indent: str = "") -> None:
 
 
 def _pid_alive(pid: int) -> bool:
+    if pid <= 0:
+        return False  # 0 and -1 would ask about a whole process group
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

@@ -44,15 +44,46 @@ def resolve_name(name: str | None) -> str:
     return alive[0]
 
 
-class Link:
-    """A blocking connection for one-shot commands (status, stop, restart, wait, logs)."""
+ANSWER_TIMEOUT = 10.0
+"""How long a client waits for the server's greeting and for a short reply: a server busy
+starting a hundred processes answers in well under a second; one that is stopped (a stray
+Ctrl+Z, `kill -STOP`) or stuck never does, and no command may hang on it."""
 
-    def __init__(self, name: str, timeout: float | None = 30.0) -> None:
+
+def not_answering(name: str, waited: float) -> SessionError:
+    """What to say of a server that accepted the connection and then said nothing."""
+    pid = (session_dir.read_info(name) or {}).get("pid")
+    where = f"its server (pid {pid})" if pid else "its server"
+    stopped = False
+    try:
+        stopped = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] in "Tt"
+    except (OSError, IndexError, TypeError):
+        pass
+    state = "is stopped" if stopped else "is stopped or stuck"
+    hint = (f"kill -CONT {pid} lets it go on; kill -9 {pid} ends it and its watchdog stops "
+            "every node" if pid else "tuilaunch ls lists the sessions")
+    return SessionError(f"session {name} did not answer within {waited:g} s: {where} {state}",
+                        hint=hint)
+
+
+class Link:
+    """A blocking connection for one-shot commands (status, stop, restart, wait, logs).
+
+    Connecting, the greeting and `request(..., short=True)` replies wait at most
+    `answer_timeout`; `timeout` is what reading messages waits afterwards (None: as long as
+    the session runs, for `stop`, `logs -f` and `wait`)."""
+
+    def __init__(self, name: str, timeout: float | None = ANSWER_TIMEOUT,
+                 answer_timeout: float = ANSWER_TIMEOUT) -> None:
         self.name = name
+        self.answer_timeout = answer_timeout
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self.sock.settimeout(timeout)
+        self.sock.settimeout(answer_timeout)
         try:
             self.sock.connect(str(session_dir.socket_path(name)))
+        except TimeoutError:
+            self.sock.close()
+            raise not_answering(name, answer_timeout) from None
         except OSError as exc:
             self.sock.close()
             raise SessionError(f"session {name} does not answer ({exc.strerror or exc})",
@@ -60,10 +91,16 @@ class Link:
         self._file = self.sock.makefile("rb")
         self._next_id = 0
         self.pending: list[dict[str, Any]] = []  # event batches that came before a reply
-        hello = self.receive()
+        try:
+            hello = self.receive()
+        except TimeoutError:
+            self.close()
+            raise not_answering(name, answer_timeout) from None
         if hello is None or hello.get("type") != "hello":
+            self.close()
             raise SessionError(f"session {name} did not greet")
         self.info: dict[str, Any] = hello["info"]
+        self.sock.settimeout(timeout)
 
     def receive(self) -> dict[str, Any] | None:
         """The next message, or None when the server closed the connection."""
@@ -75,9 +112,22 @@ class Link:
             return None
         return decode(line)
 
-    def request(self, op: str, **fields: Any) -> Any:
+    def request(self, op: str, short: bool = False, **fields: Any) -> Any:
+        """The reply to `op`; `short`: an answer the server gives at once (status, find),
+        so waiting longer than `answer_timeout` means it is not answering."""
         self._next_id += 1
         request_id = self._next_id
+        waited = self.sock.gettimeout()
+        if short:
+            self.sock.settimeout(self.answer_timeout)
+        try:
+            return self._reply(op, request_id, fields)
+        except TimeoutError:
+            raise not_answering(self.name, self.sock.gettimeout() or 0.0) from None
+        finally:
+            self.sock.settimeout(waited)
+
+    def _reply(self, op: str, request_id: int, fields: dict[str, Any]) -> Any:
         self.sock.sendall(encode({"id": request_id, "op": op, **fields}))
         while True:
             message = self.receive()
@@ -107,6 +157,17 @@ class Link:
     def close(self) -> None:
         self._file.close()
         self.sock.close()
+
+
+async def _reply_to(reader: asyncio.StreamReader, request_id: int) -> dict[str, Any]:
+    """The reply to a request, passing over what the server sends before it."""
+    while True:
+        line = await reader.readline()
+        if not line:
+            raise ProtocolError("the server closed the connection")
+        message = decode(line)
+        if message.get("type") == "reply" and message.get("id") == request_id:
+            return message
 
 
 class RemoteSupervisor:
@@ -148,15 +209,19 @@ class RemoteSupervisor:
         except OSError as exc:
             raise SessionError(f"session {name} does not answer ({exc.strerror or exc})")\
                 from None
-        hello = decode(await reader.readline())
-        self = cls(name, session, reader, writer, hello["info"])
-        writer.write(encode({"id": 0, "op": "subscribe", "max_lines": max_lines,
-                             "interval": interval}))
-        await writer.drain()
-        while True:
-            message = decode(await reader.readline())
-            if message.get("type") == "reply" and message.get("id") == 0:
-                break
+        try:
+            hello = decode(await asyncio.wait_for(reader.readline(), ANSWER_TIMEOUT))
+            self = cls(name, session, reader, writer, hello["info"])
+            writer.write(encode({"id": 0, "op": "subscribe", "max_lines": max_lines,
+                                 "interval": interval}))
+            await asyncio.wait_for(writer.drain(), ANSWER_TIMEOUT)
+            message = await asyncio.wait_for(_reply_to(reader, 0), ANSWER_TIMEOUT)
+        except TimeoutError:
+            writer.close()
+            raise not_answering(name, ANSWER_TIMEOUT) from None
+        except ProtocolError as exc:
+            writer.close()
+            raise SessionError(f"session {name}: {exc}") from None
         result = message["result"]
         self.states = dict(result["states"])
         self.lifecycle.states.update(result.get("lifecycle") or {})
