@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -95,6 +96,42 @@ def test_closed_stdout_loses_no_line_and_the_launch_runs_to_its_end(write, tmp_p
         str(n).encode() for n in range(1, count + 1)]
 
 
+def test_a_reader_that_stops_reading_freezes_no_node_and_ctrl_c_still_stops(write, tmp_path,
+                                                                            launches):
+    """A terminal paused with Ctrl+S, an ssh link slower than the output, `| less` left
+    open: the nodes run on at their own pace, Ctrl+C stops them at once, and once the reader
+    reads again the screen says how many lines it was not shown (the log has them all)."""
+    started, _ = launches
+    count = 300_000
+    path = launch_file(write, f"""
+sl.add_action(ExecuteProcess(cmd=['seq', '1', '{count}'], name='flood'))
+sl.add_action(ExecuteProcess(cmd=['sleep', '600'], name='idle'))""")
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path)}
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env,
+                            start_new_session=True)
+    started.append(proc)
+    logged = 0
+    deadline = time.monotonic() + 120
+    while logged < count and time.monotonic() < deadline:  # nobody reads stdout meanwhile
+        time.sleep(0.2)
+        logs = list(tmp_path.glob("*-tuilaunch-*/flood-1.log"))
+        logged = logs[0].read_bytes().count(b"\n") if logs else 0
+    assert logged == count  # it froze at the pipe's 64 KB before
+    shown: list[bytes] = []
+    assert proc.stdout is not None
+    reader = threading.Thread(target=lambda: shown.append(proc.stdout.read()))  # type: ignore
+    reader.start()
+    os.killpg(proc.pid, signal.SIGINT)
+    assert proc.wait(timeout=60) == 0
+    reader.join(timeout=30)
+    out = shown[0].decode()
+    skipped = sum(int(n) for n in re.findall(r"(\d+) output lines not shown", out))
+    assert skipped > 0 and "they are in the log files below" in out
+    assert out.count("[flood-1] ") + skipped == count
+    assert "[INFO] [idle-2]: process stopped (killed by SIGINT)" in out
+
+
 @pytest.mark.parametrize("closed", [(1,), (0, 1), (2,)], ids=["stdout", "stdin+stdout",
                                                               "stderr"])
 def test_a_launch_started_with_closed_std_fds_runs_and_logs_every_line(write, tmp_path,
@@ -158,7 +195,9 @@ sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'sleep 1; echo still here; sleep 6
         # one message per file that filled, not one per line
         assert everything.count("cannot write log file") <= 3
         assert f"{log_folder(disk) / 'flood-1.log'}" in everything
-        assert everything.count("[flood-1] ") == count  # the screen still got every line
+        # the screen still got every line, or says how many a slow reader was not shown
+        skipped = sum(int(n) for n in re.findall(r"(\d+) output lines not shown", everything))
+        assert everything.count("[flood-1] ") + skipped == count
     finally:
         subprocess.run(["umount", "-l", str(disk)], check=False)
 

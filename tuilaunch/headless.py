@@ -19,6 +19,7 @@ from typing import TextIO
 from .engine.plan.model import Plan
 from .engine.run.output import strip_ansi
 from .engine.run.supervisor import Event, Supervisor
+from .stdout_writer import BackgroundWriter
 
 
 def run_log_dir() -> Path:
@@ -29,7 +30,10 @@ def run_log_dir() -> Path:
 
 
 class Printer:
-    """Writes events to a stream; strips colour codes unless the stream is a terminal."""
+    """Writes events to a stream; strips colour codes unless the stream is a terminal.
+
+    A stream with a file descriptor is written from a thread of its own (`BackgroundWriter`),
+    so a reader that stops reading never holds up the launch."""
 
     def __init__(self, out: TextIO, log_dir: Path | None = None) -> None:
         self.out = out
@@ -39,6 +43,14 @@ class Printer:
             self.colour = out.isatty() and not os.environ.get("NO_COLOR")
         except ValueError:
             self.colour = False
+        self.writer: BackgroundWriter | None = None
+        try:
+            fd = out.fileno()
+            out.flush()
+        except (OSError, ValueError, AttributeError):
+            return  # a stream in memory: written directly
+        self.writer = BackgroundWriter(fd, getattr(out, "encoding", None) or "utf-8",
+                                       self._give_up, self._skipped)
 
     def __call__(self, event: Event) -> None:
         if self.broken is not None:
@@ -46,11 +58,24 @@ class Printer:
         text = self.format(event)
         if not text:
             return
+        if self.writer is not None:
+            self.writer.write(text, len(event.lines) if event.kind == "output" else 0)
+            return
         try:
             self.out.write(text)
             self.out.flush()
         except (OSError, ValueError) as exc:
             self._give_up(exc)
+
+    def close(self) -> None:
+        """Writes what is still queued, as long as the reader keeps taking it."""
+        if self.writer is not None:
+            self.writer.close()
+
+    def _skipped(self, count: int) -> str:
+        where = f" below {self.log_dir}" if self.log_dir else ""
+        return (f"[WARN] [launch]: {count} output lines not shown: stdout did not keep up "
+                f"(they are in the log files{where})\n")
 
     def format(self, event: Event) -> str:
         if event.kind == "output":
@@ -130,7 +155,10 @@ async def _run(plan: Plan, log_dir: Path) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         loop.add_signal_handler(sig, on_signal, sig)
     printer(Event("log", "launch", reason=f"All log files can be found below {log_dir}"))
-    return await supervisor.run()
+    try:
+        return await supervisor.run()
+    finally:
+        printer.close()
 
 
 def run_headless(plan: Plan, log_dir: Path | None = None) -> int:

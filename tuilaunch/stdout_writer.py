@@ -1,0 +1,101 @@
+"""A writer for headless output that never blocks the launch.
+
+Writing straight to stdout from the event loop ties every node to its reader: a terminal
+paused with Ctrl+S, an ssh link slower than the output, or `| less` left open fill the
+pipe, the loop blocks in `write`, the nodes' own pipes are no longer read, and the nodes
+freeze writing their output (Ctrl+C is not even seen). Here the loop only appends to a
+queue; one thread writes it to the file descriptor. Output lines that would make the
+queue exceed its bound are not shown, and counted: the log files hold every line, and a
+notice says how many were skipped once the reader catches up. Lines about processes
+(started, exited, failed) are always queued.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+
+QUEUE_LIMIT = 1 << 20
+"""Bytes of output waiting for a slow reader before lines are skipped: a second of a busy
+robot's output, far more than a terminal that keeps up ever has waiting."""
+
+EXIT_PATIENCE = 5.0
+"""At exit, how long to wait for a reader that takes nothing before leaving the rest."""
+
+
+class BackgroundWriter:
+    def __init__(self, fd: int, encoding: str, on_error: Callable[[OSError], None],
+                 skipped_notice: Callable[[int], str], limit: int = QUEUE_LIMIT) -> None:
+        self.fd = fd
+        self.encoding = encoding
+        self.limit = limit
+        self.written = 0  # bytes the reader has taken, for `close` to see progress
+        self._on_error = on_error
+        self._notice = skipped_notice
+        self._queue: deque[str] = deque()
+        self._queued = 0
+        self._skipped = 0
+        self._closed = False
+        self._failed = False
+        self._ready = threading.Condition()
+        self._thread = threading.Thread(target=self._run, name="stdout", daemon=True)
+        self._thread.start()
+
+    def write(self, text: str, lines: int = 0) -> None:
+        """Queues `text`; with `lines` (output lines), it may be skipped when the reader is
+        too far behind."""
+        with self._ready:
+            if self._failed or self._closed:
+                return
+            if lines and self._queued + len(text) > self.limit:
+                self._skipped += lines
+                return
+            self._queue.append(text)
+            self._queued += len(text)
+            self._ready.notify()
+
+    def close(self, patience: float = EXIT_PATIENCE) -> None:
+        """Writes what is queued, waiting as long as the reader takes something at least
+        every `patience` seconds; a reader that takes nothing is left behind."""
+        with self._ready:
+            self._closed = True
+            self._ready.notify()
+        seen, deadline = self.written, time.monotonic() + patience
+        while self._thread.is_alive():
+            self._thread.join(0.05)
+            if self.written != seen:
+                seen, deadline = self.written, time.monotonic() + patience
+            elif time.monotonic() > deadline:
+                return  # a daemon thread: it cannot keep the process alive
+
+    def _run(self) -> None:
+        while True:
+            with self._ready:
+                while not self._queue and not self._skipped and not self._closed:
+                    self._ready.wait()
+                if not self._queue and not self._skipped:
+                    return  # closed, and all written
+                text = "".join(self._queue)
+                self._queue.clear()
+                self._queued = 0
+                skipped, self._skipped = self._skipped, 0
+            if skipped:
+                text += self._notice(skipped)
+            try:
+                self._write_all(text.encode(self.encoding, "backslashreplace"))
+            except OSError as exc:
+                with self._ready:
+                    self._failed = True
+                    self._queue.clear()
+                self._on_error(exc)
+                return
+
+    def _write_all(self, data: bytes) -> None:
+        view = memoryview(data)
+        while view:
+            done = os.write(self.fd, view)  # blocks this thread only
+            view = view[done:]
+            self.written += done
