@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import json
 import os
+import signal
+import subprocess
+import sys
 
 import pytest
 
@@ -158,3 +161,25 @@ def test_missing_generate_launch_description(write):
 @pytest.mark.parametrize("text", ["no_name_here", ":=value"])
 def test_malformed_command_line_argument(text):
     check_error(run_cli(BRINGUP, text, "--print"))
+
+
+@pytest.mark.parametrize("mode", ["--headless", "--print"])
+def test_ctrl_c_while_the_file_loads_is_one_line_and_status_130(write, tmp_path, mode):
+    """A slow file (xacro, a network lookup) interrupted before anything runs."""
+    path = write("""
+import sys, time
+from launch import LaunchDescription
+def generate_launch_description():
+    print('loading', file=sys.stderr, flush=True)
+    time.sleep(60)
+    return LaunchDescription([])
+""")
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), mode],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "ROS_LOG_DIR": str(tmp_path)})
+    assert proc.stderr is not None
+    assert proc.stderr.readline() == "loading\n"
+    proc.send_signal(signal.SIGINT)
+    out, errors = proc.communicate(timeout=30)
+    assert proc.returncode == 130 and out == ""
+    assert errors == "tuilaunch: interrupted\n"

@@ -140,6 +140,11 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         os.close(devnull)
         return 0
+    except KeyboardInterrupt:
+        # Ctrl+C before anything runs (a slow file or xacro loading, `logs -f`, `wait`):
+        # nothing was started, so there is nothing to stop and no traceback to show
+        print("tuilaunch: interrupted", file=sys.stderr)
+        return 130
 
 
 def _main(argv: list[str] | None) -> int:
