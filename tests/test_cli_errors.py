@@ -158,6 +158,15 @@ def test_missing_generate_launch_description(write):
     check_error(run_cli(str(path), "--print"), "defines no generate_launch_description()")
 
 
+def test_a_file_that_exits_or_returns_nothing_says_so_at_its_line(write):
+    path = write("import sys\nif True:\n    sys.exit(3)\n")
+    check_error(run_cli(str(path), "--print"),
+                f"{path}:3: the file called sys.exit(3) while loading")
+    path = write("\n\ndef generate_launch_description():\n    return None\n")
+    check_error(run_cli(str(path), "--print"),
+                f"{path}:3: generate_launch_description() returned None")
+
+
 @pytest.mark.parametrize("text", ["no_name_here", ":=value"])
 def test_malformed_command_line_argument(text):
     check_error(run_cli(BRINGUP, text, "--print"))

@@ -142,6 +142,10 @@ def load_file(path: str, origin: Origin | None = None) -> LoadedFile:
             description = generate()
     except (LaunchError, BrokenPipeError):  # a closed stdout is the reader's choice
         raise
+    except SystemExit as exc:  # sys.exit() in the file: say so instead of ending quietly
+        where = origin_from_traceback(sys.exc_info()[2], {path}) or Origin(path, 1)
+        raise LaunchError(f"the file called sys.exit({exc.code!r}) while loading",
+                          where) from None
     except Exception as exc:  # the user's code raised: point at their line
         tb = sys.exc_info()[2]
         where = origin_from_traceback(tb, {path}) or Origin(path, 0)
@@ -159,7 +163,8 @@ def load_file(path: str, origin: Origin | None = None) -> LoadedFile:
                            "other modules must be installed in this environment") from None
         raise LaunchError(f"{type(exc).__name__}: {exc}", where) from None
     if description is None:
-        raise LaunchError("generate_launch_description() returned None", Origin(path, 0),
+        line = getattr(getattr(generate, "__code__", None), "co_firstlineno", 1)
+        raise LaunchError("generate_launch_description() returned None", Origin(path, line),
                           hint="return sl.launch_description() or a LaunchDescription")
     if isinstance(description, LaunchDescription):
         return LoadedFile(path, list(description.entities))
