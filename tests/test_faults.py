@@ -598,3 +598,24 @@ def test_include_cycle_respawn_delay_directory_and_log_folder_are_one_line(write
                    env={"ROS_LOG_DIR": str(tmp_path / "afile" / "logs")})
     assert logs.returncode == 2 and "Traceback" not in logs.stderr
     assert "cannot create the log folder" in logs.stderr and "Not a directory" in logs.stderr
+
+
+def test_a_bad_ros_domain_id_fails_the_ros_actions_not_the_launcher(write, tmp_path,
+                                                                    launches):
+    """rmw_fastrtps ends a process that makes a node in domain 300 (exit 1, no exception):
+    tuilaunch's own ROS actions must fail with a line saying why, and the launch run on."""
+    started, _ = launches
+    path = launch_file(write, """
+sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; sleep 600'], name='plain'))
+sl.call_service('/somewhere/reset')""")
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path), "ROS_DOMAIN_ID": "300"}
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=env, start_new_session=True)
+    started.append(proc)
+    out = read_until(proc, "[plain-1] up", "call_service /somewhere/reset failed: "
+                     "ROS_DOMAIN_ID=300 is out of range (0-232)")
+    assert proc.poll() is None  # still running its launch
+    os.killpg(proc.pid, signal.SIGINT)
+    out += proc.communicate(timeout=60)[0]
+    assert "[INFO] [plain-1]: process stopped (killed by SIGINT)" in out

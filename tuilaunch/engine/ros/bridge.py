@@ -8,6 +8,7 @@ environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE), as for any node.
 from __future__ import annotations
 
 import asyncio
+import os
 import threading
 from dataclasses import dataclass
 from typing import Any
@@ -76,8 +77,28 @@ def python_value(msg: Any) -> Any:
     return None if field is None else to_plain(getattr(msg, field))
 
 
+MAX_DOMAIN_ID = 232
+"""The highest domain whose DDS ports fit below 65536 (7400 + 250 x domain + offsets)."""
+
+
+def check_domain_id() -> None:
+    """rmw_fastrtps ends the whole process (exit status 1, no exception) when a node is made
+    in a domain whose ports do not fit: a bad ROS_DOMAIN_ID must be an error the caller
+    reports, never the end of the launcher and its launch."""
+    text = os.environ.get("ROS_DOMAIN_ID", "").strip()
+    if not text:
+        return
+    try:
+        value = int(text)
+    except ValueError:
+        raise RosError(f"ROS_DOMAIN_ID={text!r} is not a number") from None
+    if not 0 <= value <= MAX_DOMAIN_ID:
+        raise RosError(f"ROS_DOMAIN_ID={value} is out of range (0-{MAX_DOMAIN_ID})")
+
+
 class RosBridge:
     def __init__(self, node_name: str = "tuilaunch") -> None:
+        check_domain_id()
         import rclpy
         from rclpy.context import Context
         from rclpy.executors import MultiThreadedExecutor
