@@ -198,6 +198,27 @@ def generate_launch_description():
     assert proc.returncode == 1  # the crash is reported in the exit status
 
 
+def test_respawn_backs_off_while_it_dies_at_once_and_starts_over_after_a_lasting_run(
+        write, tmp_path, kill_leftovers):
+    runs = tmp_path / "runs"
+    script = ("n=$(cat RUNS 2>/dev/null || echo 0); n=$((n+1)); echo $n > RUNS; echo run $n; "
+              "if [ $n -eq 3 ]; then sleep 2.5; fi; exit 3").replace("RUNS", str(runs))
+    path = write(HEADER + f"""
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(cmd=['sh', '-c', {script!r}], name='driver',
+                                 respawn=True, respawn_delay=0.1, respawn_max_retries=4))
+    return sl.launch_description()
+""")
+    proc = start_headless(str(path), log_dir=tmp_path / "log")
+    kill_leftovers.append(proc)
+    out = proc.communicate(timeout=60)[0]
+    delays = [line.split("try ", 1)[1] for line in out.splitlines() if "respawning (" in line]
+    # runs 1 and 2 die at once (the delay doubles), run 3 lasts (it starts over), 4 at once
+    assert delays == ["1 in 0.1 s)", "2 in 0.2 s)", "3 in 0.1 s)", "4 in 0.1 s)"], out
+
+
 def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
     splitter = LineSplitter()
     assert splitter.feed(b"hel") == []

@@ -84,7 +84,7 @@ from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigge
 from .packages import find_executable
 from .params import ParamValue, flatten_parameters, typed_value
 
-DEFAULT_RESPAWN_MAX_RETRIES = 10
+DEFAULT_RESPAWN_MAX_RETRIES = -1  # as launch: respawn for as long as the launch runs
 
 _UNSAFE_ID = re.compile(r"[^A-Za-z0-9_.+-]")
 _NAME_CHAR = re.compile(r"[^A-Za-z0-9_]")

@@ -111,6 +111,7 @@ class Supervisor:
         self._hurry: asyncio.Event | None = None
         self._changed = asyncio.Event()
         self._retries: dict[str, int] = {}
+        self._quick_failures: dict[str, int] = {}  # crashes in a row within 2 s of starting
         self._keep_alive = False
         self._reported: set[str] = set()
         self._env_cache: dict[str, str] | None = None
@@ -719,10 +720,14 @@ class Supervisor:
     async def _respawn(self, running: Running) -> None:
         proc = running.plan
         tries = self._retries[proc.id] = self._retries.get(proc.id, 0) + 1
+        # back off while it dies at once, so a crash loop does not spin the machine; a run
+        # that lasted starts the count again (a driver that fails once an hour for days
+        # comes back after its own delay, not after the cap)
         quick = time.monotonic() - running.started < 2.0
-        # back off when it dies at once, so a crash loop does not spin the machine
-        delay = max(proc.respawn_delay, 0.1) * (2 ** (tries - 1) if quick else 1)
-        delay = min(delay, 30.0)
+        streak = self._quick_failures[proc.id] = (
+            self._quick_failures.get(proc.id, 0) + 1 if quick else 0)
+        delay = min(max(proc.respawn_delay, 0.1) * 2 ** min(max(streak - 1, 0), 16), 30.0)
+        delay = max(delay, proc.respawn_delay)
         self.states[proc.id] = "respawning"
         self._busy += 1
         self._emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s"))
