@@ -35,9 +35,11 @@ class Printer:
     A stream with a file descriptor is written from a thread of its own (`BackgroundWriter`),
     so a reader that stops reading never holds up the launch."""
 
-    def __init__(self, out: TextIO, log_dir: Path | None = None) -> None:
+    def __init__(self, out: TextIO, log_dir: Path | None = None,
+                 plan: Plan | None = None) -> None:
         self.out = out
         self.log_dir = log_dir
+        self.commands = {p.id: p.cmd for p in plan.processes} if plan is not None else {}
         self.broken: str | None = None
         try:
             self.colour = out.isatty() and not os.environ.get("NO_COLOR")
@@ -87,12 +89,7 @@ class Printer:
         if event.kind == "started":
             return f"[INFO] [{event.process}]: process started with pid [{event.pid}]\n"
         if event.kind == "exited":
-            if event.code == 0:
-                return f"[INFO] [{event.process}]: process has finished ({event.reason})\n"
-            if (event.data or {}).get("requested"):
-                # the stop asked for (Ctrl+C, `tuilaunch stop`): its end is no error to report
-                return f"[INFO] [{event.process}]: process stopped ({event.reason})\n"
-            return f"[ERROR] [{event.process}]: process has finished ({event.reason})\n"
+            return self._exit_line(event)
         if event.kind == "failed":
             return f"[ERROR] [{event.process}]: failed to start: {event.reason}\n"
         if event.kind == "respawning":
@@ -107,6 +104,21 @@ class Printer:
         if event.kind == "log":
             return f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
         return f"[INFO] [launch]: {event.kind} ({event.reason})\n"
+
+    def _exit_line(self, event: Event) -> str:
+        """ros2 launch's words, so that what greps its output greps ours."""
+        if event.code == 0:
+            return f"[INFO] [{event.process}]: process has finished cleanly [pid {event.pid}]\n"
+        if (event.data or {}).get("requested"):
+            # the stop asked for (Ctrl+C, `tuilaunch stop`): its end is no error to report
+            return f"[INFO] [{event.process}]: process stopped [pid {event.pid}, " \
+                f"{event.reason}]\n"
+        code = f"{event.code}" if event.code is None or event.code >= 0 else \
+            f"{event.code} ({event.reason})"
+        cmd = " ".join(part for part in self.commands.get(event.process or "", [])
+                       if part.strip())
+        return f"[ERROR] [{event.process}]: process has died [pid {event.pid}, exit code " \
+            f"{code}, cmd '{cmd}'].\n"
 
     def say(self, text: str) -> None:
         self(Event("log", "launch", reason=text))
@@ -133,7 +145,7 @@ class Printer:
 
 async def _run(plan: Plan, log_dir: Path) -> int:
     supervisor = Supervisor(plan, log_dir)
-    printer = Printer(sys.stdout, log_dir)
+    printer = Printer(sys.stdout, log_dir, plan)
     supervisor.subscribe(printer)
     loop = asyncio.get_running_loop()
 
