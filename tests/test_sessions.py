@@ -258,6 +258,30 @@ def test_a_stopped_server_makes_no_command_hang(runtime, write):
     tl("stop", name)
 
 
+def test_kill_now_on_a_server_that_does_not_answer_kills_it_and_so_the_launch(runtime,
+                                                                             write):
+    """The TUI's "kill now" while the server is stopped: the client SIGKILLs the server,
+    whose watchdog kills every node, instead of waiting for an answer that never comes."""
+    path = str(write(LAUNCH))
+    name = start_detached(write)
+    children = pids(name)
+    server = status(name)["pid"]
+
+    async def scenario() -> RemoteSupervisor:
+        remote = await RemoteSupervisor.open(name, Session(path, {}))
+        os.kill(server, signal.SIGSTOP)
+        asking = asyncio.ensure_future(remote.shutdown("test"))  # never answered
+        await asyncio.sleep(0.2)
+        await asyncio.to_thread(remote.kill_all)
+        await asyncio.wait_for(remote.run(), 60)  # it ends: the server is gone
+        asking.cancel()
+        return remote
+
+    remote = asyncio.run(scenario())
+    assert remote.killed_server and not remote.lost
+    wait_for(lambda: not any(_alive(p) for p in [server, *children.values()]))
+
+
 def test_killed_tui_client_leaves_nodes_running_and_attach_shows_what_was_missed(
         runtime, write):
     name = start_detached(write)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
+import signal
 import socket
 import sys
 from collections.abc import Callable, Iterator
@@ -189,6 +191,7 @@ class RemoteSupervisor:
         self.history: list[Event] = []
         self.detached = False
         self.lost = False  # the server vanished without saying it ended
+        self.killed_server = False  # "kill now" found it not answering, and SIGKILLed it
         self.owner = False  # started this session in the foreground
         self.keep_on_hangup = False
         self._reader = reader
@@ -270,7 +273,7 @@ class RemoteSupervisor:
                 except (ConnectionError, ValueError):
                     line = b""
                 if not line:
-                    if not self.detached:
+                    if not self.detached and not self.killed_server:
                         self.lost = True
                         self._deliver(Event("log", reason=f"lost the connection to session "
                                             f"{self.name}", level="ERROR"))
@@ -352,20 +355,36 @@ class RemoteSupervisor:
         down without a shutdown: a session it started in the foreground (and not told to
         outlive a hang-up) is stopped by its server; others run on."""
         if self._stopping:
-            self._send_once({"id": 1, "op": "kill"})
+            if not self._send_once({"id": 1, "op": "kill"}):
+                self._kill_server()
         elif self.owner and not self.keep_on_hangup and not self.detached:
             self._send_once({"id": 1, "op": "shutdown", "reason": "the UI ended"})
 
-    def _send_once(self, request: dict[str, Any]) -> None:
-        """A request from a thread without the engine loop (the UI's teardown)."""
+    def _send_once(self, request: dict[str, Any]) -> bool:
+        """A request from a thread without the engine loop (the UI's teardown); False when
+        the server is there but does not answer (stopped or stuck)."""
         try:
             with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
                 sock.settimeout(2.0)
                 sock.connect(str(session_dir.socket_path(self.name)))
                 sock.sendall(encode(request))
                 sock.recv(4096)  # the hello: the request is read before we hang up
+        except TimeoutError:
+            return False
         except OSError:
             pass  # the server is gone, and with it what the request was about
+        return True
+
+    def _kill_server(self) -> None:
+        """"Kill now" and the server does not answer: SIGKILL it; its watchdog then kills
+        every process of the launch, which is what the operator asked for."""
+        pid = int(self.info.get("pid") or 0)
+        if pid > 0:
+            try:
+                os.kill(pid, signal.SIGKILL)
+                self.killed_server = True
+            except OSError:
+                pass
 
 
 class RemoteLifecycle:
@@ -395,6 +414,9 @@ def report_end(app: Any, name: str) -> None:
     elif not isinstance(app.supervisor, RemoteSupervisor):
         print(f"tuilaunch: error: the TUI could not attach to session {name}, which runs on: "
               f"tuilaunch attach {name}, or tuilaunch stop {name}", file=sys.stderr)
+    elif getattr(app.supervisor, "killed_server", False):
+        print(f"session {name} did not answer: its server was killed, and its watchdog "
+              "killed every process of the launch", file=sys.stderr)
     elif getattr(app.supervisor, "lost", False):
         log = Path(app.supervisor.log_dir) / "session.log"
         print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "
