@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from .conftest import EXAMPLES, run_cli
+from .conftest import EXAMPLES, run_cli, run_headless
 from .launch_world import make_package
 
 HEADER = "from simple_launch import SimpleLauncher\n"
@@ -192,3 +192,34 @@ def generate_launch_description():
     out, errors = proc.communicate(timeout=30)
     assert proc.returncode == 130 and out == ""
     assert errors == "tuilaunch: interrupted\n"
+
+
+
+def test_what_a_python_file_finds_but_is_not_installed_fails_only_its_process(write, tmp_path):
+    """FindExecutable of a program that is not there (`ros2 bag record` on a robot without
+    ros2cli) and FindPackageShare of a package that is not installed (an rviz config from
+    nav2_bringup): ros2 launch stops everything; here those processes fail alone."""
+    path = write("""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+from launch.substitutions import FindExecutable, PathJoinSubstitution
+from launch_ros.actions import Node
+from launch_ros.substitutions import FindPackageShare
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=[FindExecutable(name='no-such-tool-tl'), 'record', '-a']),
+        Node(package='tuilaunch_demos', executable='talker', name='viz', arguments=[
+            '-d', PathJoinSubstitution([FindPackageShare('no_such_pkg_tl'), 'x.rviz'])]),
+        ExecuteProcess(cmd=['sh', '-c', 'echo fine; sleep 600'], name='fine'),
+    ])
+""")
+    printed = run_cli(str(path), "--print")
+    assert printed.returncode == 3 and "Traceback" not in printed.stderr
+    assert f"{path}:9: no-such-tool-tl-1" in printed.stderr
+    assert "executable 'no-such-tool-tl' not found on PATH" in printed.stderr
+    assert f"{path}:10: viz-2 (/viz): package 'no_such_pkg_tl' not found" in printed.stderr
+    out = run_headless(path, until=("[fine-3] fine",), env={"ROS_LOG_DIR": str(tmp_path)})
+    assert "[ERROR] [no-such-tool-tl-1]: failed to start: executable 'no-such-tool-tl' not " \
+        "found on PATH" in out
+    assert "[ERROR] [viz-2]: failed to start: package 'no_such_pkg_tl' not found" in out
+    assert "[fine-3] fine" in out

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import LaunchError, Origin, caller_origin
+from ..errors import LaunchError, Origin, PackageError, caller_origin
 
 SubValue = Any  # str | int | float | bool | Substitution | nested lists of those
 
@@ -369,7 +369,8 @@ class FindExecutable(Substitution):
         name = perform(self.name, context)
         found = shutil.which(name)
         if found is None:
-            raise LaunchError(f"executable '{name}' not found on PATH", self.origin)
+            # not installed: the process that needs it fails alone
+            raise PackageError(f"executable '{name}' not found on PATH", self.origin)
         return found
 
     def describe(self) -> str:

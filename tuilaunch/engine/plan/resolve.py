@@ -86,6 +86,7 @@ from .params import ParamValue, flatten_parameters, typed_value
 
 DEFAULT_RESPAWN_MAX_RETRIES = -1  # as launch: respawn for as long as the launch runs
 
+_FIND_EXEC = re.compile(r"\$\((?:find-exec|exec-in-pkg) ([^ )]+)[^)]*\)")
 _UNSAFE_ID = re.compile(r"[^A-Za-z0-9_.+-]")
 _NAME_CHAR = re.compile(r"[^A-Za-z0-9_]")
 _NAME_RULE = "letters, digits and _, not starting with a digit"
@@ -115,6 +116,12 @@ def namespace_problem(namespace: str) -> str | None:
         return (f"namespace {namespace!r} has a part starting with the digit "
                 f"{digit.group()[1]!r} at position {digit.start() + 2} (each part: {_NAME_RULE})")
     return None
+
+
+def _first(cmd: Any) -> Any:
+    """The program of an ExecuteProcess cmd (to name a process that could not resolve)."""
+    items = _items(cmd) if cmd is not None else []
+    return items[0] if items else None
 
 
 def _seconds(value: Any, ctx: PerformContext, what: str, origin: Origin | None) -> float:
@@ -636,16 +643,26 @@ class Resolver:
 
     def process(self, entity: Node | ExecuteProcess, scope: Scope, parent: TreeItem) -> None:
         enabled, skipped = self._gate(entity, scope)
+        counter = self._counter
         try:
             plan = self._process_plan(entity, scope, enabled, skipped)
         except LaunchError as exc:
-            if enabled:
+            self._counter = counter  # the number the failed attempt took is this one's
+            # what is not installed (a package, FindExecutable's program) fails the process
+            # that needs it, and the rest runs; any other mistake in an enabled one stops
+            if enabled and not isinstance(exc, PackageError):
                 raise
-            base = os.path.basename(describe(getattr(entity, "executable", None) or "process"))
-            plan = ProcessPlan(self._next_id(base), entity.kind, None, scope.namespace, None,
+            program = describe(getattr(entity, "executable", None)
+                               or _first(getattr(entity, "cmd", None)) or "process")
+            # `$(find-exec ros2)` names its process `ros2`
+            base = os.path.basename(_FIND_EXEC.sub(r"\1", program)) or "process"
+            given = getattr(entity, "name", None)
+            name = given if isinstance(given, str) and given else None
+            plan = ProcessPlan(self._next_id(name or base), entity.kind, name, scope.namespace,
+                               None,
                                base, [], {}, [], [], [], {}, False, None, False, 0.0, 0, None,
-                               None, False, skipped, scope.trigger, entity.origin,
-                               error=f"not resolved: {exc.message}")
+                               None, enabled, skipped, scope.trigger, entity.origin,
+                               error=exc.message if enabled else f"not resolved: {exc.message}")
         plan.source = entity
         self.processes.append(plan)
         self.entity_ids[id(entity)] = plan.id
