@@ -87,7 +87,7 @@ def measure(path: Path, nodes: int) -> tuple[float, float]:
 
 
 def main() -> None:
-    from tuilaunch.engine.plan.packages import ensure_environment
+    from tuilaunch.engine.packages import ensure_environment
 
     ensure_environment()
     print(f"{'nodes':>6} {'format':>7} {'load s':>8} {'resolve s':>10} {'load vs py':>11}")

@@ -56,7 +56,7 @@ def launch_text(nodes: int) -> str:
 
 def measure_one(nodes: int) -> dict[str, float]:
     from tuilaunch.engine import load_file, resolve
-    from tuilaunch.engine.plan.packages import ensure_environment
+    from tuilaunch.engine.packages import ensure_environment
 
     ensure_environment()
     with tempfile.TemporaryDirectory() as folder:

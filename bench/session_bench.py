@@ -29,7 +29,7 @@ from pathlib import Path
 from run_bench import write_launch  # bench/ is on sys.path when run as a script
 from tui_bench import Terminal, latency
 
-from tuilaunch.engine.plan.packages import ensure_environment
+from tuilaunch.engine.packages import ensure_environment
 
 IN_PROCESS = ("import sys; from pathlib import Path; from tuilaunch.app import make_app; "
               "make_app(sys.argv[1], {}, Path(sys.argv[2])).run()")

@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 
 from tuilaunch.engine import Plan, load_file, resolve
-from tuilaunch.engine.plan.packages import ensure_environment, known_packages
+from tuilaunch.engine.packages import ensure_environment, known_packages
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

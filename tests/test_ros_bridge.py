@@ -10,7 +10,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from tuilaunch.engine.plan.packages import package_prefix
+from tuilaunch.engine.packages import package_prefix
 from tuilaunch.engine.ros.bridge import RosBridge, RosError
 from tuilaunch.engine.ros.messages import MessageError, describe_fields, import_type
 

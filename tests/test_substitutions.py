@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from tuilaunch.engine.plan.packages import package_share
+from tuilaunch.engine.packages import package_share
 
 from .conftest import plan_of
 

@@ -8,7 +8,7 @@ import shutil
 import pytest
 
 from tuilaunch.engine import LaunchError
-from tuilaunch.engine.plan.packages import package_prefix, package_share
+from tuilaunch.engine.packages import package_prefix, package_share
 
 from .conftest import plan_of
 

@@ -18,13 +18,14 @@ from types import ModuleType
 from typing import Any
 
 from ..errors import LaunchError
-from ..plan import params
 from . import conditions as c
 from . import entities as e
 from . import launch_events as ev
 from . import launch_utilities as u
 from . import parameter_files as pf
+from . import ros_substitutions as rs
 from . import substitutions as s
+from . import values as params
 from .dsl import SimpleLauncher
 
 ROOTS = ("launch", "launch_ros", "simple_launch", "launch_xml", "launch_yaml")
@@ -268,11 +269,11 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch_ros.ros_adapters", "get_ros_adapter", UNSUPPORTED),
     # launch_ros.substitutions
     ("launch_ros.substitutions.executable_in_package", "ExecutableInPackage",
-     s.ExecutableInPackage),
-    ("launch_ros.substitutions.find_package", "FindPackage", s.FindPackagePrefix),
-    ("launch_ros.substitutions.find_package", "FindPackagePrefix", s.FindPackagePrefix),
-    ("launch_ros.substitutions.find_package", "FindPackageShare", s.FindPackageShare),
-    ("launch_ros.substitutions.parameter", "Parameter", s.ParameterSubstitution),
+     rs.ExecutableInPackage),
+    ("launch_ros.substitutions.find_package", "FindPackage", rs.FindPackagePrefix),
+    ("launch_ros.substitutions.find_package", "FindPackagePrefix", rs.FindPackagePrefix),
+    ("launch_ros.substitutions.find_package", "FindPackageShare", rs.FindPackageShare),
+    ("launch_ros.substitutions.parameter", "Parameter", rs.ParameterSubstitution),
     # launch_ros.utilities
     ("launch_ros.utilities.namespace_utils", "is_root_namespace", u.is_root_namespace),
     ("launch_ros.utilities.namespace_utils", "is_namespace_absolute", u.is_namespace_absolute),

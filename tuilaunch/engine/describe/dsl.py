@@ -13,8 +13,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from ..errors import DslError, Origin, PackageError, caller_origin
-from ..plan.packages import package_share
-from ..plan.xacro_run import Xacro
+from ..packages import package_share
 from .conditions import IfCondition, UnlessCondition
 from .entities import (
     CallService,
@@ -34,6 +33,7 @@ from .entities import (
 )
 from .events import When
 from .gazebo import GZ_AXES, GazeboBridge, GazeboLauncher
+from .ros_substitutions import Xacro
 from .substitutions import (
     LaunchConfiguration,
     PathJoin,

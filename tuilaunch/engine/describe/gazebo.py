@@ -18,7 +18,7 @@ import tempfile
 from typing import TYPE_CHECKING, Any, Protocol
 
 from ..errors import DslError, Origin, caller_origin
-from ..plan.packages import known_packages
+from ..packages import known_packages
 from .entities import ExecuteProcess
 from .substitutions import (
     PerformContext,

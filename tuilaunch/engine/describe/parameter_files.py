@@ -6,10 +6,9 @@ import re
 from typing import Any
 
 from ..errors import LaunchError, caller_origin
+from .ros_substitutions import FindPackagePrefix, FindPackageShare
 from .substitutions import (
     EnvironmentVariable,
-    FindPackagePrefix,
-    FindPackageShare,
     LaunchConfiguration,
     PerformContext,
     SubValue,

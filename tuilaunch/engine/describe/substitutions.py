@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import LaunchError, Origin, PackageError, caller_origin
+from .xacro_run import run_xacro_argv
 
 SubValue = Any  # str | int | float | bool | Substitution | nested lists of those
 
@@ -341,8 +342,6 @@ class Command(Substitution):
         text = perform(self.command, context)
         argv = shlex.split(text)
         if argv and argv[0] == "xacro" and shutil.which("xacro") is None:
-            from ..plan.xacro_run import run_xacro_argv
-
             return run_xacro_argv(argv[1:], self.origin)
         try:
             done = subprocess.run(argv, capture_output=True, text=True, timeout=60)
@@ -375,46 +374,6 @@ class FindExecutable(Substitution):
 
     def describe(self) -> str:
         return f"$(find-exec {describe(self.name)})"
-
-
-class FindPackageShare(Substitution):
-    def __init__(self, package: SubValue) -> None:
-        self.package = package
-        self.origin = caller_origin()
-
-    def perform(self, context: PerformContext) -> str:
-        from ..plan.packages import package_share
-
-        return str(package_share(perform(self.package, context), self.origin))
-
-    def find(self, package_name: str) -> str:
-        """launch_ros's FindPackageShare.find: files call it while they load."""
-        from ..plan.packages import package_share
-
-        return str(package_share(package_name, self.origin))
-
-    def describe(self) -> str:
-        return f"$(find-pkg-share {describe(self.package)})"
-
-
-class FindPackagePrefix(Substitution):
-    def __init__(self, package: SubValue) -> None:
-        self.package = package
-        self.origin = caller_origin()
-
-    def perform(self, context: PerformContext) -> str:
-        from ..plan.packages import package_prefix
-
-        return str(package_prefix(perform(self.package, context), self.origin))
-
-    def find(self, package_name: str) -> str:
-        """launch_ros's FindPackagePrefix.find."""
-        from ..plan.packages import package_prefix
-
-        return str(package_prefix(package_name, self.origin))
-
-    def describe(self) -> str:
-        return f"$(find-pkg-prefix {describe(self.package)})"
 
 
 class ThisLaunchFile(Substitution):
@@ -619,46 +578,3 @@ class LaunchLogDir(Substitution):
 
     def describe(self) -> str:
         return "$(launch-log-dir)"
-
-
-class ExecutableInPackage(Substitution):
-    """launch_ros.substitutions.ExecutableInPackage: the path of a package's executable."""
-
-    def __init__(self, executable: SubValue, package: SubValue) -> None:
-        self.executable, self.package = executable, package
-        self.origin = caller_origin()
-
-    def perform(self, context: PerformContext) -> str:
-        from ..plan.packages import find_executable
-
-        return str(find_executable(perform(self.package, context),
-                                   perform(self.executable, context), self.origin))
-
-    def describe(self) -> str:
-        return f"$(exec-in-pkg {describe(self.executable)} {describe(self.package)})"
-
-
-class ParameterSubstitution(Substitution):
-    """launch_ros.substitutions.Parameter, `$(param name [default])`: a value given earlier in
-    scope by SetParameter (or `<set_parameter>`)."""
-
-    def __init__(self, name: SubValue, default: SubValue = None) -> None:
-        self.name, self.default = name, default
-        self.origin = caller_origin()
-
-    def perform(self, context: PerformContext) -> str:
-        from ..plan.params import typed_value
-
-        name = perform(self.name, context)
-        for key, value in context.global_parameters:
-            if key is not None and perform(key, context) == name:  # None: a parameter file
-                typed = typed_value(value, context, name, self.origin)
-                return str(typed).lower() if isinstance(typed, bool) else str(typed)
-        if self.default is not None:
-            return perform(self.default, context)
-        raise LaunchError(f"$(param {name}): no SetParameter named '{name}' comes before",
-                          self.origin, hint="set it first (SetParameter, <set_parameter "
-                          "name= value=>), or give a default: $(param name default)")
-
-    def describe(self) -> str:
-        return f"$(param {describe(self.name)})"

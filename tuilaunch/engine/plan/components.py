@@ -19,8 +19,8 @@ import yaml
 
 from ..describe.entities import ComposableNode, pair_list
 from ..describe.substitutions import PerformContext, perform, perform_optional
+from ..describe.values import ParamValue, flatten_parameters
 from ..errors import LaunchError, Origin
-from .params import ParamValue, flatten_parameters
 
 
 def _join(base: str, ns: str | None) -> str:

@@ -70,6 +70,7 @@ from ..describe.substitutions import (
     perform_optional,
     text_to_bool,
 )
+from ..describe.values import ParamValue, flatten_parameters, typed_value
 from ..errors import (
     ArgumentError,
     LaunchError,
@@ -78,11 +79,10 @@ from ..errors import (
     origin_from_traceback,
     origin_outside_tuilaunch,
 )
+from ..packages import find_executable
 from . import lifecycle as lifecycle_plan
 from .components import component_plan, interfaces_warning
 from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
-from .packages import find_executable
-from .params import ParamValue, flatten_parameters, typed_value
 
 DEFAULT_RESPAWN_MAX_RETRIES = -1  # as launch: respawn for as long as the launch runs
 

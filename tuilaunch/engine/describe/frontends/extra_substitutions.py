@@ -1,4 +1,5 @@
-"""Substitutions the frontends offer that the Python side of the engine had no class for."""
+"""Substitutions the frontends' actions make (`<append_env>`, `<param from= allow_substs=>`)
+that the Python side of the engine had no class for."""
 
 from __future__ import annotations
 
@@ -10,13 +11,14 @@ import tempfile
 
 from ...errors import LaunchError, Origin
 from ..substitutions import (
-    LaunchConfiguration,
     PerformContext,
     Substitution,
     SubValue,
     describe,
     perform,
+    text_to_bool,
 )
+from .subst_parser import SubstitutionSyntaxError, parse_substitutions
 
 
 class AppendedEnvironment(Substitution):
@@ -30,8 +32,6 @@ class AppendedEnvironment(Substitution):
         self.separator = separator
 
     def perform(self, context: PerformContext) -> str:
-        from ..substitutions import text_to_bool
-
         value = perform(self.value, context)
         current = context.environment.get(perform(self.name, context))
         if not current:
@@ -71,9 +71,6 @@ class SubstitutedParameterFile(Substitution):
         self.allow = allow
 
     def perform(self, context: PerformContext) -> str:
-        from ..substitutions import text_to_bool
-        from .subst_parser import SubstitutionSyntaxError, parse_substitutions
-
         path = perform(self.path, context)
         if not text_to_bool(perform(self.allow, context)):
             return path
@@ -100,16 +97,3 @@ class SubstitutedParameterFile(Substitution):
 
     def describe(self) -> str:
         return f"{describe(self.path)} (with substitutions)"
-
-
-class FrontendVariable(LaunchConfiguration):
-    """`$(var name)`: a LaunchConfiguration whose hint speaks XML/YAML."""
-
-    def perform(self, context: PerformContext) -> str:
-        try:
-            return super().perform(context)
-        except LaunchError as exc:
-            name = self.name(context)
-            raise LaunchError(exc.message, exc.origin,
-                              hint=f'declare it with <arg name="{name}" default="..."/> '
-                              f"or pass {name}:=value") from None

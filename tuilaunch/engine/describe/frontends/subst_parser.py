@@ -13,11 +13,9 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from ...errors import Origin
+from ...errors import LaunchError, Origin
+from .. import ros_substitutions as ros_subs
 from .. import substitutions as subs
-from .extra_substitutions import (
-    FrontendVariable,
-)
 
 Part = Any  # str | Substitution
 _IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9_-]*")
@@ -117,7 +115,7 @@ def _any_count(name: str, make: Callable[..., subs.Substitution])\
 
 def _param(a: list[Any]) -> subs.Substitution:
     _count("param", a, 1, 2)
-    return subs.ParameterSubstitution(a[0], a[1] if len(a) > 1 else None)
+    return ros_subs.ParameterSubstitution(a[0], a[1] if len(a) > 1 else None)
 
 
 def _if(a: list[Any]) -> subs.Substitution:
@@ -129,10 +127,10 @@ SUBSTITUTIONS: dict[str, Callable[[list[Any]], subs.Substitution]] = {
     "var": _var,
     "env": _env,
     "optenv": _optenv,
-    "find-pkg-share": _fixed("find-pkg-share", 1, subs.FindPackageShare),
-    "find-pkg-prefix": _fixed("find-pkg-prefix", 1, subs.FindPackagePrefix),
+    "find-pkg-share": _fixed("find-pkg-share", 1, ros_subs.FindPackageShare),
+    "find-pkg-prefix": _fixed("find-pkg-prefix", 1, ros_subs.FindPackagePrefix),
     "find-exec": _fixed("find-exec", 1, lambda n: subs.FindExecutable(name=n)),
-    "exec-in-pkg": _fixed("exec-in-pkg", 2, subs.ExecutableInPackage),
+    "exec-in-pkg": _fixed("exec-in-pkg", 2, ros_subs.ExecutableInPackage),
     "eval": _eval,
     "command": _command,
     "anon": _fixed("anon", 1, subs.AnonName),
@@ -262,3 +260,16 @@ def parse_value(text: str, origin: Origin | None = None) -> Any:
 
 def has_substitution(text: str) -> bool:
     return "$(" in text
+
+
+class FrontendVariable(subs.LaunchConfiguration):
+    """`$(var name)`: a LaunchConfiguration whose hint speaks XML/YAML."""
+
+    def perform(self, context: subs.PerformContext) -> str:
+        try:
+            return super().perform(context)
+        except LaunchError as exc:
+            name = self.name(context)
+            raise LaunchError(exc.message, exc.origin,
+                              hint=f'declare it with <arg name="{name}" default="..."/> '
+                              f"or pass {name}:=value") from None

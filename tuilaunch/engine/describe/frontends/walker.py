@@ -18,6 +18,7 @@ from ...errors import LaunchError
 from .. import entities as ent
 from ..conditions import Condition, IfCondition, UnlessCondition
 from ..substitutions import Substitution, TextSubstitution
+from ..values import ParameterValue
 from .element import Element
 from .extra_substitutions import (
     AppendedEnvironment,
@@ -470,8 +471,6 @@ class Walker:
         return out
 
     def parameter_dict(self, params: list[Element]) -> dict[Any, Any]:
-        from ...plan.params import ParameterValue
-
         out: dict[Any, Any] = {}
         for param in params:
             name = self.text(param, "name")

@@ -7,15 +7,7 @@ from typing import Any
 import yaml
 
 from ...errors import DslError, Origin
-from .element import Element, YamlElement
-
-
-class MarkedDict(dict[Any, Any]):
-    """A YAML mapping with its own position and each key's."""
-
-    origin: Origin
-    positions: dict[str, Origin]
-
+from .yaml_element import MarkedDict, YamlElement, element_of
 
 _BASE: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's parser when present
 
@@ -60,27 +52,3 @@ def read_yaml(text: str, path: str) -> YamlElement:
     if tag != "launch":
         raise DslError(f"the root key is '{tag}', expected 'launch'", origin)
     return element_of("launch", body, origin)
-
-
-def element_of(tag: str, body: Any, origin: Origin) -> YamlElement:
-    positions = body.positions if isinstance(body, MarkedDict) else {}
-    return YamlElement(tag, origin, body, positions)
-
-
-def child_elements(items: Any, origin: Origin) -> list[Element]:
-    """A list of single-key mappings (`- node: {...}`) as elements."""
-    if items is None:
-        return []
-    if not isinstance(items, list):
-        raise DslError(f"expected a list of actions (- tag: ...), got {items!r}", origin)
-    out: list[Element] = []
-    for item in items:
-        where = getattr(item, "origin", origin)
-        if not isinstance(item, dict) or len(item) != 1:
-            raise DslError("each action is a mapping with one key, its tag "
-                           f"(- node: ...), got {item!r}", where)
-        (tag, body), = item.items()
-        key_origin = item.positions.get(str(tag), where) if isinstance(item, MarkedDict) \
-            else where
-        out.append(element_of(str(tag), body, key_origin))
-    return out
