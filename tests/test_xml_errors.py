@@ -6,7 +6,7 @@ import pytest
 
 from tuilaunch.engine import LaunchError, load_file
 
-from .conftest import plan_of, run_cli
+from .conftest import EXAMPLES, plan_of, run_cli
 
 
 def error_of(write, text: str, name: str = "bad.launch.xml") -> LaunchError:
@@ -136,3 +136,93 @@ def test_an_attribute_on_a_later_line_of_its_tag_is_placed_exactly(write):
                      '        args="--a $(var x"/>\n</launch>')
     assert error.origin is not None and (error.origin.line, error.origin.column) == (4, 9)
     assert "<node>: attribute 'args'" in error.message
+
+
+# --- attributes ros2 launch refuses (launch's assert_entity_completely_parsed) -----------
+
+@pytest.mark.parametrize("text, where, message", [
+    ('<launch>\n  <group ns="robot">\n    <log message="x"/>\n  </group>\n</launch>', (2, 10),
+     "<group>: unexpected attribute(s): ns (a group takes no namespace in ros2 launch: put "
+     '<push_ros_namespace namespace="..."/> first inside the group)'),
+    ('<launch>\n  <group namespace="robot"/>\n</launch>', (2, 10),
+     "<group>: unexpected attribute(s): namespace (a group takes no namespace"),
+    ('<launch>\n  <node pkg="tuilaunch_demos" exec="talker" ns="r1"/>\n</launch>', (2, 45),
+     "<node>: unexpected attribute(s): ns (did you mean namespace? ns is ROS 1's spelling)"),
+    ('<launch>\n  <node pkg="tuilaunch_demos" exec="talker" nmae="t"/>\n</launch>', (2, 45),
+     "<node>: unexpected attribute(s): nmae (did you mean name?)"),
+    ('<launch>\n  <node exec="a"><param name="p" value="1" tpye="int"/></node>\n</launch>',
+     (2, 44), "<param>: unexpected attribute(s): tpye (did you mean type?)"),
+    ('<launch>\n  <arg name="a" defualt="1"/>\n</launch>', (2, 17),
+     "<arg>: unexpected attribute(s): defualt (did you mean default?)"),
+    ('<launch>\n  <include file="x.launch.xml" flie="y"/>\n</launch>', (2, 32),
+     "<include>: unexpected attribute(s): flie (did you mean file?)"),
+    ('<launch>\n  <let name="a" value="1" vlaue="2"/>\n</launch>', (2, 27),
+     "<let>: unexpected attribute(s): vlaue (did you mean value?)"),
+    ('<launch>\n  <executable cmd="true" respwan="true"/>\n</launch>', (2, 26),
+     "<executable>: unexpected attribute(s): respwan (did you mean respawn?)"),
+    ('<launch>\n  <log message="x" level="warn"/>\n</launch>', (2, 20),
+     "<log>: unexpected attribute(s): level"),
+])
+def test_attributes_ros2_launch_refuses_are_refused(write, text, where, message):
+    error = error_of(write, text)
+    assert message in error.message
+    assert error.origin is not None
+    assert (error.origin.line, error.origin.column) == where
+
+
+def test_yaml_group_namespace_is_refused_with_what_to_write(write):
+    error = error_of(write, "launch:\n- group:\n    ns: robot\n    children:\n"
+                     "    - log: {message: x}\n", "bad.launch.yaml")
+    assert "<group>: unexpected attribute(s): ns (a group takes no namespace" \
+        in error.message
+    assert error.origin is not None and (error.origin.line, error.origin.column) == (3, 5)
+    error = error_of(write, "launch:\n- node: {exec: talker, ns: r1}\n", "bad2.launch.yaml")
+    assert "<node>: unexpected attribute(s): ns (did you mean namespace?" in error.message
+
+
+def test_the_group_namespace_error_reaches_the_command_line_as_one_line(write):
+    path = write('<launch>\n  <group ns="robot">\n    <node pkg="tuilaunch_demos" '
+                 'exec="talker"/>\n  </group>\n</launch>', "ns.launch.xml")
+    done = run_cli(str(path), "--print")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    first = done.stderr.splitlines()[0]
+    assert "ns.launch.xml:2:10: <group>: unexpected attribute(s): ns" in first
+
+
+def test_every_attribute_ros2_launch_reads_is_still_accepted(write):
+    """The attributes launch's and launch_ros's parse() read, tag by tag."""
+    path = write('''<launch>
+  <arg name="a" default="x" description="d"><choice value="x"/></arg>
+  <let name="b" value="1"/>
+  <set_env name="E" value="1"/>
+  <append_env name="E" value="2" prepend="true" separator=":"/>
+  <unset_env name="F"/>
+  <group scoped="true" forwarding="false" if="true">
+    <keep name="a" value="y"/>
+    <push_ros_namespace namespace="fleet"/>
+    <node pkg="tuilaunch_demos" exec="talker" name="t" namespace="ns" exec_name="tk"
+          args="--x" ros_args="--log-level info" output="screen" respawn="false"
+          respawn_delay="1.0" respawn_max_retries="2" launch-prefix="" cwd="/tmp"
+          sigterm_timeout="5" sigkill_timeout="5" emulate_tty="true" on_exit="shutdown"
+          unless="false">
+      <param name="p" value="1" type="int"/>
+      <param name="q" value="a,b" value-sep=","/>
+      <remap from="a" to="b"/>
+      <env name="X" value="1"/>
+    </node>
+  </group>
+  <executable cmd="true" name="e" cwd="/tmp" shell="false" output="log" emulate_tty="false"
+              launch-prefix="" respawn="false" sigterm_timeout="1" sigkill_timeout="1"/>
+  <timer period="1.0" cancel_on_shutdown="true"><log message="m"/></timer>
+  <set_parameter name="x" value="1"/>
+  <set_remap from="c" to="d"/>
+  <shutdown reason="r" if="false"/>
+</launch>''', "all.launch.xml")
+    plan = plan_of(path)
+    assert any(p.name == "t" for p in plan.processes)
+
+
+def test_the_example_launch_files_still_load():
+    for path in sorted((EXAMPLES / "launch").glob("*.launch.*")):
+        if path.suffix in (".xml", ".yaml"):
+            assert load_file(str(path)).entities, path

@@ -179,7 +179,7 @@ def test_node_attributes_map_onto_the_command_line(write):
     <remap from="chatter" to="/$(var robot)/chatter"/>
     <env name="MY_VAR" value="$(var robot)"/>
   </node>
-  <node pkg="tuilaunch_demos" exec="listener" ns="/other" exec_name="lis"/>
+  <node pkg="tuilaunch_demos" exec="listener" namespace="/other" exec_name="lis"/>
 """)
     talker, listener = plan_of(path).processes
     assert talker.full_name == "/ns1/talk_r2"

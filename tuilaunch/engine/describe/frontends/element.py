@@ -10,6 +10,7 @@ nobody read is reported as an error, as launch does, with the file, line and col
 from __future__ import annotations
 
 import difflib
+from collections.abc import Mapping
 from typing import Any
 
 from ...errors import DslError, Origin
@@ -84,13 +85,18 @@ class Element:
             raise self.error(f"attribute '{name}' = {value!r} is not {type_name(data_type)}"
                              f" ({exc})", at=name) from None
 
-    def check_complete(self) -> None:
-        """Attributes and nested tags nobody read are mistakes: name them, and what fits."""
+    def check_complete(self, advice: Mapping[str, str] | None = None) -> None:
+        """Attributes and nested tags nobody read are mistakes: name them, and what fits.
+
+        `advice` gives, for an attribute launch is known to refuse (ROS 1's `ns`), what to
+        write instead; it takes the place of the closest-name guess."""
         unread = [n for n in self.attribute_names() if n not in self._read]
         takes = sorted(self._asked) + [f"<{n}>" for n in sorted(self._asked_nested)]
         hint = f"{self.label} takes {', '.join(takes)}" if takes else None
         if unread:
-            guesses = [f"{n} (did you mean {close[0]}?)" if close else n
+            advice = advice or {}
+            guesses = [f"{n} ({advice[n]})" if n in advice
+                       else f"{n} (did you mean {close[0]}?)" if close else n
                        for n in sorted(unread)
                        for close in [difflib.get_close_matches(
                            n, [*self._asked, *self._asked_nested], 1)]]

@@ -44,6 +44,18 @@ class Unsupported(ent.Entity):
         return f"<{self.tag}>"
 
 
+_PUSH_NAMESPACE = ("a group takes no namespace in ros2 launch: put "
+                   '<push_ros_namespace namespace="..."/> first inside the group')
+_NODE_NAMESPACE = "did you mean namespace? ns is ROS 1's spelling"
+# Attributes ros2 launch refuses that people bring from ROS 1 launch files, with what to
+# write instead: the closest attribute by spelling would mislead here.
+_REFUSED_ATTRIBUTES: dict[str, dict[str, str]] = {
+    "group": {"ns": _PUSH_NAMESPACE, "namespace": _PUSH_NAMESPACE},
+    **{tag: {"ns": _NODE_NAMESPACE}
+       for tag in ("node", "lifecycle_node", "node_container")},
+}
+
+
 def _lifecycle_class() -> type[ent.Node] | None:
     """launch_ros's LifecycleNode when the engine has it (describe.lifecycle)."""
     try:
@@ -119,7 +131,7 @@ class Walker:
         except (TypeError, ValueError, AttributeError, KeyError) as exc:
             # a shape no check above foresaw: still one line naming the tag
             raise element.error(f"cannot read this tag: {type(exc).__name__}: {exc}") from None
-        element.check_complete()
+        element.check_complete(_REFUSED_ATTRIBUTES.get(element.tag))
         for entity in made:
             # an on_exit handler shares its process's condition, or it would wait forever
             entity.condition = condition
@@ -243,11 +255,8 @@ class Walker:
         scoped = element.get("scoped", "bool", optional=True)
         forwarding = element.get("forwarding", "bool", optional=True)
         keep = self.pairs(element, "keep", "name", "value")
-        namespace = self.text(element, "namespace", optional=True)
-        if namespace is None:
-            namespace = self.text(element, "ns", optional=True)
         children = [c for c in element.children() if c.tag != "keep"]
-        group = ent.Group(self.actions(children), namespace=namespace,
+        group = ent.Group(self.actions(children),
                           scoped=True if scoped is None else bool(scoped),
                           launch_configurations=dict(keep or []))
         group.forwarding = forwarding is not False
@@ -282,7 +291,6 @@ class Walker:
         return [ent.TimerAction(period=period, actions=self.actions(element.children()))]
 
     def log(self, element: Element) -> list[Any]:
-        element.get("level", optional=True)
         return [ent.LogInfo(msg=self.text(element, "message"))]
 
     def shutdown(self, element: Element) -> list[Any]:
@@ -375,10 +383,7 @@ class Walker:
         kwargs["exec_name"] = self.text(element, "exec_name", optional=True)
         kwargs["package"] = self.text(element, "pkg", optional=True)
         kwargs["executable"] = self.text(element, "exec")
-        namespace = self.text(element, "namespace", optional=True)
-        if namespace is None:
-            namespace = self.text(element, "ns", optional=True)
-        kwargs["namespace"] = namespace
+        kwargs["namespace"] = self.text(element, "namespace", optional=True)
         kwargs["remappings"] = self.pairs(element, "remap", "from", "to")
         kwargs["parameters"] = self.parameters(element)
         return kwargs
