@@ -1,0 +1,54 @@
+"""DeclareLaunchArgument, resolved: its value from the command line or its default."""
+
+from __future__ import annotations
+
+import os
+
+from ..describe.entities import DeclareLaunchArgument
+from ..describe.substitutions import perform_optional
+from ..errors import ArgumentError
+from .model import ArgumentInfo
+from .scope import Scope
+
+
+def declare_argument(arguments: dict[str, ArgumentInfo], lenient: bool,
+                     decl: DeclareLaunchArgument, scope: Scope) -> None:
+    """Give a declared argument its value in the scope and record it for the argument
+    form; a required one without a value, or a value outside the choices, stops the
+    walk unless `lenient` (--show-args)."""
+    ctx = scope.context()
+    default = perform_optional(decl.default_value, ctx)
+    if decl.name not in scope.configurations and default is not None:
+        scope.configurations[decl.name] = default
+    value = scope.configurations.get(decl.name)
+    known = arguments.get(decl.name)
+    if known is None:
+        arguments[decl.name] = ArgumentInfo(
+            decl.name, default, value, decl.description, decl.choices,
+            decl.py_type or "str", scope.launch_file,
+            decl.origin.line if decl.origin else None)
+    elif scope.enabled and value is not None and value != known.value:
+        # the argument form edits one value per name; a second declaration that holds
+        # another value (the same file included again with other arguments) is shown
+        where = os.path.basename(scope.launch_file)
+        if decl.origin is not None:
+            where += f":{decl.origin.line}"
+        note = f"{value!r} in {where}"
+        if note not in known.elsewhere:
+            known.elsewhere.append(note)
+    if not scope.enabled:
+        return
+    if lenient:
+        if value is None:
+            scope.configurations[decl.name] = ""
+        return
+    if value is None:
+        raise ArgumentError(
+            f"argument '{decl.name}' is required and has no value", decl.origin,
+            hint=f"pass {decl.name}:=value" + (f" ({decl.description})"
+                                               if decl.description else ""))
+    if decl.choices is not None and value not in decl.choices:
+        raise ArgumentError(
+            f"argument '{decl.name}' = {value!r} is not one of its choices: "
+            f"{', '.join(decl.choices)}", decl.origin,
+            hint=f"pass {decl.name}:=<one of {', '.join(decl.choices)}>")

@@ -1,0 +1,260 @@
+"""A process's command line, as ros2 launch builds it: an ExecuteProcess's cmd, and a Node's
+`[prefix] exe args [--ros-args ros_args] --ros-args -r __node:= -r __ns:= -p/--params-file
+... -r from:=to`, with its environment, respawn and parameter files."""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from ..describe.conditions import ConditionOutcome
+from ..describe.entities import ExecuteProcess, Node, pair_list
+from ..describe.parameter_files import Parameter, ParameterFile, substitute_text
+from ..describe.substitutions import (
+    PerformContext,
+    describe,
+    perform,
+    perform_optional,
+    text_to_bool,
+)
+from ..describe.values import ParamValue, flatten_parameters
+from ..errors import LaunchError, Origin, PackageError
+from ..packages import find_executable
+from .components import component_plan
+from .model import ProcessPlan
+from .scope import Scope, join_namespace, name_problem, namespace_problem
+
+_FIND_EXEC = re.compile(r"\$\((?:find-exec|exec-in-pkg) ([^ )]+)[^)]*\)")
+DEFAULT_RESPAWN_MAX_RETRIES = -1  # as launch: respawn for as long as the launch runs
+
+
+def _seconds(value: Any, ctx: PerformContext, what: str, origin: Origin | None) -> float:
+    text = perform(value, ctx)
+    try:
+        return float(text)
+    except ValueError:
+        raise LaunchError(f"{what} {text!r} is not a number of seconds", origin) from None
+
+
+def _float_or_none(value: Any, ctx: PerformContext, what: str, origin: Origin | None)\
+        -> float | None:
+    return None if value is None else _seconds(value, ctx, what, origin)
+
+
+def _rule_text(value: ParamValue) -> str:
+    """A SetParameter value as launch_ros writes it after `-p name:=`: Python's str."""
+    return str(value)
+
+
+def _yaml_rule_text(value: ParamValue) -> str:
+    """A launch_ros Parameter's value after `-p name:=`: YAML, so text stays text."""
+    import yaml
+
+    return str(yaml.safe_dump(value))
+
+
+def as_list(value: Any) -> list[Any]:
+    if value is None:
+        return []
+    if isinstance(value, list | tuple):
+        return list(value)
+    return [value]
+
+
+
+def first_program(cmd: Any) -> Any:
+    """The program of an ExecuteProcess cmd (to name a process that could not resolve)."""
+    items = as_list(cmd) if cmd is not None else []
+    return items[0] if items else None
+
+
+class ProcessPlanner:
+    """Turns a Node or ExecuteProcess, in its scope, into a ProcessPlan.
+
+    `next_id` numbers processes for the whole plan; parameter files are written under
+    `params_dir`; what does not stop the launch (a missing parameter file) goes to `warnings`."""
+
+    def __init__(self, next_id: Callable[[str], str], params_dir: Path,
+                 warnings: list[str]) -> None:
+        self.next_id = next_id
+        self.params_dir = params_dir
+        self.warnings = warnings
+
+    def plan(self, entity: Node | ExecuteProcess, scope: Scope, enabled: bool,
+                      skipped: ConditionOutcome | None) -> ProcessPlan:
+        ctx = scope.context()
+        env = {k: v for k, v in scope.env.items() if v is not None}
+        if entity.additional_env:
+            env.update({perform(k, ctx): perform(v, ctx) for k, v in entity.additional_env.items()})
+        clear_env = entity.env is not None
+        if entity.env is not None:
+            env = {perform(k, ctx): perform(v, ctx) for k, v in entity.env.items()}
+        prefix = shlex.split(perform(entity.prefix, ctx)) if entity.prefix is not None else []
+        respawn = text_to_bool(perform(entity.respawn, ctx)) or False
+        respawn_delay = _seconds(entity.respawn_delay, ctx, "respawn_delay", entity.origin) \
+            if entity.respawn_delay is not None else 0.0
+        retries = entity.respawn_max_retries
+        common = dict(
+            env=env, clear_env=clear_env, cwd=perform_optional(entity.cwd, ctx),
+            respawn=respawn, respawn_delay=respawn_delay,
+            respawn_max_retries=DEFAULT_RESPAWN_MAX_RETRIES if retries is None else retries,
+            sigterm_timeout=_float_or_none(entity.sigterm_timeout, ctx, "sigterm_timeout",
+                                           entity.origin),
+            sigkill_timeout=_float_or_none(entity.sigkill_timeout, ctx, "sigkill_timeout",
+                                           entity.origin),
+            output=str(perform(entity.output, ctx)) if entity.output is not None else "screen",
+            emulate_tty=None if getattr(entity, "emulate_tty", None) is None
+            else bool(text_to_bool(perform(entity.emulate_tty, ctx))),
+            enabled=enabled, skipped_by=skipped, trigger=scope.trigger, origin=entity.origin,
+        )
+        if isinstance(entity, ExecuteProcess):
+            return self._execute_process_plan(entity, ctx, scope, prefix, common)
+        return self._node_plan(entity, ctx, scope, prefix, common)
+
+    def _execute_process_plan(self, entity: ExecuteProcess, ctx: PerformContext, scope: Scope,
+                              prefix: list[str], common: dict[str, Any]) -> ProcessPlan:
+        cmd = [perform(part, ctx) for part in as_list(entity.cmd)]
+        cmd = [c for c in cmd if c != ""]
+        if entity.shell:
+            cmd = ["/bin/sh", "-c", " ".join(cmd)]
+        if not cmd:
+            raise LaunchError("ExecuteProcess with an empty cmd", entity.origin)
+        name = perform_optional(entity.name, ctx)
+        base = name or os.path.basename(cmd[0].split()[0])
+        error = None
+        if not entity.shell and "/" not in cmd[0] and shutil.which(cmd[0]) is None:
+            error = f"command '{cmd[0]}' not found on PATH"
+        return ProcessPlan(self.next_id(base), "process", name, scope.namespace, None, cmd[0],
+                           prefix + cmd, {}, [], [], [], error=error, **common)
+
+    def _node_plan(self, entity: Node, ctx: PerformContext, scope: Scope, prefix: list[str],
+                   common: dict[str, Any]) -> ProcessPlan:
+        package = perform_optional(entity.package, ctx)
+        executable = perform(entity.executable, ctx)
+        name = perform_optional(entity.name, ctx) or None
+        own_namespace = perform_optional(entity.namespace, ctx)
+        namespace = join_namespace(scope.namespace, own_namespace)
+        # the node's name when it has one: `[monitor-5]` says more than `[listener-5]`
+        proc_id = self.next_id(name or os.path.basename(executable))
+        error = (name_problem(name) if name else None) or namespace_problem(namespace)
+        exe_path = executable
+        if package is not None:
+            try:
+                exe_path = str(find_executable(package, executable, entity.origin))
+            except PackageError as exc:
+                error = error or exc.message
+        elif shutil.which(executable) is None:
+            error = error or f"executable '{executable}' not found on PATH"
+        merged: dict[str, ParamValue] = {}
+        user_files: list[str] = []
+        generated: list[tuple[str, dict[str, Any]]] = []
+        params_args: list[str] = []
+        # launch_ros: SetParameter pairs as `-p name:=value` and SetParametersFromFile files
+        # first, in order; then each of the node's own dicts in a file of its own, each
+        # Parameter as `-p`, each file as it is
+        items: list[Any] = [("global", value if key is None else {key: value})
+                            for key, value in scope.global_parameters]
+        items += [("own", item) for item in as_list(entity.parameters)]
+        for origin_kind, item in items:
+            if isinstance(item, Parameter):
+                values = flatten_parameters(item.as_dict(), ctx, entity.origin)
+                merged.update(values)
+                params_args += [a for name, value in values.items()
+                                for a in ("-p", f"{name}:={_yaml_rule_text(value)}")]
+                continue
+            if isinstance(item, dict):
+                values = flatten_parameters(item, ctx, entity.origin)
+                merged.update(values)
+                if origin_kind == "global":
+                    params_args += [a for name, value in values.items()
+                                    for a in ("-p", f"{name}:={_rule_text(value)}")]
+                else:
+                    generated.append(self._params_file(proc_id, len(generated), values,
+                                                       params_args))
+                continue
+            if isinstance(item, ParameterFile):
+                path = self._parameter_file(item, ctx, proc_id, len(user_files))
+            else:
+                path = perform(item, ctx)
+            if not os.path.isfile(path):
+                # launch_ros warns and starts the node without it
+                if common["enabled"]:
+                    where = f" ({entity.origin})" if entity.origin else ""
+                    self.warnings.append(f"parameter file {path} is not a file: "
+                                         f"{name or executable} starts without it{where}")
+                continue
+            user_files.append(path)
+            params_args += ["--params-file", path]
+        own_remaps = pair_list(entity.remappings, "remappings", entity.origin)
+        remappings = [[perform(a, ctx), perform(b, ctx)] for a, b in [*scope.remaps, *own_remaps]]
+        arguments = [perform(a, ctx) for a in as_list(entity.arguments)]
+        ros_arguments = [perform(a, ctx) for a in as_list(entity.ros_arguments)]
+        # launch_ros: the user's ros_arguments in a block of their own, then always a
+        # `--ros-args` block for the name, namespace, parameters and remappings
+        cmd = [*prefix, exe_path, *arguments]
+        if entity.ros_arguments is not None:
+            cmd += ["--ros-args", *ros_arguments]
+        cmd.append("--ros-args")
+        if name:
+            cmd += ["-r", f"__node:={name}"]
+        if own_namespace is not None or scope.namespace_pushed:
+            cmd += ["-r", f"__ns:={namespace}"]
+        cmd += params_args
+        for src, dst in remappings:
+            cmd += ["-r", f"{src}:={dst}"]
+        if getattr(entity, "shell", False):
+            cmd = ["/bin/sh", "-c", " ".join(cmd)]
+        # launch_ros loads components under the pushed namespace, not the container's own
+        container = join_namespace(namespace, name) if name else None
+        components = [component_plan(c, ctx, scope.namespace, scope.global_parameters,
+                                     scope.remaps, f"{proc_id}.{i + 1}", container)
+                      for i, c in enumerate(entity.components)]
+        autostart = text_to_bool(perform(getattr(entity, "autostart", False), ctx)) or False
+        return ProcessPlan(proc_id, entity.kind, name, namespace, package, executable, cmd,
+                           merged, user_files, generated, remappings, error=error,
+                           components=components, lifecycle=getattr(entity, "lifecycle", False),
+                           autostart=autostart, **common)
+
+    def _parameter_file(self, item: ParameterFile, ctx: PerformContext, proc_id: str,
+                        index: int) -> str:
+        path = item.path(ctx)
+        if not item.substitutes(ctx):
+            return path
+        try:
+            with open(path, encoding="utf-8") as handle:
+                text = handle.read()
+        except OSError as exc:
+            raise LaunchError(f"parameter file {path} cannot be read: {exc.strerror or exc}",
+                              item.origin) from None
+        out = self.params_dir / f"{proc_id}-file{index + 1}.yaml"
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(substitute_text(text, ctx, item.origin), encoding="utf-8")
+        return str(out)
+
+    def _params_file(self, proc_id: str, index: int, params: dict[str, Any],
+                     params_args: list[str]) -> tuple[str, dict[str, Any]]:
+        suffix = "" if index == 0 else f"-{index + 1}"
+        path = str(self.params_dir / f"{proc_id}{suffix}.yaml")
+        params_args += ["--params-file", path]
+        return path, dict(params)
+
+    def failed(self, entity: Node | ExecuteProcess, scope: Scope, exc: LaunchError,
+               enabled: bool, skipped: ConditionOutcome | None) -> ProcessPlan:
+        """The plan of a process that could not resolve: named, numbered, with its error."""
+        program = describe(getattr(entity, "executable", None)
+                           or first_program(getattr(entity, "cmd", None)) or "process")
+        # `$(find-exec ros2)` names its process `ros2`
+        base = os.path.basename(_FIND_EXEC.sub(r"\1", program)) or "process"
+        given = getattr(entity, "name", None)
+        name = given if isinstance(given, str) and given else None
+        plan = ProcessPlan(self.next_id(name or base), entity.kind, name, scope.namespace,
+                           None,
+                           base, [], {}, [], [], [], {}, False, None, False, 0.0, 0, None,
+                           None, enabled, skipped, scope.trigger, entity.origin,
+                           error=exc.message if enabled else f"not resolved: {exc.message}")
+        return plan
