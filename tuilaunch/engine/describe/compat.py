@@ -22,6 +22,7 @@ from . import conditions as c
 from . import entities as e
 from . import launch_events as ev
 from . import launch_utilities as u
+from . import logic_substitutions as ls
 from . import parameter_files as pf
 from . import ros_substitutions as rs
 from . import substitutions as s
@@ -187,22 +188,22 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch.logging", "reset", UNSUPPORTED),
     # launch.substitutions
     ("launch.substitutions.anon_name", "AnonName", s.AnonName),
-    ("launch.substitutions.boolean_substitution", "NotSubstitution", s.NotSubstitution),
-    ("launch.substitutions.boolean_substitution", "AndSubstitution", s.AndSubstitution),
-    ("launch.substitutions.boolean_substitution", "OrSubstitution", s.OrSubstitution),
-    ("launch.substitutions.boolean_substitution", "AnySubstitution", s.AnySubstitution),
-    ("launch.substitutions.boolean_substitution", "AllSubstitution", s.AllSubstitution),
+    ("launch.substitutions.boolean_substitution", "NotSubstitution", ls.NotSubstitution),
+    ("launch.substitutions.boolean_substitution", "AndSubstitution", ls.AndSubstitution),
+    ("launch.substitutions.boolean_substitution", "OrSubstitution", ls.OrSubstitution),
+    ("launch.substitutions.boolean_substitution", "AnySubstitution", ls.AnySubstitution),
+    ("launch.substitutions.boolean_substitution", "AllSubstitution", ls.AllSubstitution),
     ("launch.substitutions.command", "Command", s.Command),
     ("launch.substitutions.environment_variable", "EnvironmentVariable", s.EnvironmentVariable),
-    ("launch.substitutions.equals_substitution", "EqualsSubstitution", s.EqualsSubstitution),
+    ("launch.substitutions.equals_substitution", "EqualsSubstitution", ls.EqualsSubstitution),
     ("launch.substitutions.file_content", "FileContent", s.FileContent),
     ("launch.substitutions.find_executable", "FindExecutable", s.FindExecutable),
-    ("launch.substitutions.if_else_substitution", "IfElseSubstitution", s.IfElseSubstitution),
+    ("launch.substitutions.if_else_substitution", "IfElseSubstitution", ls.IfElseSubstitution),
     ("launch.substitutions.launch_configuration", "LaunchConfiguration", s.LaunchConfiguration),
     ("launch.substitutions.launch_log_dir", "LaunchLogDir", s.LaunchLogDir),
     ("launch.substitutions.local_substitution", "LocalSubstitution", s.LocalSubstitution),
     ("launch.substitutions.not_equals_substitution", "NotEqualsSubstitution",
-     s.NotEqualsSubstitution),
+     ls.NotEqualsSubstitution),
     ("launch.substitutions.path_join_substitution", "PathJoinSubstitution",
      s.PathJoinSubstitution),
     ("launch.substitutions.path_join_substitution", "PathSubstitution", s.PathSubstitution),

@@ -4,6 +4,9 @@ These classes carry the plain launch API's names and keywords (`Node`, `GroupAct
 `DeclareLaunchArgument`, ...) so that `launch` / `launch_ros` imports in user files map onto
 them directly; the SimpleLauncher DSL builds the very same tree. Nothing is performed here:
 values stay substitutions until `resolve` reads them against argument values.
+
+Over 500 lines on purpose: it is the one catalogue of entity types, kept whole so each
+launch name has one place to be looked up.
 """
 
 from __future__ import annotations

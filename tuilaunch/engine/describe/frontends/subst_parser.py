@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ...errors import LaunchError, Origin
+from .. import logic_substitutions as logic
 from .. import ros_substitutions as ros_subs
 from .. import substitutions as subs
 
@@ -120,7 +121,7 @@ def _param(a: list[Any]) -> subs.Substitution:
 
 def _if(a: list[Any]) -> subs.Substitution:
     _count("if", a, 2, 3)
-    return subs.IfElseSubstitution(a[0], a[1], a[2] if len(a) > 2 else "")
+    return logic.IfElseSubstitution(a[0], a[1], a[2] if len(a) > 2 else "")
 
 
 SUBSTITUTIONS: dict[str, Callable[[list[Any]], subs.Substitution]] = {
@@ -137,13 +138,13 @@ SUBSTITUTIONS: dict[str, Callable[[list[Any]], subs.Substitution]] = {
     "dirname": _fixed("dirname", 0, subs.ThisLaunchFileDir),
     "filename": _fixed("filename", 0, subs.ThisLaunchFile),
     "file-content": _fixed("file-content", 1, subs.FileContent),
-    "not": _fixed("not", 1, subs.NotSubstitution),
-    "and": _fixed("and", 2, subs.AndSubstitution),
-    "or": _fixed("or", 2, subs.OrSubstitution),
-    "all": _any_count("all", subs.AndSubstitution),
-    "any": _any_count("any", subs.OrSubstitution),
-    "equals": _fixed("equals", 2, subs.EqualsSubstitution),
-    "not-equals": _fixed("not-equals", 2, subs.NotEqualsSubstitution),
+    "not": _fixed("not", 1, logic.NotSubstitution),
+    "and": _fixed("and", 2, logic.AndSubstitution),
+    "or": _fixed("or", 2, logic.OrSubstitution),
+    "all": _any_count("all", logic.AndSubstitution),
+    "any": _any_count("any", logic.OrSubstitution),
+    "equals": _fixed("equals", 2, logic.EqualsSubstitution),
+    "not-equals": _fixed("not-equals", 2, logic.NotEqualsSubstitution),
     "if": _if,
     "param": _param,
 }

@@ -1,4 +1,4 @@
-"""Map the tags of an XML or YAML launch file onto the engine's entities.
+"""Map the tags of an XML or YAML launch file onto the engine's entities (one method per tag).
 
 Each tag reads the attributes its launch / launch_ros `parse` method reads, with the same
 types, so a file means here what it means to `ros2 launch`. Every entity remembers the line
@@ -10,7 +10,6 @@ from __future__ import annotations
 import difflib
 import importlib
 import os
-import shlex
 from collections.abc import Callable
 from typing import Any
 
@@ -19,13 +18,13 @@ from .. import entities as ent
 from ..conditions import Condition, IfCondition, UnlessCondition
 from ..substitutions import Substitution, TextSubstitution
 from ..values import ParameterValue
+from .attribute_values import command_line, pairs, parse, text, typed
 from .element import Element
 from .extra_substitutions import (
     AppendedEnvironment,
     SubstitutedParameterFile,
     default_path_separator,
 )
-from .subst_parser import Part, SubstitutionSyntaxError, as_value, parse_substitutions
 from .type_utils import check_identifier, coerce_text, type_name
 
 
@@ -145,81 +144,12 @@ class Walker:
             raise element.error("'if' and 'unless' cannot be used together", at="unless")
         condition: Condition | None = None
         if if_text is not None:
-            condition = IfCondition(self.parse(element, "if", if_text))
+            condition = IfCondition(parse(element, "if", if_text))
         elif unless_text is not None:
-            condition = UnlessCondition(self.parse(element, "unless", unless_text))
+            condition = UnlessCondition(parse(element, "unless", unless_text))
         if condition is not None:
             condition.origin = element.position_of("if" if if_text is not None else "unless")
         return condition
-
-    # --- values -------------------------------------------------------------------------
-
-    def parse(self, element: Element, name: str, raw: Any) -> Any:
-        """Substitutions in a value read from `name` (text only; typed values stay)."""
-        if isinstance(raw, list):
-            return [self.parse(element, name, item) for item in raw]
-        if not isinstance(raw, str):
-            return raw
-        return as_value(self.parts(element, name, raw))
-
-    def parts(self, element: Element, name: str, raw: str) -> list[Part]:
-        try:
-            return parse_substitutions(raw, element.position_of(name))
-        except SubstitutionSyntaxError as exc:
-            raise element.error(f"attribute '{name}': {exc.message} "
-                                f"(at character {exc.offset + 1} of {raw!r})",
-                                at=name) from None
-
-    def text(self, element: Element, name: str, optional: bool = False) -> Any:
-        raw = element.get(name, optional=optional)
-        return None if raw is None else self.parse(element, name, raw)
-
-    def typed(self, element: Element, name: str, data_type: str) -> Any:
-        """A typed attribute that may also be a substitution (`can_be_str`)."""
-        raw = element.get(name, data_type, optional=True, can_be_str=True)
-        return None if raw is None else self.parse(element, name, raw)
-
-    def command_line(self, element: Element, name: str, raw: str) -> list[Any]:
-        """Space-separated arguments; a substitution glued to text stays one argument."""
-        args: list[list[Part]] = []
-        current: list[Part] = []
-        for part in self.parts(element, name, raw):
-            if not isinstance(part, str):
-                current.append(part)
-                continue
-            try:
-                tokens = shlex.split(part)
-            except ValueError as exc:
-                raise element.error(f"attribute '{name}': {exc} in {raw!r}", at=name) from None
-            if not tokens:
-                if current:
-                    args.append(current)
-                current = []
-                continue
-            if part[0].isspace() and current:
-                args.append(current)
-                current = []
-            current.append(tokens[0])
-            if len(tokens) > 1:
-                args.append(current)
-                args.extend([token] for token in tokens[1:-1])
-                current = [tokens[-1]]
-            if part[-1].isspace():
-                args.append(current)
-                current = []
-        if current:
-            args.append(current)
-        return [as_value(arg) for arg in args]
-
-    def pairs(self, element: Element, tag: str, first: str, second: str)\
-            -> list[tuple[Any, Any]] | None:
-        nested = element.nested(tag)
-        if nested is None:
-            return None
-        out = [(self.text(item, first), self.text(item, second)) for item in nested]
-        for item in nested:
-            item.check_complete()
-        return out
 
     # --- launch actions -------------------------------------------------------------------
 
@@ -233,7 +163,7 @@ class Walker:
             choice_values = [str(c.get("value")) for c in choices]
             for choice in choices:
                 choice.check_complete()
-        default = self.text(element, "default", optional=True)
+        default = text(element, "default", optional=True)
         if choice_values and isinstance(default, str) and default not in choice_values:
             raise element.error(f"default {default!r} is not one of the choices: "
                                 f"{', '.join(choice_values)}", at="default")
@@ -243,18 +173,18 @@ class Walker:
             py_type=_form_type(default))]
 
     def let(self, element: Element) -> list[Any]:
-        return [ent.SetLaunchConfiguration(self.text(element, "name"),
-                                           self.text(element, "value"))]
+        return [ent.SetLaunchConfiguration(text(element, "name"),
+                                           text(element, "value"))]
 
     def include(self, element: Element) -> list[Any]:
         return [ent.IncludeLaunchDescription(
-            self.text(element, "file"),
-            launch_arguments=self.pairs(element, "arg", "name", "value"))]
+            text(element, "file"),
+            launch_arguments=pairs(element, "arg", "name", "value"))]
 
     def group(self, element: Element) -> list[Any]:
         scoped = element.get("scoped", "bool", optional=True)
         forwarding = element.get("forwarding", "bool", optional=True)
-        keep = self.pairs(element, "keep", "name", "value")
+        keep = pairs(element, "keep", "name", "value")
         children = [c for c in element.children() if c.tag != "keep"]
         group = ent.Group(self.actions(children),
                           scoped=True if scoped is None else bool(scoped),
@@ -263,20 +193,20 @@ class Walker:
         return [group]
 
     def push_ros_namespace(self, element: Element) -> list[Any]:
-        return [ent.PushRosNamespace(self.text(element, "namespace"))]
+        return [ent.PushRosNamespace(text(element, "namespace"))]
 
     def set_env(self, element: Element) -> list[Any]:
-        return [ent.SetEnvironmentVariable(self.text(element, "name"),
-                                           self.text(element, "value"))]
+        return [ent.SetEnvironmentVariable(text(element, "name"),
+                                           text(element, "value"))]
 
     def unset_env(self, element: Element) -> list[Any]:
-        return [ent.UnsetEnvironmentVariable(self.text(element, "name"))]
+        return [ent.UnsetEnvironmentVariable(text(element, "name"))]
 
     def append_env(self, element: Element) -> list[Any]:
-        name = self.text(element, "name")
-        prepend = self.typed(element, "prepend", "bool")
-        separator = self.text(element, "separator", optional=True)
-        value = AppendedEnvironment(name, self.text(element, "value"),
+        name = text(element, "name")
+        prepend = typed(element, "prepend", "bool")
+        separator = text(element, "separator", optional=True)
+        value = AppendedEnvironment(name, text(element, "value"),
                                     "false" if prepend is None else str(prepend).lower(),
                                     default_path_separator() if separator is None
                                     else separator)
@@ -284,21 +214,21 @@ class Walker:
         return [ent.SetEnvironmentVariable(name, value)]
 
     def timer(self, element: Element) -> list[Any]:
-        period = self.typed(element, "period", "float")
+        period = typed(element, "period", "float")
         if period is None:
             raise element.error("attribute 'period' is required", hint="period=\"2.0\" (s)")
         element.get("cancel_on_shutdown", "bool", optional=True, can_be_str=True)
         return [ent.TimerAction(period=period, actions=self.actions(element.children()))]
 
     def log(self, element: Element) -> list[Any]:
-        return [ent.LogInfo(msg=self.text(element, "message"))]
+        return [ent.LogInfo(msg=text(element, "message"))]
 
     def shutdown(self, element: Element) -> list[Any]:
-        reason = self.text(element, "reason", optional=True)
+        reason = text(element, "reason", optional=True)
         return [ent.Shutdown(reason="reason not given" if not reason else reason)]
 
     def reset(self, element: Element) -> list[Any]:
-        keep = self.pairs(element, "keep", "name", "value")
+        keep = pairs(element, "keep", "name", "value")
         return [ent.ResetLaunchConfigurations(dict(keep or []))]
 
     def reset_env(self, element: Element) -> list[Any]:
@@ -313,22 +243,22 @@ class Walker:
     # --- launch_ros actions ---------------------------------------------------------------
 
     def set_parameter(self, element: Element) -> list[Any]:
-        return [ent.SetParameter(self.text(element, "name"),
-                                 _yaml_typed(self.text(element, "value")))]
+        return [ent.SetParameter(text(element, "name"),
+                                 _yaml_typed(text(element, "value")))]
 
     def set_parameters_from_file(self, element: Element) -> list[Any]:
-        return [ent.SetParametersFromFile(self.text(element, "filename"))]
+        return [ent.SetParametersFromFile(text(element, "filename"))]
 
     def set_use_sim_time(self, element: Element) -> list[Any]:
-        return [ent.SetParameter("use_sim_time", _yaml_typed(self.text(element, "value")))]
+        return [ent.SetParameter("use_sim_time", _yaml_typed(text(element, "value")))]
 
     def set_remap(self, element: Element) -> list[Any]:
-        return [ent.SetRemap(self.text(element, "from"), self.text(element, "to"))]
+        return [ent.SetRemap(text(element, "from"), text(element, "to"))]
 
     def executable(self, element: Element) -> list[Any]:
-        cmd = self.command_line(element, "cmd", str(element.get("cmd")))
+        cmd = command_line(element, "cmd", str(element.get("cmd")))
         kwargs = self.process_arguments(element)
-        kwargs["name"] = self.text(element, "name", optional=True)
+        kwargs["name"] = text(element, "name", optional=True)
         shell = element.get("shell", "bool", optional=True)
         process = ent.ExecuteProcess(cmd=cmd, shell=bool(shell), **kwargs)
         return [process, *self.on_exit(element, process)]
@@ -338,7 +268,7 @@ class Walker:
         kwargs: dict[str, Any] = {}
         for attribute, keyword in (("cwd", "cwd"), ("launch-prefix", "prefix"),
                                    ("output", "output"), ("respawn", "respawn")):
-            value = self.text(element, attribute, optional=True)
+            value = text(element, attribute, optional=True)
             if value is not None:
                 kwargs[keyword] = value
         for attribute in ("respawn_delay", "sigterm_timeout", "sigkill_timeout"):
@@ -352,7 +282,7 @@ class Walker:
         if retries is not None:
             kwargs["respawn_max_retries"] = retries
         element.get("emulate_tty", "bool", optional=True)
-        env = self.pairs(element, "env", "name", "value")
+        env = pairs(element, "env", "name", "value")
         if env is not None:
             kwargs["additional_env"] = dict(env)
         return kwargs
@@ -375,16 +305,16 @@ class Walker:
         for attribute, keyword in (("args", "arguments"), ("ros_args", "ros_arguments")):
             raw = element.get(attribute, optional=True)
             if raw is not None:
-                kwargs[keyword] = self.command_line(element, attribute, str(raw))
-        name = self.text(element, "name", optional=True)
+                kwargs[keyword] = command_line(element, attribute, str(raw))
+        name = text(element, "name", optional=True)
         if name is None:
-            name = self.text(element, "node-name", optional=True)
+            name = text(element, "node-name", optional=True)
         kwargs["name"] = name
-        kwargs["exec_name"] = self.text(element, "exec_name", optional=True)
-        kwargs["package"] = self.text(element, "pkg", optional=True)
-        kwargs["executable"] = self.text(element, "exec")
-        kwargs["namespace"] = self.text(element, "namespace", optional=True)
-        kwargs["remappings"] = self.pairs(element, "remap", "from", "to")
+        kwargs["exec_name"] = text(element, "exec_name", optional=True)
+        kwargs["package"] = text(element, "pkg", optional=True)
+        kwargs["executable"] = text(element, "exec")
+        kwargs["namespace"] = text(element, "namespace", optional=True)
+        kwargs["remappings"] = pairs(element, "remap", "from", "to")
         kwargs["parameters"] = self.parameters(element)
         return kwargs
 
@@ -394,7 +324,7 @@ class Walker:
 
     def lifecycle_node(self, element: Element) -> list[Any]:
         kwargs = self.node_arguments(element)
-        autostart = self.typed(element, "autostart", "bool")
+        autostart = typed(element, "autostart", "bool")
         lifecycle = _lifecycle_class()
         if lifecycle is None:
             node = ent.Node(**kwargs)  # no lifecycle support in this engine: a plain node
@@ -415,7 +345,7 @@ class Walker:
         return [container, *self.on_exit(element, container)]
 
     def load_composable_node(self, element: Element) -> list[Any]:
-        target = self.text(element, "target")
+        target = text(element, "target")
         components = self.components(element)
         if not components:
             raise element.error("needs at least one <composable_node>")
@@ -433,13 +363,13 @@ class Walker:
         condition = self.condition(element)
         if element.tag == "composable_lifecycle_node":
             element.get("autostart", "bool", optional=True, can_be_str=True)
-        extra = self.pairs(element, "extra_arg", "name", "value")
+        extra = pairs(element, "extra_arg", "name", "value")
         component = ent.ComposableNode(
-            package=self.text(element, "pkg"), plugin=self.text(element, "plugin"),
-            name=self.text(element, "name"),
-            namespace=self.text(element, "namespace", optional=True),
+            package=text(element, "pkg"), plugin=text(element, "plugin"),
+            name=text(element, "name"),
+            namespace=text(element, "namespace", optional=True),
             parameters=self.parameters(element),
-            remappings=self.pairs(element, "remap", "from", "to"),
+            remappings=pairs(element, "remap", "from", "to"),
             # launch_ros reads <extra_arg value=> as YAML, like a parameter: "true" is a bool
             extra_arguments=[{k: v if isinstance(v, Substitution) else TextSubstitution(str(v))}
                              for k, v in extra] if extra else None,
@@ -460,8 +390,8 @@ class Walker:
             if param.has("from"):
                 if param.has("name"):
                     raise param.error("'name' and 'from' cannot be used together")
-                allow = self.typed(param, "allow_substs", "bool")
-                path = self.text(param, "from")
+                allow = typed(param, "allow_substs", "bool")
+                path = text(param, "from")
                 if allow is not None and allow is not False:
                     path = SubstitutedParameterFile(path, str(allow).lower()
                                                     if isinstance(allow, bool) else allow)
@@ -478,7 +408,7 @@ class Walker:
     def parameter_dict(self, params: list[Element]) -> dict[Any, Any]:
         out: dict[Any, Any] = {}
         for param in params:
-            name = self.text(param, "name")
+            name = text(param, "name")
             identifier = param.get("type", optional=True)
             spec = "yaml"
             if identifier is not None:
@@ -496,7 +426,7 @@ class Walker:
                     raise param.error("'type' and nested <param>s cannot be used together")
                 out[name] = self.parameter_dict(children)
             elif value is not None:
-                parsed = self.parse(param, "value", value)
+                parsed = parse(param, "value", value)
                 if isinstance(parsed, list) and any(isinstance(v, Substitution) for v in parsed):
                     # a `value-sep` list: every item is its own value, typed on its own
                     parsed = [v if isinstance(v, Substitution) else TextSubstitution(str(v))
