@@ -9,8 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 from ..errors import LaunchError, Origin
-from .frontends.type_utils import typed_parameter
 from .substitutions import PerformContext, Substitution, flatten, perform
+from .type_utils import typed_parameter
 
 ParamValue = bool | int | float | str | list[Any]
 

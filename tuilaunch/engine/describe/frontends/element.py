@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from ...errors import DslError, Origin
-from .type_utils import TypeSpec, coerce_text, type_name
+from ..type_utils import TypeSpec, coerce_text, type_name
 
 
 class Element:

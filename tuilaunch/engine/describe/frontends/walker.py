@@ -17,6 +17,7 @@ from ...errors import LaunchError
 from .. import entities as ent
 from ..conditions import Condition, IfCondition, UnlessCondition
 from ..substitutions import Substitution, TextSubstitution
+from ..type_utils import check_identifier, coerce_text, type_name
 from ..values import ParameterValue
 from .attribute_values import command_line, pairs, parse, text, typed
 from .element import Element
@@ -25,7 +26,6 @@ from .extra_substitutions import (
     SubstitutedParameterFile,
     default_path_separator,
 )
-from .type_utils import check_identifier, coerce_text, type_name
 
 
 class Unsupported(ent.Entity):

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 from ...errors import DslError, Origin
+from ..type_utils import TypeSpec, check_yaml_value
 from .element import Element
-from .type_utils import TypeSpec, check_yaml_value
 
 
 class MarkedDict(dict[Any, Any]):

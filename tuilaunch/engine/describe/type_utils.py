@@ -14,8 +14,8 @@ from typing import Any
 
 import yaml
 
-from ...errors import LaunchError, Origin
-from ..substitutions import PerformContext, perform
+from ..errors import LaunchError, Origin
+from .substitutions import PerformContext, perform
 
 TypeSpec = str
 
