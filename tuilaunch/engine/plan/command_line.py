@@ -66,8 +66,7 @@ def as_list(value: Any) -> list[Any]:
     return [value]
 
 
-
-def first_program(cmd: Any) -> Any:
+def _first_program(cmd: Any) -> Any:
     """The program of an ExecuteProcess cmd (to name a process that could not resolve)."""
     items = as_list(cmd) if cmd is not None else []
     return items[0] if items else None
@@ -247,7 +246,7 @@ class ProcessPlanner:
                enabled: bool, skipped: ConditionOutcome | None) -> ProcessPlan:
         """The plan of a process that could not resolve: named, numbered, with its error."""
         program = describe(getattr(entity, "executable", None)
-                           or first_program(getattr(entity, "cmd", None)) or "process")
+                           or _first_program(getattr(entity, "cmd", None)) or "process")
         # `$(find-exec ros2)` names its process `ros2`
         base = os.path.basename(_FIND_EXEC.sub(r"\1", program)) or "process"
         given = getattr(entity, "name", None)
