@@ -17,8 +17,7 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -27,15 +26,12 @@ from ..describe.launch_events import EventInfo, event_for
 from ..describe.substitutions import PerformContext, perform
 from ..plan.model import ActionPlan, Plan, PlanDiff, ProcessPlan, Trigger, diff_plans
 from ..plan.params import write_parameter_file
-from ..ros.composition import ComponentLoader
-from ..ros.lifecycle import LifecycleTracker
+from .events import Consumer, Event, LaunchEvent
 from .logfiles import LogFile
+from .plugins import ActionRunner, SupervisorPlugin
 from .readers import ChannelReader, Running
-from .ros_actions import RosActions
 from .spawn import spawn
 from .watchdog import Watchdog
-
-ROS_ACTIONS = ("call_service", "set_parameters")
 
 EOF_GRACE = 1.0
 """Seconds to wait, once a process is reaped, for the end of its output. A daemonised
@@ -49,37 +45,16 @@ STOP_RACE = 2.0
 of the stop (see Supervisor._real_crashes)."""
 
 
-@dataclass
-class Event:
-    """What consumers (the headless printer, the TUI) are told."""
-
-    kind: str  # started | output | exited | failed | respawning | log | shutdown | finished
-    process: str | None = None
-    pid: int | None = None
-    stream: str | None = None
-    lines: list[str] = field(default_factory=list)
-    code: int | None = None
-    reason: str | None = None
-    level: str = "INFO"
-    time: float = field(default_factory=time.time)
-    data: dict[str, Any] | None = None  # lifecycle state or component result details
-
-
-LaunchEvent = EventInfo
-"""What launch-file callbacks receive: `event.text`, `event.returncode`, `event.reason`."""
-
-
-Consumer = Callable[[Event], None]
-
-
 class Supervisor:
     def __init__(self, plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
                  sigkill_timeout: float = 5.0,
-                 bridge_factory: Callable[[], Any] | None = None,
-                 service_timeout: float = 10.0) -> None:
+                 plugins: Iterable[SupervisorPlugin] = ()) -> None:
+        """`plugins` (run/plugins.py) add what `run` does not know: ROS actions, lifecycle
+        nodes, components. engine/launcher.py makes a supervisor with the ROS ones."""
         self.plan = plan
-        self.service_timeout = service_timeout
-        self.ros = RosActions(bridge_factory, service_timeout, self._log)
+        self.plugins: list[SupervisorPlugin] = []
+        self._action_runners: dict[str, ActionRunner] = {}
+        self._detached_actions: set[str] = set()
         self.log_dir = log_dir
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
@@ -116,17 +91,28 @@ class Supervisor:
         self._reported: set[str] = set()
         self._env_cache: dict[str, str] | None = None
         self.watchdog = Watchdog()
-        self.lifecycle = LifecycleTracker(self)
-        self.components = ComponentLoader(self)
+        for plugin in plugins:
+            self.add_plugin(plugin)
         log_dir.mkdir(parents=True, exist_ok=True)
         self._launch_log = LogFile(log_dir / "launch.log", self._report_io)
 
     # --- events ----------------------------------------------------------------------
 
+    def add_plugin(self, plugin: SupervisorPlugin) -> None:
+        """Plugs in before `run`: its action kinds join those the supervisor performs."""
+        self.plugins.append(plugin)
+        self._action_runners.update(plugin.actions())
+        self._detached_actions.update(plugin.detached_actions)
+
+    @property
+    def shutting_down(self) -> bool:
+        """The launch is stopping: nothing new starts, waits should give up."""
+        return self._shutting_down
+
     def subscribe(self, consumer: Consumer) -> None:
         self.consumers.append(consumer)
 
-    def _emit(self, event: Event) -> None:
+    def emit(self, event: Event) -> None:
         """Tells every consumer; one that raises is reported once and never stops us."""
         if event.kind != "output":
             detail = " ".join(f"{k}={v}" for k, v in (("pid", event.pid), ("code", event.code),
@@ -142,7 +128,7 @@ class Supervisor:
 
     def log(self, text: str, level: str = "INFO") -> None:
         """A line for the launch pane and launch.log from whoever runs the supervisor."""
-        self._emit(Event("log", None, reason=text, level=level))
+        self.emit(Event("log", None, reason=text, level=level))
 
     def _consumer_failed(self, consumer: Consumer, exc: Exception) -> None:
         name = getattr(consumer, "__qualname__", type(consumer).__name__)
@@ -250,7 +236,12 @@ class Supervisor:
         await self._drain()
         for reader in list(self._lingering):
             reader.close()
-        await self.ros.close()
+        for plugin in self.plugins:
+            try:
+                await plugin.close()
+            except Exception as exc:  # a plugin that fails to close never stops the end
+                self._report_io(f"{type(plugin).__name__} failed to close: "
+                                f"{type(exc).__name__}: {exc}")
         self._launch_log.close()
         self._remove_parameter_files()
         # the watchdog stops what a node left behind (daemons, stray group members)
@@ -368,7 +359,7 @@ class Supervisor:
         """Exit handlers whose process has just stopped, or that are still running."""
         for action in self.plan.actions:
             state = self.states.get(action.id)
-            if state == "running" and action.kind not in ROS_ACTIONS:
+            if state == "running" and action.kind not in self._detached_actions:
                 return True
             if state == "pending" and action.enabled and action.trigger is None:
                 return True  # performed by a handler just now, about to run
@@ -440,24 +431,19 @@ class Supervisor:
         if event is None:
             event = self._event_of(action)
         self.states[action.id] = "running"
-        self._emit(Event("started", action.id))
+        self.emit(Event("started", action.id))
         self._flag(action.id, "start").set()
         ok = True
         try:
-            if action.kind == "call_service":
-                ok = await self.ros.call_service(action)
-            elif action.kind == "set_parameters":
-                ok = await self.ros.set_parameters(action)
+            runner = self._action_runners.get(action.kind)
+            if runner is not None:
+                ok = await runner(action)
             elif action.kind == "shutdown":
                 self._request_shutdown(str(action.data))
             elif action.kind == "log":
                 self._log(action, self._perform(action, action.source.msg, event))
             elif action.kind == "event_callback":
                 ok = self._run_callbacks(action, event or LaunchEvent())
-            elif action.kind == "lifecycle_transition":
-                ok = await self.lifecycle.run_action(action)
-            elif action.kind == "load_components":
-                ok = await self.components.run_action(action)
             elif action.kind == "deferred":
                 from .event_actions import deferred_entities
 
@@ -470,7 +456,7 @@ class Supervisor:
             self.states[action.id] = "cancelled"
             raise
         self.states[action.id] = "done" if ok else "failed"
-        self._emit(Event("finished", action.id, reason=self.states[action.id]))
+        self.emit(Event("finished", action.id, reason=self.states[action.id]))
         self._flag(action.id, "exit").set()
 
     def _request_shutdown(self, reason: str) -> None:
@@ -488,16 +474,12 @@ class Supervisor:
         return True
 
     def _log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
-        self._emit(Event("log", action.id, reason=text, level=level))
+        self.emit(Event("log", action.id, reason=text, level=level))
 
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
         context = PerformContext(action.configurations, None,
                                  event_locals={"event": event or LaunchEvent()})
         return perform(value, context)
-
-    def bridge(self) -> Any:
-        """The rclpy bridge the launch's ROS actions use (made on first use)."""
-        return self.ros.bridge()
 
     def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
         """Launch-file functions called with the event; what they return is carried out."""
@@ -537,7 +519,7 @@ class Supervisor:
 
     def _deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
         """A block of a process's output, already in its log file: to the consumers."""
-        self._emit(Event("output", running.plan.id, stream=stream, lines=lines))
+        self.emit(Event("output", running.plan.id, stream=stream, lines=lines))
         if self._io_watchers or self._any_watchers:
             self._dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
@@ -624,15 +606,13 @@ class Supervisor:
                        f"{type(exc).__name__}: {exc}")
             return
         self.states[process_id] = "running"
-        self._emit(Event("started", process_id, pid=popen.pid))
+        self.emit(Event("started", process_id, pid=popen.pid))
         self._process_event(process_id, "start", popen.pid)
         self._flag(process_id, "start").set()
-        if proc.lifecycle:
-            self._spawn_task(self.lifecycle.process_started(proc))
-        # any node may be a container (nav2 starts one with Node): it loads what targets it
-        loading = self.components.container_started(proc)
-        if loading is not None:
-            self._spawn_task(loading)
+        for plugin in self.plugins:
+            follow_up = plugin.process_started(proc)
+            if follow_up is not None:
+                self._spawn_task(follow_up)
         self._spawn_task(self._wait(running))
 
     def _base_env(self) -> dict[str, str]:
@@ -643,7 +623,7 @@ class Supervisor:
 
     def _fail(self, process_id: str, reason: str) -> None:
         self.states[process_id] = "failed"
-        self._emit(Event("failed", process_id, reason=reason))
+        self.emit(Event("failed", process_id, reason=reason))
 
     def _watch_exit(self, running: Running) -> None:
         """The child's exit wakes the loop through a pidfd: no thread per child."""
@@ -693,9 +673,10 @@ class Supervisor:
             self.crashes[process_id] = code
             self._crash_times[process_id] = time.monotonic()
         self.states[process_id] = "exited"
-        self.lifecycle.process_exited(process_id)
+        for plugin in self.plugins:
+            plugin.process_exited(process_id)
         # `requested`: a stop asked by anyone (another client, `tuilaunch stop`), not a crash
-        self._emit(Event("exited", process_id, pid=running.process.pid, code=code,
+        self.emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=_describe_exit(code), data={"requested": requested}))
         self._process_event(process_id, "exit", running.process.pid, code)
         self._flag(process_id, "exit").set()
@@ -703,7 +684,7 @@ class Supervisor:
             await self._respawn(running)
         elif running.plan.respawn and code != 0 and not requested:
             tries = self._retries.get(process_id, 0)
-            self._emit(Event("log", process_id, level="ERROR", reason=(
+            self.emit(Event("log", process_id, level="ERROR", reason=(
                 f"respawn gives up: it failed {tries + 1} times "
                 f"(respawn_max_retries={running.plan.respawn_max_retries})")))
 
@@ -730,7 +711,7 @@ class Supervisor:
         delay = max(delay, proc.respawn_delay)
         self.states[proc.id] = "respawning"
         self._busy += 1
-        self._emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s"))
+        self.emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s"))
         try:
             await asyncio.sleep(delay)
         finally:
@@ -811,7 +792,7 @@ class Supervisor:
         self._shutting_down = True
         self._stop_time = time.monotonic()
         try:
-            self._emit(Event("shutdown", reason=reason))
+            self.emit(Event("shutdown", reason=reason))
             for action in self._on_shutdown:
                 try:
                     await self._run_action(action, LaunchEvent(reason=reason))
@@ -855,7 +836,7 @@ class Supervisor:
             stage = max(stage, self._urgency if self._shutting_down else 0)
             if stage > sent:
                 if stage > 0:
-                    self._emit(Event("log", proc.id, level="WARN", reason=(
+                    self.emit(Event("log", proc.id, level="WARN", reason=(
                         f"{why}sending {_STAGES[stage].name} to its process group")))
                 if not _kill_group(running.process.pid, _STAGES[stage]):
                     break  # the whole group is gone; the exit arrives through the pidfd
@@ -872,7 +853,7 @@ class Supervisor:
             if running.exited.done():
                 break
             if stage == len(_STAGES) - 1:
-                self._emit(Event("log", proc.id, level="ERROR", reason=(
+                self.emit(Event("log", proc.id, level="ERROR", reason=(
                     f"still there {waits[stage]:g} s after SIGKILL (stuck in the kernel?); "
                     "no longer waiting for it")))
                 return
