@@ -19,7 +19,8 @@ from pathlib import Path
 import pytest
 
 from tuilaunch.engine import load_file, resolve
-from tuilaunch.engine.run.supervisor import Event, Supervisor
+from tuilaunch.engine.launcher import make_supervisor
+from tuilaunch.engine.run.supervisor import Event
 
 from .conftest import plan_of, run_cli, run_headless
 from .interfaces.build_interfaces import build, default_cache
@@ -208,7 +209,7 @@ async def test_a_restarted_or_respawned_container_gets_its_components_back(
     # its own parameter folder: a run removes its folder at the end
     plan = resolve(load_file(str(write(CONTAINER))), {}, tmp_path / "params")
     (box,) = plan.processes
-    supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=3)
+    supervisor = make_supervisor(plan, tmp_path / "log", sigterm_timeout=3)
     loaded: asyncio.Queue[str] = asyncio.Queue()
 
     def on_event(event: Event) -> None:

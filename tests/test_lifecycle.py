@@ -12,7 +12,8 @@ import pytest
 
 from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.errors import LaunchError
-from tuilaunch.engine.run.supervisor import Event, Supervisor
+from tuilaunch.engine.launcher import make_supervisor
+from tuilaunch.engine.run.supervisor import Event
 
 from .conftest import plan_of, run_cli, run_headless
 
@@ -328,7 +329,7 @@ def generate_launch_description():
         LifecycleNode(package='tuilaunch_demos', executable='lifecycle_talker', name='op',
                       namespace='', autostart=True)])
 """))), {}, tmp_path / "params")
-    supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=3)
+    supervisor = make_supervisor(plan, tmp_path / "log", sigterm_timeout=3)
     events: list[Event] = []
     supervisor.subscribe(events.append)
     states = asyncio.Queue[str]()

@@ -75,7 +75,7 @@ def runtime(monkeypatch, tmp_path):
             argv = (entry / "cmdline").read_bytes().split(b"\0")
         except OSError:
             continue
-        if any(b"session_server" in a for a in argv) and any(
+        if any(b"tuilaunch.engine.server_main" in a for a in argv) and any(
                 str(tmp_path).encode() in a for a in argv):
             _signal(int(entry.name), signal.SIGTERM)
             end = time.monotonic() + 30

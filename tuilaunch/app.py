@@ -26,12 +26,13 @@ from textual.screen import ModalScreen, Screen
 from textual.widget import Widget
 from textual.widgets import Button, Footer, OptionList, Static, TabbedContent, TabPane, Tree
 
+from .engine.launcher import RosSupervisor, make_supervisor
 from .engine.plan.session import Preview, Session
 from .engine.ros.bridge import RosBridge
 from .engine.ros.lifecycle import available_transitions
 from .engine.run.engine_thread import EngineThread
 from .engine.run.event_buffer import EventBuffer
-from .engine.run.supervisor import Event, Supervisor
+from .engine.run.supervisor import Event
 from .output_store import ERROR, INFO, WARN, Line, OutputStore
 from .screens.args_panel import ArgsPanel, check_plan, check_values
 from .screens.dialogs import ConfirmScreen, HelpScreen, QuitScreen
@@ -106,7 +107,7 @@ class TuiLaunchApp(App[int]):
         # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
-        self.supervisor: Supervisor | RemoteSupervisor | None = None
+        self.supervisor: RosSupervisor | RemoteSupervisor | None = None
         # with a session name the launch runs in a session server and this app is a client
         self.session_name = session_name
         self.owner = owner
@@ -175,7 +176,7 @@ class TuiLaunchApp(App[int]):
             remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
             self.supervisor = remote
         else:
-            self.supervisor = self.engine.call(lambda: Supervisor(
+            self.supervisor = self.engine.call(lambda: make_supervisor(
                 self.session.plan, self.log_dir, sigterm_timeout=self.sigterm_timeout,
                 sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
         assert self.supervisor is not None

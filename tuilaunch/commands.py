@@ -104,7 +104,7 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
     server_log = log_dir / "session.log"
     with open(server_log, "ab") as errors:
         server = subprocess.Popen(
-            [sys.executable, "-m", "tuilaunch.engine.run.session_server", name,
+            [sys.executable, "-m", "tuilaunch.engine.server_main", name,
              os.path.abspath(path), str(log_dir), json.dumps(arguments),
              json.dumps(positional or [path])],
             stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True)

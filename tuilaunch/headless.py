@@ -16,9 +16,10 @@ import time
 from pathlib import Path
 from typing import TextIO
 
+from .engine.launcher import make_supervisor
 from .engine.plan.model import Plan
 from .engine.run.output import strip_ansi
-from .engine.run.supervisor import Event, Supervisor
+from .engine.run.supervisor import Event
 from .stdout_writer import BackgroundWriter
 
 
@@ -144,7 +145,7 @@ class Printer:
 
 
 async def _run(plan: Plan, log_dir: Path) -> int:
-    supervisor = Supervisor(plan, log_dir)
+    supervisor = make_supervisor(plan, log_dir)
     printer = Printer(sys.stdout, log_dir, plan)
     supervisor.subscribe(printer)
     loop = asyncio.get_running_loop()

@@ -11,12 +11,14 @@ container gave it, the container's error, or why no request could be sent.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Coroutine
-from typing import TYPE_CHECKING, Any
+from collections.abc import Awaitable, Mapping
+from typing import Any
 
-if TYPE_CHECKING:
-    from ..plan.model import ActionPlan, ProcessPlan
-    from ..run.supervisor import Supervisor
+from ..plan.model import ActionPlan, ProcessPlan
+from ..run.events import Event
+from ..run.plugins import ActionRunner, Plugin
+from ..run.supervisor import Supervisor
+from .actions import RosActions
 
 LOAD_TIMEOUT = 30.0  # a component's constructor may take a while (maps, models)
 # A container that crashed stays on the graph until its DDS lease ends: a request sent then
@@ -57,17 +59,28 @@ def build_request(load_node: Any, component: dict[str, Any]) -> Any:
     return request
 
 
-class ComponentLoader:
-    """Results of every component of the launch, by component id."""
+class ComponentLoader(Plugin):
+    """Results of every component of the launch, by component id.
 
-    def __init__(self, supervisor: Supervisor) -> None:
+    A supervisor plugin: it performs the plan's `load_components` actions and loads a
+    container's components whenever its process starts."""
+
+    def __init__(self, supervisor: Supervisor, ros: RosActions) -> None:
         self.supervisor = supervisor
+        self.ros = ros
         self.results: dict[str, dict[str, Any]] = {}
         # components of LoadComposableNodes actions that already ran, by container name
         self._loaded_by_actions: dict[str, list[tuple[str, dict[str, Any]]]] = {}
         self._locks: dict[str, asyncio.Lock] = {}
 
-    def container_started(self, proc: ProcessPlan) -> Coroutine[Any, Any, bool] | None:
+    def actions(self) -> Mapping[str, ActionRunner]:
+        return {"load_components": self.run_action}
+
+    def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
+        # any node may be a container (nav2 starts one with Node): it loads what targets it
+        return self.container_started(proc)
+
+    def container_started(self, proc: ProcessPlan) -> Awaitable[bool] | None:
         """Loading of the container's own components, then of those actions loaded before.
 
         What to load is decided now, as the process starts: an action that runs later (an
@@ -130,7 +143,7 @@ class ComponentLoader:
             self._result(owner, component, "failed", f"cannot load {what}: {exc}", "ERROR")
             return False
         try:
-            bridge = self.supervisor.bridge()
+            bridge = self.ros.bridge()
         except Exception as exc:
             self._result(owner, component, "failed", f"cannot load {what}: no ROS "
                          f"connection ({exc})", "ERROR")
@@ -173,7 +186,7 @@ class ComponentLoader:
                                                ATTEMPT_TIMEOUT)
             except RosError:
                 alive = proc_id is None or self.supervisor.states.get(proc_id) == "running"
-                if loop.time() > deadline or not alive or self.supervisor._shutting_down:
+                if loop.time() > deadline or not alive or self.supervisor.shutting_down:
                     raise RosError(f"{container} did not answer the {request_kind} request "
                                    f"within {LOAD_TIMEOUT:g} s") from None
                 found = await self._listed(bridge, container, component.get("full_name"))
@@ -198,7 +211,7 @@ class ComponentLoader:
         return None
 
     async def _wait_for_service(self, bridge: Any, service: str, proc_id: str | None) -> bool:
-        while not self.supervisor._shutting_down:
+        while not self.supervisor.shutting_down:
             if proc_id is not None and self.supervisor.states.get(proc_id) not in ALIVE:
                 return False
             try:
@@ -210,12 +223,10 @@ class ComponentLoader:
 
     def _result(self, owner: str, component: dict[str, Any], state: str, text: str,
                 level: str = "INFO", **extra: Any) -> None:
-        from ..run.supervisor import Event
-
         data = {"component": component["id"], "state": state, "text": text,
                 "container": component.get("container"), **extra}
         self.results[component["id"]] = data
-        self.supervisor._emit(Event("component", owner, reason=text, level=level, data=data))
+        self.supervisor.emit(Event("component", owner, reason=text, level=level, data=data))
 
 
 __all__ = ["ComponentLoader", "build_request", "load_node_class"]

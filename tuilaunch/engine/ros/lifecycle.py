@@ -10,13 +10,16 @@ the node's `change_state` service as long as its process lives, as launch_ros wa
 from __future__ import annotations
 
 import asyncio
-from typing import TYPE_CHECKING, Any
+from collections.abc import Awaitable, Callable, Mapping
+from typing import Any
 
 from ..describe.lifecycle import STATES, TRANSITIONS, state_keys
-
-if TYPE_CHECKING:
-    from ..plan.model import ActionPlan, ProcessPlan
-    from ..run.supervisor import Supervisor
+from ..errors import LaunchError
+from ..plan.model import ActionPlan, ProcessPlan
+from ..run.events import Event
+from ..run.plugins import ActionRunner, Handler, Plugin
+from ..run.supervisor import Supervisor
+from .actions import RosActions
 
 # transitions an operator can ask for, by the state a node is in
 AVAILABLE: dict[str, list[str]] = {
@@ -32,18 +35,62 @@ class LifecycleError(Exception):
     """A transition that could not be asked for or was refused."""
 
 
-class LifecycleTracker:
-    """Lifecycle state of each lifecycle process, and the transitions asked of it."""
+class LifecycleTracker(Plugin):
+    """Lifecycle state of each lifecycle process, and the transitions asked of it.
 
-    def __init__(self, supervisor: Supervisor) -> None:
+    A supervisor plugin: it follows lifecycle processes as they start and exit, performs
+    the plan's `lifecycle_transition` actions, and answers the session requests
+    `lifecycle` (a node's state, asked of the node) and `transition` (an operator's)."""
+
+    def __init__(self, supervisor: Supervisor, ros: RosActions) -> None:
         self.supervisor = supervisor
+        self.ros = ros
         self.states: dict[str, str] = {}
         self._subscriptions: dict[str, Any] = {}
         self._heard: set[str] = set()  # processes whose transition events arrived
 
+    # --- the plugin's hooks ---------------------------------------------------------------
+
+    def actions(self) -> Mapping[str, ActionRunner]:
+        return {"lifecycle_transition": self.run_action}
+
+    def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
+        return self.follow(proc) if proc.lifecycle else None
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"lifecycle": dict(self.states)}
+
+    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+        async def lifecycle(message: dict[str, Any]) -> Any:
+            return await self.node_state(find_process(str(message.get("process"))))
+
+        async def transition(message: dict[str, Any]) -> Any:
+            # an operator's transition from an attached TUI; the node's answer and its new
+            # state reach every client as lifecycle and log events
+            process = find_process(str(message.get("process")))
+            done = await self.request(process, str(message.get("transition")))
+            return {"process": process, "done": done}
+
+        return {"lifecycle": lifecycle, "transition": transition}
+
+    async def node_state(self, process: str) -> dict[str, Any]:
+        """The node's own answer to `get_state` (not the state followed here)."""
+        from .bridge import RosError
+
+        name = self.supervisor.plan.process(process).full_name
+        if not name or "<" in name:
+            raise LaunchError(f"{process}: its node name is not known to the launch file")
+        try:
+            _, response = await self.ros.bridge().call_service(
+                f"{name}/get_state", {}, 2.0, service_type="lifecycle_msgs/srv/GetState")
+        except RosError as exc:
+            return {"process": process, "node": name, "state": None, "error": str(exc)}
+        label = (response.get("current_state") or {}).get("label")
+        return {"process": process, "node": name, "state": label}
+
     # --- following -------------------------------------------------------------------------
 
-    async def process_started(self, proc: ProcessPlan) -> None:
+    async def follow(self, proc: ProcessPlan) -> None:
         """Subscribes to its transitions, reads its state, and autostarts it if asked."""
         name = proc.full_name
         if name is None:
@@ -71,7 +118,7 @@ class LifecycleTracker:
     async def _bridge(self) -> Any:
         try:
             # on the loop, not in a worker thread: two tasks must never build two bridges
-            return self.supervisor.bridge()
+            return self.ros.bridge()
         except Exception as exc:  # rclpy missing or not initialisable
             raise LifecycleError(f"no ROS connection ({exc})") from None
 
@@ -100,7 +147,7 @@ class LifecycleTracker:
         if not await self._wait_for_service(bridge, service, proc.id):
             return None
         response = await bridge.call_typed(service, GetState, GetState.Request(),
-                                           self.supervisor.service_timeout)
+                                           self.ros.service_timeout)
         return str(response.current_state.label or STATES.get(response.current_state.id))
 
     async def _wait_for_service(self, bridge: Any, service: str, proc_id: str) -> bool:
@@ -108,7 +155,7 @@ class LifecycleTracker:
         while True:
             if self.supervisor.states.get(proc_id) not in ALIVE:
                 return False
-            if self.supervisor._shutting_down:
+            if self.supervisor.shutting_down:
                 return False
             try:
                 await bridge.wait_for_service(service, 1.0)
@@ -128,28 +175,22 @@ class LifecycleTracker:
         if self.states.get(proc_id) == state and detail is None:
             return
         self.states[proc_id] = state
-        from ..run.supervisor import Event
-
         data = {"state": state, **(detail or {})}
-        self.supervisor._emit(Event("lifecycle", proc_id, reason=state, data=data))
+        self.supervisor.emit(Event("lifecycle", proc_id, reason=state, data=data))
 
     def _report(self, item: str, text: str, level: str = "INFO") -> None:
-        from ..run.supervisor import Event
-
-        self.supervisor._emit(Event("log", item, reason=text, level=level))
+        self.supervisor.emit(Event("log", item, reason=text, level=level))
 
     def process_exited(self, proc_id: str) -> None:
         """A node that is gone has no lifecycle state any more."""
         sub = self._subscriptions.pop(proc_id, None)
-        if sub is not None and self.supervisor.ros.made is not None:
+        if sub is not None and self.ros.made is not None:
             try:
-                self.supervisor.ros.made.node.destroy_subscription(sub)
+                self.ros.made.node.destroy_subscription(sub)
             except Exception:  # the bridge is closing
                 pass
         if self.states.pop(proc_id, None) is not None:
-            from ..run.supervisor import Event
-
-            self.supervisor._emit(Event("lifecycle", proc_id, reason="",
+                self.supervisor.emit(Event("lifecycle", proc_id, reason="",
                                         data={"state": ""}))
 
     # --- driving ---------------------------------------------------------------------------
@@ -194,7 +235,7 @@ class LifecycleTracker:
         request.transition.id = TRANSITION_IDS[label]
         try:
             response = await bridge.call_typed(service, ChangeState, request,
-                                               self.supervisor.service_timeout)
+                                               self.ros.service_timeout)
         except Exception as exc:
             self._report(where, f"{label} {proc.full_name} failed: {exc}", "ERROR")
             return False

@@ -20,7 +20,7 @@ import dataclasses
 import json
 from typing import Any
 
-from .supervisor import Event
+from .events import Event
 
 MAX_MESSAGE = 64 << 20
 

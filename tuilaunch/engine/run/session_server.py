@@ -1,6 +1,6 @@
 """A launch as a background server: owns the Supervisor, serves clients on a unix socket.
 
-`python -m tuilaunch.engine.run.session_server NAME FILE LOG_DIR ARGUMENTS_JSON` is started by
+`python -m tuilaunch.engine.server_main NAME FILE LOG_DIR ARGUMENTS_JSON` is started by
 the command line in its own session (no terminal: a dropped ssh link never reaches it). The
 TUI, `tuilaunch status/logs/wait/...` are clients. Each subscribed client has a bounded queue:
 past its limit, output lines are dropped for that client only (with a count), and a client
@@ -18,9 +18,8 @@ import os
 import signal
 import socket
 import struct
-import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -29,8 +28,10 @@ from ..errors import LaunchError
 from ..plan.session import Session
 from . import session_dir
 from .event_buffer import EventBuffer
+from .events import Event
+from .plugins import Handler
 from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
-from .supervisor import Event, Supervisor
+from .supervisor import Supervisor
 
 CLIENT_MAX_LINES = 20_000
 """Output lines queued per client before the oldest are dropped for that client."""
@@ -40,6 +41,9 @@ REACHABLE_CHECK = 1.0
 """Seconds between checks that the session's socket is still where clients look."""
 RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
+BUILTIN_OPS = frozenset({"subscribe", "status", "start", "stop", "restart", "shutdown",
+                         "apply", "kill", "run_action", "find"})
+"""Requests the server answers itself; plugins add others with `add_handler`."""
 
 
 class ClientQueue:
@@ -73,14 +77,21 @@ class ClientQueue:
 class SessionServer:
     def __init__(self, name: str, session: Session, log_dir: Path,
                  sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
-                 command: list[str] | None = None) -> None:
+                 command: list[str] | None = None, supervisor: Supervisor | None = None) -> None:
+        """`supervisor`: one made with its plugins (engine/launcher.py); a bare one without.
+        The plugins' `handlers()` join the requests the server answers."""
         self.name = name
         self.command = command or [session.path]  # FILE or PACKAGE FILE, as the user gave
         self.session = session
         self.log_dir = log_dir
-        self.supervisor = Supervisor(session.plan, log_dir, sigterm_timeout=sigterm_timeout,
-                                     sigkill_timeout=sigkill_timeout)
+        self.supervisor = supervisor or Supervisor(
+            session.plan, log_dir, sigterm_timeout=sigterm_timeout,
+            sigkill_timeout=sigkill_timeout)
         self.supervisor.subscribe(self._on_event)
+        self._handlers: dict[str, Handler] = {}
+        for plugin in self.supervisor.plugins:
+            for op, handler in plugin.handlers(self.find_process).items():
+                self.add_handler(op, handler)
         self.started = time.time()
         self.pids: dict[str, int] = {}
         self.details: dict[str, str] = {}
@@ -96,6 +107,20 @@ class SessionServer:
         self._bound: tuple[int, int] | None = None  # the socket file we listen on
         self._bound_path: Path | None = None
         self._lock = -1  # the descriptor holding `<name>.lock`
+
+    def add_handler(self, op: str, handler: Handler) -> None:
+        """Answers the clients' requests `{"op": op, ...}` with `await handler(message)`.
+
+        For requests the server does not know itself (a plugin's: lifecycle states, ROS
+        inspection); a plugin pushes events to the clients with `supervisor.emit`."""
+        if op in BUILTIN_OPS or op in self._handlers:
+            raise ValueError(f"session request {op!r} is already answered")
+        self._handlers[op] = handler
+
+    @property
+    def handlers(self) -> Mapping[str, Handler]:
+        """The requests added with `add_handler`, by op."""
+        return dict(self._handlers)
 
     # --- the supervisor's events -------------------------------------------------------------
 
@@ -268,11 +293,13 @@ class SessionServer:
                         writer.transport.abort)
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
-                    result = {"states": dict(self.supervisor.states),
-                              "offsets": self._log_sizes(),
-                              "recent": [event_to_dict(e) for e in self.recent],
-                              "lifecycle": dict(self.supervisor.lifecycle.states),
-                              "arguments": self.session.arguments}
+                    result: dict[str, Any] = {}
+                    for plugin in self.supervisor.plugins:
+                        result.update(plugin.snapshot())
+                    result.update({"states": dict(self.supervisor.states),
+                                   "offsets": self._log_sizes(),
+                                   "recent": [event_to_dict(e) for e in self.recent],
+                                   "arguments": self.session.arguments})
                     self.queues.add(queue)
                     await _send(writer, lock, {"type": "reply", "id": message.get("id"),
                                                "ok": True, "result": result})
@@ -375,14 +402,9 @@ class SessionServer:
             return {}
         if op == "find":
             return self.find_process(str(message.get("process")))
-        if op == "lifecycle":
-            return await self.lifecycle_state(self.find_process(str(message.get("process"))))
-        if op == "transition":
-            # an operator's transition from an attached TUI; the node's answer and its new
-            # state reach every client as lifecycle and log events
-            process = self.find_process(str(message.get("process")))
-            done = await supervisor.lifecycle.request(process, str(message.get("transition")))
-            return {"process": process, "done": done}
+        handler = self._handlers.get(str(op))
+        if handler is not None:
+            return await handler(message)
         raise ValueError(f"unknown request {op!r}")
 
     def find_process(self, ref: str) -> str:
@@ -419,20 +441,6 @@ class SessionServer:
         self._on_event(Event("relaunched", reason=None, lines=[
             f"{k}:={v}" for k, v in self.session.arguments.items()]))
 
-    async def lifecycle_state(self, process: str) -> dict[str, Any]:
-        from ..ros.bridge import RosError
-
-        name = self.session.plan.process(process).full_name
-        if not name or "<" in name:
-            raise LaunchError(f"{process}: its node name is not known to the launch file")
-        try:
-            _, response = await self.supervisor.bridge().call_service(
-                f"{name}/get_state", {}, 2.0, service_type="lifecycle_msgs/srv/GetState")
-        except RosError as exc:
-            return {"process": process, "node": name, "state": None, "error": str(exc)}
-        label = (response.get("current_state") or {}).get("label")
-        return {"process": process, "node": name, "state": label}
-
 
 def op_name(message: dict[str, Any]) -> str:
     return str(message.get("op"))
@@ -468,30 +476,3 @@ def _same_user(sock: socket.socket) -> bool:
         return False
     _, uid, _ = struct.unpack("3i", raw)
     return uid == os.getuid()
-
-
-def main(argv: list[str]) -> int:
-    import json
-
-    from ..plan.packages import ensure_environment
-
-    name, path, log_dir, arguments_json = argv[:4]
-    command = json.loads(argv[4]) if len(argv) > 4 else [path]
-    arguments = json.loads(arguments_json)
-    ensure_environment()
-    set_command_line(command, arguments)
-    try:
-        session = Session(path, arguments)
-    except LaunchError as exc:
-        print(f"tuilaunch: error: {exc}", file=sys.stderr)
-        return 2
-    server = SessionServer(name, session, Path(log_dir), command=command)
-    try:
-        return asyncio.run(server.serve())
-    except LaunchError as exc:
-        print(f"tuilaunch: error: {exc}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))

@@ -1,31 +1,40 @@
 """The launch's own ROS actions: `call_service` and `set_parameters` through the bridge.
 
-The bridge (rclpy in its own thread) is made on first use, or supplied by the caller (the
-TUI shares its own), and only closed here when it was made here.
+A supervisor plugin (run/plugins.py). It also owns the launch's bridge (rclpy in its own
+thread), which the lifecycle and composition plugins share: made on first use, or supplied
+by the caller (the TUI shares its own), and only closed here when it was made here.
 """
 
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from ..plan.model import ActionPlan
-from ..ros.messages import MessageError
+from ..run.events import Event
+from ..run.plugins import ActionRunner, Plugin
+from .messages import MessageError
 
-Log = Callable[[ActionPlan, str, str], None]
+Emit = Callable[[Event], None]
 
 
-class RosActions:
+class RosActions(Plugin):
+    # a call waiting for a service that never comes must not hold a shutdown
+    detached_actions = frozenset({"call_service", "set_parameters"})
+
     def __init__(self, bridge_factory: Callable[[], Any] | None, service_timeout: float,
-                 log: Log) -> None:
+                 emit: Emit) -> None:
         self._bridge: Any = None
         self._bridge_factory = bridge_factory  # whoever supplies the bridge also closes it
         self.service_timeout = service_timeout
-        self._log_to = log
+        self._emit_to = emit
+
+    def actions(self) -> Mapping[str, ActionRunner]:
+        return {"call_service": self.call_service, "set_parameters": self.set_parameters}
 
     def log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
-        self._log_to(action, text, level)
+        self._emit_to(Event("log", action.id, reason=text, level=level))
 
     @property
     def made(self) -> Any:
@@ -42,13 +51,13 @@ class RosActions:
             if self._bridge_factory is not None:
                 self._bridge = self._bridge_factory()
             else:
-                from ..ros.bridge import RosBridge
+                from .bridge import RosBridge
 
                 self._bridge = RosBridge()
         return self._bridge
 
     async def call_service(self, action: ActionPlan) -> bool:
-        from ..ros.bridge import RosError
+        from .bridge import RosError
 
         name = str(action.target)
         self.log(action, f"waiting for service {name}")
@@ -67,7 +76,7 @@ class RosActions:
         return True
 
     async def set_parameters(self, action: ActionPlan) -> bool:
-        from ..ros.bridge import RosError
+        from .bridge import RosError
 
         node = str(action.target)
         self.log(action, f"waiting for node {node}")

@@ -1,0 +1,116 @@
+"""What plugs into a launch from above `run`: a plugin's hooks, session requests and events."""
+
+from __future__ import annotations
+
+import asyncio
+import subprocess
+import sys
+import tempfile
+from collections.abc import Awaitable, Callable, Mapping
+from typing import Any
+
+import pytest
+
+from tuilaunch.engine.plan.model import ProcessPlan
+from tuilaunch.engine.plan.session import Session
+from tuilaunch.engine.run import session_dir
+from tuilaunch.engine.run.events import Event
+from tuilaunch.engine.run.plugins import Handler, Plugin
+from tuilaunch.engine.run.protocol import decode, encode
+from tuilaunch.engine.run.session_server import SessionServer
+from tuilaunch.engine.run.supervisor import Supervisor
+
+LAUNCH = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(cmd=['sleep', '600'], name='steady'))
+    return sl.launch_description()
+"""
+
+
+def test_the_run_layer_loads_without_ros_and_the_engine_without_textual():
+    probe = ("import sys, tuilaunch.engine.run.supervisor, tuilaunch.engine.run.session_server\n"
+             "import tuilaunch.engine.launcher, tuilaunch.engine.server_main\n"
+             "print(sorted({m.split('.')[0] if m.startswith('textual') else m\n"
+             "  for m in sys.modules if m.startswith(('textual', 'tuilaunch.engine.ros'))}))")
+    run_only = ("import sys, tuilaunch.engine.run.supervisor, tuilaunch.engine.run.session_server\n"
+                "print([m for m in sys.modules if m.startswith('tuilaunch.engine.ros')])")
+    done = subprocess.run([sys.executable, "-c", run_only], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert "textual" not in done.stdout  # the wired engine has ROS, never Textual
+    assert "tuilaunch.engine.ros.lifecycle" in done.stdout
+
+
+class Greeter(Plugin):
+    """Follows the processes that start and answers `greet` with an event to every client."""
+
+    def __init__(self, supervisor: Supervisor) -> None:
+        self.supervisor = supervisor
+        self.started: list[str] = []
+
+    def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
+        self.started.append(proc.id)
+        return None
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"greeted": list(self.started)}
+
+    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+        async def greet(message: dict[str, Any]) -> Any:
+            process = find_process(str(message.get("process")))
+            self.supervisor.emit(Event("log", process, reason=f"hello {process}"))
+            return {"greeted": process}
+
+        return {"greet": greet}
+
+
+def test_a_plugin_answers_its_own_request_and_reaches_every_client(write, tmp_path,
+                                                                    monkeypatch):
+    monkeypatch.setenv("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="tl"))  # short socket path
+    session = Session(str(write(LAUNCH)), {}, tmp_path / "params")
+    supervisor = Supervisor(session.plan, tmp_path / "log", sigterm_timeout=3)
+    greeter = Greeter(supervisor)
+    supervisor.add_plugin(greeter)
+    server = SessionServer("plugged", session, tmp_path / "log", supervisor=supervisor)
+    with pytest.raises(ValueError, match="already answered"):
+        server.add_handler("status", greeter.handlers(server.find_process)["greet"])
+
+    async def scenario() -> None:
+        serving = asyncio.ensure_future(server.serve())
+        deadline = asyncio.get_running_loop().time() + 30
+        while greeter.started != ["steady-1"] or not session_dir.socket_path("plugged").exists():
+            assert asyncio.get_running_loop().time() < deadline, "never started"
+            await asyncio.sleep(0.05)
+        reader, writer = await asyncio.open_unix_connection(
+            str(session_dir.socket_path("plugged")))
+        assert decode(await reader.readline())["type"] == "hello"
+        writer.write(encode({"id": 1, "op": "subscribe"}))
+        subscribed = decode(await reader.readline())
+        assert subscribed["result"]["greeted"] == ["steady-1"]
+        writer.write(encode({"id": 2, "op": "greet", "process": "steady"}))
+        writer.write(encode({"id": 3, "op": "greet", "process": "nobody"}))
+        replies: dict[int, dict[str, Any]] = {}
+        logged: list[str] = []
+        while len(replies) < 2 or not logged:
+            message = decode(await asyncio.wait_for(reader.readline(), 30))
+            if message["type"] == "reply":
+                replies[message["id"]] = message
+            elif message["type"] == "events":
+                logged += [e["reason"] for e in message["events"] if e["kind"] == "log"]
+        assert replies[2]["result"] == {"greeted": "steady-1"}
+        assert not replies[3]["ok"] and "no process 'nobody'" in replies[3]["error"]
+        assert logged == ["hello steady-1"]
+        writer.write(encode({"id": 4, "op": "shutdown"}))
+        assert await asyncio.wait_for(serving, 30) == 0
+        writer.close()
+
+    asyncio.run(scenario())
+    assert supervisor.states["steady-1"] == "exited"
+

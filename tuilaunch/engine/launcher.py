@@ -1,0 +1,54 @@
+"""The one place that makes a Supervisor with the ROS plugins wired in.
+
+It sits above both `run` (which knows nothing of ROS) and `ros` (which plugs into `run`),
+so the headless mode, the TUI and the session server all get the same launch: the
+launch's service calls and parameter sets, lifecycle nodes followed and driven, and
+components loaded into their containers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .plan.model import Plan
+from .ros.actions import RosActions
+from .ros.composition import ComponentLoader
+from .ros.lifecycle import LifecycleTracker
+from .run.supervisor import Supervisor
+
+
+class RosSupervisor(Supervisor):
+    """A Supervisor whose ROS plugins are at hand by name (the TUI asks `lifecycle`)."""
+
+    def __init__(self, plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
+                 sigkill_timeout: float = 5.0,
+                 bridge_factory: Callable[[], Any] | None = None,
+                 service_timeout: float = 10.0) -> None:
+        super().__init__(plan, log_dir, sigterm_timeout=sigterm_timeout,
+                         sigkill_timeout=sigkill_timeout)
+        self.ros = RosActions(bridge_factory, service_timeout, self.emit)
+        self.lifecycle = LifecycleTracker(self, self.ros)
+        self.components = ComponentLoader(self, self.ros)
+        # the bridge last: its close (the ROS node) comes after the others let go of it
+        for plugin in (self.lifecycle, self.components, self.ros):
+            self.add_plugin(plugin)
+
+    def bridge(self) -> Any:
+        """The rclpy bridge the launch's ROS actions use (made on first use)."""
+        return self.ros.bridge()
+
+
+def make_supervisor(plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
+                    sigkill_timeout: float = 5.0,
+                    bridge_factory: Callable[[], Any] | None = None,
+                    service_timeout: float = 10.0) -> RosSupervisor:
+    """A supervisor for `plan` with every ROS plugin; `bridge_factory` shares a bridge the
+    caller owns (and closes), else the launch makes its own on first use."""
+    return RosSupervisor(plan, log_dir, sigterm_timeout=sigterm_timeout,
+                         sigkill_timeout=sigkill_timeout, bridge_factory=bridge_factory,
+                         service_timeout=service_timeout)
+
+
+__all__ = ["RosSupervisor", "make_supervisor"]

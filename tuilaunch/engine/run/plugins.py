@@ -1,0 +1,91 @@
+"""How layers above `run` (the ROS integration in `engine/ros`) plug into a launch.
+
+`run` knows processes, output, triggers and signals, and nothing of ROS. What needs ROS
+(lifecycle nodes, component loading, the launch's service calls) is a plugin handed to the
+`Supervisor` when it is made (`Supervisor(..., plugins=[...])` or `add_plugin`, before
+`run`). A plugin implements any of the hooks below; `Plugin` gives do-nothing defaults, so a
+plugin only writes the hooks it needs. A plugin reports through the supervisor's public
+`emit(Event(...))` and reads its public `plan`, `states` and `shutting_down`.
+
+The session server takes the same plugins' `handlers()`: named requests clients can send
+(`{"op": "lifecycle", ...}`), each an async function of the request's message whose return
+value is the reply's result. A handler raises `LaunchError`, `ValueError` or `TypeError` for
+a request the client got wrong (the reply carries the message).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Awaitable, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    from ..plan.model import ActionPlan, ProcessPlan
+
+ActionRunner = Callable[["ActionPlan"], Awaitable[bool]]
+"""Performs one action of the plan; True when it succeeded (the action is then `done`)."""
+
+Handler = Callable[[dict[str, Any]], Awaitable[Any]]
+"""Answers one request of a session client: the decoded message in, the result out."""
+
+
+@runtime_checkable
+class SupervisorPlugin(Protocol):
+    """The hooks the supervisor calls, all on its event loop."""
+
+    detached_actions: frozenset[str]
+    """Action kinds a shutdown does not wait for while they run (a service call waiting for
+    a service that will never come up must not hold the launch open)."""
+
+    def actions(self) -> Mapping[str, ActionRunner]:
+        """Action kinds of the plan this plugin performs (`call_service`, ...)."""
+        ...
+
+    def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
+        """A process of the launch has just started; the awaitable returned, if any, runs
+        as a task of the launch (cancelled when the run ends)."""
+        ...
+
+    def process_exited(self, process_id: str) -> None:
+        """A process of the launch has exited (before its `exited` event is sent)."""
+        ...
+
+    async def close(self) -> None:
+        """The run is over: release what the plugin holds (a ROS node, subscriptions)."""
+        ...
+
+    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+        """Session requests this plugin answers, by op name. `find_process` turns what a
+        client typed (id, node name) into a process id, or raises LaunchError."""
+        ...
+
+    def snapshot(self) -> dict[str, Any]:
+        """What a session client gets when it subscribes, beside the process states (the
+        lifecycle states so far, ...): keys of the subscribe reply."""
+        ...
+
+
+class Plugin:
+    """A base with every hook doing nothing: subclass it and override what you need."""
+
+    detached_actions: frozenset[str] = frozenset()
+
+    def actions(self) -> Mapping[str, ActionRunner]:
+        return {}
+
+    def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
+        return None
+
+    def process_exited(self, process_id: str) -> None:
+        return None
+
+    async def close(self) -> None:
+        return None
+
+    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+        return {}
+
+    def snapshot(self) -> dict[str, Any]:
+        return {}
+
+
+__all__ = ["ActionRunner", "Handler", "Plugin", "SupervisorPlugin"]

@@ -1,0 +1,44 @@
+"""`python -m tuilaunch.engine.server_main NAME FILE LOG_DIR ARGUMENTS_JSON [COMMAND_JSON]`:
+a launch as a background session server (run/session_server.py), with the ROS plugins.
+
+Here, above `run` and `ros`, because the server's supervisor comes from the one factory
+that wires the ROS plugins in (engine/launcher.py); `tuilaunch launch --detach` starts it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import sys
+from pathlib import Path
+
+from .describe.loader import set_command_line
+from .errors import LaunchError
+from .launcher import make_supervisor
+from .plan.packages import ensure_environment
+from .plan.session import Session
+from .run.session_server import SessionServer
+
+
+def main(argv: list[str]) -> int:
+    name, path, log_dir, arguments_json = argv[:4]
+    command = json.loads(argv[4]) if len(argv) > 4 else [path]
+    arguments = json.loads(arguments_json)
+    ensure_environment()
+    set_command_line(command, arguments)
+    try:
+        session = Session(path, arguments)
+    except LaunchError as exc:
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return 2
+    server = SessionServer(name, session, Path(log_dir), command=command,
+                           supervisor=make_supervisor(session.plan, Path(log_dir)))
+    try:
+        return asyncio.run(server.serve())
+    except LaunchError as exc:
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
