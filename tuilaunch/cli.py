@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .engine.describe.loader import LoadedFile, load_file, set_command_line
 from .engine.errors import LaunchError, PackageError
-from .engine.plan.packages import ensure_environment, find_launch_file_in_share
+from .engine.packages import ensure_environment, find_launch_file_in_share
 from .engine.plan.resolve import declared_arguments, resolve
 
 

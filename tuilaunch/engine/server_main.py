@@ -15,7 +15,7 @@ from pathlib import Path
 from .describe.loader import set_command_line
 from .errors import LaunchError
 from .launcher import make_supervisor
-from .plan.packages import ensure_environment
+from .packages import ensure_environment
 from .plan.session import Session
 from .run.session_server import SessionServer
 

@@ -132,7 +132,7 @@ class SimpleLauncher(GazeboLauncher):
                 "use_sim_time", use_sim_time,
                 description="Force use_sim_time parameter of instantiated nodes")
         elif use_sim_time == "auto":
-            from ..ros.sim_clock import clock_is_published
+            from .sim_clock import clock_is_published
 
             self.sim_time = clock_is_published()
         else:
