@@ -26,12 +26,13 @@ from textual.screen import ModalScreen, Screen
 from textual.widget import Widget
 from textual.widgets import Button, Footer, OptionList, Static, TabbedContent, TabPane, Tree
 
-from .engine.plan.session import Preview, Session
-from .engine.ros.bridge import RosBridge
-from .engine.ros.lifecycle import available_transitions
-from .engine.run.engine_thread import EngineThread
-from .engine.run.event_buffer import EventBuffer
-from .engine.run.supervisor import Event, Supervisor
+from ..client.remote_supervisor import RemoteSupervisor
+from ..engine.plan.session import Preview, Session
+from ..engine.ros.bridge import RosBridge
+from ..engine.ros.lifecycle import available_transitions
+from ..engine.run.engine_thread import EngineThread
+from ..engine.run.event_buffer import EventBuffer
+from ..engine.run.supervisor import Event, Supervisor
 from .output_store import ERROR, INFO, WARN, Line, OutputStore
 from .screens.args_panel import ArgsPanel, check_plan, check_values
 from .screens.dialogs import ConfirmScreen, HelpScreen, QuitScreen
@@ -40,7 +41,6 @@ from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.tree_panel import LaunchTree, RowData
-from .session_client import RemoteSupervisor
 
 # the UI's tick: events are taken from the engine this often; the output pane repaints at
 # most PANE_FPS times a second and only when what it shows changed, so a terminal over ssh

@@ -17,14 +17,14 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from .engine.plan.model import Plan, PlanDiff
-from .engine.plan.session import Session
-from .engine.run import session_dir
-from .engine.run.log_reader import tail_lines
-from .engine.run.output import screen_str
-from .engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
-from .engine.run.session_dir import SessionError
-from .engine.run.supervisor import Event
+from ..engine.plan.model import Plan, PlanDiff
+from ..engine.plan.session import Session
+from ..engine.run import session_dir
+from ..engine.run.log_reader import tail_lines
+from ..engine.run.output import screen_str
+from ..engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
+from ..engine.run.session_dir import SessionError
+from ..engine.run.supervisor import Event
 
 Consumer = Callable[[Event], None]
 

@@ -19,14 +19,20 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from .engine.errors import LaunchError
-from .engine.run import session_dir
-from .engine.run.log_reader import LogLine, read_lines
-from .engine.run.output import strip_ansi
-from .engine.run.protocol import event_from_dict
-from .engine.run.session_dir import SessionError
-from .output_store import LEVELS, level_of
-from .session_client import ANSWER_TIMEOUT, Link, format_arguments, report_end, resolve_name
+from ..client.remote_supervisor import (
+    ANSWER_TIMEOUT,
+    Link,
+    format_arguments,
+    report_end,
+    resolve_name,
+)
+from ..engine.errors import LaunchError
+from ..engine.run import session_dir
+from ..engine.run.log_reader import LogLine, read_lines
+from ..engine.run.output import strip_ansi
+from ..engine.run.protocol import event_from_dict
+from ..engine.run.session_dir import SessionError
+from ..tui.output_store import LEVELS, level_of
 
 COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait")
 PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
@@ -188,8 +194,8 @@ def cmd_attach(options: argparse.Namespace) -> int:
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {name} -f, or tuilaunch status {name}")
     info = _status(name)
-    from .app import make_app
-    from .engine.describe.loader import set_command_line
+    from ..engine.describe.loader import set_command_line
+    from ..tui.app import make_app
 
     set_command_line(info.get("command") or [info["file"]], info["arguments"])
     app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),

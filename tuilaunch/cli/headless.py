@@ -16,9 +16,9 @@ import time
 from pathlib import Path
 from typing import TextIO
 
-from .engine.plan.model import Plan
-from .engine.run.output import strip_ansi
-from .engine.run.supervisor import Event, Supervisor
+from ..engine.plan.model import Plan
+from ..engine.run.output import strip_ansi
+from ..engine.run.supervisor import Event, Supervisor
 from .stdout_writer import BackgroundWriter
 
 
