@@ -243,7 +243,7 @@ def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
     app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
                    owner=True, keep_on_hangup=options.keep_on_hangup)
     status = app.run()
-    from ..client.remote_supervisor import report_end
+    from .commands import report_end
 
     report_end(app, name)
     if not app.detached:
