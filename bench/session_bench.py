@@ -31,7 +31,7 @@ from tui_bench import Terminal, latency
 
 from tuilaunch.engine.packages import ensure_environment
 
-IN_PROCESS = ("import sys; from pathlib import Path; from tuilaunch.app import make_app; "
+IN_PROCESS = ("import sys; from pathlib import Path; from tuilaunch.tui.app import make_app; "
               "make_app(sys.argv[1], {}, Path(sys.argv[2])).run()")
 
 

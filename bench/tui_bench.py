@@ -35,9 +35,9 @@ from pathlib import Path
 
 from run_bench import write_launch  # bench/ is on sys.path when run as a script
 
-from tuilaunch.app import make_app
 from tuilaunch.engine.packages import ensure_environment
-from tuilaunch.output_store import View
+from tuilaunch.tui.app import make_app
+from tuilaunch.tui.output_store import View
 
 
 class Terminal:

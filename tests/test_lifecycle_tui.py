@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tuilaunch.screens.tree_panel import LaunchTree
+from tuilaunch.tui.screens.tree_panel import LaunchTree
 
 from .test_composition import CONTAINER, composition_interfaces, with_interfaces  # noqa: F401
 from .test_tui import row_text, tui, until

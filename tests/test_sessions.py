@@ -26,11 +26,11 @@ from pathlib import Path
 import pytest
 from textual.widgets import Input
 
-from tuilaunch.app import make_app
+from tuilaunch.client.remote_supervisor import RemoteSupervisor
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run import session_dir
-from tuilaunch.output_store import LEVELS, View
-from tuilaunch.session_client import RemoteSupervisor
+from tuilaunch.tui.app import make_app
+from tuilaunch.tui.output_store import LEVELS, View
 
 from .conftest import run_cli
 

@@ -17,14 +17,14 @@ import pytest
 from textual.pilot import Pilot
 from textual.widgets import Checkbox, DataTable, Input
 
-from tuilaunch.app import TuiLaunchApp, make_app
-from tuilaunch.output_store import View
-from tuilaunch.screens.args_panel import ArgsPanel
-from tuilaunch.screens.dialogs import QuitScreen
-from tuilaunch.screens.output_panel import OutputPanel
-from tuilaunch.screens.params_panel import ParamsPanel
-from tuilaunch.screens.services_panel import ServicesPanel
-from tuilaunch.screens.tree_panel import LaunchTree
+from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.args_panel import ArgsPanel
+from tuilaunch.tui.screens.dialogs import QuitScreen
+from tuilaunch.tui.screens.output_panel import OutputPanel
+from tuilaunch.tui.screens.params_panel import ParamsPanel
+from tuilaunch.tui.screens.services_panel import ServicesPanel
+from tuilaunch.tui.screens.tree_panel import LaunchTree
 
 from .conftest import EXAMPLES
 

@@ -16,13 +16,13 @@ from pathlib import Path
 from textual import events
 from textual.widgets import DataTable
 
-from tuilaunch.app import TuiLaunchApp, make_app
-from tuilaunch.output_store import View
-from tuilaunch.screens.dialogs import ConfirmScreen
-from tuilaunch.screens.fields import Field
-from tuilaunch.screens.output_panel import OutputPanel
-from tuilaunch.screens.params_panel import ParamsPanel
-from tuilaunch.screens.tree_panel import LaunchTree
+from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.dialogs import ConfirmScreen
+from tuilaunch.tui.screens.fields import Field
+from tuilaunch.tui.screens.output_panel import OutputPanel
+from tuilaunch.tui.screens.params_panel import ParamsPanel
+from tuilaunch.tui.screens.tree_panel import LaunchTree
 
 from .test_tui import pids, row_text, states, tui, until
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from textual.widgets import Checkbox, Input, Select
 
-from tuilaunch.screens.args_panel import ArgsPanel
+from tuilaunch.tui.screens.args_panel import ArgsPanel
 
 from .conftest import EXAMPLES
 from .test_tui import pids, row_text, states, tui, until

@@ -5,8 +5,8 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from .engine.plan.components import component_label
-from .engine.plan.model import ArgumentInfo, Plan, TreeItem
+from ..engine.plan.components import component_label
+from ..engine.plan.model import ArgumentInfo, Plan, TreeItem
 
 
 def format_arguments(arguments: list[ArgumentInfo], top_file: str) -> str:

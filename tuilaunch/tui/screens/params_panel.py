@@ -13,8 +13,8 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Button, DataTable, Input, OptionList, Static
 from textual.widgets.option_list import Option
 
-from ..engine.plan.model import Plan
-from ..engine.ros.bridge import ParameterInfo
+from ...engine.plan.model import Plan
+from ...engine.ros.bridge import ParameterInfo
 from .fields import Field
 
 

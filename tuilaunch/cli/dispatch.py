@@ -12,10 +12,10 @@ import sys
 import traceback
 from pathlib import Path
 
-from .engine.describe.loader import LoadedFile, load_file, set_command_line
-from .engine.errors import LaunchError, PackageError
-from .engine.packages import ensure_environment, find_launch_file_in_share
-from .engine.plan.resolve import declared_arguments, resolve
+from ..engine.describe.loader import LoadedFile, load_file, set_command_line
+from ..engine.errors import LaunchError, PackageError
+from ..engine.packages import ensure_environment, find_launch_file_in_share
+from ..engine.plan.resolve import declared_arguments, resolve
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -234,7 +234,7 @@ def _start_detached(path: str, arguments: dict[str, str], options: argparse.Name
 def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
              log_dir: Path, positional: list[str]) -> int:
     """The launch runs in a session server; this TUI is its first client."""
-    from .app import make_app
+    from ..tui.app import make_app
 
     started = _start_server(path, arguments, options, log_dir, positional)
     if started is None:
@@ -243,7 +243,7 @@ def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
     app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
                    owner=True, keep_on_hangup=options.keep_on_hangup)
     status = app.run()
-    from .session_client import report_end
+    from .commands import report_end
 
     report_end(app, name)
     if not app.detached:

@@ -16,10 +16,10 @@ import time
 from pathlib import Path
 from typing import TextIO
 
-from .engine.launcher import make_supervisor
-from .engine.plan.model import Plan
-from .engine.run.output import strip_ansi
-from .engine.run.supervisor import Event
+from ..engine.launcher import make_supervisor
+from ..engine.plan.model import Plan
+from ..engine.run.output import strip_ansi
+from ..engine.run.supervisor import Event
 from .stdout_writer import BackgroundWriter
 
 

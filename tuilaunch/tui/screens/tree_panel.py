@@ -10,8 +10,8 @@ from rich.text import Text
 from textual.widgets import Tree
 from textual.widgets.tree import TreeNode
 
-from ..engine.plan.components import component_label
-from ..engine.plan.model import Plan, PlanDiff, TreeItem
+from ...engine.plan.components import component_label
+from ...engine.plan.model import Plan, PlanDiff, TreeItem
 
 ALL = "__all__"
 

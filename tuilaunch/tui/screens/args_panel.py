@@ -13,8 +13,8 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
-from ..engine.describe.substitutions import text_to_bool
-from ..engine.plan.model import ArgumentInfo, Plan
+from ...engine.describe.substitutions import text_to_bool
+from ...engine.plan.model import ArgumentInfo, Plan
 from .fields import Field
 
 # ROS 2 name rules (rcl's validate_namespace / validate_node_name)

@@ -19,14 +19,15 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from .engine.errors import LaunchError
-from .engine.run import session_dir
-from .engine.run.log_reader import LogLine, read_lines
-from .engine.run.output import strip_ansi
-from .engine.run.protocol import event_from_dict
-from .engine.run.session_dir import SessionError
-from .output_store import LEVELS, level_of
-from .session_client import ANSWER_TIMEOUT, Link, format_arguments, report_end, resolve_name
+from ..client.link import ANSWER_TIMEOUT, Link, resolve_name
+from ..client.remote_supervisor import RemoteSupervisor
+from ..engine.errors import LaunchError
+from ..engine.run import session_dir
+from ..engine.run.log_reader import LogLine, read_lines
+from ..engine.run.output import strip_ansi
+from ..engine.run.protocol import event_from_dict
+from ..engine.run.session_dir import SessionError
+from ..tui.output_store import LEVELS, level_of
 
 COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait")
 PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
@@ -125,6 +126,26 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
     return name, server
 
 
+def report_end(app: Any, name: str) -> None:
+    """What the command line says after a TUI client closes."""
+    if getattr(app, "detached", False):
+        print(f"detached; session {name} runs on: tuilaunch attach {name}")
+    elif not isinstance(app.supervisor, RemoteSupervisor):
+        print(f"tuilaunch: error: the TUI could not attach to session {name}, which runs on: "
+              f"tuilaunch attach {name}, or tuilaunch stop {name}", file=sys.stderr)
+    elif getattr(app.supervisor, "killed_server", False):
+        print(f"session {name} did not answer: its server was killed, and its watchdog "
+              "killed every process of the launch", file=sys.stderr)
+    elif getattr(app.supervisor, "lost", False):
+        log = Path(app.supervisor.log_dir) / "session.log"
+        print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "
+              f"messages: {log})", file=sys.stderr)
+
+
+def argument_line(arguments: dict[str, str]) -> str:
+    return " ".join(f"{k}:={v}" for k, v in arguments.items())
+
+
 # --- commands ------------------------------------------------------------------------------
 
 LS_ANSWER_TIMEOUT = 3.0  # `ls` asks every session in turn: a stopped one costs this, once
@@ -174,7 +195,7 @@ def cmd_ls(options: argparse.Namespace) -> int:
         total = sum(n for state, n in s["counts"].items() if state != "skipped")
         running = f"{s['counts'].get('running', 0)}/{total}" if s["answering"] else "?"
         rows.append((s["name"], str(s["pid"]), _clock(s["started"]), running, s["file"],
-                     format_arguments(s["arguments"])))
+                     argument_line(s["arguments"])))
     _table(rows)
     for s in sessions:
         if not s["answering"]:
@@ -188,8 +209,8 @@ def cmd_attach(options: argparse.Namespace) -> int:
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {name} -f, or tuilaunch status {name}")
     info = _status(name)
-    from .app import make_app
-    from .engine.describe.loader import set_command_line
+    from ..engine.describe.loader import set_command_line
+    from ..tui.app import make_app
 
     set_command_line(info.get("command") or [info["file"]], info["arguments"])
     app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
@@ -221,7 +242,7 @@ def cmd_status(options: argparse.Namespace) -> int:
         print(json.dumps(status, indent=2))
         return 0
     print(f"session {status['name']}  pid {status['pid']}  since {_clock(status['started'])}")
-    print(f"  {status['file']} {format_arguments(status['arguments'])}")
+    print(f"  {status['file']} {argument_line(status['arguments'])}")
     print(f"  logs: {status['log_dir']}")
     rows = [("PROCESS", "STATE", "PID", "NODE", "")]
     for p in status["processes"]:

@@ -13,7 +13,7 @@ from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from .engine.run.output import strip_ansi
+from ..engine.run.output import strip_ansi
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 INFO = 1

@@ -14,8 +14,8 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
-from ..engine.ros.bridge import RosError
-from ..engine.ros.messages import FieldInfo, MessageError, describe_fields, import_type
+from ...engine.ros.bridge import RosError
+from ...engine.ros.messages import FieldInfo, MessageError, describe_fields, import_type
 from .fields import Field
 
 

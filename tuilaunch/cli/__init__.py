@@ -1,0 +1,5 @@
+"""The command line: the launcher (TUI, headless, detached) and the session commands."""
+
+from .dispatch import main
+
+__all__ = ["main"]

@@ -1,0 +1,1 @@
+"""Clients of a session server, for the commands and the TUI."""

@@ -1,0 +1,145 @@
+"""A blocking connection to a session server, for the one-shot commands; finding a session
+by name; what to say of a server that does not answer."""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from ..engine.run import session_dir
+from ..engine.run.protocol import MAX_MESSAGE, decode, encode
+from ..engine.run.session_dir import SessionError
+
+
+def resolve_name(name: str | None) -> str:
+    """The named session, or the only one running."""
+    alive = session_dir.live_sessions()
+    if name is not None:
+        session_dir.check_name(name)
+        if name not in alive:
+            raise SessionError(f"no running session named {name}",
+                               hint=f"running: {', '.join(alive)}" if alive else
+                               "tuilaunch ls lists the running sessions")
+        return name
+    if not alive:
+        raise SessionError("no running session", hint="start one with tuilaunch FILE --detach")
+    if len(alive) > 1:
+        raise SessionError(f"several sessions run: {', '.join(alive)}", hint="name one")
+    return alive[0]
+
+
+ANSWER_TIMEOUT = 10.0
+"""How long a client waits for the server's greeting and for a short reply: a server busy
+starting a hundred processes answers in well under a second; one that is stopped (a stray
+Ctrl+Z, `kill -STOP`) or stuck never does, and no command may hang on it."""
+
+
+def not_answering(name: str, waited: float) -> SessionError:
+    """What to say of a server that accepted the connection and then said nothing."""
+    pid = (session_dir.read_info(name) or {}).get("pid")
+    where = f"its server (pid {pid})" if pid else "its server"
+    stopped = False
+    try:
+        stopped = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] in "Tt"
+    except (OSError, IndexError, TypeError):
+        pass
+    state = "is stopped" if stopped else "is stopped or stuck"
+    hint = (f"kill -CONT {pid} lets it go on; kill -9 {pid} ends it and its watchdog stops "
+            "every node" if pid else "tuilaunch ls lists the sessions")
+    return SessionError(f"session {name} did not answer within {waited:g} s: {where} {state}",
+                        hint=hint)
+
+
+class Link:
+    """A blocking connection for one-shot commands (status, stop, restart, wait, logs).
+
+    Connecting, the greeting and `request(..., short=True)` replies wait at most
+    `answer_timeout`; `timeout` is what reading messages waits afterwards (None: as long as
+    the session runs, for `stop`, `logs -f` and `wait`)."""
+
+    def __init__(self, name: str, timeout: float | None = ANSWER_TIMEOUT,
+                 answer_timeout: float = ANSWER_TIMEOUT) -> None:
+        self.name = name
+        self.answer_timeout = answer_timeout
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self.sock.settimeout(answer_timeout)
+        try:
+            self.sock.connect(str(session_dir.socket_path(name)))
+        except TimeoutError:
+            self.sock.close()
+            raise not_answering(name, answer_timeout) from None
+        except OSError as exc:
+            self.sock.close()
+            raise SessionError(f"session {name} does not answer ({exc.strerror or exc})",
+                               hint="tuilaunch ls lists the running sessions") from None
+        self._file = self.sock.makefile("rb")
+        self._next_id = 0
+        self.pending: list[dict[str, Any]] = []  # event batches that came before a reply
+        try:
+            hello = self.receive()
+        except TimeoutError:
+            self.close()
+            raise not_answering(name, answer_timeout) from None
+        if hello is None or hello.get("type") != "hello":
+            self.close()
+            raise SessionError(f"session {name} did not greet")
+        self.info: dict[str, Any] = hello["info"]
+        self.sock.settimeout(timeout)
+
+    def receive(self) -> dict[str, Any] | None:
+        """The next message, or None when the server closed the connection."""
+        try:
+            line = self._file.readline(MAX_MESSAGE)
+        except ConnectionError:
+            return None
+        if not line:
+            return None
+        return decode(line)
+
+    def request(self, op: str, short: bool = False, **fields: Any) -> Any:
+        """The reply to `op`; `short`: an answer the server gives at once (status, find),
+        so waiting longer than `answer_timeout` means it is not answering."""
+        self._next_id += 1
+        request_id = self._next_id
+        waited = self.sock.gettimeout()
+        if short:
+            self.sock.settimeout(self.answer_timeout)
+        try:
+            return self._reply(op, request_id, fields)
+        except TimeoutError:
+            raise not_answering(self.name, self.sock.gettimeout() or 0.0) from None
+        finally:
+            self.sock.settimeout(waited)
+
+    def _reply(self, op: str, request_id: int, fields: dict[str, Any]) -> Any:
+        self.sock.sendall(encode({"id": request_id, "op": op, **fields}))
+        while True:
+            message = self.receive()
+            if message is None:
+                raise SessionError(f"session {self.name} closed the connection during {op}")
+            if message.get("type") == "reply" and message.get("id") == request_id:
+                if not message.get("ok"):
+                    raise SessionError(f"session {self.name}: {message.get('error')}")
+                return message.get("result")
+            if message.get("type") == "events":
+                self.pending.append(message)
+
+    def messages(self) -> Iterator[dict[str, Any]]:
+        """Messages as they come (after `subscribe`), until the server closes."""
+        while self.pending:
+            yield self.pending.pop(0)
+        while True:
+            message = self.receive()
+            if message is None:
+                return
+            yield message
+
+    def wait_closed(self) -> None:
+        for _ in self.messages():
+            pass
+
+    def close(self) -> None:
+        self._file.close()
+        self.sock.close()

@@ -1,0 +1,1 @@
+"""The Textual frontend: the app and its panels."""

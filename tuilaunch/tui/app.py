@@ -1,0 +1,174 @@
+"""The Textual app: lays out the panels and wires them to the engine.
+
+The app is composed of one mixin per concern, all built on SessionLink (the state and the
+engine link): node_commands, navigation, arguments, quitting.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import signal
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from textual.app import ComposeResult, SystemCommand
+from textual.binding import Binding
+from textual.containers import Vertical
+from textual.screen import Screen
+from textual.widgets import Footer, Static, TabbedContent, TabPane
+
+from ..client.remote_supervisor import RemoteSupervisor
+from ..engine.launcher import make_supervisor
+from ..engine.plan.session import Session
+from ..engine.ros.lifecycle import available_transitions
+from ..engine.run.engine_thread import EngineThread
+from .arguments import Arguments
+from .navigation import Navigation
+from .node_commands import NodeCommands
+from .quitting import Quitting
+from .screens.args_panel import ArgsPanel
+from .screens.output_panel import NodesView, OutputPanel
+from .screens.params_panel import ParamsPanel
+from .screens.services_panel import ServicesPanel
+from .screens.tree_panel import LaunchTree
+from .session_link import DRAIN_HZ
+
+
+class LaunchTabs(TabbedContent):
+    """Tabs that change only when asked (keys 1-4, a click on a tab).
+
+    TabbedContent also switches to whichever pane a widget was focused in, when its
+    message arrives: with keys that arrive together (escape, 3) that message is late and
+    flips the tab back."""
+
+    def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
+        event.stop()
+
+
+class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
+    """The launcher's UI: the panels laid out, wired to the engine on mount; what each
+    concern does lives in its mixin (session_link, node_commands, navigation, arguments,
+    quitting)."""
+
+    CSS_PATH = "screens/app.tcss"
+    TITLE = "tuilaunch"
+
+    BINDINGS = [
+        Binding("1", "tab('nodes')", "Nodes", tooltip="The group tree and node output"),
+        Binding("2", "tab('args')", "Args", tooltip="Edit launch arguments"),
+        Binding("3", "tab('services')", "Services", tooltip="Call a service"),
+        Binding("4", "tab('params')", "Params", tooltip="Get and set parameters"),
+        Binding("s", "stop", "Stop", tooltip="Stop the selected node or group"),
+        Binding("r", "restart", "Restart", tooltip="Restart the selected node or group"),
+        Binding("t", "start", "Start", tooltip="Start the selected node or group"),
+        Binding("a", "all_output", "All", show=False, tooltip="Output of all nodes"),
+        Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up",
+                tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
+        Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down",
+                tooltip="Deactivate an active, clean up an inactive lifecycle node"),
+        Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
+        Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
+                "opens it again"),
+        Binding("question_mark", "help", "Help"),
+        Binding("q", "request_quit", "Quit"),
+        Binding("ctrl+c", "request_quit", "Quit", show=False, priority=True),
+    ]
+
+    # --- layout ----------------------------------------------------------------------
+
+    def compose(self) -> ComposeResult:
+        yield Static("", id="status")
+        with LaunchTabs(initial="nodes"):
+            with TabPane("1 Nodes", id="nodes"), Vertical(id="nodes-tab"):
+                yield Static("", id="detail")
+                with NodesView(id="nodes-split"):
+                    yield LaunchTree(id="tree")
+                    yield OutputPanel(self.store, self.log_dir, max_lines=self.scrollback,
+                                      max_fps=self.pane_fps, id="output")
+            with TabPane("2 Args", id="args"):
+                yield ArgsPanel(self.session.plan.arguments, self.session.plan.file,
+                                id="args-panel")
+            with TabPane("3 Services", id="services"):
+                yield ServicesPanel(self.bridge, id="services-panel")
+            with TabPane("4 Params", id="params"):
+                yield ParamsPanel(self.bridge, lambda: self.session.plan,
+                                  reported=lambda: self.store.reported_names,
+                                  id="params-panel")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        # held, not queried: App.query_one searches the active screen, which is a modal
+        # (help, quit) while the engine keeps reporting
+        self.launch_tree = self.query_one(LaunchTree)
+        self.output_panel = self.query_one(OutputPanel)
+        self.args_panel = self.query_one(ArgsPanel)
+        self.tabs = self.query_one(TabbedContent)
+        self.status_bar = self.query_one("#status", Static)
+        self.detail_bar = self.query_one("#detail", Static)
+        self.launch_tree.reported = self.store.reported_names
+        # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
+        sys.setswitchinterval(0.001)
+        self.engine = EngineThread()
+        # built on the engine thread, whose loop its asyncio objects belong to
+        if self.session_name is not None:
+            remote = self.engine.submit(RemoteSupervisor.open(
+                self.session_name, self.session, self.scrollback,
+                max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)
+            remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
+            self.supervisor = remote
+        else:
+            self.supervisor = self.engine.call(lambda: make_supervisor(
+                self.session.plan, self.log_dir, sigterm_timeout=self.sigterm_timeout,
+                sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
+        assert self.supervisor is not None
+        self.supervisor.subscribe(self.buffer)
+        tree = self.launch_tree
+        tree.show_plan(self.session.plan, self.supervisor.states)
+        self.describe_waiting()
+        if isinstance(self.supervisor, RemoteSupervisor):
+            self.show_events(self.supervisor.history)  # what was printed before we came
+            for process, state in self.supervisor.lifecycle.states.items():
+                tree.set_lifecycle(process, state)  # states reached before we came
+        self.run_supervisor()
+        self.drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
+        loop = asyncio.get_running_loop()
+        loop.add_signal_handler(signal.SIGTERM, self.terminated)
+        loop.add_signal_handler(signal.SIGHUP, self.terminal_hung_up)
+        self.update_status()
+        tree.focus()
+
+    # --- command palette ---------------------------------------------------------------------
+
+    def get_system_commands(self, screen: Screen[Any]) -> Iterable[SystemCommand]:
+        yield from super().get_system_commands(screen)
+        yield SystemCommand("Stop selected", "Stop the selected node or group", self.action_stop)
+        yield SystemCommand("Restart selected", "Restart the selected node or group",
+                            self.action_restart)
+        yield SystemCommand("Start selected", "Start the selected node or group",
+                            self.action_start)
+        yield SystemCommand("Apply arguments", "Relaunch with the edited arguments",
+                            self.action_apply)
+        if self.session_name is not None:
+            yield SystemCommand("Detach", "Leave the launch running (tuilaunch attach)",
+                                self.action_detach)
+        selected = self.selected() if self.supervisor is not None else []
+        if len(selected) == 1 and self.supervisor is not None:
+            process = selected[0]
+            state = self.supervisor.lifecycle.states.get(process)
+            for transition in available_transitions(state):
+                yield SystemCommand(
+                    f"Lifecycle: {transition.replace('_', ' ')} {process}",
+                    f"Ask the lifecycle node (now {state}) for this transition",
+                    lambda t=transition, p=process: self.lifecycle_transition(p, t))
+        for tab, title in (("nodes", "Nodes"), ("args", "Arguments"), ("services", "Services"),
+                           ("params", "Parameters")):
+            yield SystemCommand(f"Open {title}", f"Show the {title} tab",
+                                lambda tab=tab: self.action_tab(tab))
+
+
+def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any)\
+        -> TuiLaunchApp:
+    """The one factory for the CLI and the tests, so tests run the real wiring."""
+    return TuiLaunchApp(Session(path, arguments), log_dir, **options)

@@ -1,0 +1,192 @@
+"""Commands on the tree's selection: stop, restart, start, lifecycle transitions."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any
+
+from textual import on
+from textual.widgets import Tree
+
+from .screens.dialogs import ConfirmScreen
+from .screens.tree_panel import RowData
+from .session_link import SessionLink
+
+
+class NodeCommands(SessionLink):
+    """The selected row of the tree and what the keys do to it: stop, restart, start, the
+    lifecycle steps; which keys apply to it (check_action)."""
+
+    @on(Tree.NodeHighlighted, "#tree")
+    def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
+        data = event.node.data
+        self.update_detail()
+        if data is None:
+            return
+        self.refresh_bindings()  # the lifecycle keys apply to lifecycle nodes only
+        if data.kind == "all":
+            self.output_panel.show_view(None)
+        elif data.kind == "process":
+            self.output_panel.show_view(data.ref)
+
+    def selected(self) -> list[str]:
+        node = self.launch_tree.cursor_node
+        if node is None or node.data is None:
+            return []
+        if node.data.kind == "all":
+            return [p.id for p in self.session.plan.enabled_processes()]
+        return list(node.data.processes)
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action in ("stop", "restart", "start", "all_output"):
+            if self.supervisor is None or self.tabs.active != "nodes":
+                return False
+            if action == "all_output":
+                return True
+            states = [self.supervisor.states.get(p) for p in self.selected()]
+            if action == "stop":
+                return True if "running" in states else None
+            if action == "start":
+                return True if any(s not in ("running", "skipped") for s in states) else None
+            return True if states else None
+        if action == "detach":
+            return self.session_name is not None
+        if action == "lifecycle":
+            if self.supervisor is None or self.tabs.active != "nodes":
+                return False
+            selected = self.selected()
+            # shown only while a lifecycle node is selected: other launches keep their footer
+            if len(selected) != 1 or selected[0] not in self.supervisor.lifecycle.states:
+                return False
+            return True if self._lifecycle_step(str(parameters[0])) else None
+        return True
+
+    def _command(self, verb: str) -> None:
+        assert self.supervisor is not None
+        supervisor = self.supervisor
+        processes = self.selected()
+        node = self.launch_tree.cursor_node
+        everything = node is not None and node.data is not None and (
+            node.data.kind == "all" or node is self.launch_tree.root)
+        if verb == "stop" and everything and len(processes) > 1:
+            running = [p for p in processes if supervisor.states.get(p) == "running"]
+
+            def answered(yes: bool | None) -> None:
+                if yes:
+                    self._run_command(verb, processes)
+
+            self.push_screen(ConfirmScreen(
+                f"Stop all {len(running)} running processes: {', '.join(running[:6])}"
+                f"{' ...' if len(running) > 6 else ''}?", "Stop them (y)"), answered)
+            return
+        self._run_command(verb, processes)
+
+    def _run_command(self, verb: str, processes: list[str]) -> None:
+        assert self.supervisor is not None
+        supervisor = self.supervisor
+        tree = self.launch_tree
+        commands = []
+        for process in processes:
+            if verb in ("stop", "restart"):
+                self.asked_to_stop.add(process)
+                if supervisor.states.get(process) == "running":
+                    tree.set_state(process, "stopping")
+            commands.append(getattr(supervisor, verb)(process))
+        actions = self._actions_to_rerun(processes) if verb in ("restart", "start") else []
+        self.run_worker(self._carry_out(commands, actions), group="commands",
+                        exit_on_error=False)
+        self.refresh_bindings()
+
+    async def _carry_out(self, commands: list[Any], actions: list[str]) -> None:
+        """The commands together; then the group's actions (set_parameters, call_service)
+        again, so a restarted node gets what the launch file gave it after its start."""
+        assert self.supervisor is not None
+        await asyncio.gather(*(self.engine.run(c) for c in commands))
+        for action in actions:
+            self.run_worker(self.engine.run(self.supervisor.run_action(action)),
+                            group="commands", exit_on_error=False)
+
+    def _actions_to_rerun(self, processes: list[str]) -> list[str]:
+        """The enabled one-off actions of the selected group, or for one node those of its
+        group that wait for it or address it by name."""
+        node = self.launch_tree.cursor_node
+        if node is None or node.data is None or node.data.kind == "action":
+            return []
+        plan = self.session.plan
+        enabled = {a.id: a for a in plan.actions if a.enabled and a.kind in (
+            "set_parameters", "call_service") and (a.trigger is None or a.trigger.on not in (
+                "io", "shutdown"))}
+        if node.data.kind in ("group", "all"):
+            return [ref for ref in _action_refs(node) if ref in enabled]
+        process = node.data.ref
+        parent = node.parent
+        if process is None or parent is None:
+            return []
+        proc = plan.process(process)
+        names = {proc.full_name} | self.store.reported_names.get(process, set())
+        chosen = []
+        for ref in _action_refs(parent):
+            action = enabled.get(ref)
+            if action is None:
+                continue
+            waits_for = action.trigger is not None and _trigger_targets(action.trigger,
+                                                                        process)
+            addressed = action.kind == "set_parameters" and str(action.target) in names
+            if waits_for or addressed:
+                chosen.append(ref)
+        return chosen
+
+    def action_stop(self) -> None:
+        self._command("stop")
+
+    def action_restart(self) -> None:
+        self._command("restart")
+
+    def action_start(self) -> None:
+        self._command("start")
+
+    def _lifecycle_step(self, direction: str) -> tuple[str, str] | None:
+        """(process, transition) that `]` (up) or `[` (down) asks of the selected node."""
+        selected = self.selected()
+        if self.supervisor is None or len(selected) != 1:
+            return None
+        state = self.supervisor.lifecycle.states.get(selected[0])
+        steps = {"up": {"unconfigured": "configure", "inactive": "activate"},
+                 "down": {"active": "deactivate", "inactive": "cleanup"}}[direction]
+        transition = steps.get(state or "")
+        return (selected[0], transition) if transition else None
+
+    def action_lifecycle(self, direction: str) -> None:
+        step = self._lifecycle_step(direction)
+        if step is not None:
+            self.lifecycle_transition(*step)
+
+    def lifecycle_transition(self, process: str, transition: str) -> None:
+        """Asks a lifecycle node for a transition; the result arrives as events."""
+        assert self.supervisor is not None
+        coroutine = self.supervisor.lifecycle.request(process, transition)
+        self.run_worker(self.engine.run(coroutine), group="commands", exit_on_error=False)
+
+    def action_all_output(self) -> None:
+        tree = self.launch_tree
+        tree.move_cursor(tree.root.children[0])
+        self.output_panel.show_view(None)
+
+
+def _action_refs(node: Any) -> list[str]:
+    """Action ids in a tree row's subtree, in the tree's order."""
+    refs = []
+    for child in node.children:
+        data = child.data
+        if data is not None and data.kind == "action" and data.ref:
+            refs.append(data.ref)
+        refs += _action_refs(child)
+    return refs
+
+
+def _trigger_targets(trigger: Any, process: str) -> bool:
+    while trigger is not None:
+        if trigger.target == process:
+            return True
+        trigger = trigger.after
+    return False

@@ -1,0 +1,84 @@
+"""Leaving: quit (stopping every process), detach, kill now, SIGTERM and SIGHUP."""
+
+from __future__ import annotations
+
+import time
+
+from ..client.remote_supervisor import RemoteSupervisor
+from .screens.dialogs import ConfirmScreen, QuitScreen
+from .session_link import SessionLink
+
+
+class Quitting(SessionLink):
+    """Quit, detach, kill now; SIGTERM and SIGHUP. The supervisor worker exits the app once
+    the shutdown it asked for is done."""
+
+    def action_request_quit(self) -> None:
+        running = self.running()
+        if self.quitting:
+            if running and not isinstance(self.screen, ConfirmScreen):
+                self._offer_kill(running)
+            return
+        if not running:
+            self.stop_all_and_exit()
+            return
+
+        def answered(stop: bool | None) -> None:
+            if stop:
+                self.stop_all_and_exit()
+
+        self.push_screen(QuitScreen(running), answered)
+
+    async def action_quit(self) -> None:
+        self.action_request_quit()
+
+    def _offer_kill(self, running: list[str]) -> None:
+        """A second q while stubborn processes stop: SIGKILL them now, or keep waiting."""
+        def answered(yes: bool | None) -> None:
+            if yes and self.supervisor is not None:
+                self.kill_all()
+
+        self.push_screen(ConfirmScreen(
+            f"Still stopping: {', '.join(running[:6])} ({self.signal_stage()}).\n"
+            "Kill them now with SIGKILL?", "Kill now (y)", "Keep waiting (n)"), answered)
+
+    def terminal_hung_up(self) -> None:
+        """SIGHUP: the ssh session or tmux pane is gone. An attached session, or one started
+        with --keep-on-hangup, runs on; otherwise everything stops, then the app leaves. The
+        server does the stopping, so the launch is never left half-stopped."""
+        self.terminal_lost = True
+        if self.session_name is not None and (self.keep_on_hangup or not self.owner):
+            self.action_detach()
+        else:
+            self.stop_all_and_exit("the terminal hung up (SIGHUP)")
+
+    def terminated(self) -> None:
+        """SIGTERM stops what this app started; a client that only attached just leaves."""
+        if self.session_name is not None and not self.owner:
+            self.action_detach()
+        else:
+            self.stop_all_and_exit("SIGTERM")
+
+    def action_detach(self) -> None:
+        """Leaves the session running; the supervisor worker then exits the app."""
+        if not isinstance(self.supervisor, RemoteSupervisor):
+            self.notify("only a session can be detached from", severity="warning")
+            return
+        self.detached = True
+        self.run_worker(self.engine.run(self.supervisor.detach()), group="shutdown",
+                        exit_on_error=False)
+
+    def stop_all_and_exit(self, reason: str = "quit from the UI") -> None:
+        """Shutdown escalation runs; the supervisor worker exits the app when all are gone.
+        The reason goes into launch.log, so a stop nobody asked for at the keyboard is told
+        apart later."""
+        if self.supervisor is None:
+            self.exit(0)
+            return
+        self.quitting = True
+        self.quit_started = time.monotonic()
+        for process in self.running():
+            self.launch_tree.set_state(process, "stopping")
+        self.update_status()
+        self.run_worker(self.engine.run(self.supervisor.shutdown(reason)),
+                        group="shutdown", exit_on_error=False)

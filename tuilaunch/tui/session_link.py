@@ -1,0 +1,319 @@
+"""The app's state and its link to the engine: supervisor wiring, engine events, status.
+
+Engine events reach the UI through one EventBuffer drained on a timer, so a flood from a
+node costs one batched write per pane per tick. The App constructor does no I/O: the
+supervisor and the ROS bridge start in on_mount.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import threading
+import time
+from pathlib import Path
+
+from rich.text import Text
+from textual import work
+from textual.app import App
+from textual.timer import Timer
+from textual.widgets import Static, TabbedContent
+
+from ..client.remote_supervisor import RemoteSupervisor
+from ..engine.launcher import RosSupervisor
+from ..engine.plan.session import Preview, Session
+from ..engine.ros.bridge import RosBridge
+from ..engine.run.engine_thread import EngineThread
+from ..engine.run.event_buffer import EventBuffer
+from ..engine.run.supervisor import Event
+from .output_store import ERROR, INFO, WARN, Line, OutputStore
+from .screens.args_panel import ArgsPanel
+from .screens.output_panel import OutputPanel
+from .screens.tree_panel import LaunchTree
+
+# the UI's tick: events are taken from the engine this often; the output pane repaints at
+# most PANE_FPS times a second and only when what it shows changed, so a terminal over ssh
+# gets little more than what changed on screen
+DRAIN_HZ = 10
+PANE_FPS = 1.0
+
+
+class SessionLink(App[int]):
+    """The app's state and its link to the engine: the supervisor (in-process, or a session
+    server's through RemoteSupervisor) runs on the engine thread; its events are drained on
+    a timer into the tree, the output store and the status lines.
+
+    The concerns built on it (node commands, navigation, arguments, quitting) are mixins of
+    this class; `TuiLaunchApp` composes them and wires the widgets in `on_mount`."""
+
+    # held, not queried (set in on_mount): App.query_one searches the active screen, which
+    # is a modal (help, quit) while the engine keeps reporting
+    launch_tree: LaunchTree
+    output_panel: OutputPanel
+    args_panel: ArgsPanel
+    tabs: TabbedContent
+    status_bar: Static
+    detail_bar: Static
+    engine: EngineThread
+    drain_timer: Timer
+
+    def __init__(self, session: Session, log_dir: Path, scrollback: int = 5000,
+                 sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
+                 pane_fps: float = PANE_FPS, session_name: str | None = None,
+                 owner: bool = False, keep_on_hangup: bool = False) -> None:
+        no_color = os.environ.get("NO_COLOR")
+        super().__init__()
+        # no animated tab underlines or scrolling: every frame is bytes over ssh
+        self.animation_level = "none"
+        if no_color is not None:
+            # Textual takes NO_COLOR out of the environment; the nodes should still see it
+            os.environ["NO_COLOR"] = no_color
+        self.session = session
+        self.log_dir = log_dir
+        self.scrollback = scrollback
+        self.sigterm_timeout = sigterm_timeout
+        self.sigkill_timeout = sigkill_timeout
+        self.pane_fps = pane_fps
+        self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
+        # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
+        # the rest is counted on screen and kept in the log files
+        self.buffer = EventBuffer(max_lines=2500)
+        self.supervisor: RosSupervisor | RemoteSupervisor | None = None
+        # with a session name the launch runs in a session server and this app is a client
+        self.session_name = session_name
+        self.owner = owner
+        self.keep_on_hangup = keep_on_hangup
+        self.detached = False
+        self.own_relaunch: list[str] | None = None
+        self.preview: Preview | None = None
+        self.exit_status = 0
+        self.quitting = False
+        self.terminal_lost = False
+        self._bridge: RosBridge | None = None
+        self._bridge_lock = threading.Lock()
+        # stops the operator asked for: their non-zero exit is not a failure
+        self.asked_to_stop: set[str] = set()
+        self.quit_started: float | None = None
+        self._status_text = ""
+        self._detail_text = ""
+
+    def bridge(self) -> RosBridge:
+        """The one rclpy context, shared by the supervisor's actions and the panels."""
+        with self._bridge_lock:  # the engine thread and the UI may both ask first
+            if self._bridge is None:
+                self._bridge = RosBridge()
+            return self._bridge
+
+    @work(group="supervisor", exit_on_error=False)
+    async def run_supervisor(self) -> None:
+        assert self.supervisor is not None
+        self.exit_status = await self.engine.run(self.supervisor.run(keep_alive=True))
+        if self._bridge is not None:
+            await asyncio.to_thread(self._bridge.close)
+            self._bridge = None
+        self.drain()  # the last states and lines, then no more ticks during teardown
+        self.drain_timer.stop()
+        if self.terminal_lost:
+            # Textual's teardown writes to the terminal and blocks forever on a hung-up one;
+            # every process is stopped and every log closed, so leave now
+            os._exit(self.exit_status)
+        self.exit(self.exit_status)
+
+    def on_unmount(self) -> None:
+        # any exit path that skipped the graceful shutdown still leaves no process behind
+        if self.supervisor is not None:
+            self.kill_all()
+            self.engine.stop()
+        if self._bridge is not None:
+            self._bridge.close()
+            self._bridge = None
+
+    def kill_all(self) -> None:
+        """SIGKILL what is left, on the engine's thread: the supervisor (its process table,
+        its watchdog pipe) belongs to that thread while its loop runs."""
+        assert self.supervisor is not None
+        if self.engine.loop.is_running():
+            try:
+                self.engine.call(self.supervisor.kill_all)
+                return
+            except Exception:
+                pass  # the loop ended meanwhile: nothing runs there any more
+        self.supervisor.kill_all()
+
+    def running(self) -> list[str]:
+        if self.supervisor is None:
+            return []
+        return [p for p, s in self.supervisor.states.items() if s == "running"]
+
+    # --- engine events -------------------------------------------------------------------
+
+    def drain(self) -> None:
+        self.show_events(self.buffer.drain())
+
+    def show_events(self, events: list[Event]) -> None:
+        tree = self.launch_tree
+        panel = self.output_panel
+        fresh: list[Line] = []
+        for event in events:
+            if event.kind == "output" and event.process:
+                fresh += self.store.add(event.process, event.stream or "stdout", event.lines)
+            elif event.kind == "log":
+                if event.process and self.supervisor is not None:
+                    tree.set_state(event.process, self.supervisor.states.get(event.process, ""))
+                level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
+                fresh += self.store.add_event(event.process or "launch", event.reason or "",
+                                              level)
+            elif event.kind == "lifecycle" and event.process:
+                tree.set_lifecycle(event.process, event.reason or "")
+                self.refresh_bindings()
+            elif event.kind == "component" and event.data:
+                data = event.data
+                short = f"id {data['unique_id']}" if "unique_id" in data else \
+                    str(data.get("error") or data.get("text") or "")
+                tree.set_component(str(data["component"]), str(data["state"]), short)
+                if data["state"] not in ("loading", "waiting"):
+                    level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
+                    fresh += self.store.add_event(event.process or "launch",
+                                                  event.reason or "", level)
+            elif event.kind == "relaunched" and self.supervisor is not None:
+                # any client's relaunch: the session already holds the new plan
+                tree.show_plan(self.session.plan, self.supervisor.states)
+                self.describe_waiting()
+                if event.lines != self.own_relaunch:
+                    self._relaunched_elsewhere(event.lines)
+                self.own_relaunch = None
+            elif event.kind == "dropped" and event.process:
+                # counted in the pane's status line, not written as lines of their own
+                self.store.count_dropped(event.process, event.code or 0)
+            elif event.process and self.supervisor is not None:
+                fresh += self._process_event(event)
+        if fresh:
+            panel.append(fresh)
+        panel.flush()
+        if events:
+            self.update_status()
+            self.update_detail()
+        elif self.quit_started is not None:
+            self.update_status()  # the signal stage moves on with time
+
+    def _process_event(self, event: Event) -> list[Line]:
+        """A state change: the tree row, and a line in the node's pane as ros2 launch
+        prints it ("process started with pid", "process has died [pid, exit code]")."""
+        assert self.supervisor is not None and event.process is not None
+        process = event.process
+        tree = self.launch_tree
+        state = self.supervisor.states.get(process, event.kind)
+        is_process = any(p.id == process for p in self.session.plan.processes)
+        if event.kind == "started":
+            self.asked_to_stop.discard(process)
+            tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
+            if is_process:
+                return self.store.add_event(process, f"process started with pid [{event.pid}]")
+            return []
+        if event.kind == "exited":
+            code = event.code if event.code is not None else 0
+            # the server says whether anyone asked for the stop (another client, a
+            # `tuilaunch stop`, a stop begun before this client attached)
+            asked = process in self.asked_to_stop or self.quitting or bool(
+                event.data and event.data.get("requested"))
+            if code != 0 and not asked and state == "exited":
+                state = "failed"  # a crash, not the operator's stop
+            tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
+            if code == 0:
+                text, level = f"process has finished cleanly [pid {event.pid}]", INFO
+            elif asked:
+                text, level = f"process stopped [pid {event.pid}, {event.reason}]", INFO
+            else:
+                text, level = f"process has died [pid {event.pid}, {event.reason}]", ERROR
+            return self.store.add_event(process, text, level)
+        if event.kind == "failed":
+            tree.set_state(process, state, f"({event.reason})")
+            return self.store.add_event(process, f"failed: {event.reason}", ERROR)
+        if event.kind == "respawning":
+            tree.set_state(process, state, f"({event.reason})")
+            return self.store.add_event(process, f"respawning: {event.reason}", WARN)
+        tree.set_state(process, state, _detail(event))
+        return []
+
+    def _relaunched_elsewhere(self, arguments: list[str]) -> None:
+        """Another operator applied new values: the form shows them, so an edit here starts
+        from what runs, never silently reverts theirs."""
+        self.preview = None
+        self.launch_tree.set_preview(None)
+        self.args_panel.arguments = self.session.plan.arguments
+        self.args_panel.refresh(recompose=True)
+        self.notify(f"relaunched by another client: {' '.join(arguments) or 'defaults'}")
+        self.refresh_bindings()
+
+    def update_status(self) -> None:
+        if self.supervisor is None:
+            return
+        counts: dict[str, int] = {}
+        shown = self.launch_tree.states
+        for proc in self.session.plan.processes:
+            state = shown.get(proc.id) or self.supervisor.states.get(proc.id, "pending")
+            counts[state] = counts.get(state, 0) + 1
+        order = ("running", "pending", "stopping", "exited", "failed", "respawning", "skipped")
+        text = "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in order
+                         if counts.get(s))
+        args = " ".join(f"{k}:={v}" for k, v in self.session.arguments.items())
+        prefix = ""
+        if self.quitting:
+            still = self.running()
+            prefix = f"stopping {', '.join(still)} ({self.signal_stage()})... " if still \
+                else "stopped. "
+        name = Path(self.session.plan.file).name
+        if self.session_name is not None:
+            name = f"[{self.session_name}] {name}"
+        line = f"{prefix}{name}  {text}  {args}"
+        if line != self._status_text:  # an unchanged line is not sent to the terminal again
+            self._status_text = line
+            self.status_bar.update(Text(line))
+
+    def signal_stage(self) -> str:
+        """Where the SIGINT -> SIGTERM -> SIGKILL escalation is, from the timeouts."""
+        if self.quit_started is None:
+            return "SIGINT sent"
+        elapsed = time.monotonic() - self.quit_started
+        if elapsed < self.sigterm_timeout:
+            return f"SIGINT sent, SIGTERM in {self.sigterm_timeout - elapsed:.0f} s; q: kill now"
+        elapsed -= self.sigterm_timeout
+        if elapsed < self.sigkill_timeout:
+            return f"SIGTERM sent, SIGKILL in {self.sigkill_timeout - elapsed:.0f} s; " \
+                   "q: kill now"
+        return "SIGKILL sent"
+
+    def update_detail(self) -> None:
+        """The selected row in full, above the tree and the pane: state, pid, exit code,
+        failure reason or condition, whatever the tree's width cuts."""
+        node = self.launch_tree.cursor_node
+        text = self.launch_tree.describe(node) if node is not None else ""
+        if text != self._detail_text:
+            self._detail_text = text
+            self.detail_bar.update(Text(text, style=_detail_style(text)))
+
+    def describe_waiting(self) -> None:
+        tree = self.launch_tree
+        for proc in self.session.plan.processes:
+            if proc.enabled and proc.trigger is not None:
+                tree.details[proc.id] = f"({proc.trigger.describe()})"
+            elif not proc.enabled and proc.skipped_by is not None:
+                tree.details[proc.id] = f"({proc.skipped_by.expression} = " \
+                                        f"{proc.skipped_by.value!r})"
+            elif proc.error:
+                tree.details[proc.id] = f"({proc.error})"
+            tree.refresh_row(proc.id)
+
+
+def _detail(event: Event) -> str:
+    if event.kind == "started" and event.pid is not None:
+        return f"pid {event.pid}"
+    if event.kind in ("exited", "failed", "respawning") and event.reason:
+        return f"({event.reason})"
+    return ""
+
+
+def _detail_style(text: str) -> str:
+    if ": failed" in text or "refused" in text:
+        return "bold red"
+    return ""
