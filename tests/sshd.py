@@ -109,6 +109,7 @@ class Machine:
         deadline = time.monotonic() + 30
         while not self._listening():
             if self.proc.poll() is not None:
+                shutil.rmtree(self.runtime, ignore_errors=True)
                 raise RuntimeError(f"sshd for {alias} ended: {self.log.read_text()}")
             assert time.monotonic() < deadline, f"sshd for {alias} never listened"
             time.sleep(0.05)
@@ -143,6 +144,7 @@ class Machines:
     def __init__(self, folder: Path, aliases: tuple[str, ...] = ("robot1", "robot2")) -> None:
         ensure_sshd()
         self.folder = folder
+        folder.mkdir(parents=True, exist_ok=True)
         self.client_key = folder / "client_key"
         keygen(self.client_key)
         self.authorized = folder / "authorized_keys"

@@ -1,0 +1,262 @@
+"""Sessions on other machines: the ssh link to a real session through a real sshd.
+
+"robot1" and "robot2" are sshd servers on 127.0.0.1 (tests/sshd.py), each with its own
+session folder; a session "on robot1" is started with robot1's folder, as a user logged in
+there would start it, and reached only through `ssh robot1 ... __proxy NAME`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import shlex
+import subprocess
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from tuilaunch.engine.run.protocol import decode, encode
+from tuilaunch.engine.run.remote import (
+    Address,
+    RemoteError,
+    list_remote,
+    open_remote_link,
+    open_remote_streams,
+    parse_address,
+    run_remote,
+    ssh_argv,
+)
+from tuilaunch.engine.run.session_dir import SessionError
+
+from .conftest import run_cli
+from .sshd import Machine, Machines, alive, free_port, keygen, machines  # noqa: F401
+
+LAUNCH = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(name='ticker', cmd=[
+        'sh', '-c', 'i=0; while true; do i=$((i+1)); echo tick $i; sleep 0.1; done']))
+    return sl.launch_description()
+"""
+
+
+def wait_for(check: Callable[[], object], limit: float = 30.0) -> None:
+    end = time.monotonic() + limit
+    while not check():
+        assert time.monotonic() < end, f"condition never held: {check}"
+        time.sleep(0.05)
+
+
+def start_on(machine: Machine, write, name: str) -> None:
+    """A session started on `machine` (its session folder), as a user there would."""
+    path = write(LAUNCH)
+    env = {"XDG_RUNTIME_DIR": str(machine.runtime),
+           "ROS_LOG_DIR": str(machine.folder / "roslog")}
+    done = run_cli(str(path), "--detach", "--name", name, env=env)
+    assert done.returncode == 0, done.stderr
+    wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=env)
+    assert wait.returncode == 0, wait.stderr
+
+
+def request(sock, op: str, request_id: int = 1, **fields) -> dict:
+    sock.sendall(encode({"id": request_id, "op": op, **fields}))
+    reader = sock.makefile("rb")
+    try:
+        while True:
+            line = reader.readline()
+            assert line, f"the link closed before the reply to {op}"
+            message = decode(line)
+            if message.get("type") == "reply" and message.get("id") == request_id:
+                return message
+    finally:
+        reader.close()
+
+
+def proxies_on(machine: Machine) -> list[int]:
+    """The proxies running under `machine`'s sshd."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            argv = (entry / "cmdline").read_bytes().split(b"\0")
+            environ = (entry / "environ").read_bytes()
+        except OSError:
+            continue
+        if b"__proxy" in argv and str(machine.runtime).encode() in environ:
+            found.append(int(entry.name))
+    return [pid for pid in found if alive(pid)]
+
+
+# --- addresses --------------------------------------------------------------------------------
+
+def test_addresses_name_a_host_or_this_machine():
+    assert parse_address("demo") == Address(None, "demo")
+    assert parse_address("robot1:demo") == Address("robot1", "demo")
+    assert parse_address("ops@robot1.local:demo-2") == Address("ops@robot1.local", "demo-2")
+    assert parse_address("[fe80::1%eth0]:demo") == Address("fe80::1%eth0", "demo")
+    assert str(parse_address("[::1]:demo")) == "[::1]:demo"
+    assert str(parse_address("robot1:demo")) == "robot1:demo"
+
+
+@pytest.mark.parametrize("text, says", [
+    (":demo", "no host before ':'"),
+    ("fe80::1:demo", "in brackets"),
+    ("-oProxyCommand=touch /tmp/x:demo", "is not a host name"),
+    ("robot1:", "not usable"),
+    ("robot1:a/b", "not usable"),
+    ("[::1]demo", "is not [HOST]:NAME"),
+])
+def test_bad_addresses_are_one_line(text, says):
+    with pytest.raises(SessionError) as caught:
+        parse_address(text)
+    assert says in str(caught.value)
+
+
+def test_ssh_command_comes_from_the_environment_and_quotes_for_the_remote_shell():
+    argv = ssh_argv("robot1", ["__proxy", "demo"], {
+        "TUILAUNCH_SSH_COMMAND": "ssh -F '/my config' -p 2222",
+        "TUILAUNCH_REMOTE": "/opt/venv/bin/tuilaunch"})
+    assert argv[:4] == ["ssh", "-F", "/my config", "-p"]
+    assert "BatchMode=yes" in argv and "-T" in argv
+    assert argv[-2:] == ["robot1", "/opt/venv/bin/tuilaunch __proxy demo"]
+
+
+def test_remote_words_reach_the_remote_program_intact(machines):
+    words = ["two words", "$HOME", "a;b", "it's"]
+    out = run_remote("robot1", words, environ={**os.environ, "TUILAUNCH_REMOTE": "printf '%s\\n'"})
+    assert out.splitlines() == words
+
+
+# --- the link ---------------------------------------------------------------------------------
+
+def test_a_session_on_robot1_answers_over_ssh_and_closing_the_link_stops_nothing(
+        machines, write):
+    start_on(machines["robot1"], write, "far")
+    link = open_remote_link("robot1", "far")
+    try:
+        assert link.info["name"] == "far"
+        reply = request(link.sock, "status")
+        assert reply["ok"], reply
+        states = {p["id"]: p["state"] for p in reply["result"]["processes"]}
+        assert states == {"ticker-1": "running"}
+        server = reply["result"]["pid"]
+    finally:
+        link.close()
+    assert link.process.returncode is not None  # ssh ended with the link
+    wait_for(lambda: not proxies_on(machines["robot1"]))  # and the proxy there
+    assert alive(server)  # the session runs on
+    again = open_remote_link("robot1", "far")
+    try:
+        assert request(again.sock, "status")["result"]["counts"] == {"running": 1}
+    finally:
+        again.close()
+
+
+async def test_events_stream_over_the_link(machines, write):
+    start_on(machines["robot1"], write, "far")
+    link, reader, writer = await open_remote_streams("robot1", "far")
+    try:
+        writer.write(encode({"id": 1, "op": "subscribe"}))
+        await writer.drain()
+        seen: list[str] = []
+        deadline = time.monotonic() + 30
+        while not any(line.startswith("tick") for line in seen):
+            assert time.monotonic() < deadline, "no output crossed the link"
+            message = decode(await asyncio.wait_for(reader.readline(), 30))
+            for event in message.get("events") or []:
+                seen.extend(event.get("lines") or [])
+    finally:
+        writer.close()
+        await asyncio.get_running_loop().run_in_executor(None, link.close)
+
+
+def test_sessions_are_listed_per_machine_as_ls_json(machines, write):
+    start_on(machines["robot1"], write, "far")
+    listed = list_remote("robot1")
+    local = json.loads(run_cli("ls", "--json", env={
+        "XDG_RUNTIME_DIR": str(machines["robot1"].runtime)}).stdout)
+    assert [s["name"] for s in listed] == ["far"]
+    assert [sorted(s) for s in listed] == [sorted(s) for s in local]
+    assert listed[0]["pid"] == local[0]["pid"]
+    assert list_remote("robot2") == []
+
+
+def test_the_relay_is_ssh_and_the_proxy_alone(machines, write):
+    """What the TUI will run, by hand: `ssh robot1 <tuilaunch> __proxy NAME`."""
+    start_on(machines["robot1"], write, "far")
+    argv = [*shlex.split(machines.ssh_command), "robot1",
+            f"{os.environ['TUILAUNCH_REMOTE']} __proxy far"]
+    proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    try:
+        assert proc.stdin is not None and proc.stdout is not None
+        assert decode(proc.stdout.readline())["type"] == "hello"
+        proc.stdin.write(encode({"id": 7, "op": "find", "process": "ticker"}))
+        proc.stdin.flush()
+        reply = decode(proc.stdout.readline())
+        assert reply == {"type": "reply", "id": 7, "ok": True, "result": "ticker-1"}
+        proc.stdin.close()  # the client hangs up: the relay ends
+        assert proc.wait(timeout=30) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+# --- failures, each one line naming the machine ---------------------------------------------
+
+def _ssh_config(machines: Machines, text: str) -> dict[str, str]:
+    config = machines.folder / "other_config"
+    config.write_text(text)
+    return {**os.environ, "TUILAUNCH_SSH_COMMAND": f"ssh -F {config}"}
+
+
+def _one_line(error: BaseException) -> str:
+    return str(error).split("\n  hint:", 1)[0]
+
+
+def test_an_unreachable_machine_is_named(machines):
+    environ = _ssh_config(machines, machines.host_entry("deadbox", free_port()))
+    with pytest.raises(RemoteError) as caught:
+        open_remote_link("deadbox", "far", environ=environ)
+    line = _one_line(caught.value)
+    assert line.startswith("cannot reach deadbox: ") and "Connection refused" in line, line
+    assert "\n" not in line
+
+
+def test_a_refused_key_is_said(machines, tmp_path):
+    stranger = tmp_path / "stranger_key"
+    keygen(stranger)
+    environ = _ssh_config(machines, machines.host_entry(
+        "robot1", machines["robot1"].port, key=stranger))
+    with pytest.raises(RemoteError) as caught:
+        open_remote_link("robot1", "far", environ=environ)
+    line = _one_line(caught.value)
+    assert line.startswith("robot1 refused the login") and "Permission denied" in line, line
+    assert "without a prompt" in str(caught.value)
+
+
+def test_a_missing_remote_tuilaunch_is_said(machines):
+    environ = {**os.environ, "TUILAUNCH_REMOTE": "/nonexistent/tuilaunch"}
+    with pytest.raises(RemoteError) as caught:
+        open_remote_link("robot1", "far", environ=environ)
+    assert _one_line(caught.value).startswith(
+        "robot1: tuilaunch not found there (/nonexistent/tuilaunch"), str(caught.value)
+    with pytest.raises(RemoteError) as caught:
+        list_remote("robot1", environ=environ)
+    assert "tuilaunch not found there" in str(caught.value)
+
+
+def test_an_unknown_session_is_said_with_the_ones_there(machines, write):
+    start_on(machines["robot1"], write, "far")
+    with pytest.raises(RemoteError) as caught:
+        open_remote_link("robot1", "near")
+    assert _one_line(caught.value) == "robot1: no running session named near"
+    with pytest.raises(RemoteError) as caught:
+        open_remote_link("robot2", "far")
+    assert _one_line(caught.value) == "robot2: no running session named far"
+    assert not proxies_on(machines["robot1"])
+
