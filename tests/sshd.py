@@ -10,7 +10,8 @@ set up with the same tuilaunch would.
 At teardown every process started under a machine (found by its runtime folder in its
 environment, or as a descendant of its sshd) is ended: nothing outlives the test.
 
-Use: `from .sshd import machines  # noqa: F401` in a test module, then the `machines` fixture.
+Use: `from .sshd import machines_fixture  # noqa: F401` in a test module, then the
+`machines` fixture.
 """
 
 from __future__ import annotations
@@ -184,8 +185,8 @@ class Machines:
             machine.stop()
 
 
-@pytest.fixture
-def machines(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Machines]:
+@pytest.fixture(name="machines")
+def machines_fixture(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Machines]:
     """robot1 and robot2, reachable through `TUILAUNCH_SSH_COMMAND` (set for the test)."""
     fleet = Machines(tmp_path / "ssh")
     for key, value in fleet.env().items():

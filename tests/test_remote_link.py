@@ -32,7 +32,7 @@ from tuilaunch.engine.run.remote import (
 from tuilaunch.engine.run.session_dir import SessionError
 
 from .conftest import run_cli
-from .sshd import Machine, Machines, alive, free_port, keygen, machines  # noqa: F401
+from .sshd import Machine, Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -127,7 +127,8 @@ def test_ssh_command_comes_from_the_environment_and_quotes_for_the_remote_shell(
 
 def test_remote_words_reach_the_remote_program_intact(machines):
     words = ["two words", "$HOME", "a;b", "it's"]
-    out = run_remote("robot1", words, environ={**os.environ, "TUILAUNCH_REMOTE": "printf '%s\\n'"})
+    environ = {**os.environ, "TUILAUNCH_REMOTE": "printf '%s\\n'"}
+    out = run_remote("robot1", words, environ=environ)
     assert out.splitlines() == words
 
 

@@ -251,7 +251,7 @@ def start_ssh(host: str, args: list[str], environ: Mapping[str, str] | None = No
     ours, theirs = socket.socketpair()
     try:
         process = subprocess.Popen(
-            argv, stdin=theirs, stdout=theirs, stderr=subprocess.PIPE,
+            argv, stdin=theirs.fileno(), stdout=theirs.fileno(), stderr=subprocess.PIPE,
             # its own session: Ctrl+C in the operator's terminal is the TUI's to handle,
             # and ssh never opens that terminal to prompt
             start_new_session=True,
