@@ -11,6 +11,7 @@ import asyncio
 import json
 import os
 import shlex
+import signal
 import subprocess
 import time
 from collections.abc import Callable
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from tuilaunch.engine.plan.machines import Machine as Machine_
 from tuilaunch.engine.run.protocol import decode, encode
 from tuilaunch.engine.run.remote import (
     Address,
@@ -261,3 +263,50 @@ def test_an_unknown_session_is_said_with_the_ones_there(machines, write):
     assert _one_line(caught.value) == "robot2: no running session named far"
     assert not proxies_on(machines["robot1"])
 
+
+
+# --- machines of a machines file ------------------------------------------------------------
+
+def test_a_machine_sources_its_setup_and_sets_its_env_before_its_tuilaunch(machines, tmp_path):
+    setup = tmp_path / "setup with space.bash"
+    setup.write_text("export FROM_SETUP=sourced\n")
+    program = tmp_path / "fake_tuilaunch"  # stands for the machine's tuilaunch: says its env
+    program.write_text('#!/bin/sh\nprintf "%s|%s|%s\\n" "$FROM_SETUP" "$FROM_ENV" "$*"\n')
+    program.chmod(0o755)
+    nuc = Machine_("nuc", "robot1", str(program), str(setup), {"FROM_ENV": "a b'c"})
+    out = run_remote(nuc, ["__ls", "x y"])
+    assert out == "sourced|a b'c|__ls x y\n"
+
+
+def test_a_machine_is_named_in_its_failures(machines, tmp_path):
+    nuc = Machine_("nuc", "robot1", "/nonexistent/tuilaunch")
+    with pytest.raises(RemoteError) as caught:
+        open_remote_link(nuc, "far")
+    assert _one_line(caught.value).startswith(
+        "nuc (robot1): tuilaunch not found there (/nonexistent/tuilaunch"), str(caught.value)
+    broken = Machine_("nuc", "robot1", None, str(tmp_path / "missing_setup.bash"))
+    with pytest.raises(RemoteError) as caught:
+        list_remote(broken)
+    assert _one_line(caught.value).startswith(
+        "nuc (robot1): its setup file cannot be sourced"), str(caught.value)
+
+
+def test_a_dropped_link_stops_nothing_and_says_why(machines, write):
+    start_on(machines["robot1"], write, "far")
+    link = open_remote_link("robot1", "far")
+    try:
+        server = link.info["pid"]
+        wait_for(lambda: proxies_on(machines["robot1"]))
+        for pid in proxies_on(machines["robot1"]):
+            os.kill(pid, signal.SIGKILL)  # the far end dies (as with a dropped connection)
+        link.sock.settimeout(30)
+        assert link.sock.recv(1) == b""  # the client sees the link end
+        assert link.lost_reason().startswith("lost the link to robot1 (")
+    finally:
+        link.close()
+    assert alive(server)
+    again = open_remote_link("robot1", "far")  # and can come back
+    try:
+        assert request(again.sock, "status")["result"]["pid"] == server
+    finally:
+        again.close()

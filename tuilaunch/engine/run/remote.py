@@ -27,6 +27,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from ..plan.machines import Machine
 from .protocol import MAX_MESSAGE, ProtocolError, decode
 from .session_dir import SessionError, check_name
 
@@ -122,52 +123,81 @@ def ssh_command(environ: Mapping[str, str] | None = None) -> list[str]:
 
 
 def remote_command(args: list[str], environ: Mapping[str, str] | None = None,
-                   tuilaunch: str | None = None) -> str:
-    """The command line the remote shell runs: `TUILAUNCH_REMOTE` (or `tuilaunch`, or the
-    machine's own `tuilaunch`), then `args` quoted for that shell. ssh joins its remote
-    words with spaces and hands them to the shell, so the words must be quoted here."""
+                   machine: Machine | None = None) -> str:
+    """The command line the remote shell runs: the machine's `tuilaunch:` (else
+    `TUILAUNCH_REMOTE`, else `tuilaunch`), then `args` quoted for that shell. ssh joins its
+    remote words with spaces and hands them to the login shell, so the words are quoted
+    here. A machine's `env:` is given through `env`; its `setup:` is sourced first by bash
+    (ROS's setup.bash is bash, and the login shell may be another)."""
     environ = os.environ if environ is None else environ
-    program = tuilaunch or environ.get("TUILAUNCH_REMOTE") or "tuilaunch"
-    return " ".join([program, *(shlex.quote(a) for a in args)])
+    program = (machine.tuilaunch if machine else None) or environ.get("TUILAUNCH_REMOTE") \
+        or "tuilaunch"
+    words = [program, *(shlex.quote(a) for a in args)]
+    if machine is not None and machine.env:
+        words[:0] = ["env", *(shlex.quote(f"{k}={v}") for k, v in machine.env.items())]
+    command = " ".join(words)
+    if machine is not None and machine.setup:
+        script = f". {shlex.quote(machine.setup)} && exec {command}"
+        return f"exec bash -c {shlex.quote(script)}"
+    return command
 
 
-def ssh_argv(host: str, args: list[str], environ: Mapping[str, str] | None = None,
-             tuilaunch: str | None = None) -> list[str]:
-    """The whole ssh command running the remote tuilaunch with `args` on `host`."""
-    check_host(host)
+Target = str | Machine
+"""A host as ssh takes it, or a machine of a machines file (its host, tuilaunch, setup
+and env)."""
+
+
+def _host(target: Target) -> str:
+    return target.host if isinstance(target, Machine) else target
+
+
+def ssh_argv(target: Target, args: list[str],
+             environ: Mapping[str, str] | None = None) -> list[str]:
+    """The whole ssh command running the remote tuilaunch with `args` on `target`."""
+    host = check_host(_host(target))
+    machine = target if isinstance(target, Machine) else None
     return [*ssh_command(environ), *SSH_OPTIONS, host,
-            remote_command(args, environ, tuilaunch)]
+            remote_command(args, environ, machine)]
 
 
 def explain_failure(host: str, code: int, stderr: str, what: str,
-                    environ: Mapping[str, str] | None = None) -> RemoteError:
+                    environ: Mapping[str, str] | None = None,
+                    machine: Machine | None = None) -> RemoteError:
     """One line for an ssh that ended before the session answered: which of ssh, the
     login, the remote tuilaunch or the session failed, from ssh's exit status and words."""
     environ = os.environ if environ is None else environ
+    # a machine of a machines file is named as the file names it, and its host
+    label = host if machine is None or machine.name == host else f"{machine.name} ({host})"
     lines = [line.strip() for line in stderr.splitlines() if line.strip()]
     text = " ".join(lines)
     last = lines[-1] if lines else f"exit status {code}"
-    ours = [line for line in lines if "tuilaunch: error: " in line]
-    if ours:  # the remote tuilaunch ran and said what is wrong
-        reason = ours[-1].split("tuilaunch: error: ", 1)[1]
-        return RemoteError(f"{host}: {reason}")
+    ours = [i for i, line in enumerate(lines) if "tuilaunch: error: " in line]
+    if ours:  # the remote tuilaunch ran and said what is wrong (and maybe a hint)
+        reason = lines[ours[-1]].split("tuilaunch: error: ", 1)[1]
+        after = lines[ours[-1] + 1:ours[-1] + 2]
+        hint = after[0][len("hint: "):] if after and after[0].startswith("hint: ") else None
+        return RemoteError(f"{label}: {reason}", hint=hint)
     if code == SSH_FAILED:
         if "Permission denied" in text:
-            return RemoteError(f"{host} refused the login ({last})",
+            return RemoteError(f"{label} refused the login ({last})",
                                hint=f"`ssh {host}` must log in without a prompt: a key in "
                                "its authorized_keys, or an ssh-agent")
         if "Host key verification failed" in text or "HOST IDENTIFICATION" in text:
-            return RemoteError(f"{host}: host key verification failed",
+            return RemoteError(f"{label}: host key verification failed",
                                hint=f"ssh {host} once in a terminal to check and accept "
                                "its key")
-        return RemoteError(f"cannot reach {host}: {_without_prefix(last)}")
-    tuilaunch = environ.get("TUILAUNCH_REMOTE") or "tuilaunch"
+        return RemoteError(f"cannot reach {label}: {_without_prefix(last)}")
+    if machine is not None and machine.setup and machine.setup in text:
+        return RemoteError(f"{label}: its setup file cannot be sourced ({last})",
+                           hint="fix the machine's 'setup:' in the machines file")
+    tuilaunch = (machine.tuilaunch if machine else None) or \
+        environ.get("TUILAUNCH_REMOTE") or "tuilaunch"
     if code in (NOT_FOUND, NOT_EXECUTABLE) or "command not found" in text or \
             "No such file or directory" in text:
-        return RemoteError(f"{host}: tuilaunch not found there ({tuilaunch}: {last})",
+        return RemoteError(f"{label}: tuilaunch not found there ({tuilaunch}: {last})",
                            hint="install tuilaunch there, or set TUILAUNCH_REMOTE (or the "
                            "machine's 'tuilaunch:') to its path")
-    return RemoteError(f"{host}: {what} failed: {last}")
+    return RemoteError(f"{label}: {what} failed: {last}")
 
 
 def _without_prefix(line: str) -> str:
@@ -193,17 +223,23 @@ class _StderrTail:
             while len(self.chunks) > 16:
                 self.chunks.pop(0)
 
-    def failure(self, host: str, what: str,
-                environ: Mapping[str, str] | None) -> RemoteError:
-        """Why ssh ended (it is waited for; one that lingers is killed)."""
+    def ended(self) -> tuple[int, str]:
+        """ssh's exit status and what it said (it is waited for; one that lingers is
+        killed)."""
         try:
             code = self.process.wait(timeout=10)
         except subprocess.TimeoutExpired:
             self.process.kill()
             code = self.process.wait()
         self.thread.join(timeout=5)  # its last words reach the pipe before it closes
-        text = b"".join(self.chunks).decode(errors="replace")
-        return explain_failure(host, code, text, what, environ)
+        return code, b"".join(self.chunks).decode(errors="replace")
+
+    def failure(self, target: Target, what: str,
+                environ: Mapping[str, str] | None) -> RemoteError:
+        """Why ssh ended before the session answered."""
+        code, text = self.ended()
+        machine = target if isinstance(target, Machine) else None
+        return explain_failure(_host(target), code, text, what, environ, machine)
 
 
 class RemoteLink:
@@ -222,9 +258,12 @@ class RemoteLink:
         self.stderr = stderr
 
     def lost_reason(self) -> str:
-        """Once the link closed: one line saying why (ssh's last words, its status)."""
-        return str(self.stderr.failure(self.host, f"the link to session {self.name}", None)
-                   ).split("\n", 1)[0]
+        """Once the link closed: one line saying why, from ssh's last words, else its exit
+        status (a remote end killed outright leaves ssh nothing to say)."""
+        code, text = self.stderr.ended()
+        lines = [line.strip() for line in text.splitlines() if line.strip()]
+        why = _without_prefix(lines[-1]) if lines else f"ssh exit status {code}"
+        return f"lost the link to {self.host} ({why})"
 
     @property
     def info(self) -> dict[str, Any]:
@@ -242,12 +281,11 @@ class RemoteLink:
             self.process.wait()
 
 
-def start_ssh(host: str, args: list[str], environ: Mapping[str, str] | None = None,
-              tuilaunch: str | None = None) -> tuple[socket.socket,
-                                                     subprocess.Popen[bytes]]:
+def start_ssh(target: Target, args: list[str], environ: Mapping[str, str] | None = None,
+              ) -> tuple[socket.socket, subprocess.Popen[bytes]]:
     """ssh running the remote tuilaunch with `args`, its stdin and stdout one socket of a
     pair (the other is returned); its stderr a pipe, read when it fails."""
-    argv = ssh_argv(host, args, environ, tuilaunch)
+    argv = ssh_argv(target, args, environ)
     ours, theirs = socket.socketpair()
     try:
         process = subprocess.Popen(
@@ -282,15 +320,15 @@ def _read_line(sock: socket.socket) -> bytes:
             raise ProtocolError("a message longer than the protocol allows")
 
 
-def open_remote_link(host: str, name: str, timeout: float = HELLO_TIMEOUT,
-                     environ: Mapping[str, str] | None = None,
-                     tuilaunch: str | None = None) -> RemoteLink:
+def open_remote_link(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
+                     environ: Mapping[str, str] | None = None) -> RemoteLink:
     """Blocking: the link to session `name` on `host`, once the session greeted us.
 
     Raises RemoteError with one line (and a hint) saying whether the machine could not be
     reached, refused the key, has no tuilaunch, or has no such session."""
     check_name(name)
-    sock, process = start_ssh(host, [PROXY_COMMAND, name], environ, tuilaunch)
+    host = _host(target)
+    sock, process = start_ssh(target, [PROXY_COMMAND, name], environ)
     stderr = _StderrTail(process)
     sock.settimeout(timeout)
     try:
@@ -305,7 +343,7 @@ def open_remote_link(host: str, name: str, timeout: float = HELLO_TIMEOUT,
         line = b""
     if not line.endswith(b"\n"):
         sock.close()
-        raise stderr.failure(host, f"session {name}", environ)
+        raise stderr.failure(target, f"session {name}", environ)
     try:
         hello = decode(line)
     except ProtocolError as exc:
@@ -324,26 +362,25 @@ def open_remote_link(host: str, name: str, timeout: float = HELLO_TIMEOUT,
     return RemoteLink(host, name, sock, process, hello, stderr)
 
 
-async def open_remote_streams(host: str, name: str, timeout: float = HELLO_TIMEOUT,
+async def open_remote_streams(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
                               environ: Mapping[str, str] | None = None,
-                              tuilaunch: str | None = None,
                               ) -> tuple[RemoteLink, asyncio.StreamReader,
                                          asyncio.StreamWriter]:
     """The asyncio form (for the TUI's RemoteSupervisor): the link, and streams on its
     socket with the session protocol's line limit. The greeting is `link.hello`."""
     link = await asyncio.get_running_loop().run_in_executor(
-        None, lambda: open_remote_link(host, name, timeout, environ, tuilaunch))
+        None, lambda: open_remote_link(target, name, timeout, environ))
     link.sock.setblocking(False)
     reader, writer = await asyncio.open_connection(sock=link.sock, limit=MAX_MESSAGE)
     return link, reader, writer
 
 
-def run_remote(host: str, args: list[str], timeout: float = HELLO_TIMEOUT,
-               environ: Mapping[str, str] | None = None,
-               tuilaunch: str | None = None) -> str:
+def run_remote(target: Target, args: list[str], timeout: float = HELLO_TIMEOUT,
+               environ: Mapping[str, str] | None = None) -> str:
     """A one-shot remote tuilaunch command (e.g. `__ls`): its standard output, or a
     RemoteError saying why it failed."""
-    argv = ssh_argv(host, args, environ, tuilaunch)
+    host = _host(target)
+    argv = ssh_argv(target, args, environ)
     try:
         done = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True,
                               timeout=timeout, start_new_session=True,
@@ -354,17 +391,18 @@ def run_remote(host: str, args: list[str], timeout: float = HELLO_TIMEOUT,
         raise RemoteError(f"cannot run {argv[0]}: {exc.strerror or exc}") from None
     if done.returncode != 0:
         raise explain_failure(host, done.returncode, done.stderr.decode(errors="replace"),
-                              " ".join(args), environ)
+                              " ".join(args), environ,
+                              target if isinstance(target, Machine) else None)
     return done.stdout.decode(errors="replace")
 
 
-def list_remote(host: str, timeout: float = HELLO_TIMEOUT,
-                environ: Mapping[str, str] | None = None,
-                tuilaunch: str | None = None) -> list[dict[str, Any]]:
+def list_remote(target: Target, timeout: float = HELLO_TIMEOUT,
+                environ: Mapping[str, str] | None = None) -> list[dict[str, Any]]:
     """The sessions on `host`, as `tuilaunch ls --json` lists them there."""
     import json
 
-    text = run_remote(host, [LIST_COMMAND], timeout, environ, tuilaunch)
+    host = _host(target)
+    text = run_remote(target, [LIST_COMMAND], timeout, environ)
     try:
         sessions = json.loads(text)
     except ValueError:
