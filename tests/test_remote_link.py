@@ -13,6 +13,7 @@ import os
 import shlex
 import signal
 import subprocess
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -310,3 +311,21 @@ def test_a_dropped_link_stops_nothing_and_says_why(machines, write):
         assert request(again.sock, "status")["result"]["pid"] == server
     finally:
         again.close()
+
+
+# --- the proxy on its own -------------------------------------------------------------------
+
+@pytest.mark.parametrize("args, says", [
+    (["__proxy", "nosuch"], "tuilaunch: error: no running session named nosuch"),
+    (["__proxy", "a/b"], "tuilaunch: error: session name 'a/b' is not usable"),
+    (["__proxy"], "usage: tuilaunch __proxy NAME"),
+])
+def test_the_proxy_fails_with_one_line(args, says, tmp_path):
+    runtime = tmp_path / "run"
+    runtime.mkdir(mode=0o700)
+    done = subprocess.run([sys.executable, "-m", "tuilaunch.engine.run.proxy", *args],
+                          capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
+                          env={**os.environ, "XDG_RUNTIME_DIR": str(runtime)})
+    assert done.returncode == 2
+    assert done.stderr.startswith(says), done.stderr
+    assert "Traceback" not in done.stderr and done.stdout == ""
