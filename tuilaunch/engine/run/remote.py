@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import os
 import re
 import shlex
@@ -154,8 +155,14 @@ def _host(target: Target) -> str:
 def ssh_argv(target: Target, args: list[str],
              environ: Mapping[str, str] | None = None) -> list[str]:
     """The whole ssh command running the remote tuilaunch with `args` on `target`."""
-    host = check_host(_host(target))
     machine = target if isinstance(target, Machine) else None
+    if isinstance(target, Machine):
+        # checked when the machines file was read (and may be a bare IPv6 address)
+        host = target.host
+        if host.startswith("-"):
+            raise SessionError(f"machine {target.name}: {host!r} is not a host name")
+    else:
+        host = check_host(target)
     return [*ssh_command(environ), *SSH_OPTIONS, host,
             remote_command(args, environ, machine)]
 
@@ -399,8 +406,6 @@ def run_remote(target: Target, args: list[str], timeout: float = HELLO_TIMEOUT,
 def list_remote(target: Target, timeout: float = HELLO_TIMEOUT,
                 environ: Mapping[str, str] | None = None) -> list[dict[str, Any]]:
     """The sessions on `host`, as `tuilaunch ls --json` lists them there."""
-    import json
-
     host = _host(target)
     text = run_remote(target, [LIST_COMMAND], timeout, environ)
     try:
