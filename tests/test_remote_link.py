@@ -329,3 +329,36 @@ def test_the_proxy_fails_with_one_line(args, says, tmp_path):
     assert done.returncode == 2
     assert done.stderr.startswith(says), done.stderr
     assert "Traceback" not in done.stderr and done.stdout == ""
+
+
+def test_a_session_started_through_ssh_is_ended_with_its_machine(tmp_path, write):
+    """The machines' teardown leaves nothing: a session started over ssh (its server
+    detached from ssh, re-parented away) ends with the machine, nodes included."""
+    fleet = Machines(tmp_path / "fleet", aliases=("robot9",))
+    try:
+        path = write(LAUNCH)
+        environ = {**os.environ, **fleet.env(
+            TUILAUNCH_REMOTE=f"{shlex.quote(sys.executable)} -m tuilaunch")}
+        name = run_remote("robot9", [str(path), "--detach", "--name", "left"],
+                          environ=environ, timeout=60).strip()
+        assert name == "left"
+        listed = list_remote("robot9", environ={**os.environ, **fleet.env()})
+        server = listed[0]["pid"]
+        wait_for(lambda: _children(server))
+        nodes = _children(server)
+        sshd = fleet["robot9"].proc
+    finally:
+        fleet.stop()
+    assert sshd.poll() is not None
+    assert not alive(server) and not any(alive(p) for p in nodes)
+
+
+def _children(pid: int) -> list[int]:
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(entry.name))
+        except (OSError, IndexError, ValueError):
+            continue
+    return found
