@@ -22,6 +22,7 @@ import pytest
 
 from tuilaunch.engine.plan.machines import Machine as Machine_
 from tuilaunch.engine.run.protocol import decode, encode
+from tuilaunch.engine.run.proxy import CHUNK
 from tuilaunch.engine.run.remote import (
     Address,
     RemoteError,
@@ -362,3 +363,40 @@ def _children(pid: int) -> list[int]:
         except (OSError, IndexError, ValueError):
             continue
     return found
+
+
+BIG = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(name='big', cmd=[
+        'sh', '-c', 'while true; do head -c 300000 /dev/zero | tr "\\\\0" x; echo; sleep 0.3; '
+        'done']))
+    return sl.launch_description()
+"""
+
+
+async def test_a_message_larger_than_the_relay_chunk_crosses_whole(machines, write):
+    path = write(BIG, "big_launch.py")
+    env = {"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)}
+    done = run_cli(str(path), "--detach", "--name", "big", env=env)
+    assert done.returncode == 0, done.stderr
+    link, reader, writer = await open_remote_streams("robot1", "big")
+    try:
+        writer.write(encode({"id": 1, "op": "subscribe"}))
+        await writer.drain()
+        deadline = time.monotonic() + 30
+        text, biggest = "", 0
+        while len(text) < 300000:  # the reader cuts a line at 64 KiB; the pieces all come
+            assert time.monotonic() < deadline, "the big line never crossed"
+            raw = await asyncio.wait_for(reader.readline(), 30)
+            biggest = max(biggest, len(raw))
+            message = decode(raw)  # whole JSON: no byte lost or doubled by the relay
+            for event in message.get("events") or []:
+                text += "".join(event.get("lines") or [])
+        assert set(text) == {"x"}
+        assert biggest > CHUNK  # a message the proxy relayed in several reads
+    finally:
+        writer.close()
+        await asyncio.get_running_loop().run_in_executor(None, link.close)
