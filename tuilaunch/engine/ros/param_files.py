@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from ..errors import LaunchError
+from .bridge import SetResult
 
 if TYPE_CHECKING:
-    from .bridge import RosBridge, SetResult
+    from .bridge import RosBridge
 
 
 def nested(values: dict[str, Any]) -> dict[str, Any]:
@@ -103,8 +104,23 @@ def file_values(path: str, node: str) -> dict[str, Any]:
 
 async def load(bridge: RosBridge, node: str, path: str, timeout: float = 5.0)\
         -> list[SetResult]:
-    """Sets every parameter the file gives the node; the node's answer per parameter."""
+    """Sets every parameter the file gives the node; the node's answer per parameter.
+
+    A read-only parameter (set at start only, like `start_type_description_service`) that
+    already holds the file's value is not sent, so that loading a dump of the same node is
+    clean; it is answered as successful, "read-only, unchanged". With another value the node
+    refuses it, and says so."""
     values = file_values(path, node)
     if not values:
         return []
-    return await bridge.set_parameters(node, values, timeout)
+    described = {d.name: d for d in await bridge.describe_parameters(node, list(values),
+                                                                     timeout)}
+    unchanged = [name for name, value in values.items()
+                 if name in described and described[name].read_only
+                 and described[name].value == value]
+    to_set = {name: value for name, value in values.items() if name not in unchanged}
+    answers = {r.name: r for r in (await bridge.set_parameters(node, to_set, timeout)
+                                   if to_set else [])}
+    for name in unchanged:
+        answers[name] = SetResult(name, True, "read-only, unchanged")
+    return [answers[name] for name in values if name in answers]
