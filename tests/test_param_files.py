@@ -11,7 +11,7 @@ import yaml
 from tests.inspector_helpers import eventually, ros_nodes, run
 from tuilaunch.engine.errors import LaunchError
 from tuilaunch.engine.plan.components import file_parameters
-from tuilaunch.engine.ros.bridge import RosBridge
+from tuilaunch.engine.ros.bridge import RosBridge, RosError
 from tuilaunch.engine.ros.param_files import file_values, nested
 
 NODE = "/params_test/lidar"
@@ -91,3 +91,12 @@ def test_a_file_without_a_section_for_the_node_says_which_it_has(tmp_path: Path)
 
 def test_nesting():
     assert nested({"a.b.c": 1, "a.b.d": 2, "e": 3}) == {"a": {"b": {"c": 1, "d": 2}}, "e": 3}
+
+
+def test_a_node_that_does_not_answer_is_one_line():
+    async def scenario(bridge: RosBridge) -> str:
+        return await bridge.dump_params("/params_test/nobody", timeout=1.0)
+
+    with pytest.raises(RosError) as caught:
+        run(scenario)
+    assert str(caught.value) == "service /params_test/nobody/list_parameters is not available"

@@ -249,9 +249,10 @@ class RosBridge:
         """The bridge's one RateMeter, made on first use."""
         from .rates import RateMeter
 
-        meter = self.__dict__.get("inspector_rates")
+        # made here rather than in __init__: most sessions never measure a rate
+        meter = getattr(self, "inspector_rates", None)
         if meter is None:
-            meter = self.__dict__["inspector_rates"] = RateMeter(self.node)
+            meter = self.inspector_rates = RateMeter(self.node)
         return meter
 
     async def start_rates(self, topics: list[str], window_s: float = 10.0,

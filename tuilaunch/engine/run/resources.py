@@ -6,7 +6,9 @@ children, a script that forks): what the operator means by "this node's" CPU and
 Descendants are found by one scan of /proc/*/stat for parent pids.
 /proc/PID/task/TID/children would be cheaper per tree, but it needs CONFIG_PROC_CHILDREN,
 which common kernels (this machine's included) leave out; one scan serves every tree of a
-sample, so its cost does not grow with the number of launched processes.
+sample, so its cost does not grow with the number of launched processes. Measured on a
+2-core machine with ~90 processes: a scan takes about 2 ms, a sample of 20 trees about 3 ms
+(stat and statm of each tree's pids on top), negligible at once a second.
 """
 
 from __future__ import annotations
