@@ -30,11 +30,15 @@ def duration_text(duration: Any) -> str:
 
 
 def qos_dict(profile: Any) -> dict[str, Any]:
+    """An endpoint's QoS as discovered. DDS discovery does not carry history and depth, so
+    other processes' endpoints say history "unknown" and depth None (`ros2 topic info -v`
+    says UNKNOWN too)."""
+    history = policy_name(profile.history)
     return {
         "reliability": policy_name(profile.reliability),
         "durability": policy_name(profile.durability),
-        "history": policy_name(profile.history),
-        "depth": int(profile.depth),
+        "history": history,
+        "depth": None if history == "unknown" else int(profile.depth),
         "deadline": duration_text(profile.deadline),
         "liveliness": policy_name(profile.liveliness),
         "liveliness_lease_duration": duration_text(profile.liveliness_lease_duration),
