@@ -52,3 +52,12 @@ def test_a_node_without_the_service_says_so_and_names_the_restart():
     message = str(caught.value)
     assert "\n" not in message
     assert "/log_test/plain has no logger service" in message and "--log-level" in message
+
+
+def test_an_unknown_node_is_one_line():
+    async def scenario(bridge: RosBridge) -> None:
+        await bridge.set_logger_level("/log_test/nobody", "debug")
+
+    with pytest.raises(RosError) as caught:
+        run(scenario)
+    assert str(caught.value) == "no node /log_test/nobody on the ROS graph"

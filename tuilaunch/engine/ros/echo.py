@@ -62,26 +62,32 @@ class Throttle:
 class EchoSubscription:
     """The latest messages of one topic, kept (at most `keep`) until taken.
 
-    Messages arrive on the bridge's executor threads; `take()` is for any other thread."""
+    Kept serialized, and deserialized only when taken: a screen shows a few messages a
+    second, and deserializing every message of a 30 Hz point cloud in Python would cost far
+    more than receiving it. Messages arrive on the bridge's executor threads; `take()` is
+    for any other thread."""
 
-    def __init__(self, topic: str, keep: int = 100) -> None:
+    def __init__(self, topic: str, message_type: Any, keep: int = 100) -> None:
         self.topic = topic
-        self.messages: deque[Any] = deque(maxlen=keep)
+        self.message_type = message_type
+        self.messages: deque[bytes] = deque(maxlen=keep)
         self.received = 0
         self.lock = threading.Lock()
         self.subscription: Any = None
 
-    def add(self, message: Any) -> None:
+    def add(self, data: bytes) -> None:
         with self.lock:
-            self.messages.append(message)
+            self.messages.append(data)
             self.received += 1
 
     def take(self) -> list[Any]:
         """The messages kept since the last take, oldest first."""
+        from rclpy.serialization import deserialize_message
+
         with self.lock:
             taken = list(self.messages)
             self.messages.clear()
-        return taken
+        return [deserialize_message(data, self.message_type) for data in taken]
 
     def take_yaml(self, truncate_length: int | None = TRUNCATE_LENGTH) -> str:
         return "".join(message_yaml(m, truncate_length) for m in self.take())
@@ -92,9 +98,9 @@ async def start_echo(node: Any, topic: str, wait: float = 5.0, keep: int = 100)\
     """Subscribes `node` to `topic` (QoS matching its publishers); stop with `stop_echo`."""
     infos = await wait_for_publishers(node, topic, wait)
     cls = message_class(infos[0].topic_type)
-    echo = EchoSubscription(topic, keep)
+    echo = EchoSubscription(topic, cls, keep)
     echo.subscription = node.create_subscription(
-        cls, topic, echo.add, matching_qos([i.qos_profile for i in infos]))
+        cls, topic, echo.add, matching_qos([i.qos_profile for i in infos]), raw=True)
     return echo
 
 

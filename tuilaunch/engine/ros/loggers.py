@@ -8,6 +8,7 @@ offers that restart.
 
 from __future__ import annotations
 
+import asyncio
 from typing import TYPE_CHECKING
 
 from .bridge import RosError
@@ -39,9 +40,21 @@ def logger_name(node: str) -> str:
     return node.strip("/").replace("/", ".")
 
 
-async def has_logger_service(bridge: RosBridge, node: str) -> bool:
+async def has_logger_service(bridge: RosBridge, node: str, wait: float = 2.0) -> bool:
+    """Whether the node offers its logger service. A node's services are discovered a
+    little after the node itself: a node just started gets `wait` seconds to show it."""
     wanted = f"{node}/set_logger_levels"
-    return any(name == wanted for name, _ in await bridge.list_services())
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + wait
+    while True:
+        if any(name == wanted for name, _ in await bridge.list_services()):
+            return True
+        if loop.time() > deadline:
+            break
+        await asyncio.sleep(0.1)
+    if node not in await bridge.list_nodes():
+        raise RosError(f"no node {node} on the ROS graph")
+    return False
 
 
 async def _require_service(bridge: RosBridge, node: str) -> None:
