@@ -60,7 +60,8 @@ def test_dump_edit_load_round_trip_with_the_nodes_answer(tmp_path: Path):
         wildcard = tmp_path / "wildcard.yaml"
         wildcard.write_text("/**:\n  ros__parameters:\n    rate: 5.0\n"
                             "params_test:\n  lidar:\n    ros__parameters:\n"
-                            "      gains: {i: 0.5}\n      enabled: not-a-bool\n")
+                            "      gains: {i: 0.5}\n      enabled: not-a-bool\n"
+                            "      undeclared: 1\n")
         refused = await bridge.load_params(NODE, str(wildcard))
         final = await bridge.get_parameters(NODE, ["rate", "gains.i", "enabled"])
         return results, after, refused, final
@@ -75,6 +76,7 @@ def test_dump_edit_load_round_trip_with_the_nodes_answer(tmp_path: Path):
     answers = {r.name: r for r in refused}
     assert answers["rate"].successful and answers["gains.i"].successful
     assert not answers["enabled"].successful and answers["enabled"].reason
+    assert not answers["undeclared"].successful  # the node does not take unknown names
     assert final == {"rate": 5.0, "gains.i": 0.5, "enabled": True}
 
 
