@@ -235,6 +235,77 @@ class RosBridge:
                 for p, r in zip(params, response.results, strict=False)]
 
 
+    # --- inspector: topics, rates, echo, parameter files, logger levels ------------------
+    # Thin: the logic lives in graph, rates, echo, param_files and loggers.
+
+    async def topics(self, processes: dict[str, str] | None = None,
+                     node: str | None = None) -> dict[str, Any]:
+        """`{"topics": [...]}` (see graph.topics_graph); `node` keeps that node's topics."""
+        from .graph import topics_graph
+
+        return await asyncio.to_thread(topics_graph, self.node, processes, node)
+
+    def rate_meter(self) -> Any:
+        """The bridge's one RateMeter, made on first use."""
+        from .rates import RateMeter
+
+        # made here rather than in __init__: most sessions never measure a rate
+        meter = getattr(self, "inspector_rates", None)
+        if meter is None:
+            meter = self.inspector_rates = RateMeter(self.node)
+        return meter
+
+    async def start_rates(self, topics: list[str], window_s: float = 10.0,
+                          wait: float = 5.0) -> None:
+        """Measures these topics from now on; RosError for a topic nobody publishes,
+        MessageError for a type not installed."""
+        for topic in topics:
+            await self.rate_meter().start(topic, window_s, wait)
+
+    async def stop_rates(self, topics: list[str] | None = None) -> None:
+        meter = self.rate_meter()
+        for topic in meter.measured() if topics is None else topics:
+            meter.stop(topic)
+
+    async def read_rates(self, topic: str | None = None) -> dict[str, dict[str, Any]]:
+        """`{topic: {"topic", "rate_hz", "bytes_per_s", "messages", "window_s"}}`."""
+        return dict(self.rate_meter().read(topic))
+
+    async def start_echo(self, topic: str, wait: float = 5.0, keep: int = 100) -> Any:
+        """An EchoSubscription (echo.py): `take()` / `take_yaml()` its messages."""
+        from .echo import start_echo
+
+        return await start_echo(self.node, topic, wait, keep)
+
+    async def stop_echo(self, echo: Any) -> None:
+        from .echo import stop_echo
+
+        stop_echo(self.node, echo)
+
+    async def dump_params(self, node: str, timeout: float = 5.0) -> str:
+        """The node's live parameters as a params YAML a launch file loads."""
+        from .param_files import dump
+
+        return await dump(self, node, timeout)
+
+    async def load_params(self, node: str, path: str, timeout: float = 5.0)\
+            -> list[SetResult]:
+        from .param_files import load
+
+        return await load(self, node, path, timeout)
+
+    async def set_logger_level(self, node: str, level: str | int, timeout: float = 5.0)\
+            -> None:
+        """loggers.NoLoggerService when the node has no logger service."""
+        from .loggers import set_level
+
+        await set_level(self, node, level, timeout=timeout)
+
+    async def get_logger_levels(self, node: str, timeout: float = 5.0) -> dict[str, str]:
+        from .loggers import get_levels
+
+        return await get_levels(self, node, timeout=timeout)
+
 def _settle(done: asyncio.Future[Any], future: Any) -> None:
     if done.done():
         return
