@@ -54,8 +54,10 @@ class LifecycleTracker:
             bridge = await self._bridge()
             await self._subscribe(bridge, proc)
             state = await self._first_state(bridge, proc)
-        except Exception as exc:  # no ROS, no lifecycle_msgs, or no answer: say so, go on
-            self._report(proc.id, f"lifecycle state of {name} unknown: {exc}", "WARN")
+        except Exception as exc:  # no ROS or no lifecycle_msgs: say so, go on
+            not_started = "; it is not autostarted" if proc.autostart else ""
+            self._report(proc.id, f"lifecycle state of {name} unknown: {exc}{not_started}",
+                         "WARN")
             return
         if state is None:
             return  # the process ended first
@@ -97,11 +99,24 @@ class LifecycleTracker:
         from lifecycle_msgs.srv import GetState
 
         service = f"{proc.full_name}/get_state"
-        if not await self._wait_for_service(bridge, service, proc.id):
-            return None
-        response = await bridge.call_typed(service, GetState, GetState.Request(),
-                                           self.supervisor.service_timeout)
-        return str(response.current_state.label or STATES.get(response.current_state.id))
+        told = False
+        while await self._wait_for_service(bridge, service, proc.id):
+            if proc.id in self._heard:  # a transition event said it first
+                return self.states.get(proc.id)
+            try:
+                response = await bridge.call_typed(service, GetState, GetState.Request(),
+                                                   self.supervisor.service_timeout)
+            except Exception as exc:
+                # On a busy machine a node answers late, or its reply to a client it has not
+                # matched yet is dropped. Asking again is harmless; giving up would silently
+                # skip its autostart.
+                if not told:
+                    self._report(proc.id, f"no answer yet from {service} ({exc}): asking "
+                                 "again while the node runs", "WARN")
+                    told = True
+                continue
+            return str(response.current_state.label or STATES.get(response.current_state.id))
+        return None
 
     async def _wait_for_service(self, bridge: Any, service: str, proc_id: str) -> bool:
         """Waits while the process lives; False once it is gone or the launch ends."""
