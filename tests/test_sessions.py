@@ -20,7 +20,6 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -32,7 +31,8 @@ from tuilaunch.engine.run import session_dir
 from tuilaunch.output_store import LEVELS, View
 from tuilaunch.session_client import RemoteSupervisor
 
-from .conftest import run_cli
+from .conftest import run_cli, wait_for
+from .test_tui import until
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -90,13 +90,6 @@ def tl(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
     if check:
         assert done.returncode == 0, done.stderr
     return done
-
-
-def wait_for(check: Callable[[], object], limit: float = 30.0) -> None:
-    end = time.monotonic() + limit
-    while not check():
-        assert time.monotonic() < end, f"condition never held: {check}"
-        time.sleep(0.05)
 
 
 def _alive(pid: int) -> bool:
@@ -322,7 +315,7 @@ def test_killed_tui_client_leaves_nodes_running_and_attach_shows_what_was_missed
                     break
             assert ticks == [f"tick {i}" for i in range(1, len(ticks) + 1)]  # no gap, no twice
             await pilot.press("d")
-            await pilot.pause(0.5)
+            await until(pilot, lambda: getattr(app.supervisor, "detached", False))
         assert app.detached
 
     asyncio.run(attach_again())
@@ -407,7 +400,7 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
             assert app.query_one("#arg-word", Input).value == "delta"
             assert "word delta" in [line.text for line in app.store.lines(View("echo-3"))]
             await pilot.press("d")
-            await pilot.pause(0.3)
+            await until(pilot, lambda: getattr(app.supervisor, "detached", False))
         await other.detach()
         await other_task
 
@@ -738,7 +731,7 @@ def test_an_attached_client_follows_lifecycle_states_and_asks_for_transitions(
         assert before == {"lc-1": "unconfigured"}
         assert configured is True and after == {"lc-1": "inactive"}
         assert refused is False
-        tl("wait", name, "/lc", "inactive", "--timeout", "10")
+        tl("wait", name, "/lc", "inactive", "--timeout", "60")
     finally:
         tl("stop", name)
 
@@ -766,7 +759,7 @@ def generate_launch_description():
                      if "process" not in line.text]
             assert shown == ["load 100%", "\ufffdbadbyte", "done"]
             await pilot.press("d")
-            await pilot.pause(0.5)
+            await until(pilot, lambda: getattr(app.supervisor, "detached", False))
 
     asyncio.run(attach())
     tl("stop", name)
