@@ -363,23 +363,31 @@ def generate_launch_description():
     assert proc.id not in supervisor.lifecycle.states  # exited: no state any more
 
 
-# A lifecycle node that is slow to answer, as on a busy machine: its services are on the
-# graph at once, but it serves them only a few seconds later.
+# A lifecycle node that is slow, as on a busy machine: its services are on the graph at once,
+# but it serves them only a few seconds later, and its configure takes seconds too.
 SLOW_NODE = """#!/usr/bin/env python3
 import sys
 import time
 import rclpy
-from rclpy.lifecycle import Node
+from rclpy.lifecycle import Node, TransitionCallbackReturn
+
+
+class Slow(Node):
+    def on_configure(self, state):
+        time.sleep(3)  # the behaviour under test: a transition longer than the timeout
+        return TransitionCallbackReturn.SUCCESS
+
 
 rclpy.init(args=sys.argv)
-node = Node('slow')
+node = Slow('slow')
 print('slow: services up, busy for 4 s', flush=True)
 time.sleep(4)  # the behaviour under test: a node that answers late
 rclpy.spin(node)
 """
 
 
-async def test_autostart_survives_a_state_query_that_times_out(write, tmp_path, monkeypatch):
+async def test_autostart_survives_calls_that_outlast_the_service_timeout(
+        write, tmp_path, monkeypatch):
     prefix = fake_package_prefix(tmp_path, "slow_lifecycle", "slow", SLOW_NODE)
     monkeypatch.setenv("AMENT_PREFIX_PATH",
                        f"{prefix}{os.pathsep}{os.environ.get('AMENT_PREFIX_PATH', '')}")
@@ -389,7 +397,8 @@ def generate_launch_description():
         LifecycleNode(package='slow_lifecycle', executable='slow', name='slow',
                       namespace='', autostart=True)])
 """))), {}, tmp_path / "params")
-    # its first get_state outlives this timeout: the tracker must ask again, not give up
+    # its first get_state and its configure outlast this timeout: the tracker asks the
+    # state again, and learns how configure ended from the node's transition events
     supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=3, service_timeout=1)
     events: list[Event] = []
     supervisor.subscribe(events.append)
@@ -406,5 +415,8 @@ def generate_launch_description():
         await asyncio.wait_for(run, 30)
     logs = [e.reason or "" for e in events if e.kind == "log"]
     assert any("no answer yet from /slow/get_state" in line for line in logs), logs
+    assert any(line.startswith("configure /slow: service /slow/change_state did not answer")
+               and "transition events tell the outcome" in line for line in logs), logs
+    assert any("/slow: configure done (autostart" in line for line in logs), logs
     assert any("/slow: activate done (autostart" in line for line in logs), logs
     assert not any("unknown" in line for line in logs), logs

@@ -25,6 +25,11 @@ AVAILABLE: dict[str, list[str]] = {
     "active": ["deactivate", "active_shutdown"],
 }
 TRANSITION_IDS = {label: number for number, label in TRANSITIONS.items()}
+# the state each transition ends in when the node makes it
+GOALS = {"configure": "inactive", "cleanup": "unconfigured", "activate": "active",
+         "deactivate": "inactive", "unconfigured_shutdown": "finalized",
+         "inactive_shutdown": "finalized", "active_shutdown": "finalized"}
+PRIMARY = ("unconfigured", "inactive", "active", "finalized")
 ALIVE = ("pending", "running", "respawning")
 
 
@@ -40,6 +45,7 @@ class LifecycleTracker:
         self.states: dict[str, str] = {}
         self._subscriptions: dict[str, Any] = {}
         self._heard: set[str] = set()  # processes whose transition events arrived
+        self._events: dict[str, int] = {}  # transition events heard, per process
 
     # --- following -------------------------------------------------------------------------
 
@@ -133,6 +139,7 @@ class LifecycleTracker:
 
     def _on_transition(self, proc_id: str, transition: str, start: str, goal: str) -> None:
         self._heard.add(proc_id)
+        self._events[proc_id] = self._events.get(proc_id, 0) + 1
         self._set_state(proc_id, goal, {"transition": transition, "start": start})
         for key in state_keys(transition, start, goal):
             self.supervisor.state_reached(proc_id, "state:" + key)
@@ -207,18 +214,39 @@ class LifecycleTracker:
             return False
         request = ChangeState.Request()
         request.transition.id = TRANSITION_IDS[label]
+        before = self._events.get(proc_id, 0)
         try:
             response = await bridge.call_typed(service, ChangeState, request,
                                                self.supervisor.service_timeout)
+            success = bool(response.success)
         except Exception as exc:
-            self._report(where, f"{label} {proc.full_name} failed: {exc}", "ERROR")
-            return False
-        if not response.success:
+            # A transition longer than the timeout, or a reply lost on a busy machine: the
+            # node's transition events tell how it ended. Asking again could repeat it.
+            outcome = await self._outcome(proc_id, label, before)
+            if outcome is None:
+                self._report(where, f"{label} {proc.full_name} failed: {exc}", "ERROR")
+                return False
+            self._report(where, f"{label} {proc.full_name}: {exc}; its transition events "
+                         f"tell the outcome", "WARN")
+            success = outcome
+        if not success:
             self._report(where, f"{proc.full_name} refused transition '{label}' ({origin}); "
                          f"it is {self.states.get(proc_id, 'in an unknown state')}", "ERROR")
             return False
         self._report(where, f"{proc.full_name}: {label} done ({origin})")
         return True
+
+    async def _outcome(self, proc_id: str, label: str, before: int) -> bool | None:
+        """Whether the node made `label`, from the transition events heard since `before`
+        events: None when it never began the transition or is gone before ending it."""
+        while self._events.get(proc_id, 0) > before:
+            if self.states.get(proc_id) in PRIMARY:
+                return self.states.get(proc_id) == GOALS.get(label)
+            if self.supervisor.states.get(proc_id) not in ALIVE \
+                    or self.supervisor._shutting_down:
+                return None
+            await asyncio.sleep(0.1)  # still in the transition: it ends with an event
+        return None
 
     async def run_action(self, action: ActionPlan) -> bool:
         """A `ChangeState` / `LifecycleTransition` of the launch file, for each target."""
