@@ -57,7 +57,7 @@ def enabled_names(plan: Plan) -> set[str]:
     return {p.full_name or p.label for p in plan.processes if p.enabled}
 
 
-def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 60) -> \
+def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 120) -> \
         subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
                           text=True, timeout=timeout, env={**os.environ, **(env or {})})
