@@ -343,7 +343,7 @@ def generate_launch_description():
     (proc,) = plan.processes
 
     async def reach(state: str) -> None:
-        while await asyncio.wait_for(states.get(), 30) != state:
+        while await asyncio.wait_for(states.get(), 60) != state:
             pass
 
     try:
