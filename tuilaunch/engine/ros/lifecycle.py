@@ -1,10 +1,12 @@
 """Following and driving lifecycle nodes: `<node>/get_state`, `change_state`, `transition_event`.
 
 One `LifecycleTracker` per supervisor. When a lifecycle node's process starts, the tracker
-subscribes to its `transition_event` topic, asks `get_state` once the service is up, and
-reports every state as a `lifecycle` event; with `autostart` it then configures and
-activates the node. Transition requests (from `ChangeState` actions or the operator) wait for
-the node's `change_state` service as long as its process lives, as launch_ros waits for it.
+subscribes to its `transition_event` topic, asks `get_state` once the service is up (again,
+while no answer comes and the process lives), and reports every state as a `lifecycle` event;
+with `autostart` it then configures and activates the node. Transition requests (from
+`ChangeState` actions or the operator) wait for the node's `change_state` service as long as
+its process lives, as launch_ros waits for it; a reply that does not come in time is judged
+by the transition events the node published.
 """
 
 from __future__ import annotations
