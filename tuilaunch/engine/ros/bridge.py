@@ -109,6 +109,8 @@ class RosBridge:
         rclpy.init(args=[], context=self._context, signal_handler_options=_no_signal_handlers())
         self.node = rclpy.create_node(node_name, context=self._context,
                                       start_parameter_services=False)
+        self._clients: dict[tuple[str, Any], Any] = {}
+        self._clients_lock = threading.Lock()
         self._executor = MultiThreadedExecutor(num_threads=2, context=self._context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name="ros-bridge", daemon=True)
@@ -156,28 +158,36 @@ class RosBridge:
 
     async def call_typed(self, name: str, service_class: Any, request: Any,
                          timeout: float) -> Any:
-        client = self.node.create_client(service_class, name)
+        client = self._client(name, service_class)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        while not client.service_is_ready():
+            if loop.time() > deadline:
+                raise RosError(f"service {name} is not available")
+            await asyncio.sleep(0.05)
+        done: asyncio.Future[Any] = loop.create_future()
+        pending = client.call_async(request)
+
+        def finished(future: Any) -> None:
+            loop.call_soon_threadsafe(_settle, done, future)
+
+        pending.add_done_callback(finished)
         try:
-            loop = asyncio.get_running_loop()
-            deadline = loop.time() + timeout
-            while not client.service_is_ready():
-                if loop.time() > deadline:
-                    raise RosError(f"service {name} is not available")
-                await asyncio.sleep(0.05)
-            done: asyncio.Future[Any] = loop.create_future()
-            pending = client.call_async(request)
+            return await asyncio.wait_for(done, max(deadline - loop.time(), 0.1))
+        except TimeoutError:
+            client.remove_pending_request(pending)
+            raise RosError(f"service {name} did not answer within {timeout:g} s") from None
 
-            def finished(future: Any) -> None:
-                loop.call_soon_threadsafe(_settle, done, future)
-
-            pending.add_done_callback(finished)
-            try:
-                return await asyncio.wait_for(done, max(deadline - loop.time(), 0.1))
-            except TimeoutError:
-                client.remove_pending_request(pending)
-                raise RosError(f"service {name} did not answer within {timeout:g} s") from None
-        finally:
-            self.node.destroy_client(client)
+    def _client(self, name: str, service_class: Any) -> Any:
+        """One client per service and type, kept: a server drops its reply to a client it
+        has not matched yet (Fast DDS: "client will not receive response"), so a client made
+        per call loses answers on a busy machine, where matching takes longer."""
+        key = (name, service_class)
+        with self._clients_lock:
+            client = self._clients.get(key)
+            if client is None:
+                client = self._clients[key] = self.node.create_client(service_class, name)
+            return client
 
     async def call_service(self, name: str, request: dict[str, Any], timeout: float = 5.0,
                            wait: float | None = 0.0, service_type: str | None = None)\
