@@ -4,8 +4,14 @@ Either everything exists afterwards, or nothing does: a failure (no file descrip
 no such executable, a bad working directory) closes what was opened and raises OSError, so
 no child runs untracked.
 
-No `preexec_fn`: the child is started with vfork + exec (fast, and safe from threads); its
-own session (`setsid`) makes it the leader of a process group the supervisor signals as one.
+Its own session (`setsid`) makes the child the leader of a process group the supervisor
+signals as one. Without a terminal for stdin it is started with vfork + exec (fast, and safe
+from threads). With one, the terminal must become the session's controlling terminal (so
+ctrl+c typed is SIGINT to its foreground group, and job control works, as gdb needs), and
+only the child itself can ask for that (TIOCSCTTY, after setsid): subprocess offers no other
+way than `preexec_fn`, which costs a fork instead of a vfork. The function it runs is one
+ioctl, with no import, lock or allocation of note, so the child cannot deadlock on a lock
+another thread held at the fork.
 """
 
 from __future__ import annotations
@@ -26,12 +32,19 @@ class Channel:
     name: str  # "stdout" | "stderr"
     fd: int
     tty: bool
+    stdin: bool = False
+    """The child reads this terminal as its stdin too: what is written to `fd` is typed."""
 
 
 @dataclass
 class Child:
     popen: subprocess.Popen[bytes]
     channels: list[Channel]
+
+    @property
+    def terminal(self) -> Channel | None:
+        """The channel whose fd is the child's keyboard (stdin), if it has one."""
+        return next((c for c in self.channels if c.stdin), None)
 
 
 _size: bytes | None = None
@@ -78,11 +91,31 @@ def _stdin() -> int:
     return _devnull
 
 
-def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool) -> Child:
-    """Starts `cmd` with stdin from /dev/null and each output stream on its own channel.
+def _take_terminal(ioctl: object = fcntl.ioctl, request: int = termios.TIOCSCTTY) -> None:
+    """Runs in the child between fork and exec: stdin becomes its controlling terminal.
+
+    Defaults bind what it calls, so nothing is looked up or imported in the child; a
+    failure leaves a terminal that still reads and writes, only without signals.
+    """
+    try:
+        ioctl(0, request, 0)  # type: ignore[operator]
+    except OSError:
+        pass
+
+
+def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool, *,
+          terminal_stdin: bool = True) -> Child:
+    """Starts `cmd` with each output stream on its own channel.
 
     With `tty`, stdout and stderr are two pseudo-terminals, as launch's emulate_tty does:
     programs line-buffer and colour as in a terminal, and stderr stays apart from stdout.
+    With `terminal_stdin` too, stdout's terminal is also the child's stdin and controlling
+    terminal, as in a terminal window: keyboard nodes (teleop_twist_keyboard, a debugger)
+    read what is typed into it (`Child.terminal`), and what is typed is echoed into stdout.
+
+    Otherwise stdin is /dev/null. ros2 launch gives every child launch's own stdin; here
+    that is the operator's keyboard in the TUI (a node would steal keys from it) or nothing
+    in a session server, so a child without its own terminal reads nothing.
     """
     ours: list[int] = []
     theirs: list[int] = []
@@ -93,8 +126,13 @@ def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool) -> Ch
             ours.append(channel.fd)
             theirs.append(child_end)
             channels.append(channel)
-        popen = subprocess.Popen(cmd, stdin=_stdin(), stdout=theirs[0],
-                                 stderr=theirs[1], env=env, cwd=cwd, start_new_session=True)
+        keyboard = tty and terminal_stdin
+        if keyboard:
+            channels[0].stdin = True
+        popen = subprocess.Popen(cmd, stdin=theirs[0] if keyboard else _stdin(),
+                                 stdout=theirs[0], stderr=theirs[1], env=env, cwd=cwd,
+                                 start_new_session=True,
+                                 preexec_fn=_take_terminal if keyboard else None)
     except BaseException:
         for fd in ours:
             os.close(fd)
