@@ -4,7 +4,6 @@ holds the launcher up."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
