@@ -99,11 +99,13 @@ async def test_a_node_that_never_reads_stdin_does_not_block_and_excess_is_droppe
 
 async def test_the_child_has_its_terminal_as_controlling_terminal(tmp_path: Path,
                                                                   terminals) -> None:
-    probe = ("import os, sys; "
+    # and no signal left blocked by the way it was started (its mask is inherited by exec)
+    probe = ("import os, signal; "
              "print('isatty', os.isatty(0), 'same', os.ttyname(0) == os.ttyname(1), "
-             "'ctty', os.tcgetpgrp(0) == os.getpgrp() == os.getsid(0), flush=True)")
+             "'ctty', os.tcgetpgrp(0) == os.getpgrp() == os.getsid(0), "
+             "'blocked', len(signal.pthread_sigmask(signal.SIG_BLOCK, [])), flush=True)")
     child = await start(tmp_path, ["python3", "-c", probe])
     terminals.append(child)
     await child.wait_for("isatty")
-    assert "isatty True same True ctty True" in child.text()
+    assert "isatty True same True ctty True blocked 0" in child.text()
     assert await child.exit_code() == 0

@@ -9,20 +9,30 @@ signals as one. Without a terminal for stdin it is started with vfork + exec (fa
 from threads). With one, the terminal must become the session's controlling terminal (so
 ctrl+c typed is SIGINT to its foreground group, and job control works, as gdb needs), and
 only the child itself can ask for that (TIOCSCTTY, after setsid): subprocess offers no other
-way than `preexec_fn`, which costs a fork instead of a vfork. The function it runs is one
-ioctl, with no import, lock or allocation of note, so the child cannot deadlock on a lock
+way than `preexec_fn`, which costs a fork instead of a vfork. What it runs is a few calls
+into C with no import, lock or allocation of note, so the child cannot deadlock on a lock
 another thread held at the fork.
+
+A forked child keeps tuilaunch's signal handlers until exec, and until setsid it is in
+tuilaunch's process group: a ctrl+c in tuilaunch's terminal then would run tuilaunch's
+handler in the child, which writes to the event loop's wake-up fd it shares, and tuilaunch
+would see a second ctrl+c (and escalate its stop at once). So signals stay blocked across
+the fork; in the child, once in its own session, what arrived meanwhile is discarded (the
+supervisor's stop signals the new group itself) before its mask is restored for exec.
 """
 
 from __future__ import annotations
 
 import fcntl
+import functools
 import os
 import shutil
+import signal
 import struct
 import subprocess
 import termios
 from dataclasses import dataclass
+from typing import Any
 
 
 @dataclass
@@ -91,16 +101,34 @@ def _stdin() -> int:
     return _devnull
 
 
-def _take_terminal(ioctl: object = fcntl.ioctl, request: int = termios.TIOCSCTTY) -> None:
+_CATCHABLE = frozenset(signal.valid_signals()) - {signal.SIGKILL, signal.SIGSTOP}
+
+
+def _take_terminal(mask: Any, ioctl: Any = fcntl.ioctl, request: int = termios.TIOCSCTTY,
+                   sigmask: Any = signal.pthread_sigmask, drain: Any = signal.sigtimedwait,
+                   catchable: Any = _CATCHABLE, restore: int = signal.SIG_SETMASK) -> None:
     """Runs in the child between fork and exec: stdin becomes its controlling terminal.
 
     Defaults bind what it calls, so nothing is looked up or imported in the child; a
     failure leaves a terminal that still reads and writes, only without signals.
     """
     try:
-        ioctl(0, request, 0)  # type: ignore[operator]
+        ioctl(0, request, 0)
     except OSError:
         pass
+    while drain(catchable, 0) is not None:
+        pass  # sent to tuilaunch's group before setsid: not for this child's program
+    sigmask(restore, mask)
+
+
+def _popen_with_terminal(cmd: list[str], **options: Any) -> subprocess.Popen[bytes]:
+    """Popen whose child takes its stdin as controlling terminal (see the module's doc)."""
+    saved = signal.pthread_sigmask(signal.SIG_BLOCK, _CATCHABLE)
+    try:
+        return subprocess.Popen(cmd, preexec_fn=functools.partial(_take_terminal, saved),
+                                **options)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, saved)
 
 
 def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool, *,
@@ -129,10 +157,13 @@ def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool, *,
         keyboard = tty and terminal_stdin
         if keyboard:
             channels[0].stdin = True
-        popen = subprocess.Popen(cmd, stdin=theirs[0] if keyboard else _stdin(),
-                                 stdout=theirs[0], stderr=theirs[1], env=env, cwd=cwd,
-                                 start_new_session=True,
-                                 preexec_fn=_take_terminal if keyboard else None)
+            popen = _popen_with_terminal(cmd, stdin=theirs[0], stdout=theirs[0],
+                                         stderr=theirs[1], env=env, cwd=cwd,
+                                         start_new_session=True)
+        else:
+            popen = subprocess.Popen(cmd, stdin=_stdin(), stdout=theirs[0],
+                                     stderr=theirs[1], env=env, cwd=cwd,
+                                     start_new_session=True)
     except BaseException:
         for fd in ours:
             os.close(fd)
