@@ -109,3 +109,15 @@ async def test_the_child_has_its_terminal_as_controlling_terminal(tmp_path: Path
     await child.wait_for("isatty")
     assert "isatty True same True ctty True blocked 0" in child.text()
     assert await child.exit_code() == 0
+
+
+async def test_a_terminal_stdin_without_control_still_reads_lines(tmp_path: Path,
+                                                                  terminals) -> None:
+    probe = ("import os, sys; print('isatty', os.isatty(0), flush=True); "
+             "print('got', sys.stdin.readline().strip(), flush=True)")
+    child = await start(tmp_path, ["python3", "-c", probe], controlling_terminal=False)
+    terminals.append(child)
+    await child.wait_for("isatty True")
+    child.running.write_input(b"hello\r")
+    await child.wait_for("got hello")
+    assert await child.exit_code() == 0
