@@ -84,3 +84,27 @@ def test_patterns_as_the_kernel_expands_them(tmp_path: Path) -> None:
     # a signal that dumps no core (SIGKILL, SIGTERM) has none to point at
     assert core_location(42, signal.SIGKILL, str(tmp_path), pattern="core",
                          uses_pid=True) is None
+
+
+def test_a_crash_is_a_signal_nobody_asked_for() -> None:
+    from tuilaunch.engine.run.cores import is_crash
+    assert is_crash(-signal.SIGSEGV, requested=False)
+    assert not is_crash(-signal.SIGINT, requested=True)  # our own stop
+    assert not is_crash(1, requested=False)  # an exit code the program chose
+    assert not is_crash(0, requested=False)
+
+
+def test_a_crash_described_with_its_core(tmp_path: Path) -> None:
+    from tuilaunch.engine.run.cores import describe_crash
+    if resource.getrlimit(resource.RLIMIT_CORE)[1] == 0:
+        pytest.skip("the hard RLIMIT_CORE is 0 here: no process may dump core")
+    pattern = Path("/proc/sys/kernel/core_pattern").read_text().strip()
+    if pattern.startswith("|"):
+        pytest.skip(f"cores are piped here ({pattern!r}): no file to name")
+    started = time.time()
+    pid, code = crash(tmp_path, "unlimited")
+    text = describe_crash(pid, code, str(tmp_path), since=started, comm="python3")
+    if "core" not in text:
+        pytest.skip(f"the kernel wrote no core for core_pattern {pattern!r}")
+    assert text.startswith("killed by SIGSEGV (core dumped: " + str(tmp_path))
+    assert describe_crash(pid, 3) == "exit code 3"

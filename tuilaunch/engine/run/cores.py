@@ -107,3 +107,25 @@ def core_location(pid: int, number: int, cwd: str | None = None, *, comm: str | 
     if not cores:
         return None  # not written: RLIMIT_CORE, an unwritable directory, a setuid program
     return str(max(cores)[1])
+
+
+def is_crash(code: int, requested: bool) -> bool:
+    """A death by a signal nobody asked for (no stop, no shutdown): `failed`, not `exited`.
+
+    A signal sent by tuilaunch's own stop is not one; neither is an exit code, which the
+    program chose (ros2 launch's "process has died" covers both; the state tells them apart).
+    """
+    return code < 0 and not requested
+
+
+def describe_crash(pid: int, code: int, cwd: str | None = None, *, since: float | None = None,
+                   comm: str | None = None) -> str:
+    """`killed by SIGSEGV (core dumped: /home/r2/core.1234)`, or without the parenthesis
+    when no core was kept: one line for the node's state, the tree and `status --json`."""
+    text = describe_death(code)
+    if code < 0:
+        where = core_location(pid, -code, cwd, since=since, comm=comm)
+        if where is not None:
+            label = "core dumped" if where.startswith("/") else "core"
+            text += f" ({label}: {where})"
+    return text
