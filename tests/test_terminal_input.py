@@ -4,6 +4,8 @@ holds the launcher up."""
 
 from __future__ import annotations
 
+import asyncio
+import time
 from pathlib import Path
 
 import pytest
@@ -121,3 +123,31 @@ async def test_a_terminal_stdin_without_control_still_reads_lines(tmp_path: Path
     child.running.write_input(b"hello\r")
     await child.wait_for("got hello")
     assert await child.exit_code() == 0
+
+
+async def test_what_waits_for_a_slow_reader_reaches_it_when_it_reads(tmp_path: Path,
+                                                                     terminals) -> None:
+    go = tmp_path / "go"
+    slow = ("import os, sys, time, tty; tty.setraw(0); print('ready', flush=True)\n"
+            f"while not os.path.exists({str(go)!r}): time.sleep(0.02)\n"
+            "total = 0\n"
+            "while True:\n"
+            "    chunk = os.read(0, 65536)\n"
+            "    total += chunk.count(b'y')\n"
+            "    if chunk.endswith(b'!'): break\n"
+            "print('read', total, flush=True)\n")
+    reader = await start(tmp_path, ["python3", "-c", slow])
+    terminals.append(reader)
+    await reader.wait_for("ready")
+    sent = 256 * 1024
+    dropped = reader.running.write_input(b"y" * sent)  # the loop goes on meanwhile
+    assert dropped > 0
+    terminal = reader.running.terminal
+    assert terminal is not None and terminal.pending  # waiting, not blocking
+    go.touch()
+    deadline = time.monotonic() + 20
+    while terminal.pending:  # written as the reader takes it
+        assert time.monotonic() < deadline, f"{len(terminal.pending)} bytes never written"
+        await asyncio.sleep(0.02)
+    reader.running.write_input(b"!")
+    await reader.wait_for(f"read {sent - dropped}")

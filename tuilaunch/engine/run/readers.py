@@ -34,7 +34,8 @@ class ChannelReader:
         self.splitter = LineSplitter()
         self.done: asyncio.Future[None] = asyncio.get_running_loop().create_future()
         self.stamp = b" " + channel.name.encode() + b" "
-        self.input = TerminalInput(channel.fd) if channel.stdin else None
+        self.input = TerminalInput(channel.fd, asyncio.get_running_loop()) \
+            if channel.stdin else None
         """Where typed keys go, when the child reads this terminal as its stdin."""
         asyncio.get_running_loop().add_reader(channel.fd, self._readable)
 
@@ -104,7 +105,8 @@ class Running:
     def write_input(self, data: bytes) -> int:
         """Types `data` into the child's terminal (keys as a terminal sends them: `\r` for
         Enter, `\x03` for ctrl+c); returns how many bytes were dropped because the child
-        does not read them. Never blocks. InputRefused when it has no open terminal."""
+        does not read them. Never blocks; call it on the supervisor's loop. InputRefused
+        when it has no open terminal."""
         terminal = self.terminal
         if terminal is None:
             if any(reader.input is not None for reader in self.readers):

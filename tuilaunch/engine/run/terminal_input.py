@@ -22,8 +22,11 @@ class InputRefused(Exception):
 class TerminalInput:
     """The writing side of one child's terminal (the master fd, owned by its reader)."""
 
-    def __init__(self, fd: int) -> None:
+    def __init__(self, fd: int, loop: asyncio.AbstractEventLoop | None = None) -> None:
         self.fd = fd
+        self.loop = loop
+        """The loop that waits for the terminal to take more (the running one when None):
+        `write` must be called on its thread."""
         self.pending = bytearray()
         self.dropped = 0
         """Bytes dropped so far because the child did not read them in time."""
@@ -59,7 +62,7 @@ class TerminalInput:
 
     def _watch(self) -> None:
         if self._watching is None:
-            self._watching = asyncio.get_running_loop()
+            self._watching = self.loop or asyncio.get_running_loop()
             self._watching.add_writer(self.fd, self._writable)
 
     def _writable(self) -> None:
