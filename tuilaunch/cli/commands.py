@@ -220,7 +220,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {name} -f, or tuilaunch status {name}")
-    info = _status(name)
+    info = _status(name, resources=False)
     from ..engine.describe.loader import set_command_line
     from ..tui.app import make_app
 
@@ -336,7 +336,7 @@ def cmd_logs(options: argparse.Namespace) -> int:
     minimum = LEVELS.index(options.level) if options.level else 0
     link = Link(name, timeout=None)
     try:
-        status = link.request("status", short=True)
+        status = link.request("status", short=True, resources=False)
         log_dir = Path(status["log_dir"])
         wanted = [p["id"] for p in status["processes"] if p["state"] != "skipped"]
         if options.process:
