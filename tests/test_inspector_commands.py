@@ -23,6 +23,7 @@ from typing import Any
 import pytest
 
 from tuilaunch.client.link import Link
+from tuilaunch.engine.run.session_dir import SessionError
 
 from .conftest import run_cli
 from .inspector_helpers import NODE_SCRIPT
@@ -216,18 +217,12 @@ def events_until(link: Link, kind: str, check: Callable[[dict[str, Any]], bool],
 
 
 def events_for(link: Link, seconds: float) -> list[dict[str, Any]]:
-    """Every event that arrives within `seconds` (to show that none of a kind comes)."""
-    found: list[dict[str, Any]] = []
-    end = time.monotonic() + seconds
-    while (left := end - time.monotonic()) > 0:
-        link.sock.settimeout(left)
-        try:
-            message = link.receive()
-        except TimeoutError:
-            break
-        if message is None:
-            break
-        found.extend(message.get("events") or [])
+    """The events that arrive within `seconds` (to count them, or show that none of a kind
+    comes): a request after the wait brings every event sent before its reply."""
+    time.sleep(seconds)
+    link.request("find", process=FAST)
+    found = [e for message in link.pending for e in message.get("events") or []]
+    link.pending.clear()
     return found
 
 
@@ -249,5 +244,24 @@ def test_a_watching_client_gets_rates_and_resources_until_it_stops(session):
         stopped = time.time()
         late = [e for e in events_for(link, 3.0) if e["time"] > stopped]
         assert late == []
+    finally:
+        link.close()
+
+
+def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):
+    link = Link(session, timeout=60)
+    try:
+        with pytest.raises(SessionError, match="subscribe first"):
+            link.request("echo", topic="/insp/scan")
+        link.request("subscribe", max_lines=1, kinds=["echo"])
+        link.request("echo", topic="/insp/scan", max_per_s=2)
+        first = events_until(link, "echo", lambda d: d["topic"] == "/insp/scan")
+        assert first["data"]["text"].startswith("data: hello ")
+        # 20 messages a second are published; a screen is sent at most 2 of them
+        shown = [e for e in events_for(link, 3.0) if e["kind"] == "echo"]
+        assert 1 <= len(shown) <= 8
+        link.request("echo_stop", topic="/insp/scan")
+        stopped = time.time()
+        assert [e for e in events_for(link, 2.0) if e["time"] > stopped] == []
     finally:
         link.close()
