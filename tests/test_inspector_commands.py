@@ -8,6 +8,7 @@ machine); each test asks it something different and leaves it as it found it.
 
 from __future__ import annotations
 
+import asyncio
 import json
 import os
 import signal
@@ -23,10 +24,14 @@ from typing import Any
 import pytest
 
 from tuilaunch.client.link import Link
+from tuilaunch.engine.ros.bridge import RosBridge
+from tuilaunch.engine.ros.graph import full_node_name
 from tuilaunch.engine.run.session_dir import SessionError
 
 from .conftest import run_cli
 from .inspector_helpers import NODE_SCRIPT
+from .inspector_helpers import eventually as eventually_async
+from .inspector_helpers import run as run_bridge
 from .launch_world import make_package
 
 LAUNCH = """
@@ -265,3 +270,36 @@ def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):
         assert [e for e in events_for(link, 2.0) if e["time"] > stopped] == []
     finally:
         link.close()
+
+
+async def server_subscribes(bridge: RosBridge, topics: list[str], wanted: bool) -> None:
+    """Waits until the session's bridge (node /tuilaunch) subscribes to each topic, or to
+    none of them, as another node on the graph sees it."""
+    async def check() -> bool:
+        for topic in topics:
+            infos = await asyncio.to_thread(bridge.node.get_subscriptions_info_by_topic,
+                                            topic)
+            if any(full_node_name(i.node_name, i.node_namespace) == "/tuilaunch"
+                   for i in infos) != wanted:
+                return False
+        return True
+    await eventually_async(check, 60, f"the server subscribed={wanted} to {topics}")
+
+
+def test_a_client_that_leaves_stops_its_rates_and_echo_measurements(session):
+    topics = ["/insp/chatter", "/insp/scan"]
+
+    async def scenario(bridge: RosBridge) -> None:
+        # one bridge throughout: a new one would see an empty graph for a while
+        link = await asyncio.to_thread(Link, session, 60)
+        try:
+            await asyncio.to_thread(link.request, "subscribe", max_lines=1,
+                                    kinds=["echo", "rates"])
+            await asyncio.to_thread(link.request, "watch_rates", topics=["/insp/chatter"])
+            await asyncio.to_thread(link.request, "echo", topic="/insp/scan")
+            await server_subscribes(bridge, topics, True)
+        finally:
+            link.close()  # no unwatch, no echo_stop: the connection just ends
+        await server_subscribes(bridge, topics, False)
+
+    run_bridge(scenario)
