@@ -179,6 +179,11 @@ class RemoteSupervisor:
         for consumer in list(self.consumers):
             consumer(event)
 
+    async def request(self, op: str, **fields: Any) -> Any:
+        """The result of any request of the protocol (engine/run/protocol.py): `topics`,
+        `watch_rates`, `echo`, ...; SessionError with the server's message when it fails."""
+        return await self._request(op, **fields)
+
     async def _request(self, op: str, **fields: Any) -> Any:
         self._next_id += 1
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
@@ -269,7 +274,7 @@ class RemoteLifecycle:
             self.states.pop(process, None)  # the node is gone
 
     async def request(self, process: str, transition: str) -> bool:
-        result = await self.remote._request("transition", process=process,
+        result = await self.remote.request("transition", process=process,
                                             transition=transition)
         return bool(result.get("done"))
 

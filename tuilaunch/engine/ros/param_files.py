@@ -78,10 +78,18 @@ def file_values(path: str, node: str) -> dict[str, Any]:
     """The parameters a params file gives `node` (full name), flat (`a.b.c`)."""
     try:
         with open(path, encoding="utf-8") as handle:
-            loaded = yaml.safe_load(handle)
-    except OSError as exc:
-        raise LaunchError(f"parameter file {path} cannot be read: {exc.strerror or exc}")\
-            from None
+            text = handle.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise LaunchError(f"parameter file {path} cannot be read: "
+                          f"{getattr(exc, 'strerror', None) or exc}") from None
+    return text_values(text, node, path)
+
+
+def text_values(text: str, node: str, path: str) -> dict[str, Any]:
+    """As `file_values`, for a file's text (sent by a session client); `path` names it in
+    messages."""
+    try:
+        loaded = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f":{mark.line + 1}" if mark is not None else ""
@@ -104,13 +112,18 @@ def file_values(path: str, node: str) -> dict[str, Any]:
 
 async def load(bridge: RosBridge, node: str, path: str, timeout: float = 5.0)\
         -> list[SetResult]:
+    """Sets every parameter the file at `path` gives the node (see `load_values`)."""
+    return await load_values(bridge, node, file_values(path, node), timeout)
+
+
+async def load_values(bridge: RosBridge, node: str, values: dict[str, Any],
+                      timeout: float = 5.0) -> list[SetResult]:
     """Sets every parameter the file gives the node; the node's answer per parameter.
 
     A read-only parameter (set at start only, like `start_type_description_service`) that
     already holds the file's value is not sent, so that loading a dump of the same node is
     clean; it is answered as successful, "read-only, unchanged". With another value the node
     refuses it, and says so."""
-    values = file_values(path, node)
     if not values:
         return []
     described = {d.name: d for d in await bridge.describe_parameters(node, list(values),
