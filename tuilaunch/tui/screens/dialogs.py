@@ -1,18 +1,21 @@
-"""Modal screens: quit confirmation while nodes run, and the keys."""
+"""Modal screens: quit confirmation while nodes run, questions, and the keys."""
 
 from __future__ import annotations
 
 from rich.text import Text
-from textual import on
+from textual import events, on
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.screen import ModalScreen
-from textual.widgets import Button, Static
+from textual.widgets import Button, Input, OptionList, Static
+from textual.widgets.option_list import Option
+
+from .fields import Field
 
 KEYS = """\
 [b]Anywhere[/b] (in a text field, esc leaves it first)
-  1 2 3 4   tabs: Nodes Args Services Params   ? help
+  1 2 3 4 5 tabs: Nodes Args Services Params Topics   ? help
   q ctrl+c  quit (asks while nodes run;        ctrl+p palette
             again while stopping: kill now)
   F5        apply edited arguments
@@ -26,6 +29,15 @@ KEYS = """\
   z T f     wrap / timestamps / lines as printed
   < >       narrower / wider tree
   w y       save the pane / copy it (OSC 52)
+  o         the selected node's topics (Topics tab)
+  L         the selected node's log level
+  CPU% and memory show in the rows of a wide tree (>), always
+  in the line above it; ↑mem: a node whose memory keeps growing
+[b]Topics[/b] (rates are measured for the rows on screen)
+  /         filter by name or type     e   echo the topic (e stops)
+  x         all topics again (after o)  u   update the list now
+[b]Params[/b]
+  w o       write the node's parameters to a file / load a file
 [b]Args, Services, Params[/b]
   tab shift+tab between fields; enter calls or sets
 """
@@ -103,3 +115,86 @@ class QuitScreen(ModalScreen[bool]):
     @on(Button.Pressed)
     def _pressed(self, event: Button.Pressed) -> None:
         self.dismiss(event.button.id == "yes")
+
+
+class ChoiceScreen(ModalScreen[str | None]):
+    """One of a few answers, picked with arrows and enter or with its first letter."""
+
+    DEFAULT_CSS = """
+    ChoiceScreen { align: center middle; }
+    ChoiceScreen > Vertical { width: 60; max-width: 100%; height: auto; padding: 1 2;
+                              border: round $primary; background: $surface; }
+    ChoiceScreen OptionList { height: auto; max-height: 10; }
+    """
+    BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
+
+    def __init__(self, question: str, choices: list[str], current: str | None = None) -> None:
+        super().__init__()
+        self.question = question
+        self.choices = choices
+        self.current = current
+
+    def compose(self) -> ComposeResult:
+        with Vertical():
+            yield Static(Text(self.question))
+            yield OptionList(*(Option(f"{c[0]}  {c}", id=c) for c in self.choices))
+
+    def on_mount(self) -> None:
+        options = self.query_one(OptionList)
+        if self.current in self.choices:
+            options.highlighted = self.choices.index(self.current)
+        options.focus()
+
+    def on_key(self, event: events.Key) -> None:
+        for choice in self.choices:
+            if event.character == choice[0]:
+                event.stop()
+                self.dismiss(choice)
+                return
+
+    @on(OptionList.OptionSelected)
+    def _picked(self, event: OptionList.OptionSelected) -> None:
+        self.dismiss(str(event.option.id))
+
+
+class PathScreen(ModalScreen[str | None]):
+    """Asks for a file path, offering one; enter takes it, escape cancels."""
+
+    DEFAULT_CSS = """
+    PathScreen { align: center middle; }
+    PathScreen > Vertical { width: 70; max-width: 100%; height: auto; padding: 1 2;
+                            border: round $primary; background: $surface; }
+    """
+    BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
+
+    def __init__(self, question: str, default: str = "") -> None:
+        super().__init__()
+        self.question = question
+        self.default = default
+
+    def compose(self) -> ComposeResult:
+        with Vertical():
+            yield Static(Text(f"{self.question} (enter: ok, esc: cancel)"))
+            yield PathField(value=self.default, id="path-input")
+
+    def on_mount(self) -> None:
+        self.query_one(Input).focus()
+
+    @on(Input.Submitted)
+    def _submitted(self, event: Input.Submitted) -> None:
+        event.stop()
+        path = event.value.strip()
+        self.dismiss(path or None)
+
+
+class PathField(Field):
+    """The path dialog's field: escape cancels the dialog (a Field would leave the field
+    for the app's tab instead)."""
+
+    async def _on_key(self, event: events.Key) -> None:
+        if event.key == "escape":
+            event.stop()
+            event.prevent_default()
+            self.screen.dismiss(None)
+            return
+        await super()._on_key(event)
