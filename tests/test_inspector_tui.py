@@ -155,7 +155,7 @@ async def test_tree_shows_cpu_and_memory_while_the_nodes_tab_is_shown(demo):
         await pilot.press("3")
         await until(pilot, lambda: not tree.usage)
         assert not app.watching_resources
-        await pilot.press("1")
+        await pilot.press("escape", "1")  # out of the services filter, back to the tree
         await until(pilot, lambda: "lidar-1" in tree.usage)
 
 
