@@ -82,7 +82,8 @@ class TopicsPanel(Vertical):
     TopicsPanel #tpc-bar { height: 1; }
     TopicsPanel #tpc-filter { width: 1fr; }
     TopicsPanel #tpc-scope { width: auto; padding: 0 1; color: $text-muted; }
-    TopicsPanel #tpc-table { height: 1fr; }
+    /* a long type is cut (the detail shows it whole): no horizontal scrollbar to repaint */
+    TopicsPanel #tpc-table { height: 1fr; overflow-x: hidden; }
     TopicsPanel #tpc-note { height: 1; color: $text-muted; }
     TopicsPanel #tpc-note.error { color: $error; }
     TopicsPanel #tpc-detail { height: 1fr; padding: 0 1; border-top: tall $panel; }
@@ -172,6 +173,7 @@ class TopicsPanel(Vertical):
         self.entries = {}
         self._fill()
         self.refresh_topics()
+        self.refresh_bindings()
 
     # --- the list ----------------------------------------------------------------------------
 
@@ -366,20 +368,21 @@ class TopicsPanel(Vertical):
             lines.append((head, "bold"))
             if name in self.unmeasured and name in self.watched:
                 lines.append((f"no rate: {self.unmeasured[name]}", "yellow"))
-            for title, key in (("publishers", "publishers"), ("subscribers", "subscribers")):
-                endpoints = entry.get(key) or []
-                lines.append((f"{title}: {len(endpoints) or 'none'}", ""))
-                lines += [(endpoint_line(e), "") for e in endpoints]
             for problem in entry.get("qos_problems") or []:
                 lines.append((f"{self.problem_mark} {problem}", "red"))
+            if self.echo_topic is None:  # while echoing, the messages take the room
+                for title, key in (("publishers", "publishers"),
+                                   ("subscribers", "subscribers")):
+                    endpoints = entry.get(key) or []
+                    lines.append((f"{title}: {len(endpoints) or 'none'}", ""))
+                    lines += [(endpoint_line(e), "") for e in endpoints]
+        height = max(1, detail.size.height or 1)
         if self.echo_topic is not None:
             lines.append((f"echo {self.echo_topic} (e stops):", "bold"))
             messages = "\n---\n".join(self.echoed) if self.echoed else "waiting for a message"
-            lines += [(line, "") for line in messages.splitlines()]
-        height = max(1, detail.size.height or 1)
-        if self.echo_topic is not None and len(lines) > height:
-            # the newest messages are what an echo is for: the oldest lines go first
-            lines = lines[:1] + lines[len(lines) - height + 1:]
+            echoed = [(line, "") for line in messages.splitlines()]
+            # the newest lines are what an echo is for: the oldest go first
+            lines += echoed[max(0, len(echoed) - (height - len(lines))):]
         text = Text("\n".join(line for line, _ in lines[:height]), no_wrap=True,
                     overflow="ellipsis")
         position = 0
@@ -404,6 +407,11 @@ class TopicsPanel(Vertical):
         return self._detail_text
 
     # --- keys --------------------------------------------------------------------------------
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "all_topics":
+            return self.node is not None  # shown only while one node's topics are listed
+        return True
 
     def action_filter(self) -> None:
         # at once, not on the next tick: the keys typed right after go into the field
