@@ -136,7 +136,7 @@ async def test_topics_tab_lists_processes_rates_problems_and_echoes(demo):
         await until(pilot, lambda: panel.node is None)
 
 
-async def test_tree_shows_cpu_and_memory_while_the_nodes_tab_is_shown(demo):
+async def test_tree_shows_cpu_memory_and_qos_problems_while_the_nodes_tab_is_shown(demo):
     async with session_tui(demo) as (app, pilot):
         tree = app.query_one(LaunchTree)
         assert app.watching_resources
@@ -151,6 +151,12 @@ async def test_tree_shows_cpu_and_memory_while_the_nodes_tab_is_shown(demo):
         for _ in range(4):
             await pilot.press("greater_than_sign")
         await until(pilot, lambda: "%" in row_text(app, "lidar-1"))
+        # both nodes of the pair that cannot talk are marked, and the detail says why
+        await until(pilot, lambda: "✗qos" in row_text(app, "mapper-2")
+                    and "✗qos" in row_text(app, "lidar-1"))
+        assert "✗qos" not in row_text(app, "chatter-3")
+        line = str(app.query_one("#detail", Static).render())
+        assert "QoS: " in line and "/mapper" in line
         # leaving the tab stops the sampling: no figures that no longer move
         await pilot.press("3")
         await until(pilot, lambda: not tree.usage)

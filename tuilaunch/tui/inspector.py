@@ -4,7 +4,11 @@ sampling asked for only while its tab is on screen."""
 
 from __future__ import annotations
 
+import re
 from typing import Any
+
+from textual import work
+from textual.timer import Timer
 
 from ..engine.run.session_dir import SessionError
 from ..engine.run.supervisor import Event
@@ -13,6 +17,9 @@ from .screens.dialogs import ChoiceScreen, ConfirmScreen
 from .screens.topics_panel import TopicsPanel
 
 LEVELS = ["debug", "info", "warn", "error", "fatal"]
+QOS_CHECK_S = 5.0
+"""While the Nodes tab shows, the graph's QoS problems are asked for this often (the tree
+marks the nodes in one)."""
 
 
 class Inspector(Navigation):
@@ -26,6 +33,7 @@ class Inspector(Navigation):
         self.watching_resources = False
         self.log_levels: dict[str, str] = {}
         """The level last set per process (the level dialog starts there)."""
+        self.qos_timer: Timer | None = None
 
     async def inspect(self, op: str, **fields: Any) -> Any:
         """A session request's result; raises SessionError with the server's message."""
@@ -53,6 +61,45 @@ class Inspector(Navigation):
             self.watching_resources = nodes
             self.run_worker(self._watch_resources(nodes), group="inspector",
                             exit_on_error=False)
+            if self.qos_timer is None:
+                self.qos_timer = self.set_interval(QOS_CHECK_S, self.check_qos, pause=True)
+            if nodes:
+                self.check_qos()
+                self.qos_timer.resume()
+            else:
+                self.qos_timer.pause()
+
+    @work(group="inspector-qos", exclusive=True, exit_on_error=False)
+    async def check_qos(self) -> None:
+        """Marks in the tree the nodes of a publisher/subscriber pair that cannot talk."""
+        if getattr(self.supervisor, "request", None) is None:
+            return  # no session server: no graph to ask
+        try:
+            result = await self.inspect("topics")
+        except SessionError:
+            return  # no ROS here, or the server is busy: the marks stay as they were
+        self.launch_tree.set_qos_problems(self.qos_problems_by_process(
+            result.get("topics") or []))
+
+    def qos_problems_by_process(self, topics: list[dict[str, Any]]) -> dict[str, list[str]]:
+        """Each launch process's node, and the QoS sentences that name it."""
+        by_name = {self.node_name(p.id): p.id for p in self.session.plan.processes}
+        found: dict[str, list[str]] = {}
+        for topic in topics:
+            problems = topic.get("qos_problems") or []
+            if not problems:
+                continue
+            for endpoint in [*(topic.get("publishers") or []),
+                             *(topic.get("subscribers") or [])]:
+                node = str(endpoint.get("node") or "")
+                process = endpoint.get("process") or by_name.get(node)
+                if not process or not node:
+                    continue
+                named = re.compile(rf"(?<![\w/]){re.escape(node)}(?![\w/])")
+                for problem in problems:
+                    if named.search(problem) and problem not in found.get(process, []):
+                        found.setdefault(process, []).append(problem)
+        return found
 
     async def _watch_resources(self, on: bool) -> None:
         try:

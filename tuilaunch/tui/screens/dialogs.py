@@ -32,7 +32,8 @@ KEYS = """\
   o         the selected node's topics (Topics tab)
   L         the selected node's log level
   CPU% and memory show in the rows of a wide tree (>), always
-  in the line above it; ↑mem: a node whose memory keeps growing
+  in the line above it; ↑mem: a node whose memory keeps growing;
+  ✗qos: a node in a publisher/subscriber pair whose QoS cannot talk
 [b]Topics[/b] (rates are measured for the rows on screen)
   /         filter by name or type     e   echo the topic (e stops)
   x         all topics again (after o)  u   update the list now

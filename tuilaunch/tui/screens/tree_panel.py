@@ -86,6 +86,8 @@ class LaunchTree(Tree[RowData]):
         self.reported: dict[str, set[str]] = {}
         self.usage: dict[str, dict[str, Any]] = {}
         """CPU, memory, threads per running process, while the server samples them."""
+        self.qos_problems: dict[str, list[str]] = {}
+        """Per process, the QoS problems (sentences) its node is part of."""
 
     def show_plan(self, plan: Plan, states: dict[str, str]) -> None:
         self.plan = plan
@@ -190,6 +192,14 @@ class LaunchTree(Tree[RowData]):
             if old.get(ref) != self.usage.get(ref):
                 self.refresh_row(ref)
 
+    def set_qos_problems(self, problems: dict[str, list[str]]) -> None:
+        """The QoS problems each process's node is part of; rows that change are repainted."""
+        old = self.qos_problems
+        self.qos_problems = {ref: list(p) for ref, p in problems.items() if p}
+        for ref in set(old) | set(self.qos_problems):
+            if old.get(ref) != self.qos_problems.get(ref):
+                self.refresh_row(ref)
+
     def on_resize(self) -> None:
         for ref in self.usage:
             self.refresh_row(ref)  # the CPU column comes or goes with the width
@@ -221,6 +231,8 @@ class LaunchTree(Tree[RowData]):
         if usage and usage.get("growing"):
             # first, so that even a narrow tree shows it
             label.append("^mem " if self.ascii else "↑mem ", "bold yellow")
+        if self.qos_problems.get(ref) and state == "running":
+            label.append("xqos " if self.ascii else "✗qos ", "bold red")
         if node.data is not None and node.data.kind == "process":
             proc = self.plan.process(ref)
             label.append(proc.name or ref, "bold" if state == "running" else "")
@@ -270,6 +282,10 @@ class LaunchTree(Tree[RowData]):
         usage = self.usage.get(ref) if state == "running" else None
         if usage:
             detail += f" · {usage_text(usage)}"
+        problems = self.qos_problems.get(ref) if state == "running" else None
+        if problems:
+            more = f" (+{len(problems) - 1} more, Topics tab)" if len(problems) > 1 else ""
+            detail += f" · QoS: {problems[0]}{more}"
         return f"{text} {detail}".rstrip()
 
 
