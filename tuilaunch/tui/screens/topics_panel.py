@@ -293,8 +293,8 @@ class TopicsPanel(Vertical):
     def show_rates(self, rates: Mapping[str, Any]) -> None:
         """A `rates` event: the cells of these topics, where their text changed."""
         for topic, values in rates.items():
-            if not isinstance(values, Mapping):
-                continue
+            if not isinstance(values, Mapping) or topic not in self.watched:
+                continue  # a figure sent before we stopped watching that row
             self.rates[topic] = dict(values)
             if topic in self.shown:
                 self._set(topic, "rate", rate_text(values.get("rate_hz")))
