@@ -7,7 +7,12 @@
    millisecond of Python per message received, so this is the figure to watch; a Python
    publisher on a busy machine may itself fall short of 1 kHz (the rate read is printed).
 
-(The wire cost of the topics tab at 80x24 comes when the tab exists.)
+3. The session server's own CPU (its process, the launch's nodes excluded) with no client,
+   then while one client watches a 100 Hz topic's rate and every process's resources (the
+   `watch_rates` and `watch_resources` requests the topics tab and the tree send), and the
+   bytes a second those events cost on its socket.
+
+(The wire cost of the topics tab at 80x24 is the TUI's figure, in bench/tui_bench.py.)
 
     python bench/inspector_bench.py
 """
@@ -15,12 +20,16 @@
 from __future__ import annotations
 
 import asyncio
+import json
 import os
 import subprocess
 import sys
+import tempfile
 import textwrap
 import time
+from pathlib import Path
 
+from tuilaunch.client.link import Link
 from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.run.resources import ResourceSampler
 
@@ -49,6 +58,73 @@ async def own_cpu(seconds: float) -> float:
     sampler.sample({"self": os.getpid()})
     await asyncio.sleep(seconds)
     return sampler.sample({"self": os.getpid()})["self"].cpu_percent or 0.0
+
+
+SESSION_LAUNCH = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='pub', cmd=[{python!r}, '-c', {code!r},
+                                                              '100', 'bench_session'])])
+"""
+
+
+def tl(*args: str) -> str:
+    done = subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def cpu_ticks(pid: int) -> int:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return int(fields[11]) + int(fields[12])
+
+
+def server_cpu(pid: int, seconds: float, link: Link | None = None) -> tuple[float, float]:
+    """% of one core the server used over `seconds`, and the bytes/s `link` received."""
+    received = 0
+    before, started = cpu_ticks(pid), time.monotonic()
+    while (left := started + seconds - time.monotonic()) > 0:
+        if link is None:
+            time.sleep(left)
+            continue
+        link.sock.settimeout(left)
+        try:
+            message = link.receive()
+        except TimeoutError:
+            break
+        received += len(json.dumps(message, separators=(",", ":"))) + 1
+    elapsed = time.monotonic() - started
+    used = (cpu_ticks(pid) - before) / os.sysconf("SC_CLK_TCK")
+    return 100 * used / elapsed, received / elapsed
+
+
+def session_cost() -> None:
+    print("3. the session server while a client watches rates and resources")
+    folder = Path(tempfile.mkdtemp(prefix="tlb"))
+    os.environ["XDG_RUNTIME_DIR"] = str(folder)
+    os.environ["ROS_LOG_DIR"] = str(folder / "log")
+    launch = folder / "bench_session.launch.py"
+    launch.write_text(SESSION_LAUNCH.format(python=sys.executable, code=PUBLISHER))
+    name = tl(str(launch), "--detach", "--name", "bench").strip()
+    try:
+        tl("wait", name, "pub-1", "running", "--timeout", "60")
+        pid = int(json.loads(tl("status", name, "--json"))["pid"])
+        link = Link(name, timeout=60)
+        link.request("subscribe", max_lines=1, kinds=["rates", "resources"])
+        link.request("watch_rates", topics=["/bench_session"])  # the bridge is up from here
+        link.request("watch_rates", topics=[])
+        idle, _ = server_cpu(pid, 5)
+        link.request("watch_rates", topics=["/bench_session"])
+        link.request("watch_resources", on=True)
+        watched, wire = server_cpu(pid, 10, link)
+        link.close()
+        print(f"   no client watching:                        {idle:5.1f}% of a core")
+        print(f"   watching a 100 Hz topic's rate + resources: {watched:5.1f}% of a core, "
+              f"{wire:.0f} B/s on the wire")
+    finally:
+        tl("stop", name)
 
 
 async def main() -> None:
@@ -88,3 +164,4 @@ async def main() -> None:
 
 if __name__ == "__main__":
     asyncio.run(main())
+    session_cost()

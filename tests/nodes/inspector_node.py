@@ -1,10 +1,15 @@
 """One rclpy node for the inspector tests: publishes and/or subscribes with chosen QoS,
-declares parameters, offers the logger service. Prints 'ready' once the node exists."""
+declares parameters, offers the logger service, burns CPU. Prints 'ready' once the node
+exists. Started by a launch file too: launch's `--ros-args ...` go to rclpy."""
 
 import argparse
+import sys
+import threading
+import time
 
 import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.utilities import remove_ros_args
 from std_msgs.msg import Int32MultiArray, String
 
 parser = argparse.ArgumentParser()
@@ -19,7 +24,9 @@ parser.add_argument("--array", type=int, default=0, help="publish Int32MultiArra
 parser.add_argument("--params", action="store_true")
 parser.add_argument("--logger-service", action="store_true")
 parser.add_argument("--debug-ticks", action="store_true")
-args = parser.parse_args()
+parser.add_argument("--burn", type=float, default=0.0,
+                    help="keep this share of one core busy (0.3: 30 %%)")
+args = parser.parse_args(remove_ros_args(sys.argv)[1:])
 
 rclpy.init()
 node = rclpy.create_node(args.name, namespace=args.namespace,
@@ -51,6 +58,16 @@ if args.sub:
     node.create_subscription(String, args.sub, lambda msg: None, qos)
 if args.debug_ticks:
     node.create_timer(0.1, lambda: node.get_logger().debug("debug tick"))
+if args.burn:
+    def burn() -> None:
+        # busy for a share of each 100 ms: a steady load that leaves the machine usable
+        while True:
+            end = time.monotonic() + 0.1 * args.burn
+            while time.monotonic() < end:
+                pass
+            time.sleep(0.1 * (1 - args.burn))
+
+    threading.Thread(target=burn, daemon=True).start()
 print("ready", flush=True)
 try:
     rclpy.spin(node)

@@ -102,6 +102,8 @@ class Inspector(Plugin):
                 bridge = await asyncio.to_thread(self.ros.bridge) if made else self.ros.made
             except RosError as exc:
                 raise LaunchError(f"ROS is not available: {exc}") from None
+            except ImportError as exc:  # rclpy not installed where the session runs
+                raise LaunchError(f"ROS is not available here: {exc}") from None
             if made and not self.discovered:
                 self.discovered = True
                 await self.wait_discovery(bridge)
