@@ -26,12 +26,9 @@ from .launch_world import make_package
 from .test_sessions import runtime, status, tl  # noqa: F401
 from .test_tui import row_text, until
 
-# inspector_node.py reads its own arguments; the launch adds --ros-args after them
+# the package's executable: inspector_node.py, as a launch file's node runs it
 WRAPPER = f"""#!{sys.executable}
-import argparse, runpy
-parse_known = argparse.ArgumentParser.parse_known_args
-argparse.ArgumentParser.parse_args = lambda self, args=None, namespace=None: \\
-    parse_known(self, args, namespace)[0]
+import runpy
 runpy.run_path({str(NODE_SCRIPT)!r}, run_name="__main__")
 """
 
