@@ -15,32 +15,21 @@ from .fields import Field
 
 KEYS = """\
 [b]Anywhere[/b] (in a text field, esc leaves it first)
-  1 2 3 4 5 tabs: Nodes Args Services Params Topics   ? help
-  q ctrl+c  quit (asks while nodes run;        ctrl+p palette
-            again while stopping: kill now)
-  F5        apply edited arguments
-  d         detach: the launch runs on (tuilaunch attach)
+  1-5     tabs: Nodes Args Services Params Topics   ? help  ctrl+p palette
+  q ctrl+c  quit (asks while nodes run; again while stopping: kill now)
+  F5      apply edited arguments   d  detach (tuilaunch attach: back)
 [b]Nodes[/b] (arrows: tree; tab: into the pane)
-  s r t     stop / restart / start node or group
-  a         all nodes' output
-  / n N     search, next / previous match; esc clears
-  l  \\      level filter / text filter
-  G         follow the newest line (end too)
-  z T f     wrap / timestamps / lines as printed
-  < >       narrower / wider tree
-  w y       save the pane / copy it (OSC 52)
-  o         the selected node's topics (Topics tab)
-  L         the selected node's log level
-  CPU% and memory show in the rows of a wide tree (>), always
-  in the line above it; ↑mem: a node whose memory keeps growing;
-  ✗qos: a node in a publisher/subscriber pair whose QoS cannot talk
-[b]Topics[/b] (rates are measured for the rows on screen)
-  /         filter by name or type     e   echo the topic (e stops)
-  x         all topics again (after o)  u   update the list now
-[b]Params[/b]
-  w o       write the node's parameters to a file / load a file
-[b]Args, Services, Params[/b]
-  tab shift+tab between fields; enter calls or sets
+  s r t   stop / restart / start   a      all nodes' output
+  / n N   search, next / previous  l \\    level / text filter
+  G end   follow the newest line   z T f  wrap / time / as printed
+  < >     narrower / wider tree    w y    save / copy the pane (OSC 52)
+  o       the node's topics        L      the node's log level
+  rows: CPU% and memory (wide tree), ↑mem memory keeps growing,
+        ✗qos in a publisher/subscriber pair whose QoS cannot talk
+[b]Topics[/b] (rates for the rows on screen)
+  /  filter   e  echo (again: stop)   x  all topics (after o)   u  update
+[b]Params[/b]  w o  write the node's parameters to a file / load a file
+[b]Args, Services, Params[/b]  tab shift+tab between fields; enter: call, set
 """
 
 
