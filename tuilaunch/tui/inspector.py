@@ -74,6 +74,8 @@ class Inspector(Navigation):
         """Marks in the tree the nodes of a publisher/subscriber pair that cannot talk."""
         if getattr(self.supervisor, "request", None) is None:
             return  # no session server: no graph to ask
+        if not any(p.kind in ("node", "container") for p in self.session.plan.processes):
+            return  # a launch of plain processes: the server need not start ROS for us
         try:
             result = await self.inspect("topics")
         except SessionError:
