@@ -152,8 +152,8 @@ async def test_tree_shows_cpu_memory_and_qos_problems_while_the_nodes_tab_is_sho
         await until(pilot, lambda: "✗qos" in row_text(app, "mapper-2")
                     and "✗qos" in row_text(app, "lidar-1"))
         assert "✗qos" not in row_text(app, "chatter-3")
-        line = str(app.query_one("#detail", Static).render())
-        assert "QoS: " in line and "/mapper" in line
+        await until(pilot, lambda: "QoS: " in str(app.query_one("#detail", Static).render()))
+        assert "/mapper" in str(app.query_one("#detail", Static).render())
         # leaving the tab stops the sampling: no figures that no longer move
         await pilot.press("3")
         await until(pilot, lambda: not tree.usage)

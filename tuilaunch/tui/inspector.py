@@ -82,6 +82,7 @@ class Inspector(Navigation):
             return  # no ROS here, or the server is busy: the marks stay as they were
         self.launch_tree.set_qos_problems(self.qos_problems_by_process(
             result.get("topics") or []))
+        self.update_detail()  # the selected node's problem, said in full
 
     def qos_problems_by_process(self, topics: list[dict[str, Any]]) -> dict[str, list[str]]:
         """Each launch process's node, and the QoS sentences that name it."""
