@@ -5,7 +5,9 @@
    (its all-nodes pane shows every line), the same with every node stopped, and under 4
    flooding processes; beside `ros2 launch -a`'s stand-in (ros2 launch is not installed
    here: `tuilaunch --headless` prints the same demo as plain `[id] line` lines, as
-   `ros2 launch` does) and htop (default 1.5 s refresh) measured in the same run.
+   `ros2 launch` does) and htop (default 1.5 s refresh) measured in the same run; and with
+   the Topics tab open (the topic list refreshed every 3 s, rates of the rows on screen once
+   a second).
 2. Keypress-to-screen latency (median and worst over 40 presses) while 4 processes flood
    output as fast as they can (`yes`), against the same with 4 quiet processes (target:
    worst under 100 ms). Measured end to end on a pseudo-terminal: from writing the key `l`
@@ -13,7 +15,8 @@
 3. Memory of the TUI with 100 processes and full scrollbacks (5000 lines each).
 4. Time to first screen on a real pseudo-terminal, against a minimal Textual app's.
 
-    python bench/tui_bench.py
+    python bench/tui_bench.py            # everything
+    python bench/tui_bench.py --topics   # only the wire with the Topics tab open, and htop
 """
 
 from __future__ import annotations
@@ -123,6 +126,32 @@ def tui_rates(path: Path, log_dir: Path, size: tuple[int, int]) -> tuple[float, 
     return running, stopped
 
 
+def topics_rate(path: Path, log_dir: Path, size: tuple[int, int]) -> float:
+    """tuilaunch with the demo and its Topics tab open: bytes/s once the rates show."""
+    term = Terminal([*TUI, str(path)], log_dir, size)
+    try:
+        term.read_until(b"5 running", limit=60)
+        term.settle(3.0)
+        term.press(b"5")
+        term.read_until(b" Hz", limit=60)  # a rate measured for a row on screen
+        term.settle(3.0)  # the list refreshed once more
+        return term.rate(WINDOW)
+    finally:
+        term.close()
+
+
+def topics_wire(folder: Path) -> None:
+    bringup = Path(__file__).resolve().parent.parent / "examples" / "bringup.py"
+    htop = rate_of(["htop"], folder / "t0", None, (80, 24)) if shutil.which("htop") else None
+    topics = topics_rate(bringup, folder / "t1", (80, 24))
+    running, _ = tui_rates(bringup, folder / "t2", (80, 24))
+    htop_text = f"{htop:,.0f} B/s" if htop is not None else "not installed"
+    ratio = f" ({topics / htop:.1f}x htop)" if htop else ""
+    print("bytes to the terminal at 80x24, the demo running")
+    print(f"  Topics tab open:     tuilaunch {topics:,.0f} B/s{ratio}, htop {htop_text}")
+    print(f"  Nodes tab (CPU/mem sampled): tuilaunch {running:,.0f} B/s")
+
+
 def rate_of(argv: list[str], log_dir: Path, marker: bytes | None, size: tuple[int, int],
             settle: float = 3.0) -> float:
     term = Terminal(argv, log_dir, size)
@@ -150,12 +179,15 @@ def wire(folder: Path, flood: Path) -> None:
         return f"{value / floor:.1f}x" if floor else "n/a"
 
     htop_text = f"{htop:,.0f} B/s" if htop is not None else "not installed"
+    topics = topics_rate(bringup, folder / "w6", (80, 24))
     print("bytes to the terminal, 80x24 unless said (ros2 launch -a stand-in: "
           "tuilaunch --headless, plain [id] lines)")
     print(f"  demo running:        tuilaunch {running:,.0f} B/s (target <= 2,000), stand-in "
           f"{stand_in:,.0f} B/s ({vs(running, stand_in)}), htop {htop_text} "
           f"({vs(running, htop)})")
     print(f"  demo at 120x40:      tuilaunch {wide:,.0f} B/s")
+    print(f"  Topics tab open:     tuilaunch {topics:,.0f} B/s, htop {htop_text} "
+          f"({vs(topics, htop)})")
     print(f"  every node stopped:  tuilaunch {stopped:,.0f} B/s (target <= 300), stand-in 0 "
           f"B/s, htop {htop_text} ({vs(stopped, htop)})")
     print(f"  4 flooders (yes):    tuilaunch {flood_tui:,.0f} B/s, stand-in "
@@ -254,6 +286,9 @@ def main() -> None:
     os.environ.setdefault("ROS_DOMAIN_ID", str(150 + os.getpid() % 50))
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
+        if sys.argv[1:] == ["--topics"]:
+            topics_wire(folder)
+            return
         flood = write_launch(folder, "flood.py", "[ExecuteProcess(cmd=['yes', 'flooding the "
                             "pane with a line of text'], name=f'flood{i}') for i in range(4)]")
         quiet = write_launch(folder, "quiet.py", "[ExecuteProcess(cmd=['sleep', '600'], "

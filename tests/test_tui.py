@@ -204,7 +204,7 @@ async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
                     every=panel.refresh_nodes)
         await pilot.press(*"tui4/control")
         await pilot.press("enter")
-        table = app.query_one(DataTable)
+        table = app.query_one("#prm-table", DataTable)
         await until(pilot, lambda: table.row_count > 0 and "mode" in panel.params)
         assert panel.params["mode"].value == "patrol"  # set by the launch file's action
         table.move_cursor(row=list(panel.params).index("mode"))

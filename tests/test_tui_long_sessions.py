@@ -540,7 +540,7 @@ async def test_params_launch_column_matches_a_node_by_the_name_it_reports(tmp_pa
         await until(pilot, lambda: "/tuip/control/configurable" in panel.nodes,
                     every=panel.refresh_nodes)
         panel.load_node("/tuip/control/configurable")
-        table = app.query_one(DataTable)
+        table = app.query_one("#prm-table", DataTable)
         await until(pilot, lambda: "mode" in panel.params and table.row_count > 0)
         assert table.get_cell("mode", "launch") == "idle"  # the node's own parameters
         # after a set, typing replaces the value instead of appending to it

@@ -1,7 +1,7 @@
 """The Textual app: lays out the panels and wires them to the engine.
 
 The app is composed of one mixin per concern, all built on SessionLink (the state and the
-engine link): node_commands, navigation, arguments, quitting.
+engine link): node_commands, navigation, arguments, quitting, inspector.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
 from .arguments import Arguments
+from .inspector import Inspector
 from .navigation import Navigation
 from .node_commands import NodeCommands
 from .quitting import Quitting
@@ -32,12 +33,13 @@ from .screens.args_panel import ArgsPanel
 from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
+from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import LaunchTree
 from .session_link import DRAIN_HZ
 
 
 class LaunchTabs(TabbedContent):
-    """Tabs that change only when asked (keys 1-4, a click on a tab).
+    """Tabs that change only when asked (keys 1-5, a click on a tab).
 
     TabbedContent also switches to whichever pane a widget was focused in, when its
     message arrives: with keys that arrive together (escape, 3) that message is late and
@@ -47,10 +49,10 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
+class TuiLaunchApp(Inspector, NodeCommands, Navigation, Arguments, Quitting):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
     concern does lives in its mixin (session_link, node_commands, navigation, arguments,
-    quitting)."""
+    quitting, inspector)."""
 
     CSS_PATH = "screens/app.tcss"
     TITLE = "tuilaunch"
@@ -60,6 +62,8 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
         Binding("2", "tab('args')", "Args", tooltip="Edit launch arguments"),
         Binding("3", "tab('services')", "Services", tooltip="Call a service"),
         Binding("4", "tab('params')", "Params", tooltip="Get and set parameters"),
+        Binding("5", "tab('topics')", "Topics", show=False,
+                tooltip="Topics, rates, QoS problems, echo"),
         Binding("s", "stop", "Stop", tooltip="Stop the selected node or group"),
         Binding("r", "restart", "Restart", tooltip="Restart the selected node or group"),
         Binding("t", "start", "Start", tooltip="Start the selected node or group"),
@@ -69,6 +73,10 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
         Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down",
                 tooltip="Deactivate an active, clean up an inactive lifecycle node"),
         Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
+        Binding("o", "node_topics", "Topics of node", show=False,
+                tooltip="The selected node's topics, in the Topics tab"),
+        Binding("L", "log_level", "Log level", show=False,
+                tooltip="Set the selected node's log level"),
         Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
                 "opens it again"),
         Binding("question_mark", "help", "Help"),
@@ -95,7 +103,9 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
             with TabPane("4 Params", id="params"):
                 yield ParamsPanel(self.bridge, lambda: self.session.plan,
                                   reported=lambda: self.store.reported_names,
-                                  id="params-panel")
+                                  request=self.inspect, id="params-panel")
+            with TabPane("5 Topics", id="topics"):
+                yield TopicsPanel(self.inspect, id="topics-panel")
         yield Footer()
 
     def on_mount(self) -> None:
@@ -107,6 +117,7 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
         self.detail_bar = self.query_one("#detail", Static)
+        self.topics_panel = self.query_one(TopicsPanel)
         self.launch_tree.reported = self.store.reported_names
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
         sys.setswitchinterval(0.001)
@@ -138,6 +149,7 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
         loop.add_signal_handler(signal.SIGHUP, self.terminal_hung_up)
         self.update_status()
         tree.focus()
+        self.tab_shown("nodes")
 
     # --- command palette ---------------------------------------------------------------------
 
@@ -162,8 +174,13 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
                     f"Lifecycle: {transition.replace('_', ' ')} {process}",
                     f"Ask the lifecycle node (now {state}) for this transition",
                     lambda t=transition, p=process: self.lifecycle_transition(p, t))
+        if len(selected) == 1:
+            yield SystemCommand("Topics of selected node", "The node's topics, rates and QoS",
+                                self.action_node_topics)
+            yield SystemCommand("Log level of selected node", "debug, info, warn, error, "
+                                "fatal (asks)", self.action_log_level)
         for tab, title in (("nodes", "Nodes"), ("args", "Arguments"), ("services", "Services"),
-                           ("params", "Parameters")):
+                           ("params", "Parameters"), ("topics", "Topics")):
             yield SystemCommand(f"Open {title}", f"Show the {title} tab",
                                 lambda tab=tab: self.action_tab(tab))
 

@@ -32,8 +32,9 @@ class Navigation(SessionLink):
         if following is None or isinstance(self.screen, ModalScreen):
             return
         event.stop()
-        if following.key in ("1", "2", "3", "4"):
-            self.action_tab(("nodes", "args", "services", "params")[int(following.key) - 1])
+        if following.key in ("1", "2", "3", "4", "5"):
+            self.action_tab(("nodes", "args", "services", "params", "topics")[
+                int(following.key) - 1])
         else:
             self.post_message(following)
 
@@ -55,12 +56,15 @@ class Navigation(SessionLink):
             return self.query_one("#svc-list", OptionList)
         if pane == "params":
             return self.query_one("#prm-nodes", OptionList)
+        if pane == "topics":
+            return self.query_one("#tpc-table")
         return self.launch_tree
 
     @on(TabbedContent.TabActivated)
     def _tab_changed(self, event: TabbedContent.TabActivated) -> None:
         self.refresh_bindings()
         pane = event.pane.id or "nodes"
+        self.tab_shown(pane)
         focused = self.focused
         if not (isinstance(focused, Widget) and pane_of(focused) == pane):
             self._enter_tab(pane)  # a click on a tab: the keys did this already
@@ -80,6 +84,8 @@ class Navigation(SessionLink):
         elif pane == "params":
             self.query_one(ParamsPanel).refresh_nodes()
             target = self.query_one("#prm-filter")
+        elif pane == "topics":
+            target = self.query_one("#tpc-table")
         if target is not None:
             self.screen.set_focus(target)
             self.call_after_refresh(self._refocus, pane, target)

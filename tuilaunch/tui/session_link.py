@@ -36,6 +36,8 @@ from .screens.tree_panel import LaunchTree
 # gets little more than what changed on screen
 DRAIN_HZ = 10
 PANE_FPS = 1.0
+INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources"})
+"""What the session server measures for a client that asks (tui/inspector.py shows it)."""
 
 
 class SessionLink(App[int]):
@@ -182,6 +184,8 @@ class SessionLink(App[int]):
                 if event.lines != self.own_relaunch:
                     self._relaunched_elsewhere(event.lines)
                 self.own_relaunch = None
+            elif event.kind in INSPECTOR_EVENTS:
+                self.inspector_event(event)
             elif event.kind == "dropped" and event.process:
                 # counted in the pane's status line, not written as lines of their own
                 self.store.count_dropped(event.process, event.code or 0)
@@ -195,6 +199,12 @@ class SessionLink(App[int]):
             self.update_detail()
         elif self.quit_started is not None:
             self.update_status()  # the signal stage moves on with time
+
+    def inspector_event(self, event: Event) -> None:
+        """A `rates`, `echo` or `resources` event (the Inspector mixin shows them)."""
+
+    def tab_shown(self, pane: str) -> None:
+        """A tab came on screen (the Inspector mixin measures only what it shows)."""
 
     def _process_event(self, event: Event) -> list[Line]:
         """A state change: the tree row, and a line in the node's pane as ros2 launch

@@ -1,20 +1,24 @@
-"""The parameter panel: live nodes, their parameters, edit, set, the node's answer."""
+"""The parameter panel: live nodes, their parameters, edit, set, the node's answer; the
+node's live parameters written to a params file, or a file loaded into it."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import Any
 
 import yaml
 from rich.text import Text
 from textual import on, work
 from textual.app import ComposeResult
+from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Button, DataTable, Input, OptionList, Static
 from textual.widgets.option_list import Option
 
 from ...engine.plan.model import Plan
 from ...engine.ros.bridge import ParameterInfo
+from .dialogs import PathScreen
 from .fields import Field
 
 
@@ -63,13 +67,23 @@ class ParamsPanel(Horizontal):
     ParamsPanel #prm-result { height: auto; }
     ParamsPanel #prm-result.error { color: $error; }
     """
+    BINDINGS = [
+        Binding("w", "write_file", "Write file", tooltip="Write the node's live parameters "
+                "to a params file a launch file can load"),
+        Binding("o", "open_file", "Load file", tooltip="Set the node's parameters from a "
+                "params file"),
+    ]
 
     def __init__(self, bridge: Callable[[], Any], plan: Callable[[], Plan],
                  timeout: float = 5.0,
                  reported: Callable[[], dict[str, set[str]]] | None = None,
+                 request: Callable[..., Awaitable[Any]] | None = None,
                  **kwargs: object) -> None:
+        """`request(op, **fields)`: a session request (params_dump, params_load), made
+        where the nodes run."""
         super().__init__(**kwargs)  # type: ignore[arg-type]
         self.bridge = bridge
+        self.request = request
         self.plan = plan
         self.reported = reported or dict
         self.timeout = timeout
@@ -152,7 +166,7 @@ class ParamsPanel(Horizontal):
         return {}
 
     @work(group="params-load", exclusive=True, exit_on_error=False)
-    async def load_node(self, node: str) -> None:
+    async def load_node(self, node: str, announce: bool = True) -> None:
         self.node = node
         try:
             described = await self.bridge().describe_parameters(node, timeout=self.timeout)
@@ -167,7 +181,8 @@ class ParamsPanel(Horizontal):
             from_launch = show_value(launch[info.name]) if info.name in launch else ""
             table.add_row(info.name, show_value(info.value), from_launch, info.type,
                           "yes" if info.read_only else "", key=info.name)
-        self.show_result(f"{node}: {len(described)} parameters", ok=True)
+        if announce:  # not over the answer of a params file just loaded
+            self.show_result(f"{node}: {len(described)} parameters", ok=True)
 
     @on(DataTable.RowHighlighted)
     def _highlighted(self, event: DataTable.RowHighlighted) -> None:
@@ -223,3 +238,79 @@ class ParamsPanel(Horizontal):
         result = self.query_one("#prm-result", Static)
         result.update(Text(text))
         result.set_class(not ok, "error")
+
+    # --- params files ------------------------------------------------------------------------
+
+    def _file_node(self) -> str | None:
+        if self.request is None:
+            self.show_result("params files need a session (tuilaunch FILE)", ok=False)
+            return None
+        if self.node is None:
+            self.show_result("pick a node first (enter on its name)", ok=False)
+        return self.node
+
+    def action_write_file(self) -> None:
+        node = self._file_node()
+        if node is None:
+            return
+        default = f"./{node.rsplit('/', 1)[-1] or 'node'}.yaml"
+
+        def answered(path: str | None) -> None:
+            if path:
+                self.write_file(node, path)
+
+        self.app.push_screen(PathScreen(f"Write {node}'s parameters to", default), answered)
+
+    def action_open_file(self) -> None:
+        node = self._file_node()
+        if node is None:
+            return
+
+        def answered(path: str | None) -> None:
+            if path:
+                self.load_file(node, path)
+
+        self.app.push_screen(PathScreen(f"Load parameters into {node} from", ""), answered)
+
+    @work(group="params-file", exclusive=True, exit_on_error=False)
+    async def write_file(self, node: str, path: str) -> None:
+        assert self.request is not None
+        try:
+            dumped = await self.request("params_dump", node=node)
+        except Exception as exc:
+            self.show_result(f"{node}: {_one_line(exc)}", ok=False)
+            return
+        target = Path(path).expanduser()
+        try:
+            target.write_text(str(dumped["yaml"]))
+        except OSError as exc:
+            self.show_result(f"cannot write {path}: {exc.strerror or exc}", ok=False)
+            return
+        self.show_result(f"wrote {node}'s parameters to {target}", ok=True)
+
+    @work(group="params-file", exclusive=True, exit_on_error=False)
+    async def load_file(self, node: str, path: str) -> None:
+        assert self.request is not None
+        try:
+            text = Path(path).expanduser().read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            self.show_result(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}",
+                             ok=False)
+            return
+        try:
+            loaded = await self.request("params_load", node=node, yaml=text)
+        except Exception as exc:
+            self.show_result(f"{path} into {node}: {_one_line(exc)}", ok=False)
+            return
+        results = loaded.get("results") or []
+        refused = [r for r in results if not r.get("ok")]
+        answers = "  ".join(f"{'ok' if r.get('ok') else 'refused'} {r.get('name')}"
+                            + (f" ({r['reason']})" if r.get("reason") and not r.get("ok")
+                               else "") for r in results)
+        self.show_result(f"{path} into {node}: {len(results) - len(refused)} set, "
+                         f"{len(refused)} refused: {answers}", ok=not refused)
+        self.load_node(node, announce=False)
+
+
+def _one_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]

@@ -12,6 +12,7 @@ from textual.widgets.tree import TreeNode
 
 from ...engine.plan.components import component_label
 from ...engine.plan.model import Plan, PlanDiff, TreeItem
+from .units import short_bytes, usage_text
 
 ALL = "__all__"
 
@@ -40,6 +41,11 @@ LIFECYCLE_LOOK = {"unconfigured": "yellow", "inactive": "cyan", "active": "bold 
 COMPONENT_LOOK = {"waiting": ("…", "yellow"), "loading": ("…", "yellow"),
                   "loaded": ("✓", "green"), "failed": ("✗", "red"),
                   "cancelled": ("○", "dim"), "skipped": ("○", "dim")}
+
+
+USAGE_WIDTH = 44
+"""From this tree width on, process rows show their CPU and memory (`< >` resize the tree);
+narrower, the detail line above the tree shows them for the selected row."""
 
 
 def ascii_terminal() -> bool:
@@ -78,6 +84,10 @@ class LaunchTree(Tree[RowData]):
         self.component_labels: dict[str, str] = {}
         # names processes report in their log lines (OutputStore.reported_names)
         self.reported: dict[str, set[str]] = {}
+        self.usage: dict[str, dict[str, Any]] = {}
+        """CPU, memory, threads per running process, while the server samples them."""
+        self.qos_problems: dict[str, list[str]] = {}
+        """Per process, the QoS problems (sentences) its node is part of."""
 
     def show_plan(self, plan: Plan, states: dict[str, str]) -> None:
         self.plan = plan
@@ -172,6 +182,28 @@ class LaunchTree(Tree[RowData]):
             self.details[ref] = detail
         self.refresh_row(ref)
 
+    def set_usage(self, usage: dict[str, Any]) -> None:
+        """A `resources` event: each running process's CPU and memory (the rows whose text
+        changes are repainted); {} clears them (sampling stopped)."""
+        old = self.usage
+        self.usage = {ref: dict(values) for ref, values in usage.items()
+                      if isinstance(values, dict)}
+        for ref in set(old) | set(self.usage):
+            if old.get(ref) != self.usage.get(ref):
+                self.refresh_row(ref)
+
+    def set_qos_problems(self, problems: dict[str, list[str]]) -> None:
+        """The QoS problems each process's node is part of; rows that change are repainted."""
+        old = self.qos_problems
+        self.qos_problems = {ref: list(p) for ref, p in problems.items() if p}
+        for ref in set(old) | set(self.qos_problems):
+            if old.get(ref) != self.qos_problems.get(ref):
+                self.refresh_row(ref)
+
+    def on_resize(self) -> None:
+        for ref in self.usage:
+            self.refresh_row(ref)  # the CPU column comes or goes with the width
+
     def set_preview(self, diff: PlanDiff | None) -> None:
         old = self.preview
         self.preview = diff
@@ -195,6 +227,12 @@ class LaunchTree(Tree[RowData]):
             elif ref in self.preview.stop:
                 label.append("-", "bold red")
         label.append(f"{icon} ", style)
+        usage = self.usage.get(ref) if state == "running" else None
+        if usage and usage.get("growing"):
+            # first, so that even a narrow tree shows it
+            label.append("^mem " if self.ascii else "↑mem ", "bold yellow")
+        if self.qos_problems.get(ref) and state == "running":
+            label.append("xqos " if self.ascii else "✗qos ", "bold red")
         if node.data is not None and node.data.kind == "process":
             proc = self.plan.process(ref)
             label.append(proc.name or ref, "bold" if state == "running" else "")
@@ -206,6 +244,10 @@ class LaunchTree(Tree[RowData]):
         lifecycle = self.lifecycle.get(ref)
         if lifecycle:
             label.append(f" · {lifecycle}", LIFECYCLE_LOOK.get(lifecycle, "italic"))
+        if usage and self.size.width >= USAGE_WIDTH:
+            cpu = usage.get("cpu_percent")
+            cpu_text = f"{cpu:.0f}%" if isinstance(cpu, (int, float)) else "-"
+            label.append(f" {cpu_text} {short_bytes(usage.get('rss_bytes'))}", "cyan")
         if node.label != label:  # an unchanged row is not repainted
             node.set_label(label)
 
@@ -237,6 +279,13 @@ class LaunchTree(Tree[RowData]):
             if self.lifecycle.get(ref):
                 text += f", lifecycle state {self.lifecycle[ref]}"
         detail = self.details.get(ref, "")
+        usage = self.usage.get(ref) if state == "running" else None
+        if usage:
+            detail += f" · {usage_text(usage)}"
+        problems = self.qos_problems.get(ref) if state == "running" else None
+        if problems:
+            more = f" (+{len(problems) - 1} more, Topics tab)" if len(problems) > 1 else ""
+            detail += f" · QoS: {problems[0]}{more}"
         return f"{text} {detail}".rstrip()
 
 

@@ -1,0 +1,190 @@
+"""The inspector's side of the app: session requests for the Topics tab, the params files
+and logger levels; the server's `rates`, `echo` and `resources` events to their widgets;
+sampling asked for only while its tab is on screen."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from textual import work
+from textual.timer import Timer
+
+from ..engine.run.session_dir import SessionError
+from ..engine.run.supervisor import Event
+from .navigation import Navigation
+from .screens.dialogs import ChoiceScreen, ConfirmScreen
+from .screens.topics_panel import TopicsPanel
+
+LEVELS = ["debug", "info", "warn", "error", "fatal"]
+QOS_CHECK_S = 5.0
+"""While the Nodes tab shows, the graph's QoS problems are asked for this often (the tree
+marks the nodes in one)."""
+
+
+class Inspector(Navigation):
+    """Topics, rates, echo, CPU and memory, log levels: all asked of the session server
+    (where the nodes run) through the supervisor's `request`, on the engine thread."""
+
+    topics_panel: TopicsPanel  # set in on_mount
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.watching_resources = False
+        self.log_levels: dict[str, str] = {}
+        """The level last set per process (the level dialog starts there)."""
+        self.qos_timer: Timer | None = None
+
+    async def inspect(self, op: str, **fields: Any) -> Any:
+        """A session request's result; raises SessionError with the server's message."""
+        request = getattr(self.supervisor, "request", None)
+        if request is None:
+            raise SessionError("the inspector needs a session server (tuilaunch FILE starts "
+                               "one)")
+        return await self.engine.run(request(op, **fields))
+
+    def inspector_event(self, event: Event) -> None:
+        data = event.data or {}
+        if event.kind == "rates":
+            self.topics_panel.show_rates(data)
+        elif event.kind == "echo":
+            self.topics_panel.show_echo(data)
+        elif event.kind == "resources":
+            self.launch_tree.set_usage(data)
+
+    def tab_shown(self, pane: str) -> None:
+        """Measures what the tab on screen shows, and only that: rates and echo for the
+        Topics tab, CPU and memory for the Nodes tab."""
+        self.topics_panel.set_shown(pane == "topics")
+        nodes = pane == "nodes"
+        if nodes != self.watching_resources and self.supervisor is not None:
+            self.watching_resources = nodes
+            self.run_worker(self._watch_resources(nodes), group="inspector",
+                            exit_on_error=False)
+            if self.qos_timer is None:
+                self.qos_timer = self.set_interval(QOS_CHECK_S, self.check_qos, pause=True)
+            if nodes:
+                self.check_qos()
+                self.qos_timer.resume()
+            else:
+                self.qos_timer.pause()
+
+    @work(group="inspector-qos", exclusive=True, exit_on_error=False)
+    async def check_qos(self) -> None:
+        """Marks in the tree the nodes of a publisher/subscriber pair that cannot talk."""
+        if getattr(self.supervisor, "request", None) is None:
+            return  # no session server: no graph to ask
+        if not any(p.kind in ("node", "container") for p in self.session.plan.processes):
+            return  # a launch of plain processes: the server need not start ROS for us
+        try:
+            result = await self.inspect("topics")
+        except SessionError:
+            return  # no ROS here, or the server is busy: the marks stay as they were
+        self.launch_tree.set_qos_problems(self.qos_problems_by_process(
+            result.get("topics") or []))
+        self.update_detail()  # the selected node's problem, said in full
+
+    def qos_problems_by_process(self, topics: list[dict[str, Any]]) -> dict[str, list[str]]:
+        """Each launch process's node, and the QoS sentences that name it."""
+        by_name = {self.node_name(p.id): p.id for p in self.session.plan.processes}
+        found: dict[str, list[str]] = {}
+        for topic in topics:
+            problems = topic.get("qos_problems") or []
+            if not problems:
+                continue
+            for endpoint in [*(topic.get("publishers") or []),
+                             *(topic.get("subscribers") or [])]:
+                node = str(endpoint.get("node") or "")
+                process = endpoint.get("process") or by_name.get(node)
+                if not process or not node:
+                    continue
+                named = re.compile(rf"(?<![\w/]){re.escape(node)}(?![\w/])")
+                for problem in problems:
+                    if named.search(problem) and problem not in found.get(process, []):
+                        found.setdefault(process, []).append(problem)
+        return found
+
+    async def _watch_resources(self, on: bool) -> None:
+        try:
+            await self.inspect("watch_resources", on=on)
+        except SessionError:
+            pass  # no CPU column then; the tree works as before
+        if not on:
+            self.launch_tree.set_usage({})  # figures that no longer move would mislead
+
+    # --- from the Nodes tab ------------------------------------------------------------------
+
+    def node_name(self, process: str) -> str:
+        """The ROS name of a process's node: the plan's, else the one it reports."""
+        proc = self.session.plan.process(process)
+        reported = sorted(self.store.reported_names.get(process, ()))
+        return proc.full_name or (reported[0] if reported else process)
+
+    def selected_process(self) -> str | None:
+        node = self.launch_tree.cursor_node
+        if node is None or node.data is None or node.data.kind != "process":
+            return None
+        return node.data.ref
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action in ("node_topics", "log_level"):
+            if self.supervisor is None or self.tabs.active != "nodes":
+                return False
+            return True if self.selected_process() is not None else None
+        return super().check_action(action, parameters)
+
+    def action_node_topics(self) -> None:
+        process = self.selected_process()
+        if process is None:
+            return
+        self.topics_panel.show_node(self.node_name(process))
+        self.action_tab("topics")
+
+    def action_log_level(self) -> None:
+        process = self.selected_process()
+        if process is None:
+            return
+        node = self.node_name(process)
+
+        def answered(level: str | None) -> None:
+            if level:
+                self.run_worker(self._set_log_level(process, node, level), group="inspector",
+                                exit_on_error=False)
+
+        self.push_screen(ChoiceScreen(f"Log level of {node} ({process}):", LEVELS,
+                                      self.log_levels.get(process, "info")), answered)
+
+    async def _set_log_level(self, process: str, node: str, level: str) -> None:
+        try:
+            await self.inspect("log_level", node=node, level=level)
+        except SessionError as exc:
+            message = str(exc).split(": ", 1)[-1]
+            if "logger service" not in message:
+                self.notify(message, severity="error", title="log level")
+                return
+
+            def answered(yes: bool | None) -> None:
+                if yes:
+                    self.run_worker(self._restart_at_level(process, level),
+                                    group="inspector", exit_on_error=False)
+
+            self.push_screen(ConfirmScreen(
+                f"{node} has no logger service (enable_logger_service), so its level "
+                f"cannot change while it runs.\nRestart {process} with --log-level {level}? "
+                "(kept across its respawns)", "Restart (y)"), answered)
+            return
+        self.log_levels[process] = level
+        self.notify(f"{node}: log level {level}", title="log level")
+
+    async def _restart_at_level(self, process: str, level: str) -> None:
+        assert self.supervisor is not None
+        self.asked_to_stop.add(process)
+        if self.supervisor.states.get(process) == "running":
+            self.launch_tree.set_state(process, "stopping")
+        try:
+            await self.inspect("restart", process=process, log_level=level)
+        except SessionError as exc:
+            self.notify(str(exc), severity="error", title="restart")
+            return
+        self.log_levels[process] = level
+        self.notify(f"{process} restarted with --log-level {level}", title="log level")
