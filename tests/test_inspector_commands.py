@@ -50,9 +50,12 @@ def generate_launch_description():
         node('strict', '--sub', 'scan'),
         node('busy', '--burn', '0.3', '--logger-service', '--debug-ticks'),
         node('plain', '--pub', 'chatter', '--rate', '5', '--sub', 'orphan'),
+        # named by its own code only: the launch learns its name from its log lines
+        Node(package='insp_nodes', executable='inspector_node', namespace='/insp',
+             arguments=['anon', '--pub', 'anon_topic', '--rate', '2']),
     ])
 """
-FAST, STRICT, BUSY, PLAIN = "fast-1", "strict-2", "busy-3", "plain-4"
+FAST, STRICT, BUSY, PLAIN, ANON = "fast-1", "strict-2", "busy-3", "plain-4", "inspector_node-5"
 
 
 def tl(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
@@ -98,7 +101,7 @@ def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
         [str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
     try:
         name = ok(str(root / "inspect.launch.py"), "--detach", "--name", "insp").strip()
-        for process in (FAST, STRICT, BUSY, PLAIN):
+        for process in (FAST, STRICT, BUSY, PLAIN, ANON):
             ok("wait", name, process, "running", "--timeout", "60")
         yield name
         tl("stop", name)
@@ -137,6 +140,10 @@ def test_topics_map_endpoints_to_processes_and_say_qos_problems(session):
     # one node's topics, named by its process id
     assert set(topics_of(session, "--node", PLAIN)) >= {"/insp/chatter", "/insp/orphan"}
     assert "/insp/scan" not in topics_of(session, "--node", PLAIN)
+    # a node the launch file does not name is still the launch's, by the name it logs under
+    anon = eventually(lambda: topics_of(session).get("/insp/anon_topic"))
+    assert [(e["node"], e["in_launch"], e["process"]) for e in anon["publishers"]] == \
+        [("/insp/anon", True, ANON)]
     table = ok("topics", session)
     assert "/insp/fast [fast-1]" in table and "/insp/strict [strict-2]" in table
     assert "QoS problems" in table and problem in table

@@ -68,6 +68,7 @@ if args.burn:
             time.sleep(0.1 * (1 - args.burn))
 
     threading.Thread(target=burn, daemon=True).start()
+node.get_logger().info("up")  # its logger name says which node it is
 print("ready", flush=True)
 try:
     rclpy.spin(node)

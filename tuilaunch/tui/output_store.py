@@ -7,22 +7,19 @@ pane can show a compact form without parsing again on every repaint.
 
 from __future__ import annotations
 
-import re
 import time
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from ..engine.run.output import strip_ansi
+from ..engine.run.reported_names import ROS_LOG_PREFIX, ReportedNames
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 INFO = 1
 WARN = 2
 ERROR = 3
-# `[INFO] [1795323834.940123] [r1.talker]: message`, rcutils' default console format
-_ROS_PREFIX = re.compile(
-    r"^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]\s*(?:\[(\d+(?:\.\d+)?)\]\s*)?"
-    r"(?:\[([^\]\s]*)\]:?\s?)?")
+_ROS_PREFIX = ROS_LOG_PREFIX
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,7 +91,8 @@ class OutputStore:
         self.dropped = Dropped()
         # the node names processes report in their log lines' logger field, for nodes whose
         # launch file does not name them: process id -> {`/ns/name`, ...} (a few at most)
-        self.reported_names: dict[str, set[str]] = {}
+        self.reported = ReportedNames()
+        self.reported_names = self.reported.names
 
     def add(self, process: str, stream: str, texts: Iterable[str]) -> list[Line]:
         now = time.time()
@@ -102,9 +100,7 @@ class OutputStore:
         for raw in texts:
             line, logger = parse(process, raw, stream, now)
             if logger:
-                names = self.reported_names.setdefault(process, set())
-                if len(names) < 8:
-                    names.add("/" + logger.replace(".", "/"))
+                self.reported.add_logger(process, logger)
             lines.append(line)
         return self._keep(process, lines)
 

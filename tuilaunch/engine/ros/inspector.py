@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import LaunchError
 from ..run.events import Event
 from ..run.plugins import Clients, Handler, Plugin
+from ..run.reported_names import ReportedNames
 from .actions import RosActions
 from .bridge import RosError
 from .echo import message_yaml
@@ -58,6 +59,21 @@ class Inspector(Plugin):
         self.pending: set[asyncio.Task[None]] = set()
         self.bridge_lock = asyncio.Lock()
         self.discovered = False
+        self.reported = ReportedNames()
+        self.unnamed: tuple[object, set[str]] = (None, set())  # (plan, its unnamed nodes)
+        supervisor.subscribe(self.learn_names)
+
+    def learn_names(self, event: Event) -> None:
+        """Learns the node name a process reports in its log lines, for the nodes the launch
+        file does not name: stops reading a process's lines once one is known."""
+        if event.kind != "output" or event.process is None or self.reported.get(event.process):
+            return
+        plan = self.supervisor.plan
+        if self.unnamed[0] is not plan:  # a relaunch replaced the plan
+            self.unnamed = (plan, {p.id for p in plan.processes
+                                   if p.kind == "node" and not p.full_name})
+        if event.process in self.unnamed[1]:
+            self.reported.add_lines(event.process, event.lines)
 
     # --- the plugin's hooks ------------------------------------------------------------------
 
@@ -125,6 +141,9 @@ class Inspector(Plugin):
         for proc in self.supervisor.plan.processes:
             if proc.kind in ("node", "container") and proc.full_name:
                 found[proc.full_name] = proc.id
+            elif proc.kind == "node":
+                for name in self.reported.get(proc.id):
+                    found.setdefault(name, proc.id)
             for component in proc.components:
                 if component.get("full_name"):
                     found[str(component["full_name"])] = proc.id

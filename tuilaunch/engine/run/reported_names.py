@@ -1,0 +1,49 @@
+"""The node names processes report in their log lines, for nodes the launch file does not name.
+
+A node whose name is chosen by its own code (`Node(package=..., executable=...)` without
+`name=`) has no full name in the plan; rcutils' console format carries its logger name
+(`[INFO] [1795323834.94] [r1.talker]: ...`), which is the node's namespace and name joined by
+dots. The TUI and the session server both map such processes to graph nodes this way.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+
+from .output import strip_ansi
+
+ROS_LOG_PREFIX = re.compile(
+    r"^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]\s*(?:\[(\d+(?:\.\d+)?)\]\s*)?"
+    r"(?:\[([^\]\s]*)\]:?\s?)?")
+"""rcutils' default console format: level, optional stamp, optional logger name."""
+
+MAX_NAMES = 8
+"""Names kept per process: a node's sub-loggers add a few; more is a process printing
+other processes' lines, which would only mislead."""
+
+
+def node_of_logger(logger: str) -> str:
+    """`r1.talker` -> `/r1/talker`."""
+    return "/" + logger.replace(".", "/")
+
+
+class ReportedNames:
+    """process id -> the node names its log lines reported (`/ns/name`, a few at most)."""
+
+    def __init__(self) -> None:
+        self.names: dict[str, set[str]] = {}
+
+    def add_logger(self, process: str, logger: str) -> None:
+        names = self.names.setdefault(process, set())
+        if len(names) < MAX_NAMES:
+            names.add(node_of_logger(logger))
+
+    def add_lines(self, process: str, lines: Iterable[str]) -> None:
+        for raw in lines:
+            match = ROS_LOG_PREFIX.match(strip_ansi(raw))
+            if match and match.group(3):
+                self.add_logger(process, match.group(3))
+
+    def get(self, process: str) -> set[str]:
+        return self.names.get(process, set())
