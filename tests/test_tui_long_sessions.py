@@ -153,7 +153,11 @@ def read_until(master: int, marker: bytes, limit: float = 60) -> bytes:
     while marker not in out:
         assert time.monotonic() < end, f"{marker!r} never shown"
         if select.select([master], [], [], 0.1)[0]:
-            out += os.read(master, 65536)
+            try:
+                out += os.read(master, 65536)
+            except OSError:  # the terminal's far side closed: the TUI ended
+                raise AssertionError(f"the TUI ended before {marker!r}; it wrote: "
+                                     f"{out[-3000:]!r}") from None
     return out
 
 
