@@ -93,9 +93,12 @@ def main(argv: list[str]) -> int:
 
 def start_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
                   positional: list[str] | None = None,
-                  timeout: float = 60.0) -> tuple[str, subprocess.Popen[bytes]]:
+                  timeout: float = 60.0, placement: dict[str, Any] | None = None,
+                  ) -> tuple[str, subprocess.Popen[bytes]]:
     """Starts a session server in its own session (no terminal) and waits until it answers.
-    `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv."""
+    `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv;
+    `placement` (`--machines`) is {"text", "path", "share"} as engine/server_main.py reads
+    it."""
     name = session_dir.check_name(name) if name else session_dir.new_name(
         session_dir.launch_stem(path))
     if session_dir.is_alive(name):
@@ -107,7 +110,8 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
         server = subprocess.Popen(
             [sys.executable, "-m", "tuilaunch.engine.server_main", name,
              os.path.abspath(path), str(log_dir), json.dumps(arguments),
-             json.dumps(positional or [path])],
+             json.dumps(positional or [path]),
+             *([json.dumps(placement)] if placement else [])],
             stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True)
     deadline = time.monotonic() + timeout
     # ours, not another server that took the name at the same instant

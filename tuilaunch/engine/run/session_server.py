@@ -150,7 +150,7 @@ class SessionServer:
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
                 "pid": self.pids.get(proc.id) if state == "running" else None,
                 "exit_code": self.supervisor.exit_codes.get(proc.id),
-                "detail": self.details.get(proc.id)})
+                "detail": self.details.get(proc.id), "machine": proc.machine})
         counts: dict[str, int] = {}
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
