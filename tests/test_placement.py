@@ -1,0 +1,231 @@
+"""Nodes placed on machines (`--machines`), over real sshd "machines" (tests/sshd.py).
+
+The launching side is this test's own session folder; "robot1" runs its share as a
+session in its own folder, reached only through ssh. The remote tuilaunch is a small
+wrapper (the machine's `tuilaunch:` field): the CLI for a share, the proxy module for the
+link, until the CLI's own hidden `__proxy` arrives.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from .conftest import run_cli
+from .sshd import Machines, alive, free_port, machines_fixture  # noqa: F401
+
+LAUNCH = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess, RegisterEventHandler
+from launch.event_handlers import OnProcessStart
+def generate_launch_description():
+    far = ExecuteProcess(name='far', cmd=['sh', '-c',
+        'echo far up; while true; do echo far tick; sleep 0.2; done'])
+    solo = ExecuteProcess(name='solo', cmd=['sh', '-c',
+        'echo solo up; while true; do sleep 0.5; done'])
+    near = ExecuteProcess(name='near', cmd=['sh', '-c',
+        'echo near up; while true; do sleep 0.5; done'])
+    return LaunchDescription([far, solo, RegisterEventHandler(
+        OnProcessStart(target_action=far, on_start=[near]))])
+"""
+
+
+def wait_for(check: Callable[[], object], limit: float = 60.0) -> None:
+    end = time.monotonic() + limit
+    while not check():
+        assert time.monotonic() < end, f"condition never held: {check}"
+        time.sleep(0.05)
+
+
+def remote_tuilaunch(folder: Path) -> Path:
+    """The machines' `tuilaunch:`: the CLI, whose hidden proxy commands come from the proxy
+    module for now."""
+    script = folder / "tl"
+    script.write_text(
+        "#!/bin/sh\n"
+        'case "$1" in __proxy|__ls) exec "' + sys.executable + '" -m '
+        'tuilaunch.engine.run.proxy "$@";; esac\n'
+        'exec "' + sys.executable + '" -m tuilaunch "$@"\n')
+    script.chmod(0o755)
+    return script
+
+
+@pytest.fixture(name="setup")
+def setup_fixture(machines: Machines, tmp_path: Path, write,
+                  monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Path, Path]]:
+    """The launch file and a machines file placing `far` on robot1 (as r1) and on an
+    unreachable robot3 (as r3, when asked by the test's own file)."""
+    monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
+    launch = write(LAUNCH)
+    dead_port = free_port()  # nothing listens there: a machine that is off
+    with open(machines.ssh_config, "a") as config:
+        config.write(machines.host_entry("robot3", dead_port))
+    tool = remote_tuilaunch(tmp_path)
+    placement = tmp_path / "machines.yaml"
+    placement.write_text(
+        "machines:\n"
+        f"  r1: {{host: robot1, tuilaunch: {tool}}}\n"
+        f"  r3: {{host: robot3, tuilaunch: {tool}}}\n"
+        "placement:\n"
+        "  - {match: far-*, machine: r1}\n")
+    yield launch, placement
+
+
+def remote_sessions(machines: Machines, alias: str) -> list[dict]:
+    done = run_cli("ls", "--json", env={"XDG_RUNTIME_DIR": str(machines[alias].runtime)})
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+class Headless:
+    """`tuilaunch FILE --machines M --headless`, its output read as it comes."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "tuilaunch", *args, "--headless"], stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT, env=os.environ.copy())
+        self.chunks: list[bytes] = []
+        self.reader = threading.Thread(target=self._pump, daemon=True)
+        self.reader.start()
+
+    def _pump(self) -> None:
+        assert self.proc.stdout is not None
+        while chunk := os.read(self.proc.stdout.fileno(), 65536):
+            self.chunks.append(chunk)
+
+    @property
+    def text(self) -> str:
+        return b"".join(self.chunks).decode(errors="replace")
+
+    def read(self) -> str:
+        return self.text
+
+    def wait_for(self, pattern: str, limit: float = 90.0) -> re.Match[str]:
+        found: list[re.Match[str]] = []
+
+        def check() -> bool:
+            match = re.search(pattern, self.read())
+            if match:
+                found.append(match)
+            return match is not None
+
+        try:
+            wait_for(check, limit)
+        except AssertionError:
+            raise AssertionError(f"never printed {pattern!r}:\n{self.text}") from None
+        return found[0]
+
+    def stop(self) -> int:
+        self.proc.send_signal(signal.SIGINT)
+        try:
+            code = self.proc.wait(timeout=90)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+                self.proc.wait()
+        self.reader.join(timeout=10)
+        return code
+
+
+def test_print_shows_where_each_process_runs(setup) -> None:
+    launch, placement = setup
+    printed = run_cli(str(launch), "--machines", str(placement), "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert "[far-1] @r1" in printed.stdout
+    assert "here: solo-2, near-3" in printed.stdout
+    assert "r1 (robot1): far-1" in printed.stdout
+    plan = json.loads(run_cli(str(launch), "--machines", str(placement), "--print",
+                              "--json").stdout)
+    assert {p["id"]: p["machine"] for p in plan["processes"]} == {
+        "far-1": "r1", "solo-2": None, "near-3": None}
+    # a rule that places nothing is said (a typo in a name would otherwise go unseen)
+    placement.write_text(placement.read_text() + "  - {match: /nobody/**, machine: r1}\n")
+    printed = run_cli(str(launch), "--machines", str(placement), "--print")
+    assert "placement rule '/nobody/**' -> r1 places no process" in printed.stdout
+
+
+def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, machines):
+    launch, placement = setup
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        started = run.wait_for(r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]")
+        far_pid = int(started.group(1))
+        run.wait_for(r"\[far-1@r1\] far tick")  # its output, labelled with its machine
+        # near-2 waits for far-1's start, which happened on robot1
+        run.wait_for(r"\[INFO\] \[near-3\]: process started")
+        assert run.text.index("[far-1@r1]: process started") < \
+            run.text.index("[near-3]: process started")
+        shares = remote_sessions(machines, "robot1")
+        assert len(shares) == 1 and shares[0]["name"].endswith("-r1")
+        assert alive(far_pid)  # a process of robot1's share (same pid space here)
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    # stopping the launch stopped everything on robot1
+    assert code == 0, run.text
+    assert "[INFO] [far-1@r1]: process stopped" in run.text
+    assert not alive(far_pid)
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, machines):
+    launch, placement = setup
+    name = "placed"
+    done = run_cli(str(launch), "--machines", str(placement), "--detach", "--name", name)
+    assert done.returncode == 0, done.stderr
+    try:
+        waited = run_cli("wait", name, "far-1", "running", "--timeout", "60", timeout=90)
+        assert waited.returncode == 0, waited.stderr
+        waited = run_cli("wait", name, "near-3", "running", "--timeout", "60", timeout=90)
+        assert waited.returncode == 0, waited.stderr
+        status = json.loads(run_cli("status", name, "--json").stdout)
+        rows = {p["id"]: p for p in status["processes"]}
+        assert rows["far-1"]["machine"] == "r1" and rows["far-1"]["state"] == "running"
+        assert rows["solo-2"]["machine"] is None and rows["solo-2"]["state"] == "running"
+        # its output is in the log files here too (`tuilaunch logs` on the launching side)
+        wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
+        # a restart of a process placed there is done there
+        far_pid = rows["far-1"]["pid"]
+        restarted = run_cli("restart", name, "far-1", timeout=90)
+        assert restarted.returncode == 0, restarted.stderr
+        wait_for(lambda: not alive(far_pid))
+        # the share's own view: it runs far-1, the others are elsewhere
+        share = remote_sessions(machines, "robot1")[0]["name"]
+        there = run_cli("status", share, "--json",
+                        env={"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)})
+        states = {p["id"]: p["state"] for p in json.loads(there.stdout)["processes"]}
+        assert states == {"far-1": "running", "solo-2": "elsewhere", "near-3": "elsewhere"}
+    finally:
+        stopped = run_cli("stop", name, timeout=120)
+    assert stopped.returncode == 0, stopped.stderr
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def test_an_unreachable_machine_fails_its_nodes_in_one_line_and_the_rest_runs(setup):
+    launch, placement = setup
+    placement.write_text(placement.read_text().replace("machine: r1", "machine: r3"))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        failed = run.wait_for(r"\[ERROR\] \[far-1@r3\]: failed to start: (.*)\n")
+        assert re.fullmatch(r"cannot reach r3 \(robot3\): .*Connection refused",
+                            failed.group(1)), failed.group(1)
+        run.wait_for(r"\[solo-2\] solo up")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code != 0
+    assert "[near-3]: process started" not in run.text  # what it waits for never started
