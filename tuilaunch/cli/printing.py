@@ -42,7 +42,7 @@ def _annotations(item: TreeItem, plan: Plan) -> str:
             notes.append(f"({proc.package}/{proc.executable})")
         if proc.lifecycle:
             notes.append("lifecycle, autostart" if proc.autostart else "lifecycle")
-        if proc.enabled and proc.error:
+        if proc.enabled and proc.error and proc.machine is None:
             notes.append(f"!! {proc.error}")
     if item.condition is not None:
         if item.kind == "group":

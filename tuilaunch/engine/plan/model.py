@@ -223,9 +223,10 @@ class Plan:
         return [p for p in self.processes if p.enabled]
 
     def problems(self) -> list[str]:
-        """Enabled processes that cannot start: each names the process and why."""
+        """Enabled processes that cannot start: each names the process and why. One placed
+        on another machine is checked there (its package need not be installed here)."""
         return [f"{p.origin or self.file}: {p.id} ({p.label}): {p.error}"
-                for p in self.processes if p.enabled and p.error]
+                for p in self.processes if p.enabled and p.error and p.machine is None]
 
     def to_json(self) -> dict[str, Any]:
         return {
