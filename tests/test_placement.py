@@ -229,3 +229,129 @@ def test_an_unreachable_machine_fails_its_nodes_in_one_line_and_the_rest_runs(se
             run.proc.wait()
     assert code != 0
     assert "[near-3]: process started" not in run.text  # what it waits for never started
+
+
+def test_a_node_on_robot1_waits_for_a_node_here(setup, machines):
+    launch, placement = setup
+    placement.write_text(placement.read_text().replace("match: far-*", "match: near-*"))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        run.wait_for(r"\[INFO\] \[near-3@r1\]: process started")
+        run.wait_for(r"\[near-3@r1\] near up|\[INFO\] \[near-3@r1\]")
+        assert run.text.index("[far-1]: process started") < \
+            run.text.index("[near-3@r1]: process started")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code == 0, run.text
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def test_a_dropped_link_stops_nothing_and_is_made_again(setup, machines):
+    launch, placement = setup
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        far_pid = int(run.wait_for(
+            r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]").group(1))
+        run.wait_for(r"\[far-1@r1\] far tick")
+        links = [pid for pid in descendants(run.proc.pid) if b"__proxy" in cmdline(pid)]
+        assert links, "no ssh link to robot1's share"
+        for pid in links:
+            os.kill(pid, signal.SIGKILL)  # the link dies as a cable pulled out would
+        lost = run.wait_for(r"\[WARN\] \[launch.user\]: r1: (.*); its share runs on there; "
+                            r"connecting again in 1 s")
+        assert "lost the link to robot1" in lost.group(1)
+        assert alive(far_pid)  # the share ran on
+        after = len(run.text)
+        wait_for(lambda: "r1: following session" in run.text[after:] and
+                 "[far-1@r1] far tick" in run.text[after:].split("following session", 1)[-1])
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code == 0, run.text
+    assert not alive(far_pid)
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def test_a_missing_remote_tuilaunch_is_said_for_each_node_placed_there(setup, tmp_path):
+    launch, placement = setup
+    text = placement.read_text()
+    placement.write_text(text.replace(str(tmp_path / "tl"), str(tmp_path / "nowhere" / "tl"),
+                                      1))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        failed = run.wait_for(r"\[ERROR\] \[far-1@r1\]: failed to start: (.*)\n")
+        assert failed.group(1).startswith("r1 (robot1): tuilaunch not found there"), \
+            failed.group(1)
+        run.wait_for(r"\[solo-2\] solo up")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code != 0
+
+
+RELAUNCH = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.substitutions import LaunchConfiguration
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('word', default_value='tick'),
+        ExecuteProcess(name='far', cmd=['sh', '-c', ['while true; do echo far ',
+                       LaunchConfiguration('word'), '; sleep 0.2; done']]),
+    ])
+"""
+
+
+def test_a_relaunch_with_new_arguments_is_applied_on_robot1(setup, machines, write):
+    from tuilaunch.client.link import Link
+
+    _, placement = setup
+    launch = write(RELAUNCH, "relaunch.py")
+    name = "relaunched"
+    done = run_cli(str(launch), "--machines", str(placement), "--detach", "--name", name)
+    assert done.returncode == 0, done.stderr
+    try:
+        wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
+        link = Link(name, timeout=None)
+        try:
+            link.request("apply", arguments={"word": "tock"})
+        finally:
+            link.close()
+        wait_for(lambda: "far tock" in run_cli("logs", name, "far-1").stdout)
+        share = remote_sessions(machines, "robot1")[0]
+        assert share["arguments"] == {"word": "tock"}
+    finally:
+        stopped = run_cli("stop", name, timeout=120)
+    assert stopped.returncode == 0, stopped.stderr
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def descendants(root: int) -> list[int]:
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+            children.setdefault(parent, []).append(int(entry.name))
+    found, todo = [], [root]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def cmdline(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""

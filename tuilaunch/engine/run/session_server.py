@@ -437,8 +437,9 @@ class SessionServer:
             return {"stop": diff.stop, "start": diff.start}
 
     def _emit_plan(self) -> None:
-        # an event like the others, so it reaches every client in order with their states
-        self._on_event(Event("relaunched", reason=None, lines=[
+        # an event like the others, so it reaches every client in order with their states,
+        # and the plugins (the machines' shares are relaunched with the same values)
+        self.supervisor.emit(Event("relaunched", reason=None, lines=[
             f"{k}:={v}" for k, v in self.session.arguments.items()]))
 
 
