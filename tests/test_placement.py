@@ -8,6 +8,7 @@ link, until the CLI's own hidden `__proxy` arrives.
 
 from __future__ import annotations
 
+import asyncio
 import json
 import os
 import re
@@ -196,6 +197,8 @@ def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, 
         assert rows["solo-2"]["machine"] is None and rows["solo-2"]["state"] == "running"
         # its output is in the log files here too (`tuilaunch logs` on the launching side)
         wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
+        # the TUI attached here shows it in the one tree, labelled with its machine
+        asyncio.run(attached_tree_shows_machine(name, status))
         # a restart of a process placed there is done there
         far_pid = rows["far-1"]["pid"]
         restarted = run_cli("restart", name, "far-1", timeout=90)
@@ -211,6 +214,32 @@ def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, 
         stopped = run_cli("stop", name, timeout=120)
     assert stopped.returncode == 0, stopped.stderr
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+async def attached_tree_shows_machine(name: str, status: dict) -> None:
+    from tuilaunch.engine.plan.machines import placement_from_text
+    from tuilaunch.tui.app import make_app
+    from tuilaunch.tui.output_store import View
+
+    placed = status["placement"]
+    app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                   session_name=name, placement=placement_from_text(placed["text"],
+                                                                    placed["path"]))
+    async with app.run_test(size=(120, 30)) as pilot:
+        assert app.supervisor is not None
+        for _ in range(400):
+            far = str(app.launch_tree.rows["far-1"].label)
+            ticks = [line.text for line in app.store.lines(View("far-1"))
+                     if "far tick" in line.text]
+            if "running" in far and len(ticks) > 2:
+                break
+            await pilot.pause(0.05)
+        assert "@r1" in far and "running" in far, far
+        assert "@" not in str(app.launch_tree.rows["solo-2"].label)
+        assert len(ticks) > 2
+        await pilot.press("d")  # detach: the launch runs on
+        await pilot.pause(0.5)
+    assert app.detached
 
 
 def test_an_unreachable_machine_fails_its_nodes_in_one_line_and_the_rest_runs(setup):

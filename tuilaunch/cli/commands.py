@@ -22,6 +22,7 @@ from typing import Any
 from ..client.link import ANSWER_TIMEOUT, Link, resolve_name
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
+from ..engine.plan.machines import placement_from_text
 from ..engine.run import session_dir
 from ..engine.run.log_reader import LogLine, read_lines
 from ..engine.run.output import strip_ansi
@@ -217,8 +218,11 @@ def cmd_attach(options: argparse.Namespace) -> int:
     from ..tui.app import make_app
 
     set_command_line(info.get("command") or [info["file"]], info["arguments"])
+    placed = info.get("placement")  # --machines: the same placement as the session's
+    placement = placement_from_text(placed["text"], placed["path"], placed.get("share")) \
+        if placed else None
     app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
-                   scrollback=options.scrollback, session_name=name)
+                   scrollback=options.scrollback, session_name=name, placement=placement)
     status = app.run() or 0
     report_end(app, name)
     return status

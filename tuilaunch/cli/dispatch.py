@@ -272,7 +272,8 @@ def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
         return 2
     name, server = started
     app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
-                   owner=True, keep_on_hangup=options.keep_on_hangup)
+                   owner=True, keep_on_hangup=options.keep_on_hangup,
+                   placement=options.placement)
     status = app.run()
     from .commands import report_end
 

@@ -312,7 +312,11 @@ class MachinesCoordinator(Plugin):
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         share.replies[request_id] = future
         await share.send({"op": op, "process": process_id, "id": request_id})
-        await future
+        result = await future
+        state = result.get("state") if isinstance(result, dict) else None
+        if isinstance(state, str):
+            # as it is there once done (its events may still be on their way)
+            self.supervisor.states[process_id] = state
 
     async def _stop_share(self, share: Share, reason: str) -> None:
         """Asks the share to stop; its `ended` closes the link."""

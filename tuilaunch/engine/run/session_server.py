@@ -139,7 +139,16 @@ class SessionServer:
         return {"name": self.name, "file": os.path.abspath(self.session.path),
                 "command": self.command,
                 "arguments": self.session.arguments, "pid": os.getpid(),
-                "started": self.started, "log_dir": str(self.log_dir)}
+                "started": self.started, "log_dir": str(self.log_dir),
+                **self._placement_info()}
+
+    def _placement_info(self) -> dict[str, Any]:
+        """`--machines` as the launch was given it, so a client resolves the same plan."""
+        placement = self.session.placement
+        if placement is None:
+            return {}
+        return {"placement": {"text": placement.text, "path": placement.machines.path,
+                              "share": placement.share}}
 
     def status(self) -> dict[str, Any]:
         states = self.supervisor.states
