@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 from .conftest import run_cli
-from .sshd import Machines, alive, free_port, machines_fixture  # noqa: F401
+from .sshd import Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
 
 LAUNCH = """
 from launch import LaunchDescription
@@ -384,3 +384,26 @@ def cmdline(pid: int) -> bytes:
         return Path(f"/proc/{pid}/cmdline").read_bytes()
     except OSError:
         return b""
+
+
+def test_a_refused_key_is_said_for_each_node_placed_there(setup, machines, tmp_path):
+    launch, placement = setup
+    stranger = tmp_path / "stranger_key"
+    keygen(stranger)  # a key robot1 does not know
+    with open(machines.ssh_config, "a") as config:
+        config.write(machines.host_entry("robot1-stranger", machines["robot1"].port,
+                                         stranger))
+    placement.write_text(placement.read_text().replace("host: robot1,",
+                                                       "host: robot1-stranger,"))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        failed = run.wait_for(r"\[ERROR\] \[far-1@r1\]: failed to start: (.*)\n")
+        assert failed.group(1).startswith("r1 (robot1-stranger) refused the login"), \
+            failed.group(1)
+        run.wait_for(r"\[solo-2\] solo up")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code != 0
