@@ -407,3 +407,25 @@ def test_a_refused_key_is_said_for_each_node_placed_there(setup, machines, tmp_p
             run.proc.kill()
             run.proc.wait()
     assert code != 0
+
+
+def test_a_node_on_robot2_waits_for_a_node_on_robot1(setup, machines, tmp_path):
+    launch, placement = setup
+    tool = tmp_path / "tl"
+    placement.write_text(placement.read_text().replace(
+        "placement:\n", f"  r2: {{host: robot2, tuilaunch: {tool}}}\nplacement:\n") +
+        "  - {match: near-*, machine: r2}\n")
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        run.wait_for(r"\[INFO\] \[near-3@r2\]: process started")
+        assert run.text.index("[far-1@r1]: process started") < \
+            run.text.index("[near-3@r2]: process started")
+        assert len(remote_sessions(machines, "robot2")) == 1
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code == 0, run.text
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+    wait_for(lambda: remote_sessions(machines, "robot2") == [])
