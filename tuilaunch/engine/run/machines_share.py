@@ -107,7 +107,9 @@ class MachinesCoordinator(Plugin):
                 machine = dataclasses.replace(
                     machine, env={"ROS_DOMAIN_ID": domain, **machine.env})
             self.shares[machine.name] = Share(machine, share_session_name(base, machine.name))
-        self.happened: list[dict[str, Any]] = []  # start/exit events the shares are told
+        self.happened: dict[tuple[str, str], dict[str, Any]] = {}
+        """The last start and exit of each process, told to each share (again on connect:
+        what a node there waits for may have happened before)."""
         self._tasks: set[asyncio.Task[Any]] = set()
         self._next_id = 0
         self._closing = False
@@ -139,8 +141,16 @@ class MachinesCoordinator(Plugin):
                 await self._connect(share)
                 delays = iter(RECONNECT_DELAYS)
                 reason = await self._read(share)
-            except RemoteError as exc:
+            except (LaunchError, OSError) as exc:
                 reason = str(exc)
+                if "no running session named" in reason:
+                    # reached, but its session is gone: stopped as asked, or killed there
+                    if self._closing or self.supervisor.shutting_down:
+                        share.ended.set()
+                        return
+                    self._fail_share(share, f"{share.machine.name}: its share (session "
+                                     f"{share.session}) ended without being asked")
+                    return
             if share.ended.is_set():
                 return
             delay = next(delays, RECONNECT_DELAYS[-1])
@@ -170,7 +180,7 @@ class MachinesCoordinator(Plugin):
         link, reader, writer = await open_remote_streams(
             share.machine, share.session, environ=self.environ)
         share.link, share.reader, share.writer = link, reader, writer
-        for message in self.happened:  # what it waits for may have happened meanwhile
+        for message in list(self.happened.values()):
             await share.send({"op": "external_event", **message})
         await share.send({"op": "subscribe", "id": self._new_id()})
         self.supervisor.log(f"{share.machine.name}: following session {share.session}")
@@ -281,10 +291,10 @@ class MachinesCoordinator(Plugin):
                 machine = self.supervisor.plan.process(event.process).machine
             except KeyError:
                 return
-            message = {"process": event.process,
-                       "on": "start" if event.kind == "started" else "exit",
-                       "pid": event.pid, "code": event.code}
-            self.happened.append(message)
+            on = "start" if event.kind == "started" else "exit"
+            message = {"process": event.process, "on": on, "pid": event.pid,
+                       "code": event.code}
+            self.happened[(event.process, on)] = message
             for share in self.shares.values():
                 if share.machine.name != machine and share.writer is not None:
                     self._spawn(self._tell(share, {"op": "external_event", **message}))
