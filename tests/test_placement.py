@@ -31,7 +31,7 @@ from launch.actions import ExecuteProcess, RegisterEventHandler
 from launch.event_handlers import OnProcessStart
 def generate_launch_description():
     far = ExecuteProcess(name='far', cmd=['sh', '-c',
-        'echo far up; while true; do echo far tick; sleep 0.2; done'])
+        'echo far up; i=0; while true; do i=$((i+1)); echo far tick $i; sleep 0.2; done'])
     solo = ExecuteProcess(name='solo', cmd=['sh', '-c',
         'echo solo up; while true; do sleep 0.5; done'])
     near = ExecuteProcess(name='near', cmd=['sh', '-c',
@@ -162,6 +162,8 @@ def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, ma
         started = run.wait_for(r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]")
         far_pid = int(started.group(1))
         run.wait_for(r"\[far-1@r1\] far tick")  # its output, labelled with its machine
+        # what it printed before the link was made is shown too, first
+        assert run.text.index("[far-1@r1] far up") < run.text.index("[far-1@r1] far tick 1\n")
         # near-2 waits for far-1's start, which happened on robot1
         run.wait_for(r"\[INFO\] \[near-3\]: process started")
         assert run.text.index("[far-1@r1]: process started") < \
@@ -304,6 +306,9 @@ def test_a_dropped_link_stops_nothing_and_is_made_again(setup, machines):
     assert code == 0, run.text
     assert not alive(far_pid)
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
+    # what it printed while the link was down was shown once it was back: no gap, no twice
+    ticks = [int(n) for n in re.findall(r"\[far-1@r1\] far tick (\d+)\n", run.text)]
+    assert ticks == list(range(1, len(ticks) + 1)), ticks
 
 
 def test_a_missing_remote_tuilaunch_is_said_for_each_node_placed_there(setup, tmp_path):

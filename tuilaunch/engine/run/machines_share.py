@@ -19,6 +19,7 @@ says so and connects again, backing off.
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import dataclasses
 import os
@@ -28,7 +29,9 @@ from typing import Any
 from ..errors import LaunchError
 from ..plan.machines import Machine, Placement
 from .events import Event
+from .log_reader import LogLine, read_lines
 from .logfiles import LogFile
+from .output import screen_str
 from .placed import Placed
 from .plugins import Handler, Plugin
 from .protocol import ProtocolError, decode, encode, event_from_dict
@@ -42,6 +45,11 @@ START_TIMEOUT = 120.0
 RECONNECT_DELAYS = (1.0, 2.0, 5.0, 10.0)
 """Seconds between attempts to reach a share again after its link dropped (the last
 repeats)."""
+BACKFILL_LINES = 2000
+"""Lines of a process printed there before the link was made (or while it was down) that
+are sent here; older ones stay in the log file there (and are said to)."""
+LINES_OP = "share_lines"
+"""The share's request for lines of its log files: {process, start, end, after}."""
 END_TIMEOUT = 60.0
 """How long the launch's end waits for a share to stop its processes (they escalate to
 SIGKILL well within it)."""
@@ -77,6 +85,10 @@ class Share:
         self.replies: dict[int, asyncio.Future[Any]] = {}
         self.seen: set[tuple[Any, ...]] = set()  # events mirrored (a reconnect repeats them)
         self.logs: dict[str, LogFile] = {}
+        self.offsets: dict[str, int] = {}  # its log files' sizes at the last subscription
+        self.last_output: dict[str, float] = {}  # the time of the last line mirrored
+        self.backfill: dict[int, str] = {}  # requests for lines still unanswered
+        self.held: list[dict[str, Any]] = []  # events batches waiting for those lines
 
     async def send(self, message: dict[str, Any]) -> None:
         if self.writer is None:
@@ -210,6 +222,8 @@ class MachinesCoordinator(Plugin):
                 kind = message.get("type")
                 if kind == "reply":
                     self._answered(share, message)
+                elif kind == "events" and share.backfill:
+                    share.held.append(message)  # after the earlier lines, in order
                 elif kind == "events":
                     self._mirror(share, message.get("events") or [],
                                  message.get("states") or {})
@@ -224,6 +238,10 @@ class MachinesCoordinator(Plugin):
                 if not future.done():
                     future.set_exception(LaunchError(f"lost the link to {share.machine.name}"))
             share.replies.clear()
+            share.backfill.clear()
+            for held in share.held:
+                self._mirror(share, held.get("events") or [], held.get("states") or {})
+            share.held.clear()
             link = share.link
             share.link = None
         if link is None:
@@ -236,6 +254,16 @@ class MachinesCoordinator(Plugin):
         if isinstance(result, dict) and "states" in result and "recent" in result:
             # the subscription: what happened there before (or while the link was down)
             self._mirror(share, result.get("recent") or [], {}, result.get("states") or {})
+            self._ask_lines(share, result.get("offsets") or {})
+        request_id = int(message.get("id") or 0)
+        if request_id in share.backfill:
+            process = share.backfill.pop(request_id)
+            if message.get("ok") and isinstance(result, dict):
+                self._backfilled(share, process, result)
+            if not share.backfill:
+                held, share.held = share.held, []
+                for batch in held:
+                    self._mirror(share, batch.get("events") or [], batch.get("states") or {})
         future = share.replies.pop(int(message.get("id") or 0), None)
         if future is not None and not future.done():
             if message.get("ok"):
@@ -243,6 +271,38 @@ class MachinesCoordinator(Plugin):
             else:
                 future.set_exception(LaunchError(
                     f"{share.machine.name}: {message.get('error')}"))
+
+    def _ask_lines(self, share: Share, offsets: dict[str, int]) -> None:
+        """What its processes printed before this subscription and was not seen here
+        (before the first link, or while the link was down): asked for, and shown before
+        the events that follow."""
+        if share.writer is None:
+            return
+        for proc in self.supervisor.plan.processes:
+            end = offsets.get(proc.id)
+            if proc.machine != share.machine.name or end is None:
+                continue
+            start = share.offsets.get(proc.id, 0)
+            share.offsets[proc.id] = end
+            if end <= start:
+                continue
+            request_id = self._new_id()
+            share.backfill[request_id] = proc.id
+            share.writer.write(encode({
+                "op": LINES_OP, "id": request_id, "process": proc.id, "start": start,
+                "end": end, "after": share.last_output.get(proc.id)}))
+
+    def _backfilled(self, share: Share, process: str, result: dict[str, Any]) -> None:
+        skipped = int(result.get("skipped") or 0)
+        if skipped:
+            self.supervisor.log(f"{share.machine.name}: {skipped} earlier lines of {process} "
+                                f"are only in its log file there", "WARN")
+        for stamp, stream, text in result.get("lines") or []:
+            event = Event("output", process, stream=str(stream),
+                          lines=[screen_str(str(text))], time=float(stamp))
+            share.last_output[process] = event.time
+            self._log_output(share, event)
+            self.supervisor.emit(event)
 
     def _mirror(self, share: Share, events: list[dict[str, Any]], touched: dict[str, str],
                 states: dict[str, str] | None = None) -> None:
@@ -256,6 +316,7 @@ class MachinesCoordinator(Plugin):
             if event.process not in mine:
                 continue
             if event.kind == "output":
+                share.last_output[event.process] = event.time
                 self._log_output(share, event)
                 self.supervisor.emit(event)
                 continue
@@ -381,7 +442,20 @@ class ShareSide(Plugin):
                                                message.get("code"))
             return {}
 
-        return {"external_event": external_event}
+        async def share_lines(message: dict[str, Any]) -> Any:
+            process = find_process(str(message.get("process")))
+            start, end = int(message.get("start") or 0), int(message.get("end") or 0)
+            after = message.get("after")
+            kept: collections.deque[LogLine] = collections.deque(maxlen=BACKFILL_LINES)
+            count = 0
+            for line in read_lines(self.supervisor.log_dir / f"{process}.log", end, start):
+                if after is None or line.time > float(after):
+                    kept.append(line)
+                    count += 1
+            return {"lines": [[line.time, line.stream, line.text] for line in kept],
+                    "skipped": count - len(kept)}
+
+        return {"external_event": external_event, LINES_OP: share_lines}
 
 
 def placement_plugin(supervisor: Placed, placement: Placement | None, command: list[str],
