@@ -7,7 +7,9 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   most output lines per batch and the least seconds between batches, for a display that
   cannot show more}, status, find {process},
   start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
-  is left), apply {arguments}, lifecycle {process}.
+  is left), apply {arguments}, lifecycle {process}; to a machine's share of a placed launch
+  (run/machines_share.py): external_event {process, on: start|exit, pid, code},
+  share_lines {process, start, end, after}.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
   [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
