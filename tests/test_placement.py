@@ -434,3 +434,14 @@ def test_a_node_on_robot2_waits_for_a_node_on_robot1(setup, machines, tmp_path):
     assert code == 0, run.text
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
     wait_for(lambda: remote_sessions(machines, "robot2") == [])
+
+
+def test_a_mistake_in_the_machines_file_is_one_line_naming_file_and_line(write, tmp_path):
+    launch = write(LAUNCH)
+    machines_file = tmp_path / "machines.yaml"
+    machines_file.write_text("machines:\n  r1: {hots: robot1}\n")
+    done = run_cli(str(launch), "--machines", str(machines_file), "--print")
+    assert done.returncode == 2
+    assert done.stderr.startswith(f"tuilaunch: error: {machines_file}:2:8: machines.r1: "
+                                  "unknown field 'hots'\n"), done.stderr
+    assert "Traceback" not in done.stderr and done.stdout == ""
