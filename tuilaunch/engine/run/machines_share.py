@@ -19,24 +19,23 @@ says so and connects again, backing off.
 from __future__ import annotations
 
 import asyncio
-import collections
 import contextlib
 import dataclasses
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 from ..errors import LaunchError
 from ..plan.machines import Machine, Placement
 from .events import Event
-from .log_reader import LogLine, read_lines
 from .logfiles import LogFile
 from .output import screen_str
 from .placed import Placed
-from .plugins import Handler, Plugin
+from .plugins import Plugin
 from .protocol import ProtocolError, decode, encode, event_from_dict
 from .remote import RemoteError, RemoteLink, open_remote_streams, run_remote
 from .session_dir import launch_stem
+from .share_side import LINES_OP, ShareSide
 
 SHARE_OPTION = "--share"
 MACHINES_TEXT_OPTION = "--machines-text"
@@ -45,11 +44,6 @@ START_TIMEOUT = 120.0
 RECONNECT_DELAYS = (1.0, 2.0, 5.0, 10.0)
 """Seconds between attempts to reach a share again after its link dropped (the last
 repeats)."""
-BACKFILL_LINES = 2000
-"""Lines of a process printed there before the link was made (or while it was down) that
-are sent here; older ones stay in the log file there (and are said to)."""
-LINES_OP = "share_lines"
-"""The share's request for lines of its log files: {process, start, end, after}."""
 END_TIMEOUT = 60.0
 """How long the launch's end waits for a share to stop its processes (they escalate to
 SIGKILL well within it)."""
@@ -76,7 +70,6 @@ class Share:
     def __init__(self, machine: Machine, session: str) -> None:
         self.machine = machine
         self.session = session
-        self.started = False  # the session runs there (stopped only by `shutdown`)
         self.writer: asyncio.StreamWriter | None = None
         self.reader: asyncio.StreamReader | None = None
         self.link: RemoteLink | None = None
@@ -178,7 +171,6 @@ class MachinesCoordinator(Plugin):
                             f"{share.session} on {share.machine.host}")
         await loop.run_in_executor(None, lambda: run_remote(
             share.machine, args, START_TIMEOUT, self.environ))
-        share.started = True
 
     def _fail_share(self, share: Share, reason: str) -> None:
         share.failure = reason
@@ -424,40 +416,6 @@ def _state_after(event: Event) -> str | None:
             "respawning": "respawning"}.get(event.kind)
 
 
-class ShareSide(Plugin):
-    """A machine's share: hears what happens to the processes other machines run."""
-
-    def __init__(self, supervisor: Placed, machine: str) -> None:
-        self.supervisor = supervisor
-        self.seen: set[tuple[Any, ...]] = set()  # the coordinator repeats them on reconnect
-        supervisor.set_placement(machine, None)
-
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
-        async def external_event(message: dict[str, Any]) -> Any:
-            process, on = str(message.get("process")), str(message.get("on"))
-            key = (process, on, message.get("pid"), message.get("code"))
-            if key not in self.seen:
-                self.seen.add(key)
-                self.supervisor.external_event(process, on, message.get("pid"),
-                                               message.get("code"))
-            return {}
-
-        async def share_lines(message: dict[str, Any]) -> Any:
-            process = find_process(str(message.get("process")))
-            start, end = int(message.get("start") or 0), int(message.get("end") or 0)
-            after = message.get("after")
-            kept: collections.deque[LogLine] = collections.deque(maxlen=BACKFILL_LINES)
-            count = 0
-            for line in read_lines(self.supervisor.log_dir / f"{process}.log", end, start):
-                if after is None or line.time > float(after):
-                    kept.append(line)
-                    count += 1
-            return {"lines": [[line.time, line.stream, line.text] for line in kept],
-                    "skipped": count - len(kept)}
-
-        return {"external_event": external_event, LINES_OP: share_lines}
-
-
 def placement_plugin(supervisor: Placed, placement: Placement | None, command: list[str],
                      arguments: Mapping[str, str], session_name: str | None = None,
                      ) -> Plugin | None:
@@ -473,5 +431,5 @@ def placement_plugin(supervisor: Placed, placement: Placement | None, command: l
     return MachinesCoordinator(supervisor, placement, command, arguments, session_name)
 
 
-__all__ = ["MACHINES_TEXT_OPTION", "SHARE_OPTION", "MachinesCoordinator", "ShareSide",
+__all__ = ["MACHINES_TEXT_OPTION", "SHARE_OPTION", "MachinesCoordinator",
            "placement_plugin", "share_arguments", "share_session_name"]
