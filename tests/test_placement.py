@@ -27,8 +27,8 @@ from .sshd import Machines, alive, free_port, keygen, machines_fixture  # noqa: 
 
 LAUNCH = """
 from launch import LaunchDescription
-from launch.actions import ExecuteProcess, RegisterEventHandler
-from launch.event_handlers import OnProcessStart
+from launch.actions import ExecuteProcess, LogInfo, RegisterEventHandler
+from launch.event_handlers import OnProcessIO, OnProcessStart
 def generate_launch_description():
     far = ExecuteProcess(name='far', cmd=['sh', '-c',
         'echo far up; i=0; while true; do i=$((i+1)); echo far tick $i; sleep 0.2; done'])
@@ -37,7 +37,9 @@ def generate_launch_description():
     near = ExecuteProcess(name='near', cmd=['sh', '-c',
         'echo near up; while true; do sleep 0.5; done'])
     return LaunchDescription([far, solo, RegisterEventHandler(
-        OnProcessStart(target_action=far, on_start=[near]))])
+        OnProcessStart(target_action=far, on_start=[near])), RegisterEventHandler(
+        OnProcessIO(target_action=far, on_stdout=lambda event: LogInfo(
+            msg='heard ' + event.text.decode().strip())))])
 """
 
 
@@ -162,6 +164,8 @@ def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, ma
         started = run.wait_for(r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]")
         far_pid = int(started.group(1))
         run.wait_for(r"\[far-1@r1\] far tick")  # its output, labelled with its machine
+        # an OnProcessIO handler here hears it
+        run.wait_for(r"\[INFO\] \[[^\]]+\]: heard far tick 3\n")
         # what it printed before the link was made is shown too, first
         assert run.text.index("[far-1@r1] far up") < run.text.index("[far-1@r1] far tick 1\n")
         # near-2 waits for far-1's start, which happened on robot1

@@ -294,7 +294,7 @@ class MachinesCoordinator(Plugin):
                           lines=[screen_str(str(text))], time=float(stamp))
             share.last_output[process] = event.time
             self._log_output(share, event)
-            self.supervisor.emit(event)
+            self.supervisor.mirror(event)
 
     def _mirror(self, share: Share, events: list[dict[str, Any]], touched: dict[str, str],
                 states: dict[str, str] | None = None) -> None:
@@ -310,7 +310,7 @@ class MachinesCoordinator(Plugin):
             if event.kind == "output":
                 share.last_output[event.process] = event.time
                 self._log_output(share, event)
-                self.supervisor.emit(event)
+                self.supervisor.mirror(event)
                 continue
             key = (event.kind, event.process, event.pid, event.time)
             if key in share.seen:

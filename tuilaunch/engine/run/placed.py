@@ -13,7 +13,7 @@ can wait for a node here.
 from __future__ import annotations
 
 import time
-from typing import Protocol
+from typing import Any, Protocol
 
 from ..errors import LaunchError
 from .events import Event
@@ -35,9 +35,12 @@ class RemoteControl(Protocol):
 class Placed(Starting):
     """Which machine runs each process, and the processes run by another."""
 
-    machine: str | None = None
-    """The machine whose share this supervisor runs; None: the launching side."""
-    remote: RemoteControl | None = None
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.machine: str | None = None
+        """The machine whose share this supervisor runs; None: the launching side."""
+        self.remote: RemoteControl | None = None
+        self._pids_elsewhere: dict[str, int] = {}  # for OnProcessIO events of theirs
 
     def set_placement(self, machine: str | None, remote: RemoteControl | None) -> None:
         """Before `run`: this side is `machine`'s share; `remote` starts and stops the
@@ -94,6 +97,14 @@ class Placed(Starting):
         process_id = event.process
         if process_id is None or process_id not in self.states:
             return
+        if event.kind == "output":
+            self.emit(event)
+            if self._io_watchers or self._any_watchers:  # OnProcessIO handlers here
+                self._dispatch_io(process_id, event.stream or "stdout", event.lines,
+                                  self._pids_elsewhere.get(process_id, 0))
+            return
+        if event.kind == "started" and event.pid is not None:
+            self._pids_elsewhere[process_id] = event.pid
         if state is not None:
             self.states[process_id] = state
         if event.kind == "exited" and event.code is not None:
