@@ -9,12 +9,15 @@ link, until the CLI's own hidden `__proxy` arrives.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -69,6 +72,9 @@ def setup_fixture(machines: Machines, tmp_path: Path, write,
     """The launch file and a machines file placing `far` on robot1 (as r1) and on an
     unreachable robot3 (as r3, when asked by the test's own file)."""
     monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
+    # the launching side's own session folder (short: a socket path has 108 bytes at most)
+    runtime = Path(tempfile.mkdtemp(prefix="tlhere"))
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(runtime))
     launch = write(LAUNCH)
     dead_port = free_port()  # nothing listens there: a machine that is off
     with open(machines.ssh_config, "a") as config:
@@ -81,7 +87,22 @@ def setup_fixture(machines: Machines, tmp_path: Path, write,
         f"  r3: {{host: robot3, tuilaunch: {tool}}}\n"
         "placement:\n"
         "  - {match: far-*, machine: r1}\n")
-    yield launch, placement
+    try:
+        yield launch, placement
+    finally:
+        # a launching-side session a failed test left running is stopped (it stops its
+        # shares); the machines' own teardown ends whatever is left there
+        servers = [json.loads(info.read_text())["pid"]
+                   for info in (runtime / "tuilaunch").glob("*.json")]
+        for pid in servers:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGTERM)
+        with contextlib.suppress(AssertionError):
+            wait_for(lambda: not any(alive(pid) for pid in servers), 60)
+        for pid in servers:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(runtime, ignore_errors=True)
 
 
 def remote_sessions(machines: Machines, alias: str) -> list[dict]:
