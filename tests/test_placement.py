@@ -222,6 +222,8 @@ def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, 
         rows = {p["id"]: p for p in status["processes"]}
         assert rows["far-1"]["machine"] == "r1" and rows["far-1"]["state"] == "running"
         assert rows["solo-2"]["machine"] is None and rows["solo-2"]["state"] == "running"
+        table = run_cli("status", name).stdout
+        assert re.search(r"^  far-1@r1 +running ", table, re.M), table
         # its output is in the log files here too (`tuilaunch logs` on the launching side)
         wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
         # the TUI attached here shows it in the one tree, labelled with its machine

@@ -254,7 +254,8 @@ def cmd_status(options: argparse.Namespace) -> int:
     print(f"  logs: {status['log_dir']}")
     rows = [("PROCESS", "STATE", "PID", "NODE", "")]
     for p in status["processes"]:
-        rows.append((p["id"], p["state"], str(p["pid"] or ""), p["name"] or "",
+        where = f"@{p['machine']}" if p.get("machine") else ""  # placed on another machine
+        rows.append((p["id"] + where, p["state"], str(p["pid"] or ""), p["name"] or "",
                      p["detail"] if p["state"] != "running" and p["detail"] else ""))
     _table(rows, indent="  ")
     return 0
