@@ -23,6 +23,7 @@ from typing import Any
 from ..client.link import ANSWER_TIMEOUT, Link, resolve_name
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
+from ..engine.plan.machines import placement_from_text
 from ..engine.run import session_dir
 from ..engine.run.log_reader import LogLine, read_lines
 from ..engine.run.output import strip_ansi
@@ -102,9 +103,12 @@ def main(argv: list[str]) -> int:
 
 def start_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
                   positional: list[str] | None = None,
-                  timeout: float = 60.0) -> tuple[str, subprocess.Popen[bytes]]:
+                  timeout: float = 60.0, placement: dict[str, Any] | None = None,
+                  ) -> tuple[str, subprocess.Popen[bytes]]:
     """Starts a session server in its own session (no terminal) and waits until it answers.
-    `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv."""
+    `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv;
+    `placement` (`--machines`) is {"text", "path", "share"} as engine/server_main.py reads
+    it."""
     name = session_dir.check_name(name) if name else session_dir.new_name(
         session_dir.launch_stem(path))
     if session_dir.is_alive(name):
@@ -116,7 +120,8 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
         server = subprocess.Popen(
             [sys.executable, "-m", "tuilaunch.engine.server_main", name,
              os.path.abspath(path), str(log_dir), json.dumps(arguments),
-             json.dumps(positional or [path])],
+             json.dumps(positional or [path]),
+             *([json.dumps(placement)] if placement else [])],
             stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True)
     deadline = time.monotonic() + timeout
     # ours, not another server that took the name at the same instant
@@ -225,8 +230,11 @@ def cmd_attach(options: argparse.Namespace) -> int:
     from ..tui.app import make_app
 
     set_command_line(info.get("command") or [info["file"]], info["arguments"])
+    placed = info.get("placement")  # --machines: the same placement as the session's
+    placement = placement_from_text(placed["text"], placed["path"], placed.get("share")) \
+        if placed else None
     app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
-                   scrollback=options.scrollback, session_name=name)
+                   scrollback=options.scrollback, session_name=name, placement=placement)
     status = app.run() or 0
     report_end(app, name)
     return status
@@ -259,7 +267,8 @@ def cmd_status(options: argparse.Namespace) -> int:
     rows = [("PROCESS", "STATE", "PID", "CPU%", "RSS", "THREADS", "NODE", "")]
     for p in status["processes"]:
         cpu, rss, threads = p.get("cpu_percent"), p.get("rss_bytes"), p.get("threads")
-        rows.append((p["id"], p["state"], str(p["pid"] or ""),
+        where = f"@{p['machine']}" if p.get("machine") else ""  # placed on another machine
+        rows.append((p["id"] + where, p["state"], str(p["pid"] or ""),
                      "" if cpu is None else f"{cpu:.1f}",
                      "" if rss is None else _megabytes(rss),
                      "" if threads is None else str(threads), p["name"] or "",

@@ -15,6 +15,7 @@ from pathlib import Path
 from ..engine.describe.loader import LoadedFile, load_file, set_command_line
 from ..engine.errors import LaunchError, PackageError
 from ..engine.packages import ensure_environment, find_launch_file_in_share
+from ..engine.plan.machines import Placement, load_placement, placement_from_text
 from ..engine.plan.resolve import declared_arguments, resolve
 
 
@@ -46,6 +47,12 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--keep-on-hangup", action="store_true",
                         help="TUI: a dropped terminal (SIGHUP) detaches instead of stopping "
                         "the launch")
+    parser.add_argument("--machines", metavar="MACHINES.yaml",
+                        help="run each node on the machine this file places it on (over "
+                        "ssh); with --print, show where each runs")
+    # how the launching side starts another machine's share of the launch (machines_share)
+    parser.add_argument("--share", metavar="MACHINE", help=argparse.SUPPRESS)
+    parser.add_argument("--machines-text", metavar="YAML", help=argparse.SUPPRESS)
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     parser.epilog = (parser.epilog or "") + (
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
@@ -85,6 +92,19 @@ def find_launch_file(positional: list[str]) -> str:
         return str(find_launch_file_in_share(package, name))
     raise LaunchError(f"expected FILE or PACKAGE FILE, got {' '.join(positional)!r}",
                       hint="launch arguments are written name:=value")
+
+
+def _placement(options: argparse.Namespace) -> Placement | None:
+    """`--machines FILE` (or, on another machine's share, the text the launching side
+    sent, and `--share MACHINE`)."""
+    if options.machines_text is not None:
+        return placement_from_text(options.machines_text, options.machines or
+                                   "the launching side's machines file", options.share)
+    if options.machines is not None:
+        return load_placement(options.machines, options.share)
+    if options.share is not None:
+        raise LaunchError("--share needs --machines")
+    return None
 
 
 def _show_arguments(loaded: LoadedFile, arguments: dict[str, str]) -> int:
@@ -165,6 +185,8 @@ def _main(argv: list[str] | None) -> int:
         options.json else contextlib.nullcontext()
     try:
         positional, arguments = split_items(options.items)
+        placement = _placement(options)
+        options.placement = placement
         path = find_launch_file(positional)
         set_command_line(positional, arguments)
         with file_output:
@@ -172,6 +194,8 @@ def _main(argv: list[str] | None) -> int:
             if options.show_args:
                 return _show_arguments(loaded, arguments)
             plan = resolve(loaded, arguments)
+            if placement is not None:
+                placement.apply(plan)
     except LaunchError as exc:
         if options.debug:
             traceback.print_exc()
@@ -181,9 +205,11 @@ def _main(argv: list[str] | None) -> int:
         if options.json:
             print(json.dumps(plan.to_json(), indent=2))
         else:
-            from .printing import format_tree
+            from .printing import format_placement, format_tree
 
             print(format_tree(plan), end="")
+            if placement is not None:
+                print(format_placement(plan, placement), end="")
         problems = plan.problems()
         for problem in problems:
             print(f"tuilaunch: error: {problem}", file=sys.stderr)
@@ -207,7 +233,8 @@ def _main(argv: list[str] | None) -> int:
     if options.headless or not (sys.stdout.isatty() and sys.stdin.isatty()):
         from .headless import run_headless
 
-        return run_headless(plan, log_dir)
+        return run_headless(plan, log_dir, placement=placement, command=positional,
+                            arguments=arguments)
     return _run_tui(path, arguments, options, log_dir, positional)
 
 
@@ -217,8 +244,12 @@ def _start_server(path: str, arguments: dict[str, str], options: argparse.Namesp
     """The launch's session server, started; None once its error is said."""
     from .commands import start_session
 
+    placement: Placement | None = options.placement
+    placed = None if placement is None else {
+        "text": placement.text, "path": placement.machines.path, "share": placement.share}
     try:
-        return start_session(path, arguments, options.name, log_dir, positional)
+        return start_session(path, arguments, options.name, log_dir, positional,
+                             placement=placed)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return None
@@ -243,7 +274,8 @@ def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
         return 2
     name, server = started
     app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
-                   owner=True, keep_on_hangup=options.keep_on_hangup)
+                   owner=True, keep_on_hangup=options.keep_on_hangup,
+                   placement=options.placement)
     status = app.run()
     from .commands import report_end
 

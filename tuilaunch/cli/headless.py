@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TextIO
 
 from ..engine.launcher import make_supervisor
+from ..engine.plan.machines import Placement
 from ..engine.plan.model import Plan
 from ..engine.run.output import strip_ansi
 from ..engine.run.supervisor import Event
@@ -41,6 +42,9 @@ class Printer:
         self.out = out
         self.log_dir = log_dir
         self.commands = {p.id: p.cmd for p in plan.processes} if plan is not None else {}
+        # a process another machine runs is labelled with it: `[talker-1@nuc] ...`
+        self.labels = {p.id: f"{p.id}@{p.machine}" for p in plan.processes
+                       if p.machine} if plan is not None else {}
         self.broken: str | None = None
         try:
             self.colour = out.isatty() and not os.environ.get("NO_COLOR")
@@ -82,26 +86,26 @@ class Printer:
 
     def format(self, event: Event) -> str:
         if event.kind == "output":
-            prefix = f"[{event.process}] "
+            prefix = f"[{self.label(event)}] "
             text = prefix + ("\n" + prefix).join(event.lines) + "\n"
             return text if self.colour or "\x1b" not in text else strip_ansi(text)
         if event.kind in ("started", "finished") and event.pid is None:
             return ""  # an action's progress: its log lines already say what happened
         if event.kind == "started":
-            return f"[INFO] [{event.process}]: process started with pid [{event.pid}]\n"
+            return f"[INFO] [{self.label(event)}]: process started with pid [{event.pid}]\n"
         if event.kind == "exited":
             return self._exit_line(event)
         if event.kind == "failed":
-            return f"[ERROR] [{event.process}]: failed to start: {event.reason}\n"
+            return f"[ERROR] [{self.label(event)}]: failed to start: {event.reason}\n"
         if event.kind == "respawning":
-            return f"[WARN] [{event.process}]: respawning ({event.reason})\n"
+            return f"[WARN] [{self.label(event)}]: respawning ({event.reason})\n"
         if event.kind == "lifecycle":
-            return f"[INFO] [{event.process}]: lifecycle state {event.reason}\n" \
+            return f"[INFO] [{self.label(event)}]: lifecycle state {event.reason}\n" \
                 if event.reason else ""
         if event.kind == "component":
             if event.data and event.data.get("state") == "loading":
                 return ""  # "waiting for the service": the result line follows
-            return f"[{event.level}] [{event.process}]: {event.reason}\n"
+            return f"[{event.level}] [{self.label(event)}]: {event.reason}\n"
         if event.kind == "log":
             return f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
         return f"[INFO] [launch]: {event.kind} ({event.reason})\n"
@@ -109,17 +113,21 @@ class Printer:
     def _exit_line(self, event: Event) -> str:
         """ros2 launch's words, so that what greps its output greps ours."""
         if event.code == 0:
-            return f"[INFO] [{event.process}]: process has finished cleanly [pid {event.pid}]\n"
+            return f"[INFO] [{self.label(event)}]: process has finished cleanly " \
+                f"[pid {event.pid}]\n"
         if (event.data or {}).get("requested"):
             # the stop asked for (Ctrl+C, `tuilaunch stop`): its end is no error to report
-            return f"[INFO] [{event.process}]: process stopped [pid {event.pid}, " \
+            return f"[INFO] [{self.label(event)}]: process stopped [pid {event.pid}, " \
                 f"{event.reason}]\n"
         code = f"{event.code}" if event.code is None or event.code >= 0 else \
             f"{event.code} ({event.reason})"
         cmd = " ".join(part for part in self.commands.get(event.process or "", [])
                        if part.strip())
-        return f"[ERROR] [{event.process}]: process has died [pid {event.pid}, exit code " \
+        return f"[ERROR] [{self.label(event)}]: process has died [pid {event.pid}, exit code " \
             f"{code}, cmd '{cmd}'].\n"
+
+    def label(self, event: Event) -> str | None:
+        return self.labels.get(event.process or "", event.process)
 
     def say(self, text: str) -> None:
         self(Event("log", "launch", reason=text))
@@ -144,8 +152,11 @@ class Printer:
             pass
 
 
-async def _run(plan: Plan, log_dir: Path) -> int:
-    supervisor = make_supervisor(plan, log_dir)
+async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
+               command: list[str] | None = None,
+               arguments: dict[str, str] | None = None) -> int:
+    supervisor = make_supervisor(plan, log_dir, placement=placement, command=command,
+                                 arguments=arguments)
     printer = Printer(sys.stdout, log_dir, plan)
     supervisor.subscribe(printer)
     loop = asyncio.get_running_loop()
@@ -174,5 +185,9 @@ async def _run(plan: Plan, log_dir: Path) -> int:
         printer.close()
 
 
-def run_headless(plan: Plan, log_dir: Path | None = None) -> int:
-    return asyncio.run(_run(plan, log_dir or run_log_dir()))
+def run_headless(plan: Plan, log_dir: Path | None = None, placement: Placement | None = None,
+                 command: list[str] | None = None,
+                 arguments: dict[str, str] | None = None) -> int:
+    """`placement` (`--machines`, applied to `plan`): its other machines run their share,
+    started with `command` (FILE or PACKAGE FILE as given) and `arguments`."""
+    return asyncio.run(_run(plan, log_dir or run_log_dir(), placement, command, arguments))

@@ -6,6 +6,7 @@ import os
 from typing import Any
 
 from ..engine.plan.components import component_label
+from ..engine.plan.machines import Placement
 from ..engine.plan.model import ArgumentInfo, Plan, TreeItem
 
 
@@ -35,11 +36,13 @@ def _annotations(item: TreeItem, plan: Plan) -> str:
     if item.kind == "process" and item.ref:
         proc = plan.process(item.ref)
         notes.append(f"[{proc.id}]")
+        if proc.machine:
+            notes.append(f"@{proc.machine}")
         if proc.package:
             notes.append(f"({proc.package}/{proc.executable})")
         if proc.lifecycle:
             notes.append("lifecycle, autostart" if proc.autostart else "lifecycle")
-        if proc.enabled and proc.error:
+        if proc.enabled and proc.error and proc.machine is None:
             notes.append(f"!! {proc.error}")
     if item.condition is not None:
         if item.kind == "group":
@@ -103,4 +106,16 @@ def format_tree(plan: Plan) -> str:
                          f"{proc.skipped_by.value!r}")
     for warning in plan.warnings:
         lines.append(f"warning: {warning}")
+    return "\n".join(lines) + "\n"
+
+
+def format_placement(plan: Plan, placement: Placement) -> str:
+    """`--print --machines`: which machine runs what (the rules' warnings are the plan's)."""
+    lines = ["", "Placement:"]
+    here = [p.id for p in plan.processes if p.enabled and p.machine is None]
+    lines.append(f"  here: {', '.join(here) if here else '(nothing)'}")
+    for name, machine in placement.machines.machines.items():
+        placed = [p.id for p in plan.processes if p.enabled and p.machine == name]
+        if placed:
+            lines.append(f"  {name} ({machine.host}): {', '.join(placed)}")
     return "\n".join(lines) + "\n"

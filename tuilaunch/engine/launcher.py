@@ -8,15 +8,17 @@ components loaded into their containers, and the inspector's session requests.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from .plan.machines import Placement
 from .plan.model import Plan
 from .ros.actions import RosActions
 from .ros.composition import ComponentLoader
 from .ros.inspector import Inspector
 from .ros.lifecycle import LifecycleTracker
+from .run.machines_share import placement_plugin
 from .run.supervisor import Supervisor
 
 
@@ -45,12 +47,24 @@ class RosSupervisor(Supervisor):
 def make_supervisor(plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
                     sigkill_timeout: float = 5.0,
                     bridge_factory: Callable[[], Any] | None = None,
-                    service_timeout: float = 10.0) -> RosSupervisor:
+                    service_timeout: float = 10.0, placement: Placement | None = None,
+                    command: list[str] | None = None,
+                    arguments: Mapping[str, str] | None = None,
+                    session_name: str | None = None) -> RosSupervisor:
     """A supervisor for `plan` with every ROS plugin; `bridge_factory` shares a bridge the
-    caller owns (and closes), else the launch makes its own on first use."""
-    return RosSupervisor(plan, log_dir, sigterm_timeout=sigterm_timeout,
-                         sigkill_timeout=sigkill_timeout, bridge_factory=bridge_factory,
-                         service_timeout=service_timeout)
+    caller owns (and closes), else the launch makes its own on first use.
+
+    `placement` (`--machines`, applied to `plan`): the processes placed on other machines
+    run there, in shares this launch starts with `command` (FILE or PACKAGE FILE as given)
+    and `arguments`, named after `session_name` (run/machines_share.py)."""
+    supervisor = RosSupervisor(plan, log_dir, sigterm_timeout=sigterm_timeout,
+                               sigkill_timeout=sigkill_timeout, bridge_factory=bridge_factory,
+                               service_timeout=service_timeout)
+    plugin = placement_plugin(supervisor, placement, command or [plan.file],
+                              arguments or {}, session_name)
+    if plugin is not None:
+        supervisor.add_plugin(plugin)
+    return supervisor
 
 
 __all__ = ["RosSupervisor", "make_supervisor"]

@@ -1,4 +1,5 @@
-"""`python -m tuilaunch.engine.server_main NAME FILE LOG_DIR ARGUMENTS_JSON [COMMAND_JSON]`:
+"""`python -m tuilaunch.engine.server_main NAME FILE LOG_DIR ARGUMENTS_JSON [COMMAND_JSON
+[PLACEMENT_JSON]]`:
 a launch as a background session server (run/session_server.py), with the ROS plugins.
 
 Here, above `run` and `ros`, because the server's supervisor comes from the one factory
@@ -16,6 +17,7 @@ from .describe.loader import set_command_line
 from .errors import LaunchError
 from .launcher import make_supervisor
 from .packages import ensure_environment
+from .plan.machines import placement_from_text
 from .plan.session import Session
 from .run.session_server import SessionServer
 
@@ -24,15 +26,21 @@ def main(argv: list[str]) -> int:
     name, path, log_dir, arguments_json = argv[:4]
     command = json.loads(argv[4]) if len(argv) > 4 else [path]
     arguments = json.loads(arguments_json)
+    # `--machines`: {"text": the file's text, "path": where it was read, "share": MACHINE}
+    placed = json.loads(argv[5]) if len(argv) > 5 else None
     ensure_environment()
     set_command_line(command, arguments)
     try:
-        session = Session(path, arguments)
+        placement = placement_from_text(placed["text"], placed["path"], placed.get("share")) \
+            if placed else None
+        session = Session(path, arguments, placement=placement)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
+    supervisor = make_supervisor(session.plan, Path(log_dir), placement=placement,
+                                 command=command, arguments=arguments, session_name=name)
     server = SessionServer(name, session, Path(log_dir), command=command,
-                           supervisor=make_supervisor(session.plan, Path(log_dir)))
+                           supervisor=supervisor)
     try:
         return asyncio.run(server.serve())
     except LaunchError as exc:

@@ -187,5 +187,7 @@ class TuiLaunchApp(Inspector, NodeCommands, Navigation, Arguments, Quitting):
 
 def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any)\
         -> TuiLaunchApp:
-    """The one factory for the CLI and the tests, so tests run the real wiring."""
-    return TuiLaunchApp(Session(path, arguments), log_dir, **options)
+    """The one factory for the CLI and the tests, so tests run the real wiring.
+    `placement` (`--machines`): the tree labels each process with its machine."""
+    placement = options.pop("placement", None)
+    return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)

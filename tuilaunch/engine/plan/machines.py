@@ -33,6 +33,7 @@ from typing import Protocol
 import yaml
 
 from ..errors import LaunchError, Origin
+from .model import Plan
 
 _MACHINE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 _ENV_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -82,6 +83,52 @@ class Placeable(Protocol):
 
     @property
     def full_name(self) -> str | None: ...
+
+
+@dataclass(frozen=True)
+class Placement:
+    """`--machines` as a launch carries it: the machines, the file's text (sent as is to
+    the other machines, whose shares place the same way), and the machine whose share this
+    side runs (`--share`; None: the launching side)."""
+
+    machines: Machines
+    text: str
+    share: str | None = None
+
+    def apply(self, plan: Plan) -> Plan:
+        """Sets each process's `machine` (same plan, changed in place and returned); a rule
+        that places nothing is a warning of the plan."""
+        placed = place(plan.processes, self.machines)
+        for proc in plan.processes:
+            proc.machine = placed[proc.id]
+        for rule in unused_rules(plan.processes, self.machines):
+            where = f"{rule.origin}: " if rule.origin else ""
+            plan.warnings.append(f"{where}placement rule {rule.match!r} -> {rule.machine} "
+                                 "places no process")
+        return plan
+
+    def used(self, plan: Plan) -> list[Machine]:
+        """The other machines with a process of the plan to run, in the file's order."""
+        names = {p.machine for p in plan.processes if p.enabled and p.machine}
+        return [m for name, m in self.machines.machines.items()
+                if name in names and name != self.share]
+
+
+def load_placement(path: str, share: str | None = None) -> Placement:
+    """`--machines FILE`: read and checked (MachinesError with file and line)."""
+    try:
+        text = Path(path).read_text()
+    except OSError as exc:
+        raise MachinesError(f"machines file {path}: {exc.strerror or exc}") from None
+    return placement_from_text(text, path, share)
+
+
+def placement_from_text(text: str, path: str, share: str | None = None) -> Placement:
+    machines = parse_machines(text, path)
+    if share is not None and share not in machines.machines:
+        raise MachinesError(f"--share {share!r} is not among the machines of {path}",
+                            hint=f"machines: {', '.join(machines.machines) or 'none'}")
+    return Placement(machines, text, share)
 
 
 def place(processes: Iterable[Placeable], machines: Machines) -> dict[str, str | None]:

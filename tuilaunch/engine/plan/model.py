@@ -119,6 +119,9 @@ class ProcessPlan:
     """The Node or ExecuteProcess it came from: what `event.action` is in handlers."""
     lifecycle: bool = False
     autostart: bool = False
+    machine: str | None = None
+    """The machine of a machines file that runs it (`--machines`); None: the launching
+    side."""
 
     @property
     def full_name(self) -> str | None:
@@ -143,6 +146,7 @@ class ProcessPlan:
             "origin": str(self.origin) if self.origin else None,
             "error": self.error, "components": self.components,
             "lifecycle": self.lifecycle, "autostart": self.autostart,
+            "machine": self.machine,
         }
 
 
@@ -219,9 +223,10 @@ class Plan:
         return [p for p in self.processes if p.enabled]
 
     def problems(self) -> list[str]:
-        """Enabled processes that cannot start: each names the process and why."""
+        """Enabled processes that cannot start: each names the process and why. One placed
+        on another machine is checked there (its package need not be installed here)."""
         return [f"{p.origin or self.file}: {p.id} ({p.label}): {p.error}"
-                for p in self.processes if p.enabled and p.error]
+                for p in self.processes if p.enabled and p.error and p.machine is None]
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -239,7 +244,7 @@ def process_signature(proc: ProcessPlan) -> tuple[Any, ...]:
     params = tuple((path, repr(sorted(values.items())))
                    for path, values in proc.generated_parameter_files)
     return (tuple(proc.cmd), tuple(sorted(proc.env.items())), proc.clear_env, proc.cwd, params,
-            proc.respawn)
+            proc.respawn, proc.machine)
 
 
 @dataclass

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from ..describe.loader import LoadedFile, load_file
 from ..errors import LaunchError
+from .machines import Placement
 from .model import Plan, PlanDiff, diff_plans
 from .resolve import default_params_dir, resolve
 
@@ -28,17 +29,23 @@ class Preview:
 
 class Session:
     def __init__(self, path: str, arguments: Mapping[str, str],
-                 params_dir: Path | None = None) -> None:
+                 params_dir: Path | None = None, placement: Placement | None = None) -> None:
+        """`placement` (`--machines`): each plan made here says which machine runs what."""
         self.path = path
+        self.placement = placement
         self.params_dir = params_dir or default_params_dir()
         self.loaded: LoadedFile = load_file(path)
         self.arguments = dict(arguments)
-        self.plan: Plan = resolve(self.loaded, self.arguments, self.params_dir)
+        self.plan: Plan = self._resolve(self.arguments)
+
+    def _resolve(self, values: Mapping[str, str]) -> Plan:
+        plan = resolve(self.loaded, dict(values), self.params_dir)
+        return self.placement.apply(plan) if self.placement is not None else plan
 
     def preview(self, edits: Mapping[str, str], running: set[str] | None = None) -> Preview:
         values = {**self.arguments, **edits}
         try:
-            plan = resolve(self.loaded, values, self.params_dir)
+            plan = self._resolve(values)
         except LaunchError as exc:
             return Preview(values, None, None, str(exc))
         return Preview(values, plan, diff_plans(self.plan, plan, running), None)
@@ -53,4 +60,4 @@ class Session:
     def reload(self) -> None:
         """Reads the launch file again (after the user edited it)."""
         self.loaded = load_file(self.path)
-        self.plan = resolve(self.loaded, self.arguments, self.params_dir)
+        self.plan = self._resolve(self.arguments)

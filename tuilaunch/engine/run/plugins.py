@@ -61,6 +61,11 @@ class SupervisorPlugin(Protocol):
         """Action kinds of the plan this plugin performs (`call_service`, ...)."""
         ...
 
+    def run_started(self) -> Awaitable[Any] | None:
+        """The run begins (before any process starts); the awaitable returned, if any,
+        runs as a task of the launch."""
+        ...
+
     def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
         """A process of the launch has just started; the awaitable returned, if any, runs
         as a task of the launch (cancelled when the run ends)."""
@@ -101,6 +106,9 @@ class Plugin:
 
     def actions(self) -> Mapping[str, ActionRunner]:
         return {}
+
+    def run_started(self) -> Awaitable[Any] | None:
+        return None
 
     def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
         return None

@@ -8,7 +8,9 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   cannot show more; kinds?: only events of these kinds}, status {resources?: false skips
   the CPU/memory sampling}, find {process},
   start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
-  is left), apply {arguments}, lifecycle {process}.
+  is left), apply {arguments}, lifecycle {process}; to a machine's share of a placed launch
+  (run/machines_share.py): external_event {process, on: start|exit, pid, code},
+  share_lines {process, start, end, after}.
   Resources (run/resource_watch.py): `status` gives each process `cpu_percent` (% of one
   core), `rss_bytes` and `threads` over its process tree (None when not running);
   watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a

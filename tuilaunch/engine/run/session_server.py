@@ -179,7 +179,16 @@ class SessionServer:
         return {"name": self.name, "file": os.path.abspath(self.session.path),
                 "command": self.command,
                 "arguments": self.session.arguments, "pid": os.getpid(),
-                "started": self.started, "log_dir": str(self.log_dir)}
+                "started": self.started, "log_dir": str(self.log_dir),
+                **self._placement_info()}
+
+    def _placement_info(self) -> dict[str, Any]:
+        """`--machines` as the launch was given it, so a client resolves the same plan."""
+        placement = self.session.placement
+        if placement is None:
+            return {}
+        return {"placement": {"text": placement.text, "path": placement.machines.path,
+                              "share": placement.share}}
 
     def status(self, usage: Mapping[str, Usage] | None = None) -> dict[str, Any]:
         """Each process's state; with `usage` (ResourceWatch.current), its CPU%, resident
@@ -194,7 +203,7 @@ class SessionServer:
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
                 "pid": self.pids.get(proc.id) if state == "running" else None,
                 "exit_code": self.supervisor.exit_codes.get(proc.id),
-                "detail": self.details.get(proc.id), **fields})
+                "detail": self.details.get(proc.id), "machine": proc.machine, **fields})
         counts: dict[str, int] = {}
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
@@ -493,8 +502,9 @@ class SessionServer:
             return {"stop": diff.stop, "start": diff.start}
 
     def _emit_plan(self) -> None:
-        # an event like the others, so it reaches every client in order with their states
-        self._on_event(Event("relaunched", reason=None, lines=[
+        # an event like the others, so it reaches every client in order with their states,
+        # and the plugins (the machines' shares are relaunched with the same values)
+        self.supervisor.emit(Event("relaunched", reason=None, lines=[
             f"{k}:={v}" for k, v in self.session.arguments.items()]))
 
 

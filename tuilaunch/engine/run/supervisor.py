@@ -21,12 +21,12 @@ import time
 
 from ..plan.model import Plan, PlanDiff, diff_plans
 from .events import Consumer, Event, LaunchEvent
-from .starting import Starting
+from .placed import Placed
 
 __all__ = ["Consumer", "Event", "LaunchEvent", "Supervisor"]
 
 
-class Supervisor(Starting):
+class Supervisor(Placed):
     """Runs a plan: see the layers it is made of (module docstring)."""
 
     async def run(self, keep_alive: bool = False) -> int:
@@ -39,13 +39,19 @@ class Supervisor(Starting):
         stops every process still wants to start them again."""
         self._keep_alive = keep_alive
         try:
+            for plugin in self.plugins:
+                begun = plugin.run_started()
+                if begun is not None:
+                    self._spawn_task(begun)
             for proc in self.plan.processes:
+                if not self.runs_here(proc.id):
+                    continue  # its machine's share starts it (run/placed.py)
                 if proc.enabled and proc.trigger is None:
                     self._start_now(proc.id)  # no task per process: start-up at the floor
                 elif proc.enabled:
                     self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
             for action in self.plan.actions:
-                if action.enabled:
+                if action.enabled and self.runs_actions():
                     self._schedule_action(action)
             while not self._settled():
                 self._changed.clear()
@@ -123,7 +129,7 @@ class Supervisor(Starting):
             self._on_shutdown.clear()
             self._any_watchers.clear()
             for proc in plan.processes:
-                if proc.id in diff.start:
+                if proc.id in diff.start and self.runs_here(proc.id):
                     self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
             for action in plan.actions:
                 self.states.setdefault(action.id, "pending" if action.enabled else "skipped")
@@ -131,11 +137,12 @@ class Supervisor(Starting):
                 on_event = action.trigger is not None and action.trigger.on in ("io", "shutdown")
                 # event watchers were cleared above and come back; one-off actions rerun
                 # only when they are new or their target or data changed
-                if action.enabled and (fresh or on_event):
+                if action.enabled and (fresh or on_event) and self.runs_actions():
                     self._schedule_action(action)
         finally:
             self._busy -= 1
             self._changed.set()
+        self.set_placement(self.machine, self.remote)  # the new plan's placement
         return diff
 
     async def restart(self, process_id: str) -> None:

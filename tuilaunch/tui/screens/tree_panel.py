@@ -237,6 +237,8 @@ class LaunchTree(Tree[RowData]):
             proc = self.plan.process(ref)
             label.append(proc.name or ref, "bold" if state == "running" else "")
             label.append(f" [{ref}]" if proc.name else "", "dim")
+            if proc.machine:  # placed on another machine (--machines)
+                label.append(f" @{proc.machine}", "cyan")
         else:
             label.append(self.action_labels.get(ref, ref))
         detail = self.details.get(ref, "")

@@ -1,0 +1,474 @@
+"""Nodes placed on machines (`--machines`), over real sshd "machines" (tests/sshd.py).
+
+The launching side is this test's own session folder; "robot1" runs its share as a
+session in its own folder, reached only through ssh. The remote tuilaunch is a small
+wrapper (the machine's `tuilaunch:` field): the CLI for a share, the proxy module for the
+link, until the CLI's own hidden `__proxy` arrives.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from .conftest import run_cli
+from .sshd import Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
+
+LAUNCH = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess, LogInfo, RegisterEventHandler
+from launch.event_handlers import OnProcessIO, OnProcessStart
+def generate_launch_description():
+    far = ExecuteProcess(name='far', cmd=['sh', '-c',
+        'echo far up; i=0; while true; do i=$((i+1)); echo far tick $i; sleep 0.2; done'])
+    solo = ExecuteProcess(name='solo', cmd=['sh', '-c',
+        'echo solo up; while true; do sleep 0.5; done'])
+    near = ExecuteProcess(name='near', cmd=['sh', '-c',
+        'echo near up; while true; do sleep 0.5; done'])
+    return LaunchDescription([far, solo, RegisterEventHandler(
+        OnProcessStart(target_action=far, on_start=[near])), RegisterEventHandler(
+        OnProcessIO(target_action=far, on_stdout=lambda event: LogInfo(
+            msg='heard ' + event.text.decode().strip())))])
+"""
+
+
+def wait_for(check: Callable[[], object], limit: float = 60.0) -> None:
+    end = time.monotonic() + limit
+    while not check():
+        assert time.monotonic() < end, f"condition never held: {check}"
+        time.sleep(0.05)
+
+
+def remote_tuilaunch(folder: Path) -> Path:
+    """The machines' `tuilaunch:`: the CLI, whose hidden proxy commands come from the proxy
+    module for now."""
+    script = folder / "tl"
+    script.write_text(
+        "#!/bin/sh\n"
+        'case "$1" in __proxy|__ls) exec "' + sys.executable + '" -m '
+        'tuilaunch.engine.run.proxy "$@";; esac\n'
+        'exec "' + sys.executable + '" -m tuilaunch "$@"\n')
+    script.chmod(0o755)
+    return script
+
+
+@pytest.fixture(name="setup")
+def setup_fixture(machines: Machines, tmp_path: Path, write,
+                  monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Path, Path]]:
+    """The launch file and a machines file placing `far` on robot1 (as r1) and on an
+    unreachable robot3 (as r3, when asked by the test's own file)."""
+    monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
+    # the launching side's own session folder (short: a socket path has 108 bytes at most)
+    runtime = Path(tempfile.mkdtemp(prefix="tlhere"))
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    launch = write(LAUNCH)
+    dead_port = free_port()  # nothing listens there: a machine that is off
+    with open(machines.ssh_config, "a") as config:
+        config.write(machines.host_entry("robot3", dead_port))
+    tool = remote_tuilaunch(tmp_path)
+    placement = tmp_path / "machines.yaml"
+    placement.write_text(
+        "machines:\n"
+        f"  r1: {{host: robot1, tuilaunch: {tool}}}\n"
+        f"  r3: {{host: robot3, tuilaunch: {tool}}}\n"
+        "placement:\n"
+        "  - {match: far-*, machine: r1}\n")
+    try:
+        yield launch, placement
+    finally:
+        # a launching-side session a failed test left running is stopped (it stops its
+        # shares); the machines' own teardown ends whatever is left there
+        servers = [json.loads(info.read_text())["pid"]
+                   for info in (runtime / "tuilaunch").glob("*.json")]
+        for pid in servers:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGTERM)
+        with contextlib.suppress(AssertionError):
+            wait_for(lambda: not any(alive(pid) for pid in servers), 60)
+        for pid in servers:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(runtime, ignore_errors=True)
+
+
+def remote_sessions(machines: Machines, alias: str) -> list[dict]:
+    done = run_cli("ls", "--json", env={"XDG_RUNTIME_DIR": str(machines[alias].runtime)})
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+class Headless:
+    """`tuilaunch FILE --machines M --headless`, its output read as it comes."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "tuilaunch", *args, "--headless"], stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT, env=os.environ.copy())
+        self.chunks: list[bytes] = []
+        self.reader = threading.Thread(target=self._pump, daemon=True)
+        self.reader.start()
+
+    def _pump(self) -> None:
+        assert self.proc.stdout is not None
+        while chunk := os.read(self.proc.stdout.fileno(), 65536):
+            self.chunks.append(chunk)
+
+    @property
+    def text(self) -> str:
+        return b"".join(self.chunks).decode(errors="replace")
+
+    def read(self) -> str:
+        return self.text
+
+    def wait_for(self, pattern: str, limit: float = 90.0) -> re.Match[str]:
+        found: list[re.Match[str]] = []
+
+        def check() -> bool:
+            match = re.search(pattern, self.read())
+            if match:
+                found.append(match)
+            return match is not None
+
+        try:
+            wait_for(check, limit)
+        except AssertionError:
+            raise AssertionError(f"never printed {pattern!r}:\n{self.text}") from None
+        return found[0]
+
+    def stop(self) -> int:
+        self.proc.send_signal(signal.SIGINT)
+        try:
+            code = self.proc.wait(timeout=90)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+                self.proc.wait()
+        self.reader.join(timeout=10)
+        return code
+
+
+def test_print_shows_where_each_process_runs(setup) -> None:
+    launch, placement = setup
+    printed = run_cli(str(launch), "--machines", str(placement), "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert "[far-1] @r1" in printed.stdout
+    assert "here: solo-2, near-3" in printed.stdout
+    assert "r1 (robot1): far-1" in printed.stdout
+    plan = json.loads(run_cli(str(launch), "--machines", str(placement), "--print",
+                              "--json").stdout)
+    assert {p["id"]: p["machine"] for p in plan["processes"]} == {
+        "far-1": "r1", "solo-2": None, "near-3": None}
+    # a rule that places nothing is said (a typo in a name would otherwise go unseen)
+    placement.write_text(placement.read_text() + "  - {match: /nobody/**, machine: r1}\n")
+    printed = run_cli(str(launch), "--machines", str(placement), "--print")
+    assert "placement rule '/nobody/**' -> r1 places no process" in printed.stdout
+
+
+def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, machines):
+    launch, placement = setup
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        started = run.wait_for(r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]")
+        far_pid = int(started.group(1))
+        run.wait_for(r"\[far-1@r1\] far tick")  # its output, labelled with its machine
+        # an OnProcessIO handler here hears it
+        run.wait_for(r"\[INFO\] \[[^\]]+\]: heard far tick 3\n")
+        # what it printed before the link was made is shown too, first
+        assert run.text.index("[far-1@r1] far up") < run.text.index("[far-1@r1] far tick 1\n")
+        # near-2 waits for far-1's start, which happened on robot1
+        run.wait_for(r"\[INFO\] \[near-3\]: process started")
+        assert run.text.index("[far-1@r1]: process started") < \
+            run.text.index("[near-3]: process started")
+        shares = remote_sessions(machines, "robot1")
+        assert len(shares) == 1 and shares[0]["name"].endswith("-r1")
+        assert alive(far_pid)  # a process of robot1's share (same pid space here)
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    # stopping the launch stopped everything on robot1
+    assert code == 0, run.text
+    assert "[INFO] [far-1@r1]: process stopped" in run.text
+    assert not alive(far_pid)
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, machines):
+    launch, placement = setup
+    name = "placed"
+    done = run_cli(str(launch), "--machines", str(placement), "--detach", "--name", name)
+    assert done.returncode == 0, done.stderr
+    try:
+        waited = run_cli("wait", name, "far-1", "running", "--timeout", "60", timeout=90)
+        assert waited.returncode == 0, waited.stderr
+        waited = run_cli("wait", name, "near-3", "running", "--timeout", "60", timeout=90)
+        assert waited.returncode == 0, waited.stderr
+        status = json.loads(run_cli("status", name, "--json").stdout)
+        rows = {p["id"]: p for p in status["processes"]}
+        assert rows["far-1"]["machine"] == "r1" and rows["far-1"]["state"] == "running"
+        assert rows["solo-2"]["machine"] is None and rows["solo-2"]["state"] == "running"
+        table = run_cli("status", name).stdout
+        assert re.search(r"^  far-1@r1 +running ", table, re.M), table
+        # its output is in the log files here too (`tuilaunch logs` on the launching side)
+        wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
+        # the TUI attached here shows it in the one tree, labelled with its machine
+        asyncio.run(attached_tree_shows_machine(name, status))
+        # a restart of a process placed there is done there
+        far_pid = rows["far-1"]["pid"]
+        restarted = run_cli("restart", name, "far-1", timeout=90)
+        assert restarted.returncode == 0, restarted.stderr
+        wait_for(lambda: not alive(far_pid))
+        # the share's own view: it runs far-1, the others are elsewhere
+        share = remote_sessions(machines, "robot1")[0]["name"]
+        there = run_cli("status", share, "--json",
+                        env={"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)})
+        states = {p["id"]: p["state"] for p in json.loads(there.stdout)["processes"]}
+        assert states == {"far-1": "running", "solo-2": "elsewhere", "near-3": "elsewhere"}
+    finally:
+        stopped = run_cli("stop", name, timeout=120)
+    assert stopped.returncode == 0, stopped.stderr
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+async def attached_tree_shows_machine(name: str, status: dict) -> None:
+    from tuilaunch.engine.plan.machines import placement_from_text
+    from tuilaunch.tui.app import make_app
+    from tuilaunch.tui.output_store import View
+
+    placed = status["placement"]
+    app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                   session_name=name, placement=placement_from_text(placed["text"],
+                                                                    placed["path"]))
+    async with app.run_test(size=(120, 30)) as pilot:
+        assert app.supervisor is not None
+        for _ in range(400):
+            far = str(app.launch_tree.rows["far-1"].label)
+            ticks = [line.text for line in app.store.lines(View("far-1"))
+                     if "far tick" in line.text]
+            if "running" in far and len(ticks) > 2:
+                break
+            await pilot.pause(0.05)
+        assert "@r1" in far and "running" in far, far
+        assert "@" not in str(app.launch_tree.rows["solo-2"].label)
+        assert len(ticks) > 2
+        await pilot.press("d")  # detach: the launch runs on
+        await pilot.pause(0.5)
+    assert app.detached
+
+
+def test_an_unreachable_machine_fails_its_nodes_in_one_line_and_the_rest_runs(setup):
+    launch, placement = setup
+    placement.write_text(placement.read_text().replace("machine: r1", "machine: r3"))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        failed = run.wait_for(r"\[ERROR\] \[far-1@r3\]: failed to start: (.*)\n")
+        assert re.fullmatch(r"cannot reach r3 \(robot3\): .*Connection refused",
+                            failed.group(1)), failed.group(1)
+        run.wait_for(r"\[solo-2\] solo up")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code != 0
+    assert "[near-3]: process started" not in run.text  # what it waits for never started
+
+
+def test_a_node_on_robot1_waits_for_a_node_here(setup, machines):
+    launch, placement = setup
+    placement.write_text(placement.read_text().replace("match: far-*", "match: near-*"))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        run.wait_for(r"\[INFO\] \[near-3@r1\]: process started")
+        run.wait_for(r"\[near-3@r1\] near up|\[INFO\] \[near-3@r1\]")
+        assert run.text.index("[far-1]: process started") < \
+            run.text.index("[near-3@r1]: process started")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code == 0, run.text
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def test_a_dropped_link_stops_nothing_and_is_made_again(setup, machines):
+    launch, placement = setup
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        far_pid = int(run.wait_for(
+            r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]").group(1))
+        run.wait_for(r"\[far-1@r1\] far tick")
+        links = [pid for pid in descendants(run.proc.pid) if b"__proxy" in cmdline(pid)]
+        assert links, "no ssh link to robot1's share"
+        for pid in links:
+            os.kill(pid, signal.SIGKILL)  # the link dies as a cable pulled out would
+        lost = run.wait_for(r"\[WARN\] \[launch.user\]: r1: (.*); its share runs on there; "
+                            r"connecting again in 1 s")
+        assert "lost the link to robot1" in lost.group(1)
+        assert alive(far_pid)  # the share ran on
+        after = len(run.text)
+        wait_for(lambda: "r1: following session" in run.text[after:] and
+                 "[far-1@r1] far tick" in run.text[after:].split("following session", 1)[-1])
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code == 0, run.text
+    assert not alive(far_pid)
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+    # what it printed while the link was down was shown once it was back: no gap, no twice
+    ticks = [int(n) for n in re.findall(r"\[far-1@r1\] far tick (\d+)\n", run.text)]
+    assert ticks == list(range(1, len(ticks) + 1)), ticks
+
+
+def test_a_missing_remote_tuilaunch_is_said_for_each_node_placed_there(setup, tmp_path):
+    launch, placement = setup
+    text = placement.read_text()
+    placement.write_text(text.replace(str(tmp_path / "tl"), str(tmp_path / "nowhere" / "tl"),
+                                      1))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        failed = run.wait_for(r"\[ERROR\] \[far-1@r1\]: failed to start: (.*)\n")
+        assert failed.group(1).startswith("r1 (robot1): tuilaunch not found there"), \
+            failed.group(1)
+        run.wait_for(r"\[solo-2\] solo up")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code != 0
+
+
+RELAUNCH = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.substitutions import LaunchConfiguration
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('word', default_value='tick'),
+        ExecuteProcess(name='far', cmd=['sh', '-c', ['while true; do echo far ',
+                       LaunchConfiguration('word'), '; sleep 0.2; done']]),
+    ])
+"""
+
+
+def test_a_relaunch_with_new_arguments_is_applied_on_robot1(setup, machines, write):
+    from tuilaunch.client.link import Link
+
+    _, placement = setup
+    launch = write(RELAUNCH, "relaunch.py")
+    name = "relaunched"
+    done = run_cli(str(launch), "--machines", str(placement), "--detach", "--name", name)
+    assert done.returncode == 0, done.stderr
+    try:
+        wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
+        link = Link(name, timeout=None)
+        try:
+            link.request("apply", arguments={"word": "tock"})
+        finally:
+            link.close()
+        wait_for(lambda: "far tock" in run_cli("logs", name, "far-1").stdout)
+        share = remote_sessions(machines, "robot1")[0]
+        assert share["arguments"] == {"word": "tock"}
+    finally:
+        stopped = run_cli("stop", name, timeout=120)
+    assert stopped.returncode == 0, stopped.stderr
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+
+
+def descendants(root: int) -> list[int]:
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+            children.setdefault(parent, []).append(int(entry.name))
+    found, todo = [], [root]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def cmdline(pid: int) -> bytes:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return b""
+
+
+def test_a_refused_key_is_said_for_each_node_placed_there(setup, machines, tmp_path):
+    launch, placement = setup
+    stranger = tmp_path / "stranger_key"
+    keygen(stranger)  # a key robot1 does not know
+    with open(machines.ssh_config, "a") as config:
+        config.write(machines.host_entry("robot1-stranger", machines["robot1"].port,
+                                         stranger))
+    placement.write_text(placement.read_text().replace("host: robot1,",
+                                                       "host: robot1-stranger,"))
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        failed = run.wait_for(r"\[ERROR\] \[far-1@r1\]: failed to start: (.*)\n")
+        assert failed.group(1).startswith("r1 (robot1-stranger) refused the login"), \
+            failed.group(1)
+        run.wait_for(r"\[solo-2\] solo up")
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code != 0
+
+
+def test_a_node_on_robot2_waits_for_a_node_on_robot1(setup, machines, tmp_path):
+    launch, placement = setup
+    tool = tmp_path / "tl"
+    placement.write_text(placement.read_text().replace(
+        "placement:\n", f"  r2: {{host: robot2, tuilaunch: {tool}}}\nplacement:\n") +
+        "  - {match: near-*, machine: r2}\n")
+    run = Headless(str(launch), "--machines", str(placement))
+    try:
+        run.wait_for(r"\[INFO\] \[near-3@r2\]: process started")
+        assert run.text.index("[far-1@r1]: process started") < \
+            run.text.index("[near-3@r2]: process started")
+        assert len(remote_sessions(machines, "robot2")) == 1
+        code = run.stop()
+    finally:
+        if run.proc.poll() is None:
+            run.proc.kill()
+            run.proc.wait()
+    assert code == 0, run.text
+    wait_for(lambda: remote_sessions(machines, "robot1") == [])
+    wait_for(lambda: remote_sessions(machines, "robot2") == [])
+
+
+def test_a_mistake_in_the_machines_file_is_one_line_naming_file_and_line(write, tmp_path):
+    launch = write(LAUNCH)
+    machines_file = tmp_path / "machines.yaml"
+    machines_file.write_text("machines:\n  r1: {hots: robot1}\n")
+    done = run_cli(str(launch), "--machines", str(machines_file), "--print")
+    assert done.returncode == 2
+    assert done.stderr.startswith(f"tuilaunch: error: {machines_file}:2:8: machines.r1: "
+                                  "unknown field 'hots'\n"), done.stderr
+    assert "Traceback" not in done.stderr and done.stdout == ""
