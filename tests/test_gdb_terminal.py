@@ -38,7 +38,8 @@ async def test_ctrl_c_typed_interrupts_a_program_under_interactive_gdb(
     monkeypatch.setenv("DEBUGINFOD_URLS", "")
     sleeper = "print('sleeping', flush=True); import time; time.sleep(600)"
     gdb = await start(tmp_path, [GDB or "gdb", "-q", "-nx", "-ex", "set confirm off",
-                                 "-ex", "run", "--args", sys.executable, "-c", sleeper])
+                                 "-ex", "run", "--args", sys.executable, "-c", sleeper],
+                      controlling_terminal=True)
     try:
         await gdb.wait_for("sleeping")
         gdb.running.write_input(b"\x03")

@@ -6,12 +6,24 @@ message longer than MAX_MESSAGE is refused rather than buffered without bound.
 Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
   most output lines per batch and the least seconds between batches, for a display that
   cannot show more}, status, find {process},
-  start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
-  is left), apply {arguments}, lifecycle {process}.
+  start/stop {process}, restart {process, prefix?: a tool run before the command (`gdb -q
+  -ex run --args`) until a restart without one, log_level?: `--ros-args --log-level` kept
+  across respawns until a restart changes it ("" drops it)}, run_action {action}, shutdown
+  {reason}, kill (SIGKILL what is left), apply {arguments}, lifecycle {process};
+  typing {process, on: bool} takes or gives back the keyboard (one client at a time; a
+  client that disconnects gives it back), input {process, data: UTF-8 text with control
+  characters, "\r" for Enter, "\u0003" for ctrl+c} from the client holding it -> {} or
+  {"dropped": bytes the node did not read in time}.
+  status -> per process also `command` (argv), `command_line` (paste-ready: cd, env
+  changes, argv quoted), `env` (changes to the launcher's environment), and for a death by a
+  signal nobody asked for (state "failed") `signal` ("SIGSEGV") and `core` when one was
+  kept; `typing` {client, process} or null.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
   [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
-  lines are the new `name:=value` arguments); `{"type": "ended", "status": n}` last.
+  lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
+  keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
+  and "core" for a crash); `{"type": "ended", "status": n}` last.
 """
 
 from __future__ import annotations

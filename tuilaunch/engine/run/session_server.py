@@ -28,6 +28,7 @@ from ..errors import LaunchError
 from ..plan.session import Session
 from . import session_dir
 from .event_buffer import EventBuffer
+from .keyboard import Keyboard
 from .events import Event
 from .plugins import Handler
 from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
@@ -89,6 +90,10 @@ class SessionServer:
             sigkill_timeout=sigkill_timeout)
         self.supervisor.subscribe(self._on_event)
         self._handlers: dict[str, Handler] = {}
+        self.keyboard = Keyboard(self.supervisor, self.find_process)
+        for op, handler in self.keyboard.handlers().items():
+            self.add_handler(op, handler)
+        self._clients = 0
         for plugin in self.supervisor.plugins:
             for op, handler in plugin.handlers(self.find_process).items():
                 self.add_handler(op, handler)
@@ -150,7 +155,10 @@ class SessionServer:
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
                 "pid": self.pids.get(proc.id) if state == "running" else None,
                 "exit_code": self.supervisor.exit_codes.get(proc.id),
-                "detail": self.details.get(proc.id)})
+                "detail": self.details.get(proc.id),
+                # the exact start (argv, paste-ready line, env changes); a crash's signal/core
+                **self.supervisor.command_of(proc.id),
+                **(self.supervisor.deaths.get(proc.id, {}) if state == "failed" else {})})
         counts: dict[str, int] = {}
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
@@ -158,7 +166,7 @@ class SessionServer:
         actions = [{"id": a.id, "kind": a.kind, "state": states.get(a.id, "pending")}
                    for a in self.session.plan.actions]
         return {**self.info(), "counts": counts, "processes": processes, "actions": actions,
-                "dropped_clients": self.dropped_clients}
+                "dropped_clients": self.dropped_clients, "typing": self.keyboard.state()}
 
     # --- serving ---------------------------------------------------------------------------
 
@@ -270,6 +278,8 @@ class SessionServer:
         self.writers.add(writer)
         lock = asyncio.Lock()
         queue: ClientQueue | None = None
+        self._clients += 1
+        client = self._clients  # who holds the keyboard (run/keyboard.py)
         try:
             await _send(writer, lock, {"type": "hello", "info": self.info()})
             while True:
@@ -285,6 +295,7 @@ class SessionServer:
                     await _send(writer, lock, {"type": "reply", "id": None, "ok": False,
                                                "error": str(exc)})
                     continue
+                message["client"] = client  # set here: a client cannot speak for another
                 if message.get("op") == "subscribe" and queue is None:
                     queue = ClientQueue(
                         max(1, min(int(message.get("max_lines") or CLIENT_MAX_LINES),
@@ -309,6 +320,7 @@ class SessionServer:
         except (ConnectionError, OSError):
             return
         finally:
+            self.keyboard.release(client)  # a client that is gone types no more
             if queue is not None:
                 self.queues.discard(queue)
                 queue.ready.set()
@@ -381,7 +393,11 @@ class SessionServer:
             process = self.find_process(str(message.get("process")))
             if process not in {p.id for p in self.session.plan.processes}:
                 raise LaunchError(f"{process} is an action, not a process: it cannot {op}")
-            await getattr(supervisor, op)(process)
+            if op == "restart":
+                await supervisor.restart(process, message.get("prefix") or None,
+                                         message.get("log_level"))
+            else:
+                await getattr(supervisor, op)(process)
             return {"process": process, "state": supervisor.states.get(process)}
         if op == "shutdown":
             await supervisor.shutdown(str(message.get("reason") or "stop requested"))

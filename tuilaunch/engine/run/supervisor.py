@@ -10,7 +10,7 @@ No thread per child: each child's exit is watched through a pidfd on the event l
 its output through non-blocking reads on the same loop.
 
 The work is split by concern, one file each, stacked as layers of one class: core.py
-(state, events), triggers.py, plan_actions.py, stopping.py, respawn.py, starting.py; this
+(state, events), triggers.py, plan_actions.py, stopping.py, respawn.py, starting.py, interacting.py; this
 file runs the whole and changes the plan. Plugins (run/plugins.py) add what needs ROS.
 """
 
@@ -21,12 +21,12 @@ import time
 
 from ..plan.model import Plan, PlanDiff, diff_plans
 from .events import Consumer, Event, LaunchEvent
-from .starting import Starting
+from .interacting import Interacting
 
 __all__ = ["Consumer", "Event", "LaunchEvent", "Supervisor"]
 
 
-class Supervisor(Starting):
+class Supervisor(Interacting):
     """Runs a plan: see the layers it is made of (module docstring)."""
 
     async def run(self, keep_alive: bool = False) -> int:
@@ -138,7 +138,12 @@ class Supervisor(Starting):
             self._changed.set()
         return diff
 
-    async def restart(self, process_id: str) -> None:
+    async def restart(self, process_id: str, prefix: str | None = None,
+                      log_level: str | None = None) -> None:
+        """Stops and starts one process; `prefix` runs it under a tool (gdb, valgrind) until
+        a restart without one, `log_level` sets its ROS log level until changed (see
+        `restart_options`: checked before anything stops)."""
+        self.restart_options(process_id, prefix, log_level)
         self._busy += 1  # the run must not look finished between the stop and the start
         try:
             await self.stop(process_id)
