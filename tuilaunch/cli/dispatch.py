@@ -15,6 +15,7 @@ from pathlib import Path
 from ..engine.describe.loader import LoadedFile, load_file, set_command_line
 from ..engine.errors import LaunchError, PackageError
 from ..engine.packages import ensure_environment, find_launch_file_in_share
+from ..engine.plan.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
 
 
@@ -46,6 +47,12 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--keep-on-hangup", action="store_true",
                         help="TUI: a dropped terminal (SIGHUP) detaches instead of stopping "
                         "the launch")
+    parser.add_argument("--launch-prefix", metavar="CMD",
+                        help="as ros2 launch: put CMD (e.g. 'gdb -ex run --args') before "
+                        "each executable without a prefix of its own (launch-prefix:=CMD)")
+    parser.add_argument("--launch-prefix-filter", metavar="REGEX",
+                        help="as ros2 launch: only executables whose name REGEX matches from "
+                        "its start get --launch-prefix (launch-prefix-filter:=REGEX)")
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     parser.epilog = (parser.epilog or "") + (
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
@@ -163,6 +170,9 @@ def _main(argv: list[str] | None) -> int:
         options.json else contextlib.nullcontext()
     try:
         positional, arguments = split_items(options.items)
+        # after the user's own name:=value, so these win, as in ros2 launch
+        arguments.update(item.split(":=", 1) for item in prefix_arguments(
+            options.launch_prefix, options.launch_prefix_filter))
         path = find_launch_file(positional)
         set_command_line(positional, arguments)
         with file_output:
