@@ -190,14 +190,23 @@ class RemoteSupervisor:
             raise SessionError(f"session {self.name}: {reply.get('error')}")
         return reply.get("result")
 
+    async def request(self, op: str, **fields: Any) -> Any:
+        """Any request of the protocol (run/protocol.py): its reply's result; SessionError
+        with the server's one-line message when it refuses."""
+        return await self._request(op, **fields)
+
     async def start(self, process_id: str) -> None:
         await self._request("start", process=process_id)
 
     async def stop(self, process_id: str) -> None:
         await self._request("stop", process=process_id)
 
-    async def restart(self, process_id: str) -> None:
-        await self._request("restart", process=process_id)
+    async def restart(self, process_id: str, prefix: str | None = None,
+                      log_level: str | None = None) -> None:
+        """As Supervisor.restart: `prefix` runs it under a tool until a plain restart."""
+        extra = {k: v for k, v in (("prefix", prefix), ("log_level", log_level))
+                 if v is not None}
+        await self._request("restart", process=process_id, **extra)
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         self._stopping = True

@@ -19,6 +19,9 @@ KEYS = """\
   d         detach: the launch runs on (tuilaunch attach)
 [b]Nodes[/b] (arrows: tree; tab: into the pane)
   s r t     stop / restart / start node or group
+  i         type into the node's terminal (every key, ctrl+c too) until ctrl+]
+  g         restart the node under a tool (gdb, valgrind...); r: plain again
+  c         the node's exact command line (y copies it)
   a         all nodes' output
   / n N     search, next / previous match; esc clears
   l  \\      level filter / text filter
