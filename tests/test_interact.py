@@ -26,6 +26,8 @@ from .gdb_support import requires_gdb
 from .terminal_harness import PROGRAMS
 from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
 
+pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
+
 LAUNCH = f"""
 import sys
 from launch import LaunchDescription
@@ -60,7 +62,7 @@ def start(write) -> str:
     return name
 
 
-def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(runtime, write):
+def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(write):
     name = start(write)
     typist, other = Link(name), Link(name)
     try:
@@ -69,7 +71,7 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(runtime, wr
         other.request("subscribe")
         typist.request("typing", process="lines-1", on=True)
         # only one client types at a time; the others are told who does
-        with pytest.raises(SessionError, match="another client .* is typing into lines-1"):
+        with pytest.raises(SessionError, match=r"another client .* is typing into lines-1"):
             other.request("typing", process="lines-1", on=True)
         with pytest.raises(SessionError, match="refused"):
             other.request("input", process="lines-1", data="x\r")
@@ -105,7 +107,7 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(runtime, wr
     tl("stop", name)
 
 
-def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(runtime, write):
+def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(write):
     name = start(write)
     tl("wait", name, "segv-3", "failed", "--timeout", "60")
     crashed = process(name, "segv-3")
@@ -128,7 +130,7 @@ def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(runtime, write)
 
 @requires_gdb
 def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
-        runtime, write, monkeypatch):
+        write, monkeypatch):
     monkeypatch.setenv("DEBUGINFOD_URLS", "")  # no network look-up of debug symbols
     name = start(write)
     tl("wait", name, "segv-3", "failed", "--timeout", "60")
@@ -147,7 +149,7 @@ def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
     tl("stop", name)
 
 
-def test_a_prefix_that_is_not_a_program_changes_nothing(runtime, write):
+def test_a_prefix_that_is_not_a_program_changes_nothing(write):
     name = start(write)
     before = process(name, "keys-2")
     done = run_cli("restart", name, "keys-2", "--prefix", "no-such-debugger --args")
@@ -217,7 +219,7 @@ def test_launch_prefix_with_a_filter_shows_in_print_as_ros2_launch_would(write, 
     assert bad.returncode == 2 and "is not a regular expression" in bad.stderr
 
 
-def test_log_level_is_appended_as_ros_args_and_kept_until_changed(runtime, write, nodes):
+def test_log_level_is_appended_as_ros_args_and_kept_until_changed(write, nodes):
     name = tl(str(write(NODES)), "--detach").stdout.strip()
     tl("wait", name, "talker-1", "running", "--timeout", "60")
     tl("restart", name, "talker-1", "--log-level", "DEBUG")
@@ -231,7 +233,7 @@ def test_log_level_is_appended_as_ros_args_and_kept_until_changed(runtime, write
     tl("stop", name)
 
 
-def test_status_command_line_of_a_node_runs_it_by_hand(runtime, write, nodes):
+def test_status_command_line_of_a_node_runs_it_by_hand(write, nodes):
     name = tl(str(write(NODES)), "--detach").stdout.strip()
     tl("wait", name, "listener-2", "running", "--timeout", "60")
     line = process(name, "listener-2")["command_line"]

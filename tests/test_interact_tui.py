@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 from pathlib import Path
 
+import pytest
 from textual.widgets import Input
 
 from tuilaunch.tui.app import make_app
@@ -16,6 +17,8 @@ from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 from .test_interact import LAUNCH, logs, process
 from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
+
+pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
 
 
 def select(app, process_id: str) -> None:
@@ -27,7 +30,7 @@ def pane(app, process_id: str) -> str:
     return "\n".join(line.text for line in app.store.lines(View(process_id)))
 
 
-def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(runtime, write):
+def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
     path = str(write(LAUNCH))
     name = tl(path, "--detach").stdout.strip()
     tl("wait", name, "keys-2", "running", "--timeout", "60")
@@ -90,7 +93,7 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(runtime,
     tl("stop", name)
 
 
-def test_g_prompts_for_a_tool_and_c_shows_the_command_line(runtime, write):
+def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
     path = str(write(LAUNCH))
     name = tl(path, "--detach").stdout.strip()
     tl("wait", name, "keys-2", "running", "--timeout", "60")

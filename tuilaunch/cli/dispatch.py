@@ -171,8 +171,9 @@ def _main(argv: list[str] | None) -> int:
     try:
         positional, arguments = split_items(options.items)
         # after the user's own name:=value, so these win, as in ros2 launch
-        arguments.update(item.split(":=", 1) for item in prefix_arguments(
-            options.launch_prefix, options.launch_prefix_filter))
+        for item in prefix_arguments(options.launch_prefix, options.launch_prefix_filter):
+            key, value = item.split(":=", 1)
+            arguments[key] = value
         path = find_launch_file(positional)
         set_command_line(positional, arguments)
         with file_output:

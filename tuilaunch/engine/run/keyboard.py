@@ -41,7 +41,7 @@ class Keyboard:
         client = message.get("client")
         process = self.find(str(message.get("process")))
         if not message.get("on"):
-            if self.client == client:
+            if client is not None and self.client == client:
                 self.release(int(client))
             return {}
         if self.client is not None and self.client != client:

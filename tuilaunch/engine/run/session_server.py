@@ -28,8 +28,8 @@ from ..errors import LaunchError
 from ..plan.session import Session
 from . import session_dir
 from .event_buffer import EventBuffer
-from .keyboard import Keyboard
 from .events import Event
+from .keyboard import Keyboard
 from .plugins import Handler
 from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
 from .supervisor import Supervisor

@@ -10,8 +10,9 @@ No thread per child: each child's exit is watched through a pidfd on the event l
 its output through non-blocking reads on the same loop.
 
 The work is split by concern, one file each, stacked as layers of one class: core.py
-(state, events), triggers.py, plan_actions.py, stopping.py, respawn.py, starting.py, interacting.py; this
-file runs the whole and changes the plan. Plugins (run/plugins.py) add what needs ROS.
+(state, events), triggers.py, plan_actions.py, stopping.py, respawn.py, starting.py,
+interacting.py; this file runs the whole and changes the plan. Plugins (run/plugins.py)
+add what needs ROS.
 """
 
 from __future__ import annotations

@@ -28,8 +28,8 @@ class TypingLine(Static, can_focus=True):
                  text-style: bold; }
     """
 
-    def __init__(self, send: Callable[[str, str | None], None], **options: str) -> None:
-        super().__init__("", **options)
+    def __init__(self, send: Callable[[str, str | None], None], id: str | None = None) -> None:
+        super().__init__("", id=id)
         self.send = send
 
     def on_key(self, event: events.Key) -> None:
