@@ -21,7 +21,7 @@ import pytest
 from tuilaunch.client.link import Link
 from tuilaunch.engine.run.session_dir import SessionError
 
-from .conftest import run_cli, wait_for
+from .conftest import run_cli, run_headless, wait_for
 from .gdb_support import requires_gdb
 from .terminal_harness import PROGRAMS
 from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
@@ -254,3 +254,11 @@ def test_status_command_line_of_a_node_runs_it_by_hand(write, nodes):
     finally:
         os.killpg(by_hand.pid, signal.SIGKILL)
         by_hand.wait()
+
+
+def test_headless_keyboard_nodes_get_a_terminal_and_a_crash_is_an_error(write):
+    out = run_headless(write(LAUNCH), until=("killed by SIGSEGV", "[lines-1] ready",
+                                             "[keys-2] ready"))
+    assert "[lines-1] ready" in out and "[keys-2] ready" in out
+    assert "stdin is not a terminal" not in out
+    assert "[ERROR] [segv-3]: process has died" in out

@@ -59,8 +59,12 @@ class Supervisor(Interacting):
                     await self._changed.wait()
         finally:
             await self._finish()
+        real = self._real_crashes()
+        for process_id in set(self.crashes) - set(real):
+            if self.states.get(process_id) == "failed":
+                self.states[process_id] = "exited"  # the stop's own signal, a hair early
         failed = [item for item, state in self.states.items() if state == "failed"]
-        return 1 if failed or self._real_crashes() else 0
+        return 1 if failed or real else 0
 
     async def _finish(self) -> None:
         """Whatever ended the run: nothing left running, nothing left open."""
