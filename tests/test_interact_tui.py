@@ -142,3 +142,22 @@ def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
 
     asyncio.run(scenario())
     tl("stop", name)
+
+
+async def test_i_types_into_a_node_of_an_in_process_launch(tmp_path, write):
+    # the TUI without a session server (as the tests' factory makes it): the same keys
+    app = make_app(str(write(LAUNCH)), {}, tmp_path / "log")
+    async with app.run_test(size=(120, 32)) as pilot:
+        await until(pilot, lambda: "ready" in pane(app, "lines-1"))
+        select(app, "lines-1")
+        await pilot.pause()
+        await pilot.press("i")
+        await until(pilot, lambda: app.typing_to == "lines-1")
+        await pilot.press(*"hello", "enter")
+        await until(pilot, lambda: "got: hello" in pane(app, "lines-1"))
+        await pilot.press("ctrl+right_square_bracket")
+        assert app.typing_to is None
+        await pilot.press("c")
+        await until(pilot, lambda: isinstance(app.screen, CommandScreen))
+        assert "line_reader.py" in app.screen.line
+        await pilot.press("escape")
