@@ -36,11 +36,13 @@ async def test_ctrl_c_typed_interrupts_a_program_under_interactive_gdb(
     # the terminal is gdb's controlling terminal: it hands it to the program, and a typed
     # ctrl+c stops the program into gdb's prompt, as in a terminal window
     monkeypatch.setenv("DEBUGINFOD_URLS", "")
-    sleeper = "print('sleeping', flush=True); import time; time.sleep(600)"
+    # what it prints is not in its command line, which gdb echoes at "Starting program"
+    sleeper = "print('asleep', 'now', flush=True); import time; time.sleep(600)"
     gdb = await start(tmp_path, [GDB or "gdb", "-q", "-nx", "-ex", "set confirm off",
-                                 "-ex", "run", "--args", sys.executable, "-c", sleeper])
+                                 "-ex", "run", "--args", sys.executable, "-c", sleeper],
+                      controlling_terminal=True)
     try:
-        await gdb.wait_for("sleeping")
+        await gdb.wait_for("asleep now")
         gdb.running.write_input(b"\x03")
         await gdb.wait_for("received signal SIGINT")
         gdb.running.write_input(b"bt\r")

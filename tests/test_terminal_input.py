@@ -5,6 +5,7 @@ holds the launcher up."""
 from __future__ import annotations
 
 import asyncio
+import signal
 import time
 from pathlib import Path
 
@@ -41,12 +42,29 @@ async def test_line_reader_gets_typed_lines_and_the_echo_shows_them(tmp_path: Pa
 
 
 async def test_ctrl_c_typed_is_sigint_to_a_line_reader(tmp_path: Path, terminals) -> None:
+    # the terminal is not its controlling terminal (the fast start): the writer sends the
+    # SIGINT a terminal would, and never the byte itself
     reader = await start(tmp_path, program("line_reader.py"))
+    terminals.append(reader)
+    await reader.wait_for("ready")
+    reader.running.write_input(b"half a line\x03")
+    await reader.wait_for("interrupted by SIGINT")
+    assert await reader.exit_code() == 130
+    assert reader.running.typed_signals == {signal.SIGINT}
+    assert "got:" not in reader.text()  # the partial line was flushed, as a terminal does
+
+
+async def test_ctrl_c_on_a_controlling_terminal_is_the_kernel_s_sigint(tmp_path: Path,
+                                                                      terminals) -> None:
+    # under a tool (gdb) the terminal controls the child: the byte goes in, the kernel
+    # signals its foreground group
+    reader = await start(tmp_path, program("line_reader.py"), controlling_terminal=True)
     terminals.append(reader)
     await reader.wait_for("ready")
     reader.running.write_input(b"\x03")
     await reader.wait_for("interrupted by SIGINT")
     assert await reader.exit_code() == 130
+    assert reader.running.typed_signals == set()  # not ours to send
 
 
 async def test_raw_key_reader_gets_single_keys_and_ctrl_c_as_a_key(tmp_path: Path,
@@ -106,18 +124,18 @@ async def test_the_child_has_its_terminal_as_controlling_terminal(tmp_path: Path
              "print('isatty', os.isatty(0), 'same', os.ttyname(0) == os.ttyname(1), "
              "'ctty', os.tcgetpgrp(0) == os.getpgrp() == os.getsid(0), "
              "'blocked', len(signal.pthread_sigmask(signal.SIG_BLOCK, [])), flush=True)")
-    child = await start(tmp_path, ["python3", "-c", probe])
+    child = await start(tmp_path, ["python3", "-c", probe], controlling_terminal=True)
     terminals.append(child)
     await child.wait_for("isatty")
     assert "isatty True same True ctty True blocked 0" in child.text()
     assert await child.exit_code() == 0
 
 
-async def test_a_terminal_stdin_without_control_still_reads_lines(tmp_path: Path,
-                                                                  terminals) -> None:
+async def test_by_default_the_terminal_is_stdin_without_controlling_the_child(
+        tmp_path: Path, terminals) -> None:
     probe = ("import os, sys; print('isatty', os.isatty(0), flush=True); "
              "print('got', sys.stdin.readline().strip(), flush=True)")
-    child = await start(tmp_path, ["python3", "-c", probe], controlling_terminal=False)
+    child = await start(tmp_path, ["python3", "-c", probe])
     terminals.append(child)
     await child.wait_for("isatty True")
     child.running.write_input(b"hello\r")

@@ -65,6 +65,13 @@ def _parser() -> argparse.ArgumentParser:
     restart = commands.add_parser("restart", help="restart one process")
     restart.add_argument("name")
     restart.add_argument("process")
+    restart.add_argument("--prefix", metavar="CMD",
+                         help="run it under a tool until a restart without one, e.g. "
+                         "'gdb -q -ex run --args' (type into it in the TUI with i)")
+    restart.add_argument("--log-level", metavar="LEVEL",
+                         help="append --ros-args --log-level LEVEL (debug, info, warn, error, "
+                         "fatal; kept across respawns until a restart gives another; '' "
+                         "drops it)")
     wait = commands.add_parser(
         "wait", help="wait until a process is in a state (exit status 0) or time runs out (1)")
     wait.add_argument("name")
@@ -280,7 +287,10 @@ def cmd_status(options: argparse.Namespace) -> int:
 def cmd_restart(options: argparse.Namespace) -> int:
     link = Link(resolve_name(options.name), timeout=None)
     try:
-        result = link.request("restart", process=options.process)
+        extra = {key: value for key, value in (("prefix", options.prefix),
+                                               ("log_level", options.log_level))
+                 if value is not None}
+        result = link.request("restart", process=options.process, **extra)
     finally:
         link.close()
     print(f"{result['process']}: {result['state']}")
@@ -303,7 +313,13 @@ def cmd_wait(options: argparse.Namespace) -> int:
             return _wait_lifecycle(link, process, state, deadline)
         result = link.request("subscribe")
         current = result["states"].get(process)
+        last: dict[str, Any] = {"events": result.get("recent") or []}
         while current != state:
+            if state == "exited" and current == "failed":
+                # a crash ended it: not the end asked for, and that one will not come
+                print(f"tuilaunch wait: {process} failed, not exited: "
+                      f"{_death(last, process)}", file=sys.stderr)
+                return 1
             remaining = None if deadline is None else deadline - time.monotonic()
             if remaining is not None and remaining <= 0:
                 print(f"tuilaunch wait: {process} is {current}, not {state}, after "
@@ -320,9 +336,18 @@ def cmd_wait(options: argparse.Namespace) -> int:
                 return 1
             if message.get("type") == "events":
                 current = (message.get("states") or {}).get(process, current)
+                last = message
         return 0
     finally:
         link.close()
+
+
+def _death(message: dict[str, Any], process: str) -> str:
+    """How a process died, from the events of one batch."""
+    for data in reversed(message.get("events") or []):
+        if data.get("process") == process and data.get("reason"):
+            return str(data["reason"])
+    return "it died"
 
 
 def _wait_lifecycle(link: Link, process: str, state: str, deadline: float | None) -> int:

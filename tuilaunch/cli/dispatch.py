@@ -16,6 +16,7 @@ from ..engine.describe.loader import LoadedFile, load_file, set_command_line
 from ..engine.errors import LaunchError, PackageError
 from ..engine.packages import ensure_environment, find_launch_file_in_share
 from ..engine.plan.machines import Placement, load_placement, placement_from_text
+from ..engine.plan.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
 
 
@@ -53,6 +54,12 @@ def _parser() -> argparse.ArgumentParser:
     # how the launching side starts another machine's share of the launch (machines_share)
     parser.add_argument("--share", metavar="MACHINE", help=argparse.SUPPRESS)
     parser.add_argument("--machines-text", metavar="YAML", help=argparse.SUPPRESS)
+    parser.add_argument("--launch-prefix", metavar="CMD",
+                        help="as ros2 launch: put CMD (e.g. 'gdb -ex run --args') before "
+                        "each executable without a prefix of its own (launch-prefix:=CMD)")
+    parser.add_argument("--launch-prefix-filter", metavar="REGEX",
+                        help="as ros2 launch: only executables whose name REGEX matches from "
+                        "its start get --launch-prefix (launch-prefix-filter:=REGEX)")
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     parser.epilog = (parser.epilog or "") + (
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
@@ -187,6 +194,10 @@ def _main(argv: list[str] | None) -> int:
         positional, arguments = split_items(options.items)
         placement = _placement(options)
         options.placement = placement
+        # after the user's own name:=value, so these win, as in ros2 launch
+        for item in prefix_arguments(options.launch_prefix, options.launch_prefix_filter):
+            key, value = item.split(":=", 1)
+            arguments[key] = value
         path = find_launch_file(positional)
         set_command_line(positional, arguments)
         with file_output:

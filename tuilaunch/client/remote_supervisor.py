@@ -201,8 +201,12 @@ class RemoteSupervisor:
     async def stop(self, process_id: str) -> None:
         await self._request("stop", process=process_id)
 
-    async def restart(self, process_id: str) -> None:
-        await self._request("restart", process=process_id)
+    async def restart(self, process_id: str, prefix: str | None = None,
+                      log_level: str | None = None) -> None:
+        """As Supervisor.restart: `prefix` runs it under a tool until a plain restart."""
+        extra = {k: v for k, v in (("prefix", prefix), ("log_level", log_level))
+                 if v is not None}
+        await self._request("restart", process=process_id, **extra)
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         self._stopping = True

@@ -1,7 +1,8 @@
 """The Textual app: lays out the panels and wires them to the engine.
 
 The app is composed of one mixin per concern, all built on SessionLink (the state and the
-engine link): node_commands, navigation, arguments, quitting, inspector.
+engine link): keyboard (typing into a node, tools), node_commands, navigation, arguments,
+quitting, inspector.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
 from .arguments import Arguments
 from .inspector import Inspector
+from .keyboard import NodeKeyboard
 from .navigation import Navigation
 from .node_commands import NodeCommands
 from .quitting import Quitting
@@ -49,7 +51,7 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(Inspector, NodeCommands, Navigation, Arguments, Quitting):
+class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments, Quitting):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
     concern does lives in its mixin (session_link, node_commands, navigation, arguments,
     quitting, inspector)."""

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import re
-import shlex
 import shutil
 from collections.abc import Callable
 from pathlib import Path
@@ -27,6 +26,7 @@ from ..errors import LaunchError, Origin, PackageError
 from ..packages import find_executable
 from .components import component_plan
 from .model import ProcessPlan
+from .prefix import LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER, final_cmd
 from .scope import Scope, join_namespace, name_problem, namespace_problem
 
 _FIND_EXEC = re.compile(r"\$\((?:find-exec|exec-in-pkg) ([^ )]+)[^)]*\)")
@@ -93,7 +93,14 @@ class ProcessPlanner:
         clear_env = entity.env is not None
         if entity.env is not None:
             env = {perform(k, ctx): perform(v, ctx) for k, v in entity.env.items()}
-        prefix = shlex.split(perform(entity.prefix, ctx)) if entity.prefix is not None else []
+        own_prefix = perform(entity.prefix, ctx) if entity.prefix is not None else None
+        launch_prefix = scope.configurations.get(LAUNCH_PREFIX) or ""
+        prefix_filter = scope.configurations.get(LAUNCH_PREFIX_FILTER) or ""
+
+        def prefix(cmd: list[str]) -> list[str]:
+            """Its own prefix, else launch-prefix where launch-prefix-filter matches."""
+            return final_cmd(cmd, own_prefix, launch_prefix, prefix_filter)
+
         respawn = text_to_bool(perform(entity.respawn, ctx)) or False
         respawn_delay = _seconds(entity.respawn_delay, ctx, "respawn_delay", entity.origin) \
             if entity.respawn_delay is not None else 0.0
@@ -116,22 +123,26 @@ class ProcessPlanner:
         return self._node_plan(entity, ctx, scope, prefix, common)
 
     def _execute_process_plan(self, entity: ExecuteProcess, ctx: PerformContext, scope: Scope,
-                              prefix: list[str], common: dict[str, Any]) -> ProcessPlan:
+                              prefix: Callable[[list[str]], list[str]],
+                              common: dict[str, Any]) -> ProcessPlan:
         cmd = [perform(part, ctx) for part in as_list(entity.cmd)]
         cmd = [c for c in cmd if c != ""]
-        if entity.shell:
-            cmd = ["/bin/sh", "-c", " ".join(cmd)]
         if not cmd:
             raise LaunchError("ExecuteProcess with an empty cmd", entity.origin)
+        started = prefix(cmd)
+        if entity.shell:
+            cmd = ["/bin/sh", "-c", " ".join(cmd)]
+            started = ["/bin/sh", "-c", " ".join(started)]
         name = perform_optional(entity.name, ctx)
         base = name or os.path.basename(cmd[0].split()[0])
         error = None
         if not entity.shell and "/" not in cmd[0] and shutil.which(cmd[0]) is None:
             error = f"command '{cmd[0]}' not found on PATH"
         return ProcessPlan(self.next_id(base), "process", name, scope.namespace, None, cmd[0],
-                           prefix + cmd, {}, [], [], [], error=error, **common)
+                           started, {}, [], [], [], error=error, **common)
 
-    def _node_plan(self, entity: Node, ctx: PerformContext, scope: Scope, prefix: list[str],
+    def _node_plan(self, entity: Node, ctx: PerformContext, scope: Scope,
+                   prefix: Callable[[list[str]], list[str]],
                    common: dict[str, Any]) -> ProcessPlan:
         package = perform_optional(entity.package, ctx)
         executable = perform(entity.executable, ctx)
@@ -195,7 +206,7 @@ class ProcessPlanner:
         ros_arguments = [perform(a, ctx) for a in as_list(entity.ros_arguments)]
         # launch_ros: the user's ros_arguments in a block of their own, then always a
         # `--ros-args` block for the name, namespace, parameters and remappings
-        cmd = [*prefix, exe_path, *arguments]
+        cmd = [exe_path, *arguments]
         if entity.ros_arguments is not None:
             cmd += ["--ros-args", *ros_arguments]
         cmd.append("--ros-args")
@@ -206,6 +217,7 @@ class ProcessPlanner:
         cmd += params_args
         for src, dst in remappings:
             cmd += ["-r", f"{src}:={dst}"]
+        cmd = prefix(cmd)
         if getattr(entity, "shell", False):
             cmd = ["/bin/sh", "-c", " ".join(cmd)]
         # launch_ros loads components under the pushed namespace, not the container's own

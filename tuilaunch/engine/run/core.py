@@ -1,8 +1,8 @@
 """The supervisor's state, and how it tells the world: events to consumers and launch.log.
 
 `SupervisorCore` is the base of the supervisor's layers (core <- triggers <- plan_actions <-
-stopping <- respawn <- starting <- supervisor): each file holds one concern of the run and
-the `Supervisor` (run/supervisor.py) is the whole. Every event goes through `emit`; a
+stopping <- respawn <- starting <- interacting <- supervisor): each file holds one concern of
+the run and the `Supervisor` (run/supervisor.py) is the whole. Every event goes through `emit`; a
 consumer that raises is reported once and never stops the launch.
 """
 
@@ -20,6 +20,7 @@ from ..plan.model import ActionPlan, Plan
 from .events import Consumer, Event
 from .logfiles import LogFile
 from .plugins import ActionRunner, SupervisorPlugin
+from .process_command import StartCommand
 from .readers import ChannelReader, Running
 from .watchdog import Watchdog
 
@@ -71,6 +72,15 @@ class SupervisorCore:
         self._keep_alive = False
         self._reported: set[str] = set()
         self._env_cache: dict[str, str] | None = None
+        self.run_prefixes: dict[str, str] = {}
+        """An operator's tool (`gdb -q -ex run --args`) a process runs under, from a
+        `restart` with a prefix until the next restart without one."""
+        self.log_levels: dict[str, str] = {}
+        """`--log-level` given at a restart, kept across respawns until a restart changes it."""
+        self.started_with: dict[str, StartCommand] = {}
+        """The last start of each process, exactly (status's command line)."""
+        self.deaths: dict[str, dict[str, str]] = {}
+        """A crash's `signal` name and `core` location, until the process starts again."""
         self.watchdog = Watchdog()
         for plugin in plugins:
             self.add_plugin(plugin)

@@ -7,9 +7,12 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   most output lines per batch and the least seconds between batches, for a display that
   cannot show more; kinds?: only events of these kinds}, status {resources?: false skips
   the CPU/memory sampling}, find {process},
-  start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
-  is left), apply {arguments}, lifecycle {process}; to a machine's share of a placed launch
-  (run/machines_share.py): external_event {process, on: start|exit, pid, code},
+  start/stop {process}, restart {process, prefix?: a tool run before the command (`gdb -q
+  -ex run --args`) until a restart without one, log_level?: `--ros-args --log-level` kept
+  across respawns until a restart changes it ("" drops it)}, run_action {action}, shutdown
+  {reason}, kill (SIGKILL what is left), apply {arguments}, lifecycle {process}; to a
+  machine's share of a placed launch (run/machines_share.py): external_event {process, on:
+  start|exit, pid, code},
   share_lines {process, start, end, after}.
   Resources (run/resource_watch.py): `status` gives each process `cpu_percent` (% of one
   core), `rss_bytes` and `threads` over its process tree (None when not running);
@@ -31,10 +34,20 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   log_level {node, level} -> {ok: true}, or an error saying the node has no logger service
   and that restarting it with --log-level applies the level.
   A client's streams (echo, rates, resources) end when it disconnects.
+  typing {process, on: bool} takes or gives back the keyboard (one client at a time; a
+  client that disconnects gives it back), input {process, data: UTF-8 text with control
+  characters, "\r" for Enter, "\u0003" for ctrl+c} from the client holding it -> {} or
+  {"dropped": bytes the node did not read in time}.
+  status -> per process also `command` (argv), `command_line` (paste-ready: cd, env
+  changes, argv quoted), `env` (changes to the launcher's environment), and for a death by a
+  signal nobody asked for (state "failed") `signal` ("SIGSEGV") and `core` when one was
+  kept; `typing` {client, process} or null.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
   [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
-  lines are the new `name:=value` arguments); `{"type": "ended", "status": n}` last.
+  lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
+  keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
+  and "core" for a crash); `{"type": "ended", "status": n}` last.
 """
 
 from __future__ import annotations

@@ -34,8 +34,9 @@ class ChannelReader:
         self.splitter = LineSplitter()
         self.done: asyncio.Future[None] = asyncio.get_running_loop().create_future()
         self.stamp = b" " + channel.name.encode() + b" "
-        self.input = TerminalInput(channel.fd, asyncio.get_running_loop()) \
-            if channel.stdin else None
+        self.input = TerminalInput(
+            channel.fd, asyncio.get_running_loop(),
+            None if channel.controlling else running.process.pid) if channel.stdin else None
         """Where typed keys go, when the child reads this terminal as its stdin."""
         asyncio.get_running_loop().add_reader(channel.fd, self._readable)
 
@@ -101,6 +102,12 @@ class Running:
             if reader.input is not None and not reader.input.closed:
                 return reader.input
         return None
+
+    @property
+    def typed_signals(self) -> set[int]:
+        """Signals the operator sent by typing ctrl+c, ctrl+\\ or ctrl+z into it."""
+        return {int(sig) for reader in self.readers if reader.input is not None
+                for sig in reader.input.signalled}
 
     def write_input(self, data: bytes) -> int:
         """Types `data` into the child's terminal (keys as a terminal sends them: `\r` for

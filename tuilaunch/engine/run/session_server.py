@@ -30,6 +30,7 @@ from ..plan.session import Session
 from . import session_dir
 from .event_buffer import EventBuffer
 from .events import Event
+from .keyboard import Keyboard
 from .plugins import Handler
 from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
 from .resource_watch import ResourceWatch, usage_fields
@@ -99,6 +100,9 @@ class SessionServer:
         self._client_ids = itertools.count(1)
         self.clients: dict[int, ClientQueue] = {}  # subscribed clients' queues, by client id
         self.resources = ResourceWatch(self._running_pids, self.send)
+        self.keyboard = Keyboard(self.supervisor, self.find_process)
+        for op, handler in self.keyboard.handlers().items():
+            self.add_handler(op, handler)
         for plugin in self.supervisor.plugins:
             for op, handler in plugin.handlers(self.find_process).items():
                 self.add_handler(op, handler)
@@ -203,7 +207,10 @@ class SessionServer:
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
                 "pid": self.pids.get(proc.id) if state == "running" else None,
                 "exit_code": self.supervisor.exit_codes.get(proc.id),
-                "detail": self.details.get(proc.id), "machine": proc.machine, **fields})
+                "detail": self.details.get(proc.id), "machine": proc.machine, **fields,
+                # the exact start (argv, paste-ready line, env changes); a crash's signal/core
+                **self.supervisor.command_of(proc.id),
+                **(self.supervisor.deaths.get(proc.id, {}) if state == "failed" else {})})
         counts: dict[str, int] = {}
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
@@ -211,7 +218,7 @@ class SessionServer:
         actions = [{"id": a.id, "kind": a.kind, "state": states.get(a.id, "pending")}
                    for a in self.session.plan.actions]
         return {**self.info(), "counts": counts, "processes": processes, "actions": actions,
-                "dropped_clients": self.dropped_clients}
+                "dropped_clients": self.dropped_clients, "typing": self.keyboard.state()}
 
     # --- serving ---------------------------------------------------------------------------
 
@@ -340,6 +347,7 @@ class SessionServer:
                     await _send(writer, lock, {"type": "reply", "id": None, "ok": False,
                                                "error": str(exc)})
                     continue
+                message["client"] = client  # set here: a client cannot speak for another
                 if message.get("op") == "subscribe" and queue is None:
                     kinds = message.get("kinds")
                     queue = ClientQueue(
@@ -363,11 +371,11 @@ class SessionServer:
                                                "ok": True, "result": result})
                     self._spawn(self._pump(queue, writer, lock))
                     continue
-                message["client"] = client  # who asks: for the streams of one client
                 self._spawn(self._answer(message, writer, lock))
         except (ConnectionError, OSError):
             return
         finally:
+            self.keyboard.release(client)  # a client that is gone types no more
             if queue is not None:
                 self.queues.discard(queue)
                 queue.ready.set()
@@ -446,7 +454,11 @@ class SessionServer:
             process = self.find_process(str(message.get("process")))
             if process not in {p.id for p in self.session.plan.processes}:
                 raise LaunchError(f"{process} is an action, not a process: it cannot {op}")
-            await getattr(supervisor, op)(process)
+            if op == "restart":
+                await supervisor.restart(process, message.get("prefix") or None,
+                                         message.get("log_level"))
+            else:
+                await getattr(supervisor, op)(process)
             return {"process": process, "state": supervisor.states.get(process)}
         if op == "shutdown":
             await supervisor.shutdown(str(message.get("reason") or "stop requested"))

@@ -44,6 +44,9 @@ class Channel:
     tty: bool
     stdin: bool = False
     """The child reads this terminal as its stdin too: what is written to `fd` is typed."""
+    controlling: bool = False
+    """It is the child's controlling terminal too: the kernel turns a typed ctrl+c into
+    SIGINT. Otherwise the writer does (run/terminal_input.py)."""
 
 
 @dataclass
@@ -132,7 +135,7 @@ def _popen_with_terminal(cmd: list[str], **options: Any) -> subprocess.Popen[byt
 
 
 def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool, *,
-          terminal_stdin: bool = True, controlling_terminal: bool = True) -> Child:
+          terminal_stdin: bool = True, controlling_terminal: bool = False) -> Child:
     """Starts `cmd` with each output stream on its own channel.
 
     With `tty`, stdout and stderr are two pseudo-terminals, as launch's emulate_tty does:
@@ -141,11 +144,13 @@ def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool, *,
     terminal, as in a terminal window: keyboard nodes (teleop_twist_keyboard, a debugger)
     read what is typed into it (`Child.terminal`), and what is typed is echoed into stdout.
 
-    As in a terminal window, when the child (the session's leader) exits, what it left
-    running in its foreground group gets SIGHUP (a daemon that setsid's or ignores SIGHUP
-    stays). `controlling_terminal=False` keeps stdin a terminal without that, and without
-    ctrl+c as a signal, for a vfork instead of a fork: a fork of a 250 MB tuilaunch costs
-    ~8 ms more per start, measured here.
+    By default the terminal is not the child's controlling terminal, so the child starts
+    with a vfork instead of a fork (a fork of a 250 MB tuilaunch costs ~8 ms more per
+    start, measured here); the writer of its keys then turns a typed ctrl+c into SIGINT as
+    the kernel would (run/terminal_input.py). `controlling_terminal=True` (a run under gdb,
+    which needs job control) makes it the controlling terminal: as in a terminal window,
+    when the child (the session's leader) exits, what it left running in its foreground
+    group gets SIGHUP (a daemon that setsid's or ignores SIGHUP stays).
 
     Otherwise stdin is /dev/null. ros2 launch gives every child launch's own stdin; here
     that is the operator's keyboard in the TUI (a node would steal keys from it) or nothing
@@ -163,6 +168,7 @@ def spawn(cmd: list[str], env: dict[str, str], cwd: str | None, tty: bool, *,
         keyboard = tty and terminal_stdin
         if keyboard:
             channels[0].stdin = True
+            channels[0].controlling = controlling_terminal
         if keyboard and not controlling_terminal:
             popen = subprocess.Popen(cmd, stdin=theirs[0], stdout=theirs[0],
                                      stderr=theirs[1], env=env, cwd=cwd,

@@ -13,10 +13,12 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from ..errors import LaunchError
 from ..plan.model import ProcessPlan
 from ..plan.params import write_parameter_file
 from .events import Event
 from .logfiles import LogFile
+from .process_command import death_details, start_command
 from .readers import ChannelReader, Running
 from .respawn import Respawning
 from .spawn import spawn
@@ -51,11 +53,16 @@ class Starting(Respawning):
         except Exception as exc:  # a LaunchError or an OSError: either way, one line
             self._fail(process_id, f"cannot write its parameter file: {exc}")
             return
-        env = {} if proc.clear_env else dict(self._base_env())
-        env.update(proc.env)
-        env.setdefault("PYTHONUNBUFFERED", "1")
-        env.setdefault("RCUTILS_LOGGING_BUFFERED_STREAM", "1")
-        env.setdefault("RCUTILS_COLORIZED_OUTPUT", "0" if os.environ.get("NO_COLOR") else "1")
+        try:
+            start = start_command(proc, self._base_env(), wants_tty(proc),
+                                  self.run_prefixes.get(process_id),
+                                  self.log_levels.get(process_id))
+        except LaunchError as exc:  # the tool left PATH since the restart checked it
+            self._fail(process_id, str(exc))
+            return
+        self.started_with[process_id] = start
+        self.deaths.pop(process_id, None)
+        env = dict(start.env)
         self.watchdog.start()
         if self.watchdog.error and "watchdog" not in self._reported:
             self._reported.add("watchdog")
@@ -70,11 +77,14 @@ class Starting(Respawning):
                        f"{exc.strerror or exc}")
             return
         try:
-            child = spawn(proc.cmd, env, proc.cwd, wants_tty(proc))
+            # no controlling terminal (vfork: fast) but under a tool, whose job control
+            # needs one; the terminal's writer turns ctrl+c into SIGINT otherwise
+            child = spawn(start.cmd, env, start.cwd, start.tty,
+                          controlling_terminal=start.controlling_terminal)
         except Exception as exc:  # OSError, or ValueError for a NUL byte in an argument
             log.close()
             what = getattr(exc, "filename", None)
-            what = what if isinstance(what, str) else proc.cmd[0]
+            what = what if isinstance(what, str) else start.cmd[0]
             self._fail(process_id, f"cannot start {what}: "
                        f"{getattr(exc, 'strerror', None) or exc}")
             return
@@ -167,15 +177,29 @@ class Starting(Respawning):
         del self._running[process_id]
         self.exit_codes[process_id] = code
         requested = running.stopping or self._shutting_down
-        if code != 0 and not requested:
+        # a ctrl+c (or ctrl+\\, ctrl+z) typed into it was asked for by the operator too
+        typed = code < 0 and -code in running.typed_signals
+        if code != 0 and not requested and not typed:
             self.crashes[process_id] = code
             self._crash_times[process_id] = time.monotonic()
-        self.states[process_id] = "exited"
+        start = self.started_with.get(process_id)
+        death = death_details(running.process.pid, code, requested or typed,
+                              start.cwd if start else None,
+                              os.path.basename(running.process.args[0]
+                                               if running.process.args else "")[:15],
+                              running.started)
+        if death:
+            self.deaths[process_id] = death
+        # a death by a signal nobody asked for is a failure, as headless reports it
+        self.states[process_id] = "failed" if death else "exited"
         for plugin in self.plugins:
             plugin.process_exited(process_id)
+        reason = describe_exit(code)
+        if "core" in death:
+            reason += f" (core: {death['core']})"
         # `requested`: a stop asked by anyone (another client, `tuilaunch stop`), not a crash
         self.emit(Event("exited", process_id, pid=running.process.pid, code=code,
-                         reason=describe_exit(code), data={"requested": requested}))
+                         reason=reason, data={"requested": requested, **death}))
         self._process_event(process_id, "exit", running.process.pid, code)
         self._flag(process_id, "exit").set()
         if self._should_respawn(running, code):

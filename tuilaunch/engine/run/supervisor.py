@@ -10,8 +10,9 @@ No thread per child: each child's exit is watched through a pidfd on the event l
 its output through non-blocking reads on the same loop.
 
 The work is split by concern, one file each, stacked as layers of one class: core.py
-(state, events), triggers.py, plan_actions.py, stopping.py, respawn.py, starting.py; this
-file runs the whole and changes the plan. Plugins (run/plugins.py) add what needs ROS.
+(state, events), triggers.py, plan_actions.py, stopping.py, respawn.py, starting.py,
+interacting.py; this file runs the whole and changes the plan. Plugins (run/plugins.py)
+add what needs ROS.
 """
 
 from __future__ import annotations
@@ -21,12 +22,13 @@ import time
 
 from ..plan.model import Plan, PlanDiff, diff_plans
 from .events import Consumer, Event, LaunchEvent
+from .interacting import Interacting
 from .placed import Placed
 
 __all__ = ["Consumer", "Event", "LaunchEvent", "Supervisor"]
 
 
-class Supervisor(Placed):
+class Supervisor(Interacting, Placed):
     """Runs a plan: see the layers it is made of (module docstring)."""
 
     async def run(self, keep_alive: bool = False) -> int:
@@ -64,8 +66,12 @@ class Supervisor(Placed):
                     await self._changed.wait()
         finally:
             await self._finish()
+        real = self._real_crashes()
+        for process_id in set(self.crashes) - set(real):
+            if self.states.get(process_id) == "failed":
+                self.states[process_id] = "exited"  # the stop's own signal, a hair early
         failed = [item for item, state in self.states.items() if state == "failed"]
-        return 1 if failed or self._real_crashes() else 0
+        return 1 if failed or real else 0
 
     async def _finish(self) -> None:
         """Whatever ended the run: nothing left running, nothing left open."""
@@ -145,7 +151,12 @@ class Supervisor(Placed):
         self.set_placement(self.machine, self.remote)  # the new plan's placement
         return diff
 
-    async def restart(self, process_id: str) -> None:
+    async def restart(self, process_id: str, prefix: str | None = None,
+                      log_level: str | None = None) -> None:
+        """Stops and starts one process; `prefix` runs it under a tool (gdb, valgrind) until
+        a restart without one, `log_level` sets its ROS log level until changed (see
+        `restart_options`: checked before anything stops)."""
+        self.restart_options(process_id, prefix, log_level)
         self._busy += 1  # the run must not look finished between the stop and the start
         try:
             await self.stop(process_id)

@@ -24,6 +24,8 @@ KEYS = """\
   G end   follow the newest line   z T f  wrap / time / as printed
   < >     narrower / wider tree    w y    save / copy the pane (OSC 52)
   o       the node's topics        L      the node's log level
+  i       type into it (ctrl+] ends)  g    restart it under a tool (gdb...)
+  c       its exact command line (y: copy)
   rows: CPU% and memory (wide tree), ↑mem memory keeps growing,
         ✗qos in a publisher/subscriber pair whose QoS cannot talk
 [b]Topics[/b] (rates for the rows on screen)

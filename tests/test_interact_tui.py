@@ -1,0 +1,163 @@
+"""The TUI's hands on a node, attached to a real session as `tuilaunch FILE` runs it: `i`
+types every key into the node's terminal (ctrl+c too, which must not quit) until ctrl+]
+gives them back; `g` restarts a node under a tool from a prompt; `c` shows its command."""
+
+from __future__ import annotations
+
+import asyncio
+from pathlib import Path
+
+import pytest
+from textual.widgets import Input
+
+from tuilaunch.tui.app import make_app
+from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
+
+from .test_interact import LAUNCH, logs, process
+from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
+from .test_tui import until
+
+pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
+
+
+def select(app, process_id: str) -> None:
+    tree = app.launch_tree
+    tree.move_cursor(tree.rows[process_id])
+
+
+def pane(app, process_id: str) -> str:
+    return "\n".join(line.text for line in app.store.lines(View(process_id)))
+
+
+def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
+    path = str(write(LAUNCH))
+    name = tl(path, "--detach").stdout.strip()
+    tl("wait", name, "keys-2", "running", "--timeout", "60")
+    log_dir = Path(status(name)["log_dir"])
+
+    async def scenario() -> None:
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(120, 32)) as pilot:
+            await until(pilot, lambda: "ready" in pane(app, "lines-1"))
+            await until(pilot, lambda: "ready" in pane(app, "keys-2"))
+            # `i` on a node that is not running: one line, nothing changes
+            await until(pilot, lambda: app.supervisor.states.get("segv-3") == "failed")
+            select(app, "segv-3")
+            await pilot.pause()
+            await pilot.press("i")
+            await pilot.pause()
+            assert app.typing_to is None
+            assert any("segv-3 is not running" in n.message for n in app._notifications)
+
+            select(app, "lines-1")
+            await pilot.pause()
+            await pilot.press("i")
+            await until(pilot, lambda: app.typing_to == "lines-1")
+            await pilot.press(*"hi robot")
+            # the partial line shows before the node's echo, which comes at Enter
+            assert "typing to lines-1: hi robot" in str(app.status_bar.render())
+            await pilot.press("backspace", "enter")
+            await until(pilot, lambda: "got: hi robo" in pane(app, "lines-1"))
+            assert status(name)["typing"]["process"] == "lines-1"
+            await pilot.press("ctrl+right_square_bracket")
+            assert app.typing_to is None
+            await until(pilot, lambda: status(name)["typing"] is None)
+
+            # the raw reader: arrows as escape sequences, ctrl+c as a key, not a quit
+            select(app, "keys-2")
+            await pilot.pause()
+            await pilot.press("i")
+            await until(pilot, lambda: app.typing_to == "keys-2")
+            await pilot.press("w", "up", "ctrl+c")
+            await until(pilot, lambda: "key: '\\x03'" in pane(app, "keys-2"))
+            assert "key: 'w'" in pane(app, "keys-2")
+            assert "key: '\\x1b'" in pane(app, "keys-2")  # up: ESC [ A
+            assert not app.quitting and app.supervisor.states["keys-2"] == "running"
+            await pilot.press("ctrl+right_square_bracket")
+
+            # ctrl+c to the line reader is SIGINT; the keys come back when it ends
+            select(app, "lines-1")
+            await pilot.pause()
+            await pilot.press("i")
+            await until(pilot, lambda: app.typing_to == "lines-1")
+            await pilot.press("ctrl+c")
+            await until(pilot, lambda: app.supervisor.states.get("lines-1") == "exited")
+            await until(pilot, lambda: app.typing_to is None)
+            assert "interrupted by SIGINT" in logs(name, "lines-1")
+            assert not app.quitting
+            await pilot.press("d")
+            await until(pilot, lambda: getattr(app.supervisor, "detached", False))
+
+    asyncio.run(scenario())
+    tl("stop", name)
+
+
+def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
+    path = str(write(LAUNCH))
+    name = tl(path, "--detach").stdout.strip()
+    tl("wait", name, "keys-2", "running", "--timeout", "60")
+    log_dir = Path(status(name)["log_dir"])
+    before = process(name, "keys-2")["pid"]
+
+    async def scenario() -> None:
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(120, 32)) as pilot:
+            await until(pilot, lambda: app.supervisor.states.get("keys-2") == "running")
+            select(app, "keys-2")
+            await pilot.pause()
+            # a cancelled prompt changes nothing
+            await pilot.press("g")
+            await until(pilot, lambda: isinstance(app.screen, PrefixPrompt))
+            await pilot.press("escape")
+            await until(pilot, lambda: not isinstance(app.screen, PrefixPrompt))
+            # a prefix that is not a program: one line, the node runs on untouched
+            await pilot.press("g")
+            await until(pilot, lambda: isinstance(app.screen, PrefixPrompt))
+            app.screen.query_one(Input).value = "no-such-debugger --args"
+            await pilot.press("enter")
+            await until(pilot, lambda: any("not a program on PATH" in n.message
+                                           for n in app._notifications))
+            assert process(name, "keys-2")["pid"] == before
+            assert app.prefix_history == []
+            # a real tool: env is on PATH and runs the node as it was
+            await pilot.press("g")
+            await until(pilot, lambda: isinstance(app.screen, PrefixPrompt))
+            app.screen.query_one(Input).value = "env TL_UNDER=1"
+            await pilot.press("enter")
+            await until(pilot, lambda: app.prefix_history == ["env TL_UNDER=1"])
+            assert process(name, "keys-2")["command"][:2] == ["env", "TL_UNDER=1"]
+            # the prompt remembers it first
+            await pilot.press("g")
+            await until(pilot, lambda: isinstance(app.screen, PrefixPrompt))
+            assert app.screen.choices[0] == "env TL_UNDER=1"
+            await pilot.press("escape")
+            await until(pilot, lambda: not isinstance(app.screen, PrefixPrompt))
+            await pilot.press("c")
+            await until(pilot, lambda: isinstance(app.screen, CommandScreen))
+            assert "env TL_UNDER=1" in app.screen.line and "raw_key_reader.py" in app.screen.line
+            await pilot.press("escape")
+            await pilot.press("d")
+            await until(pilot, lambda: getattr(app.supervisor, "detached", False))
+
+    asyncio.run(scenario())
+    tl("stop", name)
+
+
+async def test_i_types_into_a_node_of_an_in_process_launch(tmp_path, write):
+    # the TUI without a session server (as the tests' factory makes it): the same keys
+    app = make_app(str(write(LAUNCH)), {}, tmp_path / "log")
+    async with app.run_test(size=(120, 32)) as pilot:
+        await until(pilot, lambda: "ready" in pane(app, "lines-1"))
+        select(app, "lines-1")
+        await pilot.pause()
+        await pilot.press("i")
+        await until(pilot, lambda: app.typing_to == "lines-1")
+        await pilot.press(*"hello", "enter")
+        await until(pilot, lambda: "got: hello" in pane(app, "lines-1"))
+        await pilot.press("ctrl+right_square_bracket")
+        assert app.typing_to is None
+        await pilot.press("c")
+        await until(pilot, lambda: isinstance(app.screen, CommandScreen))
+        assert "line_reader.py" in app.screen.line
+        await pilot.press("escape")

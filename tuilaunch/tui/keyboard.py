@@ -1,0 +1,267 @@
+"""The operator's hands on one node from the TUI: `i` types into its terminal until ctrl+],
+`g` restarts it under a tool (gdb, valgrind...), `c` shows the exact command it was started
+with. Through the session server when there is one (one client types at a time), else the
+in-process supervisor."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rich.text import Text
+from textual.binding import Binding
+
+from ..client.remote_supervisor import RemoteSupervisor
+from ..engine.errors import LaunchError
+from ..engine.run.supervisor import Event
+from .keys import edit_line, is_release, key_bytes
+from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TypingLine
+from .session_link import SessionLink
+
+RECENT_PREFIXES = 10
+"""Tools remembered for the prompt, most recent first (in memory, for this TUI)."""
+
+
+class NodeKeyboard(SessionLink):
+    """Typing into the selected node, running it under a tool, its command line."""
+
+    BINDINGS = [
+        Binding("i", "type_into", "Type", tooltip="Send the keys to the node's terminal "
+                "until ctrl+]"),
+        Binding("g", "run_under", "Debug", tooltip="Restart the node under a tool (gdb, "
+                "valgrind...) until its next plain restart"),
+        Binding("c", "command_line", "Command", show=False,
+                tooltip="The exact command line the node was started with, to copy"),
+    ]
+
+    typing_to: str | None = None
+    """The node the keys go to, while typing."""
+    typed_line: str = ""
+    """What was typed since the last Enter: shown before the node's echo arrives."""
+
+    def __init__(self, *args: Any, **options: Any) -> None:
+        super().__init__(*args, **options)
+        self.prefix_history: list[str] = []
+        self.other_typists: dict[str, int] = {}
+        """Processes another client types into, and that client's number."""
+        self._keys_out: list[str] = []
+        self._sending = False
+        self._typing_line: TypingLine | None = None
+
+    # --- which keys apply -----------------------------------------------------------------
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if self.typing_to is not None and action in ("request_quit", "command_palette"):
+            return False  # ctrl+c, ctrl+p are the node's keys while typing
+        if action in ("type_into", "run_under", "command_line"):
+            if self.supervisor is None or self.tabs.active != "nodes":
+                return False
+            return True if self._one_process() else None
+        return super().check_action(action, parameters)
+
+    def _one_process(self) -> str | None:
+        node = self.launch_tree.cursor_node
+        if node is None or node.data is None or node.data.kind != "process":
+            return None
+        return node.data.ref
+
+    # --- typing ---------------------------------------------------------------------------
+
+    def action_type_into(self) -> None:
+        process = self._one_process()
+        if process is None or self.supervisor is None:
+            return
+        state = self.supervisor.states.get(process)
+        if state != "running":
+            self.notify(f"{process} is not running ({state}): there is nothing to type into",
+                        severity="warning")
+            return
+        self.run_worker(self._take_keyboard(process), group="typing", exit_on_error=False)
+
+    async def _take_keyboard(self, process: str) -> None:
+        try:
+            await self.engine.run(take_keyboard(self.supervisor, process))
+        except LaunchError as exc:
+            self.notify(str(exc), severity="error")
+            return
+        self.typing_to = process
+        self.typed_line = ""
+        line = TypingLine(self._typed, id="typing-line")
+        self._typing_line = line
+        self.query_one("#nodes-tab").mount(line, before="#nodes-split")
+        line.focus()
+        self._show_typing()
+        self.refresh_bindings()
+
+    def _typed(self, key: str, character: str | None) -> None:
+        """A key pressed while typing: to the node, or ctrl+] back to tuilaunch."""
+        if self.typing_to is None:
+            return
+        if key != "paste" and is_release(key, character):
+            self.stop_typing()
+            return
+        data = character if key == "paste" else key_bytes(key, character)
+        if not data:
+            return
+        self.typed_line = edit_line(self.typed_line, data)
+        self._keys_out.append(data)
+        if not self._sending:
+            self._sending = True
+            self.run_worker(self._send_keys(self.typing_to), group="typing-keys",
+                            exit_on_error=False)
+        self._show_typing()
+
+    async def _send_keys(self, process: str) -> None:
+        """One sender, so keys reach the node in the order they were pressed."""
+        try:
+            while self._keys_out:
+                data = "".join(self._keys_out)
+                self._keys_out.clear()
+                await self.engine.run(type_keys(self.supervisor, process, data))
+        except LaunchError as exc:
+            self._keys_out.clear()
+            self.notify(str(exc), severity="error")
+        finally:
+            self._sending = False
+
+    def stop_typing(self, why: str = "") -> None:
+        """Gives the keys back to tuilaunch (and the keyboard to the other clients)."""
+        process = self.typing_to
+        if process is None:
+            return
+        self.typing_to = None
+        self.typed_line = ""
+        if self._typing_line is not None:
+            self._typing_line.remove()
+            self._typing_line = None
+        self.launch_tree.focus()
+        self.run_worker(self._release(process), group="typing", exit_on_error=False)
+        if why:
+            self.notify(why)
+        self._status_text = ""  # the line is drawn again without the typing part
+        self.update_status()
+        self.refresh_bindings()
+
+    async def _release(self, process: str) -> None:
+        try:
+            await self.engine.run(release_keyboard(self.supervisor, process))
+        except LaunchError:
+            pass  # the session is gone, and with it the keyboard
+
+    def _show_typing(self) -> None:
+        if self.typing_to is None:
+            return
+        text = Text.assemble((f"typing to {self.typing_to}", "bold"),
+                             " (ctrl+] gives the keys back): ", self.typed_line, "▏")
+        if self._typing_line is not None:
+            self._typing_line.update(text)
+        self.update_status()
+
+    def update_status(self) -> None:
+        super().update_status()
+        if self.supervisor is None or not hasattr(self, "status_bar"):
+            return
+        notes = [f"client {client} types into {process}"
+                 for process, client in self.other_typists.items()]
+        if self.typing_to is not None:
+            notes.insert(0, f"typing to {self.typing_to}: {self.typed_line}")
+        if notes:
+            self.status_bar.update(Text(f"{'  '.join(notes)}  |  {self._status_text}"))
+            self._status_text = ""  # the plain line is drawn again when the notes go
+
+    def show_events(self, events: list[Event]) -> None:
+        rest = []
+        for event in events:
+            if event.kind != "typing":
+                rest.append(event)
+                continue
+            client = (event.data or {}).get("client")
+            process = event.process or ""
+            if client is None or process == self.typing_to:
+                self.other_typists.pop(process, None)  # ours, or given back
+            else:
+                self.other_typists[process] = int(client)
+        super().show_events(rest)
+        if self.typing_to is not None and self.supervisor is not None and \
+                self.supervisor.states.get(self.typing_to) != "running":
+            self.stop_typing(f"{self.typing_to} is no longer running: the keys are back")
+        elif any(e.kind == "typing" for e in events):
+            self.update_status()
+
+    # --- a tool, the command line ---------------------------------------------------------
+
+    def action_run_under(self) -> None:
+        process = self._one_process()
+        if process is None:
+            return
+
+        def chosen(prefix: str | None) -> None:
+            if prefix:  # cancelled: nothing changes
+                self.run_worker(self._restart_under(process, prefix), group="commands",
+                                exit_on_error=False)
+
+        self.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
+
+    async def _restart_under(self, process: str, prefix: str) -> None:
+        assert self.supervisor is not None
+        self.asked_to_stop.add(process)
+        try:
+            await self.engine.run(self.supervisor.restart(process, prefix=prefix))
+        except LaunchError as exc:
+            self.asked_to_stop.discard(process)
+            self.notify(str(exc), severity="error")
+            return
+        self.prefix_history = [prefix, *[p for p in self.prefix_history
+                                         if p != prefix]][:RECENT_PREFIXES]
+        self.notify(f"{process} runs under {prefix}: i types into it; r restarts it plain")
+
+    def action_command_line(self) -> None:
+        process = self._one_process()
+        if process is not None:
+            self.run_worker(self._show_command(process), group="commands",
+                            exit_on_error=False)
+
+    async def _show_command(self, process: str) -> None:
+        try:
+            command = await self.engine.run(command_of(self.supervisor, process))
+        except LaunchError as exc:
+            self.notify(str(exc), severity="error")
+            return
+        line = command.get("command_line")
+        if not line:
+            self.notify(f"{process} has no command line (it could not be resolved)",
+                        severity="warning")
+            return
+        self.push_screen(CommandScreen(process, line))
+
+
+# --- the same calls on a session's server or an in-process supervisor --------------------
+
+async def take_keyboard(supervisor: Any, process: str) -> None:
+    if isinstance(supervisor, RemoteSupervisor):
+        await supervisor.request("typing", process=process, on=True)
+        return
+    running = supervisor.running_process(process)
+    if running is None:
+        raise LaunchError(f"{process} is not running: there is nothing to type into")
+    if running.terminal is None:
+        raise LaunchError(f"{process} cannot be typed into: it has no terminal (its output "
+                          "is not shown on screen, or emulate_tty is False)")
+
+
+async def release_keyboard(supervisor: Any, process: str) -> None:
+    if isinstance(supervisor, RemoteSupervisor):
+        await supervisor.request("typing", process=process, on=False)
+
+
+async def type_keys(supervisor: Any, process: str, data: str) -> None:
+    if isinstance(supervisor, RemoteSupervisor):
+        await supervisor.request("input", process=process, data=data)
+    else:
+        supervisor.write_input(process, data.encode())
+
+
+async def command_of(supervisor: Any, process: str) -> dict[str, Any]:
+    if isinstance(supervisor, RemoteSupervisor):
+        status = await supervisor.request("status")
+        return next((p for p in status["processes"] if p["id"] == process), {})
+    return dict(supervisor.command_of(process))
