@@ -128,6 +128,31 @@ def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(write):
     tl("stop", name)
 
 
+def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
+    """status agrees with headless ("process has died", ERROR), the tree and the exit status."""
+    name = tl(str(write("""
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([
+                ExecuteProcess(name='quits', cmd=['sh', '-c', 'exit 3']),
+                ExecuteProcess(name='stays', cmd=['sleep', '600']),
+            ])
+        """)), "--detach").stdout.strip()
+    tl("wait", name, "quits-1", "failed", "--timeout", "60")
+    quits = process(name, "quits-1")
+    assert quits["state"] == "failed" and quits["exit_code"] == 3
+    assert "signal" not in quits  # an exit status, not a signal
+    tl("wait", name, "stays-2", "running", "--timeout", "60")
+    link = Link(name)
+    try:
+        link.request("stop", process="stays-2")
+    finally:
+        link.close()
+    tl("wait", name, "stays-2", "exited", "--timeout", "60")  # asked for: not a failure
+    tl("stop", name)
+
+
 @requires_gdb
 def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
         write, monkeypatch):

@@ -179,7 +179,8 @@ class Starting(Respawning):
         requested = running.stopping or self._shutting_down
         # a ctrl+c (or ctrl+\\, ctrl+z) typed into it was asked for by the operator too
         typed = code < 0 and -code in running.typed_signals
-        if code != 0 and not requested and not typed:
+        crashed = code != 0 and not requested and not typed
+        if crashed:
             self.crashes[process_id] = code
             self._crash_times[process_id] = time.monotonic()
         start = self.started_with.get(process_id)
@@ -190,8 +191,9 @@ class Starting(Respawning):
                               running.started)
         if death:
             self.deaths[process_id] = death
-        # a death by a signal nobody asked for is a failure, as headless reports it
-        self.states[process_id] = "failed" if death else "exited"
+        # an end nobody asked for with a signal or a non-zero status is a failure, as
+        # headless ("process has died", ERROR), the tree and the exit status have it
+        self.states[process_id] = "failed" if crashed else "exited"
         for plugin in self.plugins:
             plugin.process_exited(process_id)
         reason = describe_exit(code)
