@@ -149,6 +149,12 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] in (["__proxy"], ["__ls"]):
+        # hidden: the far end of an ssh link (`ssh HOST tuilaunch __proxy NAME`), not for
+        # people, so not in --help
+        from ..engine.run import proxy
+
+        return proxy.main(argv)
     if is_command(argv):
         from .commands import main as command_main
 

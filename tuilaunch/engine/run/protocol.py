@@ -7,7 +7,12 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   most output lines per batch and the least seconds between batches, for a display that
   cannot show more}, status, find {process},
   start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
-  is left), apply {arguments}, lifecycle {process}.
+  is left), apply {arguments}, lifecycle {process}, read_log {process, start, end, skip,
+  limit, tail}: a process's log file read by the server, for a client on another machine
+  (`logs HOST:NAME`, the TUI's replay and what it missed while its link was down): the
+  lines from byte `start` to `end` (default: the file's size) after the first `skip`,
+  the first `limit` (or with `tail` the last), as `{"lines": [[time, stream, text]...],
+  "next": byte to ask again from, "size": the file's size, "skipped": lines left out}`.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
   [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose

@@ -29,6 +29,7 @@ from ..plan.session import Session
 from . import session_dir
 from .event_buffer import EventBuffer
 from .events import Event
+from .log_reader import READ_LOG_LIMIT, read_log
 from .plugins import Handler
 from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
 from .supervisor import Supervisor
@@ -42,7 +43,7 @@ REACHABLE_CHECK = 1.0
 RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
 BUILTIN_OPS = frozenset({"subscribe", "status", "start", "stop", "restart", "shutdown",
-                         "apply", "kill", "run_action", "find"})
+                         "apply", "kill", "run_action", "find", "read_log"})
 """Requests the server answers itself; plugins add others with `add_handler`."""
 
 
@@ -402,6 +403,14 @@ class SessionServer:
             return {}
         if op == "find":
             return self.find_process(str(message.get("process")))
+        if op == "read_log":
+            # by id only: the file is the plan's own, never a path a client names
+            process = self.find_process(str(message.get("process")))
+            end = message.get("end")
+            return read_log(self.log_dir / f"{process}.log", int(message.get("start") or 0),
+                            None if end is None else int(end), int(message.get("skip") or 0),
+                            int(message.get("limit", READ_LOG_LIMIT)),
+                            bool(message.get("tail")))
         handler = self._handlers.get(str(op))
         if handler is not None:
             return await handler(message)
