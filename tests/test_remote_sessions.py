@@ -1,0 +1,121 @@
+"""Sessions on another machine through a real sshd: `[HOST:]NAME` addresses for every
+session command, `attach HOST:NAME`, and a dropped link that stops nothing.
+
+"robot1" is an sshd on 127.0.0.1 (tests/sshd.py) with its own session folder; its sessions
+are started as a user logged in there would, and reached only through `ssh robot1`.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+
+from .conftest import run_cli
+from .sshd import Machine, Machines, alive, machines_fixture  # noqa: F401
+
+LAUNCH = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(name='ticker', cmd=[
+        'sh', '-c', 'i=0; while true; do i=$((i+1)); echo tick $i; sleep 0.2; done']))
+    sl.add_action(ExecuteProcess(name='quiet', cmd=['sleep', '600']))
+    return sl.launch_description()
+"""
+
+
+def wait_for(check: Callable[[], object], limit: float = 30.0) -> None:
+    end = time.monotonic() + limit
+    while not check():
+        assert time.monotonic() < end, f"condition never held: {check}"
+        time.sleep(0.05)
+
+
+def there(machine: Machine) -> dict[str, str]:
+    """The environment of a user logged in on `machine`."""
+    return {"XDG_RUNTIME_DIR": str(machine.runtime),
+            "ROS_LOG_DIR": str(machine.folder / "roslog")}
+
+
+def start_on(machine: Machine, write, name: str) -> int:
+    """A session started on `machine`; its server's pid."""
+    path = write(LAUNCH)
+    done = run_cli(str(path), "--detach", "--name", name, env=there(machine))
+    assert done.returncode == 0, done.stderr
+    wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=there(machine))
+    assert wait.returncode == 0, wait.stderr
+    status = json.loads(run_cli("status", name, "--json", env=there(machine)).stdout)
+    return int(status["pid"])
+
+
+def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
+    server = start_on(machines["robot1"], write, "far")
+    listed = run_cli("ls", "robot1", "--json")
+    assert listed.returncode == 0, listed.stderr
+    assert [s["name"] for s in json.loads(listed.stdout)] == ["far"]
+    # not listed here: the session is robot1's
+    assert "far" not in run_cli("ls").stdout
+
+    status = run_cli("status", "robot1:far", "--json")
+    assert status.returncode == 0, status.stderr
+    states = {p["id"]: p["state"] for p in json.loads(status.stdout)["processes"]}
+    assert states == {"ticker-1": "running", "quiet-2": "running"}
+
+    wait_for(lambda: "tick 3\n" in run_cli("logs", "robot1:far", "ticker-1").stdout)
+    logs = run_cli("logs", "robot1:far", "ticker-1").stdout.splitlines()
+    assert logs[:3] == ["tick 1", "tick 2", "tick 3"]
+    every = run_cli("logs", "robot1:far").stdout
+    assert "[ticker-1] tick 1" in every
+
+    restarted = run_cli("restart", "robot1:far", "ticker")
+    assert restarted.returncode == 0, restarted.stderr
+    assert "ticker-1: running" in restarted.stdout
+    assert run_cli("wait", "robot1:far", "quiet-2", "running", "--timeout", "30")\
+        .returncode == 0
+
+    stopped = run_cli("stop", "robot1:far")
+    assert stopped.returncode == 0, stopped.stderr
+    assert "session robot1:far stopped" in stopped.stdout
+    wait_for(lambda: not alive(server))
+    assert json.loads(run_cli("ls", "robot1", "--json").stdout) == []
+
+
+def test_wait_through_the_link_times_out_with_the_state(machines: Machines, write):
+    start_on(machines["robot1"], write, "far")
+    done = run_cli("wait", "robot1:far", "ticker-1", "exited", "--timeout", "1")
+    assert done.returncode == 1
+    assert "ticker-1 is running, not exited" in done.stderr
+
+
+def test_remote_failures_are_one_line_naming_the_host(machines: Machines, write, tmp_path):
+    start_on(machines["robot1"], write, "far")
+    unknown = run_cli("status", "robot1:nothere")
+    assert unknown.returncode == 2
+    assert "robot1: no running session named nothere" in unknown.stderr
+    assert "Traceback" not in unknown.stderr
+
+    # a machine nobody listens on
+    config = tmp_path / "ssh" / "ssh_config"
+    config.write_text(config.read_text() + machines.host_entry("gone", 1))
+    unreachable = run_cli("ls", "gone")
+    assert unreachable.returncode == 2
+    assert "cannot reach gone" in unreachable.stderr.splitlines()[0]
+
+    # a key robot1 does not accept
+    from .sshd import keygen
+
+    other = tmp_path / "other_key"
+    keygen(other)
+    config.write_text(config.read_text() + machines.host_entry(
+        "stranger", machines["robot1"].port, other))
+    refused = run_cli("status", "stranger:far")
+    assert refused.returncode == 2
+    assert "stranger refused the login" in refused.stderr.splitlines()[0]
+
+    missing = run_cli("logs", "robot1:far", env={"TUILAUNCH_REMOTE": "/nonexistent/tuilaunch"})
+    assert missing.returncode == 2
+    assert "robot1: tuilaunch not found there" in missing.stderr.splitlines()[0]
+    for done in (unknown, unreachable, refused, missing):
+        assert "Traceback" not in done.stderr
