@@ -7,9 +7,18 @@ are started as a user logged in there would, and reached only through `ssh robot
 
 from __future__ import annotations
 
+import asyncio
 import json
+import os
+import signal
 import time
 from collections.abc import Callable
+from pathlib import Path
+
+from tuilaunch.client import remote_supervisor
+from tuilaunch.tui.app import make_app
+from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.dialogs import ConfirmScreen
 
 from .conftest import run_cli
 from .sshd import Machine, Machines, alive, machines_fixture  # noqa: F401
@@ -119,3 +128,94 @@ def test_remote_failures_are_one_line_naming_the_host(machines: Machines, write,
     assert "robot1: tuilaunch not found there" in missing.stderr.splitlines()[0]
     for done in (unknown, unreachable, refused, missing):
         assert "Traceback" not in done.stderr
+
+
+def proxies_on(machine: Machine) -> list[int]:
+    """The `__proxy` processes under `machine` (the far end of each ssh link)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            argv = (entry / "cmdline").read_bytes().split(b"\0")
+            environ = (entry / "environ").read_bytes()
+        except OSError:
+            continue
+        if b"__proxy" in argv and str(machine.runtime).encode() in environ:
+            found.append(int(entry.name))
+    return [pid for pid in found if alive(pid)]
+
+
+def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, monkeypatch):
+    """The TUI here, the launch on robot1: the link dropped says so, stops nothing, and
+    once back shows what happened meanwhile, nothing twice and nothing missed."""
+    robot = machines["robot1"]
+    server = start_on(robot, write, "far")
+    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    before = {p["id"]: p["pid"] for p in status["processes"]}
+    # reconnect only when asked (R), so what happens meanwhile surely happens meanwhile
+    monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)
+
+    def ticks(app) -> list[str]:
+        return [line.text for line in app.store.lines(View("ticker-1"))
+                if line.text.startswith("tick")]
+
+    async def until(pilot, check: Callable[[], object], limit: float = 60.0) -> None:
+        end = time.monotonic() + limit
+        while not check():
+            assert time.monotonic() < end, f"condition never held: {check}"
+            await pilot.pause(0.05)
+
+    async def attached() -> None:
+        app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                       session_name="far", session_host="robot1")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await until(pilot, lambda: len(ticks(app)) >= 3)
+            assert "[robot1:far]" in str(app.status_bar.render())
+            for pid in proxies_on(robot):
+                os.kill(pid, signal.SIGKILL)  # the link dies; ssh ends with it
+            await until(pilot, lambda: "link to robot1 lost" in str(app.status_bar.render()))
+            seen = len(ticks(app))
+            # meanwhile, over there: lines go on, and another operator restarts a node
+            restarted = run_cli("restart", "robot1:far", "quiet")
+            assert restarted.returncode == 0, restarted.stderr
+            await pilot.pause(1.0)
+            assert len(ticks(app)) == seen  # nothing arrives while the link is down
+            await pilot.press("R")
+            await until(pilot, lambda: "link to robot1 lost" not in str(
+                app.status_bar.render()) and len(ticks(app)) > seen + 5)
+            shown = ticks(app)
+            assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
+            quiet = [line.text for line in app.store.lines(View("quiet-2"))]
+            assert sum("process started with pid" in t for t in quiet) == 2
+            assert app.supervisor is not None
+            assert app.supervisor.states["quiet-2"] == "running"
+            # new lines keep coming on the new link
+            now = len(ticks(app))
+            await until(pilot, lambda: len(ticks(app)) > now + 3)
+            shown = ticks(app)
+            assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
+            # the ssh client killed this time: the same
+            assert app.supervisor.link is not None
+            app.supervisor.link.process.kill()
+            await until(pilot, lambda: "link to robot1 lost" in str(app.status_bar.render()))
+            seen = len(ticks(app))
+            await pilot.press("R")
+            await until(pilot, lambda: "link to robot1 lost" not in str(
+                app.status_bar.render()) and len(ticks(app)) > seen + 3)
+            shown = ticks(app)
+            assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
+            # quitting asks; "n" leaves the launch running there
+            await pilot.press("q")
+            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+            await pilot.press("n")
+            await until(pilot, lambda: app.detached)
+        assert app.detached
+
+    asyncio.run(attached())
+    after = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    assert after["pid"] == server
+    assert {p["id"]: p["state"] for p in after["processes"]} == {
+        "ticker-1": "running", "quiet-2": "running"}
+    assert {p["id"]: p["pid"] for p in after["processes"]}["ticker-1"] == before["ticker-1"]
+    assert run_cli("stop", "robot1:far").returncode == 0
+    wait_for(lambda: not alive(server))
+    assert proxies_on(robot) == []

@@ -140,6 +140,9 @@ def report_end(app: Any, name: str) -> None:
     elif getattr(app.supervisor, "killed_server", False):
         print(f"session {name} did not answer: its server was killed, and its watchdog "
               "killed every process of the launch", file=sys.stderr)
+    elif getattr(app.supervisor, "lost", False) and getattr(app, "session_host", None):
+        print(f"tuilaunch: error: session {name} ended while the link was down (its "
+              f"messages: session.log in {app.supervisor.log_dir} there)", file=sys.stderr)
     elif getattr(app.supervisor, "lost", False):
         log = Path(app.supervisor.log_dir) / "session.log"
         print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "

@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from ..engine.run import session_dir
-from ..engine.run.remote import open_remote_link, parse_address
 from ..engine.run.protocol import MAX_MESSAGE, decode, encode
+from ..engine.run.remote import open_remote_link, parse_address
 from ..engine.run.session_dir import SessionError
 
 

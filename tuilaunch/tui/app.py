@@ -71,6 +71,8 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
         Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
         Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
                 "opens it again"),
+        Binding("R", "reconnect", "Reconnect", show=False,
+                tooltip="Reconnect a dropped link to the session's machine now"),
         Binding("question_mark", "help", "Help"),
         Binding("q", "request_quit", "Quit"),
         Binding("ctrl+c", "request_quit", "Quit", show=False, priority=True),
@@ -112,7 +114,12 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
         sys.setswitchinterval(0.001)
         self.engine = EngineThread()
         # built on the engine thread, whose loop its asyncio objects belong to
-        if self.session_name is not None:
+        if self.session_host is not None:
+            # the session is on another machine: the protocol crosses an ssh link
+            self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
+                self.session_host, str(self.session_name), self.session, self.scrollback,
+                max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=120)
+        elif self.session_name is not None:
             remote = self.engine.submit(RemoteSupervisor.open(
                 self.session_name, self.session, self.scrollback,
                 max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)

@@ -267,10 +267,13 @@ class RemoteLink:
     def lost_reason(self) -> str:
         """Once the link closed: one line saying why, from ssh's last words, else its exit
         status (a remote end killed outright leaves ssh nothing to say)."""
+        return f"lost the link to {self.host} ({self.why_lost()})"
+
+    def why_lost(self) -> str:
+        """`lost_reason` without the host: ssh's last words or its exit status."""
         code, text = self.stderr.ended()
         lines = [line.strip() for line in text.splitlines() if line.strip()]
-        why = _without_prefix(lines[-1]) if lines else f"ssh exit status {code}"
-        return f"lost the link to {self.host} ({why})"
+        return _without_prefix(lines[-1]) if lines else f"ssh exit status {code}"
 
     @property
     def info(self) -> dict[str, Any]:
