@@ -20,7 +20,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..client.link import ANSWER_TIMEOUT, Link, open_link
+from ..client.link import ANSWER_TIMEOUT, Link, open_link, resolve_name
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.run import session_dir
@@ -220,21 +220,25 @@ def _print_sessions(sessions: list[dict[str, Any]], as_json: bool) -> int:
 
 
 def cmd_attach(options: argparse.Namespace) -> int:
-    host = None if options.name is None else parse_address(options.name).host
+    where = None if options.name is None else parse_address(options.name)
+    host = None if where is None else where.host
+    if where is None or where.host is None:
+        # here, the session is found first; there, by connecting to it
+        label = resolve_name(None if where is None else where.name)
+    else:
+        label = str(where)
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
-        label = options.name or "NAME"
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {label} -f, or tuilaunch status {label}")
-    info = _status(options.name)
-    name = info["name"]
+    info = _status(label)
     from ..engine.describe.loader import set_command_line
     from ..tui.app import make_app
 
     set_command_line(info.get("command") or [info["file"]], info["arguments"])
     app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
-                   scrollback=options.scrollback, session_name=name, session_host=host)
+                   scrollback=options.scrollback, session_name=info["name"], session_host=host)
     status = app.run() or 0
-    report_end(app, name if host is None else f"{host}:{name}")
+    report_end(app, label)
     return status
 
 

@@ -63,6 +63,8 @@ class Link:
     def __init__(self, name: str, timeout: float | None = ANSWER_TIMEOUT,
                  answer_timeout: float = ANSWER_TIMEOUT) -> None:
         self.name = name
+        self.host: str | None = None
+        self._on_close: Callable[[], None] | None = None
         self.answer_timeout = answer_timeout
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         self.sock.settimeout(answer_timeout)
@@ -88,8 +90,6 @@ class Link:
             raise SessionError(f"session {name} did not greet")
         self.info: dict[str, Any] = hello["info"]
         self.sock.settimeout(timeout)
-        self.host: str | None = None
-        self._on_close: Callable[[], None] | None = None
 
     @classmethod
     def connected(cls, name: str, sock: socket.socket, hello: dict[str, Any], host: str,
