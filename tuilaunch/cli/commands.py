@@ -27,7 +27,7 @@ from ..engine.run import session_dir
 from ..engine.run.log_reader import LogLine, read_lines
 from ..engine.run.output import strip_ansi
 from ..engine.run.protocol import event_from_dict
-from ..engine.run.remote import check_host, list_remote, parse_address
+from ..engine.run.remote import check_host, list_remote, open_remote_link, parse_address
 from ..engine.run.session_dir import SessionError
 from ..tui.output_store import LEVELS, level_of
 
@@ -230,14 +230,31 @@ def cmd_attach(options: argparse.Namespace) -> int:
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {label} -f, or tuilaunch status {label}")
-    info = _status(label)
+    remote = None
+    if where is not None and where.host is not None:
+        # one ssh login for both: the status first, then the TUI's subscription
+        remote = open_remote_link(where.host, where.name)
+        link = Link.connected(where.name, remote.sock, remote.hello, where.host)
+        try:
+            info = link.request("status", short=True)
+        except BaseException:
+            remote.close()
+            raise
+        link.release()
+    else:
+        info = _status(label)
     from ..engine.describe.loader import set_command_line
     from ..tui.app import make_app
 
-    set_command_line(info.get("command") or [info["file"]], info["arguments"])
-    app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
-                   scrollback=options.scrollback, session_name=info["name"], session_host=host)
-    status = app.run() or 0
+    try:
+        set_command_line(info.get("command") or [info["file"]], info["arguments"])
+        app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
+                       scrollback=options.scrollback, session_name=info["name"],
+                       session_host=host, remote_link=remote)
+        status = app.run() or 0
+    finally:
+        if remote is not None:
+            remote.close()  # done already unless the TUI never took it
     report_end(app, label)
     return status
 

@@ -163,6 +163,11 @@ class Link:
         for _ in self.messages():
             pass
 
+    def release(self) -> None:
+        """Done with the blocking reads; the socket stays open for another client of the
+        same connection (nothing unasked is sent before a subscribe, so none is lost)."""
+        self._file.close()
+
     def close(self) -> None:
         self._file.close()
         self.sock.close()

@@ -29,7 +29,7 @@ from ..engine.run import session_dir
 from ..engine.run.log_reader import LogLine, tail_lines
 from ..engine.run.output import screen_str
 from ..engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
-from ..engine.run.remote import RemoteError, RemoteLink, open_remote_streams
+from ..engine.run.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
 from ..engine.run.session_dir import SessionError
 from ..engine.run.supervisor import Event
 from .link import ANSWER_TIMEOUT, not_answering
@@ -38,6 +38,9 @@ Consumer = Callable[[Event], None]
 
 RETRY_FIRST = 1.0
 """Seconds before the first try to reconnect a dropped link; doubled after each failure."""
+LINK_INTERVAL = 1.0
+"""Seconds between event batches for a display over an ssh link: its output pane repaints
+once a second anyway (tui PANE_FPS), and every batch costs the link a packet."""
 RETRY_MOST = 15.0
 """The longest wait between tries: a robot back on the network is found within this."""
 
@@ -131,10 +134,15 @@ class RemoteSupervisor:
 
     @classmethod
     async def open_remote(cls, host: str, name: str, session: Session, scrollback: int = 5000,
-                          max_lines: int = 0, interval: float = 0.0) -> RemoteSupervisor:
-        """The same over an ssh link to `host` (RemoteError with one line when it cannot be
-        made); the replay is read through the server, the files being over there."""
-        link, reader, writer = await open_remote_streams(host, name)
+                          max_lines: int = 0, interval: float = 0.0,
+                          link: RemoteLink | None = None) -> RemoteSupervisor:
+        """The same over an ssh link to `host` (`link`: one already open, else a new one;
+        RemoteError with one line when it cannot be made); the replay is read through the
+        server, the files being over there."""
+        if link is None:
+            link, reader, writer = await open_remote_streams(host, name)
+        else:
+            reader, writer = await link_streams(link)
         self = cls(name, session, reader, writer, link.hello["info"], host, link)
         self.scrollback, self.max_lines, self.interval = scrollback, max_lines, interval
         try:

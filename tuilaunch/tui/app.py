@@ -19,7 +19,7 @@ from textual.containers import Vertical
 from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
-from ..client.remote_supervisor import RemoteSupervisor
+from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
 from ..engine.launcher import make_supervisor
 from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
@@ -116,9 +116,12 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
         # built on the engine thread, whose loop its asyncio objects belong to
         if self.session_host is not None:
             # the session is on another machine: the protocol crosses an ssh link
+            # sent what the screen can show each second (a pane is shorter than the
+            # screen); what it cannot is counted, and is in the log files over there
             self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
                 self.session_host, str(self.session_name), self.session, self.scrollback,
-                max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=120)
+                max_lines=max(24, self.size.height), interval=LINK_INTERVAL,
+                link=self.remote_link)).result(timeout=120)
         elif self.session_name is not None:
             remote = self.engine.submit(RemoteSupervisor.open(
                 self.session_name, self.session, self.scrollback,
