@@ -33,7 +33,9 @@ from tui_bench import Terminal  # noqa: E402  (bench/ is on sys.path as a script
 from tests.sshd import Machines  # noqa: E402  (the tests' sshd, as the issue asks)
 
 WINDOW = 10.0  # seconds each rate is measured over
-MARKER = b"says hi"  # the demo talker's line: a node line on screen
+MARKERS = {"demo": b"says hi", "flood": b"of the lidar"}
+"""A node's line on screen: the talker's; under the flood, the flooder's (what a screen
+showing the newest lines shows)."""
 
 FLOODER = """
     from launch.actions import ExecuteProcess
@@ -95,7 +97,7 @@ class Link:
         return total
 
 
-def measure(argv: list[str], env: dict[str, str], link: Link, tag: str)\
+def measure(argv: list[str], env: dict[str, str], link: Link, tag: str, marker: bytes)\
         -> tuple[float, float]:
     """Seconds to the first node line, and link bytes/s over WINDOW once settled."""
     saved = dict(os.environ)
@@ -107,7 +109,7 @@ def measure(argv: list[str], env: dict[str, str], link: Link, tag: str)\
         os.environ.clear()
         os.environ.update(saved)
     try:
-        term.read_until(MARKER, limit=90)
+        term.read_until(marker, limit=90)
         attach = time.perf_counter() - start
         term.settle(5.0)  # the first screen and the replay are out
         before = link.count(tag)
@@ -149,11 +151,17 @@ def main() -> None:
             ours = measure(
                 [sys.executable, "-m", "tuilaunch", "attach", f"robot1:{name}"],
                 {"TUILAUNCH_SSH_COMMAND": link.ssh(f"ours-{name}"),
-                 "TUILAUNCH_REMOTE": remote}, link, f"ours-{name}")
+                 "TUILAUNCH_REMOTE": remote}, link, f"ours-{name}",
+                MARKERS[name])
             drawn = measure(
                 [*shlex.split(link.ssh(f"drawn-{name}")), "-t", "robot1",
-                 f"{remote} attach {name}"], {}, link, f"drawn-{name}")
-            rows.append((name, ours, drawn))
+                 f"{remote} attach {name}"], {}, link, f"drawn-{name}", MARKERS[name])
+            # the same with ssh's compression, which our link always asks for
+            squeezed = measure(
+                [*shlex.split(link.ssh(f"drawnc-{name}")), "-C", "-t", "robot1",
+                 f"{remote} attach {name}"], {}, link, f"drawnc-{name}",
+                MARKERS[name])
+            rows.append((name, ours, drawn, squeezed))
             subprocess.run([sys.executable, "-m", "tuilaunch", "stop", f"robot1:{name}"],
                            env={**os.environ, "TUILAUNCH_SSH_COMMAND": machines.ssh_command,
                                 "TUILAUNCH_REMOTE": remote}, capture_output=True)
@@ -161,15 +169,18 @@ def main() -> None:
         machines.stop()
     print("bytes/s crossing the ssh link (TCP, both ways), 80x24, the TUI attached to a "
           "session on robot1")
-    print(f"  {'':18}{'attach robot1:NAME':>20}{'ssh -t ... attach':>20}{'fewer':>8}")
-    for name, ours, drawn in rows:
+    print(f"  {'':18}{'attach robot1:NAME':>20}{'ssh -t ... attach':>20}{'fewer':>7}"
+          f"{'ssh -C -t ...':>16}{'fewer':>7}")
+    for name, ours, drawn, squeezed in rows:
         label = "demo, idle" if name == "demo" else "demo + 2,000 l/s"
         print(f"  {label:18}{ours[1]:>16,.0f} B/s{drawn[1]:>16,.0f} B/s"
-              f"{drawn[1] / max(ours[1], 1):>7.1f}x")
+              f"{drawn[1] / max(ours[1], 1):>6.1f}x{squeezed[1]:>12,.0f} B/s"
+              f"{squeezed[1] / max(ours[1], 1):>6.1f}x")
     print("time to attach (command start to the first node line on screen)")
-    for name, ours, drawn in rows:
-        print(f"  {name:18}{ours[0]:>18.2f} s{drawn[0]:>18.2f} s")
-    print(json.dumps({name: {"ours": ours, "drawn": drawn} for name, ours, drawn in rows}))
+    for name, ours, drawn, squeezed in rows:
+        print(f"  {name:18}{ours[0]:>18.2f} s{drawn[0]:>18.2f} s{squeezed[0]:>18.2f} s")
+    print(json.dumps({name: {"ours": ours, "drawn": drawn, "drawn_compressed": squeezed}
+                      for name, ours, drawn, squeezed in rows}))
 
 
 if __name__ == "__main__":
