@@ -27,11 +27,11 @@ from ..engine.plan.model import Plan, PlanDiff
 from ..engine.plan.session import Session
 from ..engine.run import session_dir
 from ..engine.run.log_reader import LogLine, tail_lines
-from ..engine.run.output import screen_str
 from ..engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
 from ..engine.run.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
 from ..engine.run.session_dir import SessionError
 from ..engine.run.supervisor import Event
+from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering
 
 Consumer = Callable[[Event], None]
@@ -160,7 +160,7 @@ class RemoteSupervisor:
             await asyncio.get_running_loop().run_in_executor(None, link.close)
             raise RemoteError(f"{host}: session {name} did not answer ({exc or 'timeout'})")\
                 from None
-        self.history = _merged(lines, result["recent"])
+        self.history = merged(lines, result["recent"])
         self._note_recent(result["recent"])
         return self
 
@@ -209,7 +209,7 @@ class RemoteSupervisor:
 
     def _replay(self, offsets: dict[str, int], recent: list[dict[str, Any]],
                 scrollback: int) -> list[Event]:
-        return _merged({process: tail_lines(self.log_dir / f"{process}.log", end, scrollback)
+        return merged({process: tail_lines(self.log_dir / f"{process}.log", end, scrollback)
                         for process, end in offsets.items()}, recent)
 
     # --- the Supervisor's interface ----------------------------------------------------------
@@ -382,7 +382,7 @@ class RemoteSupervisor:
             event = event_from_dict(data)
             if event.kind == "exited" and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
-        return notes + _merged(lines, recent)
+        return notes + merged(lines, recent)
 
     def _deliver(self, event: Event) -> None:
         for consumer in list(self.consumers):
@@ -490,31 +490,3 @@ class RemoteLifecycle:
         result = await self.remote._request("transition", process=process,
                                             transition=transition)
         return bool(result.get("done"))
-
-
-def _merged(lines: dict[str, list[LogLine]], recent: list[dict[str, Any]]) -> list[Event]:
-    """Log lines of several processes and state events as one history, in time order."""
-    timed: list[tuple[float, int, Event]] = []
-    for process, found in lines.items():
-        for line in found:
-            timed.append((line.time, len(timed), Event(
-                "output", process, stream=line.stream, lines=[screen_str(line.text)],
-                time=line.time)))
-    for data in recent:
-        event = event_from_dict(data)
-        timed.append((event.time, len(timed), event))
-    timed.sort(key=lambda item: (item[0], item[1]))
-    return _batched([event for _, _, event in timed])
-
-
-def _batched(events: list[Event]) -> list[Event]:
-    """Consecutive output lines of one process and stream as one event."""
-    out: list[Event] = []
-    for event in events:
-        last = out[-1] if out else None
-        if (event.kind == "output" and last is not None and last.kind == "output"
-                and last.process == event.process and last.stream == event.stream):
-            last.lines.append(*event.lines)
-        else:
-            out.append(event)
-    return out
