@@ -11,6 +11,8 @@ import asyncio
 import json
 import os
 import signal
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -22,6 +24,7 @@ from tuilaunch.tui.screens.dialogs import ConfirmScreen
 
 from .conftest import run_cli
 from .sshd import Machine, Machines, alive, machines_fixture  # noqa: F401
+from .test_sessions import Terminal
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -219,3 +222,34 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
     assert run_cli("stop", "robot1:far").returncode == 0
     wait_for(lambda: not alive(server))
     assert proxies_on(robot) == []
+
+
+def test_attach_on_a_terminal_and_logs_follow_through_the_link(machines: Machines, write):
+    server = start_on(machines["robot1"], write, "far")
+    terminal = Terminal("attach", "robot1:far")
+    try:
+        terminal.read_until(b"[robot1:far]")  # the status line names the session's machine
+        terminal.read_until(b"tick")  # the remote node's output, on this screen
+        os.write(terminal.master, b"d")
+        assert terminal.wait_exit() == 0
+        assert b"detached; session robot1:far runs on" in terminal.screen
+    finally:
+        terminal.close()
+    assert alive(server)
+
+    follow = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", "robot1:far",
+                               "ticker-1", "-f"], stdout=subprocess.PIPE, text=True,
+                              start_new_session=True)
+    try:
+        assert follow.stdout is not None
+        lines = []
+        for line in follow.stdout:  # the file's lines, then the live ones, no gap
+            lines.append(line.rstrip("\n"))
+            if len(lines) >= 40:
+                break
+        assert lines == [f"tick {i}" for i in range(1, 41)]
+    finally:
+        os.killpg(follow.pid, signal.SIGTERM)
+        follow.wait()
+    table = run_cli("ls", "robot1")
+    assert table.returncode == 0 and "far" in table.stdout and "2/2" in table.stdout
