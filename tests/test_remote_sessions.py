@@ -253,3 +253,17 @@ def test_attach_on_a_terminal_and_logs_follow_through_the_link(machines: Machine
         follow.wait()
     table = run_cli("ls", "robot1")
     assert table.returncode == 0 and "far" in table.stdout and "2/2" in table.stdout
+
+
+def test_a_tui_whose_link_fails_before_it_mounts_exits_with_the_reason(machines, write,
+                                                                       tmp_path):
+    app = make_app(str(write(LAUNCH)), {}, tmp_path, session_name="nothere",
+                   session_host="robot1")
+
+    async def attach() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.pause(0.1)
+
+    asyncio.run(attach())
+    assert app.return_code == 2
+    assert app.supervisor is None

@@ -20,6 +20,7 @@ from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
+from ..engine.errors import LaunchError
 from ..engine.launcher import make_supervisor
 from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
@@ -118,10 +119,15 @@ class TuiLaunchApp(NodeCommands, Navigation, Arguments, Quitting):
             # the session is on another machine: the protocol crosses an ssh link
             # sent what the screen can show each second (a pane is shorter than the
             # screen); what it cannot is counted, and is in the log files over there
-            self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
-                self.session_host, str(self.session_name), self.session, self.scrollback,
-                max_lines=max(24, self.size.height), interval=LINK_INTERVAL,
-                link=self.remote_link)).result(timeout=120)
+            try:
+                self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
+                    self.session_host, str(self.session_name), self.session,
+                    self.scrollback, max_lines=max(24, self.size.height),
+                    interval=LINK_INTERVAL, link=self.remote_link)).result(timeout=120)
+            except LaunchError as exc:  # the link failed between `attach` and here
+                self.engine.stop()
+                self.exit(2, return_code=2, message=f"tuilaunch attach: error: {exc}")
+                return
         elif self.session_name is not None:
             remote = self.engine.submit(RemoteSupervisor.open(
                 self.session_name, self.session, self.scrollback,
