@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import os
+import queue
 import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -55,38 +57,66 @@ def enabled_names(plan: Plan) -> set[str]:
     return {p.full_name or p.label for p in plan.processes if p.enabled}
 
 
-def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 60) -> \
+def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 120) -> \
         subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
                           text=True, timeout=timeout, env={**os.environ, **(env or {})})
 
 
-def run_headless(path: Path, *args: str, timeout: float = 40,
+def wait_for(check: Callable[[], object], timeout: float = 60.0, what: str = "") -> None:
+    """Polls `check` until it holds. The timeout only guards against a hang (a busy machine
+    is slow, never wrong); when it runs out the failure names what was awaited."""
+    end = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < end, f"never happened within {timeout:g} s: {what or check}"
+        time.sleep(0.05)
+
+
+def run_headless(path: Path, *args: str, timeout: float = 90,
                  until: tuple[str, ...] | Callable[[str], bool] = (),
                  env: dict[str, str] | None = None) -> str:
     """Runs the file headless until every text in `until` was printed (or `until(output)`
     holds), then sends SIGINT.
 
-    The timeout only guards against a hang; the assertions then say what was missing."""
+    The timeout only guards against a hang, and holds even when the launch prints nothing;
+    the assertions then say what was missing."""
     proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), *args, "--headless"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             env={**os.environ, **(env or {})}, start_new_session=True)
     seen: list[str] = []
-    assert proc.stdout is not None
+    lines: queue.Queue[str | None] = queue.Queue()
+    stdout = proc.stdout
+    assert stdout is not None
+
+    def read() -> None:  # a thread, so that a silent launch cannot outlast the deadline
+        for line in stdout:
+            lines.put(line)
+        lines.put(None)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
     try:
         limit = time.monotonic() + timeout
-        for line in proc.stdout:
+        while (left := limit - time.monotonic()) > 0:
+            try:
+                line = lines.get(timeout=left)
+            except queue.Empty:
+                break
+            if line is None:
+                break
             seen.append(line)
             if callable(until):
                 if until("".join(seen)):
                     break
             elif all(any(text in earlier for earlier in seen) for text in until):
                 break
-            if time.monotonic() > limit:
-                break
         proc.send_signal(signal.SIGINT)
-        rest, _ = proc.communicate(timeout=30)
-        seen.append(rest)
+        proc.wait(timeout=60)
+        reader.join(timeout=30)
+        while not lines.empty():
+            rest = lines.get()
+            if rest is not None:
+                seen.append(rest)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)

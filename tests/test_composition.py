@@ -220,7 +220,7 @@ async def test_a_restarted_or_respawned_container_gets_its_components_back(
     run = asyncio.ensure_future(supervisor.run(keep_alive=True))
 
     async def two_loaded() -> set[str]:
-        return {await asyncio.wait_for(loaded.get(), 30) for _ in range(2)}
+        return {await asyncio.wait_for(loaded.get(), 60) for _ in range(2)}
 
     try:
         assert await two_loaded() == {"/talker_c", "/listener_c"}

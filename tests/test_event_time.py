@@ -34,7 +34,7 @@ def world(tmp_path):
     return world_env(prefix, tmp_path, probes), probes
 
 
-def headless(path, env, *args, timeout=60):
+def headless(path, env, *args, timeout=120):
     return run_cli(str(path), "--headless", *args, env=env, timeout=timeout)
 
 
@@ -198,7 +198,7 @@ def generate_launch_description():
             EmitEvent(event=ShutdownProcess(process_matcher=matches_action(sleeper)))])),
     ])
 """)
-    done = headless(path, env, timeout=40)
+    done = headless(path, env, timeout=120)
     lines = lines_of(done)
     assert index_of(lines, "[driver-2]: process has finished") < index_of(
         lines, "[INFO] [sleeper-1]: process stopped")

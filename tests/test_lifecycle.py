@@ -220,15 +220,20 @@ except Exception:
 
 
 def fake_lifecycle_manager_prefix(tmp_path: Path) -> Path:
+    return fake_package_prefix(tmp_path, "nav2_lifecycle_manager", "lifecycle_manager",
+                               FAKE_MANAGER)
+
+
+def fake_package_prefix(tmp_path: Path, pkg: str, executable: str, text: str) -> Path:
+    """An install prefix holding package `pkg` with one Python executable."""
     prefix = tmp_path / "prefix"
-    pkg = "nav2_lifecycle_manager"
     (prefix / "share/ament_index/resource_index/packages").mkdir(parents=True)
     (prefix / "share/ament_index/resource_index/packages" / pkg).write_text("")
     (prefix / "share" / pkg).mkdir(parents=True)
     (prefix / "share" / pkg / "package.xml").write_text(f"<package><name>{pkg}</name></package>")
-    exe = prefix / "lib" / pkg / "lifecycle_manager"
+    exe = prefix / "lib" / pkg / executable
     exe.parent.mkdir(parents=True)
-    exe.write_text(FAKE_MANAGER)
+    exe.write_text(text)
     exe.chmod(0o755)
     return prefix
 
@@ -339,7 +344,7 @@ def generate_launch_description():
     (proc,) = plan.processes
 
     async def reach(state: str) -> None:
-        while await asyncio.wait_for(states.get(), 30) != state:
+        while await asyncio.wait_for(states.get(), 60) != state:
             pass
 
     try:
@@ -357,3 +362,62 @@ def generate_launch_description():
         await supervisor.shutdown("test over")
         await asyncio.wait_for(run, 30)
     assert proc.id not in supervisor.lifecycle.states  # exited: no state any more
+
+
+# A lifecycle node that is slow, as on a busy machine: its services are on the graph at once,
+# but it serves them only a few seconds later, and its configure takes seconds too.
+SLOW_NODE = """#!/usr/bin/env python3
+import sys
+import time
+import rclpy
+from rclpy.lifecycle import Node, TransitionCallbackReturn
+
+
+class Slow(Node):
+    def on_configure(self, state):
+        time.sleep(3)  # the behaviour under test: a transition longer than the timeout
+        return TransitionCallbackReturn.SUCCESS
+
+
+rclpy.init(args=sys.argv)
+node = Slow('slow')
+print('slow: services up, busy for 4 s', flush=True)
+time.sleep(4)  # the behaviour under test: a node that answers late
+rclpy.spin(node)
+"""
+
+
+async def test_autostart_survives_calls_that_outlast_the_service_timeout(
+        write, tmp_path, monkeypatch):
+    prefix = fake_package_prefix(tmp_path, "slow_lifecycle", "slow", SLOW_NODE)
+    monkeypatch.setenv("AMENT_PREFIX_PATH",
+                       f"{prefix}{os.pathsep}{os.environ.get('AMENT_PREFIX_PATH', '')}")
+    plan = resolve(load_file(str(write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        LifecycleNode(package='slow_lifecycle', executable='slow', name='slow',
+                      namespace='', autostart=True)])
+"""))), {}, tmp_path / "params")
+    # its first get_state and its configure outlast this timeout: the tracker asks the
+    # state again, and learns how configure ended from the node's transition events
+    supervisor = make_supervisor(plan, tmp_path / "log", sigterm_timeout=3, service_timeout=1)
+    events: list[Event] = []
+    supervisor.subscribe(events.append)
+    active = asyncio.Event()
+    supervisor.subscribe(lambda e: active.set()
+                         if e.kind == "lifecycle" and e.reason == "active" else None)
+    run = asyncio.ensure_future(supervisor.run())
+    try:
+        await asyncio.wait_for(active.wait(), 60)
+    except TimeoutError:
+        pytest.fail(f"/slow never became active: {[e.reason for e in events]}")
+    finally:
+        await supervisor.shutdown("test over")
+        await asyncio.wait_for(run, 30)
+    logs = [e.reason or "" for e in events if e.kind == "log"]
+    assert any("no answer yet from /slow/get_state" in line for line in logs), logs
+    assert any(line.startswith("configure /slow: service /slow/change_state did not answer")
+               and "transition events tell the outcome" in line for line in logs), logs
+    assert any("/slow: configure done (autostart" in line for line in logs), logs
+    assert any("/slow: activate done (autostart" in line for line in logs), logs
+    assert not any("unknown" in line for line in logs), logs

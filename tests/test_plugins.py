@@ -15,7 +15,7 @@ from tuilaunch.engine.plan.model import ProcessPlan
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run import session_dir
 from tuilaunch.engine.run.events import Event
-from tuilaunch.engine.run.plugins import Handler, Plugin
+from tuilaunch.engine.run.plugins import Clients, Handler, Plugin
 from tuilaunch.engine.run.protocol import decode, encode
 from tuilaunch.engine.run.session_server import SessionServer
 from tuilaunch.engine.run.supervisor import Supervisor
@@ -114,3 +114,91 @@ def test_a_plugin_answers_its_own_request_and_reaches_every_client(write, tmp_pa
     asyncio.run(scenario())
     assert supervisor.states["steady-1"] == "exited"
 
+
+
+class Whisperer(Plugin):
+    """Answers `whisper` with an event to the asking client only; notes who leaves."""
+
+    def __init__(self) -> None:
+        self.clients: Clients | None = None
+        self.asked: list[int] = []
+        self.gone: list[int] = []
+
+    def serve(self, clients: Clients) -> None:
+        self.clients = clients
+
+    def client_gone(self, client: int) -> None:
+        self.gone.append(client)
+
+    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+        async def whisper(message: dict[str, Any]) -> Any:
+            assert self.clients is not None
+            client = message["client"]
+            self.asked.append(client)
+            self.clients.send(Event("whisper", reason=f"to {client}"), client)
+            return {"subscribed": self.clients.subscribed(client)}
+
+        return {"whisper": whisper}
+
+
+def test_a_plugin_streams_to_the_client_that_asked_and_hears_when_it_leaves(
+        write, tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="tl"))  # short socket path
+    session = Session(str(write(LAUNCH)), {}, tmp_path / "params")
+    supervisor = Supervisor(session.plan, tmp_path / "log", sigterm_timeout=3)
+    whisperer = Whisperer()
+    supervisor.add_plugin(whisperer)
+    server = SessionServer("streams", session, tmp_path / "log", supervisor=supervisor)
+
+    async def connect() -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
+        reader, writer = await asyncio.open_unix_connection(
+            str(session_dir.socket_path("streams")))
+        assert decode(await reader.readline())["type"] == "hello"
+        writer.write(encode({"id": 1, "op": "subscribe", "kinds": ["whisper"]}))
+        assert decode(await reader.readline())["ok"]
+        return reader, writer
+
+    async def whisper(reader: asyncio.StreamReader, writer: asyncio.StreamWriter,
+                      request: int) -> list[str]:
+        """Whispers (claiming to be client 99); what it hears until the reply and at least
+        one whisper came (in either order)."""
+        writer.write(encode({"id": request, "op": "whisper", "client": 99}))
+        heard: list[str] = []
+        replied = False
+        while not (replied and heard):
+            message = decode(await asyncio.wait_for(reader.readline(), 30))
+            if message["type"] == "events":
+                assert {e["kind"] for e in message["events"]} == {"whisper"}  # kinds filter
+                heard += [e["reason"] for e in message["events"]]
+            elif message["type"] == "reply" and message["id"] == request:
+                assert message["result"] == {"subscribed": True}
+                replied = True
+        return heard
+
+    async def scenario() -> None:
+        serving = asyncio.ensure_future(server.serve())
+        deadline = asyncio.get_running_loop().time() + 30
+        while supervisor.states.get("steady-1") != "running" or \
+                not session_dir.socket_path("streams").exists():
+            assert asyncio.get_running_loop().time() < deadline, "never started"
+            await asyncio.sleep(0.05)
+        first, first_writer = await connect()
+        second, second_writer = await connect()
+        heard = await whisper(first, first_writer, 2)
+        (me,) = whisperer.asked
+        assert me != 99  # the server says who really asks
+        assert heard == [f"to {me}"]
+        heard = await whisper(second, second_writer, 2)
+        other = whisperer.asked[1]
+        assert other != me
+        assert heard == [f"to {other}"]  # never the first client's whisper
+        first_writer.close()
+        deadline = asyncio.get_running_loop().time() + 30
+        while whisperer.gone != [me]:
+            assert asyncio.get_running_loop().time() < deadline, "client_gone never came"
+            await asyncio.sleep(0.05)
+        second_writer.write(encode({"id": 3, "op": "shutdown"}))
+        assert await asyncio.wait_for(serving, 30) == 0
+        second_writer.close()
+
+    asyncio.run(scenario())

@@ -191,7 +191,7 @@ async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
         field.value = "true"
         field.focus()
         await pilot.press("enter")
-        await until(pilot, lambda: "not available" in str(response.render()), limit=30)
+        await until(pilot, lambda: "not available" in str(response.render()), limit=60)
         assert [r.ok for r in panel.history] == [True, False, False]
 
 

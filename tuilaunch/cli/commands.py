@@ -1,4 +1,5 @@
-"""`tuilaunch ls | attach | stop | status | logs | restart | wait`: the session commands.
+"""`tuilaunch ls | attach | stop | status | logs | restart | wait`: the session commands
+(and the inspector's: topics, hz, echo, params, log-level, in inspector.py).
 
 Each is a short-lived client of a session server; all but `attach` work without a terminal,
 so scripts and CI use them (`--json` where a script reads the answer). A session is named
@@ -30,8 +31,10 @@ from ..engine.run.protocol import event_from_dict
 from ..engine.run.remote import check_host, list_remote, open_remote_link, parse_address
 from ..engine.run.session_dir import SessionError
 from ..tui.output_store import LEVELS, level_of
+from .inspector import add_commands
 
-COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait")
+COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait", "topics", "hz", "echo",
+            "params", "log-level")
 PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
                   "cancelled")
 LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
@@ -74,14 +77,20 @@ def _parser() -> argparse.ArgumentParser:
     wait.add_argument("--timeout", type=float, default=None, metavar="S",
                       help="give up after S seconds (exit status 1)")
     for sub in (ls, attach, stop, status, logs, restart, wait):
-        sub.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+        _common(sub)
+    add_commands(commands, _common)
     return parser
+
+
+def _common(sub: argparse.ArgumentParser) -> None:
+    sub.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
 
 
 def main(argv: list[str]) -> int:
     options = _parser().parse_args(argv)
     try:
-        return int(globals()[f"cmd_{options.command}"](options) or 0)
+        handler = getattr(options, "handler", None) or globals()[f"cmd_{options.command}"]
+        return int(handler(options) or 0)
     except LaunchError as exc:
         print(f"tuilaunch {options.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -158,10 +167,12 @@ def argument_line(arguments: dict[str, str]) -> str:
 LS_ANSWER_TIMEOUT = 3.0  # `ls` asks every session in turn: a stopped one costs this, once
 
 
-def _status(name: str | None, answer_timeout: float = ANSWER_TIMEOUT) -> dict[str, Any]:
+def _status(name: str | None, answer_timeout: float = ANSWER_TIMEOUT,
+            resources: bool = True) -> dict[str, Any]:
+    """`resources`: with each process's CPU, memory and threads (0.3 s more)."""
     link = open_link(name, answer_timeout=answer_timeout)
     try:
-        result: dict[str, Any] = link.request("status", short=True)
+        result: dict[str, Any] = link.request("status", short=True, resources=resources)
         return result
     finally:
         link.close()
@@ -187,7 +198,8 @@ def cmd_ls(options: argparse.Namespace) -> int:
     sessions = []
     for name in session_dir.live_sessions():
         try:
-            sessions.append({**_status(name, LS_ANSWER_TIMEOUT), "answering": True})
+            sessions.append({**_status(name, LS_ANSWER_TIMEOUT, resources=False),
+                             "answering": True})
         except SessionError as exc:
             # a stopped or stuck server is listed as such; one that ended meanwhile is not
             silent = _silent_session(name, exc)
@@ -236,13 +248,13 @@ def cmd_attach(options: argparse.Namespace) -> int:
         remote = open_remote_link(where.host, where.name)
         link = Link.connected(where.name, remote.sock, remote.hello, where.host)
         try:
-            info = link.request("status", short=True)
+            info = link.request("status", short=True, resources=False)
         except BaseException:
             remote.close()
             raise
         link.release()
     else:
-        info = _status(label)
+        info = _status(label, resources=False)
     from ..engine.describe.loader import set_command_line
     from ..tui.app import make_app
 
@@ -283,9 +295,13 @@ def cmd_status(options: argparse.Namespace) -> int:
     print(f"session {status['name']}  pid {status['pid']}  since {_clock(status['started'])}")
     print(f"  {status['file']} {argument_line(status['arguments'])}")
     print(f"  logs: {status['log_dir']}")
-    rows = [("PROCESS", "STATE", "PID", "NODE", "")]
+    rows = [("PROCESS", "STATE", "PID", "CPU%", "RSS", "THREADS", "NODE", "")]
     for p in status["processes"]:
-        rows.append((p["id"], p["state"], str(p["pid"] or ""), p["name"] or "",
+        cpu, rss, threads = p.get("cpu_percent"), p.get("rss_bytes"), p.get("threads")
+        rows.append((p["id"], p["state"], str(p["pid"] or ""),
+                     "" if cpu is None else f"{cpu:.1f}",
+                     "" if rss is None else _megabytes(rss),
+                     "" if threads is None else str(threads), p["name"] or "",
                      p["detail"] if p["state"] != "running" and p["detail"] else ""))
     _table(rows, indent="  ")
     return 0
@@ -358,7 +374,7 @@ def cmd_logs(options: argparse.Namespace) -> int:
     minimum = LEVELS.index(options.level) if options.level else 0
     link = open_link(options.name, timeout=None)
     try:
-        status = link.request("status", short=True)
+        status = link.request("status", short=True, resources=False)
         log_dir = Path(status["log_dir"])
         wanted = [p["id"] for p in status["processes"] if p["state"] != "skipped"]
         if options.process:
@@ -451,6 +467,10 @@ def _parse_since(text: str) -> float:
                 from None
         moment = datetime.datetime.combine(datetime.date.today(), clock)
     return moment.timestamp()
+
+
+def _megabytes(size: int) -> str:
+    return f"{size / (1 << 20):.1f}M"
 
 
 def _clock(stamp: float) -> str:

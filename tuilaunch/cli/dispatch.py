@@ -49,7 +49,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     parser.epilog = (parser.epilog or "") + (
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
-        "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE (tuilaunch COMMAND -h).")
+        "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
+        "hz NAME TOPIC | echo NAME TOPIC | params NAME NODE --dump/--load FILE | log-level "
+        "NAME NODE LEVEL (tuilaunch COMMAND -h).")
     return parser
 
 

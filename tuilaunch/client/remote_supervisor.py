@@ -388,6 +388,11 @@ class RemoteSupervisor:
         for consumer in list(self.consumers):
             consumer(event)
 
+    async def request(self, op: str, **fields: Any) -> Any:
+        """The result of any request of the protocol (engine/run/protocol.py): `topics`,
+        `watch_rates`, `echo`, ...; SessionError with the server's message when it fails."""
+        return await self._request(op, **fields)
+
     async def _request(self, op: str, **fields: Any) -> Any:
         if self.link_lost is not None:
             raise SessionError(f"{self.link_lost}: not sent ({op}); reconnecting")
@@ -487,6 +492,6 @@ class RemoteLifecycle:
             self.states.pop(process, None)  # the node is gone
 
     async def request(self, process: str, transition: str) -> bool:
-        result = await self.remote._request("transition", process=process,
+        result = await self.remote.request("transition", process=process,
                                             transition=transition)
         return bool(result.get("done"))

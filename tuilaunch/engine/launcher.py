@@ -2,8 +2,8 @@
 
 It sits above both `run` (which knows nothing of ROS) and `ros` (which plugs into `run`),
 so the headless mode, the TUI and the session server all get the same launch: the
-launch's service calls and parameter sets, lifecycle nodes followed and driven, and
-components loaded into their containers.
+launch's service calls and parameter sets, lifecycle nodes followed and driven,
+components loaded into their containers, and the inspector's session requests.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import Any
 from .plan.model import Plan
 from .ros.actions import RosActions
 from .ros.composition import ComponentLoader
+from .ros.inspector import Inspector
 from .ros.lifecycle import LifecycleTracker
 from .run.supervisor import Supervisor
 
@@ -31,8 +32,9 @@ class RosSupervisor(Supervisor):
         self.ros = RosActions(bridge_factory, service_timeout, self.emit)
         self.lifecycle = LifecycleTracker(self, self.ros)
         self.components = ComponentLoader(self, self.ros)
+        self.inspector = Inspector(self, self.ros)  # topics, rates, echo, params, loggers
         # the bridge last: its close (the ROS node) comes after the others let go of it
-        for plugin in (self.lifecycle, self.components, self.ros):
+        for plugin in (self.lifecycle, self.components, self.inspector, self.ros):
             self.add_plugin(plugin)
 
     def bridge(self) -> Any:

@@ -109,6 +109,8 @@ class RosBridge:
         rclpy.init(args=[], context=self._context, signal_handler_options=_no_signal_handlers())
         self.node = rclpy.create_node(node_name, context=self._context,
                                       start_parameter_services=False)
+        self._clients: dict[tuple[str, Any], Any] = {}
+        self._clients_lock = threading.Lock()
         self._executor = MultiThreadedExecutor(num_threads=2, context=self._context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name="ros-bridge", daemon=True)
@@ -156,28 +158,36 @@ class RosBridge:
 
     async def call_typed(self, name: str, service_class: Any, request: Any,
                          timeout: float) -> Any:
-        client = self.node.create_client(service_class, name)
+        client = self._client(name, service_class)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        while not client.service_is_ready():
+            if loop.time() > deadline:
+                raise RosError(f"service {name} is not available")
+            await asyncio.sleep(0.05)
+        done: asyncio.Future[Any] = loop.create_future()
+        pending = client.call_async(request)
+
+        def finished(future: Any) -> None:
+            loop.call_soon_threadsafe(_settle, done, future)
+
+        pending.add_done_callback(finished)
         try:
-            loop = asyncio.get_running_loop()
-            deadline = loop.time() + timeout
-            while not client.service_is_ready():
-                if loop.time() > deadline:
-                    raise RosError(f"service {name} is not available")
-                await asyncio.sleep(0.05)
-            done: asyncio.Future[Any] = loop.create_future()
-            pending = client.call_async(request)
+            return await asyncio.wait_for(done, max(deadline - loop.time(), 0.1))
+        except TimeoutError:
+            client.remove_pending_request(pending)
+            raise RosError(f"service {name} did not answer within {timeout:g} s") from None
 
-            def finished(future: Any) -> None:
-                loop.call_soon_threadsafe(_settle, done, future)
-
-            pending.add_done_callback(finished)
-            try:
-                return await asyncio.wait_for(done, max(deadline - loop.time(), 0.1))
-            except TimeoutError:
-                client.remove_pending_request(pending)
-                raise RosError(f"service {name} did not answer within {timeout:g} s") from None
-        finally:
-            self.node.destroy_client(client)
+    def _client(self, name: str, service_class: Any) -> Any:
+        """One client per service and type, kept: a server drops its reply to a client it
+        has not matched yet (Fast DDS: "client will not receive response"), so a client made
+        per call loses answers on a busy machine, where matching takes longer."""
+        key = (name, service_class)
+        with self._clients_lock:
+            client = self._clients.get(key)
+            if client is None:
+                client = self._clients[key] = self.node.create_client(service_class, name)
+            return client
 
     async def call_service(self, name: str, request: dict[str, Any], timeout: float = 5.0,
                            wait: float | None = 0.0, service_type: str | None = None)\
@@ -234,6 +244,77 @@ class RosBridge:
         return [SetResult(p.name, r.successful, r.reason)
                 for p, r in zip(params, response.results, strict=False)]
 
+
+    # --- inspector: topics, rates, echo, parameter files, logger levels ------------------
+    # Thin: the logic lives in graph, rates, echo, param_files and loggers.
+
+    async def topics(self, processes: dict[str, str] | None = None,
+                     node: str | None = None) -> dict[str, Any]:
+        """`{"topics": [...]}` (see graph.topics_graph); `node` keeps that node's topics."""
+        from .graph import topics_graph
+
+        return await asyncio.to_thread(topics_graph, self.node, processes, node)
+
+    def rate_meter(self) -> Any:
+        """The bridge's one RateMeter, made on first use."""
+        from .rates import RateMeter
+
+        # made here rather than in __init__: most sessions never measure a rate
+        meter = getattr(self, "inspector_rates", None)
+        if meter is None:
+            meter = self.inspector_rates = RateMeter(self.node)
+        return meter
+
+    async def start_rates(self, topics: list[str], window_s: float = 10.0,
+                          wait: float = 5.0) -> None:
+        """Measures these topics from now on; RosError for a topic nobody publishes,
+        MessageError for a type not installed."""
+        for topic in topics:
+            await self.rate_meter().start(topic, window_s, wait)
+
+    async def stop_rates(self, topics: list[str] | None = None) -> None:
+        meter = self.rate_meter()
+        for topic in meter.measured() if topics is None else topics:
+            meter.stop(topic)
+
+    async def read_rates(self, topic: str | None = None) -> dict[str, dict[str, Any]]:
+        """`{topic: {"topic", "rate_hz", "bytes_per_s", "messages", "window_s"}}`."""
+        return dict(self.rate_meter().read(topic))
+
+    async def start_echo(self, topic: str, wait: float = 5.0, keep: int = 100) -> Any:
+        """An EchoSubscription (echo.py): `take()` / `take_yaml()` its messages."""
+        from .echo import start_echo
+
+        return await start_echo(self.node, topic, wait, keep)
+
+    async def stop_echo(self, echo: Any) -> None:
+        from .echo import stop_echo
+
+        stop_echo(self.node, echo)
+
+    async def dump_params(self, node: str, timeout: float = 5.0) -> str:
+        """The node's live parameters as a params YAML a launch file loads."""
+        from .param_files import dump
+
+        return await dump(self, node, timeout)
+
+    async def load_params(self, node: str, path: str, timeout: float = 5.0)\
+            -> list[SetResult]:
+        from .param_files import load
+
+        return await load(self, node, path, timeout)
+
+    async def set_logger_level(self, node: str, level: str | int, timeout: float = 5.0)\
+            -> None:
+        """loggers.NoLoggerService when the node has no logger service."""
+        from .loggers import set_level
+
+        await set_level(self, node, level, timeout=timeout)
+
+    async def get_logger_levels(self, node: str, timeout: float = 5.0) -> dict[str, str]:
+        from .loggers import get_levels
+
+        return await get_levels(self, node, timeout=timeout)
 
 def _settle(done: asyncio.Future[Any], future: Any) -> None:
     if done.done():

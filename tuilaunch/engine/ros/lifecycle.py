@@ -1,10 +1,12 @@
 """Following and driving lifecycle nodes: `<node>/get_state`, `change_state`, `transition_event`.
 
 One `LifecycleTracker` per supervisor. When a lifecycle node's process starts, the tracker
-subscribes to its `transition_event` topic, asks `get_state` once the service is up, and
-reports every state as a `lifecycle` event; with `autostart` it then configures and
-activates the node. Transition requests (from `ChangeState` actions or the operator) wait for
-the node's `change_state` service as long as its process lives, as launch_ros waits for it.
+subscribes to its `transition_event` topic, asks `get_state` once the service is up (again,
+while no answer comes and the process lives), and reports every state as a `lifecycle` event;
+with `autostart` it then configures and activates the node. Transition requests (from
+`ChangeState` actions or the operator) wait for the node's `change_state` service as long as
+its process lives, as launch_ros waits for it; a reply that does not come in time is judged
+by the transition events the node published.
 """
 
 from __future__ import annotations
@@ -28,6 +30,11 @@ AVAILABLE: dict[str, list[str]] = {
     "active": ["deactivate", "active_shutdown"],
 }
 TRANSITION_IDS = {label: number for number, label in TRANSITIONS.items()}
+# the state each transition ends in when the node makes it
+GOALS = {"configure": "inactive", "cleanup": "unconfigured", "activate": "active",
+         "deactivate": "inactive", "unconfigured_shutdown": "finalized",
+         "inactive_shutdown": "finalized", "active_shutdown": "finalized"}
+PRIMARY = ("unconfigured", "inactive", "active", "finalized")
 ALIVE = ("pending", "running", "respawning")
 
 
@@ -48,6 +55,7 @@ class LifecycleTracker(Plugin):
         self.states: dict[str, str] = {}
         self._subscriptions: dict[str, Any] = {}
         self._heard: set[str] = set()  # processes whose transition events arrived
+        self._events: dict[str, int] = {}  # transition events heard, per process
 
     # --- the plugin's hooks ---------------------------------------------------------------
 
@@ -101,8 +109,10 @@ class LifecycleTracker(Plugin):
             bridge = await self._bridge()
             await self._subscribe(bridge, proc)
             state = await self._first_state(bridge, proc)
-        except Exception as exc:  # no ROS, no lifecycle_msgs, or no answer: say so, go on
-            self._report(proc.id, f"lifecycle state of {name} unknown: {exc}", "WARN")
+        except Exception as exc:  # no ROS or no lifecycle_msgs: say so, go on
+            not_started = "; it is not autostarted" if proc.autostart else ""
+            self._report(proc.id, f"lifecycle state of {name} unknown: {exc}{not_started}",
+                         "WARN")
             return
         if state is None:
             return  # the process ended first
@@ -144,11 +154,24 @@ class LifecycleTracker(Plugin):
         from lifecycle_msgs.srv import GetState
 
         service = f"{proc.full_name}/get_state"
-        if not await self._wait_for_service(bridge, service, proc.id):
-            return None
-        response = await bridge.call_typed(service, GetState, GetState.Request(),
-                                           self.ros.service_timeout)
-        return str(response.current_state.label or STATES.get(response.current_state.id))
+        told = False
+        while await self._wait_for_service(bridge, service, proc.id):
+            if proc.id in self._heard:  # a transition event said it first
+                return self.states.get(proc.id)
+            try:
+                response = await bridge.call_typed(service, GetState, GetState.Request(),
+                                                   self.ros.service_timeout)
+            except Exception as exc:
+                # On a busy machine a node answers late, or its reply to a client it has not
+                # matched yet is dropped. Asking again is harmless; giving up would silently
+                # skip its autostart.
+                if not told:
+                    self._report(proc.id, f"no answer yet from {service} ({exc}): asking "
+                                 "again while the node runs", "WARN")
+                    told = True
+                continue
+            return str(response.current_state.label or STATES.get(response.current_state.id))
+        return None
 
     async def _wait_for_service(self, bridge: Any, service: str, proc_id: str) -> bool:
         """Waits while the process lives; False once it is gone or the launch ends."""
@@ -165,6 +188,7 @@ class LifecycleTracker(Plugin):
 
     def _on_transition(self, proc_id: str, transition: str, start: str, goal: str) -> None:
         self._heard.add(proc_id)
+        self._events[proc_id] = self._events.get(proc_id, 0) + 1
         self._set_state(proc_id, goal, {"transition": transition, "start": start})
         for key in state_keys(transition, start, goal):
             self.supervisor.state_reached(proc_id, "state:" + key)
@@ -233,18 +257,39 @@ class LifecycleTracker(Plugin):
             return False
         request = ChangeState.Request()
         request.transition.id = TRANSITION_IDS[label]
+        before = self._events.get(proc_id, 0)
         try:
             response = await bridge.call_typed(service, ChangeState, request,
                                                self.ros.service_timeout)
+            success = bool(response.success)
         except Exception as exc:
-            self._report(where, f"{label} {proc.full_name} failed: {exc}", "ERROR")
-            return False
-        if not response.success:
+            # A transition longer than the timeout, or a reply lost on a busy machine: the
+            # node's transition events tell how it ended. Asking again could repeat it.
+            outcome = await self._outcome(proc_id, label, before)
+            if outcome is None:
+                self._report(where, f"{label} {proc.full_name} failed: {exc}", "ERROR")
+                return False
+            self._report(where, f"{label} {proc.full_name}: {exc}; its transition events "
+                         f"tell the outcome", "WARN")
+            success = outcome
+        if not success:
             self._report(where, f"{proc.full_name} refused transition '{label}' ({origin}); "
                          f"it is {self.states.get(proc_id, 'in an unknown state')}", "ERROR")
             return False
         self._report(where, f"{proc.full_name}: {label} done ({origin})")
         return True
+
+    async def _outcome(self, proc_id: str, label: str, before: int) -> bool | None:
+        """Whether the node made `label`, from the transition events heard since `before`
+        events: None when it never began the transition or is gone before ending it."""
+        while self._events.get(proc_id, 0) > before:
+            if self.states.get(proc_id) in PRIMARY:
+                return self.states.get(proc_id) == GOALS.get(label)
+            if self.supervisor.states.get(proc_id) not in ALIVE \
+                    or self.supervisor.shutting_down:
+                return None
+            await asyncio.sleep(0.1)  # still in the transition: it ends with an event
+        return None
 
     async def run_action(self, action: ActionPlan) -> bool:
         """A `ChangeState` / `LifecycleTransition` of the launch file, for each target."""

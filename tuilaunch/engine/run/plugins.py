@@ -11,6 +11,13 @@ The session server takes the same plugins' `handlers()`: named requests clients 
 (`{"op": "lifecycle", ...}`), each an async function of the request's message whose return
 value is the reply's result. A handler raises `LaunchError`, `ValueError` or `TypeError` for
 a request the client got wrong (the reply carries the message).
+
+Streams for one client (a topic's echo, the rates it watches): the message a handler gets
+carries `"client"`, the asking connection's id (set by the server, whatever the client
+sent); `serve(clients)` hands the plugin the server's `Clients`, whose `send` reaches one
+client or all, and `client_gone(id)` says a connection closed, so its streams can stop.
+Events sent that way are neither logged nor kept for late clients (a rate a second would
+crowd out the state changes a late client needs).
 """
 
 from __future__ import annotations
@@ -20,12 +27,26 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     from ..plan.model import ActionPlan, ProcessPlan
+    from .events import Event
 
 ActionRunner = Callable[["ActionPlan"], Awaitable[bool]]
 """Performs one action of the plan; True when it succeeded (the action is then `done`)."""
 
 Handler = Callable[[dict[str, Any]], Awaitable[Any]]
 """Answers one request of a session client: the decoded message in, the result out."""
+
+
+class Clients(Protocol):
+    """The session server's clients, as a plugin reaches them (handed over by `serve`)."""
+
+    def send(self, event: Event, client: int | None = None) -> None:
+        """To the subscribed client `client` (a request's `"client"`), or to every subscribed
+        client (None); a client that did not subscribe gets nothing."""
+        ...
+
+    def subscribed(self, client: int) -> bool:
+        """Whether that client is connected and receives events."""
+        ...
 
 
 @runtime_checkable
@@ -63,6 +84,15 @@ class SupervisorPlugin(Protocol):
         lifecycle states so far, ...): keys of the subscribe reply."""
         ...
 
+    def serve(self, clients: Clients) -> None:
+        """A session server serves this launch: `clients` reaches its clients (called once,
+        before any request)."""
+        ...
+
+    def client_gone(self, client: int) -> None:
+        """The session client with this id disconnected: stop what it asked for."""
+        ...
+
 
 class Plugin:
     """A base with every hook doing nothing: subclass it and override what you need."""
@@ -87,5 +117,11 @@ class Plugin:
     def snapshot(self) -> dict[str, Any]:
         return {}
 
+    def serve(self, clients: Clients) -> None:
+        return None
 
-__all__ = ["ActionRunner", "Handler", "Plugin", "SupervisorPlugin"]
+    def client_gone(self, client: int) -> None:
+        return None
+
+
+__all__ = ["ActionRunner", "Clients", "Handler", "Plugin", "SupervisorPlugin"]

@@ -5,7 +5,8 @@ message longer than MAX_MESSAGE is refused rather than buffered without bound.
 
 Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
   most output lines per batch and the least seconds between batches, for a display that
-  cannot show more}, status, find {process},
+  cannot show more; kinds?: only events of these kinds}, status {resources?: false skips
+  the CPU/memory sampling}, find {process},
   start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
   is left), apply {arguments}, lifecycle {process}, read_log {process, start, end, skip,
   limit, tail}: a process's log file read by the server, for a client on another machine
@@ -13,6 +14,26 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   lines from byte `start` to `end` (default: the file's size) after the first `skip`,
   the first `limit` (or with `tail` the last), as `{"lines": [[time, stream, text]...],
   "next": byte to ask again from, "size": the file's size, "skipped": lines left out}`.
+  Resources (run/resource_watch.py): `status` gives each process `cpu_percent` (% of one
+  core), `rss_bytes` and `threads` over its process tree (None when not running);
+  watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a
+  second an event of kind "resources", data {process: {cpu_percent, rss_bytes, threads,
+  growing}}.
+  The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
+  topics {node?} -> {"topics": [{name, types, publishers: [{node, in_launch, process,
+  qos}], subscribers, qos_problems: [sentence]}]};
+  hz {topic, window: s} -> {topic, rate_hz, bytes_per_s, messages, window_s} after window s;
+  watch_rates {topics: [...]} -> {unmeasured: {topic: why}}: this client's topics ([]: none);
+  the union over clients is measured, and each watcher gets about once a second an event
+  "rates", data {topic: {rate_hz, bytes_per_s}} (None until measured);
+  echo {topic, count?, max_per_s? (default 5; 0: every message)} -> {}: events "echo", data
+  {topic, text: one message's YAML ending in "---"}, to this client until echo_stop {topic}
+  or `count` messages (the last has data "done": true); a subscribed client only;
+  params_dump {node} -> {yaml}; params_load {node, yaml, source?: its file name for
+  messages} -> {results: [{name, ok, reason}]};
+  log_level {node, level} -> {ok: true}, or an error saying the node has no logger service
+  and that restarting it with --log-level applies the level.
+  A client's streams (echo, rates, resources) end when it disconnects.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
   [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose

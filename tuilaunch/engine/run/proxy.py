@@ -121,7 +121,7 @@ def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> dict[str, A
         hello = reader.readline(MAX_MESSAGE)
         if not hello:
             raise SessionError(f"session {name} closed the connection")
-        sock.sendall(encode({"id": 1, "op": "status"}))
+        sock.sendall(encode({"id": 1, "op": "status", "resources": False}))  # a listing
         while True:
             line = reader.readline(MAX_MESSAGE)
             if not line:

@@ -18,6 +18,7 @@ from ..plan.model import ProcessPlan
 from .logfiles import LogFile
 from .output import LineSplitter, screen_lines
 from .spawn import Channel
+from .terminal_input import InputRefused, TerminalInput
 
 Deliver = Callable[["Running", str, list[str]], None]
 """What a reader calls with each block of lines: (process, channel name, lines)."""
@@ -33,6 +34,9 @@ class ChannelReader:
         self.splitter = LineSplitter()
         self.done: asyncio.Future[None] = asyncio.get_running_loop().create_future()
         self.stamp = b" " + channel.name.encode() + b" "
+        self.input = TerminalInput(channel.fd, asyncio.get_running_loop()) \
+            if channel.stdin else None
+        """Where typed keys go, when the child reads this terminal as its stdin."""
         asyncio.get_running_loop().add_reader(channel.fd, self._readable)
 
     def _readable(self) -> None:
@@ -66,6 +70,8 @@ class ChannelReader:
             asyncio.get_running_loop().remove_reader(self.channel.fd)
         except RuntimeError:
             pass  # the loop is gone: nothing to unregister
+        if self.input is not None:
+            self.input.close()
         os.close(self.channel.fd)
         try:
             self._deliver(self.splitter.flush_block())
@@ -87,6 +93,27 @@ class Running:
     readers: list[ChannelReader] = field(default_factory=list)
     pidfd: int | None = None
     reaped: bool = False
+
+    @property
+    def terminal(self) -> TerminalInput | None:
+        """The child's keyboard: its terminal's writing side, while it is open."""
+        for reader in self.readers:
+            if reader.input is not None and not reader.input.closed:
+                return reader.input
+        return None
+
+    def write_input(self, data: bytes) -> int:
+        """Types `data` into the child's terminal (keys as a terminal sends them: `\r` for
+        Enter, `\x03` for ctrl+c); returns how many bytes were dropped because the child
+        does not read them. Never blocks; call it on the supervisor's loop. InputRefused
+        when it has no open terminal."""
+        terminal = self.terminal
+        if terminal is None:
+            if any(reader.input is not None for reader in self.readers):
+                raise InputRefused("its terminal is closed")
+            raise InputRefused("it has no terminal (its output is not shown on screen, "
+                               "or emulate_tty is False)")
+        return terminal.write(data)
 
     def reader_closed(self) -> None:
         if self.reaped and all(r.done.done() for r in self.readers):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import itertools
 import os
 import signal
 import socket
@@ -32,6 +33,8 @@ from .events import Event
 from .log_reader import READ_LOG_LIMIT, read_log
 from .plugins import Handler
 from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
+from .resource_watch import ResourceWatch, usage_fields
+from .resources import Usage
 from .supervisor import Supervisor
 
 CLIENT_MAX_LINES = 20_000
@@ -43,7 +46,8 @@ REACHABLE_CHECK = 1.0
 RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
 BUILTIN_OPS = frozenset({"subscribe", "status", "start", "stop", "restart", "shutdown",
-                         "apply", "kill", "run_action", "find", "read_log"})
+                         "apply", "kill", "run_action", "find", "read_log",
+                         "watch_resources"})
 """Requests the server answers itself; plugins add others with `add_handler`."""
 
 
@@ -51,8 +55,10 @@ class ClientQueue:
     """One subscriber's bounded queue, drained by its own writer task."""
 
     def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
-                 on_overflow: Callable[[], None] | None = None) -> None:
+                 on_overflow: Callable[[], None] | None = None,
+                 kinds: frozenset[str] | None = None) -> None:
         self.buffer = EventBuffer(max_lines=max_lines)
+        self.kinds = kinds  # only these kinds of events (`tuilaunch echo` wants no output)
         self.on_overflow = on_overflow
         self.interval = interval  # a display asks for no more batches than it draws
         self.events = 0
@@ -60,6 +66,8 @@ class ClientQueue:
         self.overflowed = False
 
     def __call__(self, event: Event) -> None:
+        if self.kinds is not None and event.kind not in self.kinds:
+            return
         if event.kind != "output":
             self.events += 1
             if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
@@ -90,9 +98,13 @@ class SessionServer:
             sigkill_timeout=sigkill_timeout)
         self.supervisor.subscribe(self._on_event)
         self._handlers: dict[str, Handler] = {}
+        self._client_ids = itertools.count(1)
+        self.clients: dict[int, ClientQueue] = {}  # subscribed clients' queues, by client id
+        self.resources = ResourceWatch(self._running_pids, self.send)
         for plugin in self.supervisor.plugins:
             for op, handler in plugin.handlers(self.find_process).items():
                 self.add_handler(op, handler)
+            plugin.serve(self)
         self.started = time.time()
         self.pids: dict[str, int] = {}
         self.details: dict[str, str] = {}
@@ -136,22 +148,55 @@ class SessionServer:
         for queue in list(self.queues):
             queue(event)
 
+    def send(self, event: Event, client: int | None = None) -> None:
+        """An event for one subscribed client (by id) or all, neither logged nor kept for
+        late clients: the inspector's streams (run/plugins.py `Clients`)."""
+        if client is None:
+            for queue in list(self.queues):
+                queue(event)
+            return
+        addressed = self.clients.get(client)
+        if addressed is not None and addressed in self.queues:
+            addressed(event)
+
+    def subscribed(self, client: int) -> bool:
+        queue = self.clients.get(client)
+        return queue is not None and queue in self.queues
+
+    def _running_pids(self) -> dict[str, int]:
+        states = self.supervisor.states
+        return {process: pid for process, pid in self.pids.items()
+                if states.get(process) == "running"}
+
+    def _client_gone(self, client: int) -> None:
+        self.clients.pop(client, None)
+        self.resources.forget(client)
+        for plugin in self.supervisor.plugins:
+            try:
+                plugin.client_gone(client)
+            except Exception as exc:  # a plugin's cleanup must never stop the server
+                self._log(f"{type(plugin).__name__} failed to let client {client} go: {exc}")
+
     def info(self) -> dict[str, Any]:
         return {"name": self.name, "file": os.path.abspath(self.session.path),
                 "command": self.command,
                 "arguments": self.session.arguments, "pid": os.getpid(),
                 "started": self.started, "log_dir": str(self.log_dir)}
 
-    def status(self) -> dict[str, Any]:
+    def status(self, usage: Mapping[str, Usage] | None = None) -> dict[str, Any]:
+        """Each process's state; with `usage` (ResourceWatch.current), its CPU%, resident
+        memory and threads (None when it is not running)."""
         states = self.supervisor.states
         processes = []
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
+            fields = usage_fields((usage or {}).get(proc.id))
+            del fields["growing"]  # a trend needs watching; status is one look
             processes.append({
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
                 "pid": self.pids.get(proc.id) if state == "running" else None,
                 "exit_code": self.supervisor.exit_codes.get(proc.id),
-                "detail": self.details.get(proc.id)})
+                "detail": self.details.get(proc.id), **fields})
         counts: dict[str, int] = {}
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
@@ -180,6 +225,7 @@ class SessionServer:
             status = await self.supervisor.run(keep_alive=True)
         finally:
             keeper.cancel()
+            self.resources.close()
             if self._server is not None:
                 self._server.close()
             if self._owns_name():  # never the files of a later session given our name
@@ -271,6 +317,7 @@ class SessionServer:
         self.writers.add(writer)
         lock = asyncio.Lock()
         queue: ClientQueue | None = None
+        client = next(self._client_ids)
         try:
             await _send(writer, lock, {"type": "hello", "info": self.info()})
             while True:
@@ -287,11 +334,13 @@ class SessionServer:
                                                "error": str(exc)})
                     continue
                 if message.get("op") == "subscribe" and queue is None:
+                    kinds = message.get("kinds")
                     queue = ClientQueue(
                         max(1, min(int(message.get("max_lines") or CLIENT_MAX_LINES),
                                    CLIENT_MAX_LINES)),
                         max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
-                        writer.transport.abort)
+                        writer.transport.abort,
+                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None)
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result: dict[str, Any] = {}
@@ -302,10 +351,12 @@ class SessionServer:
                                    "recent": [event_to_dict(e) for e in self.recent],
                                    "arguments": self.session.arguments})
                     self.queues.add(queue)
+                    self.clients[client] = queue
                     await _send(writer, lock, {"type": "reply", "id": message.get("id"),
                                                "ok": True, "result": result})
                     self._spawn(self._pump(queue, writer, lock))
                     continue
+                message["client"] = client  # who asks: for the streams of one client
                 self._spawn(self._answer(message, writer, lock))
         except (ConnectionError, OSError):
             return
@@ -313,6 +364,7 @@ class SessionServer:
             if queue is not None:
                 self.queues.discard(queue)
                 queue.ready.set()
+            self._client_gone(client)
             self.writers.discard(writer)
             writer.close()
 
@@ -377,7 +429,12 @@ class SessionServer:
         op = message.get("op")
         supervisor = self.supervisor
         if op == "status":
-            return self.status()
+            # `ls` asks every session and needs no CPU figures: it can spare their 0.3 s
+            wanted = message.get("resources", True) is not False
+            return self.status(await self.resources.current() if wanted else None)
+        if op == "watch_resources":
+            self.resources.watch(int(message["client"]), bool(message.get("on", True)))
+            return {}
         if op in ("start", "stop", "restart"):
             process = self.find_process(str(message.get("process")))
             if process not in {p.id for p in self.session.plan.processes}:

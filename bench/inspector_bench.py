@@ -1,0 +1,167 @@
+"""Inspector figures, one run on this machine.
+
+1. Rate accuracy against publishers with known rates (1 Hz and 100 Hz timers; target:
+   within 5%), measured as `tuilaunch hz` measures them (RosBridge.start_rates, 10 s window).
+2. The inspector's own CPU (this process, % of one core as top shows it) while it measures
+   a 1 kHz topic, beside the same bridge measuring nothing. rclpy costs a fraction of a
+   millisecond of Python per message received, so this is the figure to watch; a Python
+   publisher on a busy machine may itself fall short of 1 kHz (the rate read is printed).
+
+3. The session server's own CPU (its process, the launch's nodes excluded) with no client,
+   then while one client watches a 100 Hz topic's rate and every process's resources (the
+   `watch_rates` and `watch_resources` requests the topics tab and the tree send), and the
+   bytes a second those events cost on its socket.
+
+(The wire cost of the topics tab at 80x24 is the TUI's figure, in bench/tui_bench.py.)
+
+    python bench/inspector_bench.py
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+from tuilaunch.client.link import Link
+from tuilaunch.engine.ros.bridge import RosBridge
+from tuilaunch.engine.run.resources import ResourceSampler
+
+PUBLISHER = textwrap.dedent("""
+    import sys, rclpy
+    from std_msgs.msg import String
+    rclpy.init()
+    node = rclpy.create_node('bench_pub_' + sys.argv[2])
+    pub = node.create_publisher(String, sys.argv[2], 10)
+    node.create_timer(1.0 / float(sys.argv[1]), lambda: pub.publish(String(data='x' * 64)))
+    print('ready', flush=True)
+    rclpy.spin(node)
+""")
+WINDOW_S = 10.0
+
+
+def publisher(rate: float, topic: str) -> subprocess.Popen[str]:
+    proc = subprocess.Popen([sys.executable, "-c", PUBLISHER, str(rate), topic],
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "ready"
+    return proc
+
+
+async def own_cpu(seconds: float) -> float:
+    sampler = ResourceSampler()
+    sampler.sample({"self": os.getpid()})
+    await asyncio.sleep(seconds)
+    return sampler.sample({"self": os.getpid()})["self"].cpu_percent or 0.0
+
+
+SESSION_LAUNCH = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='pub', cmd=[{python!r}, '-c', {code!r},
+                                                              '100', 'bench_session'])])
+"""
+
+
+def tl(*args: str) -> str:
+    done = subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def cpu_ticks(pid: int) -> int:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return int(fields[11]) + int(fields[12])
+
+
+def server_cpu(pid: int, seconds: float, link: Link | None = None) -> tuple[float, float]:
+    """% of one core the server used over `seconds`, and the bytes/s `link` received."""
+    received = 0
+    before, started = cpu_ticks(pid), time.monotonic()
+    while (left := started + seconds - time.monotonic()) > 0:
+        if link is None:
+            time.sleep(left)
+            continue
+        link.sock.settimeout(left)
+        try:
+            message = link.receive()
+        except TimeoutError:
+            break
+        received += len(json.dumps(message, separators=(",", ":"))) + 1
+    elapsed = time.monotonic() - started
+    used = (cpu_ticks(pid) - before) / os.sysconf("SC_CLK_TCK")
+    return 100 * used / elapsed, received / elapsed
+
+
+def session_cost() -> None:
+    print("3. the session server while a client watches rates and resources")
+    folder = Path(tempfile.mkdtemp(prefix="tlb"))
+    os.environ["XDG_RUNTIME_DIR"] = str(folder)
+    os.environ["ROS_LOG_DIR"] = str(folder / "log")
+    launch = folder / "bench_session.launch.py"
+    launch.write_text(SESSION_LAUNCH.format(python=sys.executable, code=PUBLISHER))
+    name = tl(str(launch), "--detach", "--name", "bench").strip()
+    try:
+        tl("wait", name, "pub-1", "running", "--timeout", "60")
+        pid = int(json.loads(tl("status", name, "--json"))["pid"])
+        link = Link(name, timeout=60)
+        link.request("subscribe", max_lines=1, kinds=["rates", "resources"])
+        link.request("watch_rates", topics=["/bench_session"])  # the bridge is up from here
+        link.request("watch_rates", topics=[])
+        idle, _ = server_cpu(pid, 5)
+        link.request("watch_rates", topics=["/bench_session"])
+        link.request("watch_resources", on=True)
+        watched, wire = server_cpu(pid, 10, link)
+        link.close()
+        print(f"   no client watching:                        {idle:5.1f}% of a core")
+        print(f"   watching a 100 Hz topic's rate + resources: {watched:5.1f}% of a core, "
+              f"{wire:.0f} B/s on the wire")
+    finally:
+        tl("stop", name)
+
+
+async def main() -> None:
+    os.environ.setdefault("ROS_DOMAIN_ID", str(100 + os.getpid() % 100))
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    procs = [publisher(1, "bench_1hz"), publisher(100, "bench_100hz")]
+    bridge = RosBridge("tuilaunch_bench")
+    try:
+        print("1. rate accuracy (10 s window)")
+        topics = ["/bench_1hz", "/bench_100hz"]
+        await bridge.start_rates(topics, window_s=WINDOW_S, wait=30)
+        await asyncio.sleep(WINDOW_S + 1)
+        results = await bridge.read_rates()
+        for topic, nominal in zip(topics, (1.0, 100.0), strict=True):
+            rate = results[topic]["rate_hz"] or 0.0
+            error = 100 * (rate - nominal) / nominal
+            print(f"   {topic:14} nominal {nominal:6.1f} Hz  measured {rate:8.3f} Hz  "
+                  f"error {error:+5.1f}%  ({results[topic]['messages']} messages, "
+                  f"{results[topic]['bytes_per_s']} B/s)")
+        await bridge.stop_rates()
+        print("2. the inspector's own CPU")
+        idle = await own_cpu(5)
+        procs.append(publisher(1000, "bench_1khz"))
+        await bridge.start_rates(["/bench_1khz"], window_s=WINDOW_S, wait=30)
+        started = time.monotonic()
+        measuring = await own_cpu(5)
+        rate = (await bridge.read_rates("/bench_1khz"))["/bench_1khz"]["rate_hz"]
+        print(f"   bridge measuring nothing: {idle:5.1f}% of a core")
+        print(f"   measuring a 1 kHz topic:  {measuring:5.1f}% of a core "
+              f"(read {rate} Hz over {time.monotonic() - started:.1f} s)")
+    finally:
+        bridge.close()
+        for proc in procs:
+            proc.kill()
+            proc.wait(timeout=30)
+
+
+if __name__ == "__main__":
+    asyncio.run(main())
+    session_cost()

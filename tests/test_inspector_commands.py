@@ -1,0 +1,305 @@
+"""The inspector's session commands on a real session of real rclpy nodes: topics, hz,
+echo, status with CPU and memory, parameter files, logger levels, and the rates and
+resources streams a client watches.
+
+One session serves the module (starting one costs seconds of DDS discovery on a busy
+machine); each test asks it something different and leaves it as it found it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tuilaunch.client.link import Link
+from tuilaunch.engine.ros.bridge import RosBridge
+from tuilaunch.engine.ros.graph import full_node_name
+from tuilaunch.engine.run.session_dir import SessionError
+
+from .conftest import run_cli
+from .inspector_helpers import NODE_SCRIPT
+from .inspector_helpers import eventually as eventually_async
+from .inspector_helpers import run as run_bridge
+from .launch_world import make_package
+
+LAUNCH = """
+from launch import LaunchDescription
+from launch_ros.actions import Node
+
+
+def node(name, *arguments):
+    return Node(package='insp_nodes', executable='inspector_node', name=name,
+                namespace='/insp', arguments=[name, *arguments])
+
+
+def generate_launch_description():
+    return LaunchDescription([
+        node('fast', '--pub', 'scan', '--rate', '20', '--best-effort', '--params'),
+        node('strict', '--sub', 'scan'),
+        node('busy', '--burn', '0.3', '--logger-service', '--debug-ticks'),
+        node('plain', '--pub', 'chatter', '--rate', '5', '--sub', 'orphan'),
+    ])
+"""
+FAST, STRICT, BUSY, PLAIN = "fast-1", "strict-2", "busy-3", "plain-4"
+
+
+def tl(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    return run_cli(*args, timeout=timeout)
+
+
+def ok(*args: str) -> str:
+    done = tl(*args)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def one_line_error(done: subprocess.CompletedProcess[str], command: str) -> str:
+    """A failed command's message: a non-zero exit, no traceback, `tuilaunch CMD: error:`."""
+    assert done.returncode != 0, done.stdout
+    assert "Traceback" not in done.stderr
+    assert done.stderr.startswith(f"tuilaunch {command}: error: "), done.stderr
+    return done.stderr.strip()
+
+
+def eventually(check: Callable[[], Any], limit: float = 60.0) -> Any:
+    end = time.monotonic() + limit
+    while True:
+        result = check()
+        if result:
+            return result
+        assert time.monotonic() < end, f"condition never held: {check}"
+        time.sleep(0.2)
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    root = tmp_path_factory.mktemp("inspector")
+    prefix = root / "prefix"
+    make_package(prefix, "insp_nodes", ["inspector_node"],
+                 probe=f"#!{sys.executable}\n" + NODE_SCRIPT.read_text())
+    (root / "inspect.launch.py").write_text(textwrap.dedent(LAUNCH))
+    runtime = Path(tempfile.mkdtemp(prefix="tl"))  # short: socket paths are limited
+    patch = pytest.MonkeyPatch()
+    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    patch.setenv("ROS_LOG_DIR", str(root / "log"))
+    patch.setenv("AMENT_PREFIX_PATH", os.pathsep.join(
+        [str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
+    try:
+        name = ok(str(root / "inspect.launch.py"), "--detach", "--name", "insp").strip()
+        for process in (FAST, STRICT, BUSY, PLAIN):
+            ok("wait", name, process, "running", "--timeout", "60")
+        yield name
+        tl("stop", name)
+    finally:
+        for info in (runtime / "tuilaunch").glob("*.json"):  # a failed stop leaves none
+            try:
+                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
+            except (ProcessLookupError, ValueError, KeyError):
+                pass
+        patch.undo()
+
+
+def topics_of(name: str, *extra: str) -> dict[str, dict[str, Any]]:
+    return {t["name"]: t for t in json.loads(ok("topics", name, "--json", *extra))["topics"]}
+
+
+def test_topics_map_endpoints_to_processes_and_say_qos_problems(session):
+    def settled() -> dict[str, dict[str, Any]] | None:
+        topics = topics_of(session)
+        scan = topics.get("/insp/scan", {})
+        if [e["node"] for e in scan.get("publishers", [])] == ["/insp/fast"] and \
+                [e["node"] for e in scan.get("subscribers", [])] == ["/insp/strict"]:
+            return topics
+        return None
+
+    topics = eventually(settled)
+    scan = topics["/insp/scan"]
+    assert scan["types"] == ["std_msgs/msg/String"]
+    (publisher,) = scan["publishers"]
+    assert publisher["in_launch"] is True and publisher["process"] == FAST
+    assert publisher["qos"]["reliability"] == "best_effort"
+    assert scan["subscribers"][0]["process"] == STRICT
+    (problem,) = scan["qos_problems"]
+    assert "publisher /insp/fast and subscriber /insp/strict cannot talk" in problem
+    assert "reliability" in problem
+    # one node's topics, named by its process id
+    assert set(topics_of(session, "--node", PLAIN)) >= {"/insp/chatter", "/insp/orphan"}
+    assert "/insp/scan" not in topics_of(session, "--node", PLAIN)
+    table = ok("topics", session)
+    assert "/insp/fast [fast-1]" in table and "/insp/strict [strict-2]" in table
+    assert "QoS problems" in table and problem in table
+
+
+def test_hz_measures_a_known_rate_and_refuses_a_topic_nobody_publishes(session):
+    result = json.loads(ok("hz", session, "/insp/scan", "--window", "3", "--json"))
+    assert result["topic"] == "/insp/scan"
+    assert 10 < result["rate_hz"] < 30  # published at 20 Hz; loose: the machine is shared
+    assert result["bytes_per_s"] > 0 and result["messages"] > 10
+    text = ok("hz", session, "insp/chatter", "--window", "2")
+    assert text.startswith("average rate: ") and "average bandwidth: " in text
+    started = time.monotonic()
+    error = one_line_error(tl("hz", session, "/insp/orphan", "--window", "1"), "hz")
+    assert "topic /insp/orphan has no publisher (waited 5 s)" in error
+    missing = one_line_error(tl("hz", session, "/insp/nowhere", "--window", "1"), "hz")
+    assert "no topic /insp/nowhere on the ROS graph" in missing
+    assert time.monotonic() - started < 100  # never a hang (the deadlines are ~5 s each)
+    unknown = one_line_error(tl("hz", "nosuch", "/insp/scan"), "hz")
+    assert "no running session named nosuch" in unknown
+
+
+def test_echo_prints_count_messages_as_yaml(session):
+    out = ok("echo", session, "/insp/chatter", "--count", "2", "--timeout", "60")
+    documents = [d for d in out.split("---\n") if d.strip()]
+    assert len(documents) == 2 and out.endswith("---\n")
+    assert all(d.startswith("data: hello ") for d in documents)
+
+
+def test_status_shows_cpu_memory_and_threads_per_process(session):
+    status = json.loads(ok("status", session, "--json"))
+    busy = next(p for p in status["processes"] if p["id"] == BUSY)
+    assert busy["cpu_percent"] > 5  # it keeps ~30 % of a core busy
+    assert busy["rss_bytes"] > 10 << 20  # an rclpy process holds tens of MB
+    assert busy["threads"] >= 2  # its burner besides the main thread
+    plain = next(p for p in status["processes"] if p["id"] == PLAIN)
+    assert plain["cpu_percent"] is not None and plain["threads"] >= 1
+    table = ok("status", session)
+    assert "CPU%" in table and "RSS" in table and "THREADS" in table
+
+
+def test_params_dump_then_load_round_trip(session, tmp_path):
+    dumped = ok("params", session, FAST, "--dump")
+    assert dumped.startswith("/insp/fast:\n  ros__parameters:\n")
+    assert "label: lidar" in dumped and "p: 1.5" in dumped
+    changed = tmp_path / "fast.yaml"
+    changed.write_text(dumped.replace("label: lidar", "label: radar"))
+    loaded = tl("params", session, "/insp/fast", "--load", str(changed))
+    assert loaded.returncode == 0, loaded.stdout + loaded.stderr
+    assert "label: set" in loaded.stdout.splitlines()
+    assert "label: radar" in ok("params", session, FAST, "--dump")
+    wrong = tmp_path / "broken.yaml"
+    wrong.write_text("a: [")
+    error = one_line_error(tl("params", session, FAST, "--load", str(wrong)), "params")
+    assert f"parameter file {wrong}:" in error and "not valid YAML" in error
+    ghost = one_line_error(tl("params", session, "/ghost", "--dump"), "params")
+    assert "no node /ghost on the ROS graph" in ghost
+    nobody = one_line_error(tl("params", session, "nobody", "--dump"), "params")
+    assert "no node or process 'nobody'" in nobody
+
+
+def test_log_level_through_the_logger_service_or_says_how_to_restart(session):
+    ok("log-level", session, "/insp/busy", "debug")
+    eventually(lambda: "debug tick" in ok("logs", session, BUSY))
+    ok("log-level", session, BUSY, "info")
+    error = one_line_error(tl("log-level", session, PLAIN, "debug"), "log-level")
+    assert "/insp/plain has no logger service" in error
+    assert f"tuilaunch restart {session} {PLAIN} --log-level DEBUG" in error
+    bad = one_line_error(tl("log-level", session, BUSY, "loud"), "log-level")
+    assert "'loud' is not a logger level" in bad
+
+
+def events_until(link: Link, kind: str, check: Callable[[dict[str, Any]], bool],
+                 limit: float = 60.0) -> dict[str, Any]:
+    end = time.monotonic() + limit
+    link.sock.settimeout(limit)
+    for message in link.messages():
+        for event in message.get("events") or []:
+            if event["kind"] == kind and check(event["data"]):
+                return event
+        assert time.monotonic() < end, f"no {kind} event as wanted"
+    raise AssertionError("the session closed the connection")
+
+
+def events_for(link: Link, seconds: float) -> list[dict[str, Any]]:
+    """The events that arrive within `seconds` (to count them, or show that none of a kind
+    comes): a request after the wait brings every event sent before its reply."""
+    time.sleep(seconds)
+    link.request("find", process=FAST)
+    found = [e for message in link.pending for e in message.get("events") or []]
+    link.pending.clear()
+    return found
+
+
+def test_a_watching_client_gets_rates_and_resources_until_it_stops(session):
+    link = Link(session, timeout=60)
+    try:
+        link.request("subscribe", max_lines=1, kinds=["rates", "resources"])
+        answer = link.request("watch_rates", topics=["/insp/scan", "/insp/orphan"])
+        assert answer["unmeasured"] == {"/insp/orphan": "topic /insp/orphan has no publisher"}
+        event = events_until(link, "rates",
+                             lambda d: (d["/insp/scan"]["rate_hz"] or 0) > 5)
+        assert event["data"]["/insp/orphan"] == {"rate_hz": None, "bytes_per_s": None}
+        link.request("watch_resources", on=True)
+        event = events_until(link, "resources",
+                             lambda d: (d.get(BUSY, {}).get("cpu_percent") or 0) > 5)
+        assert set(event["data"][BUSY]) == {"cpu_percent", "rss_bytes", "threads", "growing"}
+        link.request("watch_rates", topics=[])
+        link.request("watch_resources", on=False)
+        stopped = time.time()
+        late = [e for e in events_for(link, 3.0) if e["time"] > stopped]
+        assert late == []
+    finally:
+        link.close()
+
+
+def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):
+    link = Link(session, timeout=60)
+    try:
+        with pytest.raises(SessionError, match="subscribe first"):
+            link.request("echo", topic="/insp/scan")
+        link.request("subscribe", max_lines=1, kinds=["echo"])
+        link.request("echo", topic="/insp/scan", max_per_s=2)
+        first = events_until(link, "echo", lambda d: d["topic"] == "/insp/scan")
+        assert first["data"]["text"].startswith("data: hello ")
+        # 20 messages a second are published; a screen is sent at most 2 of them
+        shown = [e for e in events_for(link, 3.0) if e["kind"] == "echo"]
+        assert 1 <= len(shown) <= 8
+        link.request("echo_stop", topic="/insp/scan")
+        stopped = time.time()
+        assert [e for e in events_for(link, 2.0) if e["time"] > stopped] == []
+    finally:
+        link.close()
+
+
+async def server_subscribes(bridge: RosBridge, topics: list[str], wanted: bool) -> None:
+    """Waits until the session's bridge (node /tuilaunch) subscribes to each topic, or to
+    none of them, as another node on the graph sees it."""
+    async def check() -> bool:
+        for topic in topics:
+            infos = await asyncio.to_thread(bridge.node.get_subscriptions_info_by_topic,
+                                            topic)
+            if any(full_node_name(i.node_name, i.node_namespace) == "/tuilaunch"
+                   for i in infos) != wanted:
+                return False
+        return True
+    await eventually_async(check, 60, f"the server subscribed={wanted} to {topics}")
+
+
+def test_a_client_that_leaves_stops_its_rates_and_echo_measurements(session):
+    topics = ["/insp/chatter", "/insp/scan"]
+
+    async def scenario(bridge: RosBridge) -> None:
+        # one bridge throughout: a new one would see an empty graph for a while
+        link = await asyncio.to_thread(Link, session, 60)
+        try:
+            await asyncio.to_thread(link.request, "subscribe", max_lines=1,
+                                    kinds=["echo", "rates"])
+            await asyncio.to_thread(link.request, "watch_rates", topics=["/insp/chatter"])
+            await asyncio.to_thread(link.request, "echo", topic="/insp/scan")
+            await server_subscribes(bridge, topics, True)
+        finally:
+            link.close()  # no unwatch, no echo_stop: the connection just ends
+        await server_subscribes(bridge, topics, False)
+
+    run_bridge(scenario)

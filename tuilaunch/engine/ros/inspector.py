@@ -1,0 +1,385 @@
+"""The inspector's session requests: topics, rates, echo, parameter files, logger levels.
+
+A supervisor plugin (run/plugins.py) whose `handlers` the session server answers (the ops
+are listed in run/protocol.py). It works through the launch's bridge (actions.py owns it)
+and knows the plan, so graph endpoints are mapped to the launch's processes and a node may
+be named by its process id.
+
+Streams are per client: `watch_rates` measures the union of what the clients watch and
+stops a topic when nobody watches it; `echo` runs one throttled stream per client and
+topic. A client that disconnects loses its streams (`client_gone`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+from ..errors import LaunchError
+from ..run.events import Event
+from ..run.plugins import Clients, Handler, Plugin
+from .actions import RosActions
+from .bridge import RosError
+from .echo import message_yaml
+
+if TYPE_CHECKING:
+    from ..run.supervisor import Supervisor
+
+RATES_PERIOD = 1.0
+"""Seconds between `rates` events to a watching client."""
+DISCOVERY_WAIT = 3.0
+"""A bridge made for this request waits at most this for the launch's nodes to show up:
+a graph read a moment after joining would be empty."""
+PUBLISHER_WAIT = 5.0
+"""How long `hz` and `echo` wait for a topic's first publisher."""
+NODE_WAIT = 2.0
+"""How long a request for a node waits for it to appear on the graph."""
+SERVICE_TIMEOUT = 5.0
+"""How long a node may take to answer a parameter or logger request."""
+ECHO_DEFAULT_PER_S = 5.0
+"""Messages a second an echo stream sends by default: what a screen can show."""
+ECHO_UNTHROTTLED_POLL = 0.05
+"""With no throttle (`max_per_s` 0), how often the kept messages are sent."""
+MAX_WINDOW = 600.0
+
+
+class Inspector(Plugin):
+    def __init__(self, supervisor: Supervisor, ros: RosActions) -> None:
+        self.supervisor = supervisor
+        self.ros = ros
+        self.clients: Clients | None = None
+        self.find_process: Callable[[str], str] | None = None
+        self.rate_watch: dict[int, set[str]] = {}
+        self.unmeasured: dict[str, str] = {}  # watched topics not measured yet: why
+        self.rates_task: asyncio.Task[None] | None = None
+        self.echoes: dict[tuple[int, str], asyncio.Task[None]] = {}
+        self.pending: set[asyncio.Task[None]] = set()
+        self.bridge_lock = asyncio.Lock()
+        self.discovered = False
+
+    # --- the plugin's hooks ------------------------------------------------------------------
+
+    def serve(self, clients: Clients) -> None:
+        self.clients = clients
+
+    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+        self.find_process = find_process
+        return {"topics": self.topics, "hz": self.hz, "watch_rates": self.watch_rates,
+                "echo": self.echo, "echo_stop": self.echo_stop,
+                "params_dump": self.params_dump, "params_load": self.params_load,
+                "log_level": self.log_level}
+
+    def client_gone(self, client: int) -> None:
+        for key in [k for k in self.echoes if k[0] == client]:
+            self.echoes.pop(key).cancel()
+        if self.rate_watch.pop(client, None) is not None:
+            task = asyncio.ensure_future(self.update_rates())
+            self.pending.add(task)  # kept until done: a bare task may be collected
+            task.add_done_callback(self.pending.discard)
+
+    async def close(self) -> None:
+        for task in [*self.echoes.values(), self.rates_task]:
+            if task is not None:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError, Exception):
+                    await task
+        self.echoes.clear()
+        self.rate_watch.clear()
+        bridge = self.ros.made
+        if bridge is not None:
+            await bridge.stop_rates()
+
+    # --- shared ------------------------------------------------------------------------------
+
+    async def bridge(self) -> Any:
+        """The launch's bridge; made now if need be, and then given a moment to discover the
+        launch's nodes."""
+        async with self.bridge_lock:
+            made = self.ros.made is None
+            try:
+                bridge = await asyncio.to_thread(self.ros.bridge) if made else self.ros.made
+            except RosError as exc:
+                raise LaunchError(f"ROS is not available: {exc}") from None
+            except ImportError as exc:  # rclpy not installed where the session runs
+                raise LaunchError(f"ROS is not available here: {exc}") from None
+            if made and not self.discovered:
+                self.discovered = True
+                await self.wait_discovery(bridge)
+            return bridge
+
+    async def wait_discovery(self, bridge: Any) -> None:
+        wanted = {name for name, process in self.node_processes().items()
+                  if self.supervisor.states.get(process) == "running"}
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + DISCOVERY_WAIT
+        while loop.time() < deadline:
+            if wanted <= set(await bridge.list_nodes()):
+                return
+            await asyncio.sleep(0.1)
+
+    def node_processes(self) -> dict[str, str]:
+        """`{full node name: process id}` for the plan's nodes, containers and components."""
+        found: dict[str, str] = {}
+        for proc in self.supervisor.plan.processes:
+            if proc.kind in ("node", "container") and proc.full_name:
+                found[proc.full_name] = proc.id
+            for component in proc.components:
+                if component.get("full_name"):
+                    found[str(component["full_name"])] = proc.id
+        return found
+
+    def node_name(self, ref: Any) -> str:
+        """A node given as its full name or its process id (or the launch's node name)."""
+        if not isinstance(ref, str) or not ref:
+            raise ValueError("a node is needed: its full name (/ns/name) or its process id")
+        assert self.find_process is not None
+        try:
+            process = self.find_process(ref)
+        except LaunchError:
+            if ref.startswith("/"):
+                return ref  # a node of the graph outside this launch
+            raise LaunchError(f"no node or process {ref!r} in this launch "
+                              f"(a node outside it is named by its full name, /ns/name)")\
+                from None
+        names = [name for name, owner in self.node_processes().items() if owner == process]
+        if ref in names:
+            return ref
+        if len(names) != 1:
+            raise LaunchError(f"process {process} runs no single named ROS node: "
+                              f"give the node's full name (/ns/name)")
+        return names[0]
+
+    async def require_node(self, bridge: Any, node: str) -> None:
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + NODE_WAIT
+        while node not in await bridge.list_nodes():
+            if loop.time() > deadline:
+                raise LaunchError(f"no node {node} on the ROS graph")
+            await asyncio.sleep(0.1)
+
+    async def publisher_problem(self, bridge: Any, topic: str) -> str:
+        """Why a topic cannot be measured: it does not exist, or nobody publishes it."""
+        names = await asyncio.to_thread(bridge.node.get_topic_names_and_types)
+        if topic not in {name for name, _ in names}:
+            return f"no topic {topic} on the ROS graph"
+        return f"topic {topic} has no publisher"
+
+    # --- topics and rates --------------------------------------------------------------------
+
+    async def topics(self, message: dict[str, Any]) -> dict[str, Any]:
+        node = message.get("node")
+        only = self.node_name(node) if node else None
+        bridge = await self.bridge()
+        if only is not None:
+            await self.require_node(bridge, only)
+        result: dict[str, Any] = await bridge.topics(self.node_processes(), only)
+        return result
+
+    async def hz(self, message: dict[str, Any]) -> dict[str, Any]:
+        from .rates import RateMeter
+
+        topic = topic_of(message)
+        window = float(message.get("window") or 10.0)
+        if not 0 < window <= MAX_WINDOW:
+            raise ValueError(f"window {window:g} s is out of range (0-{MAX_WINDOW:g} s)")
+        bridge = await self.bridge()
+        # its own meter: a client watching the same topic keeps its own window
+        meter = RateMeter(bridge.node)
+        try:
+            try:
+                await meter.start(topic, window, PUBLISHER_WAIT)
+            except RosError:
+                raise LaunchError(f"{await self.publisher_problem(bridge, topic)} "
+                                  f"(waited {PUBLISHER_WAIT:g} s)") from None
+            await asyncio.sleep(window)
+            return meter.read(topic)[topic]
+        finally:
+            meter.stop_all()
+
+    async def watch_rates(self, message: dict[str, Any]) -> dict[str, Any]:
+        topics = message.get("topics") or []
+        if not isinstance(topics, list) or not all(isinstance(t, str) for t in topics):
+            raise ValueError("watch_rates needs topics as a list of names")
+        client = int(message["client"])
+        if topics:
+            self.rate_watch[client] = set(topics)
+        else:
+            self.rate_watch.pop(client, None)
+        await self.update_rates()
+        return {"unmeasured": {t: self.unmeasured[t] for t in topics if t in self.unmeasured}}
+
+    async def update_rates(self) -> None:
+        """Measures the union of the watched topics, no more; the ticker runs while any
+        client watches."""
+        wanted = set().union(*self.rate_watch.values()) if self.rate_watch else set()
+        if not wanted:
+            if self.rates_task is not None:
+                self.rates_task.cancel()
+                self.rates_task = None
+            self.unmeasured.clear()
+            if self.ros.made is not None:
+                await self.ros.made.stop_rates()
+            return
+        bridge = await self.bridge()
+        measured = set(bridge.rate_meter().measured())
+        await bridge.stop_rates(sorted(measured - wanted))
+        for topic in list(self.unmeasured):
+            if topic not in wanted:
+                del self.unmeasured[topic]
+        await self.start_missing(bridge, wanted - measured)
+        if self.rates_task is None:
+            self.rates_task = asyncio.ensure_future(self.tick_rates())
+
+    async def start_missing(self, bridge: Any, topics: set[str]) -> None:
+        from .messages import MessageError
+
+        for topic in sorted(topics):
+            try:
+                await bridge.start_rates([topic], wait=0.0)
+                self.unmeasured.pop(topic, None)
+            except RosError:
+                self.unmeasured[topic] = await self.publisher_problem(bridge, topic)
+            except MessageError as exc:
+                self.unmeasured[topic] = str(exc)
+
+    async def tick_rates(self) -> None:
+        while self.rate_watch:
+            await asyncio.sleep(RATES_PERIOD)
+            bridge = self.ros.made
+            if bridge is None:
+                continue
+            if self.unmeasured:  # a publisher may have come since
+                await self.start_missing(bridge, set(self.unmeasured))
+            rates = await bridge.read_rates()
+            for client, topics in list(self.rate_watch.items()):
+                data = {t: {"rate_hz": rates.get(t, {}).get("rate_hz"),
+                            "bytes_per_s": rates.get(t, {}).get("bytes_per_s")}
+                        for t in sorted(topics)}
+                self.send(Event("rates", data=data), client)
+
+    def send(self, event: Event, client: int) -> None:
+        if self.clients is not None:
+            self.clients.send(event, client)
+
+    # --- echo --------------------------------------------------------------------------------
+
+    async def echo(self, message: dict[str, Any]) -> dict[str, Any]:
+        topic = topic_of(message)
+        client = int(message["client"])
+        if self.clients is None or not self.clients.subscribed(client):
+            raise LaunchError("echo sends its messages as events: subscribe first")
+        count = message.get("count")
+        if count is not None and (not isinstance(count, int) or count < 1):
+            raise ValueError(f"count {count!r} is not a positive number")
+        per_s = float(message.get("max_per_s", ECHO_DEFAULT_PER_S) or 0.0)
+        bridge = await self.bridge()
+        try:
+            stream = await bridge.start_echo(topic, wait=PUBLISHER_WAIT)
+        except RosError:
+            raise LaunchError(f"{await self.publisher_problem(bridge, topic)} "
+                              f"(waited {PUBLISHER_WAIT:g} s)") from None
+        old = self.echoes.pop((client, topic), None)
+        if old is not None:
+            old.cancel()
+        self.echoes[(client, topic)] = asyncio.ensure_future(
+            self.stream_echo(bridge, stream, client, count, per_s))
+        return {}
+
+    async def stream_echo(self, bridge: Any, stream: Any, client: int, count: int | None,
+                          per_s: float) -> None:
+        topic = stream.topic
+        sent = 0
+        period = 1.0 / per_s if per_s > 0 else ECHO_UNTHROTTLED_POLL
+        try:
+            while count is None or sent < count:
+                await asyncio.sleep(period)
+                texts = await asyncio.to_thread(take_texts, stream, per_s > 0)
+                for text in texts[:None if count is None else count - sent]:
+                    sent += 1
+                    data: dict[str, Any] = {"topic": topic, "text": text}
+                    if sent == count:
+                        data["done"] = True
+                    self.send(Event("echo", data=data), client)
+        finally:
+            await bridge.stop_echo(stream)
+            if self.echoes.get((client, topic)) is asyncio.current_task():
+                del self.echoes[(client, topic)]
+
+    async def echo_stop(self, message: dict[str, Any]) -> dict[str, Any]:
+        task = self.echoes.pop((int(message["client"]), topic_of(message)), None)
+        if task is not None:
+            task.cancel()
+        return {}
+
+    # --- parameters and loggers --------------------------------------------------------------
+
+    async def params_dump(self, message: dict[str, Any]) -> dict[str, Any]:
+        node = self.node_name(message.get("node"))
+        bridge = await self.bridge()
+        await self.require_node(bridge, node)
+        try:
+            return {"yaml": await bridge.dump_params(node, SERVICE_TIMEOUT)}
+        except RosError as exc:
+            raise LaunchError(f"{node} does not answer: {exc}") from None
+
+    async def params_load(self, message: dict[str, Any]) -> dict[str, Any]:
+        from .param_files import load_values, text_values
+
+        node = self.node_name(message.get("node"))
+        text = message.get("yaml")
+        if not isinstance(text, str):
+            raise ValueError("params_load needs the file's text as yaml")
+        values = text_values(text, node, str(message.get("source") or "<yaml>"))
+        bridge = await self.bridge()
+        await self.require_node(bridge, node)
+        try:
+            results = await load_values(bridge, node, values, SERVICE_TIMEOUT)
+        except RosError as exc:
+            raise LaunchError(f"{node} does not answer: {exc}") from None
+        return {"results": [{"name": r.name, "ok": r.successful, "reason": r.reason}
+                            for r in results]}
+
+    async def log_level(self, message: dict[str, Any]) -> dict[str, Any]:
+        from .loggers import NoLoggerService, level_number
+
+        ref = message.get("node")
+        node = self.node_name(ref)
+        level = str(message.get("level") or "")
+        try:
+            level_number(level)
+        except RosError as exc:
+            raise ValueError(str(exc)) from None
+        bridge = await self.bridge()
+        await self.require_node(bridge, node)
+        try:
+            await bridge.set_logger_level(node, level, SERVICE_TIMEOUT)
+        except NoLoggerService:
+            process = self.node_processes().get(node)
+            how = (f"restart {process} with --log-level {level.upper()} to apply it"
+                   if process else "only a restart with --ros-args --log-level changes it")
+            raise LaunchError(f"{node} has no logger service (it was not created with "
+                              f"enable_logger_service=True): {how}") from None
+        except RosError as exc:
+            raise LaunchError(f"{node}: {exc}") from None
+        return {"ok": True}
+
+
+def topic_of(message: dict[str, Any]) -> str:
+    topic = message.get("topic")
+    if not isinstance(topic, str) or not topic:
+        raise ValueError("a topic name is needed")
+    return topic if topic.startswith("/") else "/" + topic
+
+
+def take_texts(stream: Any, newest_only: bool) -> list[str]:
+    """The stream's kept messages as YAML (in a worker thread: deserializing costs); when
+    throttled, only the newest: a screen shows what the topic says now."""
+    messages = stream.take()
+    if newest_only:
+        messages = messages[-1:]
+    return [message_yaml(m) for m in messages]
+
+
+__all__ = ["Inspector"]

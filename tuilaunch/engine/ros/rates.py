@@ -1,0 +1,148 @@
+"""Rate and bandwidth of topics, as `ros2 topic hz` and `ros2 topic bw` compute them.
+
+Both take the times messages were *received* here: the rate is one over the mean period
+between consecutive messages of the window; the bandwidth is the bytes of the window's
+messages over the time from its first message to now. The window here is a time span
+(`window_s`) rather than a message count, so a 1 Hz and a 1 kHz topic read alike.
+
+Subscriptions are generic (`raw=True`: serialized bytes, never deserialized, so measuring
+costs little) with a QoS that matches the publishers', as ros2cli's `choose_qos` does.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import threading
+import time
+from collections import deque
+from typing import Any
+
+from .bridge import RosError
+from .messages import MessageError, import_type
+
+
+def message_class(type_name: str) -> Any:
+    """The Python class of a message type, or a one-line error saying what to install."""
+    try:
+        return import_type(type_name, "msg")
+    except MessageError:
+        package = type_name.split("/")[0]
+        distro = os.environ.get("ROS_DISTRO", "jazzy")
+        raise MessageError(f"{type_name}: install the Python package "
+                           f"ros-{distro}-{package.replace('_', '-')}") from None
+
+
+def matching_qos(publisher_profiles: list[Any]) -> Any:
+    """A subscriber QoS every publisher can talk to: best effort if any publisher is,
+    transient local only if all are (then late-joining reads the kept messages too)."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    qos = QoSProfile(depth=10)
+    if any(p.reliability == ReliabilityPolicy.BEST_EFFORT for p in publisher_profiles):
+        qos.reliability = ReliabilityPolicy.BEST_EFFORT
+    if publisher_profiles and all(p.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                                  for p in publisher_profiles):
+        qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+    return qos
+
+
+async def wait_for_publishers(node: Any, topic: str, timeout: float) -> list[Any]:
+    """The topic's publishers' endpoint infos, once discovery has found at least one."""
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + timeout
+    while True:
+        infos = await asyncio.to_thread(node.get_publishers_info_by_topic, topic)
+        if infos:
+            return list(infos)
+        if loop.time() > deadline:
+            raise RosError(f"topic {topic} has no publisher (waited {timeout:g} s)")
+        await asyncio.sleep(0.1)
+
+
+class RateWindow:
+    """Receive times and sizes of one topic's messages over the last `window_s` seconds.
+
+    Thread-safe: messages arrive on executor threads, reads come from asyncio."""
+
+    def __init__(self, topic: str, window_s: float = 10.0) -> None:
+        self.topic = topic
+        self.window_s = window_s
+        self.started = time.monotonic()
+        self.samples: deque[tuple[float, int]] = deque()
+        self.lock = threading.Lock()
+
+    def add(self, size: int, now: float | None = None) -> None:
+        now = time.monotonic() if now is None else now
+        with self.lock:
+            self.samples.append((now, size))
+            self.trim(now)
+
+    def trim(self, now: float) -> None:
+        while self.samples and self.samples[0][0] < now - self.window_s:
+            self.samples.popleft()
+
+    def result(self, now: float | None = None) -> dict[str, Any]:
+        """`{"topic", "rate_hz", "bytes_per_s", "messages", "window_s"}`; the rates are None
+        until two messages arrived in the window; window_s is the span measured so far."""
+        now = time.monotonic() if now is None else now
+        with self.lock:
+            self.trim(now)
+            samples = list(self.samples)
+        span = min(self.window_s, now - self.started)
+        rate = bandwidth = None
+        if len(samples) >= 2:
+            first, last = samples[0][0], samples[-1][0]
+            if last > first:
+                rate = (len(samples) - 1) / (last - first)  # 1 / mean period
+            if now > first:
+                bandwidth = sum(size for _, size in samples) / (now - first)
+        return {"topic": self.topic,
+                "rate_hz": None if rate is None else round(rate, 3),
+                "bytes_per_s": None if bandwidth is None else round(bandwidth, 1),
+                "messages": len(samples), "window_s": round(span, 3)}
+
+
+class RateMeter:
+    """Many topics measured at once on one node (the bridge's), started and stopped at will:
+    the TUI measures only the topics on screen."""
+
+    def __init__(self, node: Any) -> None:
+        self.node = node
+        self.windows: dict[str, RateWindow] = {}
+        self.subscriptions: dict[str, Any] = {}
+
+    async def start(self, topic: str, window_s: float = 10.0, wait: float = 5.0) -> None:
+        """Measures `topic` from now on (a no-op when it already is, bar a new window)."""
+        if topic in self.windows:
+            self.windows[topic].window_s = window_s
+            return
+        infos = await wait_for_publishers(self.node, topic, wait)
+        cls = message_class(infos[0].topic_type)
+        window = RateWindow(topic, window_s)
+
+        def received(data: bytes) -> None:
+            window.add(len(data))
+
+        subscription = self.node.create_subscription(
+            cls, topic, received, matching_qos([i.qos_profile for i in infos]), raw=True)
+        self.windows[topic] = window
+        self.subscriptions[topic] = subscription
+
+    def stop(self, topic: str) -> None:
+        subscription = self.subscriptions.pop(topic, None)
+        self.windows.pop(topic, None)
+        if subscription is not None:
+            self.node.destroy_subscription(subscription)
+
+    def stop_all(self) -> None:
+        for topic in list(self.subscriptions):
+            self.stop(topic)
+
+    def measured(self) -> list[str]:
+        return sorted(self.windows)
+
+    def read(self, topic: str | None = None) -> dict[str, dict[str, Any]]:
+        """Results by topic: all measured topics, or only `topic`."""
+        topics = self.measured() if topic is None else [topic]
+        return {t: self.windows[t].result() for t in topics if t in self.windows}
