@@ -75,6 +75,11 @@ def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
     states = {p["id"]: p["state"] for p in json.loads(status.stdout)["processes"]}
     assert states == {"ticker-1": "running", "quiet-2": "running"}
 
+    # the ROS inspector's commands too (no ROS node runs here: no topic of ours)
+    topics = run_cli("topics", "robot1:far", "--json")
+    assert topics.returncode == 0, topics.stderr
+    assert isinstance(json.loads(topics.stdout), list | dict)
+
     wait_for(lambda: "tick 3\n" in run_cli("logs", "robot1:far", "ticker-1").stdout)
     logs = run_cli("logs", "robot1:far", "ticker-1").stdout.splitlines()
     assert logs[:3] == ["tick 1", "tick 2", "tick 3"]
