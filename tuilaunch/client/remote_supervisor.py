@@ -342,9 +342,14 @@ class RemoteSupervisor:
                 continue
             old, self.link = self.link, link
             await loop.run_in_executor(None, old.close)
+            start, received = self._from, self._received
             try:
                 missed = await asyncio.wait_for(self._missed(), ANSWER_TIMEOUT * 3)
             except (TimeoutError, ConnectionError, ProtocolError, SessionError) as exc:
+                # the link dropped again before the gap was read: it is read on the next
+                # one, from the same place; what this one sent meanwhile is in that gap
+                self._from, self._received = start, received
+                self._early.clear()
                 self._writer.close()
                 self._deliver(Event("log", reason=f"reconnecting: {exc}", level="WARN"))
                 continue
