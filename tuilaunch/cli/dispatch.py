@@ -51,7 +51,8 @@ def _parser() -> argparse.ArgumentParser:
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
         "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
         "hz NAME TOPIC | echo NAME TOPIC | params NAME NODE --dump/--load FILE | log-level "
-        "NAME NODE LEVEL (tuilaunch COMMAND -h).")
+        "NAME NODE LEVEL (tuilaunch COMMAND -h). On another machine: ls HOST, and HOST:NAME "
+        "for NAME (over ssh).")
     return parser
 
 
