@@ -96,6 +96,8 @@ def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
     assert stopped.returncode == 0, stopped.stderr
     assert "session robot1:far stopped" in stopped.stdout
     wait_for(lambda: not alive(server))
+    # nothing of the launch is left over there: no node, no server, no proxy
+    wait_for(lambda: running_on(machines["robot1"]) == [])
     assert json.loads(run_cli("ls", "robot1", "--json").stdout) == []
 
 
@@ -136,6 +138,22 @@ def test_remote_failures_are_one_line_naming_the_host(machines: Machines, write,
     assert "robot1: tuilaunch not found there" in missing.stderr.splitlines()[0]
     for done in (unknown, unreachable, refused, missing):
         assert "Traceback" not in done.stderr
+
+
+def running_on(machine: Machine) -> list[int]:
+    """Every live process started under `machine` (its session folder in its environment)."""
+    marker = f"XDG_RUNTIME_DIR={machine.runtime}".encode()
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            environ = (entry / "environ").read_bytes()
+        except OSError:
+            continue
+        if marker in environ.split(b"\0") and alive(int(entry.name)):
+            found.append(int(entry.name))
+    return found
 
 
 def proxies_on(machine: Machine) -> list[int]:
