@@ -18,6 +18,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from tuilaunch.client import remote_supervisor
+from tuilaunch.engine.run.event_buffer import EventBuffer
+from tuilaunch.engine.run.events import Event
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
@@ -290,3 +292,20 @@ def test_a_tui_whose_link_fails_before_it_mounts_exits_with_the_reason(machines,
     asyncio.run(attach())
     assert app.return_code == 2
     assert app.supervisor is None
+
+
+def test_a_fair_buffer_drops_the_loudest_process_lines_not_the_oldest():
+    """A display sent a screenful a second (over a link) still sees a quiet node's line
+    beside a flood; the unfair buffer (a local display's) keeps only the newest."""
+    for fair, quiet_kept in ((True, ["hello"]), (False, [])):
+        buffer = EventBuffer(max_lines=10, fair=fair)
+        buffer(Event("output", "quiet", lines=["hello"]))
+        for i in range(50):
+            buffer(Event("output", "loud", lines=[f"x{i}"]))
+        events = buffer.drain()
+        kept = {name: [text for e in events if e.kind == "output" and e.process == name
+                       for text in e.lines] for name in ("quiet", "loud")}
+        assert kept["quiet"] == quiet_kept
+        assert kept["loud"] == [f"x{i}" for i in range(50 - 10 + len(quiet_kept), 50)]
+        dropped = {e.process: e.code for e in events if e.kind == "dropped"}
+        assert dropped.get("loud") == 40 + len(quiet_kept)

@@ -167,8 +167,9 @@ class RemoteSupervisor:
     async def _subscribe(self) -> dict[str, Any]:
         """Subscribes on the current connection; from here on lines are counted from the
         log files' sizes it answers with."""
+        # fair: with a screenful a second, a loud node must not hide the others' lines
         result: dict[str, Any] = await self._call(
-            "subscribe", max_lines=self.max_lines, interval=self.interval)
+            "subscribe", max_lines=self.max_lines, interval=self.interval, fair=True)
         self._from = dict(result["offsets"])
         self._received = {}
         return result

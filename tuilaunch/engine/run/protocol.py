@@ -5,7 +5,8 @@ message longer than MAX_MESSAGE is refused rather than buffered without bound.
 
 Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
   most output lines per batch and the least seconds between batches, for a display that
-  cannot show more; kinds?: only events of these kinds}, status {resources?: false skips
+  cannot show more; kinds?: only events of these kinds; fair?: past max_lines, the lines
+  dropped are the loudest process's, not the oldest}, status {resources?: false skips
   the CPU/memory sampling}, find {process},
   start/stop/restart {process}, run_action {action}, shutdown {reason}, kill (SIGKILL what
   is left), apply {arguments}, lifecycle {process}, read_log {process, start, end, skip,

@@ -56,8 +56,8 @@ class ClientQueue:
 
     def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
                  on_overflow: Callable[[], None] | None = None,
-                 kinds: frozenset[str] | None = None) -> None:
-        self.buffer = EventBuffer(max_lines=max_lines)
+                 kinds: frozenset[str] | None = None, fair: bool = False) -> None:
+        self.buffer = EventBuffer(max_lines=max_lines, fair=fair)
         self.kinds = kinds  # only these kinds of events (`tuilaunch echo` wants no output)
         self.on_overflow = on_overflow
         self.interval = interval  # a display asks for no more batches than it draws
@@ -340,7 +340,8 @@ class SessionServer:
                                    CLIENT_MAX_LINES)),
                         max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
                         writer.transport.abort,
-                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None)
+                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None,
+                        bool(message.get("fair")))
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result: dict[str, Any] = {}
