@@ -33,8 +33,8 @@ import pytest
 SSHD = "/usr/sbin/sshd"
 PRIVSEP_DIR = "/run/sshd"
 ROOT = Path(__file__).resolve().parent.parent
-PROXY = f"{shlex.quote(sys.executable)} -m tuilaunch.engine.run.proxy"
-"""The remote tuilaunch for the proxy until the CLI has its hidden `__proxy` command."""
+REMOTE = f"{shlex.quote(sys.executable)} -m tuilaunch"
+"""The remote tuilaunch: the test's venv and code, as `tuilaunch` would be on a robot."""
 
 
 def ensure_sshd() -> None:
@@ -178,7 +178,7 @@ class Machines:
 
     def env(self, **extra: str) -> dict[str, str]:
         """What a client on "the laptop" needs to reach the machines."""
-        return {"TUILAUNCH_SSH_COMMAND": self.ssh_command, "TUILAUNCH_REMOTE": PROXY, **extra}
+        return {"TUILAUNCH_SSH_COMMAND": self.ssh_command, "TUILAUNCH_REMOTE": REMOTE, **extra}
 
     def stop(self) -> None:
         for machine in self.machines.values():

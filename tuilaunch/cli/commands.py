@@ -2,7 +2,8 @@
 (and the inspector's: topics, hz, echo, params, log-level, in inspector.py).
 
 Each is a short-lived client of a session server; all but `attach` work without a terminal,
-so scripts and CI use them (`--json` where a script reads the answer).
+so scripts and CI use them (`--json` where a script reads the answer). A session is named
+`[HOST:]NAME`: with a HOST, the same protocol crosses an ssh link (engine/run/remote.py).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..client.link import ANSWER_TIMEOUT, Link, resolve_name
+from ..client.link import ANSWER_TIMEOUT, Link, open_link, resolve_name
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import placement_from_text
@@ -28,6 +29,7 @@ from ..engine.run import session_dir
 from ..engine.run.log_reader import LogLine, read_lines
 from ..engine.run.output import strip_ansi
 from ..engine.run.protocol import event_from_dict
+from ..engine.run.remote import check_host, list_remote, open_remote_link, parse_address
 from ..engine.run.session_dir import SessionError
 from ..tui.output_store import LEVELS, level_of
 from .inspector import add_commands
@@ -44,17 +46,19 @@ def _parser() -> argparse.ArgumentParser:
         prog="tuilaunch", description="Control launches running as sessions.")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     ls = commands.add_parser("ls", help="running sessions")
+    ls.add_argument("host", nargs="?", help="the sessions on this machine (as ssh names it)")
     ls.add_argument("--json", action="store_true", help="one JSON list")
     attach = commands.add_parser("attach", help="the TUI on a running session")
-    attach.add_argument("name", nargs="?", help="the session (default: the only one)")
+    attach.add_argument("name", nargs="?", metavar="[HOST:]NAME",
+                        help="the session (default: the only one here)")
     attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
     stop = commands.add_parser("stop", help="stop every process of a session, then exit")
-    stop.add_argument("name", nargs="?")
+    stop.add_argument("name", nargs="?", metavar="[HOST:]NAME")
     status = commands.add_parser("status", help="each process's state")
-    status.add_argument("name", nargs="?")
+    status.add_argument("name", nargs="?", metavar="[HOST:]NAME")
     status.add_argument("--json", action="store_true", help="one JSON object")
     logs = commands.add_parser("logs", help="the output of a session's processes")
-    logs.add_argument("name", nargs="?")
+    logs.add_argument("name", nargs="?", metavar="[HOST:]NAME")
     logs.add_argument("process", nargs="?", help="a process id or node name (default: all)")
     logs.add_argument("-f", "--follow", action="store_true", help="keep printing new lines")
     logs.add_argument("--since", metavar="T",
@@ -63,7 +67,7 @@ def _parser() -> argparse.ArgumentParser:
     logs.add_argument("--level", metavar="L", type=str.upper, choices=LEVELS,
                       help=f"only lines at this ROS level or above ({', '.join(LEVELS)})")
     restart = commands.add_parser("restart", help="restart one process")
-    restart.add_argument("name")
+    restart.add_argument("name", metavar="[HOST:]NAME")
     restart.add_argument("process")
     restart.add_argument("--prefix", metavar="CMD",
                          help="run it under a tool until a restart without one, e.g. "
@@ -74,7 +78,7 @@ def _parser() -> argparse.ArgumentParser:
                          "drops it)")
     wait = commands.add_parser(
         "wait", help="wait until a process is in a state (exit status 0) or time runs out (1)")
-    wait.add_argument("name")
+    wait.add_argument("name", metavar="[HOST:]NAME")
     wait.add_argument("process")
     wait.add_argument("state", help=f"{', '.join(PROCESS_STATES)}, or a lifecycle state: "
                       f"{', '.join(LIFECYCLE_STATES)}")
@@ -157,6 +161,9 @@ def report_end(app: Any, name: str) -> None:
     elif getattr(app.supervisor, "killed_server", False):
         print(f"session {name} did not answer: its server was killed, and its watchdog "
               "killed every process of the launch", file=sys.stderr)
+    elif getattr(app.supervisor, "lost", False) and getattr(app, "session_host", None):
+        print(f"tuilaunch: error: session {name} ended while the link was down (its "
+              f"messages: session.log in {app.supervisor.log_dir} there)", file=sys.stderr)
     elif getattr(app.supervisor, "lost", False):
         log = Path(app.supervisor.log_dir) / "session.log"
         print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "
@@ -172,10 +179,10 @@ def argument_line(arguments: dict[str, str]) -> str:
 LS_ANSWER_TIMEOUT = 3.0  # `ls` asks every session in turn: a stopped one costs this, once
 
 
-def _status(name: str, answer_timeout: float = ANSWER_TIMEOUT,
+def _status(name: str | None, answer_timeout: float = ANSWER_TIMEOUT,
             resources: bool = True) -> dict[str, Any]:
     """`resources`: with each process's CPU, memory and threads (0.3 s more)."""
-    link = Link(name, answer_timeout=answer_timeout)
+    link = open_link(name, answer_timeout=answer_timeout)
     try:
         result: dict[str, Any] = link.request("status", short=True, resources=resources)
         return result
@@ -196,6 +203,10 @@ def _silent_session(name: str, error: SessionError) -> dict[str, Any] | None:
 
 
 def cmd_ls(options: argparse.Namespace) -> int:
+    if options.host is not None:
+        # the remote tuilaunch lists its own sessions (`__ls`), with ls --json's keys
+        sessions: list[dict[str, Any]] = list_remote(check_host(options.host))
+        return _print_sessions(sessions, options.json)
     sessions = []
     for name in session_dir.live_sessions():
         try:
@@ -206,7 +217,11 @@ def cmd_ls(options: argparse.Namespace) -> int:
             silent = _silent_session(name, exc)
             if silent is not None:
                 sessions.append(silent)
-    if options.json:
+    return _print_sessions(sessions, options.json)
+
+
+def _print_sessions(sessions: list[dict[str, Any]], as_json: bool) -> int:
+    if as_json:
         keys = ("name", "file", "arguments", "pid", "started", "log_dir", "counts",
                 "answering")
         print(json.dumps([{k: s[k] for k in keys} for s in sessions], indent=2))
@@ -223,34 +238,58 @@ def cmd_ls(options: argparse.Namespace) -> int:
     _table(rows)
     for s in sessions:
         if not s["answering"]:
-            print(f"tuilaunch: {s['problem']}", file=sys.stderr)
+            problem = s.get("problem") or f"session {s['name']} does not answer"
+            print(f"tuilaunch: {problem}", file=sys.stderr)
     return 0
 
 
 def cmd_attach(options: argparse.Namespace) -> int:
-    name = resolve_name(options.name)
+    where = None if options.name is None else parse_address(options.name)
+    host = None if where is None else where.host
+    if where is None or where.host is None:
+        # here, the session is found first; there, by connecting to it
+        label = resolve_name(None if where is None else where.name)
+    else:
+        label = str(where)
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
-                           hint=f"tuilaunch logs {name} -f, or tuilaunch status {name}")
-    info = _status(name, resources=False)
+                           hint=f"tuilaunch logs {label} -f, or tuilaunch status {label}")
+    remote = None
+    if where is not None and where.host is not None:
+        # one ssh login for both: the status first, then the TUI's subscription
+        remote = open_remote_link(where.host, where.name)
+        link = Link.connected(where.name, remote.sock, remote.hello, where.host)
+        try:
+            info = link.request("status", short=True, resources=False)
+        except BaseException:
+            remote.close()
+            raise
+        link.release()
+    else:
+        info = _status(label, resources=False)
     from ..engine.describe.loader import set_command_line
     from ..tui.app import make_app
 
-    set_command_line(info.get("command") or [info["file"]], info["arguments"])
-    placed = info.get("placement")  # --machines: the same placement as the session's
-    placement = placement_from_text(placed["text"], placed["path"], placed.get("share")) \
-        if placed else None
-    app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
-                   scrollback=options.scrollback, session_name=name, placement=placement)
-    status = app.run() or 0
-    report_end(app, name)
+    try:
+        set_command_line(info.get("command") or [info["file"]], info["arguments"])
+        placed = info.get("placement")  # --machines: the same placement as the session's
+        placement = placement_from_text(placed["text"], placed["path"], placed.get("share")) \
+            if placed else None
+        app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
+                       scrollback=options.scrollback, session_name=info["name"],
+                       session_host=host, remote_link=remote, placement=placement)
+        status = app.run() or 0
+    finally:
+        if remote is not None:
+            remote.close()  # done already unless the TUI never took it
+    report_end(app, label)
     return status
 
 
 def cmd_stop(options: argparse.Namespace) -> int:
-    name = resolve_name(options.name)
-    link = Link(name, timeout=None)
-    pid = int(link.info["pid"])
+    link = open_link(options.name, timeout=None)
+    name = link.label
+    pid = int(link.info["pid"]) if link.host is None else 0  # a pid there is not ours
     try:
         link.request("shutdown", reason="tuilaunch stop")
         link.wait_closed()  # the server closes its connections once every process is gone
@@ -264,7 +303,7 @@ def cmd_stop(options: argparse.Namespace) -> int:
 
 
 def cmd_status(options: argparse.Namespace) -> int:
-    status = _status(resolve_name(options.name))
+    status = _status(options.name)
     if options.json:
         print(json.dumps(status, indent=2))
         return 0
@@ -285,7 +324,7 @@ def cmd_status(options: argparse.Namespace) -> int:
 
 
 def cmd_restart(options: argparse.Namespace) -> int:
-    link = Link(resolve_name(options.name), timeout=None)
+    link = open_link(options.name, timeout=None)
     try:
         extra = {key: value for key, value in (("prefix", options.prefix),
                                                ("log_level", options.log_level))
@@ -306,7 +345,7 @@ def cmd_wait(options: argparse.Namespace) -> int:
     # a server that does not answer is said within the wait's own time (at least 1 s)
     answer = ANSWER_TIMEOUT if options.timeout is None else min(
         ANSWER_TIMEOUT, max(1.0, options.timeout))
-    link = Link(resolve_name(options.name), timeout=None, answer_timeout=answer)
+    link = open_link(options.name, timeout=None, answer_timeout=answer)
     try:
         process = link.request("find", short=True, process=options.process)
         if state in LIFECYCLE_STATES:
@@ -365,10 +404,9 @@ def _wait_lifecycle(link: Link, process: str, state: str, deadline: float | None
 
 
 def cmd_logs(options: argparse.Namespace) -> int:
-    name = resolve_name(options.name)
     since = _parse_since(options.since) if options.since else None
     minimum = LEVELS.index(options.level) if options.level else 0
-    link = Link(name, timeout=None)
+    link = open_link(options.name, timeout=None)
     try:
         status = link.request("status", short=True, resources=False)
         log_dir = Path(status["log_dir"])
@@ -391,7 +429,11 @@ def cmd_logs(options: argparse.Namespace) -> int:
                 return
             out.write(f"[{process}] {text}\n" if prefixed else text + "\n")
 
-        streams = [_tagged(p, read_lines(log_dir / f"{p}.log", offsets[p])) for p in wanted]
+        if link.host is None:
+            streams = [_tagged(p, read_lines(log_dir / f"{p}.log", offsets[p]))
+                       for p in wanted]
+        else:  # the files are on the other machine: its server reads them for us
+            streams = [_tagged(p, _remote_lines(link, p, offsets[p])) for p in wanted]
         for _, process, line in heapq.merge(*streams, key=lambda item: item[0]):
             show(process, line)
         out.flush()
@@ -413,6 +455,20 @@ def cmd_logs(options: argparse.Namespace) -> int:
         return 0
     finally:
         link.close()
+
+
+def _remote_lines(link: Link, process: str, end: int | None) -> Iterator[LogLine]:
+    """A log file on the session's machine, page by page through `read_log`."""
+    start = 0
+    if end is None:
+        end = int(link.request("read_log", short=True, process=process, limit=0)["size"])
+    while start < end:
+        page = link.request("read_log", short=True, process=process, start=start, end=end)
+        for stamp, stream, text in page["lines"]:
+            yield LogLine(float(stamp), str(stream), str(text))
+        if int(page["next"]) <= start:
+            return  # a half-written last line: the events carry it
+        start = int(page["next"])
 
 
 def _tagged(process: str, lines: Iterator[LogLine]) -> Iterator[tuple[float, str, LogLine]]:

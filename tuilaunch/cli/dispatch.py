@@ -65,7 +65,8 @@ def _parser() -> argparse.ArgumentParser:
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
         "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
         "hz NAME TOPIC | echo NAME TOPIC | params NAME NODE --dump/--load FILE | log-level "
-        "NAME NODE LEVEL (tuilaunch COMMAND -h).")
+        "NAME NODE LEVEL (tuilaunch COMMAND -h). On another machine: ls HOST, and HOST:NAME "
+        "for NAME (over ssh).")
     return parser
 
 
@@ -178,6 +179,12 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] in (["__proxy"], ["__ls"]):
+        # hidden: the far end of an ssh link (`ssh HOST tuilaunch __proxy NAME`), not for
+        # people, so not in --help
+        from ..engine.run import proxy
+
+        return proxy.main(argv)
     if is_command(argv):
         from .commands import main as command_main
 

@@ -15,7 +15,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from ..client.link import Link, resolve_name
+from ..client.link import open_link
 from ..engine.run.session_dir import SessionError
 
 SLACK = 30.0
@@ -27,20 +27,20 @@ def add_commands(commands: Any, common: Callable[[argparse.ArgumentParser], None
     """The inspector's sub-commands, on the session commands' parser."""
     topics = commands.add_parser("topics", help="topics, their types, publishers and "
                                  "subscribers (with their processes) and QoS problems")
-    topics.add_argument("name", help="the session")
+    topics.add_argument("name", metavar="[HOST:]NAME", help="the session")
     topics.add_argument("--node", metavar="NODE",
                         help="only this node's topics (full name or process id)")
     topics.add_argument("--json", action="store_true", help="one JSON object")
     topics.set_defaults(handler=cmd_topics)
     hz = commands.add_parser("hz", help="a topic's rate and bandwidth, measured for a while")
-    hz.add_argument("name")
+    hz.add_argument("name", metavar="[HOST:]NAME")
     hz.add_argument("topic")
     hz.add_argument("--window", type=float, default=5.0, metavar="S",
                     help="seconds to measure (default 5)")
     hz.add_argument("--json", action="store_true", help="one JSON object")
     hz.set_defaults(handler=cmd_hz)
     echo = commands.add_parser("echo", help="a topic's messages as YAML")
-    echo.add_argument("name")
+    echo.add_argument("name", metavar="[HOST:]NAME")
     echo.add_argument("topic")
     echo.add_argument("--count", type=int, metavar="N", help="stop after N messages")
     echo.add_argument("--timeout", type=float, metavar="S",
@@ -48,7 +48,7 @@ def add_commands(commands: Any, common: Callable[[argparse.ArgumentParser], None
     echo.set_defaults(handler=cmd_echo)
     params = commands.add_parser("params", help="a node's live parameters as a params file, "
                                  "or such a file loaded into it")
-    params.add_argument("name")
+    params.add_argument("name", metavar="[HOST:]NAME")
     params.add_argument("node", help="full node name or process id")
     what = params.add_mutually_exclusive_group(required=True)
     what.add_argument("--dump", action="store_true",
@@ -56,7 +56,7 @@ def add_commands(commands: Any, common: Callable[[argparse.ArgumentParser], None
     what.add_argument("--load", metavar="FILE", help="set the parameters a params file gives")
     params.set_defaults(handler=cmd_params)
     level = commands.add_parser("log-level", help="set a node's logger level")
-    level.add_argument("name")
+    level.add_argument("name", metavar="[HOST:]NAME")
     level.add_argument("node", help="full node name or process id")
     level.add_argument("level", help="debug, info, warn, error, fatal or unset")
     level.set_defaults(handler=cmd_log_level)
@@ -66,7 +66,7 @@ def add_commands(commands: Any, common: Callable[[argparse.ArgumentParser], None
 
 def ask(name: str, op: str, wait: float = 0.0, **fields: Any) -> Any:
     """One request's result; `wait`: the seconds the work itself takes."""
-    link = Link(resolve_name(name), timeout=wait + SLACK)
+    link = open_link(name, timeout=wait + SLACK)
     try:
         return link.request(op, **fields)
     finally:
@@ -144,7 +144,7 @@ def cmd_hz(options: argparse.Namespace) -> int:
 def cmd_echo(options: argparse.Namespace) -> int:
     if options.count is not None and options.count < 1:
         raise SessionError(f"--count {options.count} is not a positive number")
-    link = Link(resolve_name(options.name), timeout=SLACK)
+    link = open_link(options.name, timeout=SLACK)
     try:
         link.request("subscribe", max_lines=1, kinds=["echo"])  # no output lines wanted
         fields: dict[str, Any] = {"topic": options.topic, "max_per_s": 0}
@@ -201,12 +201,12 @@ def cmd_params(options: argparse.Namespace) -> int:
 
 
 def cmd_log_level(options: argparse.Namespace) -> int:
-    name = resolve_name(options.name)
+    name = options.name
     try:
         ask(name, "log_level", node=options.node, level=options.level)
     except SessionError as exc:
         if "has no logger service" in str(exc):
-            link = Link(name)
+            link = open_link(name)
             try:
                 process = link.request("find", short=True, process=options.node)
             except SessionError:

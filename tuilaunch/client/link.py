@@ -4,12 +4,13 @@ by name; what to say of a server that does not answer."""
 from __future__ import annotations
 
 import socket
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 from ..engine.run import session_dir
 from ..engine.run.protocol import MAX_MESSAGE, decode, encode
+from ..engine.run.remote import open_remote_link, parse_address
 from ..engine.run.session_dir import SessionError
 
 
@@ -62,6 +63,8 @@ class Link:
     def __init__(self, name: str, timeout: float | None = ANSWER_TIMEOUT,
                  answer_timeout: float = ANSWER_TIMEOUT) -> None:
         self.name = name
+        self.host: str | None = None
+        self._on_close: Callable[[], None] | None = None
         self.answer_timeout = answer_timeout
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         self.sock.settimeout(answer_timeout)
@@ -87,6 +90,26 @@ class Link:
             raise SessionError(f"session {name} did not greet")
         self.info: dict[str, Any] = hello["info"]
         self.sock.settimeout(timeout)
+
+    @classmethod
+    def connected(cls, name: str, sock: socket.socket, hello: dict[str, Any], host: str,
+                  timeout: float | None = ANSWER_TIMEOUT,
+                  answer_timeout: float = ANSWER_TIMEOUT,
+                  on_close: Callable[[], None] | None = None) -> Link:
+        """A Link on a socket already connected and greeted: the ssh link to `host`'s
+        session (engine/run/remote.py). `on_close` ends what carries it (ssh)."""
+        self = cls.__new__(cls)
+        self.name = name
+        self.answer_timeout = answer_timeout
+        self.sock = sock
+        self._file = sock.makefile("rb")
+        self._next_id = 0
+        self.pending = []
+        self.info = hello["info"]
+        self.host = host
+        self._on_close = on_close
+        sock.settimeout(timeout)
+        return self
 
     def receive(self) -> dict[str, Any] | None:
         """The next message, or None when the server closed the connection."""
@@ -140,6 +163,31 @@ class Link:
         for _ in self.messages():
             pass
 
+    def release(self) -> None:
+        """Done with the blocking reads; the socket stays open for another client of the
+        same connection (nothing unasked is sent before a subscribe, so none is lost)."""
+        self._file.close()
+
     def close(self) -> None:
         self._file.close()
         self.sock.close()
+        if self._on_close is not None:
+            self._on_close()
+
+    @property
+    def label(self) -> str:
+        """The session's address as the user writes it: NAME, or HOST:NAME."""
+        return self.name if self.host is None else f"{self.host}:{self.name}"
+
+
+def open_link(address: str | None, timeout: float | None = ANSWER_TIMEOUT,
+              answer_timeout: float = ANSWER_TIMEOUT) -> Link:
+    """A Link to `[HOST:]NAME` (None: the only session here); over ssh for a HOST."""
+    if address is None:
+        return Link(resolve_name(None), timeout, answer_timeout)
+    where = parse_address(address)
+    if where.host is None:
+        return Link(resolve_name(where.name), timeout, answer_timeout)
+    remote = open_remote_link(where.host, where.name)
+    return Link.connected(where.name, remote.sock, remote.hello, where.host, timeout,
+                          answer_timeout, on_close=remote.close)

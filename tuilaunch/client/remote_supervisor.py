@@ -3,11 +3,19 @@ by a session server.
 
 The TUI process then never reads a node's pipe: a flood is read, logged and batched by the
 server, and reaches the UI as one message per batch.
+
+A session on another machine (`host`) is reached over ssh (engine/run/remote.py); its log
+files are read through the server (`read_log`). When that link drops, the launch there runs
+on: this client says so, reconnects with backoff (or at once when asked), and then delivers
+what happened meanwhile, from where it left off: the lines from the log files (counted
+from the offsets of its last subscription, so none is seen twice or missed) and the state
+events the server kept, in time order.
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import signal
 import socket
@@ -18,14 +26,23 @@ from typing import Any
 from ..engine.plan.model import Plan, PlanDiff
 from ..engine.plan.session import Session
 from ..engine.run import session_dir
-from ..engine.run.log_reader import tail_lines
-from ..engine.run.output import screen_str
+from ..engine.run.log_reader import LogLine, tail_lines
 from ..engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
+from ..engine.run.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
 from ..engine.run.session_dir import SessionError
 from ..engine.run.supervisor import Event
+from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering
 
 Consumer = Callable[[Event], None]
+
+RETRY_FIRST = 1.0
+"""Seconds before the first try to reconnect a dropped link; doubled after each failure."""
+LINK_INTERVAL = 1.0
+"""Seconds between event batches for a display over an ssh link: its output pane repaints
+once a second anyway (tui PANE_FPS), and every batch costs the link a packet."""
+RETRY_MOST = 15.0
+"""The longest wait between tries: a robot back on the network is found within this."""
 
 
 async def _reply_to(reader: asyncio.StreamReader, request_id: int) -> dict[str, Any]:
@@ -47,8 +64,24 @@ class RemoteSupervisor:
     and recent state events, in time order, for the panes to show first."""
 
     def __init__(self, name: str, session: Session, reader: asyncio.StreamReader,
-                 writer: asyncio.StreamWriter, info: dict[str, Any]) -> None:
+                 writer: asyncio.StreamWriter, info: dict[str, Any], host: str | None = None,
+                 link: RemoteLink | None = None) -> None:
+        """`host` and `link`: a session on another machine, over this ssh link."""
         self.name = name
+        self.host = host
+        self.link = link
+        self.link_lost: str | None = None
+        """While the link to `host` is down: why ("link to HOST lost (reason)")."""
+        self.scrollback = 5000
+        self.max_lines = 0
+        self.interval = 0.0
+        self._early: list[dict[str, Any]] = []  # messages read while awaiting a reply
+        # where this client's view of each log file stands: the size at subscription,
+        # and the lines received (or dropped for it) since
+        self._from: dict[str, int] = {}
+        self._received: dict[str, int] = {}
+        self._last_event = 0.0  # the time of the latest state event received
+        self._retry: asyncio.Event | None = None
         self.session = session
         self.info = info
         self.log_dir = Path(info["log_dir"])
@@ -99,6 +132,70 @@ class RemoteSupervisor:
         self.history = self._replay(result["offsets"], result["recent"], scrollback)
         return self
 
+    @classmethod
+    async def open_remote(cls, host: str, name: str, session: Session, scrollback: int = 5000,
+                          max_lines: int = 0, interval: float = 0.0,
+                          link: RemoteLink | None = None) -> RemoteSupervisor:
+        """The same over an ssh link to `host` (`link`: one already open, else a new one;
+        RemoteError with one line when it cannot be made); the replay is read through the
+        server, the files being over there."""
+        if link is None:
+            link, reader, writer = await open_remote_streams(host, name)
+        else:
+            reader, writer = await link_streams(link)
+        self = cls(name, session, reader, writer, link.hello["info"], host, link)
+        self.scrollback, self.max_lines, self.interval = scrollback, max_lines, interval
+        try:
+            result = await asyncio.wait_for(self._subscribe(), ANSWER_TIMEOUT * 3)
+            self.states = dict(result["states"])
+            self.lifecycle.states.update(result.get("lifecycle") or {})
+            self._adopt(result["arguments"])
+            lines = {}
+            for process, end in result["offsets"].items():
+                page = await self._call("read_log", process=process, end=end,
+                                        limit=scrollback, tail=True)
+                lines[process] = [LogLine(*line) for line in page["lines"]]
+        except (TimeoutError, ProtocolError, ConnectionError) as exc:
+            writer.close()
+            await asyncio.get_running_loop().run_in_executor(None, link.close)
+            raise RemoteError(f"{host}: session {name} did not answer ({exc or 'timeout'})")\
+                from None
+        self.history = merged(lines, result["recent"])
+        self._note_recent(result["recent"])
+        return self
+
+    async def _subscribe(self) -> dict[str, Any]:
+        """Subscribes on the current connection; from here on lines are counted from the
+        log files' sizes it answers with."""
+        # fair: with a screenful a second, a loud node must not hide the others' lines
+        result: dict[str, Any] = await self._call(
+            "subscribe", max_lines=self.max_lines, interval=self.interval, fair=True)
+        self._from = dict(result["offsets"])
+        self._received = {}
+        return result
+
+    async def _call(self, op: str, **fields: Any) -> Any:
+        """A request answered before `run` reads the connection (opening, reconnecting):
+        what the server sends meanwhile is kept for `run`, in order."""
+        self._next_id += 1
+        request_id = self._next_id
+        self._writer.write(encode({"id": request_id, "op": op, **fields}))
+        await self._writer.drain()
+        while True:
+            line = await self._reader.readline()
+            if not line:
+                raise ConnectionError(f"the link closed during {op}")
+            message = decode(line)
+            if message.get("type") == "reply" and message.get("id") == request_id:
+                if not message.get("ok"):
+                    raise SessionError(f"session {self.name}: {message.get('error')}")
+                return message.get("result")
+            self._early.append(message)
+
+    def _note_recent(self, recent: list[dict[str, Any]]) -> None:
+        for data in recent:
+            self._last_event = max(self._last_event, float(data.get("time") or 0.0))
+
     @property
     def plan(self) -> Plan:
         return self.session.plan
@@ -113,17 +210,8 @@ class RemoteSupervisor:
 
     def _replay(self, offsets: dict[str, int], recent: list[dict[str, Any]],
                 scrollback: int) -> list[Event]:
-        timed: list[tuple[float, int, Event]] = []
-        for process, end in offsets.items():
-            for line in tail_lines(self.log_dir / f"{process}.log", end, scrollback):
-                timed.append((line.time, len(timed), Event(
-                    "output", process, stream=line.stream, lines=[screen_str(line.text)],
-                    time=line.time)))
-        for data in recent:
-            event = event_from_dict(data)
-            timed.append((event.time, len(timed), event))
-        timed.sort(key=lambda item: (item[0], item[1]))
-        return _batched([event for _, _, event in timed])
+        return merged({process: tail_lines(self.log_dir / f"{process}.log", end, scrollback)
+                        for process, end in offsets.items()}, recent)
 
     # --- the Supervisor's interface ----------------------------------------------------------
 
@@ -131,49 +219,176 @@ class RemoteSupervisor:
         self.consumers.append(consumer)
 
     async def run(self, keep_alive: bool = True) -> int:
-        """Delivers the server's events until it ends (its status) or this client detaches."""
+        """Delivers the server's events until it ends (its status) or this client detaches;
+        a dropped ssh link is reconnected meanwhile (see the module's docstring)."""
         status = 1
+        self._retry = asyncio.Event()
         try:
             while True:
+                ended = await self._follow()
+                if ended is not None:
+                    status = ended
+                    break
+                if self.detached or self.killed_server:
+                    break
+                if self.host is None or self.link is None:
+                    self.lost = True
+                    self._deliver(Event("log", reason=f"lost the connection to session "
+                                        f"{self.name}", level="ERROR"))
+                    break
+                if not await self._relink():
+                    if self._stopping and not self.lost:
+                        status = 0  # the stop asked for finished while the link was down
+                    break
+        finally:
+            self._fail_replies(f"session {self.name} is gone")
+            self._writer.close()
+            if self.link is not None:
+                await asyncio.get_running_loop().run_in_executor(None, self.link.close)
+        return 0 if self.detached else status
+
+    async def _follow(self) -> int | None:
+        """The server's messages until it ends (its status) or the connection closes."""
+        while True:
+            if self._early:
+                message = self._early.pop(0)
+            else:
                 try:
                     line = await self._reader.readline()
                 except (ConnectionError, ValueError):
                     line = b""
                 if not line:
-                    if not self.detached and not self.killed_server:
-                        self.lost = True
-                        self._deliver(Event("log", reason=f"lost the connection to session "
-                                            f"{self.name}", level="ERROR"))
-                    break
+                    return None
                 try:
                     message = decode(line)
                 except ProtocolError:
                     continue
-                kind = message.get("type")
-                if kind == "events":
-                    self.states.update(message.get("states") or {})
-                    for data in message.get("events") or []:
-                        event = event_from_dict(data)
-                        if event.kind == "relaunched":
-                            self._adopt(dict(item.split(":=", 1) for item in event.lines))
-                        if event.kind == "exited" and event.process and event.code is not None:
-                            self.exit_codes[event.process] = event.code
-                        if event.kind == "lifecycle" and event.process:
-                            self.lifecycle.follow(event.process, event.reason or "")
-                        self._deliver(event)
-                elif kind == "reply":
-                    future = self._replies.pop(message.get("id", -1), None)
-                    if future is not None and not future.done():
-                        future.set_result(message)
-                elif kind == "ended":
-                    status = int(message.get("status") or 0)
-                    break
-        finally:
-            for future in self._replies.values():
-                if not future.done():
-                    future.set_exception(SessionError(f"session {self.name} is gone"))
-            self._writer.close()
-        return 0 if self.detached else status
+            kind = message.get("type")
+            if kind == "events":
+                self._take(message)
+            elif kind == "reply":
+                future = self._replies.pop(message.get("id", -1), None)
+                if future is not None and not future.done():
+                    future.set_result(message)
+            elif kind == "ended":
+                return int(message.get("status") or 0)
+
+    def _take(self, message: dict[str, Any]) -> None:
+        self.states.update(message.get("states") or {})
+        for data in message.get("events") or []:
+            event = event_from_dict(data)
+            if event.kind == "output" and event.process:
+                self._count(event.process, len(event.lines))
+            elif event.kind == "dropped" and event.process:
+                self._count(event.process, event.code or 0)  # in the file, not sent to us
+            else:
+                self._last_event = max(self._last_event, event.time)
+            if event.kind == "relaunched":
+                self._adopt(dict(item.split(":=", 1) for item in event.lines))
+            if event.kind == "exited" and event.process and event.code is not None:
+                self.exit_codes[event.process] = event.code
+            if event.kind == "lifecycle" and event.process:
+                self.lifecycle.follow(event.process, event.reason or "")
+            self._deliver(event)
+
+    def _count(self, process: str, lines: int) -> None:
+        self._received[process] = self._received.get(process, 0) + lines
+
+    def _fail_replies(self, why: str) -> None:
+        for future in self._replies.values():
+            if not future.done():
+                future.set_exception(SessionError(why))
+        self._replies.clear()
+
+    # --- a dropped link ----------------------------------------------------------------------
+
+    def retry_now(self) -> None:
+        """Reconnect at once instead of at the next try (on the loop's thread)."""
+        if self._retry is not None:
+            self._retry.set()
+
+    async def _relink(self) -> bool:
+        """The link to `host` dropped: reconnect with backoff, then deliver what was missed.
+        False when there is nothing to reconnect to (detached, or the session ended)."""
+        assert self.host is not None and self.link is not None and self._retry is not None
+        loop = asyncio.get_running_loop()
+        self._writer.close()
+        why = await loop.run_in_executor(None, self.link.why_lost)
+        self.link_lost = f"link to {self.host} lost ({why})"
+        self._fail_replies(self.link_lost)
+        self._deliver(Event("log", reason=f"{self.link_lost}; session {self.name} runs on "
+                            "there; reconnecting", level="ERROR"))
+        delay = RETRY_FIRST
+        said = ""
+        while not self.detached:
+            self._retry.clear()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._retry.wait(), delay)
+            if self.detached:
+                return False
+            try:
+                link, self._reader, self._writer = await open_remote_streams(
+                    self.host, self.name)
+            except RemoteError as exc:
+                if "no running session" in str(exc):
+                    self.lost = not self._stopping  # unless it was asked to stop
+                    self.link_lost = None
+                    self._deliver(Event("log", reason=f"session {self.name} ended on "
+                                        f"{self.host} while the link was down", level="ERROR"))
+                    return False
+                if str(exc) != said:  # each new reason once, not every try
+                    said = str(exc)
+                    self._deliver(Event("log", reason=f"reconnecting: {exc}", level="WARN"))
+                delay = min(delay * 2, RETRY_MOST)
+                continue
+            old, self.link = self.link, link
+            await loop.run_in_executor(None, old.close)
+            start, received = self._from, self._received
+            try:
+                missed = await asyncio.wait_for(self._missed(), ANSWER_TIMEOUT * 3)
+            except (TimeoutError, ConnectionError, ProtocolError, SessionError) as exc:
+                # the link dropped again before the gap was read: it is read on the next
+                # one, from the same place; what this one sent meanwhile is in that gap
+                self._from, self._received = start, received
+                self._early.clear()
+                self._writer.close()
+                self._deliver(Event("log", reason=f"reconnecting: {exc}", level="WARN"))
+                continue
+            self.link_lost = None
+            self._deliver(Event("log", reason=f"link to {self.host} back: what happened "
+                                "meanwhile follows"))
+            for event in missed:
+                self._deliver(event)
+            return True
+        return False
+
+    async def _missed(self) -> list[Event]:
+        """Subscribes again; the lines each log file got since the last line received (the
+        last `scrollback` of them), and the state events after the last one received."""
+        start, received = self._from, self._received
+        result = await self._subscribe()
+        self.states = dict(result["states"])
+        self.lifecycle.states.update(result.get("lifecycle") or {})
+        self._adopt(result["arguments"])
+        lines: dict[str, list[LogLine]] = {}
+        notes: list[Event] = []
+        for process, end in result["offsets"].items():
+            begin, skip = start.get(process, 0), received.get(process, 0)
+            if end <= begin:
+                continue
+            page = await self._call("read_log", process=process, start=begin, skip=skip,
+                                    end=end, limit=self.scrollback, tail=True)
+            lines[process] = [LogLine(*line) for line in page["lines"]]
+            if page.get("skipped"):
+                notes.append(Event("dropped", process, code=int(page["skipped"])))
+        recent = [data for data in result["recent"]
+                  if float(data.get("time") or 0.0) > self._last_event]
+        self._note_recent(recent)
+        for data in recent:
+            event = event_from_dict(data)
+            if event.kind == "exited" and event.process and event.code is not None:
+                self.exit_codes[event.process] = event.code
+        return notes + merged(lines, recent)
 
     def _deliver(self, event: Event) -> None:
         for consumer in list(self.consumers):
@@ -185,6 +400,8 @@ class RemoteSupervisor:
         return await self._request(op, **fields)
 
     async def _request(self, op: str, **fields: Any) -> Any:
+        if self.link_lost is not None:
+            raise SessionError(f"{self.link_lost}: not sent ({op}); reconnecting")
         self._next_id += 1
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         self._replies[self._next_id] = future
@@ -225,11 +442,18 @@ class RemoteSupervisor:
     async def detach(self) -> None:
         self.detached = True
         self._writer.close()
+        if self._retry is not None:
+            self._retry.set()  # a reconnection waiting for its next try gives up
 
     def kill_all(self) -> None:
         """While a shutdown runs: SIGKILL what is left, now. Otherwise the UI is being torn
         down without a shutdown: a session it started in the foreground (and not told to
         outlive a hang-up) is stopped by its server; others run on."""
+        if self.host is not None:
+            # over there: only the link reaches it, and only "kill now" is ours to send
+            if self._stopping and self.link_lost is None and not self._writer.is_closing():
+                self._writer.write(encode({"id": 1, "op": "kill"}))
+            return
         if self._stopping:
             if not self._send_once({"id": 1, "op": "kill"}):
                 self._kill_server()
@@ -281,16 +505,3 @@ class RemoteLifecycle:
         result = await self.remote.request("transition", process=process,
                                             transition=transition)
         return bool(result.get("done"))
-
-
-def _batched(events: list[Event]) -> list[Event]:
-    """Consecutive output lines of one process and stream as one event."""
-    out: list[Event] = []
-    for event in events:
-        last = out[-1] if out else None
-        if (event.kind == "output" and last is not None and last.kind == "output"
-                and last.process == event.process and last.stream == event.stream):
-            last.lines.append(*event.lines)
-        else:
-            out.append(event)
-    return out

@@ -20,7 +20,8 @@ from textual.containers import Vertical
 from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
-from ..client.remote_supervisor import RemoteSupervisor
+from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
+from ..engine.errors import LaunchError
 from ..engine.launcher import make_supervisor
 from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
@@ -81,6 +82,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 tooltip="Set the selected node's log level"),
         Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
                 "opens it again"),
+        Binding("R", "reconnect", "Reconnect", show=False,
+                tooltip="Reconnect a dropped link to the session's machine now"),
         Binding("question_mark", "help", "Help"),
         Binding("q", "request_quit", "Quit"),
         Binding("ctrl+c", "request_quit", "Quit", show=False, priority=True),
@@ -125,7 +128,20 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         sys.setswitchinterval(0.001)
         self.engine = EngineThread()
         # built on the engine thread, whose loop its asyncio objects belong to
-        if self.session_name is not None:
+        if self.session_host is not None:
+            # the session is on another machine: the protocol crosses an ssh link
+            # sent what the screen can show each second (a pane is shorter than the
+            # screen); what it cannot is counted, and is in the log files over there
+            try:
+                self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
+                    self.session_host, str(self.session_name), self.session,
+                    self.scrollback, max_lines=max(24, self.size.height),
+                    interval=LINK_INTERVAL, link=self.remote_link)).result(timeout=120)
+            except LaunchError as exc:  # the link failed between `attach` and here
+                self.engine.stop()
+                self.exit(2, return_code=2, message=f"tuilaunch attach: error: {exc}")
+                return
+        elif self.session_name is not None:
             remote = self.engine.submit(RemoteSupervisor.open(
                 self.session_name, self.session, self.scrollback,
                 max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)

@@ -13,8 +13,20 @@ class Quitting(SessionLink):
     """Quit, detach, kill now; SIGTERM and SIGHUP. The supervisor worker exits the app once
     the shutdown it asked for is done."""
 
+    def action_reconnect(self) -> None:
+        """R: try the dropped link to the session's machine now, not at the next try."""
+        supervisor = self.supervisor
+        if isinstance(supervisor, RemoteSupervisor) and supervisor.link_lost is not None:
+            self.engine.call(supervisor.retry_now)
+            self.notify(f"reconnecting to {supervisor.host}")
+        else:
+            self.notify("no link is down", severity="information")
+
     def action_request_quit(self) -> None:
         running = self.running()
+        if self.session_host is not None and not self.quitting:
+            self._quit_remote(running)
+            return
         if self.quitting:
             if running and not isinstance(self.screen, ConfirmScreen):
                 self._offer_kill(running)
@@ -28,6 +40,28 @@ class Quitting(SessionLink):
                 self.stop_all_and_exit()
 
         self.push_screen(QuitScreen(running), answered)
+
+    def _quit_remote(self, running: list[str]) -> None:
+        """On another machine's session, quitting leaves it running unless the operator
+        says to stop it: a robot's launch is not stopped by closing a laptop's TUI. With
+        the link down nothing can be asked of it, so it is left as it is."""
+        supervisor = self.supervisor
+        if not running or (isinstance(supervisor, RemoteSupervisor)
+                           and supervisor.link_lost is not None):
+            self.action_detach()
+            return
+
+        def answered(stop: bool | None) -> None:
+            if stop:
+                self.stop_all_and_exit()
+            else:
+                self.action_detach()
+
+        names = ", ".join(running[:8]) + (" ..." if len(running) > 8 else "")
+        self.push_screen(ConfirmScreen(
+            f"{len(running)} processes run on {self.session_host}: {names}\n"
+            "Stop them all, or leave them running there and detach?",
+            "Stop and quit (y)", "Detach (n)"), answered)
 
     async def action_quit(self) -> None:
         self.action_request_quit()

@@ -25,6 +25,7 @@ from ..engine.plan.session import Preview, Session
 from ..engine.ros.bridge import RosBridge
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
+from ..engine.run.remote import RemoteLink
 from ..engine.run.supervisor import Event
 from .output_store import ERROR, INFO, WARN, Line, OutputStore
 from .screens.args_panel import ArgsPanel
@@ -62,7 +63,9 @@ class SessionLink(App[int]):
     def __init__(self, session: Session, log_dir: Path, scrollback: int = 5000,
                  sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
                  pane_fps: float = PANE_FPS, session_name: str | None = None,
-                 owner: bool = False, keep_on_hangup: bool = False) -> None:
+                 owner: bool = False, keep_on_hangup: bool = False,
+                 session_host: str | None = None,
+                 remote_link: RemoteLink | None = None) -> None:
         no_color = os.environ.get("NO_COLOR")
         super().__init__()
         # no animated tab underlines or scrolling: every frame is bytes over ssh
@@ -83,6 +86,8 @@ class SessionLink(App[int]):
         self.supervisor: RosSupervisor | RemoteSupervisor | None = None
         # with a session name the launch runs in a session server and this app is a client
         self.session_name = session_name
+        self.session_host = session_host  # the session runs there, reached over ssh
+        self.remote_link = remote_link  # an ssh link to it already open (attach made it)
         self.owner = owner
         self.keep_on_hangup = keep_on_hangup
         self.detached = False
@@ -274,7 +279,11 @@ class SessionLink(App[int]):
                 else "stopped. "
         name = Path(self.session.plan.file).name
         if self.session_name is not None:
-            name = f"[{self.session_name}] {name}"
+            where = f"{self.session_host}:" if self.session_host else ""
+            name = f"[{where}{self.session_name}] {name}"
+        lost = getattr(self.supervisor, "link_lost", None)
+        if lost:  # what is shown is as it was when the link dropped
+            prefix = f"{lost}; reconnecting (R: now)  {prefix}"
         line = f"{prefix}{name}  {text}  {args}"
         if line != self._status_text:  # an unchanged line is not sent to the terminal again
             self._status_text = line

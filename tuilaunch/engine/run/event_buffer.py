@@ -3,6 +3,8 @@
 Process reading never waits for a display: past `max_lines`, the oldest output lines are
 dropped from the buffer and counted per process. Only the display loses them; the log
 files already hold every line. Other events (started, exited, ...) are never dropped.
+`fair`: the lines dropped are the oldest of the process holding the most, so a display
+sent few lines a second (over an ssh link) still sees every node, not only the loudest.
 """
 
 from __future__ import annotations
@@ -15,8 +17,10 @@ from .supervisor import Event
 
 
 class EventBuffer:
-    def __init__(self, max_lines: int = 20_000) -> None:
+    def __init__(self, max_lines: int = 20_000, fair: bool = False) -> None:
         self.max_lines = max_lines
+        self.fair = fair
+        self._held: dict[str, int] = {}  # lines buffered per process
         # two queues, merged by sequence number on drain, so trimming output is O(1) per
         # event however much other traffic is waiting
         self._output: deque[tuple[int, Event]] = deque()
@@ -35,18 +39,27 @@ class EventBuffer:
                 return
             self._output.append(entry)
             self._lines += len(event.lines)
+            name = event.process or ""
+            self._held[name] = self._held.get(name, 0) + len(event.lines)
             while self._lines > self.max_lines:
-                self._trim_oldest(self._lines - self.max_lines)
+                self._trim(self._lines - self.max_lines)
 
-    def _trim_oldest(self, excess: int) -> None:
-        _, oldest = self._output[0]
+    def _trim(self, excess: int) -> None:
+        index = 0
+        if self.fair:
+            # a scan, but a fair buffer is a small one (a screenful a second)
+            loudest = max(self._held, key=lambda name: self._held[name])
+            index = next(i for i, (_, event) in enumerate(self._output)
+                         if (event.process or "") == loudest)
+        _, oldest = self._output[index]
         cut = min(excess, len(oldest.lines))
         name = oldest.process or ""
         self._dropped[name] = self._dropped.get(name, 0) + cut
         self.total_dropped += cut
         self._lines -= cut
+        self._held[name] -= cut
         if cut == len(oldest.lines):
-            self._output.popleft()
+            del self._output[index]
         else:
             oldest.lines = oldest.lines[cut:]
 
@@ -59,6 +72,7 @@ class EventBuffer:
             self._output = deque()
             self._other = []
             self._lines = 0
+            self._held = {}
             self._dropped = {}
         notices = [Event("dropped", name, code=count,
                          reason=f"{count} lines not shown (all are in the log file)")

@@ -6,6 +6,7 @@ events it receives afterwards neither overlap nor leave a gap.
 
 from __future__ import annotations
 
+import collections
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -80,3 +81,51 @@ def log_size(path: Path) -> int:
         return os.path.getsize(path)
     except OSError:
         return 0
+
+
+READ_LOG_LIMIT = 20_000
+"""The most lines one `read_log` answer carries: a client pages on with `next`."""
+
+
+def read_log(path: Path, start: int = 0, end: int | None = None, skip: int = 0,
+             limit: int = READ_LOG_LIMIT, tail: bool = False) -> dict[str, object]:
+    """The session protocol's `read_log`: the lines between bytes `start` and `end` (the
+    file's size if None), after the first `skip` of them (lines a client already has).
+
+    `tail`: the last `limit` lines of that range (a pane's scrollback), and `skipped`
+    how many before them were left out; otherwise the first `limit`, and `next` is where
+    to ask again. Lines are `[time, stream, text]`."""
+    limit = max(0, min(int(limit), READ_LOG_LIMIT))
+    size = log_size(path)
+    end = size if end is None else min(int(end), size)
+    start = max(0, int(start))
+    if tail and skip <= 0 and start == 0:
+        lines = tail_lines(path, end, limit)  # backwards: a huge log costs only its tail
+        return {"lines": [[line.time, line.stream, line.text] for line in lines],
+                "next": end, "size": size, "skipped": None}
+    kept: collections.deque[list[object]] = collections.deque(maxlen=limit if tail else None)
+    seen = 0
+    position = start
+    try:
+        handle = open(path, "rb")
+    except OSError:
+        return {"lines": [], "next": start, "size": size, "skipped": 0}
+    with handle:
+        handle.seek(start)
+        while position < end:
+            raw = handle.readline(end - position)
+            if not raw.endswith(b"\n"):
+                break  # a half-written last line is the next reader's
+            if not tail and len(kept) >= limit:
+                break
+            position += len(raw)
+            if skip > 0:
+                skip -= 1
+                continue
+            line = parse(raw.decode("utf-8", "replace"))
+            if line is None:
+                continue
+            kept.append([line.time, line.stream, line.text])
+            seen += 1
+    return {"lines": list(kept), "next": position, "size": size,
+            "skipped": seen - len(kept)}

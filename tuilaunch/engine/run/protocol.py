@@ -5,12 +5,19 @@ message longer than MAX_MESSAGE is refused rather than buffered without bound.
 
 Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
   most output lines per batch and the least seconds between batches, for a display that
-  cannot show more; kinds?: only events of these kinds}, status {resources?: false skips
+  cannot show more; kinds?: only events of these kinds; fair?: past max_lines, the lines
+  dropped are the loudest process's, not the oldest}, status {resources?: false skips
   the CPU/memory sampling}, find {process},
   start/stop {process}, restart {process, prefix?: a tool run before the command (`gdb -q
   -ex run --args`) until a restart without one, log_level?: `--ros-args --log-level` kept
   across respawns until a restart changes it ("" drops it)}, run_action {action}, shutdown
-  {reason}, kill (SIGKILL what is left), apply {arguments}, lifecycle {process}; to a
+  {reason}, kill (SIGKILL what is left), apply {arguments}, lifecycle {process}, read_log
+  {process, start, end, skip, limit, tail}: a process's log file read by the server, for a
+  client on another machine (`logs HOST:NAME`, the TUI's replay and what it missed while its
+  link was down): the lines from byte `start` to `end` (default: the file's size) after the
+  first `skip`, the first `limit` (or with `tail` the last), as `{"lines": [[time, stream,
+  text]...], "next": byte to ask again from, "size": the file's size, "skipped": lines left
+  out}`; to a
   machine's share of a placed launch (run/machines_share.py): external_event {process, on:
   start|exit, pid, code},
   share_lines {process, start, end, after}.

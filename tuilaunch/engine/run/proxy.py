@@ -1,6 +1,6 @@
 """The remote end of an ssh link: relays a session's unix socket over stdin and stdout.
 
-`tuilaunch __proxy NAME` (for now `python -m tuilaunch.engine.run.proxy __proxy NAME`) runs
+`tuilaunch __proxy NAME` (hidden from --help) runs
 on the machine of the session, started by `ssh HOST ...`; its stdin and stdout are ssh's
 channel. It relays bytes both ways, in chunks as they come, until the session closes or
 the client goes (ssh's channel closes): it never parses the protocol, so it adds nothing

@@ -45,6 +45,8 @@ SSH_OPTIONS = (
     "-o", "ConnectTimeout=10",
     # a dropped link (cable out, robot off) is noticed within 15 s even when idle
     "-o", "ServerAliveInterval=5", "-o", "ServerAliveCountMax=3",
+    # JSON lines of log output repeat themselves: zlib takes most of the bytes off the link
+    "-o", "Compression=yes",
     "-T",  # the protocol is bytes, not a terminal: no pty, no \r\n translation
 )
 HELLO_TIMEOUT = 30.0
@@ -267,10 +269,13 @@ class RemoteLink:
     def lost_reason(self) -> str:
         """Once the link closed: one line saying why, from ssh's last words, else its exit
         status (a remote end killed outright leaves ssh nothing to say)."""
+        return f"lost the link to {self.host} ({self.why_lost()})"
+
+    def why_lost(self) -> str:
+        """`lost_reason` without the host: ssh's last words or its exit status."""
         code, text = self.stderr.ended()
         lines = [line.strip() for line in text.splitlines() if line.strip()]
-        why = _without_prefix(lines[-1]) if lines else f"ssh exit status {code}"
-        return f"lost the link to {self.host} ({why})"
+        return _without_prefix(lines[-1]) if lines else f"ssh exit status {code}"
 
     @property
     def info(self) -> dict[str, Any]:
@@ -377,9 +382,15 @@ async def open_remote_streams(target: Target, name: str, timeout: float = HELLO_
     socket with the session protocol's line limit. The greeting is `link.hello`."""
     link = await asyncio.get_running_loop().run_in_executor(
         None, lambda: open_remote_link(target, name, timeout, environ))
-    link.sock.setblocking(False)
-    reader, writer = await asyncio.open_connection(sock=link.sock, limit=MAX_MESSAGE)
+    reader, writer = await link_streams(link)
     return link, reader, writer
+
+
+async def link_streams(link: RemoteLink) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
+    """asyncio streams on an open link's socket (one already used by a blocking client
+    that read all it was sent: `attach` asks the status first on the same link)."""
+    link.sock.setblocking(False)
+    return await asyncio.open_connection(sock=link.sock, limit=MAX_MESSAGE)
 
 
 def run_remote(target: Target, args: list[str], timeout: float = HELLO_TIMEOUT,

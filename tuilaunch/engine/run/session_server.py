@@ -31,6 +31,7 @@ from . import session_dir
 from .event_buffer import EventBuffer
 from .events import Event
 from .keyboard import Keyboard
+from .log_reader import READ_LOG_LIMIT, read_log
 from .plugins import Handler
 from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
 from .resource_watch import ResourceWatch, usage_fields
@@ -46,7 +47,8 @@ REACHABLE_CHECK = 1.0
 RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
 BUILTIN_OPS = frozenset({"subscribe", "status", "start", "stop", "restart", "shutdown",
-                         "apply", "kill", "run_action", "find", "watch_resources"})
+                         "apply", "kill", "run_action", "find", "read_log",
+                         "watch_resources"})
 """Requests the server answers itself; plugins add others with `add_handler`."""
 
 
@@ -55,8 +57,8 @@ class ClientQueue:
 
     def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
                  on_overflow: Callable[[], None] | None = None,
-                 kinds: frozenset[str] | None = None) -> None:
-        self.buffer = EventBuffer(max_lines=max_lines)
+                 kinds: frozenset[str] | None = None, fair: bool = False) -> None:
+        self.buffer = EventBuffer(max_lines=max_lines, fair=fair)
         self.kinds = kinds  # only these kinds of events (`tuilaunch echo` wants no output)
         self.on_overflow = on_overflow
         self.interval = interval  # a display asks for no more batches than it draws
@@ -355,7 +357,8 @@ class SessionServer:
                                    CLIENT_MAX_LINES)),
                         max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
                         writer.transport.abort,
-                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None)
+                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None,
+                        bool(message.get("fair")))
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result: dict[str, Any] = {}
@@ -479,6 +482,14 @@ class SessionServer:
             return {}
         if op == "find":
             return self.find_process(str(message.get("process")))
+        if op == "read_log":
+            # by id only: the file is the plan's own, never a path a client names
+            process = self.find_process(str(message.get("process")))
+            end = message.get("end")
+            return read_log(self.log_dir / f"{process}.log", int(message.get("start") or 0),
+                            None if end is None else int(end), int(message.get("skip") or 0),
+                            int(message.get("limit", READ_LOG_LIMIT)),
+                            bool(message.get("tail")))
         handler = self._handlers.get(str(op))
         if handler is not None:
             return await handler(message)

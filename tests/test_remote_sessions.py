@@ -1,0 +1,311 @@
+"""Sessions on another machine through a real sshd: `[HOST:]NAME` addresses for every
+session command, `attach HOST:NAME`, and a dropped link that stops nothing.
+
+"robot1" is an sshd on 127.0.0.1 (tests/sshd.py) with its own session folder; its sessions
+are started as a user logged in there would, and reached only through `ssh robot1`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from tuilaunch.client import remote_supervisor
+from tuilaunch.engine.run.event_buffer import EventBuffer
+from tuilaunch.engine.run.events import Event
+from tuilaunch.tui.app import make_app
+from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.dialogs import ConfirmScreen
+
+from .conftest import run_cli
+from .sshd import Machine, Machines, alive, machines_fixture  # noqa: F401
+from .test_sessions import Terminal
+
+LAUNCH = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(name='ticker', cmd=[
+        'sh', '-c', 'i=0; while true; do i=$((i+1)); echo tick $i; sleep 0.2; done']))
+    sl.add_action(ExecuteProcess(name='quiet', cmd=['sleep', '600']))
+    return sl.launch_description()
+"""
+
+
+def wait_for(check: Callable[[], object], limit: float = 30.0) -> None:
+    end = time.monotonic() + limit
+    while not check():
+        assert time.monotonic() < end, f"condition never held: {check}"
+        time.sleep(0.05)
+
+
+def there(machine: Machine) -> dict[str, str]:
+    """The environment of a user logged in on `machine`."""
+    return {"XDG_RUNTIME_DIR": str(machine.runtime),
+            "ROS_LOG_DIR": str(machine.folder / "roslog")}
+
+
+def start_on(machine: Machine, write, name: str) -> int:
+    """A session started on `machine`; its server's pid."""
+    path = write(LAUNCH)
+    done = run_cli(str(path), "--detach", "--name", name, env=there(machine))
+    assert done.returncode == 0, done.stderr
+    wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=there(machine))
+    assert wait.returncode == 0, wait.stderr
+    status = json.loads(run_cli("status", name, "--json", env=there(machine)).stdout)
+    return int(status["pid"])
+
+
+def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
+    server = start_on(machines["robot1"], write, "far")
+    listed = run_cli("ls", "robot1", "--json")
+    assert listed.returncode == 0, listed.stderr
+    assert [s["name"] for s in json.loads(listed.stdout)] == ["far"]
+    # not listed here: the session is robot1's
+    assert "far" not in run_cli("ls").stdout
+
+    status = run_cli("status", "robot1:far", "--json")
+    assert status.returncode == 0, status.stderr
+    states = {p["id"]: p["state"] for p in json.loads(status.stdout)["processes"]}
+    assert states == {"ticker-1": "running", "quiet-2": "running"}
+
+    # the ROS inspector's commands too (no ROS node runs here: no topic of ours)
+    topics = run_cli("topics", "robot1:far", "--json")
+    assert topics.returncode == 0, topics.stderr
+    assert isinstance(json.loads(topics.stdout), list | dict)
+
+    wait_for(lambda: "tick 3\n" in run_cli("logs", "robot1:far", "ticker-1").stdout)
+    logs = run_cli("logs", "robot1:far", "ticker-1").stdout.splitlines()
+    assert logs[:3] == ["tick 1", "tick 2", "tick 3"]
+    every = run_cli("logs", "robot1:far").stdout
+    assert "[ticker-1] tick 1" in every
+
+    restarted = run_cli("restart", "robot1:far", "ticker")
+    assert restarted.returncode == 0, restarted.stderr
+    assert "ticker-1: running" in restarted.stdout
+    assert run_cli("wait", "robot1:far", "quiet-2", "running", "--timeout", "30")\
+        .returncode == 0
+
+    stopped = run_cli("stop", "robot1:far")
+    assert stopped.returncode == 0, stopped.stderr
+    assert "session robot1:far stopped" in stopped.stdout
+    wait_for(lambda: not alive(server))
+    # nothing of the launch is left over there: no node, no server, no proxy
+    wait_for(lambda: running_on(machines["robot1"]) == [])
+    assert json.loads(run_cli("ls", "robot1", "--json").stdout) == []
+
+
+def test_wait_through_the_link_times_out_with_the_state(machines: Machines, write):
+    start_on(machines["robot1"], write, "far")
+    done = run_cli("wait", "robot1:far", "ticker-1", "exited", "--timeout", "1")
+    assert done.returncode == 1
+    assert "ticker-1 is running, not exited" in done.stderr
+
+
+def test_remote_failures_are_one_line_naming_the_host(machines: Machines, write, tmp_path):
+    start_on(machines["robot1"], write, "far")
+    unknown = run_cli("status", "robot1:nothere")
+    assert unknown.returncode == 2
+    assert "robot1: no running session named nothere" in unknown.stderr
+    assert "Traceback" not in unknown.stderr
+
+    # a machine nobody listens on
+    config = tmp_path / "ssh" / "ssh_config"
+    config.write_text(config.read_text() + machines.host_entry("gone", 1))
+    unreachable = run_cli("ls", "gone")
+    assert unreachable.returncode == 2
+    assert "cannot reach gone" in unreachable.stderr.splitlines()[0]
+
+    # a key robot1 does not accept
+    from .sshd import keygen
+
+    other = tmp_path / "other_key"
+    keygen(other)
+    config.write_text(config.read_text() + machines.host_entry(
+        "stranger", machines["robot1"].port, other))
+    refused = run_cli("status", "stranger:far")
+    assert refused.returncode == 2
+    assert "stranger refused the login" in refused.stderr.splitlines()[0]
+
+    missing = run_cli("logs", "robot1:far", env={"TUILAUNCH_REMOTE": "/nonexistent/tuilaunch"})
+    assert missing.returncode == 2
+    assert "robot1: tuilaunch not found there" in missing.stderr.splitlines()[0]
+    for done in (unknown, unreachable, refused, missing):
+        assert "Traceback" not in done.stderr
+
+
+def running_on(machine: Machine) -> list[int]:
+    """Every live process started under `machine` (its session folder in its environment)."""
+    marker = f"XDG_RUNTIME_DIR={machine.runtime}".encode()
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            environ = (entry / "environ").read_bytes()
+        except OSError:
+            continue
+        if marker in environ.split(b"\0") and alive(int(entry.name)):
+            found.append(int(entry.name))
+    return found
+
+
+def proxies_on(machine: Machine) -> list[int]:
+    """The `__proxy` processes under `machine` (the far end of each ssh link)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            argv = (entry / "cmdline").read_bytes().split(b"\0")
+            environ = (entry / "environ").read_bytes()
+        except OSError:
+            continue
+        if b"__proxy" in argv and str(machine.runtime).encode() in environ:
+            found.append(int(entry.name))
+    return [pid for pid in found if alive(pid)]
+
+
+def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, monkeypatch):
+    """The TUI here, the launch on robot1: the link dropped says so, stops nothing, and
+    once back shows what happened meanwhile, nothing twice and nothing missed."""
+    robot = machines["robot1"]
+    server = start_on(robot, write, "far")
+    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    before = {p["id"]: p["pid"] for p in status["processes"]}
+    # reconnect only when asked (R), so what happens meanwhile surely happens meanwhile
+    monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)
+
+    def ticks(app) -> list[str]:
+        return [line.text for line in app.store.lines(View("ticker-1"))
+                if line.text.startswith("tick")]
+
+    async def until(pilot, check: Callable[[], object], limit: float = 60.0) -> None:
+        end = time.monotonic() + limit
+        while not check():
+            assert time.monotonic() < end, f"condition never held: {check}"
+            await pilot.pause(0.05)
+
+    async def attached() -> None:
+        app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                       session_name="far", session_host="robot1")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await until(pilot, lambda: len(ticks(app)) >= 3)
+            assert "[robot1:far]" in str(app.status_bar.render())
+            for pid in proxies_on(robot):
+                os.kill(pid, signal.SIGKILL)  # the link dies; ssh ends with it
+            await until(pilot, lambda: "link to robot1 lost" in str(app.status_bar.render()))
+            seen = len(ticks(app))
+            # meanwhile, over there: lines go on, and another operator restarts a node
+            restarted = run_cli("restart", "robot1:far", "quiet")
+            assert restarted.returncode == 0, restarted.stderr
+            await pilot.pause(1.0)
+            assert len(ticks(app)) == seen  # nothing arrives while the link is down
+            await pilot.press("R")
+            await until(pilot, lambda: "link to robot1 lost" not in str(
+                app.status_bar.render()) and len(ticks(app)) > seen + 5)
+            shown = ticks(app)
+            assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
+            quiet = [line.text for line in app.store.lines(View("quiet-2"))]
+            assert sum("process started with pid" in t for t in quiet) == 2
+            assert app.supervisor is not None
+            assert app.supervisor.states["quiet-2"] == "running"
+            # new lines keep coming on the new link
+            now = len(ticks(app))
+            await until(pilot, lambda: len(ticks(app)) > now + 3)
+            shown = ticks(app)
+            assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
+            # the ssh client killed this time, and no R: it reconnects by itself
+            monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 1.0)
+            assert app.supervisor.link is not None
+            app.supervisor.link.process.kill()
+            await until(pilot, lambda: "link to robot1 lost" in str(app.status_bar.render()))
+            seen = len(ticks(app))
+            await until(pilot, lambda: "link to robot1 lost" not in str(
+                app.status_bar.render()) and len(ticks(app)) > seen + 3)
+            shown = ticks(app)
+            assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
+            # quitting asks; "n" leaves the launch running there
+            await pilot.press("q")
+            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+            await pilot.press("n")
+            await until(pilot, lambda: app.detached)
+        assert app.detached
+
+    asyncio.run(attached())
+    after = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    assert after["pid"] == server
+    assert {p["id"]: p["state"] for p in after["processes"]} == {
+        "ticker-1": "running", "quiet-2": "running"}
+    assert {p["id"]: p["pid"] for p in after["processes"]}["ticker-1"] == before["ticker-1"]
+    assert run_cli("stop", "robot1:far").returncode == 0
+    wait_for(lambda: not alive(server))
+    assert proxies_on(robot) == []
+
+
+def test_attach_on_a_terminal_and_logs_follow_through_the_link(machines: Machines, write):
+    server = start_on(machines["robot1"], write, "far")
+    terminal = Terminal("attach", "robot1:far")
+    try:
+        terminal.read_until(b"[robot1:far]")  # the status line names the session's machine
+        terminal.read_until(b"tick")  # the remote node's output, on this screen
+        os.write(terminal.master, b"d")
+        assert terminal.wait_exit() == 0
+        assert b"detached; session robot1:far runs on" in terminal.screen
+    finally:
+        terminal.close()
+    assert alive(server)
+
+    follow = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", "robot1:far",
+                               "ticker-1", "-f"], stdout=subprocess.PIPE, text=True,
+                              start_new_session=True)
+    try:
+        assert follow.stdout is not None
+        lines = []
+        for line in follow.stdout:  # the file's lines, then the live ones, no gap
+            lines.append(line.rstrip("\n"))
+            if len(lines) >= 40:
+                break
+        assert lines == [f"tick {i}" for i in range(1, 41)]
+    finally:
+        os.killpg(follow.pid, signal.SIGTERM)
+        follow.wait()
+    table = run_cli("ls", "robot1")
+    assert table.returncode == 0 and "far" in table.stdout and "2/2" in table.stdout
+
+
+def test_a_tui_whose_link_fails_before_it_mounts_exits_with_the_reason(machines, write,
+                                                                       tmp_path):
+    app = make_app(str(write(LAUNCH)), {}, tmp_path, session_name="nothere",
+                   session_host="robot1")
+
+    async def attach() -> None:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.pause(0.1)
+
+    asyncio.run(attach())
+    assert app.return_code == 2
+    assert app.supervisor is None
+
+
+def test_a_fair_buffer_drops_the_loudest_process_lines_not_the_oldest():
+    """A display sent a screenful a second (over a link) still sees a quiet node's line
+    beside a flood; the unfair buffer (a local display's) keeps only the newest."""
+    for fair, quiet_kept in ((True, ["hello"]), (False, [])):
+        buffer = EventBuffer(max_lines=10, fair=fair)
+        buffer(Event("output", "quiet", lines=["hello"]))
+        for i in range(50):
+            buffer(Event("output", "loud", lines=[f"x{i}"]))
+        events = buffer.drain()
+        kept = {name: [text for e in events if e.kind == "output" and e.process == name
+                       for text in e.lines] for name in ("quiet", "loud")}
+        assert kept["quiet"] == quiet_kept
+        assert kept["loud"] == [f"x{i}" for i in range(50 - 10 + len(quiet_kept), 50)]
+        dropped = {e.process: e.code for e in events if e.kind == "dropped"}
+        assert dropped.get("loud") == 40 + len(quiet_kept)
