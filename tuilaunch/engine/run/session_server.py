@@ -2,25 +2,23 @@
 
 `python -m tuilaunch.engine.server_main NAME FILE LOG_DIR ARGUMENTS_JSON` is started by
 the command line in its own session (no terminal: a dropped ssh link never reaches it). The
-TUI, `tuilaunch status/logs/wait/...` are clients. Each subscribed client has a bounded queue:
-past its limit, output lines are dropped for that client only (with a count), and a client
-that stops reading state changes altogether is disconnected, so a stalled or dead client
-never holds up the supervisor. The log files keep every line; a client that subscribes late
-gets, with the states, the log files' sizes at that instant, and reads what came before
-from the files: nothing is missed and nothing is seen twice.
+TUI, `tuilaunch status/logs/wait/...` are clients. The log files keep every line; a client
+that subscribes late gets, with the states, the log files' sizes at that instant, and reads
+what came before from the files: nothing is missed and nothing is seen twice.
+
+Here: the coordinator (status, the requests it answers, argument edits). The connections
+and their bounded queues are in run/clients.py; the socket, lock and info files, kept
+reachable, in run/session_socket.py.
 """
 
 from __future__ import annotations
 
 import asyncio
 import collections
-import itertools
 import os
 import signal
-import socket
-import struct
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -28,60 +26,28 @@ from ..describe.loader import set_command_line
 from ..errors import LaunchError
 from ..plan.session import Session
 from . import session_dir
-from .event_buffer import EventBuffer
+from .clients import CLIENT_MAX_EVENTS as CLIENT_MAX_EVENTS
+from .clients import CLIENT_MAX_LINES as CLIENT_MAX_LINES
+from .clients import ClientHub
+from .clients import ClientQueue as ClientQueue
+from .clients import op_name as op_name
 from .events import Event
 from .keyboard import Keyboard
 from .log_reader import READ_LOG_LIMIT, read_log
 from .plugins import Handler
-from .protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_to_dict
+from .protocol import event_to_dict
 from .resource_watch import ResourceWatch, usage_fields
 from .resources import Usage
+from .session_socket import REACHABLE_CHECK as REACHABLE_CHECK
+from .session_socket import SessionSocket
 from .supervisor import Supervisor
 
-CLIENT_MAX_LINES = 20_000
-"""Output lines queued per client before the oldest are dropped for that client."""
-CLIENT_MAX_EVENTS = 10_000
-"""State events queued for a client that reads nothing; past this it is disconnected."""
-REACHABLE_CHECK = 1.0
-"""Seconds between checks that the session's socket is still where clients look."""
 RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
 BUILTIN_OPS = frozenset({"subscribe", "status", "start", "stop", "restart", "shutdown",
                          "apply", "kill", "run_action", "find", "read_log",
                          "watch_resources"})
 """Requests the server answers itself; plugins add others with `add_handler`."""
-
-
-class ClientQueue:
-    """One subscriber's bounded queue, drained by its own writer task."""
-
-    def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
-                 on_overflow: Callable[[], None] | None = None,
-                 kinds: frozenset[str] | None = None, fair: bool = False) -> None:
-        self.buffer = EventBuffer(max_lines=max_lines, fair=fair)
-        self.kinds = kinds  # only these kinds of events (`tuilaunch echo` wants no output)
-        self.on_overflow = on_overflow
-        self.interval = interval  # a display asks for no more batches than it draws
-        self.events = 0
-        self.ready = asyncio.Event()
-        self.overflowed = False
-
-    def __call__(self, event: Event) -> None:
-        if self.kinds is not None and event.kind not in self.kinds:
-            return
-        if event.kind != "output":
-            self.events += 1
-            if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
-                self.overflowed = True
-                if self.on_overflow is not None:
-                    self.on_overflow()  # its writer may be stuck; cut it loose now
-        self.buffer(event)
-        self.ready.set()
-
-    def take(self) -> list[Event]:
-        self.ready.clear()
-        self.events = 0
-        return self.buffer.drain()
 
 
 class SessionServer:
@@ -99,8 +65,9 @@ class SessionServer:
             sigkill_timeout=sigkill_timeout)
         self.supervisor.subscribe(self._on_event)
         self._handlers: dict[str, Handler] = {}
-        self._client_ids = itertools.count(1)
-        self.clients: dict[int, ClientQueue] = {}  # subscribed clients' queues, by client id
+        self.hub = ClientHub(self.info, self._snapshot, self._perform,
+                             lambda: self.supervisor.states, self._client_gone)
+        self.socket = SessionSocket(name, self.hub.serve, self.info, self._log)
         self.resources = ResourceWatch(self._running_pids, self.send)
         self.keyboard = Keyboard(self.supervisor, self.find_process)
         for op, handler in self.keyboard.handlers().items():
@@ -113,17 +80,7 @@ class SessionServer:
         self.pids: dict[str, int] = {}
         self.details: dict[str, str] = {}
         self.recent: collections.deque[Event] = collections.deque(maxlen=RECENT_EVENTS)
-        self.queues: set[ClientQueue] = set()
-        self.writers: set[asyncio.StreamWriter] = set()
         self.apply_lock = asyncio.Lock()  # argument edits from several clients, one at a time
-        self.dropped_clients = 0
-        self.ended = False  # the supervisor's run is over; writers send "ended" and stop
-        self.status_code = 0
-        self._tasks: set[asyncio.Task[Any]] = set()
-        self._server: asyncio.AbstractServer | None = None
-        self._bound: tuple[int, int] | None = None  # the socket file we listen on
-        self._bound_path: Path | None = None
-        self._lock = -1  # the descriptor holding `<name>.lock`
 
     def add_handler(self, op: str, handler: Handler) -> None:
         """Answers the clients' requests `{"op": op, ...}` with `await handler(message)`.
@@ -139,6 +96,33 @@ class SessionServer:
         """The requests added with `add_handler`, by op."""
         return dict(self._handlers)
 
+    @property
+    def clients(self) -> dict[int, ClientQueue]:
+        """Subscribed clients' queues, by client id."""
+        return self.hub.clients
+
+    @property
+    def queues(self) -> set[ClientQueue]:
+        return self.hub.queues
+
+    @property
+    def writers(self) -> set[asyncio.StreamWriter]:
+        return self.hub.writers
+
+    @property
+    def dropped_clients(self) -> int:
+        """Clients cut loose because they stopped reading."""
+        return self.hub.dropped_clients
+
+    @property
+    def ended(self) -> bool:
+        """The supervisor's run is over; writers send "ended" and stop."""
+        return self.hub.ended
+
+    @property
+    def status_code(self) -> int:
+        return self.hub.status_code
+
     # --- the supervisor's events -------------------------------------------------------------
 
     def _on_event(self, event: Event) -> None:
@@ -149,23 +133,18 @@ class SessionServer:
                     self.pids[event.process] = event.pid
                 if event.reason is not None and event.kind != "log":
                     self.details[event.process] = event.reason
-        for queue in list(self.queues):
-            queue(event)
+        self.hub.broadcast(event)
 
     def send(self, event: Event, client: int | None = None) -> None:
         """An event for one subscribed client (by id) or all, neither logged nor kept for
         late clients: the inspector's streams (run/plugins.py `Clients`)."""
         if client is None:
-            for queue in list(self.queues):
-                queue(event)
-            return
-        addressed = self.clients.get(client)
-        if addressed is not None and addressed in self.queues:
-            addressed(event)
+            self.hub.broadcast(event)
+        else:
+            self.hub.send(event, client)
 
     def subscribed(self, client: int) -> bool:
-        queue = self.clients.get(client)
-        return queue is not None and queue in self.queues
+        return self.hub.subscribed(client)
 
     def _running_pids(self) -> dict[str, int]:
         states = self.supervisor.states
@@ -173,7 +152,7 @@ class SessionServer:
                 if states.get(process) == "running"}
 
     def _client_gone(self, client: int) -> None:
-        self.clients.pop(client, None)
+        self.keyboard.release(client)  # a client that is gone types no more
         self.resources.forget(client)
         for plugin in self.supervisor.plugins:
             try:
@@ -225,166 +204,40 @@ class SessionServer:
     # --- serving ---------------------------------------------------------------------------
 
     async def serve(self) -> int:
-        self._lock = session_dir.claim(self.name)  # held until this process ends
-        if session_dir.is_alive(self.name):
-            os.close(self._lock)
-            raise session_dir.SessionError(f"a session named {self.name} is already running",
-                                           hint="choose another --name")
-        await self._bind()
+        self.socket.claim()
+        await self.socket.bind()
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
             loop.add_signal_handler(sig, self._signalled, sig)
         # no terminal: a SIGHUP can only come from someone who means it as "keep going"
         loop.add_signal_handler(signal.SIGHUP, lambda: None)
-        keeper = asyncio.ensure_future(self._stay_reachable())
+        keeper = asyncio.ensure_future(self.socket.stay_reachable())
         try:
             status = await self.supervisor.run(keep_alive=True)
         finally:
             keeper.cancel()
             self.resources.close()
-            if self._server is not None:
-                self._server.close()
-            if self._owns_name():  # never the files of a later session given our name
-                session_dir.remove(self.name)
-        self.status_code = status
-        self.ended = True
-        for queue in list(self.queues):
-            queue.ready.set()  # writers flush what is left, then send "ended"
-        if self._tasks:  # a client that stopped reading must not keep the server alive
-            await asyncio.wait([*self._tasks], timeout=5.0)
-        for writer in list(self.writers):
-            writer.close()
+            self.socket.close()
+        await self.hub.end(status)
         return status
-
-    async def _bind(self) -> None:
-        """Listens on the session's socket path (anew: the old socket, if any, is closed)."""
-        if self._server is not None:
-            self._server.close()
-            self._server = None
-        path = session_dir.socket_path(self.name)
-        old = self._bound_path
-        if old is not None and old.parent != path.parent and _identity_or_none(old) == self._bound:
-            # the folder moved ($XDG_RUNTIME_DIR came back): no stale files left behind
-            for suffix in (".sock", ".json", ".lock"):
-                old.with_suffix(suffix).unlink(missing_ok=True)
-        path.unlink(missing_ok=True)
-        old_umask = os.umask(0o177)  # the socket is created 0600, never briefly wider
-        try:
-            self._server = await asyncio.start_unix_server(self._client, path=str(path),
-                                                           limit=MAX_MESSAGE)
-        finally:
-            os.umask(old_umask)
-        os.chmod(path, 0o600)
-        self._bound = _identity(path)
-        self._bound_path = path
-        session_dir.write_info(self.name, self.info())
-
-    def _owns_name(self) -> bool:
-        try:
-            lock_path = session_dir.session_root() / f"{self.name}.lock"
-            return _identity(lock_path) == _identity_fd(self._lock)
-        except (OSError, LaunchError):
-            return False
-
-    async def _stay_reachable(self) -> None:
-        """Puts the session's files back when someone removed them: logind removes
-        $XDG_RUNTIME_DIR when the user's last login ends (the ssh logout after --detach),
-        a tmp cleaner or an `rm` removes a socket. Without this, the launch would run on
-        with no way to attach, stop or even list it. One stat a second is the whole cost."""
-        warned = False
-        while True:
-            await asyncio.sleep(REACHABLE_CHECK)
-            try:
-                if not self._owns_name():
-                    try:
-                        lock = session_dir.claim(self.name)
-                    except session_dir.SessionError:
-                        continue  # a newer session took the name; it keeps it
-                    os.close(self._lock)
-                    self._lock = lock
-                if _identity_or_none(
-                        session_dir.socket_path(self.name)) != self._bound:
-                    await self._bind()
-                    self._log(f"session {self.name}: its socket was removed; "
-                              f"listening again at {session_dir.socket_path(self.name)}")
-                warned = False
-            except (OSError, LaunchError) as exc:
-                if not warned:  # e.g. the folder cannot be made; try again, say it once
-                    self._log(f"session {self.name}: cannot put its socket back: {exc}", "ERROR")
-                    warned = True
 
     def _log(self, text: str, level: str = "WARN") -> None:
         self.supervisor.log(text, level)
 
     def _signalled(self, sig: signal.Signals) -> None:
-        self._spawn(self.supervisor.shutdown(f"received {sig.name}"))
+        self.hub.spawn(self.supervisor.shutdown(f"received {sig.name}"))
 
-    def _spawn(self, coroutine: Any) -> asyncio.Task[Any]:
-        task = asyncio.ensure_future(coroutine)
-        self._tasks.add(task)
-        task.add_done_callback(self._tasks.discard)
-        return task
-
-    async def _client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        sock = writer.get_extra_info("socket")
-        if sock is not None and not _same_user(sock):
-            writer.close()
-            return
-        self.writers.add(writer)
-        lock = asyncio.Lock()
-        queue: ClientQueue | None = None
-        client = next(self._client_ids)
-        try:
-            await _send(writer, lock, {"type": "hello", "info": self.info()})
-            while True:
-                try:
-                    line = await reader.readline()
-                except (ValueError, ConnectionError):
-                    return  # longer than MAX_MESSAGE, or the peer vanished
-                if not line:
-                    return
-                try:
-                    message = decode(line)
-                except ProtocolError as exc:
-                    await _send(writer, lock, {"type": "reply", "id": None, "ok": False,
-                                               "error": str(exc)})
-                    continue
-                message["client"] = client  # set here: a client cannot speak for another
-                if message.get("op") == "subscribe" and queue is None:
-                    kinds = message.get("kinds")
-                    queue = ClientQueue(
-                        max(1, min(int(message.get("max_lines") or CLIENT_MAX_LINES),
-                                   CLIENT_MAX_LINES)),
-                        max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
-                        writer.transport.abort,
-                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None,
-                        bool(message.get("fair")))
-                    # states and file sizes at the same instant as the subscription: the
-                    # client reads the files up to these sizes, then gets events from here
-                    result: dict[str, Any] = {}
-                    for plugin in self.supervisor.plugins:
-                        result.update(plugin.snapshot())
-                    result.update({"states": dict(self.supervisor.states),
-                                   "offsets": self._log_sizes(),
-                                   "recent": [event_to_dict(e) for e in self.recent],
-                                   "arguments": self.session.arguments})
-                    self.queues.add(queue)
-                    self.clients[client] = queue
-                    await _send(writer, lock, {"type": "reply", "id": message.get("id"),
-                                               "ok": True, "result": result})
-                    self._spawn(self._pump(queue, writer, lock))
-                    continue
-                self._spawn(self._answer(message, writer, lock))
-        except (ConnectionError, OSError):
-            return
-        finally:
-            self.keyboard.release(client)  # a client that is gone types no more
-            if queue is not None:
-                self.queues.discard(queue)
-                queue.ready.set()
-            self._client_gone(client)
-            self.writers.discard(writer)
-            writer.close()
+    def _snapshot(self) -> dict[str, Any]:
+        """What a client gets with its subscription: the plugins' snapshots, the states
+        and the log files' sizes at that instant, the recent events, the arguments."""
+        result: dict[str, Any] = {}
+        for plugin in self.supervisor.plugins:
+            result.update(plugin.snapshot())
+        result.update({"states": dict(self.supervisor.states),
+                       "offsets": self._log_sizes(),
+                       "recent": [event_to_dict(e) for e in self.recent],
+                       "arguments": self.session.arguments})
+        return result
 
     def _log_sizes(self) -> dict[str, int]:
         sizes = {}
@@ -394,54 +247,6 @@ class SessionServer:
             except OSError:
                 continue
         return sizes
-
-    async def _pump(self, queue: ClientQueue, writer: asyncio.StreamWriter,
-                    lock: asyncio.Lock) -> None:
-        """Sends a client its queued events, one batch per round trip of the socket."""
-        try:
-            while queue in self.queues and not self.ended:
-                await queue.ready.wait()
-                if queue.overflowed:
-                    self.dropped_clients += 1
-                    break
-                await self._send_events(queue, writer, lock)
-                if queue.interval:
-                    await asyncio.sleep(queue.interval)
-            if self.ended:
-                await self._send_events(queue, writer, lock)
-                await _send(writer, lock, {"type": "ended", "status": self.status_code})
-        except (ConnectionError, OSError):
-            pass
-        finally:
-            self.queues.discard(queue)
-            writer.close()
-
-    async def _send_events(self, queue: ClientQueue, writer: asyncio.StreamWriter,
-                           lock: asyncio.Lock) -> None:
-        events = queue.take()
-        if not events:
-            return
-        states = self.supervisor.states
-        touched = {e.process: states[e.process] for e in events
-                   if e.process is not None and e.process in states}
-        await _send(writer, lock, {"type": "events", "states": touched,
-                                   "events": [event_to_dict(e) for e in events]})
-
-    async def _answer(self, message: dict[str, Any], writer: asyncio.StreamWriter,
-                      lock: asyncio.Lock) -> None:
-        request_id = message.get("id")
-        try:
-            result = await self._perform(message)
-            reply = {"type": "reply", "id": request_id, "ok": True, "result": result}
-        except (LaunchError, TypeError, ValueError) as exc:
-            reply = {"type": "reply", "id": request_id, "ok": False, "error": str(exc)}
-        except Exception as exc:  # one bad request must never take the session down
-            reply = {"type": "reply", "id": request_id, "ok": False,
-                     "error": f"{op_name(message)} failed: {type(exc).__name__}: {exc}"}
-        try:
-            await _send(writer, lock, reply)
-        except (ConnectionError, OSError):
-            pass  # the asker is gone; what it asked for was done all the same
 
     async def _perform(self, message: dict[str, Any]) -> Any:
         op = message.get("op")
@@ -530,38 +335,3 @@ class SessionServer:
         self.supervisor.emit(Event("relaunched", reason=None, lines=[
             f"{k}:={v}" for k, v in self.session.arguments.items()]))
 
-
-def op_name(message: dict[str, Any]) -> str:
-    return str(message.get("op"))
-
-
-async def _send(writer: asyncio.StreamWriter, lock: asyncio.Lock, message: dict[str, Any]) -> None:
-    async with lock:  # replies and event batches never interleave inside a line
-        writer.write(encode(message))
-        await writer.drain()
-
-
-def _identity(path: Path) -> tuple[int, int]:
-    info = os.stat(path)
-    return info.st_dev, info.st_ino
-
-
-def _identity_or_none(path: Path) -> tuple[int, int] | None:
-    try:
-        return _identity(path)
-    except FileNotFoundError:
-        return None
-
-
-def _identity_fd(fd: int) -> tuple[int, int]:
-    info = os.fstat(fd)
-    return info.st_dev, info.st_ino
-
-
-def _same_user(sock: socket.socket) -> bool:
-    try:
-        raw = sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
-    except (OSError, AttributeError):
-        return False
-    _, uid, _ = struct.unpack("3i", raw)
-    return uid == os.getuid()
