@@ -226,10 +226,10 @@ async def test_a_restarted_or_respawned_container_gets_its_components_back(
         assert await two_loaded() == {"/talker_c", "/listener_c"}
         await supervisor.restart(box.id)
         assert await two_loaded() == {"/talker_c", "/listener_c"}
-        pid = supervisor._running[box.id].process.pid
+        pid = supervisor.running[box.id].process.pid
         os.killpg(pid, signal.SIGKILL)  # a crash: respawn=True brings it back
         assert await two_loaded() == {"/talker_c", "/listener_c"}
-        assert supervisor._retries[box.id] == 1
+        assert supervisor.retries[box.id] == 1
         results = supervisor.components.results
         assert results["box-1.1"]["unique_id"] == 1  # a fresh container numbers from 1
     finally:

@@ -68,7 +68,7 @@ def row_text(app: TuiLaunchApp, ref: str) -> str:
 
 def pids(app: TuiLaunchApp) -> dict[str, int]:
     assert app.supervisor is not None
-    return {pid: r.process.pid for pid, r in app.supervisor._running.items()}
+    return {pid: r.process.pid for pid, r in app.supervisor.running.items()}
 
 
 async def test_select_a_node_see_its_output_stop_restart_and_search(tmp_path):

@@ -35,8 +35,10 @@ class SupervisorCore:
         nodes, components. engine/launcher.py makes a supervisor with the ROS ones."""
         self.plan = plan
         self.plugins: list[SupervisorPlugin] = []
-        self._action_runners: dict[str, ActionRunner] = {}
-        self._detached_actions: set[str] = set()
+        self.action_runners: dict[str, ActionRunner] = {}
+        """The plugins' performers of action kinds `run` does not know, by kind."""
+        self.detached_actions: set[str] = set()
+        """Action kinds performed in the background (a trigger does not wait for them)."""
         self.log_dir = log_dir
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
@@ -44,34 +46,57 @@ class SupervisorCore:
         self.states: dict[str, str] = {
             p.id: ("pending" if p.enabled else "skipped") for p in plan.processes}
         self.states.update({a.id: ("pending" if a.enabled else "skipped") for a in plan.actions})
-        self._io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
-        self._on_shutdown: list[ActionPlan] = []
-        self._any_watchers: dict[str, list[ActionPlan]] = {}  # handlers without a target
-        self._last_event: dict[tuple[str, str], EventInfo] = {}
-        self._shutdown_requested = False
+        self.io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
+        """Event handlers on a process's output, by (process, stream)."""
+        self.on_shutdown: list[ActionPlan] = []
+        """OnShutdown handlers, run once when the launch begins to stop."""
+        self.any_watchers: dict[str, list[ActionPlan]] = {}
+        """Event handlers without a target (any process), by event kind."""
+        self.last_event: dict[tuple[str, str], EventInfo] = {}
+        """The latest event of each (process, kind), handed to the actions it triggers."""
+        self.shutdown_requested = False
+        """A Shutdown action or an operator asked the launch to end."""
         self.exit_codes: dict[str, int] = {}
         self.crashes: dict[str, int] = {}
         """Processes that exited on their own with a non-zero status (not stopped by us)."""
-        self._crash_times: dict[str, float] = {}
-        self._stop_time: float | None = None
-        self._running: dict[str, Running] = {}
-        self._lingering: set[ChannelReader] = set()  # output still open after its process exited
-        self._happened: dict[tuple[str, str], asyncio.Event] = {}
+        self.crash_times: dict[str, float] = {}
+        """When each process last crashed (loop time), for the respawn policy."""
+        self.stop_time: float | None = None
+        """When the shutdown began (loop time), for its escalation deadlines."""
+        self.running: dict[str, Running] = {}
+        """The processes that run now, by id: their process, pty or pipes, readers."""
+        self.lingering: set[ChannelReader] = set()
+        """Output still open after its process exited (a grandchild holds the pipe)."""
+        self.happened: dict[tuple[str, str], asyncio.Event] = {}
+        """Set when (process, event kind) has happened: what triggers wait on."""
         # lifecycle transitions seen per (node or "*", state filter), and an event pulsed at
         # each: what re-runs the actions of an OnStateTransition on every match
-        self._occurrences: dict[tuple[str, str], int] = {}
-        self._pulses: dict[tuple[str, str], asyncio.Event] = {}
-        self._busy = 0  # triggers sleeping or respawns scheduled
-        self._tasks: set[asyncio.Task[Any]] = set()
-        self._shutting_down = False
-        self._urgency = 0  # 0: SIGINT first; 1: SIGTERM now; 2: SIGKILL now
-        self._hurry: asyncio.Event | None = None
-        self._changed = asyncio.Event()
-        self._retries: dict[str, int] = {}
-        self._quick_failures: dict[str, int] = {}  # crashes in a row within 2 s of starting
-        self._keep_alive = False
-        self._reported: set[str] = set()
-        self._env_cache: dict[str, str] | None = None
+        self.occurrences: dict[tuple[str, str], int] = {}
+        """Lifecycle transitions seen per (node or "*", state filter)."""
+        self.pulses: dict[tuple[str, str], asyncio.Event] = {}
+        """Pulsed at each such transition."""
+        self.busy = 0
+        """Triggers sleeping or respawns scheduled: the run is not over while any is."""
+        self.tasks: set[asyncio.Task[Any]] = set()
+        """The supervisor's background tasks (`spawn_task`), cancelled at the end of a run."""
+        self.shutting_down = False
+        """The launch is stopping: nothing new starts, waits should give up."""
+        self.urgency = 0
+        """How hard the shutdown stops: 0 SIGINT first; 1 SIGTERM now; 2 SIGKILL now."""
+        self.hurry: asyncio.Event | None = None
+        """Set to make the shutdown's escalation skip to the urgency asked for."""
+        self.changed = asyncio.Event()
+        """Set at every event: the run loop looks again whether the launch is over."""
+        self.retries: dict[str, int] = {}
+        """Respawns of each process so far."""
+        self.quick_failures: dict[str, int] = {}
+        """Crashes in a row within 2 s of starting, by process (respawn back-off)."""
+        self.keep_alive = False
+        """Only shutdown ends the run (an interactive UI), not every process having exited."""
+        self.reported: set[str] = set()
+        """Failures already said once (a consumer that keeps raising)."""
+        self.env_cache: dict[str, str] | None = None
+        """The environment the processes start from, built once."""
         self.run_prefixes: dict[str, str] = {}
         """An operator's tool (`gdb -q -ex run --args`) a process runs under, from a
         `restart` with a prefix until the next restart without one."""
@@ -85,18 +110,14 @@ class SupervisorCore:
         for plugin in plugins:
             self.add_plugin(plugin)
         log_dir.mkdir(parents=True, exist_ok=True)
-        self._launch_log = LogFile(log_dir / "launch.log", self._report_io)
+        self.launch_log = LogFile(log_dir / "launch.log", self._report_io)
+        """launch.log: every event but output, one line each."""
 
     def add_plugin(self, plugin: SupervisorPlugin) -> None:
         """Plugs in before `run`: its action kinds join those the supervisor performs."""
         self.plugins.append(plugin)
-        self._action_runners.update(plugin.actions())
-        self._detached_actions.update(plugin.detached_actions)
-
-    @property
-    def shutting_down(self) -> bool:
-        """The launch is stopping: nothing new starts, waits should give up."""
-        return self._shutting_down
+        self.action_runners.update(plugin.actions())
+        self.detached_actions.update(plugin.detached_actions)
 
     def subscribe(self, consumer: Consumer) -> None:
         self.consumers.append(consumer)
@@ -106,14 +127,14 @@ class SupervisorCore:
         if event.kind != "output":
             detail = " ".join(f"{k}={v}" for k, v in (("pid", event.pid), ("code", event.code),
                                                        ("reason", event.reason)) if v is not None)
-            self._launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
+            self.launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
                                    f"{detail}\n".encode())
         for consumer in list(self.consumers):
             try:
                 consumer(event)
             except Exception as exc:
                 self._consumer_failed(consumer, exc)
-        self._changed.set()
+        self.changed.set()
 
     def log(self, text: str, level: str = "INFO") -> None:
         """A line for the launch pane and launch.log from whoever runs the supervisor."""
@@ -122,10 +143,10 @@ class SupervisorCore:
     def _consumer_failed(self, consumer: Consumer, exc: Exception) -> None:
         name = getattr(consumer, "__qualname__", type(consumer).__name__)
         text = f"{name} failed on an event: {type(exc).__name__}: {exc}"
-        if text in self._reported:
+        if text in self.reported:
             return
-        self._reported.add(text)
-        self._launch_log.write(f"{time.time():.3f} error  reason={text}\n".encode())
+        self.reported.add(text)
+        self.launch_log.write(f"{time.time():.3f} error  reason={text}\n".encode())
         to_stderr(f"tuilaunch: {text}; the launch goes on")
 
     def _report_io(self, text: str) -> None:
@@ -141,15 +162,15 @@ class SupervisorCore:
 
     def _spawn_task(self, coro: Any) -> None:
         task = asyncio.ensure_future(coro)
-        self._tasks.add(task)
+        self.tasks.add(task)
         task.add_done_callback(self._task_done)
 
     def _task_done(self, task: asyncio.Task[Any]) -> None:
-        self._tasks.discard(task)
+        self.tasks.discard(task)
         if not task.cancelled() and task.exception() is not None:
             exc = task.exception()
             self._report_io(f"internal error: {type(exc).__name__}: {exc}")
-            self._changed.set()
+            self.changed.set()
 
     def _log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
         self.emit(Event("log", action.id, reason=text, level=level))

@@ -18,14 +18,14 @@ class Interacting(Starting):
 
     def running_process(self, process_id: str) -> Running | None:
         """The running process's record (its pid, its terminal), or None."""
-        return self._running.get(process_id)
+        return self.running.get(process_id)
 
     def write_input(self, process_id: str, data: bytes) -> int:
         """Types `data` into a running process's terminal (`\\r` for Enter, `\\x03` for
         ctrl+c: SIGINT to a line reader, a key to a raw one); returns the bytes dropped
         because it does not read them. LaunchError, one line naming it, when it cannot be
         typed into (not running, no terminal)."""
-        running = self._running.get(process_id)
+        running = self.running.get(process_id)
         if running is None:
             raise LaunchError(f"{process_id} is not running ({self.states.get(process_id)}):"
                               " there is nothing to type into")

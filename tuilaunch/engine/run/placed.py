@@ -99,7 +99,7 @@ class Placed(Starting):
             return
         if event.kind == "output":
             self.emit(event)
-            if self._io_watchers or self._any_watchers:  # OnProcessIO handlers here
+            if self.io_watchers or self.any_watchers:  # OnProcessIO handlers here
                 self._dispatch_io(process_id, event.stream or "stdout", event.lines,
                                   self._pids_elsewhere.get(process_id, 0))
             return
@@ -110,9 +110,9 @@ class Placed(Starting):
         if event.kind == "exited" and event.code is not None:
             self.exit_codes[process_id] = event.code
             requested = bool((event.data or {}).get("requested"))
-            if event.code != 0 and not requested and not self._shutting_down:
+            if event.code != 0 and not requested and not self.shutting_down:
                 self.crashes[process_id] = event.code
-                self._crash_times[process_id] = time.monotonic()
+                self.crash_times[process_id] = time.monotonic()
         self.emit(event)
         if event.kind == "started":
             self.external_event(process_id, "start", event.pid)
@@ -129,7 +129,7 @@ class Placed(Starting):
             raise LaunchError(f"no process {process_id!r} in this launch")
         self._process_event(process_id, on, pid, code)
         self._flag(process_id, on).set()
-        self._changed.set()
+        self.changed.set()
 
 
 __all__ = ["ELSEWHERE", "Placed", "RemoteControl"]

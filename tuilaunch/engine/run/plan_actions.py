@@ -27,8 +27,8 @@ class PlanActions(Triggers):
         proc = self.plan.process(process_id)
         event = event_for(on, process_name=process_id, pid=pid, returncode=returncode,
                           action=proc.source, cmd=proc.cmd)
-        self._last_event[(process_id, on)] = event
-        for action in self._any_watchers.get(on, []):
+        self.last_event[(process_id, on)] = event
+        for action in self.any_watchers.get(on, []):
             self.states[action.id] = "running"  # due now: the run must not end before it
             self._spawn_task(self._run_action(action, event))
 
@@ -37,15 +37,15 @@ class PlanActions(Triggers):
         """Processes and actions performed at event time join the run."""
         for proc in processes:
             self.states[proc.id] = "pending" if proc.enabled else "skipped"
-            if proc.enabled and not self._shutting_down:  # launch starts nothing in shutdown
+            if proc.enabled and not self.shutting_down:  # launch starts nothing in shutdown
                 self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
         for action in actions:
             self.states[action.id] = "pending" if action.enabled else "skipped"
             if event is not None:
-                self._last_event[(action.id, "made")] = event
+                self.last_event[(action.id, "made")] = event
             if action.enabled:
                 self._schedule_action(action)
-        self._changed.set()
+        self.changed.set()
 
     def _perform_at_event(self, action: ActionPlan, entities: list[Any],
                           event: EventInfo) -> bool:
@@ -64,12 +64,12 @@ class PlanActions(Triggers):
 
     def _event_of(self, action: ActionPlan) -> EventInfo:
         """The event an action was triggered by (its process's start or exit, ...)."""
-        if (action.id, "made") in self._last_event:  # performed by an event handler
-            return self._last_event[(action.id, "made")]
+        if (action.id, "made") in self.last_event:  # performed by an event handler
+            return self.last_event[(action.id, "made")]
         step = action.trigger
         while step is not None:
-            if step.target is not None and (step.target, step.on) in self._last_event:
-                return self._last_event[(step.target, step.on)]
+            if step.target is not None and (step.target, step.on) in self.last_event:
+                return self.last_event[(step.target, step.on)]
             step = step.after
         on = action.trigger.on if action.trigger is not None else "timer"
         return event_for(on)
@@ -82,7 +82,7 @@ class PlanActions(Triggers):
         self._flag(action.id, "start").set()
         ok = True
         try:
-            runner = self._action_runners.get(action.kind)
+            runner = self.action_runners.get(action.kind)
             if runner is not None:
                 ok = await runner(action)
             elif action.kind == "shutdown":
@@ -108,7 +108,7 @@ class PlanActions(Triggers):
 
     def _request_shutdown(self, reason: str) -> None:
         """A Shutdown action: the run must not end before the shutdown has begun."""
-        self._shutdown_requested = True
+        self.shutdown_requested = True
         self._spawn_task(self.shutdown(reason))
 
     async def _stop_process(self, action: ActionPlan) -> bool:
@@ -164,12 +164,12 @@ class PlanActions(Triggers):
     def _deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
         """A block of a process's output, already in its log file: to the consumers."""
         self.emit(Event("output", running.plan.id, stream=stream, lines=lines))
-        if self._io_watchers or self._any_watchers:
+        if self.io_watchers or self.any_watchers:
             self._dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
     def _dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
-        watchers = [*self._io_watchers.get((process_id, stream), []),
-                    *self._any_watchers.get(f"io:{stream}", [])]
+        watchers = [*self.io_watchers.get((process_id, stream), []),
+                    *self.any_watchers.get(f"io:{stream}", [])]
         source = self.plan.process(process_id).source if watchers else None
         for action in watchers:
             for line in lines:

@@ -41,7 +41,7 @@ class Starting(Respawning):
         """From the check that the launch is not shutting down to the registration of the
         child nothing awaits, so a shutdown either prevents the start or sees the child."""
         proc = self.plan.process(process_id)
-        if process_id in self._running or self._shutting_down:
+        if process_id in self.running or self.shutting_down:
             return
         if proc.error:
             where = f" ({proc.origin})" if proc.origin else ""
@@ -64,8 +64,8 @@ class Starting(Respawning):
         self.deaths.pop(process_id, None)
         env = dict(start.env)
         self.watchdog.start()
-        if self.watchdog.error and "watchdog" not in self._reported:
-            self._reported.add("watchdog")
+        if self.watchdog.error and "watchdog" not in self.reported:
+            self.reported.add("watchdog")
             self._report_io(f"{self.watchdog.error}: processes may outlive a crash of "
                             "tuilaunch")
         self.watchdog.mark(env)
@@ -94,7 +94,7 @@ class Starting(Respawning):
         try:
             self.watchdog.watch(popen.pid)
             running = Running(proc, popen, log, time.monotonic(), loop.create_future())
-            self._running[process_id] = running
+            self.running[process_id] = running
             self._watch_exit(running)
             for channel in child.channels:
                 running.readers.append(ChannelReader(running, channel, self._deliver_lines))
@@ -109,7 +109,7 @@ class Starting(Respawning):
                 loop.remove_reader(channel.fd)
                 close_quietly(channel.fd)
             log.close()
-            self._running.pop(process_id, None)
+            self.running.pop(process_id, None)
             self._fail(process_id, f"could not be tracked and was killed: "
                        f"{type(exc).__name__}: {exc}")
             return
@@ -125,9 +125,9 @@ class Starting(Respawning):
 
     def _base_env(self) -> dict[str, str]:
         """tuilaunch's environment as it was at the first start: read once, not per child."""
-        if self._env_cache is None:
-            self._env_cache = dict(os.environ)
-        return self._env_cache
+        if self.env_cache is None:
+            self.env_cache = dict(os.environ)
+        return self.env_cache
 
     def _fail(self, process_id: str, reason: str) -> None:
         self.states[process_id] = "failed"
@@ -166,7 +166,7 @@ class Starting(Respawning):
         if pending:
             await asyncio.wait(pending, timeout=EOF_GRACE)
         lingering = [r for r in running.readers if not r.done.done()]
-        self._lingering.update(lingering)
+        self.lingering.update(lingering)
         for reader in lingering:
             reader.done.add_done_callback(self._forget_reader(reader))
         if not lingering:
@@ -174,15 +174,15 @@ class Starting(Respawning):
         if not group_alive(running.process.pid):
             self.watchdog.forget(running.process.pid)
         process_id = running.plan.id
-        del self._running[process_id]
+        del self.running[process_id]
         self.exit_codes[process_id] = code
-        requested = running.stopping or self._shutting_down
+        requested = running.stopping or self.shutting_down
         # a ctrl+c (or ctrl+\\, ctrl+z) typed into it was asked for by the operator too
         typed = code < 0 and -code in running.typed_signals
         crashed = code != 0 and not requested and not typed
         if crashed:
             self.crashes[process_id] = code
-            self._crash_times[process_id] = time.monotonic()
+            self.crash_times[process_id] = time.monotonic()
         start = self.started_with.get(process_id)
         death = death_details(running.process.pid, code, requested or typed,
                               start.cwd if start else None,
@@ -207,13 +207,13 @@ class Starting(Respawning):
         if self._should_respawn(running, code):
             await self._respawn(running)
         elif running.plan.respawn and code != 0 and not requested:
-            tries = self._retries.get(process_id, 0)
+            tries = self.retries.get(process_id, 0)
             self.emit(Event("log", process_id, level="ERROR", reason=(
                 f"respawn gives up: it failed {tries + 1} times "
                 f"(respawn_max_retries={running.plan.respawn_max_retries})")))
 
     def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:
-        return lambda _: self._lingering.discard(reader)
+        return lambda _: self.lingering.discard(reader)
 
 
 def wants_tty(proc: ProcessPlan) -> bool:

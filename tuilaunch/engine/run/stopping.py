@@ -28,42 +28,42 @@ class Stopping(PlanActions):
     """Stopping processes and the launch."""
 
     async def stop(self, process_id: str) -> None:
-        running = self._running.get(process_id)
+        running = self.running.get(process_id)
         if running is not None:
             running.stopping = True
             await self._escalate(running)
 
     async def shutdown(self, reason: str = "shutdown") -> None:
-        if self._shutting_down:
+        if self.shutting_down:
             return
-        self._shutting_down = True
-        self._stop_time = time.monotonic()
+        self.shutting_down = True
+        self.stop_time = time.monotonic()
         try:
             self.emit(Event("shutdown", reason=reason))
-            for action in self._on_shutdown:
+            for action in self.on_shutdown:
                 try:
                     await self._run_action(action, LaunchEvent(reason=reason))
                 except Exception as exc:  # an OnShutdown action never stops the shutdown
                     self._report_io(f"on-shutdown action {action.id} raised "
                                     f"{type(exc).__name__}: {exc}")
         finally:
-            await asyncio.gather(*(self._escalate(r) for r in list(self._running.values())),
+            await asyncio.gather(*(self._escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
-            self._changed.set()
+            self.changed.set()
 
     def escalate_now(self) -> str | None:
         """The operator insists (a second Ctrl+C): SIGTERM now; once more: SIGKILL.
 
         Returns the signal's name now sent, or None when nothing is left to stop."""
-        if not self._running:
+        if not self.running:
             return None
-        self._urgency = min(self._urgency + 1, len(STAGES) - 1)
-        if self._hurry is not None:
-            self._hurry.set()
-        self._hurry = None
-        if not self._shutting_down:
+        self.urgency = min(self.urgency + 1, len(STAGES) - 1)
+        if self.hurry is not None:
+            self.hurry.set()
+        self.hurry = None
+        if not self.shutting_down:
             self._spawn_task(self.shutdown("stop requested again"))
-        return STAGES[self._urgency].name
+        return STAGES[self.urgency].name
 
     async def _escalate(self, running: Running) -> None:
         """SIGINT, then SIGTERM, then SIGKILL, to the whole process group.
@@ -80,7 +80,7 @@ class Stopping(PlanActions):
         stage = 0
         why = ""
         while not running.exited.done():
-            stage = max(stage, self._urgency if self._shutting_down else 0)
+            stage = max(stage, self.urgency if self.shutting_down else 0)
             if stage > sent:
                 if stage > 0:
                     self.emit(Event("log", proc.id, level="WARN", reason=(
@@ -88,9 +88,9 @@ class Stopping(PlanActions):
                 if not kill_group(running.process.pid, STAGES[stage]):
                     break  # the whole group is gone; the exit arrives through the pidfd
                 sent = stage
-            if self._hurry is None:
-                self._hurry = asyncio.Event()
-            hurry: asyncio.Future[Any] = asyncio.ensure_future(self._hurry.wait())
+            if self.hurry is None:
+                self.hurry = asyncio.Event()
+            hurry: asyncio.Future[Any] = asyncio.ensure_future(self.hurry.wait())
             exited: asyncio.Future[Any] = running.exited
             try:
                 await asyncio.wait([exited, hurry], timeout=waits[stage],
@@ -104,7 +104,7 @@ class Stopping(PlanActions):
                     f"still there {waits[stage]:g} s after SIGKILL (stuck in the kernel?); "
                     "no longer waiting for it")))
                 return
-            if self._urgency > stage and self._shutting_down:
+            if self.urgency > stage and self.shutting_down:
                 why = "asked again: "
             else:
                 why = f"still running {waits[stage]:g} s after {STAGES[stage].name}: "
@@ -114,8 +114,8 @@ class Stopping(PlanActions):
     def kill_all(self) -> None:
         """Last resort when the caller cannot wait (the UI is being torn down): SIGKILL,
         and the watchdog sweeps what the processes left behind."""
-        self._shutting_down = True
-        for running in list(self._running.values()):
+        self.shutting_down = True
+        for running in list(self.running.values()):
             kill_group(running.process.pid, signal.SIGKILL)
         self._remove_parameter_files()
         self.watchdog.close()
@@ -124,11 +124,11 @@ class Stopping(PlanActions):
         """Crashes, less the processes that died of the stop signal itself just before the
         stop was seen: a terminal's Ctrl+C or hang-up reaches a child that is still in
         tuilaunch's process group for the instant between its fork and its own session."""
-        if self._stop_time is None:
+        if self.stop_time is None:
             return self.crashes
         return {pid: code for pid, code in self.crashes.items()
                 if not (-code in STOP_SIGNALS and
-                        self._stop_time - self._crash_times[pid] < STOP_RACE)}
+                        self.stop_time - self.crash_times[pid] < STOP_RACE)}
 
     def _remove_parameter_files(self) -> None:
         for proc in self.plan.processes:

@@ -39,7 +39,7 @@ class Supervisor(Interacting, Placed):
 
         With keep_alive (an interactive UI), only shutdown ends the run: an operator who
         stops every process still wants to start them again."""
-        self._keep_alive = keep_alive
+        self.keep_alive = keep_alive
         try:
             for plugin in self.plugins:
                 begun = plugin.run_started()
@@ -56,14 +56,14 @@ class Supervisor(Interacting, Placed):
                 if action.enabled and self.runs_actions():
                     self._schedule_action(action)
             while not self._settled():
-                self._changed.clear()
-                await self._changed.wait()
-            if not self._shutting_down and self._on_shutdown:
+                self.changed.clear()
+                await self.changed.wait()
+            if not self.shutting_down and self.on_shutdown:
                 # as launch does when nothing is left to run: OnShutdown handlers see it
                 await self.shutdown("idle")
                 while not self._settled():
-                    self._changed.clear()
-                    await self._changed.wait()
+                    self.changed.clear()
+                    await self.changed.wait()
         finally:
             await self._finish()
         real = self._real_crashes()
@@ -75,13 +75,13 @@ class Supervisor(Interacting, Placed):
 
     async def _finish(self) -> None:
         """Whatever ended the run: nothing left running, nothing left open."""
-        if self._running:  # cancelled from outside: stop what still runs, quickly
-            self._shutting_down = True
-            self._urgency = max(self._urgency, 1)
-            await asyncio.gather(*(self._escalate(r) for r in list(self._running.values())),
+        if self.running:  # cancelled from outside: stop what still runs, quickly
+            self.shutting_down = True
+            self.urgency = max(self.urgency, 1)
+            await asyncio.gather(*(self._escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
         await self._drain()
-        for reader in list(self._lingering):
+        for reader in list(self.lingering):
             reader.close()
         for plugin in self.plugins:
             try:
@@ -89,7 +89,7 @@ class Supervisor(Interacting, Placed):
             except Exception as exc:  # a plugin that fails to close never stops the end
                 self._report_io(f"{type(plugin).__name__} failed to close: "
                                 f"{type(exc).__name__}: {exc}")
-        self._launch_log.close()
+        self.launch_log.close()
         self._remove_parameter_files()
         # the watchdog stops what a node left behind (daemons, stray group members)
         self.watchdog.close()
@@ -98,11 +98,11 @@ class Supervisor(Interacting, Placed):
             await asyncio.sleep(0.02)
 
     def _settled(self) -> bool:
-        if self._shutting_down:
+        if self.shutting_down:
             # waiting actions, timers and respawns are cancelled when the run drains;
             # exit handlers of the processes being stopped still run, as in launch
-            return not self._running and not self._actions_due_in_shutdown()
-        if self._keep_alive or self._running or self._busy or self._shutdown_requested:
+            return not self.running and not self._actions_due_in_shutdown()
+        if self.keep_alive or self.running or self.busy or self.shutdown_requested:
             return False
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
@@ -119,9 +119,9 @@ class Supervisor(Interacting, Placed):
         are (running, finished or waiting for their trigger); triggers of new processes fire
         at once when what they wait for already happened.
         """
-        running = {pid for pid in self._running}
+        running = {pid for pid in self.running}
         diff = diff_plans(self.plan, plan, running)
-        self._busy += 1
+        self.busy += 1
         try:
             await asyncio.gather(*(self.stop(pid) for pid in diff.stop if pid in running))
             old_actions = {(a.kind, a.target, repr(a.data)) for a in self.plan.actions
@@ -129,11 +129,11 @@ class Supervisor(Interacting, Placed):
             self.plan = plan
             for proc in plan.processes:
                 # a kept process keeps its state: finished, failed, or still waiting
-                if proc.id not in self._running and proc.id not in diff.keep:
+                if proc.id not in self.running and proc.id not in diff.keep:
                     self.states[proc.id] = "pending" if proc.enabled else "skipped"
-            self._io_watchers.clear()
-            self._on_shutdown.clear()
-            self._any_watchers.clear()
+            self.io_watchers.clear()
+            self.on_shutdown.clear()
+            self.any_watchers.clear()
             for proc in plan.processes:
                 if proc.id in diff.start and self.runs_here(proc.id):
                     self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
@@ -146,8 +146,8 @@ class Supervisor(Interacting, Placed):
                 if action.enabled and (fresh or on_event) and self.runs_actions():
                     self._schedule_action(action)
         finally:
-            self._busy -= 1
-            self._changed.set()
+            self.busy -= 1
+            self.changed.set()
         self.set_placement(self.machine, self.remote)  # the new plan's placement
         return diff
 
@@ -157,28 +157,28 @@ class Supervisor(Interacting, Placed):
         a restart without one, `log_level` sets its ROS log level until changed (see
         `restart_options`: checked before anything stops)."""
         self.restart_options(process_id, prefix, log_level)
-        self._busy += 1  # the run must not look finished between the stop and the start
+        self.busy += 1  # the run must not look finished between the stop and the start
         try:
             await self.stop(process_id)
             await self.start(process_id)
         finally:
-            self._busy -= 1
-            self._changed.set()
+            self.busy -= 1
+            self.changed.set()
 
     async def run_action(self, action_id: str) -> None:
         """Performs one action of the plan again (the UI restarted its group)."""
         action = next((a for a in self.plan.actions if a.id == action_id), None)
-        if action is None or not action.enabled or self._shutting_down:
+        if action is None or not action.enabled or self.shutting_down:
             return
-        self._busy += 1
+        self.busy += 1
         try:
             await self._run_action(action)
         finally:
-            self._busy -= 1
-            self._changed.set()
+            self.busy -= 1
+            self.changed.set()
 
     async def _drain(self) -> None:
-        for task in list(self._tasks):
+        for task in list(self.tasks):
             if not task.done():
                 task.cancel()
-        await asyncio.gather(*self._tasks, return_exceptions=True)
+        await asyncio.gather(*self.tasks, return_exceptions=True)

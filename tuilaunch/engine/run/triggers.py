@@ -20,15 +20,15 @@ class Triggers(SupervisorCore):
     """Waiting for triggers and dispatching event handlers."""
 
     def _flag(self, process_id: str, what: str) -> asyncio.Event:
-        return self._happened.setdefault((process_id, what), asyncio.Event())
+        return self.happened.setdefault((process_id, what), asyncio.Event())
 
     def state_reached(self, process_id: str, what: str) -> None:
         """A lifecycle transition matching `what`: once for start-up chains, and counted
         for the handlers that run on each match."""
         key = (process_id, what)
         self._flag(process_id, what).set()
-        self._occurrences[key] = self._occurrences.get(key, 0) + 1
-        pulse = self._pulses.pop(key, None)
+        self.occurrences[key] = self.occurrences.get(key, 0) + 1
+        pulse = self.pulses.pop(key, None)
         if pulse is not None:
             pulse.set()
 
@@ -40,12 +40,12 @@ class Triggers(SupervisorCore):
         assert trigger is not None and trigger.target is not None
         key = (trigger.target, flag_name(trigger))
         await self._when_ready(trigger, self._run_action, action)
-        seen = self._occurrences.get(key, 0)
-        while not self._shutting_down:
-            while self._occurrences.get(key, 0) <= seen:
-                await self._pulses.setdefault(key, asyncio.Event()).wait()
+        seen = self.occurrences.get(key, 0)
+        while not self.shutting_down:
+            while self.occurrences.get(key, 0) <= seen:
+                await self.pulses.setdefault(key, asyncio.Event()).wait()
             seen += 1
-            if self._shutting_down or not action.enabled:
+            if self.shutting_down or not action.enabled:
                 return
             if trigger.delay:
                 await asyncio.sleep(trigger.delay)
@@ -79,13 +79,13 @@ class Triggers(SupervisorCore):
             if step.target is not None:
                 await self._flag(step.target, flag_name(step)).wait()
             if step.delay:
-                self._busy += 1
+                self.busy += 1
                 try:
                     await asyncio.sleep(step.delay)
                 finally:
-                    self._busy -= 1
-                    self._changed.set()
-            if self._shutting_down and not runs_in_shutdown(step, item):
+                    self.busy -= 1
+                    self.changed.set()
+            if self.shutting_down and not runs_in_shutdown(step, item):
                 return
         result = then(item)
         if asyncio.iscoroutine(result):
@@ -97,14 +97,14 @@ class Triggers(SupervisorCore):
             chain = chain.after
         first = action.trigger
         if chain is not None and chain.on == "shutdown":
-            self._on_shutdown.append(action)
+            self.on_shutdown.append(action)
         elif first is not None and first.target is None and first.on in ("start", "exit", "io"):
             # a handler without target_action: every process's event runs it
             kind = f"io:{first.io or 'stdout'}" if first.on == "io" else first.on
-            self._any_watchers.setdefault(kind, []).append(action)
+            self.any_watchers.setdefault(kind, []).append(action)
         elif chain is not None and chain.target is not None:
             key = (chain.target, chain.io or "stdout")
-            self._io_watchers.setdefault(key, []).append(action)
+            self.io_watchers.setdefault(key, []).append(action)
         elif first is not None and first.on == "state" and first.repeat and \
                 first.target is not None:
             self._spawn_task(self._on_every_state(action))
@@ -131,7 +131,7 @@ class Triggers(SupervisorCore):
         """Exit handlers whose process has just stopped, or that are still running."""
         for action in self.plan.actions:
             state = self.states.get(action.id)
-            if state == "running" and action.kind not in self._detached_actions:
+            if state == "running" and action.kind not in self.detached_actions:
                 return True
             if state == "pending" and action.enabled and action.trigger is None:
                 return True  # performed by a handler just now, about to run
