@@ -10,6 +10,10 @@ on: this client says so, reconnects with backoff (or at once when asked), and th
 what happened meanwhile, from where it left off: the lines from the log files (counted
 from the offsets of its last subscription, so none is seen twice or missed) and the state
 events the server kept, in time order.
+
+Over 500 lines on purpose: reconnecting (`_relink`, `_missed`) swaps this client's own
+connection and rewinds its counters, so it stays inside the class, not in a module that
+would reach into its private state.
 """
 
 from __future__ import annotations

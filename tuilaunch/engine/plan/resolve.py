@@ -8,6 +8,9 @@ This module walks the entities (dispatch, groups, triggers, event handlers, incl
 each kind becomes is built next door: scope.py (namespace, SetParameter/SetRemap,
 environment push/pop), command_line.py (a process's or node's command line), actions.py
 (log, call_service, set_parameters, ...), arguments.py, opaque.py.
+
+A little over 500 lines on purpose: `Resolver` is one recursive visitor (visit -> group /
+include / event handler -> walk -> visit); its visits call each other and stay together.
 """
 
 from __future__ import annotations
