@@ -110,7 +110,7 @@ class SupervisorCore:
         for plugin in plugins:
             self.add_plugin(plugin)
         log_dir.mkdir(parents=True, exist_ok=True)
-        self.launch_log = LogFile(log_dir / "launch.log", self._report_io)
+        self.launch_log = LogFile(log_dir / "launch.log", self.report_io)
         """launch.log: every event but output, one line each."""
 
     def add_plugin(self, plugin: SupervisorPlugin) -> None:
@@ -149,7 +149,7 @@ class SupervisorCore:
         self.launch_log.write(f"{time.time():.3f} error  reason={text}\n".encode())
         to_stderr(f"tuilaunch: {text}; the launch goes on")
 
-    def _report_io(self, text: str) -> None:
+    def report_io(self, text: str) -> None:
         """A log file that cannot be written: said to the consumers (on stderr without)."""
         if not self.consumers:
             to_stderr(f"tuilaunch: {text}")
@@ -160,7 +160,7 @@ class SupervisorCore:
             except Exception as exc:
                 self._consumer_failed(consumer, exc)
 
-    def _spawn_task(self, coro: Any) -> None:
+    def spawn_task(self, coro: Any) -> None:
         task = asyncio.ensure_future(coro)
         self.tasks.add(task)
         task.add_done_callback(self._task_done)
@@ -169,10 +169,10 @@ class SupervisorCore:
         self.tasks.discard(task)
         if not task.cancelled() and task.exception() is not None:
             exc = task.exception()
-            self._report_io(f"internal error: {type(exc).__name__}: {exc}")
+            self.report_io(f"internal error: {type(exc).__name__}: {exc}")
             self.changed.set()
 
-    def _log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
+    def log_action(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
         self.emit(Event("log", action.id, reason=text, level=level))
 
     # Made by the later layers; declared here so the earlier ones can call them.
@@ -186,7 +186,7 @@ class SupervisorCore:
     async def shutdown(self, reason: str = "shutdown") -> None:
         raise NotImplementedError  # run/stopping.py
 
-    async def _run_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
+    async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
         raise NotImplementedError  # run/plan_actions.py
 
 

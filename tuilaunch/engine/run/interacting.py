@@ -68,9 +68,9 @@ class Interacting(Starting):
             if not proc.cmd:
                 return {}
             try:
-                start = start_command(proc, self._base_env(), wants_tty(proc),
+                start = start_command(proc, self.base_env(), wants_tty(proc),
                                       self.run_prefixes.get(process_id),
                                       self.log_levels.get(process_id))
             except LaunchError:
                 return {}
-        return describe_command(start, self._base_env())
+        return describe_command(start, self.base_env())

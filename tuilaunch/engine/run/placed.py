@@ -100,7 +100,7 @@ class Placed(Starting):
         if event.kind == "output":
             self.emit(event)
             if self.io_watchers or self.any_watchers:  # OnProcessIO handlers here
-                self._dispatch_io(process_id, event.stream or "stdout", event.lines,
+                self.dispatch_io(process_id, event.stream or "stdout", event.lines,
                                   self._pids_elsewhere.get(process_id, 0))
             return
         if event.kind == "started" and event.pid is not None:
@@ -127,8 +127,8 @@ class Placed(Starting):
             raise ValueError(f"an external event is start or exit, not {on!r}")
         if process_id not in {p.id for p in self.plan.processes}:
             raise LaunchError(f"no process {process_id!r} in this launch")
-        self._process_event(process_id, on, pid, code)
-        self._flag(process_id, on).set()
+        self.process_event(process_id, on, pid, code)
+        self.flag(process_id, on).set()
         self.changed.set()
 
 

@@ -21,7 +21,7 @@ from .triggers import Triggers
 class PlanActions(Triggers):
     """Performing one action of the plan, and what event handlers add to the run."""
 
-    def _process_event(self, process_id: str, on: str, pid: int | None = None,
+    def process_event(self, process_id: str, on: str, pid: int | None = None,
                        returncode: int | None = None) -> None:
         """A process started or exited: remember the event and run handlers without target."""
         proc = self.plan.process(process_id)
@@ -30,7 +30,7 @@ class PlanActions(Triggers):
         self.last_event[(process_id, on)] = event
         for action in self.any_watchers.get(on, []):
             self.states[action.id] = "running"  # due now: the run must not end before it
-            self._spawn_task(self._run_action(action, event))
+            self.spawn_task(self.perform_action(action, event))
 
     def add_to_plan(self, processes: list[ProcessPlan], actions: list[ActionPlan],
                     event: EventInfo | None = None) -> None:
@@ -38,13 +38,13 @@ class PlanActions(Triggers):
         for proc in processes:
             self.states[proc.id] = "pending" if proc.enabled else "skipped"
             if proc.enabled and not self.shutting_down:  # launch starts nothing in shutdown
-                self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
+                self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
         for action in actions:
             self.states[action.id] = "pending" if action.enabled else "skipped"
             if event is not None:
                 self.last_event[(action.id, "made")] = event
             if action.enabled:
-                self._schedule_action(action)
+                self.schedule_action(action)
         self.changed.set()
 
     def _perform_at_event(self, action: ActionPlan, entities: list[Any],
@@ -55,10 +55,10 @@ class PlanActions(Triggers):
         try:
             performed = perform_entities(self.plan, action, entities, event)
         except LaunchError as exc:  # only this handler fails, as in launch
-            self._log(action, str(exc).replace("\n", " "), "ERROR")
+            self.log_action(action, str(exc).replace("\n", " "), "ERROR")
             return False
         for warning in performed.warnings:
-            self._log(action, warning, "WARN")
+            self.log_action(action, warning, "WARN")
         self.add_to_plan(performed.processes, performed.actions, event)
         return True
 
@@ -74,12 +74,12 @@ class PlanActions(Triggers):
         on = action.trigger.on if action.trigger is not None else "timer"
         return event_for(on)
 
-    async def _run_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
+    async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
         if event is None:
             event = self._event_of(action)
         self.states[action.id] = "running"
         self.emit(Event("started", action.id))
-        self._flag(action.id, "start").set()
+        self.flag(action.id, "start").set()
         ok = True
         try:
             runner = self.action_runners.get(action.kind)
@@ -88,7 +88,7 @@ class PlanActions(Triggers):
             elif action.kind == "shutdown":
                 self._request_shutdown(str(action.data))
             elif action.kind == "log":
-                self._log(action, self._perform(action, action.source.msg, event))
+                self.log_action(action, self._perform(action, action.source.msg, event))
             elif action.kind == "event_callback":
                 ok = self._run_callbacks(action, event or LaunchEvent())
             elif action.kind == "deferred":
@@ -98,26 +98,26 @@ class PlanActions(Triggers):
             elif action.kind == "stop_process":
                 ok = await self._stop_process(action)
             else:
-                self._log(action, f"{action.kind} is not supported yet; skipped", "WARN")
+                self.log_action(action, f"{action.kind} is not supported yet; skipped", "WARN")
         except asyncio.CancelledError:
             self.states[action.id] = "cancelled"
             raise
         self.states[action.id] = "done" if ok else "failed"
         self.emit(Event("finished", action.id, reason=self.states[action.id]))
-        self._flag(action.id, "exit").set()
+        self.flag(action.id, "exit").set()
 
     def _request_shutdown(self, reason: str) -> None:
         """A Shutdown action: the run must not end before the shutdown has begun."""
         self.shutdown_requested = True
-        self._spawn_task(self.shutdown(reason))
+        self.spawn_task(self.shutdown(reason))
 
     async def _stop_process(self, action: ActionPlan) -> bool:
         """EmitEvent(ShutdownProcess(process_matcher=matches_action(x)))."""
         target = str(action.target)
         if target not in self.states:
-            self._log(action, f"cannot stop {target}: this launch does not run it", "WARN")
+            self.log_action(action, f"cannot stop {target}: this launch does not run it", "WARN")
             return False
-        self._spawn_task(self.stop(target))
+        self.spawn_task(self.stop(target))
         return True
 
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
@@ -138,7 +138,7 @@ class PlanActions(Triggers):
                 else:
                     produced += entity_list(call_handler(callback, event, action))
         except Exception as exc:  # a user's callback must never stop the launch
-            self._log(action, f"event callback ({action.origin}) raised "
+            self.log_action(action, f"event callback ({action.origin}) raised "
                       f"{type(exc).__name__}: {exc}", "ERROR")
             return False
         seen: set[int] = set()
@@ -154,20 +154,20 @@ class PlanActions(Triggers):
     def _carry_out(self, action: ActionPlan, entity: Entity, event: EventInfo) -> bool:
         """Log lines and shutdown at once; False for what must be resolved into the plan."""
         if isinstance(entity, LogInfo):
-            self._log(action, self._perform(action, entity.msg, event))
+            self.log_action(action, self._perform(action, entity.msg, event))
         elif isinstance(entity, Shutdown):
             self._request_shutdown(self._perform(action, entity.reason, event))
         else:
             return False
         return True
 
-    def _deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
+    def deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
         """A block of a process's output, already in its log file: to the consumers."""
         self.emit(Event("output", running.plan.id, stream=stream, lines=lines))
         if self.io_watchers or self.any_watchers:
-            self._dispatch_io(running.plan.id, stream, lines, running.process.pid)
+            self.dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
-    def _dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
+    def dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
         watchers = [*self.io_watchers.get((process_id, stream), []),
                     *self.any_watchers.get(f"io:{stream}", [])]
         source = self.plan.process(process_id).source if watchers else None
@@ -175,7 +175,7 @@ class PlanActions(Triggers):
             for line in lines:
                 event = event_for("io", stream, process_name=process_id, pid=pid,
                                   text=(line + "\n").encode(), action=source)
-                self._spawn_task(self._run_action(action, event))
+                self.spawn_task(self.perform_action(action, event))
 
 
 def call_handler(callback: Any, event: EventInfo, action: ActionPlan) -> Any:

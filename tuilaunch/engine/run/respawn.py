@@ -13,14 +13,14 @@ from .stopping import Stopping
 class Respawning(Stopping):
     """Bringing a crashed process back, with backoff."""
 
-    def _should_respawn(self, running: Running, code: int) -> bool:
+    def should_respawn(self, running: Running, code: int) -> bool:
         proc = running.plan
         if not proc.respawn or running.stopping or self.shutting_down or code == 0:
             return False  # a clean exit is a finished job, not a crash
         limit = proc.respawn_max_retries
         return limit < 0 or self.retries.get(proc.id, 0) < limit
 
-    async def _respawn(self, running: Running) -> None:
+    async def respawn(self, running: Running) -> None:
         proc = running.plan
         tries = self.retries[proc.id] = self.retries.get(proc.id, 0) + 1
         # back off while it dies at once, so a crash loop does not spin the machine; a run

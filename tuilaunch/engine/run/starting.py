@@ -35,9 +35,9 @@ class Starting(Respawning):
 
     async def start(self, process_id: str) -> None:
         """Starts one process (also a stopped or exited one, from the UI)."""
-        self._start_now(process_id)
+        self.start_now(process_id)
 
-    def _start_now(self, process_id: str) -> None:
+    def start_now(self, process_id: str) -> None:
         """From the check that the launch is not shutting down to the registration of the
         child nothing awaits, so a shutdown either prevents the start or sees the child."""
         proc = self.plan.process(process_id)
@@ -54,7 +54,7 @@ class Starting(Respawning):
             self._fail(process_id, f"cannot write its parameter file: {exc}")
             return
         try:
-            start = start_command(proc, self._base_env(), wants_tty(proc),
+            start = start_command(proc, self.base_env(), wants_tty(proc),
                                   self.run_prefixes.get(process_id),
                                   self.log_levels.get(process_id))
         except LaunchError as exc:  # the tool left PATH since the restart checked it
@@ -66,12 +66,12 @@ class Starting(Respawning):
         self.watchdog.start()
         if self.watchdog.error and "watchdog" not in self.reported:
             self.reported.add("watchdog")
-            self._report_io(f"{self.watchdog.error}: processes may outlive a crash of "
+            self.report_io(f"{self.watchdog.error}: processes may outlive a crash of "
                             "tuilaunch")
         self.watchdog.mark(env)
         log_path = self.log_dir / f"{process_id}.log"
         try:
-            log = LogFile(log_path, self._report_io)
+            log = LogFile(log_path, self.report_io)
         except OSError as exc:
             self._fail(process_id, f"cannot open its log file {log_path}: "
                        f"{exc.strerror or exc}")
@@ -97,7 +97,7 @@ class Starting(Respawning):
             self.running[process_id] = running
             self._watch_exit(running)
             for channel in child.channels:
-                running.readers.append(ChannelReader(running, channel, self._deliver_lines))
+                running.readers.append(ChannelReader(running, channel, self.deliver_lines))
         except Exception as exc:
             # nothing may run that nobody reads or stops
             kill_group(popen.pid, signal.SIGKILL)
@@ -115,15 +115,15 @@ class Starting(Respawning):
             return
         self.states[process_id] = "running"
         self.emit(Event("started", process_id, pid=popen.pid))
-        self._process_event(process_id, "start", popen.pid)
-        self._flag(process_id, "start").set()
+        self.process_event(process_id, "start", popen.pid)
+        self.flag(process_id, "start").set()
         for plugin in self.plugins:
             follow_up = plugin.process_started(proc)
             if follow_up is not None:
-                self._spawn_task(follow_up)
-        self._spawn_task(self._wait(running))
+                self.spawn_task(follow_up)
+        self.spawn_task(self._wait(running))
 
-    def _base_env(self) -> dict[str, str]:
+    def base_env(self) -> dict[str, str]:
         """tuilaunch's environment as it was at the first start: read once, not per child."""
         if self.env_cache is None:
             self.env_cache = dict(os.environ)
@@ -202,10 +202,10 @@ class Starting(Respawning):
         # `requested`: a stop asked by anyone (another client, `tuilaunch stop`), not a crash
         self.emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=reason, data={"requested": requested, **death}))
-        self._process_event(process_id, "exit", running.process.pid, code)
-        self._flag(process_id, "exit").set()
-        if self._should_respawn(running, code):
-            await self._respawn(running)
+        self.process_event(process_id, "exit", running.process.pid, code)
+        self.flag(process_id, "exit").set()
+        if self.should_respawn(running, code):
+            await self.respawn(running)
         elif running.plan.respawn and code != 0 and not requested:
             tries = self.retries.get(process_id, 0)
             self.emit(Event("log", process_id, level="ERROR", reason=(

@@ -21,7 +21,7 @@ STAGES = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 STOP_RACE = 2.0
 """Seconds before a stop within which a child's death by that stop's signal counts as part
-of the stop (see Stopping._real_crashes)."""
+of the stop (see Stopping.real_crashes)."""
 
 
 class Stopping(PlanActions):
@@ -31,7 +31,7 @@ class Stopping(PlanActions):
         running = self.running.get(process_id)
         if running is not None:
             running.stopping = True
-            await self._escalate(running)
+            await self.escalate(running)
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         if self.shutting_down:
@@ -42,12 +42,12 @@ class Stopping(PlanActions):
             self.emit(Event("shutdown", reason=reason))
             for action in self.on_shutdown:
                 try:
-                    await self._run_action(action, LaunchEvent(reason=reason))
+                    await self.perform_action(action, LaunchEvent(reason=reason))
                 except Exception as exc:  # an OnShutdown action never stops the shutdown
-                    self._report_io(f"on-shutdown action {action.id} raised "
+                    self.report_io(f"on-shutdown action {action.id} raised "
                                     f"{type(exc).__name__}: {exc}")
         finally:
-            await asyncio.gather(*(self._escalate(r) for r in list(self.running.values())),
+            await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
             self.changed.set()
 
@@ -62,10 +62,10 @@ class Stopping(PlanActions):
             self.hurry.set()
         self.hurry = None
         if not self.shutting_down:
-            self._spawn_task(self.shutdown("stop requested again"))
+            self.spawn_task(self.shutdown("stop requested again"))
         return STAGES[self.urgency].name
 
-    async def _escalate(self, running: Running) -> None:
+    async def escalate(self, running: Running) -> None:
         """SIGINT, then SIGTERM, then SIGKILL, to the whole process group.
 
         The waits are the process's own sigterm_timeout / sigkill_timeout when it sets them;
@@ -117,10 +117,10 @@ class Stopping(PlanActions):
         self.shutting_down = True
         for running in list(self.running.values()):
             kill_group(running.process.pid, signal.SIGKILL)
-        self._remove_parameter_files()
+        self.remove_parameter_files()
         self.watchdog.close()
 
-    def _real_crashes(self) -> dict[str, int]:
+    def real_crashes(self) -> dict[str, int]:
         """Crashes, less the processes that died of the stop signal itself just before the
         stop was seen: a terminal's Ctrl+C or hang-up reaches a child that is still in
         tuilaunch's process group for the instant between its fork and its own session."""
@@ -130,7 +130,7 @@ class Stopping(PlanActions):
                 if not (-code in STOP_SIGNALS and
                         self.stop_time - self.crash_times[pid] < STOP_RACE)}
 
-    def _remove_parameter_files(self) -> None:
+    def remove_parameter_files(self) -> None:
         for proc in self.plan.processes:
             for path, _ in proc.generated_parameter_files:
                 Path(path).unlink(missing_ok=True)

@@ -44,17 +44,17 @@ class Supervisor(Interacting, Placed):
             for plugin in self.plugins:
                 begun = plugin.run_started()
                 if begun is not None:
-                    self._spawn_task(begun)
+                    self.spawn_task(begun)
             for proc in self.plan.processes:
                 if not self.runs_here(proc.id):
                     continue  # its machine's share starts it (run/placed.py)
                 if proc.enabled and proc.trigger is None:
-                    self._start_now(proc.id)  # no task per process: start-up at the floor
+                    self.start_now(proc.id)  # no task per process: start-up at the floor
                 elif proc.enabled:
-                    self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
+                    self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
             for action in self.plan.actions:
                 if action.enabled and self.runs_actions():
-                    self._schedule_action(action)
+                    self.schedule_action(action)
             while not self._settled():
                 self.changed.clear()
                 await self.changed.wait()
@@ -66,7 +66,7 @@ class Supervisor(Interacting, Placed):
                     await self.changed.wait()
         finally:
             await self._finish()
-        real = self._real_crashes()
+        real = self.real_crashes()
         for process_id in set(self.crashes) - set(real):
             if self.states.get(process_id) == "failed":
                 self.states[process_id] = "exited"  # the stop's own signal, a hair early
@@ -78,7 +78,7 @@ class Supervisor(Interacting, Placed):
         if self.running:  # cancelled from outside: stop what still runs, quickly
             self.shutting_down = True
             self.urgency = max(self.urgency, 1)
-            await asyncio.gather(*(self._escalate(r) for r in list(self.running.values())),
+            await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
         await self._drain()
         for reader in list(self.lingering):
@@ -87,10 +87,10 @@ class Supervisor(Interacting, Placed):
             try:
                 await plugin.close()
             except Exception as exc:  # a plugin that fails to close never stops the end
-                self._report_io(f"{type(plugin).__name__} failed to close: "
+                self.report_io(f"{type(plugin).__name__} failed to close: "
                                 f"{type(exc).__name__}: {exc}")
         self.launch_log.close()
-        self._remove_parameter_files()
+        self.remove_parameter_files()
         # the watchdog stops what a node left behind (daemons, stray group members)
         self.watchdog.close()
         deadline = time.monotonic() + self.watchdog.grace + 3.0
@@ -101,15 +101,15 @@ class Supervisor(Interacting, Placed):
         if self.shutting_down:
             # waiting actions, timers and respawns are cancelled when the run drains;
             # exit handlers of the processes being stopped still run, as in launch
-            return not self.running and not self._actions_due_in_shutdown()
+            return not self.running and not self.actions_due_in_shutdown()
         if self.keep_alive or self.running or self.busy or self.shutdown_requested:
             return False
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
         # a pending item can still start only if what it waits for is alive or pending
         waiting = [p.trigger for p in self.plan.processes if self.states[p.id] == "pending"]
-        return not any(self._can_fire(trigger) for trigger in waiting) and not any(
-            self._action_can_fire(a) for a in self.plan.actions
+        return not any(self.can_fire(trigger) for trigger in waiting) and not any(
+            self.action_can_fire(a) for a in self.plan.actions
             if self.states.get(a.id) == "pending")
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
@@ -136,7 +136,7 @@ class Supervisor(Interacting, Placed):
             self.any_watchers.clear()
             for proc in plan.processes:
                 if proc.id in diff.start and self.runs_here(proc.id):
-                    self._spawn_task(self._when_ready(proc.trigger, self.start, proc.id))
+                    self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
             for action in plan.actions:
                 self.states.setdefault(action.id, "pending" if action.enabled else "skipped")
                 fresh = (action.kind, action.target, repr(action.data)) not in old_actions
@@ -144,7 +144,7 @@ class Supervisor(Interacting, Placed):
                 # event watchers were cleared above and come back; one-off actions rerun
                 # only when they are new or their target or data changed
                 if action.enabled and (fresh or on_event) and self.runs_actions():
-                    self._schedule_action(action)
+                    self.schedule_action(action)
         finally:
             self.busy -= 1
             self.changed.set()
@@ -172,7 +172,7 @@ class Supervisor(Interacting, Placed):
             return
         self.busy += 1
         try:
-            await self._run_action(action)
+            await self.perform_action(action)
         finally:
             self.busy -= 1
             self.changed.set()

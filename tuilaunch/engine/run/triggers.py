@@ -19,14 +19,14 @@ from .core import SupervisorCore
 class Triggers(SupervisorCore):
     """Waiting for triggers and dispatching event handlers."""
 
-    def _flag(self, process_id: str, what: str) -> asyncio.Event:
+    def flag(self, process_id: str, what: str) -> asyncio.Event:
         return self.happened.setdefault((process_id, what), asyncio.Event())
 
     def state_reached(self, process_id: str, what: str) -> None:
         """A lifecycle transition matching `what`: once for start-up chains, and counted
         for the handlers that run on each match."""
         key = (process_id, what)
-        self._flag(process_id, what).set()
+        self.flag(process_id, what).set()
         self.occurrences[key] = self.occurrences.get(key, 0) + 1
         pulse = self.pulses.pop(key, None)
         if pulse is not None:
@@ -39,7 +39,7 @@ class Triggers(SupervisorCore):
         trigger = action.trigger
         assert trigger is not None and trigger.target is not None
         key = (trigger.target, flag_name(trigger))
-        await self._when_ready(trigger, self._run_action, action)
+        await self.when_ready(trigger, self.perform_action, action)
         seen = self.occurrences.get(key, 0)
         while not self.shutting_down:
             while self.occurrences.get(key, 0) <= seen:
@@ -49,25 +49,25 @@ class Triggers(SupervisorCore):
                 return
             if trigger.delay:
                 await asyncio.sleep(trigger.delay)
-            await self._run_action(action)
+            await self.perform_action(action)
 
-    def _can_fire(self, trigger: Trigger | None) -> bool:
+    def can_fire(self, trigger: Trigger | None) -> bool:
         while trigger is not None:
             if trigger.target == "*" and trigger.on == "state":
                 # any lifecycle node of the launch: one of them must still be able to run
-                if not self._flag("*", flag_name(trigger)).is_set() and not any(
+                if not self.flag("*", flag_name(trigger)).is_set() and not any(
                         p.lifecycle and self.states.get(p.id) in ("running", "pending")
                         for p in self.plan.processes):
                     return False
             if trigger.target not in (None, "*") and trigger.on in ("start", "exit", "state"):
                 assert trigger.target is not None
-                done = self._flag(trigger.target, flag_name(trigger)).is_set()
+                done = self.flag(trigger.target, flag_name(trigger)).is_set()
                 if not done and self.states.get(trigger.target) not in ("running", "pending"):
                     return False
             trigger = trigger.after
         return True
 
-    async def _when_ready(self, trigger: Trigger | None, then: Callable[[Any], Any],
+    async def when_ready(self, trigger: Trigger | None, then: Callable[[Any], Any],
                           item: Any) -> None:
         chain: list[Trigger] = []
         while trigger is not None:
@@ -77,7 +77,7 @@ class Triggers(SupervisorCore):
             if step.on == "shutdown" or step.on == "io":
                 return  # run by their own events, not as a start-up chain
             if step.target is not None:
-                await self._flag(step.target, flag_name(step)).wait()
+                await self.flag(step.target, flag_name(step)).wait()
             if step.delay:
                 self.busy += 1
                 try:
@@ -91,7 +91,7 @@ class Triggers(SupervisorCore):
         if asyncio.iscoroutine(result):
             await result
 
-    def _schedule_action(self, action: ActionPlan) -> None:
+    def schedule_action(self, action: ActionPlan) -> None:
         chain = action.trigger
         while chain is not None and chain.on not in ("io", "shutdown"):
             chain = chain.after
@@ -107,11 +107,11 @@ class Triggers(SupervisorCore):
             self.io_watchers.setdefault(key, []).append(action)
         elif first is not None and first.on == "state" and first.repeat and \
                 first.target is not None:
-            self._spawn_task(self._on_every_state(action))
+            self.spawn_task(self._on_every_state(action))
         else:
-            self._spawn_task(self._when_ready(action.trigger, self._run_action, action))
+            self.spawn_task(self.when_ready(action.trigger, self.perform_action, action))
 
-    def _action_can_fire(self, action: ActionPlan) -> bool:
+    def action_can_fire(self, action: ActionPlan) -> bool:
         """Whether a pending action may still run before the launch goes idle."""
         trigger = action.trigger
         if trigger is not None and trigger.target is None and trigger.on in ("start", "exit",
@@ -125,9 +125,9 @@ class Triggers(SupervisorCore):
                     self.states.get(chain.target) not in ("running", "pending"):
                 return False
             chain = chain.after
-        return self._can_fire(trigger)
+        return self.can_fire(trigger)
 
-    def _actions_due_in_shutdown(self) -> bool:
+    def actions_due_in_shutdown(self) -> bool:
         """Exit handlers whose process has just stopped, or that are still running."""
         for action in self.plan.actions:
             state = self.states.get(action.id)
@@ -140,7 +140,7 @@ class Triggers(SupervisorCore):
                 due = True
                 while step is not None and due:
                     due = (step.on == "exit" and not step.delay and step.target is not None
-                           and self._flag(step.target, "exit").is_set())
+                           and self.flag(step.target, "exit").is_set())
                     step = step.after
                 if due:
                     return True
