@@ -1,9 +1,12 @@
 """The supervisor's state, and how it tells the world: events to consumers and launch.log.
 
 `SupervisorCore` is the base of the supervisor's layers (core <- triggers <- plan_actions <-
-stopping <- respawn <- starting <- interacting <- supervisor): each file holds one concern of
-the run and the `Supervisor` (run/supervisor.py) is the whole. Every event goes through `emit`; a
-consumer that raises is reported once and never stops the launch.
+stopping <- respawn <- starting <- placed / interacting <- supervisor): each file holds one
+concern of the run and the `Supervisor` (run/supervisor.py) is the whole. Every event goes
+through `emit`; a consumer that raises is reported once and never stops the launch.
+
+The state and the methods several layers share are public here (documented attributes), so
+no underscore name crosses a module; what one layer alone uses stays private to it.
 """
 
 from __future__ import annotations
@@ -161,6 +164,7 @@ class SupervisorCore:
                 self._consumer_failed(consumer, exc)
 
     def spawn_task(self, coro: Any) -> None:
+        """Runs `coro` in the background, kept in `tasks`; a failure is reported."""
         task = asyncio.ensure_future(coro)
         self.tasks.add(task)
         task.add_done_callback(self._task_done)
@@ -173,6 +177,7 @@ class SupervisorCore:
             self.changed.set()
 
     def log_action(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
+        """A line in the launch pane on behalf of one action of the plan."""
         self.emit(Event("log", action.id, reason=text, level=level))
 
     # Made by the later layers; declared here so the earlier ones can call them.

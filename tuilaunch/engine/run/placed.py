@@ -101,7 +101,7 @@ class Placed(Starting):
             self.emit(event)
             if self.io_watchers or self.any_watchers:  # OnProcessIO handlers here
                 self.dispatch_io(process_id, event.stream or "stdout", event.lines,
-                                  self._pids_elsewhere.get(process_id, 0))
+                                 self._pids_elsewhere.get(process_id, 0))
             return
         if event.kind == "started" and event.pid is not None:
             self._pids_elsewhere[process_id] = event.pid

@@ -22,7 +22,7 @@ class PlanActions(Triggers):
     """Performing one action of the plan, and what event handlers add to the run."""
 
     def process_event(self, process_id: str, on: str, pid: int | None = None,
-                       returncode: int | None = None) -> None:
+                      returncode: int | None = None) -> None:
         """A process started or exited: remember the event and run handlers without target."""
         proc = self.plan.process(process_id)
         event = event_for(on, process_name=process_id, pid=pid, returncode=returncode,
@@ -139,7 +139,7 @@ class PlanActions(Triggers):
                     produced += entity_list(call_handler(callback, event, action))
         except Exception as exc:  # a user's callback must never stop the launch
             self.log_action(action, f"event callback ({action.origin}) raised "
-                      f"{type(exc).__name__}: {exc}", "ERROR")
+                            f"{type(exc).__name__}: {exc}", "ERROR")
             return False
         seen: set[int] = set()
         rest: list[Any] = []

@@ -67,7 +67,7 @@ class Starting(Respawning):
         if self.watchdog.error and "watchdog" not in self.reported:
             self.reported.add("watchdog")
             self.report_io(f"{self.watchdog.error}: processes may outlive a crash of "
-                            "tuilaunch")
+                           "tuilaunch")
         self.watchdog.mark(env)
         log_path = self.log_dir / f"{process_id}.log"
         try:

@@ -45,7 +45,7 @@ class Stopping(PlanActions):
                     await self.perform_action(action, LaunchEvent(reason=reason))
                 except Exception as exc:  # an OnShutdown action never stops the shutdown
                     self.report_io(f"on-shutdown action {action.id} raised "
-                                    f"{type(exc).__name__}: {exc}")
+                                   f"{type(exc).__name__}: {exc}")
         finally:
             await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)

@@ -88,7 +88,7 @@ class Supervisor(Interacting, Placed):
                 await plugin.close()
             except Exception as exc:  # a plugin that fails to close never stops the end
                 self.report_io(f"{type(plugin).__name__} failed to close: "
-                                f"{type(exc).__name__}: {exc}")
+                               f"{type(exc).__name__}: {exc}")
         self.launch_log.close()
         self.remove_parameter_files()
         # the watchdog stops what a node left behind (daemons, stray group members)

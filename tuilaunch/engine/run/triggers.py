@@ -68,7 +68,7 @@ class Triggers(SupervisorCore):
         return True
 
     async def when_ready(self, trigger: Trigger | None, then: Callable[[Any], Any],
-                          item: Any) -> None:
+                         item: Any) -> None:
         chain: list[Trigger] = []
         while trigger is not None:
             chain.insert(0, trigger)
