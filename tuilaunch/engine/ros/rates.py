@@ -143,21 +143,18 @@ class RateMeter:
     """Many topics measured at once on one node (the bridge's), started and stopped at will:
     the TUI measures only the topics on screen.
 
-    Subscriptions are made and destroyed on the caller's thread; the meter's thread (running
-    while any topic is measured) holds each subscription's handle while it waits and takes,
-    so rclpy defers destroying one that is in use."""
+    Subscriptions are made and destroyed on the caller's thread. The meter's thread runs
+    while any topic is measured; it holds each subscription's handle while it waits and
+    takes, so rclpy defers destroying one in use until the thread lets go of it."""
 
     def __init__(self, node: Any) -> None:
-        from rclpy.guard_condition import GuardCondition
-
         self.node = node
         self.windows: dict[str, RateWindow] = {}
         self.subscriptions: dict[str, Any] = {}
         self.group = NotByExecutor()
-        # wakes the thread when the topics change; not on the node: no executor sees it
-        self.changed = GuardCondition(None, None, context=node.context)
-        self.lock = threading.Lock()
-        self.thread: threading.Thread | None = None
+        self.lock = threading.Lock()  # guards the two dicts and `changed` with the thread
+        # the thread's wake-up when the topics change, None while no thread runs
+        self.changed: Any = None
 
     async def start(self, topic: str, window_s: float = 10.0, wait: float = 5.0) -> None:
         """Measures `topic` from now on (a no-op when it already is, bar a new window)."""
@@ -166,7 +163,7 @@ class RateMeter:
             return
         infos = await wait_for_publishers(self.node, topic, wait)
         cls = message_class(infos[0].topic_type)
-        if topic in self.windows:  # started meanwhile by another caller
+        if topic in self.windows:  # started by another caller while this one waited
             self.windows[topic].window_s = window_s
             return
         subscription = self.node.create_subscription(
@@ -175,18 +172,27 @@ class RateMeter:
         with self.lock:
             self.windows[topic] = RateWindow(topic, window_s)
             self.subscriptions[topic] = subscription
-            if self.thread is None:
-                self.thread = threading.Thread(target=self.take_loop, daemon=True,
-                                               name=f"rates {topic}")
-                self.thread.start()
-        self.changed.trigger()
+            if self.changed is None:
+                self.start_thread()
+            else:
+                self.changed.trigger()
+
+    def start_thread(self) -> None:
+        from rclpy.guard_condition import GuardCondition
+
+        # made apart from the node: no executor waits on it
+        changed = self.changed = GuardCondition(None, None, context=self.node.context)
+        threading.Thread(target=self.take_loop, args=(changed,), daemon=True,
+                         name="rate meter").start()
 
     def stop(self, topic: str) -> None:
+        """Stops measuring `topic`; its subscription goes as soon as the thread lets go."""
         with self.lock:
             subscription = self.subscriptions.pop(topic, None)
             self.windows.pop(topic, None)
+            if subscription is not None and self.changed is not None:
+                self.changed.trigger()
         if subscription is not None:
-            self.changed.trigger()
             self.node.destroy_subscription(subscription)
 
     def stop_all(self) -> None:
@@ -203,56 +209,68 @@ class RateMeter:
 
     # --- the meter's thread ----------------------------------------------------------------
 
-    def take_loop(self) -> None:
+    def take_loop(self, changed: Any) -> None:
         """Until no topic is left: wait for messages or a change, take all that wait."""
         from rclpy.exceptions import InvalidHandle
         from rclpy.impl.implementation_singleton import rclpy_implementation
 
         context = self.node.context
-        while context.ok():
+        while True:
             with self.lock:
                 measured = [(self.subscriptions[t], self.windows[t]) for t in self.subscriptions]
-                if not measured:
-                    self.thread = None
-                    return
+                if not measured or not context.ok():
+                    self.changed = None
+                    break
             try:
                 with ExitStack() as held:
                     for subscription, _ in measured:
                         held.enter_context(subscription.handle)
-                    held.enter_context(self.changed.handle)
+                    held.enter_context(changed.handle)
                     held.enter_context(context.handle)
                     wait_set = rclpy_implementation.WaitSet(len(measured), 1, 0, 0, 0, 0,
                                                             context.handle)
-                    self.serve(wait_set, measured)
-            except InvalidHandle:  # stopped meanwhile: the next round leaves it out
+                    self.serve(wait_set, measured, changed)
+            except InvalidHandle:  # stopped meanwhile (the next round has it not) or destroyed
+                self.forget_destroyed()  # with the node: no round would ever have it
                 continue
             except Exception:  # the context was shut down under the thread: nothing to do
+                with self.lock:
+                    self.changed = None
                 break
-        with self.lock:
-            self.thread = None
+        changed.destroy()
 
-    def serve(self, wait_set: Any, measured: list[tuple[Any, RateWindow]]) -> None:
-        """Waits and takes with this set of subscriptions until it changes."""
+    def forget_destroyed(self) -> None:
+        from rclpy.exceptions import InvalidHandle
+
+        with self.lock:
+            for topic, subscription in list(self.subscriptions.items()):
+                try:
+                    with subscription.handle:
+                        pass
+                except InvalidHandle:
+                    del self.subscriptions[topic], self.windows[topic]
+
+    def serve(self, wait_set: Any, measured: list[tuple[Any, RateWindow]],
+              changed: Any) -> None:
+        """Waits and takes with this set of subscriptions until the set changes."""
         clock = time.monotonic
         while True:
             wait_set.clear_entities()
             for subscription, _ in measured:
                 wait_set.add_subscription(subscription.handle)
-            wait_set.add_guard_condition(self.changed.handle)
+            wait_set.add_guard_condition(changed.handle)
             wait_set.wait(IDLE_WAIT_NS)
             if wait_set.get_ready_entities("guard_condition"):
                 return
             ready = wait_set.get_ready_entities("subscription")
-            if not ready:
-                if not self.node.context.ok():
-                    return
-                continue
+            if not ready and not self.node.context.ok():
+                return
             for subscription, window in measured:
                 if subscription.handle.pointer not in ready:
                     continue
                 handle, msg_type = subscription.handle, subscription.msg_type
                 taken: list[tuple[float, int]] = []
-                # a message's time is when it was taken: take all waiting, each stamped
+                # each message's time is when it was taken: the wait set woke on the first
                 while (message := handle.take_message(msg_type, True)) is not None:
                     taken.append((clock(), len(message[0])))
                 window.add_many(taken)
