@@ -9,7 +9,8 @@
    the same topic in its own process. The 1 kHz publisher publishes from a plain loop rather
    than an executor's timer (rclpy's timers cost more Python than a publish), catching up in
    bursts when the machine is busy; the rate it actually published over each measurement is
-   printed beside the rate read.
+   printed beside the rate read. "Subscribed, taking nothing" is the floor under both: DDS
+   receiving the messages in this process before any Python runs.
 
 3. The session server's own CPU (its process, the launch's nodes excluded) with no client,
    then while one client watches a 100 Hz topic's rate and every process's resources (the
@@ -158,6 +159,21 @@ async def hz_standin_cpu(topic: str, seconds: float) -> tuple[float, float | Non
         proc.wait(timeout=30)
 
 
+async def dds_floor(bridge: RosBridge, topic: str, seconds: float) -> float:
+    """This process's CPU while a subscription no one takes from receives the topic: what
+    DDS costs before any Python runs (a node of the bridge's context no executor spins)."""
+    import rclpy
+    from std_msgs.msg import String
+
+    node = rclpy.create_node("bench_floor", context=bridge.node.context)
+    try:
+        node.create_subscription(String, topic, lambda _data: None, 10, raw=True)
+        await asyncio.sleep(1)
+        return await own_cpu(seconds)
+    finally:
+        node.destroy_node()
+
+
 async def own_cpu(seconds: float) -> float:
     sampler = ResourceSampler()
     sampler.sample({"self": os.getpid()})
@@ -254,6 +270,7 @@ async def main() -> None:
         idle = await own_cpu(5)
         fast, reports = fast_publisher(1000, "bench_1khz")
         procs.append(fast)
+        floor = await dds_floor(bridge, "/bench_1khz", 5)
         await bridge.start_rates(["/bench_1khz"], window_s=WINDOW_S, wait=30)
         await asyncio.sleep(1)
         started = time.monotonic()
@@ -266,6 +283,8 @@ async def main() -> None:
         standin, standin_rate = await hz_standin_cpu("/bench_1khz", 5)
         standin_sent = published_rate(reports, started, time.monotonic())
         print(f"   bridge measuring nothing:          {idle:5.1f}% of a core")
+        print(f"   subscribed, taking nothing:        {floor:5.1f}% of a core "
+              "(DDS receiving the messages: the floor)")
         print(f"   bridge measuring the 1 kHz topic:  {measuring:5.1f}% of a core, "
               f"read {rate} Hz (published {sent:.1f} Hz)")
         print(f"   `ros2 topic hz` stand-in, alone:   {standin:5.1f}% of a core, "
