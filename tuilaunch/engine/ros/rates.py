@@ -200,12 +200,15 @@ class RateMeter:
             self.stop(topic)
 
     def measured(self) -> list[str]:
-        return sorted(self.windows)
+        with self.lock:
+            return sorted(self.windows)
 
     def read(self, topic: str | None = None) -> dict[str, dict[str, Any]]:
         """Results by topic: all measured topics, or only `topic`."""
-        topics = self.measured() if topic is None else [topic]
-        return {t: self.windows[t].result() for t in topics if t in self.windows}
+        with self.lock:  # the thread forgets topics whose node was destroyed
+            windows = dict(self.windows)
+        topics = sorted(windows) if topic is None else [topic]
+        return {t: windows[t].result() for t in topics if t in windows}
 
     # --- the meter's thread ----------------------------------------------------------------
 
