@@ -3,9 +3,14 @@
 1. Rate accuracy against publishers with known rates (1 Hz and 100 Hz timers; target:
    within 5%), measured as `tuilaunch hz` measures them (RosBridge.start_rates, 10 s window).
 2. The inspector's own CPU (this process, % of one core as top shows it) while it measures
-   a 1 kHz topic, beside the same bridge measuring nothing. rclpy costs a fraction of a
-   millisecond of Python per message received, so this is the figure to watch; a Python
-   publisher on a busy machine may itself fall short of 1 kHz (the rate read is printed).
+   a 1 kHz topic, beside the same bridge measuring nothing, and beside a stand-in for
+   `ros2 topic hz` (ros2cli is not installed here: HZ_STANDIN does what ros2topic's hz.py
+   does, a raw subscription whose callback records receive times, spun by rclpy) measuring
+   the same topic in its own process. The 1 kHz publisher publishes from a plain loop rather
+   than an executor's timer (rclpy's timers cost more Python than a publish), catching up in
+   bursts when the machine is busy; the rate it actually published over each measurement is
+   printed beside the rate read. "Subscribed, taking nothing" is the floor under both: DDS
+   receiving the messages in this process before any Python runs.
 
 3. The session server's own CPU (its process, the launch's nodes excluded) with no client,
    then while one client watches a 100 Hz topic's rate and every process's resources (the
@@ -26,6 +31,7 @@ import subprocess
 import sys
 import tempfile
 import textwrap
+import threading
 import time
 from pathlib import Path
 
@@ -43,6 +49,56 @@ PUBLISHER = textwrap.dedent("""
     print('ready', flush=True)
     rclpy.spin(node)
 """)
+FAST_PUBLISHER = textwrap.dedent("""
+    import sys, time, rclpy
+    from std_msgs.msg import String
+    rclpy.init()
+    rate, topic = float(sys.argv[1]), sys.argv[2]
+    node = rclpy.create_node('bench_pub_' + topic)
+    pub = node.create_publisher(String, topic, 10)
+    message = String(data='x' * 64)
+    print('ready', flush=True)
+    period, count = 1.0 / rate, 0
+    due = reported = time.monotonic()
+    while True:
+        now = time.monotonic()
+        if now < due:
+            time.sleep(due - now)
+        pub.publish(message)
+        count += 1
+        due = max(due + period, now - 0.1)  # behind: catch up in bursts, at most 0.1 s
+        if now - reported >= 0.25:
+            print(now, count, flush=True)
+            reported = now
+""")
+HZ_STANDIN = textwrap.dedent("""
+    import sys, threading, rclpy
+    from rclpy.qos import qos_profile_sensor_data
+    from std_msgs.msg import String
+    rclpy.init()
+    node = rclpy.create_node('bench_hz')
+    clock, lock, times, last = node.get_clock(), threading.Lock(), [], [-1]
+
+    def received(data):  # as ROSTopicHz.callback_hz: periods between receive times
+        with lock:
+            now = clock.now().nanoseconds
+            if last[0] >= 0:
+                times.append(now - last[0])
+                if len(times) > 10000:
+                    times.pop(0)
+            last[0] = now
+
+    node.create_subscription(String, sys.argv[1], received, qos_profile_sensor_data,
+                             raw=True)
+    print('ready', flush=True)
+    printed = clock.now().nanoseconds
+    while rclpy.ok():  # as _rostopic_hz: spin once, print the mean rate once a second
+        rclpy.spin_once(node)
+        with lock:
+            if times and last[0] - printed >= 1e9:
+                print(1e9 * len(times) / sum(times), len(times), flush=True)
+                printed = last[0]
+""")
 WINDOW_S = 10.0
 
 
@@ -51,6 +107,71 @@ def publisher(rate: float, topic: str) -> subprocess.Popen[str]:
                             stdout=subprocess.PIPE, text=True)
     assert proc.stdout is not None and proc.stdout.readline().strip() == "ready"
     return proc
+
+
+class Lines:
+    """A child's stdout lines as they come, read in a thread (the child prints figures)."""
+
+    def __init__(self, proc: subprocess.Popen[str]) -> None:
+        self.lines: list[tuple[float, ...]] = []
+        self.thread = threading.Thread(target=self.read, args=(proc,), daemon=True)
+        self.thread.start()
+
+    def read(self, proc: subprocess.Popen[str]) -> None:
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            self.lines.append(tuple(float(f) for f in line.split()))
+
+
+def fast_publisher(rate: float, topic: str) -> tuple[subprocess.Popen[str], Lines]:
+    """The publisher and its `(time, messages published so far)` lines."""
+    proc = subprocess.Popen([sys.executable, "-c", FAST_PUBLISHER, str(rate), topic],
+                            stdout=subprocess.PIPE, text=True)
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "ready"
+    return proc, Lines(proc)
+
+
+def published_rate(lines: Lines, start: float, end: float) -> float:
+    """Messages a second the publisher published between its reports nearest these times."""
+    inside = [(t, n) for t, n in lines.lines if start <= t <= end]
+    (t0, n0), (t1, n1) = inside[0], inside[-1]
+    return (n1 - n0) / (t1 - t0)
+
+
+async def hz_standin_cpu(topic: str, seconds: float) -> tuple[float, float | None]:
+    """% of one core the `ros2 topic hz` stand-in used over `seconds` once it receives, and
+    the rate it printed last."""
+    proc = subprocess.Popen([sys.executable, "-c", HZ_STANDIN, topic], stdout=subprocess.PIPE,
+                            text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline().strip() == "ready"
+        lines = Lines(proc)
+        deadline = time.monotonic() + 30
+        while not lines.lines and time.monotonic() < deadline:  # matched and receiving
+            await asyncio.sleep(0.1)
+        before, started = cpu_ticks(proc.pid), time.monotonic()
+        await asyncio.sleep(seconds)
+        used = (cpu_ticks(proc.pid) - before) / os.sysconf("SC_CLK_TCK")
+        rate = lines.lines[-1][0] if lines.lines else None
+        return 100 * used / (time.monotonic() - started), rate
+    finally:
+        proc.kill()
+        proc.wait(timeout=30)
+
+
+async def dds_floor(bridge: RosBridge, topic: str, seconds: float) -> float:
+    """This process's CPU while a subscription no one takes from receives the topic: what
+    DDS costs before any Python runs (a node of the bridge's context no executor spins)."""
+    import rclpy
+    from std_msgs.msg import String
+
+    node = rclpy.create_node("bench_floor", context=bridge.node.context)
+    try:
+        node.create_subscription(String, topic, lambda _data: None, 10, raw=True)
+        await asyncio.sleep(1)
+        return await own_cpu(seconds)
+    finally:
+        node.destroy_node()
 
 
 async def own_cpu(seconds: float) -> float:
@@ -145,16 +266,29 @@ async def main() -> None:
                   f"error {error:+5.1f}%  ({results[topic]['messages']} messages, "
                   f"{results[topic]['bytes_per_s']} B/s)")
         await bridge.stop_rates()
-        print("2. the inspector's own CPU")
+        print("2. CPU while measuring a 1 kHz topic (5 s each)")
         idle = await own_cpu(5)
-        procs.append(publisher(1000, "bench_1khz"))
+        fast, reports = fast_publisher(1000, "bench_1khz")
+        procs.append(fast)
+        floor = await dds_floor(bridge, "/bench_1khz", 5)
         await bridge.start_rates(["/bench_1khz"], window_s=WINDOW_S, wait=30)
+        await asyncio.sleep(1)
         started = time.monotonic()
         measuring = await own_cpu(5)
+        ended = time.monotonic()
         rate = (await bridge.read_rates("/bench_1khz"))["/bench_1khz"]["rate_hz"]
-        print(f"   bridge measuring nothing: {idle:5.1f}% of a core")
-        print(f"   measuring a 1 kHz topic:  {measuring:5.1f}% of a core "
-              f"(read {rate} Hz over {time.monotonic() - started:.1f} s)")
+        await bridge.stop_rates()
+        sent = published_rate(reports, started, ended)
+        started = time.monotonic()
+        standin, standin_rate = await hz_standin_cpu("/bench_1khz", 5)
+        standin_sent = published_rate(reports, started, time.monotonic())
+        print(f"   bridge measuring nothing:          {idle:5.1f}% of a core")
+        print(f"   subscribed, taking nothing:        {floor:5.1f}% of a core "
+              "(DDS receiving the messages: the floor)")
+        print(f"   bridge measuring the 1 kHz topic:  {measuring:5.1f}% of a core, "
+              f"read {rate} Hz (published {sent:.1f} Hz)")
+        print(f"   `ros2 topic hz` stand-in, alone:   {standin:5.1f}% of a core, "
+              f"read {standin_rate or 0:.3f} Hz (published {standin_sent:.1f} Hz)")
     finally:
         bridge.close()
         for proc in procs:

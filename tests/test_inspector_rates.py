@@ -4,6 +4,8 @@ The bands are loose on purpose (a busy shared machine): accuracy figures belong 
 
 from __future__ import annotations
 
+import asyncio
+import threading
 from typing import Any
 
 import pytest
@@ -51,6 +53,38 @@ def test_rates_of_several_topics_at_once_with_matching_qos():
     assert 10 <= latched["rate_hz"] <= 30
     assert left == [f"{NS}/latched", f"{NS}/slow"]
     assert after_stop == {}
+
+
+def test_many_topics_each_read_at_its_own_rate_and_stop_lets_go_of_them():
+    rates = {f"{NS}/many_{hz}": hz for hz in (5, 10, 25, 50)}
+
+    async def scenario(bridge: RosBridge) -> tuple[dict[str, Any], list[str], Any]:
+        await bridge.start_rates(list(rates), window_s=5.0, wait=30)
+        results = {t: await reading(bridge, t, 2 * hz) for t, hz in rates.items()}
+        await bridge.stop_rates()
+
+        async def released() -> bool:
+            counts = [await asyncio.to_thread(bridge.node.count_subscribers, t) for t in rates]
+            return counts == [0] * len(rates) and not meter_threads()
+        await eventually(released, 60, "subscriptions and the meter's thread gone")
+        left = await bridge.read_rates()
+        # measuring again after everything stopped
+        await bridge.start_rates([f"{NS}/many_50"], window_s=5.0, wait=30)
+        again = await reading(bridge, f"{NS}/many_50", 20)
+        return results, sorted(left), again
+
+    publishers = [[f"many_{hz}", "--namespace", NS, "--pub", f"many_{hz}", "--rate", str(hz)]
+                  for hz in rates.values()]
+    with ros_nodes(*publishers):
+        results, left, again = run(scenario)
+    for topic, hz in rates.items():
+        assert 0.5 * hz <= results[topic]["rate_hz"] <= 1.5 * hz, (topic, results[topic])
+    assert left == []
+    assert 25 <= again["rate_hz"] <= 75
+
+
+def meter_threads() -> list[threading.Thread]:
+    return [t for t in threading.enumerate() if t.name == "rate meter"]
 
 
 def test_bandwidth_follows_message_size():

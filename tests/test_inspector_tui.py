@@ -190,6 +190,10 @@ async def test_log_level_key_sets_it_or_offers_a_restart(demo):
             return entry["state"] == "running" and entry["pid"] != before
 
         await until(pilot, restarted, limit=60)
+        # the node now runs with the level, as `ros2 run ... --ros-args --log-level warn`
+        now = status(app.session_name or "")
+        command = next(p["command"] for p in now["processes"] if p["id"] == "mapper-2")
+        assert command[-3:] == ["--ros-args", "--log-level", "warn"]
 
 
 async def test_params_tab_writes_and_loads_a_params_file(demo, tmp_path, monkeypatch):

@@ -7,6 +7,11 @@ messages over the time from its first message to now. The window here is a time 
 
 Subscriptions are generic (`raw=True`: serialized bytes, never deserialized, so measuring
 costs little) with a QoS that matches the publishers', as ros2cli's `choose_qos` does.
+
+Messages are not delivered by the bridge's executor: an executor callback costs about half a
+millisecond of Python per message, a whole core for a 1 kHz topic, and falls behind it. Each
+RateMeter has one thread waiting on its own wait set; on each wake-up it takes every message
+waiting and records only when each was taken and its size.
 """
 
 from __future__ import annotations
@@ -16,7 +21,10 @@ import os
 import threading
 import time
 from collections import deque
+from contextlib import ExitStack
 from typing import Any
+
+from rclpy.callback_groups import CallbackGroup
 
 from .bridge import RosError
 from .messages import MessageError, import_type
@@ -63,7 +71,7 @@ async def wait_for_publishers(node: Any, topic: str, timeout: float) -> list[Any
 class RateWindow:
     """Receive times and sizes of one topic's messages over the last `window_s` seconds.
 
-    Thread-safe: messages arrive on executor threads, reads come from asyncio."""
+    Thread-safe: messages arrive on the meter's thread, reads come from asyncio."""
 
     def __init__(self, topic: str, window_s: float = 10.0) -> None:
         self.topic = topic
@@ -77,6 +85,14 @@ class RateWindow:
         with self.lock:
             self.samples.append((now, size))
             self.trim(now)
+
+    def add_many(self, samples: list[tuple[float, int]]) -> None:
+        """(time taken, size) of messages, oldest first: one lock for a batch."""
+        if not samples:
+            return
+        with self.lock:
+            self.samples.extend(samples)
+            self.trim(samples[-1][0])
 
     def trim(self, now: float) -> None:
         while self.samples and self.samples[0][0] < now - self.window_s:
@@ -103,14 +119,42 @@ class RateWindow:
                 "messages": len(samples), "window_s": round(span, 3)}
 
 
+class NotByExecutor(CallbackGroup):
+    """A callback group whose entities no executor waits on or runs (Executor.can_execute
+    asks the group): the subscriptions belong to the bridge's node, so they are made and
+    destroyed like any other and hidden from the graph like it, but the meter's thread
+    alone takes their messages."""
+
+    def can_execute(self, entity: Any) -> bool:
+        return False
+
+    def beginning_execution(self, entity: Any) -> bool:
+        return False
+
+    def ending_execution(self, entity: Any) -> None:
+        pass
+
+
+IDLE_WAIT_NS = 500_000_000
+"""How long the meter's thread waits at most: it notices a context shut down under it."""
+
+
 class RateMeter:
     """Many topics measured at once on one node (the bridge's), started and stopped at will:
-    the TUI measures only the topics on screen."""
+    the TUI measures only the topics on screen.
+
+    Subscriptions are made and destroyed on the caller's thread. The meter's thread runs
+    while any topic is measured; it holds each subscription's handle while it waits and
+    takes, so rclpy defers destroying one in use until the thread lets go of it."""
 
     def __init__(self, node: Any) -> None:
         self.node = node
         self.windows: dict[str, RateWindow] = {}
         self.subscriptions: dict[str, Any] = {}
+        self.group = NotByExecutor()
+        self.lock = threading.Lock()  # guards the two dicts and `changed` with the thread
+        # the thread's wake-up when the topics change, None while no thread runs
+        self.changed: Any = None
 
     async def start(self, topic: str, window_s: float = 10.0, wait: float = 5.0) -> None:
         """Measures `topic` from now on (a no-op when it already is, bar a new window)."""
@@ -119,19 +163,35 @@ class RateMeter:
             return
         infos = await wait_for_publishers(self.node, topic, wait)
         cls = message_class(infos[0].topic_type)
-        window = RateWindow(topic, window_s)
-
-        def received(data: bytes) -> None:
-            window.add(len(data))
-
+        if topic in self.windows:  # started by another caller while this one waited
+            self.windows[topic].window_s = window_s
+            return
         subscription = self.node.create_subscription(
-            cls, topic, received, matching_qos([i.qos_profile for i in infos]), raw=True)
-        self.windows[topic] = window
-        self.subscriptions[topic] = subscription
+            cls, topic, lambda _data: None, matching_qos([i.qos_profile for i in infos]),
+            callback_group=self.group, raw=True)
+        with self.lock:
+            self.windows[topic] = RateWindow(topic, window_s)
+            self.subscriptions[topic] = subscription
+            if self.changed is None:
+                self.start_thread()
+            else:
+                self.changed.trigger()
+
+    def start_thread(self) -> None:
+        from rclpy.guard_condition import GuardCondition
+
+        # made apart from the node: no executor waits on it
+        changed = self.changed = GuardCondition(None, None, context=self.node.context)
+        threading.Thread(target=self.take_loop, args=(changed,), daemon=True,
+                         name="rate meter").start()
 
     def stop(self, topic: str) -> None:
-        subscription = self.subscriptions.pop(topic, None)
-        self.windows.pop(topic, None)
+        """Stops measuring `topic`; its subscription goes as soon as the thread lets go."""
+        with self.lock:
+            subscription = self.subscriptions.pop(topic, None)
+            self.windows.pop(topic, None)
+            if subscription is not None and self.changed is not None:
+                self.changed.trigger()
         if subscription is not None:
             self.node.destroy_subscription(subscription)
 
@@ -140,9 +200,80 @@ class RateMeter:
             self.stop(topic)
 
     def measured(self) -> list[str]:
-        return sorted(self.windows)
+        with self.lock:
+            return sorted(self.windows)
 
     def read(self, topic: str | None = None) -> dict[str, dict[str, Any]]:
         """Results by topic: all measured topics, or only `topic`."""
-        topics = self.measured() if topic is None else [topic]
-        return {t: self.windows[t].result() for t in topics if t in self.windows}
+        with self.lock:  # the thread forgets topics whose node was destroyed
+            windows = dict(self.windows)
+        topics = sorted(windows) if topic is None else [topic]
+        return {t: windows[t].result() for t in topics if t in windows}
+
+    # --- the meter's thread ----------------------------------------------------------------
+
+    def take_loop(self, changed: Any) -> None:
+        """Until no topic is left: wait for messages or a change, take all that wait."""
+        from rclpy.exceptions import InvalidHandle
+        from rclpy.impl.implementation_singleton import rclpy_implementation
+
+        context = self.node.context
+        while True:
+            with self.lock:
+                measured = [(self.subscriptions[t], self.windows[t]) for t in self.subscriptions]
+                if not measured or not context.ok():
+                    self.changed = None
+                    break
+            try:
+                with ExitStack() as held:
+                    for subscription, _ in measured:
+                        held.enter_context(subscription.handle)
+                    held.enter_context(changed.handle)
+                    held.enter_context(context.handle)
+                    wait_set = rclpy_implementation.WaitSet(len(measured), 1, 0, 0, 0, 0,
+                                                            context.handle)
+                    self.serve(wait_set, measured, changed)
+            except InvalidHandle:  # stopped meanwhile (the next round has it not) or destroyed
+                self.forget_destroyed()  # with the node: no round would ever have it
+                continue
+            except Exception:  # the context was shut down under the thread: nothing to do
+                with self.lock:
+                    self.changed = None
+                break
+        changed.destroy()
+
+    def forget_destroyed(self) -> None:
+        from rclpy.exceptions import InvalidHandle
+
+        with self.lock:
+            for topic, subscription in list(self.subscriptions.items()):
+                try:
+                    with subscription.handle:
+                        pass
+                except InvalidHandle:
+                    del self.subscriptions[topic], self.windows[topic]
+
+    def serve(self, wait_set: Any, measured: list[tuple[Any, RateWindow]],
+              changed: Any) -> None:
+        """Waits and takes with this set of subscriptions until the set changes."""
+        clock = time.monotonic
+        while True:
+            wait_set.clear_entities()
+            for subscription, _ in measured:
+                wait_set.add_subscription(subscription.handle)
+            wait_set.add_guard_condition(changed.handle)
+            wait_set.wait(IDLE_WAIT_NS)
+            if wait_set.get_ready_entities("guard_condition"):
+                return
+            ready = wait_set.get_ready_entities("subscription")
+            if not ready and not self.node.context.ok():
+                return
+            for subscription, window in measured:
+                if subscription.handle.pointer not in ready:
+                    continue
+                handle, msg_type = subscription.handle, subscription.msg_type
+                taken: list[tuple[float, int]] = []
+                # each message's time is when it was taken: the wait set woke on the first
+                while (message := handle.take_message(msg_type, True)) is not None:
+                    taken.append((clock(), len(message[0])))
+                window.add_many(taken)

@@ -24,6 +24,9 @@ from .respawn import Respawning
 from .spawn import spawn
 from .stopping import describe_exit, group_alive, kill_group
 
+_ENDING_KEYS = {signal.SIGINT, signal.SIGQUIT}
+"""Signals of keys typed into a node (ctrl+c, ctrl+\\) that end it on the operator's request."""
+
 EOF_GRACE = 1.0
 """Seconds to wait, once a process is reaped, for the end of its output. A daemonised
 grandchild may hold the pipe for ever: its exit is then reported anyway, and whatever it
@@ -179,6 +182,8 @@ class Starting(Respawning):
         requested = running.stopping or self.shutting_down
         # a ctrl+c (or ctrl+\\, ctrl+z) typed into it was asked for by the operator too
         typed = code < 0 and -code in running.typed_signals
+        if code > 0 and running.typed_signals & _ENDING_KEYS:
+            typed = True  # a program that turns a typed ctrl+c into an exit status (130)
         crashed = code != 0 and not requested and not typed
         if crashed:
             self.crashes[process_id] = code
