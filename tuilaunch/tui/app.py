@@ -21,6 +21,7 @@ from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
+from ..client.served_session import ServedSession
 from ..engine.errors import LaunchError
 from ..engine.launcher import make_supervisor
 from ..engine.plan.session import Session
@@ -153,6 +154,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
         assert self.supervisor is not None
         self.supervisor.subscribe(self.buffer)
+        if isinstance(self.session, ServedSession):  # the form from the server's plan
+            self.args_panel.arguments = self.session.plan.arguments
+            self.args_panel.refresh(recompose=True)
         tree = self.launch_tree
         tree.show_plan(self.session.plan, self.supervisor.states)
         self.describe_waiting()
@@ -206,6 +210,10 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
 def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any)\
         -> TuiLaunchApp:
     """The one factory for the CLI and the tests, so tests run the real wiring.
-    `placement` (`--machines`): the tree labels each process with its machine."""
+    `placement` (`--machines`): the tree labels each process with its machine. A session on
+    another machine (`session_host`) is drawn from the plan its server sends: the launch file
+    need not be readable here (`path` only names it)."""
     placement = options.pop("placement", None)
+    if options.get("session_host") is not None:
+        return TuiLaunchApp(ServedSession(path, arguments), log_dir, **options)
     return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)
