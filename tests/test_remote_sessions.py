@@ -389,3 +389,20 @@ def test_a_fair_buffer_drops_the_loudest_process_lines_not_the_oldest():
         assert kept["loud"] == [f"x{i}" for i in range(50 - 10 + len(quiet_kept), 50)]
         dropped = {e.process: e.code for e in events if e.kind == "dropped"}
         assert dropped.get("loud") == 40 + len(quiet_kept)
+
+
+def test_a_batch_carries_each_run_of_a_process_lines_once():
+    """Reads of one pipe in a row are one event in a batch (one header over the link), in
+    order; another process's output or a state event between them keeps them apart."""
+    buffer = EventBuffer()
+    buffer(Event("output", "a", stream="stdout", lines=["1"]))
+    buffer(Event("output", "a", stream="stdout", lines=["2", "3"]))
+    buffer(Event("output", "a", stream="stderr", lines=["oops"]))
+    buffer(Event("output", "b", stream="stdout", lines=["b1"]))
+    buffer(Event("exited", "b", code=0))
+    buffer(Event("output", "a", stream="stderr", lines=["again"]))
+    events = buffer.drain()
+    assert [(e.kind, e.process, e.stream, e.lines) for e in events] == [
+        ("output", "a", "stdout", ["1", "2", "3"]), ("output", "a", "stderr", ["oops"]),
+        ("output", "b", "stdout", ["b1"]), ("exited", "b", None, []),
+        ("output", "a", "stderr", ["again"])]

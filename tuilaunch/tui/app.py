@@ -39,7 +39,7 @@ from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import LaunchTree
-from .session_link import DRAIN_HZ
+from .session_link import DRAIN_HZ, PANE_CHROME
 
 
 class LaunchTabs(TabbedContent):
@@ -131,12 +131,12 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         # built on the engine thread, whose loop its asyncio objects belong to
         if self.session_host is not None:
             # the session is on another machine: the protocol crosses an ssh link
-            # sent what the screen can show each second (a pane is shorter than the
-            # screen); what it cannot is counted, and is in the log files over there
+            # sent what the output pane can show each second; what it cannot is
+            # counted, and is in the log files over there
             try:
                 self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
                     self.session_host, str(self.session_name), self.session,
-                    self.scrollback, max_lines=max(24, self.size.height),
+                    self.scrollback, max_lines=max(12, self.size.height - PANE_CHROME),
                     interval=LINK_INTERVAL, link=self.remote_link)).result(timeout=120)
             except LaunchError as exc:  # the link failed between `attach` and here
                 self.engine.stop()
