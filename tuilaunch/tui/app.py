@@ -8,6 +8,7 @@ quitting, inspector.
 from __future__ import annotations
 
 import asyncio
+import os
 import signal
 import sys
 from collections.abc import Iterable
@@ -214,6 +215,6 @@ def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any
     another machine (`session_host`) is drawn from the plan its server sends: the launch file
     need not be readable here (`path` only names it)."""
     placement = options.pop("placement", None)
-    if options.get("session_host") is not None:
+    if options.get("session_host") is not None and not os.access(path, os.R_OK):
         return TuiLaunchApp(ServedSession(path, arguments), log_dir, **options)
     return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)
