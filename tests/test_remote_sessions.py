@@ -17,6 +17,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from textual.widgets import Input
+
 from tuilaunch.client import remote_supervisor
 from tuilaunch.engine.run.event_buffer import EventBuffer
 from tuilaunch.engine.run.events import Event
@@ -198,6 +200,12 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
         async with app.run_test(size=(100, 30)) as pilot:
             await until(pilot, lambda: len(ticks(app)) >= 3)
             assert "[robot1:far]" in str(app.status_bar.render())
+            # the Nodes tab watches CPU and memory: the server sends them each second
+            assert app.supervisor is not None
+            usage: list[Event] = []
+            app.supervisor.subscribe(lambda e: usage.append(e) if e.kind == "resources"
+                                     else None)
+            await until(pilot, lambda: usage)
             for pid in proxies_on(robot):
                 os.kill(pid, signal.SIGKILL)  # the link dies; ssh ends with it
             await until(pilot, lambda: "link to robot1 lost" in str(app.status_bar.render()))
@@ -212,6 +220,9 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
                 app.status_bar.render()) and len(ticks(app)) > seen + 5)
             shown = ticks(app)
             assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
+            # the watch ended with the old connection; the new one asked again
+            usage.clear()
+            await until(pilot, lambda: usage)
             quiet = [line.text for line in app.store.lines(View("quiet-2"))]
             assert sum("process started with pid" in t for t in quiet) == 2
             assert app.supervisor is not None
@@ -247,6 +258,75 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
     assert run_cli("stop", "robot1:far").returncode == 0
     wait_for(lambda: not alive(server))
     assert proxies_on(robot) == []
+
+
+ARGUED = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.substitutions import LaunchConfiguration
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('nap', default_value='600', description='how long quiet sleeps'),
+        ExecuteProcess(name='ticker', cmd=[
+            'sh', '-c', 'i=0; while true; do i=$((i+1)); echo tick $i; sleep 0.2; done']),
+        ExecuteProcess(name='quiet', cmd=['sleep', LaunchConfiguration('nap')]),
+    ])
+"""
+
+
+def test_attach_without_the_launch_file_here_draws_the_servers_plan(machines: Machines,
+                                                                    tmp_path, monkeypatch):
+    """The launch file is on the robot only: the tree, the output and the argument form
+    come from robot1's server, and an argument edit is previewed and applied there."""
+    robot = machines["robot1"]
+    files = tmp_path / "on-robot1"
+    files.mkdir()
+    path = files / "argued_launch.py"
+    path.write_text(ARGUED)
+    started = run_cli(str(path), "--detach", "--name", "far", env=there(robot))
+    assert started.returncode == 0, started.stderr
+    assert run_cli("wait", "far", "quiet-2", "running", "--timeout", "30",
+                   env=there(robot)).returncode == 0
+    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    quiet_pid = {p["id"]: p["pid"] for p in status["processes"]}["quiet-2"]
+    files.rename(tmp_path / "moved-away")  # not readable here at that path any more
+    elsewhere = tmp_path / "operator"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+
+    async def until(pilot, check: Callable[[], object], limit: float = 60.0) -> None:
+        end = time.monotonic() + limit
+        while not check():
+            assert time.monotonic() < end, f"condition never held: {check}"
+            await pilot.pause(0.05)
+
+    async def attached() -> None:
+        app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                       session_name="far", session_host="robot1")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await until(pilot, lambda: any(line.text.startswith("tick") for line in
+                                           app.store.lines(View("ticker-1"))))
+            assert set(app.launch_tree.states) >= {"ticker-1", "quiet-2"}
+            assert [p.id for p in app.session.plan.processes] == ["ticker-1", "quiet-2"]
+            await pilot.press("2")
+            field = app.query_one("#arg-nap", Input)
+            assert field.value == "600"
+            field.value = "601"
+            await pilot.pause()
+            preview = app.query_one("#args-preview")
+            assert "would restart: quiet-2" in str(preview.render())
+            await pilot.press("f5")
+            await until(pilot, lambda: "Applied." in str(preview.render()))
+            assert app.session.arguments == {"nap": "601"}
+            app.action_detach()  # "d" would be typed into the focused field
+            await until(pilot, lambda: app.detached)
+
+    asyncio.run(attached())
+    after = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    assert after["arguments"] == {"nap": "601"}
+    quiet = {p["id"]: p for p in after["processes"]}["quiet-2"]
+    assert quiet["pid"] != quiet_pid and quiet["state"] == "running"
+    assert run_cli("stop", "robot1:far").returncode == 0
 
 
 def test_attach_on_a_terminal_and_logs_follow_through_the_link(machines: Machines, write):
@@ -309,3 +389,20 @@ def test_a_fair_buffer_drops_the_loudest_process_lines_not_the_oldest():
         assert kept["loud"] == [f"x{i}" for i in range(50 - 10 + len(quiet_kept), 50)]
         dropped = {e.process: e.code for e in events if e.kind == "dropped"}
         assert dropped.get("loud") == 40 + len(quiet_kept)
+
+
+def test_a_batch_carries_each_run_of_a_process_lines_once():
+    """Reads of one pipe in a row are one event in a batch (one header over the link), in
+    order; another process's output or a state event between them keeps them apart."""
+    buffer = EventBuffer()
+    buffer(Event("output", "a", stream="stdout", lines=["1"]))
+    buffer(Event("output", "a", stream="stdout", lines=["2", "3"]))
+    buffer(Event("output", "a", stream="stderr", lines=["oops"]))
+    buffer(Event("output", "b", stream="stdout", lines=["b1"]))
+    buffer(Event("exited", "b", code=0))
+    buffer(Event("output", "a", stream="stderr", lines=["again"]))
+    events = buffer.drain()
+    assert [(e.kind, e.process, e.stream, e.lines) for e in events] == [
+        ("output", "a", "stdout", ["1", "2", "3"]), ("output", "a", "stderr", ["oops"]),
+        ("output", "b", "stdout", ["b1"]), ("exited", "b", None, []),
+        ("output", "a", "stderr", ["again"])]

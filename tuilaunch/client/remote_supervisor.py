@@ -37,6 +37,7 @@ from ..engine.run.session_dir import SessionError
 from ..engine.run.supervisor import Event
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering
+from .served_session import ServedSession
 
 Consumer = Callable[[Event], None]
 
@@ -86,6 +87,9 @@ class RemoteSupervisor:
         self._received: dict[str, int] = {}
         self._last_event = 0.0  # the time of the latest state event received
         self._retry: asyncio.Event | None = None
+        self.watches: dict[str, dict[str, Any]] = {}
+        """The inspector's streams asked for and not ended (rates, echo, resources), as the
+        requests that asked: a new connection asks again, the server's ended with the old."""
         self.session = session
         self.info = info
         self.log_dir = Path(info["log_dir"])
@@ -153,6 +157,9 @@ class RemoteSupervisor:
             result = await asyncio.wait_for(self._subscribe(), ANSWER_TIMEOUT * 3)
             self.states = dict(result["states"])
             self.lifecycle.states.update(result.get("lifecycle") or {})
+            if isinstance(session, ServedSession):
+                session.connect(self.request, asyncio.get_running_loop())
+                await asyncio.wait_for(self._fetch_plan(), ANSWER_TIMEOUT * 3)
             self._adopt(result["arguments"])
             lines = {}
             for process, end in result["offsets"].items():
@@ -204,9 +211,15 @@ class RemoteSupervisor:
     def plan(self) -> Plan:
         return self.session.plan
 
+    async def _fetch_plan(self) -> None:
+        """The plan the server runs, for a session whose file is read there (ServedSession);
+        before `run` reads the connection, or from `run` itself."""
+        assert isinstance(self.session, ServedSession)
+        self.session.adopt(await self._call("plan"))
+
     def _adopt(self, arguments: dict[str, str]) -> None:
         """Another client relaunched with these values: resolve the same plan here."""
-        if arguments == self.session.arguments:
+        if isinstance(self.session, ServedSession) or arguments == self.session.arguments:
             return
         preview = self.session.preview(arguments)
         if preview.plan is not None:
@@ -268,6 +281,17 @@ class RemoteSupervisor:
                 except ProtocolError:
                     continue
             kind = message.get("type")
+            if kind == "events" and isinstance(self.session, ServedSession) and any(
+                    data.get("kind") == "relaunched" for data in message.get("events") or []):
+                # the plan the relaunch made is the server's to send, before the event
+                # that has the TUI draw it
+                try:
+                    await self._fetch_plan()
+                except (ConnectionError, ProtocolError):
+                    # not taken: the reconnection reads its lines and events from the gap
+                    return None
+                except SessionError as exc:
+                    self._deliver(Event("log", reason=str(exc), level="ERROR"))
             if kind == "events":
                 self._take(message)
             elif kind == "reply":
@@ -350,6 +374,7 @@ class RemoteSupervisor:
             start, received = self._from, self._received
             try:
                 missed = await asyncio.wait_for(self._missed(), ANSWER_TIMEOUT * 3)
+                await asyncio.wait_for(self._watch_again(), ANSWER_TIMEOUT * 3)
             except (TimeoutError, ConnectionError, ProtocolError, SessionError) as exc:
                 # the link dropped again before the gap was read: it is read on the next
                 # one, from the same place; what this one sent meanwhile is in that gap
@@ -373,6 +398,8 @@ class RemoteSupervisor:
         result = await self._subscribe()
         self.states = dict(result["states"])
         self.lifecycle.states.update(result.get("lifecycle") or {})
+        if isinstance(self.session, ServedSession):
+            await self._fetch_plan()
         self._adopt(result["arguments"])
         lines: dict[str, list[LogLine]] = {}
         notes: list[Event] = []
@@ -401,7 +428,35 @@ class RemoteSupervisor:
     async def request(self, op: str, **fields: Any) -> Any:
         """The result of any request of the protocol (engine/run/protocol.py): `topics`,
         `watch_rates`, `echo`, ...; SessionError with the server's message when it fails."""
-        return await self._request(op, **fields)
+        result = await self._request(op, **fields)
+        self._note_watch(op, fields)
+        return result
+
+    def _note_watch(self, op: str, fields: dict[str, Any]) -> None:
+        """Keeps `watches` as the streams now running for this client."""
+        if op == "watch_rates":
+            key = op
+            on = bool(fields.get("topics"))
+        elif op in ("echo", "echo_stop"):
+            key, on = f"echo {fields.get('topic')}", op == "echo"
+        elif op == "watch_resources":
+            key, on = op, bool(fields.get("on", True))
+        else:
+            return
+        if on:
+            self.watches[key] = {"op": op, **fields}
+        else:
+            self.watches.pop(key, None)
+
+    async def _watch_again(self) -> None:
+        """After a reconnection: the streams the old connection carried, asked for again."""
+        for key, asked in list(self.watches.items()):
+            fields = {k: v for k, v in asked.items() if k != "op"}
+            try:
+                await self._call(asked["op"], **fields)
+            except SessionError as exc:  # the topic went away meanwhile, say
+                self.watches.pop(key, None)
+                self._deliver(Event("log", reason=f"not watched again: {exc}", level="WARN"))
 
     async def _request(self, op: str, **fields: Any) -> Any:
         if self.link_lost is not None:

@@ -19,6 +19,7 @@ from .launcher import make_supervisor
 from .packages import ensure_environment
 from .plan.machines import placement_from_text
 from .plan.session import Session
+from .run.plan_ops import plan_handlers
 from .run.session_server import SessionServer
 
 
@@ -41,6 +42,8 @@ def main(argv: list[str]) -> int:
                                  command=command, arguments=arguments, session_name=name)
     server = SessionServer(name, session, Path(log_dir), command=command,
                            supervisor=supervisor)
+    for op, handler in plan_handlers(session).items():  # a client without the launch file
+        server.add_handler(op, handler)
     try:
         return asyncio.run(server.serve())
     except LaunchError as exc:

@@ -8,6 +8,7 @@ quitting, inspector.
 from __future__ import annotations
 
 import asyncio
+import os
 import signal
 import sys
 from collections.abc import Iterable
@@ -21,6 +22,7 @@ from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
+from ..client.served_session import ServedSession
 from ..engine.errors import LaunchError
 from ..engine.launcher import make_supervisor
 from ..engine.plan.session import Session
@@ -38,7 +40,7 @@ from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import LaunchTree
-from .session_link import DRAIN_HZ
+from .session_link import DRAIN_HZ, PANE_CHROME
 
 
 class LaunchTabs(TabbedContent):
@@ -130,12 +132,12 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         # built on the engine thread, whose loop its asyncio objects belong to
         if self.session_host is not None:
             # the session is on another machine: the protocol crosses an ssh link
-            # sent what the screen can show each second (a pane is shorter than the
-            # screen); what it cannot is counted, and is in the log files over there
+            # sent what the output pane can show each second; what it cannot is
+            # counted, and is in the log files over there
             try:
                 self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
                     self.session_host, str(self.session_name), self.session,
-                    self.scrollback, max_lines=max(24, self.size.height),
+                    self.scrollback, max_lines=max(12, self.size.height - PANE_CHROME),
                     interval=LINK_INTERVAL, link=self.remote_link)).result(timeout=120)
             except LaunchError as exc:  # the link failed between `attach` and here
                 self.engine.stop()
@@ -153,6 +155,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
         assert self.supervisor is not None
         self.supervisor.subscribe(self.buffer)
+        if isinstance(self.session, ServedSession):  # the form from the server's plan
+            self.args_panel.arguments = self.session.plan.arguments
+            self.args_panel.refresh(recompose=True)
         tree = self.launch_tree
         tree.show_plan(self.session.plan, self.supervisor.states)
         self.describe_waiting()
@@ -206,6 +211,10 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
 def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any)\
         -> TuiLaunchApp:
     """The one factory for the CLI and the tests, so tests run the real wiring.
-    `placement` (`--machines`): the tree labels each process with its machine."""
+    `placement` (`--machines`): the tree labels each process with its machine. A session on
+    another machine (`session_host`) is drawn from the plan its server sends: the launch file
+    need not be readable here (`path` only names it)."""
     placement = options.pop("placement", None)
+    if options.get("session_host") is not None and not os.access(path, os.R_OK):
+        return TuiLaunchApp(ServedSession(path, arguments), log_dir, **options)
     return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)

@@ -37,6 +37,10 @@ from .screens.tree_panel import LaunchTree
 # gets little more than what changed on screen
 DRAIN_HZ = 10
 PANE_FPS = 1.0
+PANE_CHROME = 6
+"""Rows of the screen that are not the output pane (status, tabs, detail, the pane's own
+status line, footer): a display over a link is sent a pane's worth of lines a second, as
+the pane repaints once a second and shows no more."""
 INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources"})
 """What the session server measures for a client that asks (tui/inspector.py shows it)."""
 

@@ -9,6 +9,7 @@ sent few lines a second (over an ssh link) still sees every node, not only the l
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import threading
 from collections import deque
@@ -77,4 +78,20 @@ class EventBuffer:
         notices = [Event("dropped", name, code=count,
                          reason=f"{count} lines not shown (all are in the log file)")
                    for name, count in dropped.items()]
-        return notices + [event for _, event in entries]
+        return notices + joined([event for _, event in entries])
+
+
+def joined(events: list[Event]) -> list[Event]:
+    """Consecutive output events of one process and stream as one (the first's time): a
+    batch then carries each run of lines once, not a header per read of the pipe."""
+    out: list[Event] = []
+    for event in events:
+        last = out[-1] if out else None
+        if (last is not None and event.kind == "output" and last.kind == "output"
+                and last.process == event.process and last.stream == event.stream
+                and last.pid == event.pid and last.level == event.level
+                and last.data is None and event.data is None):
+            out[-1] = dataclasses.replace(last, lines=[*last.lines, *event.lines])
+            continue
+        out.append(event)
+    return out

@@ -25,7 +25,7 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   core), `rss_bytes` and `threads` over its process tree (None when not running);
   watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a
   second an event of kind "resources", data {process: {cpu_percent, rss_bytes, threads,
-  growing}}.
+  growing}} (whole percents, memory to 64 KiB: what a display shows).
   The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
   topics {node?} -> {"topics": [{name, types, publishers: [{node, in_launch, process,
   qos}], subscribers, qos_problems: [sentence]}]};
@@ -54,7 +54,11 @@ Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type
   [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
   lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
   keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
-  and "core" for a crash); `{"type": "ended", "status": n}` last.
+  and "core" for a crash; event times are to the millisecond; consecutive output of one
+  process is one event); `{"type": "ended", "status": n}` last.
+  Without the launch file (engine/run/plan_ops.py): plan -> {plan: Plan.to_json(),
+  arguments}; preview {arguments, running?} -> {arguments, plan, keep, stop, start,
+  error: null} or {arguments, error}: what `apply` with those values would do.
 """
 
 from __future__ import annotations
@@ -91,8 +95,10 @@ def decode(line: bytes) -> dict[str, Any]:
 
 
 def event_to_dict(event: Event) -> dict[str, Any]:
-    # defaults are left out: an output batch is then mostly its lines
-    data: dict[str, Any] = {"kind": event.kind, "time": event.time}
+    # defaults are left out: an output batch is then mostly its lines; the time to the
+    # millisecond (what the log files keep), as sub-millisecond digits are noise that no
+    # compression squeezes over an ssh link
+    data: dict[str, Any] = {"kind": event.kind, "time": round(event.time, 3)}
     for name in ("process", "pid", "stream", "code", "reason"):
         value = getattr(event, name)
         if value is not None:

@@ -33,6 +33,21 @@ def usage_fields(usage: Usage | None) -> dict[str, Any]:
             "threads": usage.threads, "growing": usage.memory_growing}
 
 
+RSS_STEP = 64 << 10
+"""Watchers get memory to this step: a display shows tenths of a MB at most, and a figure
+that does not move is a repeat the ssh link's compression sends for almost nothing."""
+
+
+def shown_fields(fields: dict[str, Any]) -> dict[str, Any]:
+    """A sample as a display shows it: CPU in whole percent, memory to RSS_STEP."""
+    cpu, rss = fields.get("cpu_percent"), fields.get("rss_bytes")
+    if isinstance(cpu, float):
+        fields["cpu_percent"] = float(round(cpu))
+    if isinstance(rss, int):
+        fields["rss_bytes"] = round(rss / RSS_STEP) * RSS_STEP
+    return fields
+
+
 class ResourceWatch:
     """Samples the process trees `roots()` names (`{process id: pid}` of running processes)
     when asked, and for watching clients once a second."""
@@ -74,7 +89,8 @@ class ResourceWatch:
         self.sample()  # the first event already has an interval for its CPU%
         while self.watchers:
             await asyncio.sleep(WATCH_PERIOD)
-            data = {process: usage_fields(usage) for process, usage in self.sample().items()}
+            data = {process: shown_fields(usage_fields(usage))
+                    for process, usage in self.sample().items()}
             for client in list(self.watchers):
                 self.send(Event("resources", data=data), client)
 
