@@ -26,7 +26,14 @@ ensure_environment()
 
 # Every test run gets its own DDS domain, and discovery stays on this machine, so parallel
 # runs and other users' nodes never see each other. Set before any ROS process starts.
-os.environ.setdefault("ROS_DOMAIN_ID", str(100 + os.getpid() % 100))
+# Under pytest-xdist each worker inherits the controller's environment: each takes a domain of
+# its own next to it, so two workers' nodes never meet either.
+_WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
+if _WORKER.startswith("gw"):
+    _BASE = int(os.environ.get("ROS_DOMAIN_ID") or 100 + os.getppid() % 100)
+    os.environ["ROS_DOMAIN_ID"] = str(100 + (_BASE - 100 + 1 + int(_WORKER[2:])) % 100)
+else:
+    os.environ.setdefault("ROS_DOMAIN_ID", str(100 + os.getpid() % 100))
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 
 

@@ -39,6 +39,7 @@ async def test_ctrl_c_typed_interrupts_a_program_under_interactive_gdb(
     # what it prints is not in its command line, which gdb echoes at "Starting program"
     sleeper = "print('asleep', 'now', flush=True); import time; time.sleep(600)"
     gdb = await start(tmp_path, [GDB or "gdb", "-q", "-nx", "-ex", "set confirm off",
+                                 "-ex", "set pagination off",
                                  "-ex", "run", "--args", sys.executable, "-c", sleeper],
                       controlling_terminal=True)
     try:

@@ -834,6 +834,8 @@ def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, 
     wait_for(lambda: run_cli("status", name).returncode == 0)
     assert pids(name) == before
     assert tl("ls").stdout.count(name) == 1
-    assert not list((tmp_path / "ros_home" / "tuilaunch").iterdir())  # nothing left there
+    # nothing left there once the server has moved back (it tidies up just after)
+    wait_for(lambda: not list((tmp_path / "ros_home" / "tuilaunch").iterdir()),
+             what="the fallback folder emptied")
     tl("stop", name)
     assert not any(_alive(pid) for pid in before.values())

@@ -50,7 +50,8 @@ class Inspector(Navigation):
         elif event.kind == "echo":
             self.topics_panel.show_echo(data)
         elif event.kind == "resources":
-            self.launch_tree.set_usage(data)
+            if self.watching_resources:  # one sent before the server heard "off" is stale
+                self.launch_tree.set_usage(data)
 
     def tab_shown(self, pane: str) -> None:
         """Measures what the tab on screen shows, and only that: rates and echo for the
