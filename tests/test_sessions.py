@@ -825,7 +825,10 @@ def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, 
                                                                      monkeypatch, tmp_path):
     """The ssh logout after --detach: logind unmounts $XDG_RUNTIME_DIR and makes it anew,
     empty, at the next login. The session is found there again."""
-    monkeypatch.setenv("ROS_HOME", str(tmp_path / "ros_home"))  # the fallback in between
+    # the fallback in between; short: a socket path must fit in 108 bytes (pytest-xdist's
+    # tmp_path is longer)
+    ros_home = Path(tempfile.mkdtemp(prefix="tlh"))
+    monkeypatch.setenv("ROS_HOME", str(ros_home))
     name = start_detached(write)
     before = pids(name)
     shutil.rmtree(runtime)
@@ -835,7 +838,8 @@ def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, 
     assert pids(name) == before
     assert tl("ls").stdout.count(name) == 1
     # nothing left there once the server has moved back (it tidies up just after)
-    wait_for(lambda: not list((tmp_path / "ros_home" / "tuilaunch").iterdir()),
+    wait_for(lambda: not list((ros_home / "tuilaunch").iterdir()),
              what="the fallback folder emptied")
     tl("stop", name)
+    shutil.rmtree(ros_home, ignore_errors=True)
     assert not any(_alive(pid) for pid in before.values())
