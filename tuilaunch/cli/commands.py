@@ -190,7 +190,7 @@ def _silent_session(name: str, error: SessionError) -> dict[str, Any] | None:
     """An `ls` row for a session whose socket accepts but whose server does not answer,
     from the info it wrote when it started; None when it is gone."""
     info = session_dir.read_info(name)
-    if info is None or not _pid_alive(int(info.get("pid") or 0)):
+    if info is None or not session_dir.pid_alive(int(info.get("pid") or 0)):
         return None
     return {"name": name, "file": info.get("file", "?"), "arguments": info.get("arguments", {}),
             "pid": info.get("pid"), "started": info.get("started", 0.0),
@@ -292,7 +292,7 @@ def cmd_stop(options: argparse.Namespace) -> int:
     finally:
         link.close()
     deadline = time.monotonic() + 10
-    while _pid_alive(pid) and time.monotonic() < deadline:
+    while session_dir.pid_alive(pid) and time.monotonic() < deadline:
         time.sleep(0.02)
     print(f"session {name} stopped")
     return 0
@@ -414,19 +414,3 @@ def _table(rows: Sequence[tuple[str, ...]], indent: str = "") -> None:
     for row in rows:
         cells = [cell.ljust(width) for cell, width in zip(row, widths, strict=True)]
         print((indent + "  ".join(cells)).rstrip())
-
-
-def _pid_alive(pid: int) -> bool:
-    if pid <= 0:
-        return False  # 0 and -1 would ask about a whole process group
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:  # our own child (the foreground case) is a zombie until reaped
-        return os.waitpid(pid, os.WNOHANG) == (0, 0)
-    except ChildProcessError:
-        return True
-

@@ -105,8 +105,8 @@ def _write_all(fd: int, data: bytes) -> None:
 
 
 # --- listing ---------------------------------------------------------------------------------
-# The same JSON as `tuilaunch ls --json` (commands.cmd_ls); duplicated here because the
-# engine cannot import the command line. To be factored into one place by the lead.
+# The same JSON as `tuilaunch ls --json` (cli/commands.cmd_ls prints these rows); it lives in
+# the engine because the remote side's `__ls` must not need the command line.
 
 LS_KEYS = ("name", "file", "arguments", "pid", "started", "log_dir", "counts", "answering")
 
@@ -150,25 +150,13 @@ def list_sessions() -> list[dict[str, Any]]:
             rows.append({**session_status(name), "answering": True})
         except SessionError:
             info = session_dir.read_info(name)
-            if info is None or not _pid_alive(int(info.get("pid") or 0)):
+            if info is None or not session_dir.pid_alive(int(info.get("pid") or 0)):
                 continue
             rows.append({"name": name, "file": info.get("file", "?"),
                          "arguments": info.get("arguments", {}), "pid": info.get("pid"),
                          "started": info.get("started", 0.0), "log_dir": info.get("log_dir", ""),
                          "counts": {}, "answering": False})
     return [{key: row[key] for key in LS_KEYS} for row in rows]
-
-
-def _pid_alive(pid: int) -> bool:
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 # --- entry -----------------------------------------------------------------------------------

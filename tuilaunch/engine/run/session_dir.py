@@ -164,3 +164,19 @@ def launch_stem(path: str) -> str:
         if name.endswith(suffix) and len(name) > len(suffix):
             return name[: -len(suffix)]
     return name
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether a process (a session server) lives; our own unreaped child counts as gone."""
+    if pid <= 0:
+        return False  # 0 and -1 would ask about a whole process group
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:  # our own child (the foreground case) is a zombie until reaped
+        return os.waitpid(pid, os.WNOHANG) == (0, 0)
+    except ChildProcessError:
+        return True
