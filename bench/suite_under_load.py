@@ -29,6 +29,11 @@ def main() -> int:
     parser.add_argument("--burners", type=int, default=os.cpu_count() or 2)
     parser.add_argument("pytest_args", nargs="*")
     options = parser.parse_args()
+    # Started in the background (`cmd &` without job control), this script ignores SIGINT and
+    # so would every test process: the tests of Ctrl+C would see nothing happen. A handled
+    # signal is reset to the default in a child, an ignored one is not.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGQUIT, signal.SIG_DFL)
     burners = [subprocess.Popen([sys.executable, "-c", "while True: pass"],
                                 start_new_session=True) for _ in range(options.burners)]
     results: list[tuple[int, float, str]] = []
