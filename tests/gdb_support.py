@@ -6,11 +6,13 @@ import shutil
 
 import pytest
 
-GDB = shutil.which("gdb")
+from .system_packages import apt_install
+
+GDB = shutil.which("gdb") or (apt_install("gdb") and shutil.which("gdb")) or None
 
 requires_gdb = pytest.mark.skipif(
-    GDB is None, reason="gdb is not installed (apt-get install gdb) : the test runs a "
-                        "crashing program under it")
+    GDB is None, reason="gdb is not installed and could not be (apt-get install gdb): "
+                        "the test runs a crashing program under it")
 
 
 def gdb_batch(*argv: str) -> list[str]:

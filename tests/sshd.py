@@ -30,6 +30,8 @@ from pathlib import Path
 
 import pytest
 
+from .system_packages import apt_install
+
 SSHD = "/usr/sbin/sshd"
 PRIVSEP_DIR = "/run/sshd"
 ROOT = Path(__file__).resolve().parent.parent
@@ -39,10 +41,8 @@ REMOTE = f"{shlex.quote(sys.executable)} -m tuilaunch"
 
 def ensure_sshd() -> None:
     """sshd is needed; where it is missing and we may, install it once, else skip."""
-    if not os.access(SSHD, os.X_OK) and os.geteuid() == 0 and shutil.which("apt-get"):
-        subprocess.run(["apt-get", "install", "-y", "-qq", "openssh-server"],
-                       capture_output=True, timeout=600, env={
-                           **os.environ, "DEBIAN_FRONTEND": "noninteractive"})
+    if not os.access(SSHD, os.X_OK):
+        apt_install("openssh-server")
     if not os.access(SSHD, os.X_OK):
         pytest.skip(f"{SSHD} is not installed (apt-get install openssh-server)")
     if not shutil.which("ssh") or not shutil.which("ssh-keygen"):
