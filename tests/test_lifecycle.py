@@ -416,7 +416,9 @@ def generate_launch_description():
         await asyncio.wait_for(run, 30)
     logs = [e.reason or "" for e in events if e.kind == "log"]
     assert any("no answer yet from /slow/get_state" in line for line in logs), logs
-    assert any(line.startswith("configure /slow: service /slow/change_state did not answer")
+    # no answer in time (on a busy machine the service may not even be ready in time): the
+    # outcome came from the node's transition events, and the missing answer was said
+    assert any(line.startswith("configure /slow: service /slow/change_state ")
                and "transition events tell the outcome" in line for line in logs), logs
     assert any("/slow: configure done (autostart" in line for line in logs), logs
     assert any("/slow: activate done (autostart" in line for line in logs), logs

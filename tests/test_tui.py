@@ -351,7 +351,7 @@ def generate_launch_description():
 
 
 async def test_quit_shows_which_processes_are_still_stopping(write, tmp_path):
-    app = make_app(str(write(STUBBORN_TUI)), {}, tmp_path / "log", sigterm_timeout=2.0)
+    app = make_app(str(write(STUBBORN_TUI)), {}, tmp_path / "log", sigterm_timeout=15.0)
     async with app.run_test(size=(80, 24)) as pilot:
         await until(pilot, lambda: any("holding out" in line
                                        for line in app.store.text(View("stubborn-1"))))
@@ -360,4 +360,4 @@ async def test_quit_shows_which_processes_are_still_stopping(write, tmp_path):
         assert "stopping stubborn-1" in str(status.render())
         assert "stopping" in row_text(app, "stubborn-1")
         # SIGINT is ignored; SIGTERM after the timeout ends it
-        await until(pilot, lambda: not pids(app), limit=30)
+        await until(pilot, lambda: not pids(app), limit=60)
