@@ -36,13 +36,20 @@ def nodes() -> Iterator[None]:
              for name in ("service_server", "configurable")]
     procs.append(subprocess.Popen([sys.executable, "-c", SLOW_SERVER], stdout=subprocess.PIPE,
                                   text=True))
-    for proc in procs:
-        assert proc.stdout is not None
-        assert proc.stdout.readline()  # each prints a first line once its node exists
-    yield
-    for proc in procs:
-        proc.terminate()
-        proc.wait(timeout=30)
+    try:
+        for proc in procs:
+            assert proc.stdout is not None
+            assert proc.stdout.readline()  # each prints a first line once its node exists
+        yield
+    finally:
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:  # none outlives the module, even one that ignores SIGTERM
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
 
 
 def run(coro_factory):
