@@ -37,7 +37,7 @@ from pathlib import Path
 
 from tuilaunch.client.link import Link
 from tuilaunch.engine.ros.bridge import RosBridge
-from tuilaunch.engine.run.resources import ResourceSampler
+from tuilaunch.engine.run.session.resources import ResourceSampler
 
 PUBLISHER = textwrap.dedent("""
     import sys, rclpy

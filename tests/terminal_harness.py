@@ -12,9 +12,9 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
-from tuilaunch.engine.run.logfiles import LogFile
-from tuilaunch.engine.run.readers import ChannelReader, Running
-from tuilaunch.engine.run.spawn import spawn
+from tuilaunch.engine.run.process.logfiles import LogFile
+from tuilaunch.engine.run.process.readers import ChannelReader, Running
+from tuilaunch.engine.run.process.spawn import spawn
 
 PROGRAMS = Path(__file__).parent / "programs"
 DEADLINE = 20.0

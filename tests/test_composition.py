@@ -20,7 +20,7 @@ import pytest
 
 from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.launcher import make_supervisor
-from tuilaunch.engine.run.supervisor import Event
+from tuilaunch.engine.run.supervisor.supervisor import Event
 
 from .conftest import plan_of, run_cli, run_headless
 from .interfaces.build_interfaces import build, default_cache

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tuilaunch.engine.run.cores import core_location, describe_death, signal_name
+from tuilaunch.engine.run.process.cores import core_location, describe_death, signal_name
 
 from .terminal_harness import PROGRAMS
 
@@ -87,7 +87,7 @@ def test_patterns_as_the_kernel_expands_them(tmp_path: Path) -> None:
 
 
 def test_a_crash_is_a_signal_nobody_asked_for() -> None:
-    from tuilaunch.engine.run.cores import is_crash
+    from tuilaunch.engine.run.process.cores import is_crash
     assert is_crash(-signal.SIGSEGV, requested=False)
     assert not is_crash(-signal.SIGINT, requested=True)  # our own stop
     assert not is_crash(1, requested=False)  # an exit code the program chose
@@ -95,7 +95,7 @@ def test_a_crash_is_a_signal_nobody_asked_for() -> None:
 
 
 def test_a_crash_described_with_its_core(tmp_path: Path) -> None:
-    from tuilaunch.engine.run.cores import describe_crash
+    from tuilaunch.engine.run.process.cores import describe_crash
     if resource.getrlimit(resource.RLIMIT_CORE)[1] == 0:
         pytest.skip("the hard RLIMIT_CORE is 0 here: no process may dump core")
     pattern = Path("/proc/sys/kernel/core_pattern").read_text().strip()

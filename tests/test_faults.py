@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from tuilaunch.engine import load_file, resolve
-from tuilaunch.engine.run.supervisor import Event, Supervisor
+from tuilaunch.engine.run.supervisor.supervisor import Event, Supervisor
 
 from .conftest import run_cli
 from .test_supervisor import HEADER, STUBBORN, alive, pids_of, read_until, start_headless, wait_gone

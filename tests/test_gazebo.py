@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tuilaunch.engine.describe.gazebo import gazebo_message, reset_world_name
+from tuilaunch.engine.describe.python.gazebo import gazebo_message, reset_world_name
 
 from .conftest import plan_of, run_cli
 from .fake_prefix import make_prefix, prefix_env, probe_records

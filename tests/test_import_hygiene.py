@@ -8,7 +8,7 @@ import sys
 
 def test_engine_imports_no_textual():
     code = ("import sys, tuilaunch.engine, tuilaunch.engine.plan.resolve, "
-            "tuilaunch.engine.describe.compat, tuilaunch.engine.run.supervisor;"
+            "tuilaunch.engine.describe.python.compat, tuilaunch.engine.run.supervisor.supervisor;"
             "bad = sorted(m for m in sys.modules if m == 'textual' or m.startswith('textual.'));"
             "print(bad); sys.exit(1 if bad else 0)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

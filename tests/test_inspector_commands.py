@@ -26,7 +26,7 @@ import pytest
 from tuilaunch.client.link import Link
 from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.ros.graph import full_node_name
-from tuilaunch.engine.run.session_dir import SessionError
+from tuilaunch.engine.run.session.session_dir import SessionError
 
 from .conftest import run_cli
 from .inspector_helpers import NODE_SCRIPT

@@ -19,7 +19,7 @@ import time
 import pytest
 
 from tuilaunch.client.link import Link
-from tuilaunch.engine.run.session_dir import SessionError
+from tuilaunch.engine.run.session.session_dir import SessionError
 
 from .conftest import run_cli, run_headless, wait_for
 from .gdb_support import requires_gdb

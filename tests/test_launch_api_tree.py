@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tuilaunch.engine.describe.compat import NAMES, UNSUPPORTED
-from tuilaunch.engine.describe.loader import compat_modules, load_file
+from tuilaunch.engine.describe.python.compat import NAMES, UNSUPPORTED
+from tuilaunch.engine.describe.python.loader import compat_modules, load_file
 from tuilaunch.engine.errors import LaunchError
 
 from .conftest import plan_of, run_cli

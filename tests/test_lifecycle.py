@@ -13,7 +13,7 @@ import pytest
 from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.errors import LaunchError
 from tuilaunch.engine.launcher import make_supervisor
-from tuilaunch.engine.run.supervisor import Event
+from tuilaunch.engine.run.supervisor.supervisor import Event
 
 from .conftest import plan_of, run_cli, run_headless
 

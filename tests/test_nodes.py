@@ -101,7 +101,7 @@ def generate_launch_description():
 
 def test_use_sim_time_auto_reads_the_live_graph(write, monkeypatch):
     monkeypatch.setenv("TUILAUNCH_SIM_TIME", "true")
-    from tuilaunch.engine.describe.sim_clock import clock_is_published
+    from tuilaunch.engine.describe.python.sim_clock import clock_is_published
 
     clock_is_published.cache_clear()
     path = write(HEADER + """

@@ -60,7 +60,7 @@ def remote_tuilaunch(folder: Path) -> Path:
     script.write_text(
         "#!/bin/sh\n"
         'case "$1" in __proxy|__ls) exec "' + sys.executable + '" -m '
-        'tuilaunch.engine.run.proxy "$@";; esac\n'
+        'tuilaunch.engine.run.machines.proxy "$@";; esac\n'
         'exec "' + sys.executable + '" -m tuilaunch "$@"\n')
     script.chmod(0o755)
     return script

@@ -13,12 +13,12 @@ import pytest
 
 from tuilaunch.engine.plan.model import ProcessPlan
 from tuilaunch.engine.plan.session import Session
-from tuilaunch.engine.run import session_dir
 from tuilaunch.engine.run.events import Event
 from tuilaunch.engine.run.plugins import Clients, Handler, Plugin
-from tuilaunch.engine.run.protocol import decode, encode
-from tuilaunch.engine.run.session_server import SessionServer
-from tuilaunch.engine.run.supervisor import Supervisor
+from tuilaunch.engine.run.session import session_dir
+from tuilaunch.engine.run.session.protocol import decode, encode
+from tuilaunch.engine.run.session.session_server import SessionServer
+from tuilaunch.engine.run.supervisor.supervisor import Supervisor
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -31,11 +31,13 @@ def generate_launch_description():
 
 
 def test_the_run_layer_loads_without_ros_and_the_engine_without_textual():
-    probe = ("import sys, tuilaunch.engine.run.supervisor, tuilaunch.engine.run.session_server\n"
+    probe = ("import sys, tuilaunch.engine.run.supervisor.supervisor\n"
+             "import tuilaunch.engine.run.session.session_server\n"
              "import tuilaunch.engine.launcher, tuilaunch.engine.server_main\n"
              "print(sorted({m.split('.')[0] if m.startswith('textual') else m\n"
              "  for m in sys.modules if m.startswith(('textual', 'tuilaunch.engine.ros'))}))")
-    run_only = ("import sys, tuilaunch.engine.run.supervisor, tuilaunch.engine.run.session_server\n"
+    run_only = ("import sys, tuilaunch.engine.run.supervisor.supervisor\n"
+                "import tuilaunch.engine.run.session.session_server\n"
                 "print([m for m in sys.modules if m.startswith('tuilaunch.engine.ros')])")
     done = subprocess.run([sys.executable, "-c", run_only], capture_output=True, text=True,
                           timeout=60)

@@ -21,9 +21,8 @@ from pathlib import Path
 import pytest
 
 from tuilaunch.engine.plan.machines import Machine as Machine_
-from tuilaunch.engine.run.protocol import decode, encode
-from tuilaunch.engine.run.proxy import CHUNK
-from tuilaunch.engine.run.remote import (
+from tuilaunch.engine.run.machines.proxy import CHUNK
+from tuilaunch.engine.run.machines.remote import (
     Address,
     RemoteError,
     list_remote,
@@ -33,7 +32,8 @@ from tuilaunch.engine.run.remote import (
     run_remote,
     ssh_argv,
 )
-from tuilaunch.engine.run.session_dir import SessionError
+from tuilaunch.engine.run.session.protocol import decode, encode
+from tuilaunch.engine.run.session.session_dir import SessionError
 
 from .conftest import run_cli
 from .sshd import Machine, Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
@@ -324,7 +324,7 @@ def test_a_dropped_link_stops_nothing_and_says_why(machines, write):
 def test_the_proxy_fails_with_one_line(args, says, tmp_path):
     runtime = tmp_path / "run"
     runtime.mkdir(mode=0o700)
-    done = subprocess.run([sys.executable, "-m", "tuilaunch.engine.run.proxy", *args],
+    done = subprocess.run([sys.executable, "-m", "tuilaunch.engine.run.machines.proxy", *args],
                           capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL,
                           env={**os.environ, "XDG_RUNTIME_DIR": str(runtime)})
     assert done.returncode == 2

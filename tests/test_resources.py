@@ -12,7 +12,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from tuilaunch.engine.run.resources import ResourceSampler, Usage, growing, tree_pids
+from tuilaunch.engine.run.session.resources import ResourceSampler, Usage, growing, tree_pids
 
 BURN = "while True: pass"
 GROW = textwrap.dedent("""

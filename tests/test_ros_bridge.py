@@ -166,7 +166,7 @@ CLOCK_PUBLISHER = textwrap.dedent("""
 
 
 def test_use_sim_time_auto_follows_a_live_clock_publisher(monkeypatch):
-    from tuilaunch.engine.describe.sim_clock import clock_is_published
+    from tuilaunch.engine.describe.python.sim_clock import clock_is_published
 
     monkeypatch.delenv("TUILAUNCH_SIM_TIME", raising=False)
     clock_is_published.cache_clear()

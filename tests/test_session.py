@@ -5,7 +5,7 @@ from __future__ import annotations
 import asyncio
 
 from tuilaunch.engine.plan.session import Session
-from tuilaunch.engine.run.supervisor import Supervisor
+from tuilaunch.engine.run.supervisor.supervisor import Supervisor
 
 LAUNCH = """
 from simple_launch import SimpleLauncher

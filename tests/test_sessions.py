@@ -27,7 +27,7 @@ from textual.widgets import Input
 
 from tuilaunch.client.remote_supervisor import RemoteSupervisor
 from tuilaunch.engine.plan.session import Session
-from tuilaunch.engine.run import session_dir
+from tuilaunch.engine.run.session import session_dir
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import LEVELS, View
 
@@ -587,8 +587,8 @@ def test_the_server_refuses_another_users_connection(runtime, write):
 
 
 def test_a_client_queue_is_bounded_and_cuts_loose_a_client_that_reads_nothing():
-    from tuilaunch.engine.run.session_server import CLIENT_MAX_EVENTS, ClientQueue
-    from tuilaunch.engine.run.supervisor import Event
+    from tuilaunch.engine.run.session.session_server import CLIENT_MAX_EVENTS, ClientQueue
+    from tuilaunch.engine.run.supervisor.supervisor import Event
 
     async def scenario() -> None:
         cut: list[bool] = []
@@ -643,7 +643,7 @@ def test_kill_during_a_shutdown_sends_sigkill_at_once(runtime, write):
 
 
 def test_log_tails_are_read_backwards_up_to_the_given_size(tmp_path):
-    from tuilaunch.engine.run.log_reader import read_lines, tail_lines
+    from tuilaunch.engine.run.session.log_reader import read_lines, tail_lines
 
     log = tmp_path / "n-1.log"
     log.write_text("".join(f"{1000 + i}.5 stdout line {i} {'x' * (i % 50)}\n"

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tuilaunch.engine.run.output import LineSplitter
+from tuilaunch.engine.run.process.output import LineSplitter
 
 from .conftest import EXAMPLES
 
@@ -231,7 +231,7 @@ def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
 
 def test_display_buffer_drops_oldest_lines_and_counts_them_but_never_other_events():
     from tuilaunch.engine.run.event_buffer import EventBuffer
-    from tuilaunch.engine.run.supervisor import Event
+    from tuilaunch.engine.run.supervisor.supervisor import Event
 
     buffer = EventBuffer(max_lines=1000)
     buffer(Event("started", "flood-1", pid=1))
@@ -273,7 +273,7 @@ def test_stop_restart_and_start_one_process_while_the_others_run(write, tmp_path
     import asyncio
 
     from tuilaunch.engine import load_file, resolve
-    from tuilaunch.engine.run.supervisor import Supervisor
+    from tuilaunch.engine.run.supervisor.supervisor import Supervisor
 
     path = write(HEADER + """
 def generate_launch_description():
@@ -341,7 +341,7 @@ def generate_launch_description():
 
 
 def test_line_splitter_blocks_keep_bytes_and_cut_endless_lines():
-    from tuilaunch.engine.run.output import MAX_LINE, screen_lines
+    from tuilaunch.engine.run.process.output import MAX_LINE, screen_lines
 
     splitter = LineSplitter()
     assert splitter.feed_block(b"par") == b""

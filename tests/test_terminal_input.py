@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tuilaunch.engine.run.terminal_input import LIMIT, InputRefused
+from tuilaunch.engine.run.process.terminal_input import LIMIT, InputRefused
 
 from .terminal_harness import Terminal, program, start
 

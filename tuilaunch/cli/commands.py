@@ -4,7 +4,7 @@ inspector.py).
 
 Each is a short-lived client of a session server; all but `attach` work without a terminal,
 so scripts and CI use them (`--json` where a script reads the answer). A session is named
-`[HOST:]NAME`: with a HOST, the same protocol crosses an ssh link (engine/run/remote.py).
+`[HOST:]NAME`: with a HOST, the same protocol crosses an ssh link (engine/run/machines/remote.py).
 """
 
 from __future__ import annotations
@@ -23,9 +23,9 @@ from ..client.link import ANSWER_TIMEOUT, Link, open_link, resolve_name
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import placement_from_text
-from ..engine.run import session_dir
-from ..engine.run.remote import check_host, list_remote, open_remote_link, parse_address
-from ..engine.run.session_dir import SessionError
+from ..engine.run.machines.remote import check_host, list_remote, open_remote_link, parse_address
+from ..engine.run.session import session_dir
+from ..engine.run.session.session_dir import SessionError
 from ..tui.output_store import LEVELS
 from .inspector import add_commands
 from .logs import cmd_logs as cmd_logs  # found by name in main
@@ -263,7 +263,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
         link.release()
     else:
         info = _status(label, resources=False)
-    from ..engine.describe.loader import set_command_line
+    from ..engine.describe.python.loader import set_command_line
     from ..tui.app import make_app
 
     try:

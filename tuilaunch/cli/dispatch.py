@@ -12,7 +12,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from ..engine.describe.loader import LoadedFile, load_file, set_command_line
+from ..engine.describe.python.loader import LoadedFile, load_file, set_command_line
 from ..engine.errors import LaunchError, PackageError
 from ..engine.packages import ensure_environment, find_launch_file_in_share
 from ..engine.plan.machines import Placement, load_placement, placement_from_text
@@ -182,7 +182,7 @@ def _main(argv: list[str] | None) -> int:
     if argv[:1] in (["__proxy"], ["__ls"]):
         # hidden: the far end of an ssh link (`ssh HOST tuilaunch __proxy NAME`), not for
         # people, so not in --help
-        from ..engine.run import proxy
+        from ..engine.run.machines import proxy
 
         return proxy.main(argv)
     if is_command(argv):

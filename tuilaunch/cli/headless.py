@@ -19,8 +19,8 @@ from typing import TextIO
 from ..engine.launcher import make_supervisor
 from ..engine.plan.machines import Placement
 from ..engine.plan.model import Plan
-from ..engine.run.output import strip_ansi
-from ..engine.run.supervisor import Event
+from ..engine.run.process.output import strip_ansi
+from ..engine.run.supervisor.supervisor import Event
 from .stdout_writer import BackgroundWriter
 
 

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from ..client.link import open_link
-from ..engine.run.session_dir import SessionError
+from ..engine.run.session.session_dir import SessionError
 
 SLACK = 30.0
 """Seconds a reply may take beyond the work asked for (a bridge made for the request waits

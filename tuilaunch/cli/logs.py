@@ -17,10 +17,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ..client.link import Link, open_link
-from ..engine.run.log_reader import LogLine, read_lines
-from ..engine.run.output import strip_ansi
-from ..engine.run.protocol import event_from_dict
-from ..engine.run.session_dir import SessionError
+from ..engine.run.process.output import strip_ansi
+from ..engine.run.session.log_reader import LogLine, read_lines
+from ..engine.run.session.protocol import event_from_dict
+from ..engine.run.session.session_dir import SessionError
 from ..tui.output_store import LEVELS, level_of
 
 

@@ -8,10 +8,10 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from ..engine.run import session_dir
-from ..engine.run.protocol import MAX_MESSAGE, decode, encode
-from ..engine.run.remote import open_remote_link, parse_address
-from ..engine.run.session_dir import SessionError
+from ..engine.run.machines.remote import open_remote_link, parse_address
+from ..engine.run.session import session_dir
+from ..engine.run.session.protocol import MAX_MESSAGE, decode, encode
+from ..engine.run.session.session_dir import SessionError
 
 
 def resolve_name(name: str | None) -> str:
@@ -97,7 +97,7 @@ class Link:
                   answer_timeout: float = ANSWER_TIMEOUT,
                   on_close: Callable[[], None] | None = None) -> Link:
         """A Link on a socket already connected and greeted: the ssh link to `host`'s
-        session (engine/run/remote.py). `on_close` ends what carries it (ssh)."""
+        session (engine/run/machines/remote.py). `on_close` ends what carries it (ssh)."""
         self = cls.__new__(cls)
         self.name = name
         self.answer_timeout = answer_timeout

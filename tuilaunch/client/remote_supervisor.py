@@ -4,7 +4,7 @@ by a session server.
 The TUI process then never reads a node's pipe: a flood is read, logged and batched by the
 server, and reaches the UI as one message per batch.
 
-A session on another machine (`host`) is reached over ssh (engine/run/remote.py); its log
+A session on another machine (`host`) is reached over ssh (engine/run/machines/remote.py); its log
 files are read through the server (`read_log`). When that link drops, the launch there runs
 on: this client says so, reconnects with backoff (or at once when asked), and then delivers
 what happened meanwhile, from where it left off: the lines from the log files (counted
@@ -29,12 +29,18 @@ from typing import Any
 
 from ..engine.plan.model import Plan, PlanDiff
 from ..engine.plan.session import Session
-from ..engine.run import session_dir
-from ..engine.run.log_reader import LogLine, tail_lines
-from ..engine.run.protocol import MAX_MESSAGE, ProtocolError, decode, encode, event_from_dict
-from ..engine.run.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
-from ..engine.run.session_dir import SessionError
-from ..engine.run.supervisor import Event
+from ..engine.run.machines.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
+from ..engine.run.session import session_dir
+from ..engine.run.session.log_reader import LogLine, tail_lines
+from ..engine.run.session.protocol import (
+    MAX_MESSAGE,
+    ProtocolError,
+    decode,
+    encode,
+    event_from_dict,
+)
+from ..engine.run.session.session_dir import SessionError
+from ..engine.run.supervisor.supervisor import Event
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering
 from .served_session import ServedSession
@@ -426,7 +432,7 @@ class RemoteSupervisor:
             consumer(event)
 
     async def request(self, op: str, **fields: Any) -> Any:
-        """The result of any request of the protocol (engine/run/protocol.py): `topics`,
+        """The result of any request of the protocol (engine/run/session/protocol.py): `topics`,
         `watch_rates`, `echo`, ...; SessionError with the server's message when it fails."""
         result = await self._request(op, **fields)
         self._note_watch(op, fields)

@@ -18,8 +18,8 @@ from .ros.actions import RosActions
 from .ros.composition import ComponentLoader
 from .ros.inspector import Inspector
 from .ros.lifecycle import LifecycleTracker
-from .run.machines_share import placement_plugin
-from .run.supervisor import Supervisor
+from .run.machines.machines_share import placement_plugin
+from .run.supervisor.supervisor import Supervisor
 
 
 class RosSupervisor(Supervisor):

@@ -13,14 +13,14 @@ import json
 import sys
 from pathlib import Path
 
-from .describe.loader import set_command_line
+from .describe.python.loader import set_command_line
 from .errors import LaunchError
 from .launcher import make_supervisor
 from .packages import ensure_environment
 from .plan.machines import placement_from_text
 from .plan.session import Session
-from .run.plan_ops import plan_handlers
-from .run.session_server import SessionServer
+from .run.session.plan_ops import plan_handlers
+from .run.session.session_server import SessionServer
 
 
 def main(argv: list[str]) -> int:

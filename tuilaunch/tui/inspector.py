@@ -10,8 +10,8 @@ from typing import Any
 from textual import work
 from textual.timer import Timer
 
-from ..engine.run.session_dir import SessionError
-from ..engine.run.supervisor import Event
+from ..engine.run.session.session_dir import SessionError
+from ..engine.run.supervisor.supervisor import Event
 from .navigation import Navigation
 from .screens.dialogs import ChoiceScreen, ConfirmScreen
 from .screens.topics_panel import TopicsPanel

@@ -12,7 +12,7 @@ from textual.binding import Binding
 
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
-from ..engine.run.supervisor import Event
+from ..engine.run.supervisor.supervisor import Event
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TypingLine
 from .session_link import SessionLink

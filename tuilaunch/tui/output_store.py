@@ -12,8 +12,8 @@ from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from ..engine.run.output import strip_ansi
-from ..engine.run.reported_names import ROS_LOG_PREFIX, ReportedNames
+from ..engine.run.process.output import strip_ansi
+from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 INFO = 1

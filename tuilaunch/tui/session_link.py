@@ -25,8 +25,8 @@ from ..engine.plan.session import Preview, Session
 from ..engine.ros.bridge import RosBridge
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.remote import RemoteLink
-from ..engine.run.supervisor import Event
+from ..engine.run.machines.remote import RemoteLink
+from ..engine.run.supervisor.supervisor import Event
 from .output_store import ERROR, INFO, WARN, Line, OutputStore
 from .screens.args_panel import ArgsPanel
 from .screens.output_panel import OutputPanel

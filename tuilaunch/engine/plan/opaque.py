@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from ..describe.entities import DslOpaque, Entity, OpaqueFunction, entity_list
-from ..describe.loader import compat_modules, known_launch_files, unsupported_import
+from ..describe.python.loader import compat_modules, known_launch_files, unsupported_import
 from ..describe.substitutions import PerformContext
 from ..errors import LaunchError, origin_from_traceback, origin_outside_tuilaunch
 

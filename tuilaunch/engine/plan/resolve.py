@@ -59,7 +59,7 @@ from ..describe.entities import (
 )
 from ..describe.events import When
 from ..describe.lifecycle import ChangeStateAction, LifecycleTransition
-from ..describe.loader import (
+from ..describe.python.loader import (
     LoadedFile,
     load_file,
     set_command_line,

@@ -10,7 +10,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..describe.loader import LoadedFile, load_file
+from ..describe.python.loader import LoadedFile, load_file
 from ..errors import LaunchError
 from .machines import Placement
 from .model import Plan, PlanDiff, diff_plans

@@ -17,7 +17,7 @@ from typing import Any
 from ..plan.model import ActionPlan, ProcessPlan
 from ..run.events import Event
 from ..run.plugins import ActionRunner, Plugin
-from ..run.supervisor import Supervisor
+from ..run.supervisor.supervisor import Supervisor
 from .actions import RosActions
 
 LOAD_TIMEOUT = 30.0  # a component's constructor may take a while (maps, models)

@@ -20,13 +20,13 @@ from typing import TYPE_CHECKING, Any
 from ..errors import LaunchError
 from ..run.events import Event
 from ..run.plugins import Clients, Handler, Plugin
-from ..run.reported_names import ReportedNames
+from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
 from .bridge import RosError
 from .echo import message_yaml
 
 if TYPE_CHECKING:
-    from ..run.supervisor import Supervisor
+    from ..run.supervisor.supervisor import Supervisor
 
 RATES_PERIOD = 1.0
 """Seconds between `rates` events to a watching client."""

@@ -20,7 +20,7 @@ from ..errors import LaunchError
 from ..plan.model import ActionPlan, ProcessPlan
 from ..run.events import Event
 from ..run.plugins import ActionRunner, Handler, Plugin
-from ..run.supervisor import Supervisor
+from ..run.supervisor.supervisor import Supervisor
 from .actions import RosActions
 
 # transitions an operator can ask for, by the state a node is in

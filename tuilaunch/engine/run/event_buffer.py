@@ -14,7 +14,7 @@ import itertools
 import threading
 from collections import deque
 
-from .supervisor import Event
+from .supervisor.supervisor import Event
 
 
 class EventBuffer:

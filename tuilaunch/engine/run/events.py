@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..describe.launch_events import EventInfo
+from ..describe.python.launch_events import EventInfo
 
 
 @dataclass

@@ -1,0 +1,435 @@
+"""The launching side of a launch placed on several machines (`--machines`).
+
+For each other machine that has processes to run, the coordinator starts that machine's
+share as a session of its own there (`ssh HOST tuilaunch FILE args... --detach --name NAME
+--share MACHINE --machines-text YAML`), then follows it through the session protocol over
+ssh (`open_remote_streams`): the share's events of its own processes are mirrored into this
+supervisor (`Placed.mirror`), so the one tree, the panes, the log files and the triggers here
+see them as local ones. What happens here (and on the other shares) to processes a share
+waits for is sent to it (`external_event`); a start, stop or restart of a process placed
+there is sent as the protocol's request; a relaunch is applied there too; the launch's
+shutdown stops every share and waits until each has ended.
+
+A machine that cannot be reached, refuses the login, or lacks tuilaunch or the launch
+file: every process placed there fails with one line naming the machine and why; the rest
+runs. A link that drops leaves the share running (it is a session there): the coordinator
+says so and connects again, backing off.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import os
+from collections.abc import Mapping
+from typing import Any
+
+from ...errors import LaunchError
+from ...plan.machines import Machine, Placement
+from ..events import Event
+from ..plugins import Plugin
+from ..process.logfiles import LogFile
+from ..process.output import screen_str
+from ..session.protocol import ProtocolError, decode, encode, event_from_dict
+from ..session.session_dir import launch_stem
+from ..supervisor.placed import Placed
+from .remote import RemoteError, RemoteLink, open_remote_streams, run_remote
+from .share_side import LINES_OP, ShareSide
+
+SHARE_OPTION = "--share"
+MACHINES_TEXT_OPTION = "--machines-text"
+START_TIMEOUT = 120.0
+"""An ssh login, a Python start and the share's own load and resolve of the file."""
+RECONNECT_DELAYS = (1.0, 2.0, 5.0, 10.0)
+"""Seconds between attempts to reach a share again after its link dropped (the last
+repeats)."""
+END_TIMEOUT = 60.0
+"""How long the launch's end waits for a share to stop its processes (they escalate to
+SIGKILL well within it)."""
+
+
+def share_session_name(base: str, machine: str) -> str:
+    """The session name of `machine`'s share: the launch's, then the machine's."""
+    return f"{base[:63 - min(len(machine), 30)]}-{machine[:30]}"
+
+
+def share_arguments(command: list[str], arguments: Mapping[str, str], name: str,
+                    placement: Placement, machine: str) -> list[str]:
+    """The remote tuilaunch's words that start `machine`'s share. A launch file given by
+    path is given by the same (absolute) path: it must exist at that path there; PACKAGE
+    FILE is found in that machine's own ament index."""
+    files = [os.path.abspath(command[0])] if len(command) == 1 else list(command)
+    return ["--", *files, *(f"{k}:={v}" for k, v in arguments.items()), "--detach",
+            "--name", name, SHARE_OPTION, machine, MACHINES_TEXT_OPTION, placement.text]
+
+
+class Share:
+    """One other machine's share: its session there and the link to it."""
+
+    def __init__(self, machine: Machine, session: str) -> None:
+        self.machine = machine
+        self.session = session
+        self.writer: asyncio.StreamWriter | None = None
+        self.reader: asyncio.StreamReader | None = None
+        self.link: RemoteLink | None = None
+        self.ended = asyncio.Event()
+        self.failure: str | None = None
+        self.replies: dict[int, asyncio.Future[Any]] = {}
+        self.seen: set[tuple[Any, ...]] = set()  # events mirrored (a reconnect repeats them)
+        self.logs: dict[str, LogFile] = {}
+        self.offsets: dict[str, int] = {}  # its log files' sizes at the last subscription
+        self.last_output: dict[str, float] = {}  # the time of the last line mirrored
+        self.backfill: dict[int, str] = {}  # requests for lines still unanswered
+        self.held: list[dict[str, Any]] = []  # events batches waiting for those lines
+
+    async def send(self, message: dict[str, Any]) -> None:
+        if self.writer is None:
+            raise LaunchError(f"{self.machine.name} is not connected")
+        self.writer.write(encode(message))
+        await self.writer.drain()
+
+
+class MachinesCoordinator(Plugin):
+    """The launching side's plugin: runs the other machines' shares and mirrors them."""
+
+    def __init__(self, supervisor: Placed, placement: Placement, command: list[str],
+                 arguments: Mapping[str, str], session_name: str | None = None,
+                 environ: Mapping[str, str] | None = None) -> None:
+        """`command` is FILE or PACKAGE FILE as given; `session_name` the launch's session
+        here, if any (the shares' names start with it)."""
+        self.supervisor = supervisor
+        self.placement = placement
+        self.command = list(command)
+        self.arguments = dict(arguments)
+        self.environ = dict(os.environ if environ is None else environ)
+        base = session_name or f"{launch_stem(command[-1])}-{os.getpid()}"
+        domain = self.environ.get("ROS_DOMAIN_ID")
+        self.shares: dict[str, Share] = {}
+        for machine in placement.used(supervisor.plan):
+            if domain is not None:
+                # the launching side's domain, unless the machines file sets one on purpose
+                machine = dataclasses.replace(
+                    machine, env={"ROS_DOMAIN_ID": domain, **machine.env})
+            self.shares[machine.name] = Share(machine, share_session_name(base, machine.name))
+        self.happened: dict[tuple[str, str], dict[str, Any]] = {}
+        """The last start and exit of each process, told to each share (again on connect:
+        what a node there waits for may have happened before)."""
+        self._tasks: set[asyncio.Task[Any]] = set()
+        self._next_id = 0
+        self._closing = False
+        supervisor.set_placement(None, self)
+        supervisor.subscribe(self._on_event)
+
+    # --- the run --------------------------------------------------------------------------
+
+    def run_started(self) -> None:
+        # tasks of our own: the supervisor cancels its tasks before plugins close, and a
+        # share being started must be seen through to be stopped
+        for share in self.shares.values():
+            self._spawn(self._follow(share))
+
+    def _spawn(self, coroutine: Any) -> None:
+        task = asyncio.ensure_future(coroutine)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _follow(self, share: Share) -> None:
+        try:
+            await self._start(share)
+        except RemoteError as exc:
+            self._fail_share(share, str(exc))
+            return
+        delays = iter(RECONNECT_DELAYS)
+        while not share.ended.is_set():
+            try:
+                await self._connect(share)
+                delays = iter(RECONNECT_DELAYS)
+                reason = await self._read(share)
+            except (LaunchError, OSError) as exc:
+                reason = str(exc)
+                if "no running session named" in reason:
+                    # reached, but its session is gone: stopped as asked, or killed there
+                    if self._closing or self.supervisor.shutting_down:
+                        share.ended.set()
+                        return
+                    self._fail_share(share, f"{share.machine.name}: its share (session "
+                                     f"{share.session}) ended without being asked")
+                    return
+            if share.ended.is_set():
+                return
+            delay = next(delays, RECONNECT_DELAYS[-1])
+            self.supervisor.log(f"{share.machine.name}: {reason}; its share runs on there; "
+                                f"connecting again in {delay:g} s", "WARN")
+            await asyncio.sleep(delay)
+
+    async def _start(self, share: Share) -> None:
+        args = share_arguments(self.command, self.arguments, share.session, self.placement,
+                               share.machine.name)
+        loop = asyncio.get_running_loop()
+        self.supervisor.log(f"{share.machine.name}: starting its share as session "
+                            f"{share.session} on {share.machine.host}")
+        await loop.run_in_executor(None, lambda: run_remote(
+            share.machine, args, START_TIMEOUT, self.environ))
+
+    def _fail_share(self, share: Share, reason: str) -> None:
+        share.failure = reason
+        share.ended.set()
+        for proc in self.supervisor.plan.processes:
+            if proc.machine == share.machine.name and proc.enabled and \
+                    self.supervisor.states.get(proc.id) in ("pending", "running"):
+                self.supervisor.mirror(Event("failed", proc.id, reason=reason), "failed")
+
+    async def _connect(self, share: Share) -> None:
+        link, reader, writer = await open_remote_streams(
+            share.machine, share.session, environ=self.environ)
+        share.link, share.reader, share.writer = link, reader, writer
+        for message in list(self.happened.values()):
+            await share.send({"op": "external_event", **message})
+        await share.send({"op": "subscribe", "id": self._new_id()})
+        self.supervisor.log(f"{share.machine.name}: following session {share.session}")
+        if self._closing or self.supervisor.shutting_down:  # stopped while it started
+            await self._stop_share(share, "the launch ended")
+
+    def _new_id(self) -> int:
+        self._next_id += 1
+        return self._next_id
+
+    async def _read(self, share: Share) -> str:
+        """Mirrors the share's messages until its link closes; why it closed."""
+        reader = share.reader
+        assert reader is not None
+        try:
+            while True:
+                try:
+                    line = await reader.readline()
+                except (ValueError, ConnectionError):
+                    line = b""
+                if not line:
+                    break
+                try:
+                    message = decode(line)
+                except ProtocolError:
+                    continue
+                kind = message.get("type")
+                if kind == "reply":
+                    self._answered(share, message)
+                elif kind == "events" and share.backfill:
+                    share.held.append(message)  # after the earlier lines, in order
+                elif kind == "events":
+                    self._mirror(share, message.get("events") or [],
+                                 message.get("states") or {})
+                elif kind == "ended":
+                    share.ended.set()
+                    return "ended"
+        finally:
+            writer, share.writer = share.writer, None
+            if writer is not None:
+                writer.close()
+            for future in share.replies.values():
+                if not future.done():
+                    future.set_exception(LaunchError(f"lost the link to {share.machine.name}"))
+            share.replies.clear()
+            share.backfill.clear()
+            for held in share.held:
+                self._mirror(share, held.get("events") or [], held.get("states") or {})
+            share.held.clear()
+            link = share.link
+            share.link = None
+        if link is None:
+            return f"lost the link to {share.machine.host}"
+        loop = asyncio.get_running_loop()
+        return await loop.run_in_executor(None, link.lost_reason)
+
+    def _answered(self, share: Share, message: dict[str, Any]) -> None:
+        result = message.get("result")
+        if isinstance(result, dict) and "states" in result and "recent" in result:
+            # the subscription: what happened there before (or while the link was down)
+            self._mirror(share, result.get("recent") or [], {}, result.get("states") or {})
+            self._ask_lines(share, result.get("offsets") or {})
+        request_id = int(message.get("id") or 0)
+        if request_id in share.backfill:
+            process = share.backfill.pop(request_id)
+            if message.get("ok") and isinstance(result, dict):
+                self._backfilled(share, process, result)
+            if not share.backfill:
+                held, share.held = share.held, []
+                for batch in held:
+                    self._mirror(share, batch.get("events") or [], batch.get("states") or {})
+        future = share.replies.pop(int(message.get("id") or 0), None)
+        if future is not None and not future.done():
+            if message.get("ok"):
+                future.set_result(result)
+            else:
+                future.set_exception(LaunchError(
+                    f"{share.machine.name}: {message.get('error')}"))
+
+    def _ask_lines(self, share: Share, offsets: dict[str, int]) -> None:
+        """What its processes printed before this subscription and was not seen here
+        (before the first link, or while the link was down): asked for, and shown before
+        the events that follow."""
+        if share.writer is None:
+            return
+        for proc in self.supervisor.plan.processes:
+            end = offsets.get(proc.id)
+            if proc.machine != share.machine.name or end is None:
+                continue
+            start = share.offsets.get(proc.id, 0)
+            share.offsets[proc.id] = end
+            if end <= start:
+                continue
+            request_id = self._new_id()
+            share.backfill[request_id] = proc.id
+            share.writer.write(encode({
+                "op": LINES_OP, "id": request_id, "process": proc.id, "start": start,
+                "end": end, "after": share.last_output.get(proc.id)}))
+
+    def _backfilled(self, share: Share, process: str, result: dict[str, Any]) -> None:
+        skipped = int(result.get("skipped") or 0)
+        if skipped:
+            self.supervisor.log(f"{share.machine.name}: {skipped} earlier lines of {process} "
+                                f"are only in its log file there", "WARN")
+        for stamp, stream, text in result.get("lines") or []:
+            event = Event("output", process, stream=str(stream),
+                          lines=[screen_str(str(text))], time=float(stamp))
+            share.last_output[process] = event.time
+            self._log_output(share, event)
+            self.supervisor.mirror(event)
+
+    def _mirror(self, share: Share, events: list[dict[str, Any]], touched: dict[str, str],
+                states: dict[str, str] | None = None) -> None:
+        mine = {p.id for p in self.supervisor.plan.processes
+                if p.machine == share.machine.name}
+        for data in events:
+            try:
+                event = event_from_dict(data)
+            except (ProtocolError, TypeError):
+                continue
+            if event.process not in mine:
+                continue
+            if event.kind == "output":
+                share.last_output[event.process] = event.time
+                self._log_output(share, event)
+                self.supervisor.mirror(event)
+                continue
+            key = (event.kind, event.process, event.pid, event.time)
+            if key in share.seen:
+                continue
+            share.seen.add(key)
+            self.supervisor.mirror(event, _state_after(event))
+        for process, state in {**(states or {}), **touched}.items():
+            if process in mine and state != "elsewhere":
+                self.supervisor.states[process] = state
+
+    def _log_output(self, share: Share, event: Event) -> None:
+        """Its lines also go to this side's log file of the process, as local lines do."""
+        assert event.process is not None
+        log = share.logs.get(event.process)
+        if log is None:
+            path = self.supervisor.log_dir / f"{event.process}.log"
+            try:
+                log = share.logs[event.process] = LogFile(path, self.supervisor.log)
+            except OSError:
+                return
+        stamp = f"{event.time:.6f} {event.stream or 'stdout'} ".encode()
+        log.write(b"".join(stamp + line.encode(errors="replace") + b"\n"
+                           for line in event.lines), len(event.lines))
+
+    # --- what happens here, and requests -----------------------------------------------------
+
+    def _on_event(self, event: Event) -> None:
+        if event.kind in ("started", "exited") and event.process is not None and \
+                event.pid is not None:
+            try:
+                machine = self.supervisor.plan.process(event.process).machine
+            except KeyError:
+                return
+            on = "start" if event.kind == "started" else "exit"
+            message = {"process": event.process, "on": on, "pid": event.pid,
+                       "code": event.code}
+            self.happened[(event.process, on)] = message
+            for share in self.shares.values():
+                if share.machine.name != machine and share.writer is not None:
+                    self._spawn(self._tell(share, {"op": "external_event", **message}))
+        elif event.kind == "shutdown":
+            for share in self.shares.values():
+                self._spawn(self._stop_share(share, event.reason or "shutdown"))
+        elif event.kind == "relaunched":
+            arguments = dict(line.split(":=", 1) for line in event.lines if ":=" in line)
+            self.arguments = arguments
+            for share in self.shares.values():
+                self._spawn(self._tell(share, {"op": "apply", "arguments": arguments,
+                                               "id": self._new_id()}))
+
+    async def _tell(self, share: Share, message: dict[str, Any]) -> None:
+        with contextlib.suppress(LaunchError, ConnectionError, OSError):
+            await share.send(message)
+
+    async def forward(self, op: str, process_id: str) -> None:
+        machine = self.supervisor.plan.process(process_id).machine
+        share = self.shares.get(machine or "")
+        if share is None or share.writer is None:
+            why = share.failure if share is not None and share.failure else "not connected"
+            raise LaunchError(f"{process_id} runs on {machine}: {why}")
+        request_id = self._new_id()
+        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        share.replies[request_id] = future
+        await share.send({"op": op, "process": process_id, "id": request_id})
+        result = await future
+        state = result.get("state") if isinstance(result, dict) else None
+        if isinstance(state, str):
+            # as it is there once done (its events may still be on their way)
+            self.supervisor.states[process_id] = state
+
+    async def _stop_share(self, share: Share, reason: str) -> None:
+        """Asks the share to stop; its `ended` closes the link."""
+        if share.writer is not None:
+            await self._tell(share, {"op": "shutdown", "reason": reason, "id": self._new_id()})
+
+    async def close(self) -> None:
+        """The launch is over here: every share stops, and is waited for."""
+        self._closing = True
+        for share in self.shares.values():
+            if not share.ended.is_set():
+                await self._stop_share(share, "the launch ended")
+        waits = [asyncio.ensure_future(s.ended.wait()) for s in self.shares.values()]
+        if waits:
+            _, pending = await asyncio.wait(waits, timeout=END_TIMEOUT)
+            for wait in pending:
+                wait.cancel()
+        for share in self.shares.values():
+            if not share.ended.is_set():
+                self.supervisor.log(f"{share.machine.name}: its share did not end within "
+                                    f"{END_TIMEOUT:g} s (tuilaunch stop "
+                                    f"{share.machine.host}:{share.session})", "ERROR")
+        for task in list(self._tasks):
+            task.cancel()
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        for share in self.shares.values():
+            for log in share.logs.values():
+                log.close()
+
+
+def _state_after(event: Event) -> str | None:
+    """The state an event leaves its process in (the batch's states follow it)."""
+    return {"started": "running", "exited": "exited", "failed": "failed",
+            "respawning": "respawning"}.get(event.kind)
+
+
+def placement_plugin(supervisor: Placed, placement: Placement | None, command: list[str],
+                     arguments: Mapping[str, str], session_name: str | None = None,
+                     ) -> Plugin | None:
+    """The plugin a placed launch needs on this side, if any: a share's, or the
+    coordinator when other machines run some of its processes."""
+    if placement is None:
+        return None
+    if placement.share is not None:
+        return ShareSide(supervisor, placement.share)
+    if not placement.used(supervisor.plan):
+        supervisor.set_placement(None, None)
+        return None
+    return MachinesCoordinator(supervisor, placement, command, arguments, session_name)
+
+
+__all__ = ["MACHINES_TEXT_OPTION", "SHARE_OPTION", "MachinesCoordinator",
+           "placement_plugin", "share_arguments", "share_session_name"]

@@ -1,0 +1,61 @@
+"""A machine's share of a placed launch (`--share MACHINE`): what it answers the
+launching side beyond the usual session requests.
+
+The share runs only the processes placed on its machine (run/placed.py); the launching
+side tells it when the others start and exit (`external_event`), so a node here can wait
+for one elsewhere, and asks it for the lines its nodes printed while no link was there to
+carry them (`share_lines`, read from its log files).
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from ..plugins import Handler, Plugin
+from ..session.log_reader import LogLine, read_lines
+from ..supervisor.placed import Placed
+
+BACKFILL_LINES = 2000
+"""Lines of a process sent at most per request (the newest); older ones stay in the log
+file there, and the launching side says how many."""
+LINES_OP = "share_lines"
+"""The share's request for lines of its log files: {process, start, end, after}."""
+
+
+class ShareSide(Plugin):
+    """A machine's share: hears what happens to the processes other machines run."""
+
+    def __init__(self, supervisor: Placed, machine: str) -> None:
+        self.supervisor = supervisor
+        self.seen: set[tuple[Any, ...]] = set()  # the coordinator repeats them on reconnect
+        supervisor.set_placement(machine, None)
+
+    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+        async def external_event(message: dict[str, Any]) -> Any:
+            process, on = str(message.get("process")), str(message.get("on"))
+            key = (process, on, message.get("pid"), message.get("code"))
+            if key not in self.seen:
+                self.seen.add(key)
+                self.supervisor.external_event(process, on, message.get("pid"),
+                                               message.get("code"))
+            return {}
+
+        async def share_lines(message: dict[str, Any]) -> Any:
+            process = find_process(str(message.get("process")))
+            start, end = int(message.get("start") or 0), int(message.get("end") or 0)
+            after = message.get("after")
+            kept: collections.deque[LogLine] = collections.deque(maxlen=BACKFILL_LINES)
+            count = 0
+            for line in read_lines(self.supervisor.log_dir / f"{process}.log", end, start):
+                if after is None or line.time > float(after):
+                    kept.append(line)
+                    count += 1
+            return {"lines": [[line.time, line.stream, line.text] for line in kept],
+                    "skipped": count - len(kept)}
+
+        return {"external_event": external_event, LINES_OP: share_lines}
+
+
+__all__ = ["BACKFILL_LINES", "LINES_OP", "ShareSide"]

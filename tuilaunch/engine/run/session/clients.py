@@ -1,0 +1,245 @@
+"""The session server's clients: one connection each, one bounded queue per subscriber.
+
+Each subscribed client has a bounded queue: past its limit, output lines are dropped for that
+client only (with a count), and a client that stops reading state changes altogether is
+disconnected, so a stalled or dead client never holds up the supervisor. What a request
+does is the server's (`answer`); here is only how requests come in and replies and event
+batches go out, never interleaved inside a line.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import os
+import socket
+import struct
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from ...errors import LaunchError
+from ..event_buffer import EventBuffer
+from ..events import Event
+from .protocol import ProtocolError, decode, encode, event_to_dict
+
+CLIENT_MAX_LINES = 20_000
+"""Output lines queued per client before the oldest are dropped for that client."""
+CLIENT_MAX_EVENTS = 10_000
+"""State events queued for a client that reads nothing; past this it is disconnected."""
+
+
+class ClientQueue:
+    """One subscriber's bounded queue, drained by its own writer task."""
+
+    def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
+                 on_overflow: Callable[[], None] | None = None,
+                 kinds: frozenset[str] | None = None, fair: bool = False) -> None:
+        self.buffer = EventBuffer(max_lines=max_lines, fair=fair)
+        self.kinds = kinds  # only these kinds of events (`tuilaunch echo` wants no output)
+        self.on_overflow = on_overflow
+        self.interval = interval  # a display asks for no more batches than it draws
+        self.events = 0
+        self.ready = asyncio.Event()
+        self.overflowed = False
+
+    def __call__(self, event: Event) -> None:
+        if self.kinds is not None and event.kind not in self.kinds:
+            return
+        if event.kind != "output":
+            self.events += 1
+            if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
+                self.overflowed = True
+                if self.on_overflow is not None:
+                    self.on_overflow()  # its writer may be stuck; cut it loose now
+        self.buffer(event)
+        self.ready.set()
+
+    def take(self) -> list[Event]:
+        self.ready.clear()
+        self.events = 0
+        return self.buffer.drain()
+
+
+class ClientHub:
+    """Every connection of a session server: reads requests, answers them, pumps events.
+
+    `hello()`: what a client is told on connecting; `snapshot()`: what a subscriber gets
+    with its subscription (states and log sizes at that instant); `answer(message)`: the
+    result of one request (raising LaunchError/TypeError/ValueError for a refusal);
+    `states()`: the processes' states sent along with each batch; `gone(client)`: a client
+    has disconnected (its keyboard, resource watch and plugins' streams are let go)."""
+
+    def __init__(self, hello: Callable[[], dict[str, Any]],
+                 snapshot: Callable[[], dict[str, Any]],
+                 answer: Callable[[dict[str, Any]], Awaitable[Any]],
+                 states: Callable[[], dict[str, str]],
+                 gone: Callable[[int], None]) -> None:
+        self.hello = hello
+        self.snapshot = snapshot
+        self.answer = answer
+        self.states = states
+        self.gone = gone
+        self.ids = itertools.count(1)
+        self.clients: dict[int, ClientQueue] = {}  # subscribed clients' queues, by client id
+        self.queues: set[ClientQueue] = set()
+        self.writers: set[asyncio.StreamWriter] = set()
+        self.tasks: set[asyncio.Task[Any]] = set()
+        self.dropped_clients = 0
+        self.ended = False  # the supervisor's run is over; writers send "ended" and stop
+        self.status_code = 0
+
+    def broadcast(self, event: Event) -> None:
+        for queue in list(self.queues):
+            queue(event)
+
+    def send(self, event: Event, client: int) -> None:
+        addressed = self.clients.get(client)
+        if addressed is not None and addressed in self.queues:
+            addressed(event)
+
+    def subscribed(self, client: int) -> bool:
+        queue = self.clients.get(client)
+        return queue is not None and queue in self.queues
+
+    def spawn(self, coroutine: Any) -> asyncio.Task[Any]:
+        """A task the end waits for (a little) before closing the connections."""
+        task = asyncio.ensure_future(coroutine)
+        self.tasks.add(task)
+        task.add_done_callback(self.tasks.discard)
+        return task
+
+    async def end(self, status: int) -> None:
+        """The run is over: every subscriber gets what is left, then `ended`."""
+        self.status_code = status
+        self.ended = True
+        for queue in list(self.queues):
+            queue.ready.set()  # writers flush what is left, then send "ended"
+        if self.tasks:  # a client that stopped reading must not keep the server alive
+            await asyncio.wait([*self.tasks], timeout=5.0)
+        for writer in list(self.writers):
+            writer.close()
+
+    async def serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        """One connection, from hello to its end (the unix server's client callback)."""
+        sock = writer.get_extra_info("socket")
+        if sock is not None and not same_user(sock):
+            writer.close()
+            return
+        self.writers.add(writer)
+        lock = asyncio.Lock()
+        queue: ClientQueue | None = None
+        client = next(self.ids)
+        try:
+            await send_message(writer, lock, {"type": "hello", "info": self.hello()})
+            while True:
+                try:
+                    line = await reader.readline()
+                except (ValueError, ConnectionError):
+                    return  # longer than MAX_MESSAGE, or the peer vanished
+                if not line:
+                    return
+                try:
+                    message = decode(line)
+                except ProtocolError as exc:
+                    await send_message(writer, lock, {"type": "reply", "id": None, "ok": False,
+                                                      "error": str(exc)})
+                    continue
+                message["client"] = client  # set here: a client cannot speak for another
+                if message.get("op") == "subscribe" and queue is None:
+                    kinds = message.get("kinds")
+                    queue = ClientQueue(
+                        max(1, min(int(message.get("max_lines") or CLIENT_MAX_LINES),
+                                   CLIENT_MAX_LINES)),
+                        max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
+                        writer.transport.abort,
+                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None,
+                        bool(message.get("fair")))
+                    # states and file sizes at the same instant as the subscription: the
+                    # client reads the files up to these sizes, then gets events from here
+                    result = self.snapshot()
+                    self.queues.add(queue)
+                    self.clients[client] = queue
+                    await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
+                                                      "ok": True, "result": result})
+                    self.spawn(self._pump(queue, writer, lock))
+                    continue
+                self.spawn(self._answer(message, writer, lock))
+        except (ConnectionError, OSError):
+            return
+        finally:
+            if queue is not None:
+                self.queues.discard(queue)
+                queue.ready.set()
+            self.clients.pop(client, None)
+            self.gone(client)
+            self.writers.discard(writer)
+            writer.close()
+
+    async def _pump(self, queue: ClientQueue, writer: asyncio.StreamWriter,
+                    lock: asyncio.Lock) -> None:
+        """Sends a client its queued events, one batch per round trip of the socket."""
+        try:
+            while queue in self.queues and not self.ended:
+                await queue.ready.wait()
+                if queue.overflowed:
+                    self.dropped_clients += 1
+                    break
+                await self._send_events(queue, writer, lock)
+                if queue.interval:
+                    await asyncio.sleep(queue.interval)
+            if self.ended:
+                await self._send_events(queue, writer, lock)
+                await send_message(writer, lock, {"type": "ended", "status": self.status_code})
+        except (ConnectionError, OSError):
+            pass
+        finally:
+            self.queues.discard(queue)
+            writer.close()
+
+    async def _send_events(self, queue: ClientQueue, writer: asyncio.StreamWriter,
+                           lock: asyncio.Lock) -> None:
+        events = queue.take()
+        if not events:
+            return
+        states = self.states()
+        touched = {e.process: states[e.process] for e in events
+                   if e.process is not None and e.process in states}
+        await send_message(writer, lock, {"type": "events", "states": touched,
+                                          "events": [event_to_dict(e) for e in events]})
+
+    async def _answer(self, message: dict[str, Any], writer: asyncio.StreamWriter,
+                      lock: asyncio.Lock) -> None:
+        request_id = message.get("id")
+        try:
+            result = await self.answer(message)
+            reply = {"type": "reply", "id": request_id, "ok": True, "result": result}
+        except (LaunchError, TypeError, ValueError) as exc:
+            reply = {"type": "reply", "id": request_id, "ok": False, "error": str(exc)}
+        except Exception as exc:  # one bad request must never take the session down
+            reply = {"type": "reply", "id": request_id, "ok": False,
+                     "error": f"{op_name(message)} failed: {type(exc).__name__}: {exc}"}
+        try:
+            await send_message(writer, lock, reply)
+        except (ConnectionError, OSError):
+            pass  # the asker is gone; what it asked for was done all the same
+
+
+def op_name(message: dict[str, Any]) -> str:
+    return str(message.get("op"))
+
+
+async def send_message(writer: asyncio.StreamWriter, lock: asyncio.Lock,
+                       message: dict[str, Any]) -> None:
+    async with lock:  # replies and event batches never interleave inside a line
+        writer.write(encode(message))
+        await writer.drain()
+
+
+def same_user(sock: socket.socket) -> bool:
+    """Whether the peer of a unix socket runs as this process's user (SO_PEERCRED)."""
+    try:
+        raw = sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
+    except (OSError, AttributeError):
+        return False
+    _, uid, _ = struct.unpack("3i", raw)
+    return uid == os.getuid()

@@ -1,0 +1,92 @@
+"""Typing into a node through a session: one client holds the keyboard at a time.
+
+Two people typing into one gdb at once would interleave their keys; so a client asks for the
+keyboard (`typing {process, on: true}`), sends keys (`input {process, data}`), and gives it
+back (`on: false`, or by disconnecting). Every client is told who holds it by an event of
+kind `typing` (`process`, `data: {"client": id or None}`), so the others can show it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...errors import LaunchError
+from ..events import Event
+from ..plugins import Handler
+from ..supervisor.supervisor import Supervisor
+
+
+class Keyboard:
+    """Who types into which process of one session's supervisor."""
+
+    def __init__(self, supervisor: Supervisor, find: Any) -> None:
+        """`find` turns a client's process reference into a process id (or raises)."""
+        self.supervisor = supervisor
+        self.find = find
+        self.client: int | None = None
+        """The client holding the keyboard, if any."""
+        self.process: str | None = None
+        """The process it types into."""
+
+    def handlers(self) -> dict[str, Handler]:
+        return {"typing": self.typing, "input": self.input}
+
+    def state(self) -> dict[str, Any] | None:
+        """For `status`: who types into what, or None."""
+        if self.client is None:
+            return None
+        return {"client": self.client, "process": self.process}
+
+    async def typing(self, message: dict[str, Any]) -> dict[str, Any]:
+        client = message.get("client")
+        process = self.find(str(message.get("process")))
+        if not message.get("on"):
+            if client is not None and self.client == client:
+                self.release(int(client))
+            return {}
+        if self.client is not None and self.client != client:
+            raise LaunchError(f"another client (client {self.client}) is typing into "
+                              f"{self.process}; one client types at a time")
+        state = self.supervisor.states.get(process)
+        if state != "running":
+            raise LaunchError(f"{process} is not running ({state}): there is nothing to "
+                              "type into")
+        if not self._has_terminal(process):
+            raise LaunchError(f"{process} cannot be typed into: it has no terminal (its "
+                              "output is not shown on screen, or emulate_tty is False)")
+        previous = self.process
+        self.client, self.process = int(client) if client is not None else None, process
+        if previous is not None and previous != process:
+            self._tell(previous, None)
+        self._tell(process, self.client)
+        return {}
+
+    async def input(self, message: dict[str, Any]) -> dict[str, Any]:
+        client = message.get("client")
+        process = self.find(str(message.get("process")))
+        data = message.get("data")
+        if not isinstance(data, str):
+            raise ValueError("input needs data as a string")
+        if self.client != client or self.process != process:
+            who = f"client {self.client} types into {self.process}" \
+                if self.client is not None else "nobody holds the keyboard"
+            raise LaunchError(f"input to {process} refused: {who}; ask for it with "
+                              "typing {on: true} first")
+        dropped = self.supervisor.write_input(process, data.encode())
+        return {"dropped": dropped} if dropped else {}
+
+    def release(self, client: int) -> None:
+        """The client gives the keyboard back, or is gone."""
+        if self.client != client:
+            return
+        process = self.process
+        self.client = self.process = None
+        if process is not None:
+            self._tell(process, None)
+
+    def _has_terminal(self, process: str) -> bool:
+        running = self.supervisor.running_process(process)
+        return running is not None and running.terminal is not None
+
+    def _tell(self, process: str, client: int | None) -> None:
+        self.supervisor.emit(Event("typing", process, data={"client": client}))

@@ -1,0 +1,39 @@
+"""The session's plan over the protocol, for a client that cannot read the launch file (a
+TUI on an operator's laptop, the file on the robot): `plan` sends the plan the session runs
+and its arguments; `preview {arguments, running}` says what those values would do, resolved
+here where the file, the packages and the processes are. `apply` then relaunches."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...plan.model import Plan
+from ...plan.session import Session
+from ..plugins import Handler
+
+
+def plan_message(session: Session, plan: Plan | None = None) -> dict[str, Any]:
+    """The plan as JSON with the values it was resolved from."""
+    return {"plan": (plan or session.plan).to_json(), "arguments": dict(session.arguments)}
+
+
+def plan_handlers(session: Session) -> dict[str, Handler]:
+    """The `plan` and `preview` requests, answered from `session` (the server's)."""
+
+    async def plan(message: dict[str, Any]) -> Any:
+        return plan_message(session)
+
+    async def preview(message: dict[str, Any]) -> Any:
+        values = message.get("arguments")
+        if not isinstance(values, dict):
+            raise ValueError("preview needs arguments as an object")
+        running = message.get("running")
+        result = session.preview({str(k): str(v) for k, v in values.items()},
+                                 None if running is None else {str(p) for p in running})
+        if result.plan is None or result.diff is None:
+            return {"arguments": result.arguments, "error": result.error}
+        diff = result.diff
+        return {"arguments": result.arguments, "plan": result.plan.to_json(),
+                "keep": diff.keep, "stop": diff.stop, "start": diff.start, "error": None}
+
+    return {"plan": plan, "preview": preview}

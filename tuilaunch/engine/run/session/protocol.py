@@ -1,0 +1,119 @@
+"""The session socket's wire format: one JSON object per line, and Event <-> dict.
+
+JSON escapes every newline inside strings, so a line is always one whole message; a
+message longer than MAX_MESSAGE is refused rather than buffered without bound.
+
+Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
+  most output lines per batch and the least seconds between batches, for a display that
+  cannot show more; kinds?: only events of these kinds; fair?: past max_lines, the lines
+  dropped are the loudest process's, not the oldest}, status {resources?: false skips
+  the CPU/memory sampling}, find {process},
+  start/stop {process}, restart {process, prefix?: a tool run before the command (`gdb -q
+  -ex run --args`) until a restart without one, log_level?: `--ros-args --log-level` kept
+  across respawns until a restart changes it ("" drops it)}, run_action {action}, shutdown
+  {reason}, kill (SIGKILL what is left), apply {arguments}, lifecycle {process}, read_log
+  {process, start, end, skip, limit, tail}: a process's log file read by the server, for a
+  client on another machine (`logs HOST:NAME`, the TUI's replay and what it missed while its
+  link was down): the lines from byte `start` to `end` (default: the file's size) after the
+  first `skip`, the first `limit` (or with `tail` the last), as `{"lines": [[time, stream,
+  text]...], "next": byte to ask again from, "size": the file's size, "skipped": lines left
+  out}`; to a
+  machine's share of a placed launch (run/machines_share.py): external_event {process, on:
+  start|exit, pid, code},
+  share_lines {process, start, end, after}.
+  Resources (run/resource_watch.py): `status` gives each process `cpu_percent` (% of one
+  core), `rss_bytes` and `threads` over its process tree (None when not running);
+  watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a
+  second an event of kind "resources", data {process: {cpu_percent, rss_bytes, threads,
+  growing}} (whole percents, memory to 64 KiB: what a display shows).
+  The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
+  topics {node?} -> {"topics": [{name, types, publishers: [{node, in_launch, process,
+  qos}], subscribers, qos_problems: [sentence]}]};
+  hz {topic, window: s} -> {topic, rate_hz, bytes_per_s, messages, window_s} after window s;
+  watch_rates {topics: [...]} -> {unmeasured: {topic: why}}: this client's topics ([]: none);
+  the union over clients is measured, and each watcher gets about once a second an event
+  "rates", data {topic: {rate_hz, bytes_per_s}} (None until measured);
+  echo {topic, count?, max_per_s? (default 5; 0: every message)} -> {}: events "echo", data
+  {topic, text: one message's YAML ending in "---"}, to this client until echo_stop {topic}
+  or `count` messages (the last has data "done": true); a subscribed client only;
+  params_dump {node} -> {yaml}; params_load {node, yaml, source?: its file name for
+  messages} -> {results: [{name, ok, reason}]};
+  log_level {node, level} -> {ok: true}, or an error saying the node has no logger service
+  and that restarting it with --log-level applies the level.
+  A client's streams (echo, rates, resources) end when it disconnects.
+  typing {process, on: bool} takes or gives back the keyboard (one client at a time; a
+  client that disconnects gives it back), input {process, data: UTF-8 text with control
+  characters, "\r" for Enter, "\u0003" for ctrl+c} from the client holding it -> {} or
+  {"dropped": bytes the node did not read in time}.
+  status -> per process also `command` (argv), `command_line` (paste-ready: cd, env
+  changes, argv quoted), `env` (changes to the launcher's environment), and for a death by a
+  signal nobody asked for (state "failed") `signal` ("SIGSEGV") and `core` when one was
+  kept; `typing` {client, process} or null.
+Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
+  "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
+  [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
+  lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
+  keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
+  and "core" for a crash; event times are to the millisecond; consecutive output of one
+  process is one event); `{"type": "ended", "status": n}` last.
+  Without the launch file (engine/run/session/plan_ops.py): plan -> {plan: Plan.to_json(),
+  arguments}; preview {arguments, running?} -> {arguments, plan, keep, stop, start,
+  error: null} or {arguments, error}: what `apply` with those values would do.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from typing import Any
+
+from ..events import Event
+
+MAX_MESSAGE = 64 << 20
+
+_EVENT_FIELDS = {f.name for f in dataclasses.fields(Event)}
+
+
+class ProtocolError(Exception):
+    """A peer sent something that is not a message of this protocol."""
+
+
+def encode(message: dict[str, Any]) -> bytes:
+    # default=str: a detail that is not JSON (a path, an enum) is sent as its text, never
+    # stops the events that follow it
+    return json.dumps(message, separators=(",", ":"), default=str).encode() + b"\n"
+
+
+def decode(line: bytes) -> dict[str, Any]:
+    try:
+        message = json.loads(line)
+    except ValueError as exc:
+        raise ProtocolError(f"not a JSON message: {exc}") from None
+    if not isinstance(message, dict):
+        raise ProtocolError("a message must be a JSON object")
+    return message
+
+
+def event_to_dict(event: Event) -> dict[str, Any]:
+    # defaults are left out: an output batch is then mostly its lines; the time to the
+    # millisecond (what the log files keep), as sub-millisecond digits are noise that no
+    # compression squeezes over an ssh link
+    data: dict[str, Any] = {"kind": event.kind, "time": round(event.time, 3)}
+    for name in ("process", "pid", "stream", "code", "reason"):
+        value = getattr(event, name)
+        if value is not None:
+            data[name] = value
+    if event.lines:
+        data["lines"] = event.lines
+    if event.level != "INFO":
+        data["level"] = event.level
+    if event.data is not None:
+        data["data"] = event.data  # a component's result, a lifecycle state, a stop asked
+    return data
+
+
+def event_from_dict(data: dict[str, Any]) -> Event:
+    fields = {k: v for k, v in data.items() if k in _EVENT_FIELDS}
+    if not isinstance(fields.get("kind"), str):
+        raise ProtocolError(f"an event without a kind: {data!r}")
+    return Event(**fields)

@@ -1,0 +1,182 @@
+"""Where sessions live: a private folder of `<name>.sock` sockets and `<name>.json` infos.
+
+The folder is `$XDG_RUNTIME_DIR/tuilaunch` (per user, on tmpfs, gone at logout), else
+`~/.ros/tuilaunch` (`$ROS_HOME/tuilaunch`); it is made 0700 and must belong to the user,
+so no other user can reach a socket even before the server checks the peer's uid.
+"""
+
+from __future__ import annotations
+
+import errno
+import fcntl
+import json
+import os
+import re
+import socket
+import stat
+from pathlib import Path
+from typing import Any
+
+from ...errors import LaunchError
+
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+
+
+class SessionError(LaunchError):
+    """A session cannot be found, named or reached."""
+
+
+def session_root() -> Path:
+    runtime = os.environ.get("XDG_RUNTIME_DIR")
+    if runtime and os.path.isdir(runtime) and os.access(runtime, os.W_OK | os.X_OK):
+        root = Path(runtime) / "tuilaunch"
+    else:
+        home = os.environ.get("ROS_HOME") or os.path.expanduser("~/.ros")
+        root = Path(home) / "tuilaunch"
+    root.mkdir(mode=0o700, parents=True, exist_ok=True)
+    info = root.stat()
+    if info.st_uid != os.getuid():
+        raise SessionError(f"session folder {root} belongs to another user",
+                           hint="set XDG_RUNTIME_DIR to a folder of your own")
+    if stat.S_IMODE(info.st_mode) != 0o700:
+        os.chmod(root, 0o700)
+    return root
+
+
+def check_name(name: str) -> str:
+    if not _NAME.match(name):
+        raise SessionError(f"session name {name!r} is not usable",
+                           hint="use letters, digits, '_', '.' and '-' (at most 64)")
+    return name
+
+
+def socket_path(name: str) -> Path:
+    return session_root() / f"{check_name(name)}.sock"
+
+
+def info_path(name: str) -> Path:
+    return session_root() / f"{check_name(name)}.json"
+
+
+def is_alive(name: str) -> bool:
+    """A session is alive when its socket accepts a connection."""
+    path = session_root() / f"{name}.sock"
+    probe = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    probe.settimeout(2.0)
+    try:
+        probe.connect(str(path))
+    except TimeoutError:
+        return True  # a server that is stopped, with its backlog full: there, not answering
+    except OSError as exc:
+        if exc.errno in (errno.ECONNREFUSED, errno.ENOENT, errno.ENOTSOCK):
+            return False
+        raise SessionError(f"session {name}: cannot reach {path}: {exc.strerror}") from None
+    finally:
+        probe.close()
+    return True
+
+
+def claim(name: str) -> int:
+    """Holds `<name>.lock` for the server's lifetime (the returned descriptor): of two
+    servers started with one name at the same instant, the second is refused, instead of
+    taking over the first one's socket path."""
+    path = session_root() / f"{check_name(name)}.lock"
+    fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o600)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        raise SessionError(f"a session named {name} is already running",
+                           hint="choose another --name") from None
+    return fd
+
+
+def _claimed(name: str) -> bool:
+    """Whether a server (maybe still starting) holds the name."""
+    try:
+        fd = os.open(session_root() / f"{name}.lock", os.O_RDWR | os.O_CLOEXEC)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def remove(name: str) -> None:
+    root = session_root()
+    for suffix in (".sock", ".json", ".lock"):
+        (root / f"{name}{suffix}").unlink(missing_ok=True)
+
+
+def read_info(name: str) -> dict[str, Any] | None:
+    try:
+        data = json.loads((session_root() / f"{name}.json").read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def write_info(name: str, info: dict[str, Any]) -> None:
+    path = info_path(name)
+    temporary = path.with_suffix(".json.tmp")
+    temporary.write_text(json.dumps(info))
+    os.chmod(temporary, 0o600)
+    temporary.replace(path)  # a reader never sees half a file
+
+
+def live_sessions(clean: bool = True) -> list[str]:
+    """Names of the sessions whose server answers, oldest first; with `clean`, the sockets
+    and infos of dead ones (a server that was SIGKILLed) are removed."""
+    root = session_root()
+    names = {p.stem for suffix in ("sock", "json", "lock") for p in root.glob(f"*.{suffix}")}
+    alive = []
+    for name in names:
+        if not _NAME.match(name):
+            continue
+        if is_alive(name):
+            alive.append(name)
+        elif clean and not _claimed(name):
+            remove(name)
+    return sorted(alive, key=lambda n: (read_info(n) or {}).get("started", 0.0))
+
+
+def new_name(stem: str) -> str:
+    """`stem-N` with the smallest N not taken by a live session."""
+    base = re.sub(r"[^A-Za-z0-9_.-]", "_", stem)[:56] or "launch"
+    if not base[0].isalnum():
+        base = "l" + base
+    taken = set(live_sessions())
+    number = 1
+    while f"{base}-{number}" in taken or _claimed(f"{base}-{number}"):
+        number += 1
+    return f"{base}-{number}"
+
+
+def launch_stem(path: str) -> str:
+    """`bringup` for bringup.py, bringup.launch.py, bringup.launch.xml."""
+    name = os.path.basename(path)
+    for suffix in (".launch.py", ".launch.xml", ".launch.yaml", ".launch.yml", ".py", ".xml",
+                   ".yaml", ".yml"):
+        if name.endswith(suffix) and len(name) > len(suffix):
+            return name[: -len(suffix)]
+    return name
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether a process (a session server) lives; our own unreaped child counts as gone."""
+    if pid <= 0:
+        return False  # 0 and -1 would ask about a whole process group
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:  # our own child (the foreground case) is a zombie until reaped
+        return os.waitpid(pid, os.WNOHANG) == (0, 0)
+    except ChildProcessError:
+        return True

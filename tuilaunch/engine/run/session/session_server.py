@@ -1,0 +1,337 @@
+"""A launch as a background server: owns the Supervisor, serves clients on a unix socket.
+
+`python -m tuilaunch.engine.server_main NAME FILE LOG_DIR ARGUMENTS_JSON` is started by
+the command line in its own session (no terminal: a dropped ssh link never reaches it). The
+TUI, `tuilaunch status/logs/wait/...` are clients. The log files keep every line; a client
+that subscribes late gets, with the states, the log files' sizes at that instant, and reads
+what came before from the files: nothing is missed and nothing is seen twice.
+
+Here: the coordinator (status, the requests it answers, argument edits). The connections
+and their bounded queues are in run/clients.py; the socket, lock and info files, kept
+reachable, in run/session_socket.py.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import os
+import signal
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ...describe.python.loader import set_command_line
+from ...errors import LaunchError
+from ...plan.session import Session
+from ..events import Event
+from ..plugins import Handler
+from ..supervisor.supervisor import Supervisor
+from . import session_dir
+from .clients import CLIENT_MAX_EVENTS as CLIENT_MAX_EVENTS
+from .clients import CLIENT_MAX_LINES as CLIENT_MAX_LINES
+from .clients import ClientHub
+from .clients import ClientQueue as ClientQueue
+from .clients import op_name as op_name
+from .keyboard import Keyboard
+from .log_reader import READ_LOG_LIMIT, read_log
+from .protocol import event_to_dict
+from .resource_watch import ResourceWatch, usage_fields
+from .resources import Usage
+from .session_socket import REACHABLE_CHECK as REACHABLE_CHECK
+from .session_socket import SessionSocket
+
+RECENT_EVENTS = 2000
+"""Non-output events kept for late clients (states' details and the launch pane)."""
+BUILTIN_OPS = frozenset({"subscribe", "status", "start", "stop", "restart", "shutdown",
+                         "apply", "kill", "run_action", "find", "read_log",
+                         "watch_resources"})
+"""Requests the server answers itself; plugins add others with `add_handler`."""
+
+
+class SessionServer:
+    def __init__(self, name: str, session: Session, log_dir: Path,
+                 sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
+                 command: list[str] | None = None, supervisor: Supervisor | None = None) -> None:
+        """`supervisor`: one made with its plugins (engine/launcher.py); a bare one without.
+        The plugins' `handlers()` join the requests the server answers."""
+        self.name = name
+        self.command = command or [session.path]  # FILE or PACKAGE FILE, as the user gave
+        self.session = session
+        self.log_dir = log_dir
+        self.supervisor = supervisor or Supervisor(
+            session.plan, log_dir, sigterm_timeout=sigterm_timeout,
+            sigkill_timeout=sigkill_timeout)
+        self.supervisor.subscribe(self._on_event)
+        self._handlers: dict[str, Handler] = {}
+        self.hub = ClientHub(self.info, self._snapshot, self._perform,
+                             lambda: self.supervisor.states, self._client_gone)
+        self.socket = SessionSocket(name, self.hub.serve, self.info, self._log)
+        self.resources = ResourceWatch(self._running_pids, self.send)
+        self.keyboard = Keyboard(self.supervisor, self.find_process)
+        for op, handler in self.keyboard.handlers().items():
+            self.add_handler(op, handler)
+        for plugin in self.supervisor.plugins:
+            for op, handler in plugin.handlers(self.find_process).items():
+                self.add_handler(op, handler)
+            plugin.serve(self)
+        self.started = time.time()
+        self.pids: dict[str, int] = {}
+        self.details: dict[str, str] = {}
+        self.recent: collections.deque[Event] = collections.deque(maxlen=RECENT_EVENTS)
+        self.apply_lock = asyncio.Lock()  # argument edits from several clients, one at a time
+
+    def add_handler(self, op: str, handler: Handler) -> None:
+        """Answers the clients' requests `{"op": op, ...}` with `await handler(message)`.
+
+        For requests the server does not know itself (a plugin's: lifecycle states, ROS
+        inspection); a plugin pushes events to the clients with `supervisor.emit`."""
+        if op in BUILTIN_OPS or op in self._handlers:
+            raise ValueError(f"session request {op!r} is already answered")
+        self._handlers[op] = handler
+
+    @property
+    def handlers(self) -> Mapping[str, Handler]:
+        """The requests added with `add_handler`, by op."""
+        return dict(self._handlers)
+
+    @property
+    def clients(self) -> dict[int, ClientQueue]:
+        """Subscribed clients' queues, by client id."""
+        return self.hub.clients
+
+    @property
+    def queues(self) -> set[ClientQueue]:
+        return self.hub.queues
+
+    @property
+    def writers(self) -> set[asyncio.StreamWriter]:
+        return self.hub.writers
+
+    @property
+    def dropped_clients(self) -> int:
+        """Clients cut loose because they stopped reading."""
+        return self.hub.dropped_clients
+
+    @property
+    def ended(self) -> bool:
+        """The supervisor's run is over; writers send "ended" and stop."""
+        return self.hub.ended
+
+    @property
+    def status_code(self) -> int:
+        return self.hub.status_code
+
+    # --- the supervisor's events -------------------------------------------------------------
+
+    def _on_event(self, event: Event) -> None:
+        if event.kind != "output":
+            self.recent.append(event)
+            if event.process is not None:
+                if event.kind == "started" and event.pid is not None:
+                    self.pids[event.process] = event.pid
+                if event.reason is not None and event.kind != "log":
+                    self.details[event.process] = event.reason
+        self.hub.broadcast(event)
+
+    def send(self, event: Event, client: int | None = None) -> None:
+        """An event for one subscribed client (by id) or all, neither logged nor kept for
+        late clients: the inspector's streams (run/plugins.py `Clients`)."""
+        if client is None:
+            self.hub.broadcast(event)
+        else:
+            self.hub.send(event, client)
+
+    def subscribed(self, client: int) -> bool:
+        return self.hub.subscribed(client)
+
+    def _running_pids(self) -> dict[str, int]:
+        states = self.supervisor.states
+        return {process: pid for process, pid in self.pids.items()
+                if states.get(process) == "running"}
+
+    def _client_gone(self, client: int) -> None:
+        self.keyboard.release(client)  # a client that is gone types no more
+        self.resources.forget(client)
+        for plugin in self.supervisor.plugins:
+            try:
+                plugin.client_gone(client)
+            except Exception as exc:  # a plugin's cleanup must never stop the server
+                self._log(f"{type(plugin).__name__} failed to let client {client} go: {exc}")
+
+    def info(self) -> dict[str, Any]:
+        return {"name": self.name, "file": os.path.abspath(self.session.path),
+                "command": self.command,
+                "arguments": self.session.arguments, "pid": os.getpid(),
+                "started": self.started, "log_dir": str(self.log_dir),
+                **self._placement_info()}
+
+    def _placement_info(self) -> dict[str, Any]:
+        """`--machines` as the launch was given it, so a client resolves the same plan."""
+        placement = self.session.placement
+        if placement is None:
+            return {}
+        return {"placement": {"text": placement.text, "path": placement.machines.path,
+                              "share": placement.share}}
+
+    def status(self, usage: Mapping[str, Usage] | None = None) -> dict[str, Any]:
+        """Each process's state; with `usage` (ResourceWatch.current), its CPU%, resident
+        memory and threads (None when it is not running)."""
+        states = self.supervisor.states
+        processes = []
+        for proc in self.session.plan.processes:
+            state = states.get(proc.id, "pending")
+            fields = usage_fields((usage or {}).get(proc.id))
+            del fields["growing"]  # a trend needs watching; status is one look
+            processes.append({
+                "id": proc.id, "name": proc.full_name or proc.label, "state": state,
+                "pid": self.pids.get(proc.id) if state == "running" else None,
+                "exit_code": self.supervisor.exit_codes.get(proc.id),
+                "detail": self.details.get(proc.id), "machine": proc.machine, **fields,
+                # the exact start (argv, paste-ready line, env changes); a crash's signal/core
+                **self.supervisor.command_of(proc.id),
+                **(self.supervisor.deaths.get(proc.id, {}) if state == "failed" else {})})
+        counts: dict[str, int] = {}
+        for proc in self.session.plan.processes:
+            state = states.get(proc.id, "pending")
+            counts[state] = counts.get(state, 0) + 1
+        actions = [{"id": a.id, "kind": a.kind, "state": states.get(a.id, "pending")}
+                   for a in self.session.plan.actions]
+        return {**self.info(), "counts": counts, "processes": processes, "actions": actions,
+                "dropped_clients": self.dropped_clients, "typing": self.keyboard.state()}
+
+    # --- serving ---------------------------------------------------------------------------
+
+    async def serve(self) -> int:
+        self.socket.claim()
+        await self.socket.bind()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, self._signalled, sig)
+        # no terminal: a SIGHUP can only come from someone who means it as "keep going"
+        loop.add_signal_handler(signal.SIGHUP, lambda: None)
+        keeper = asyncio.ensure_future(self.socket.stay_reachable())
+        try:
+            status = await self.supervisor.run(keep_alive=True)
+        finally:
+            keeper.cancel()
+            self.resources.close()
+            self.socket.close()
+        await self.hub.end(status)
+        return status
+
+    def _log(self, text: str, level: str = "WARN") -> None:
+        self.supervisor.log(text, level)
+
+    def _signalled(self, sig: signal.Signals) -> None:
+        self.hub.spawn(self.supervisor.shutdown(f"received {sig.name}"))
+
+    def _snapshot(self) -> dict[str, Any]:
+        """What a client gets with its subscription: the plugins' snapshots, the states
+        and the log files' sizes at that instant, the recent events, the arguments."""
+        result: dict[str, Any] = {}
+        for plugin in self.supervisor.plugins:
+            result.update(plugin.snapshot())
+        result.update({"states": dict(self.supervisor.states),
+                       "offsets": self._log_sizes(),
+                       "recent": [event_to_dict(e) for e in self.recent],
+                       "arguments": self.session.arguments})
+        return result
+
+    def _log_sizes(self) -> dict[str, int]:
+        sizes = {}
+        for proc in self.session.plan.processes:
+            try:
+                sizes[proc.id] = (self.log_dir / f"{proc.id}.log").stat().st_size
+            except OSError:
+                continue
+        return sizes
+
+    async def _perform(self, message: dict[str, Any]) -> Any:
+        op = message.get("op")
+        supervisor = self.supervisor
+        if op == "status":
+            # `ls` asks every session and needs no CPU figures: it can spare their 0.3 s
+            wanted = message.get("resources", True) is not False
+            return self.status(await self.resources.current() if wanted else None)
+        if op == "watch_resources":
+            self.resources.watch(int(message["client"]), bool(message.get("on", True)))
+            return {}
+        if op in ("start", "stop", "restart"):
+            process = self.find_process(str(message.get("process")))
+            if process not in {p.id for p in self.session.plan.processes}:
+                raise LaunchError(f"{process} is an action, not a process: it cannot {op}")
+            if op == "restart":
+                await supervisor.restart(process, message.get("prefix") or None,
+                                         message.get("log_level"))
+            else:
+                await getattr(supervisor, op)(process)
+            return {"process": process, "state": supervisor.states.get(process)}
+        if op == "shutdown":
+            await supervisor.shutdown(str(message.get("reason") or "stop requested"))
+            return {}
+        if op == "apply":
+            arguments = message.get("arguments")
+            if not isinstance(arguments, dict):
+                raise ValueError("apply needs arguments as an object")
+            return await self.apply({str(k): str(v) for k, v in arguments.items()})
+        if op == "kill":
+            supervisor.kill_all()  # the impatient second `q`: SIGKILL whatever is left
+            return {}
+        if op == "run_action":
+            run_action = getattr(supervisor, "run_action", None)
+            if run_action is None:
+                raise LaunchError("this supervisor cannot run an action again")
+            await run_action(self.find_process(str(message.get("action"))))
+            return {}
+        if op == "find":
+            return self.find_process(str(message.get("process")))
+        if op == "read_log":
+            # by id only: the file is the plan's own, never a path a client names
+            process = self.find_process(str(message.get("process")))
+            end = message.get("end")
+            return read_log(self.log_dir / f"{process}.log", int(message.get("start") or 0),
+                            None if end is None else int(end), int(message.get("skip") or 0),
+                            int(message.get("limit", READ_LOG_LIMIT)),
+                            bool(message.get("tail")))
+        handler = self._handlers.get(str(op))
+        if handler is not None:
+            return await handler(message)
+        raise ValueError(f"unknown request {op!r}")
+
+    def find_process(self, ref: str) -> str:
+        """A process by id (`talker-1`), full node name (`/r2/talker`) or unique node name."""
+        processes = self.session.plan.processes
+        for item_id in [*(p.id for p in processes), *(a.id for a in self.session.plan.actions)]:
+            if ref == item_id:
+                return item_id
+        matches = [p.id for p in processes if ref in (p.full_name, p.name, p.label)
+                   or (p.full_name or "").rsplit("/", 1)[-1] == ref]
+        if len(matches) == 1:
+            return matches[0]
+        if matches:
+            raise LaunchError(f"{ref!r} names several processes: {', '.join(matches)}",
+                              hint="use a process id")
+        raise LaunchError(f"no process {ref!r}",
+                          hint=f"processes: {', '.join(p.id for p in processes)}")
+
+    async def apply(self, arguments: dict[str, str]) -> dict[str, Any]:
+        async with self.apply_lock:
+            running = {p for p, s in self.supervisor.states.items() if s == "running"}
+            set_command_line(None, arguments)  # sys.argv as a file reads it, again
+            preview = self.session.preview(arguments, running)
+            if preview.error is not None or preview.plan is None:
+                raise LaunchError(f"cannot apply: {preview.error}")
+            plan = self.session.accept(preview)
+            diff = await self.supervisor.replace_plan(plan)
+            session_dir.write_info(self.name, self.info())
+            self._emit_plan()
+            return {"stop": diff.stop, "start": diff.start}
+
+    def _emit_plan(self) -> None:
+        # an event like the others, so it reaches every client in order with their states,
+        # and the plugins (the machines' shares are relaunched with the same values)
+        self.supervisor.emit(Event("relaunched", reason=None, lines=[
+            f"{k}:={v}" for k, v in self.session.arguments.items()]))
+

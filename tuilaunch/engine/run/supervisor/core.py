@@ -1,0 +1,204 @@
+"""The supervisor's state, and how it tells the world: events to consumers and launch.log.
+
+`SupervisorCore` is the base of the supervisor's layers (core <- triggers <- plan_actions <-
+stopping <- respawn <- starting <- placed / interacting <- supervisor): each file holds one
+concern of the run and the `Supervisor` (run/supervisor.py) is the whole. Every event goes
+through `emit`; a consumer that raises is reported once and never stops the launch.
+
+The state and the methods several layers share are public here (documented attributes), so
+no underscore name crosses a module; what one layer alone uses stays private to it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+import time
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from ...describe.python.launch_events import EventInfo
+from ...plan.model import ActionPlan, Plan
+from ..events import Consumer, Event
+from ..plugins import ActionRunner, SupervisorPlugin
+from ..process.logfiles import LogFile
+from ..process.process_command import StartCommand
+from ..process.readers import ChannelReader, Running
+from ..process.watchdog import Watchdog
+
+
+class SupervisorCore:
+    """The supervisor's state, its plugins and its consumers."""
+
+    def __init__(self, plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
+                 sigkill_timeout: float = 5.0,
+                 plugins: Iterable[SupervisorPlugin] = ()) -> None:
+        """`plugins` (run/plugins.py) add what `run` does not know: ROS actions, lifecycle
+        nodes, components. engine/launcher.py makes a supervisor with the ROS ones."""
+        self.plan = plan
+        self.plugins: list[SupervisorPlugin] = []
+        self.action_runners: dict[str, ActionRunner] = {}
+        """The plugins' performers of action kinds `run` does not know, by kind."""
+        self.detached_actions: set[str] = set()
+        """Action kinds performed in the background (a trigger does not wait for them)."""
+        self.log_dir = log_dir
+        self.sigterm_timeout = sigterm_timeout
+        self.sigkill_timeout = sigkill_timeout
+        self.consumers: list[Consumer] = []
+        self.states: dict[str, str] = {
+            p.id: ("pending" if p.enabled else "skipped") for p in plan.processes}
+        self.states.update({a.id: ("pending" if a.enabled else "skipped") for a in plan.actions})
+        self.io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
+        """Event handlers on a process's output, by (process, stream)."""
+        self.on_shutdown: list[ActionPlan] = []
+        """OnShutdown handlers, run once when the launch begins to stop."""
+        self.any_watchers: dict[str, list[ActionPlan]] = {}
+        """Event handlers without a target (any process), by event kind."""
+        self.last_event: dict[tuple[str, str], EventInfo] = {}
+        """The latest event of each (process, kind), handed to the actions it triggers."""
+        self.shutdown_requested = False
+        """A Shutdown action or an operator asked the launch to end."""
+        self.exit_codes: dict[str, int] = {}
+        self.crashes: dict[str, int] = {}
+        """Processes that exited on their own with a non-zero status (not stopped by us)."""
+        self.crash_times: dict[str, float] = {}
+        """When each process last crashed (loop time), for the respawn policy."""
+        self.stop_time: float | None = None
+        """When the shutdown began (loop time), for its escalation deadlines."""
+        self.running: dict[str, Running] = {}
+        """The processes that run now, by id: their process, pty or pipes, readers."""
+        self.lingering: set[ChannelReader] = set()
+        """Output still open after its process exited (a grandchild holds the pipe)."""
+        self.happened: dict[tuple[str, str], asyncio.Event] = {}
+        """Set when (process, event kind) has happened: what triggers wait on."""
+        # lifecycle transitions seen per (node or "*", state filter), and an event pulsed at
+        # each: what re-runs the actions of an OnStateTransition on every match
+        self.occurrences: dict[tuple[str, str], int] = {}
+        """Lifecycle transitions seen per (node or "*", state filter)."""
+        self.pulses: dict[tuple[str, str], asyncio.Event] = {}
+        """Pulsed at each such transition."""
+        self.busy = 0
+        """Triggers sleeping or respawns scheduled: the run is not over while any is."""
+        self.tasks: set[asyncio.Task[Any]] = set()
+        """The supervisor's background tasks (`spawn_task`), cancelled at the end of a run."""
+        self.shutting_down = False
+        """The launch is stopping: nothing new starts, waits should give up."""
+        self.urgency = 0
+        """How hard the shutdown stops: 0 SIGINT first; 1 SIGTERM now; 2 SIGKILL now."""
+        self.hurry: asyncio.Event | None = None
+        """Set to make the shutdown's escalation skip to the urgency asked for."""
+        self.changed = asyncio.Event()
+        """Set at every event: the run loop looks again whether the launch is over."""
+        self.retries: dict[str, int] = {}
+        """Respawns of each process so far."""
+        self.quick_failures: dict[str, int] = {}
+        """Crashes in a row within 2 s of starting, by process (respawn back-off)."""
+        self.keep_alive = False
+        """Only shutdown ends the run (an interactive UI), not every process having exited."""
+        self.reported: set[str] = set()
+        """Failures already said once (a consumer that keeps raising)."""
+        self.env_cache: dict[str, str] | None = None
+        """The environment the processes start from, built once."""
+        self.run_prefixes: dict[str, str] = {}
+        """An operator's tool (`gdb -q -ex run --args`) a process runs under, from a
+        `restart` with a prefix until the next restart without one."""
+        self.log_levels: dict[str, str] = {}
+        """`--log-level` given at a restart, kept across respawns until a restart changes it."""
+        self.started_with: dict[str, StartCommand] = {}
+        """The last start of each process, exactly (status's command line)."""
+        self.deaths: dict[str, dict[str, str]] = {}
+        """A crash's `signal` name and `core` location, until the process starts again."""
+        self.watchdog = Watchdog()
+        for plugin in plugins:
+            self.add_plugin(plugin)
+        log_dir.mkdir(parents=True, exist_ok=True)
+        self.launch_log = LogFile(log_dir / "launch.log", self.report_io)
+        """launch.log: every event but output, one line each."""
+
+    def add_plugin(self, plugin: SupervisorPlugin) -> None:
+        """Plugs in before `run`: its action kinds join those the supervisor performs."""
+        self.plugins.append(plugin)
+        self.action_runners.update(plugin.actions())
+        self.detached_actions.update(plugin.detached_actions)
+
+    def subscribe(self, consumer: Consumer) -> None:
+        self.consumers.append(consumer)
+
+    def emit(self, event: Event) -> None:
+        """Tells every consumer; one that raises is reported once and never stops us."""
+        if event.kind != "output":
+            detail = " ".join(f"{k}={v}" for k, v in (("pid", event.pid), ("code", event.code),
+                                                       ("reason", event.reason)) if v is not None)
+            self.launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
+                                   f"{detail}\n".encode())
+        for consumer in list(self.consumers):
+            try:
+                consumer(event)
+            except Exception as exc:
+                self._consumer_failed(consumer, exc)
+        self.changed.set()
+
+    def log(self, text: str, level: str = "INFO") -> None:
+        """A line for the launch pane and launch.log from whoever runs the supervisor."""
+        self.emit(Event("log", None, reason=text, level=level))
+
+    def _consumer_failed(self, consumer: Consumer, exc: Exception) -> None:
+        name = getattr(consumer, "__qualname__", type(consumer).__name__)
+        text = f"{name} failed on an event: {type(exc).__name__}: {exc}"
+        if text in self.reported:
+            return
+        self.reported.add(text)
+        self.launch_log.write(f"{time.time():.3f} error  reason={text}\n".encode())
+        to_stderr(f"tuilaunch: {text}; the launch goes on")
+
+    def report_io(self, text: str) -> None:
+        """A log file that cannot be written: said to the consumers (on stderr without)."""
+        if not self.consumers:
+            to_stderr(f"tuilaunch: {text}")
+        event = Event("log", None, reason=text, level="ERROR")
+        for consumer in list(self.consumers):
+            try:
+                consumer(event)
+            except Exception as exc:
+                self._consumer_failed(consumer, exc)
+
+    def spawn_task(self, coro: Any) -> None:
+        """Runs `coro` in the background, kept in `tasks`; a failure is reported."""
+        task = asyncio.ensure_future(coro)
+        self.tasks.add(task)
+        task.add_done_callback(self._task_done)
+
+    def _task_done(self, task: asyncio.Task[Any]) -> None:
+        self.tasks.discard(task)
+        if not task.cancelled() and task.exception() is not None:
+            exc = task.exception()
+            self.report_io(f"internal error: {type(exc).__name__}: {exc}")
+            self.changed.set()
+
+    def log_action(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
+        """A line in the launch pane on behalf of one action of the plan."""
+        self.emit(Event("log", action.id, reason=text, level=level))
+
+    # Made by the later layers; declared here so the earlier ones can call them.
+
+    async def start(self, process_id: str) -> None:
+        raise NotImplementedError  # run/starting.py
+
+    async def stop(self, process_id: str) -> None:
+        raise NotImplementedError  # run/stopping.py
+
+    async def shutdown(self, reason: str = "shutdown") -> None:
+        raise NotImplementedError  # run/stopping.py
+
+    async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
+        raise NotImplementedError  # run/plan_actions.py
+
+
+def to_stderr(text: str) -> None:
+    """A message for the operator; a dead terminal must not turn it into a failure."""
+    try:
+        sys.stderr.write(text + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass

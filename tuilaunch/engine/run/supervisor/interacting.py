@@ -1,0 +1,76 @@
+"""The operator's hands on one process: typing into its terminal, running it under a tool
+(gdb, valgrind...) or at another log level, and the exact command it was started with."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...errors import LaunchError
+from ...plan.prefix import with_prefix
+from ..process.process_command import check_log_level, describe_command, start_command
+from ..process.readers import Running
+from ..process.terminal_input import InputRefused
+from .starting import Starting, wants_tty
+
+
+class Interacting(Starting):
+    """Typing into a process, restart options, and its command for `status`."""
+
+    def running_process(self, process_id: str) -> Running | None:
+        """The running process's record (its pid, its terminal), or None."""
+        return self.running.get(process_id)
+
+    def write_input(self, process_id: str, data: bytes) -> int:
+        """Types `data` into a running process's terminal (`\\r` for Enter, `\\x03` for
+        ctrl+c: SIGINT to a line reader, a key to a raw one); returns the bytes dropped
+        because it does not read them. LaunchError, one line naming it, when it cannot be
+        typed into (not running, no terminal)."""
+        running = self.running.get(process_id)
+        if running is None:
+            raise LaunchError(f"{process_id} is not running ({self.states.get(process_id)}):"
+                              " there is nothing to type into")
+        try:
+            return running.write_input(data)
+        except InputRefused as exc:
+            raise LaunchError(f"{process_id} cannot be typed into: {exc}") from None
+
+    def restart_options(self, process_id: str, prefix: str | None = None,
+                        log_level: str | None = None) -> None:
+        """Checks and records what the next start of `process_id` runs with, before anything
+        is stopped: a bad prefix or level changes nothing.
+
+        `prefix` (a tool and its options) holds for the runs from this restart (respawns
+        included) until a restart without one; `log_level` holds until a restart gives
+        another (an empty one goes back to the file's)."""
+        proc = self.plan.process(process_id)
+        level = None
+        if log_level:
+            if proc.kind == "process":
+                raise LaunchError(f"{process_id} is not a ROS node (an ExecuteProcess): "
+                                  "--log-level does not apply to it")
+            level = check_log_level(log_level)
+        if prefix:
+            with_prefix(list(proc.cmd), prefix)  # a tool not on PATH fails here
+            self.run_prefixes[process_id] = prefix
+        else:
+            self.run_prefixes.pop(process_id, None)
+        if level:
+            self.log_levels[process_id] = level
+        elif log_level is not None:
+            self.log_levels.pop(process_id, None)
+
+    def command_of(self, process_id: str) -> dict[str, Any]:
+        """`command`, `command_line` and `env` of the process's last start, or of the
+        start it would get now when it has not started yet."""
+        start = self.started_with.get(process_id)
+        if start is None:
+            proc = self.plan.process(process_id)
+            if not proc.cmd:
+                return {}
+            try:
+                start = start_command(proc, self.base_env(), wants_tty(proc),
+                                      self.run_prefixes.get(process_id),
+                                      self.log_levels.get(process_id))
+            except LaunchError:
+                return {}
+        return describe_command(start, self.base_env())

@@ -1,0 +1,192 @@
+"""Performing the plan's actions: log, shutdown, stop, event callbacks, plugins' kinds.
+
+Kinds a plugin registered (`call_service`, `lifecycle_transition`, ...) go to it; event
+handlers' callbacks are called with the launch event, and what they return joins the run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any
+
+from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
+from ...describe.python.launch_events import EventInfo, event_for
+from ...describe.substitutions import PerformContext, perform
+from ...plan.model import ActionPlan, ProcessPlan
+from ..events import Event, LaunchEvent
+from ..process.readers import Running
+from .triggers import Triggers
+
+
+class PlanActions(Triggers):
+    """Performing one action of the plan, and what event handlers add to the run."""
+
+    def process_event(self, process_id: str, on: str, pid: int | None = None,
+                      returncode: int | None = None) -> None:
+        """A process started or exited: remember the event and run handlers without target."""
+        proc = self.plan.process(process_id)
+        event = event_for(on, process_name=process_id, pid=pid, returncode=returncode,
+                          action=proc.source, cmd=proc.cmd)
+        self.last_event[(process_id, on)] = event
+        for action in self.any_watchers.get(on, []):
+            self.states[action.id] = "running"  # due now: the run must not end before it
+            self.spawn_task(self.perform_action(action, event))
+
+    def add_to_plan(self, processes: list[ProcessPlan], actions: list[ActionPlan],
+                    event: EventInfo | None = None) -> None:
+        """Processes and actions performed at event time join the run."""
+        for proc in processes:
+            self.states[proc.id] = "pending" if proc.enabled else "skipped"
+            if proc.enabled and not self.shutting_down:  # launch starts nothing in shutdown
+                self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
+        for action in actions:
+            self.states[action.id] = "pending" if action.enabled else "skipped"
+            if event is not None:
+                self.last_event[(action.id, "made")] = event
+            if action.enabled:
+                self.schedule_action(action)
+        self.changed.set()
+
+    def _perform_at_event(self, action: ActionPlan, entities: list[Any],
+                          event: EventInfo) -> bool:
+        from ...errors import LaunchError
+        from .event_actions import perform_entities
+
+        try:
+            performed = perform_entities(self.plan, action, entities, event)
+        except LaunchError as exc:  # only this handler fails, as in launch
+            self.log_action(action, str(exc).replace("\n", " "), "ERROR")
+            return False
+        for warning in performed.warnings:
+            self.log_action(action, warning, "WARN")
+        self.add_to_plan(performed.processes, performed.actions, event)
+        return True
+
+    def _event_of(self, action: ActionPlan) -> EventInfo:
+        """The event an action was triggered by (its process's start or exit, ...)."""
+        if (action.id, "made") in self.last_event:  # performed by an event handler
+            return self.last_event[(action.id, "made")]
+        step = action.trigger
+        while step is not None:
+            if step.target is not None and (step.target, step.on) in self.last_event:
+                return self.last_event[(step.target, step.on)]
+            step = step.after
+        on = action.trigger.on if action.trigger is not None else "timer"
+        return event_for(on)
+
+    async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
+        if event is None:
+            event = self._event_of(action)
+        self.states[action.id] = "running"
+        self.emit(Event("started", action.id))
+        self.flag(action.id, "start").set()
+        ok = True
+        try:
+            runner = self.action_runners.get(action.kind)
+            if runner is not None:
+                ok = await runner(action)
+            elif action.kind == "shutdown":
+                self._request_shutdown(str(action.data))
+            elif action.kind == "log":
+                self.log_action(action, self._perform(action, action.source.msg, event))
+            elif action.kind == "event_callback":
+                ok = self._run_callbacks(action, event or LaunchEvent())
+            elif action.kind == "deferred":
+                from .event_actions import deferred_entities
+
+                ok = self._perform_at_event(action, deferred_entities(action), event)
+            elif action.kind == "stop_process":
+                ok = await self._stop_process(action)
+            else:
+                self.log_action(action, f"{action.kind} is not supported yet; skipped", "WARN")
+        except asyncio.CancelledError:
+            self.states[action.id] = "cancelled"
+            raise
+        self.states[action.id] = "done" if ok else "failed"
+        self.emit(Event("finished", action.id, reason=self.states[action.id]))
+        self.flag(action.id, "exit").set()
+
+    def _request_shutdown(self, reason: str) -> None:
+        """A Shutdown action: the run must not end before the shutdown has begun."""
+        self.shutdown_requested = True
+        self.spawn_task(self.shutdown(reason))
+
+    async def _stop_process(self, action: ActionPlan) -> bool:
+        """EmitEvent(ShutdownProcess(process_matcher=matches_action(x)))."""
+        target = str(action.target)
+        if target not in self.states:
+            self.log_action(action, f"cannot stop {target}: this launch does not run it", "WARN")
+            return False
+        self.spawn_task(self.stop(target))
+        return True
+
+    def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
+        context = PerformContext(action.configurations, None,
+                                 event_locals={"event": event or LaunchEvent()})
+        return perform(value, context)
+
+    def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
+        """Launch-file functions called with the event; what they return is carried out."""
+        source = action.source
+        launcher = getattr(source, "launcher", None)
+        produced: list[Any] = []
+        try:
+            for callback in source.callbacks:
+                if launcher is not None:
+                    with launcher.capture() as added:
+                        produced += entity_list(callback(event)) + added
+                else:
+                    produced += entity_list(call_handler(callback, event, action))
+        except Exception as exc:  # a user's callback must never stop the launch
+            self.log_action(action, f"event callback ({action.origin}) raised "
+                            f"{type(exc).__name__}: {exc}", "ERROR")
+            return False
+        seen: set[int] = set()
+        rest: list[Any] = []
+        for entity in produced:
+            if id(entity) in seen:
+                continue
+            seen.add(id(entity))
+            if not self._carry_out(action, entity, event):
+                rest.append(entity)
+        return self._perform_at_event(action, rest, event) if rest else True
+
+    def _carry_out(self, action: ActionPlan, entity: Entity, event: EventInfo) -> bool:
+        """Log lines and shutdown at once; False for what must be resolved into the plan."""
+        if isinstance(entity, LogInfo):
+            self.log_action(action, self._perform(action, entity.msg, event))
+        elif isinstance(entity, Shutdown):
+            self._request_shutdown(self._perform(action, entity.reason, event))
+        else:
+            return False
+        return True
+
+    def deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
+        """A block of a process's output, already in its log file: to the consumers."""
+        self.emit(Event("output", running.plan.id, stream=stream, lines=lines))
+        if self.io_watchers or self.any_watchers:
+            self.dispatch_io(running.plan.id, stream, lines, running.process.pid)
+
+    def dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
+        watchers = [*self.io_watchers.get((process_id, stream), []),
+                    *self.any_watchers.get(f"io:{stream}", [])]
+        source = self.plan.process(process_id).source if watchers else None
+        for action in watchers:
+            for line in lines:
+                event = event_for("io", stream, process_name=process_id, pid=pid,
+                                  text=(line + "\n").encode(), action=source)
+                self.spawn_task(self.perform_action(action, event))
+
+
+def call_handler(callback: Any, event: EventInfo, action: ActionPlan) -> Any:
+    """Plain launch API handlers take (event, context); simple_launch's take (event)."""
+    import inspect
+
+    try:
+        arity = len(inspect.signature(callback).parameters)
+    except (TypeError, ValueError):
+        arity = 1
+    if arity >= 2:
+        return callback(event, PerformContext(action.configurations,
+                                              event_locals={"event": event}))
+    return callback(event)

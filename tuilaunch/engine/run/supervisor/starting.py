@@ -1,0 +1,237 @@
+"""Starting a process: parameter files, environment, log file, spawn, and watching its exit.
+
+No thread per child: each child's exit is watched through a pidfd on the event loop, and
+its output through non-blocking reads on the same loop.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from ...errors import LaunchError
+from ...plan.model import ProcessPlan
+from ...plan.params import write_parameter_file
+from ..events import Event
+from ..process.logfiles import LogFile
+from ..process.process_command import death_details, start_command
+from ..process.readers import ChannelReader, Running
+from ..process.spawn import spawn
+from .respawn import Respawning
+from .stopping import describe_exit, group_alive, kill_group
+
+_ENDING_KEYS = {signal.SIGINT, signal.SIGQUIT}
+"""Signals of keys typed into a node (ctrl+c, ctrl+\\) that end it on the operator's request."""
+
+EOF_GRACE = 1.0
+"""Seconds to wait, once a process is reaped, for the end of its output. A daemonised
+grandchild may hold the pipe for ever: its exit is then reported anyway, and whatever it
+still prints is read and logged until the launch ends."""
+
+
+class Starting(Respawning):
+    """Starting a process and following it until it has exited."""
+
+    async def start(self, process_id: str) -> None:
+        """Starts one process (also a stopped or exited one, from the UI)."""
+        self.start_now(process_id)
+
+    def start_now(self, process_id: str) -> None:
+        """From the check that the launch is not shutting down to the registration of the
+        child nothing awaits, so a shutdown either prevents the start or sees the child."""
+        proc = self.plan.process(process_id)
+        if process_id in self.running or self.shutting_down:
+            return
+        if proc.error:
+            where = f" ({proc.origin})" if proc.origin else ""
+            self._fail(process_id, proc.error + where)
+            return
+        try:
+            for path, values in proc.generated_parameter_files:
+                write_parameter_file(Path(path), values)
+        except Exception as exc:  # a LaunchError or an OSError: either way, one line
+            self._fail(process_id, f"cannot write its parameter file: {exc}")
+            return
+        try:
+            start = start_command(proc, self.base_env(), wants_tty(proc),
+                                  self.run_prefixes.get(process_id),
+                                  self.log_levels.get(process_id))
+        except LaunchError as exc:  # the tool left PATH since the restart checked it
+            self._fail(process_id, str(exc))
+            return
+        self.started_with[process_id] = start
+        self.deaths.pop(process_id, None)
+        env = dict(start.env)
+        self.watchdog.start()
+        if self.watchdog.error and "watchdog" not in self.reported:
+            self.reported.add("watchdog")
+            self.report_io(f"{self.watchdog.error}: processes may outlive a crash of "
+                           "tuilaunch")
+        self.watchdog.mark(env)
+        log_path = self.log_dir / f"{process_id}.log"
+        try:
+            log = LogFile(log_path, self.report_io)
+        except OSError as exc:
+            self._fail(process_id, f"cannot open its log file {log_path}: "
+                       f"{exc.strerror or exc}")
+            return
+        try:
+            # no controlling terminal (vfork: fast) but under a tool, whose job control
+            # needs one; the terminal's writer turns ctrl+c into SIGINT otherwise
+            child = spawn(start.cmd, env, start.cwd, start.tty,
+                          controlling_terminal=start.controlling_terminal)
+        except Exception as exc:  # OSError, or ValueError for a NUL byte in an argument
+            log.close()
+            what = getattr(exc, "filename", None)
+            what = what if isinstance(what, str) else start.cmd[0]
+            self._fail(process_id, f"cannot start {what}: "
+                       f"{getattr(exc, 'strerror', None) or exc}")
+            return
+        popen = child.popen
+        loop = asyncio.get_running_loop()
+        running = None
+        try:
+            self.watchdog.watch(popen.pid)
+            running = Running(proc, popen, log, time.monotonic(), loop.create_future())
+            self.running[process_id] = running
+            self._watch_exit(running)
+            for channel in child.channels:
+                running.readers.append(ChannelReader(running, channel, self.deliver_lines))
+        except Exception as exc:
+            # nothing may run that nobody reads or stops
+            kill_group(popen.pid, signal.SIGKILL)
+            popen.wait()
+            if running is not None and running.pidfd is not None:
+                loop.remove_reader(running.pidfd)
+                close_quietly(running.pidfd)
+            for channel in child.channels:
+                loop.remove_reader(channel.fd)
+                close_quietly(channel.fd)
+            log.close()
+            self.running.pop(process_id, None)
+            self._fail(process_id, f"could not be tracked and was killed: "
+                       f"{type(exc).__name__}: {exc}")
+            return
+        self.states[process_id] = "running"
+        self.emit(Event("started", process_id, pid=popen.pid))
+        self.process_event(process_id, "start", popen.pid)
+        self.flag(process_id, "start").set()
+        for plugin in self.plugins:
+            follow_up = plugin.process_started(proc)
+            if follow_up is not None:
+                self.spawn_task(follow_up)
+        self.spawn_task(self._wait(running))
+
+    def base_env(self) -> dict[str, str]:
+        """tuilaunch's environment as it was at the first start: read once, not per child."""
+        if self.env_cache is None:
+            self.env_cache = dict(os.environ)
+        return self.env_cache
+
+    def _fail(self, process_id: str, reason: str) -> None:
+        self.states[process_id] = "failed"
+        self.emit(Event("failed", process_id, reason=reason))
+
+    def _watch_exit(self, running: Running) -> None:
+        """The child's exit wakes the loop through a pidfd: no thread per child."""
+        loop = asyncio.get_running_loop()
+        try:
+            running.pidfd = os.pidfd_open(running.process.pid)
+        except (OSError, AttributeError):
+            running.pidfd = None  # old kernel, or no descriptor left: poll instead
+            loop.call_later(0.05, self._poll_exit, running)
+            return
+        loop.add_reader(running.pidfd, self._reap, running)
+
+    def _poll_exit(self, running: Running) -> None:
+        if running.process.poll() is not None:
+            self._reap(running)
+        else:
+            asyncio.get_running_loop().call_later(0.05, self._poll_exit, running)
+
+    def _reap(self, running: Running) -> None:
+        if running.pidfd is not None:
+            asyncio.get_running_loop().remove_reader(running.pidfd)
+            os.close(running.pidfd)
+            running.pidfd = None
+        code = running.process.wait()  # a zombie by now: does not block
+        if not running.exited.done():
+            running.exited.set_result(code)
+
+    async def _wait(self, running: Running) -> None:
+        code = await running.exited
+        running.reaped = True
+        pending = [r.done for r in running.readers if not r.done.done()]
+        if pending:
+            await asyncio.wait(pending, timeout=EOF_GRACE)
+        lingering = [r for r in running.readers if not r.done.done()]
+        self.lingering.update(lingering)
+        for reader in lingering:
+            reader.done.add_done_callback(self._forget_reader(reader))
+        if not lingering:
+            running.log.close()
+        if not group_alive(running.process.pid):
+            self.watchdog.forget(running.process.pid)
+        process_id = running.plan.id
+        del self.running[process_id]
+        self.exit_codes[process_id] = code
+        requested = running.stopping or self.shutting_down
+        # a ctrl+c (or ctrl+\\, ctrl+z) typed into it was asked for by the operator too
+        typed = code < 0 and -code in running.typed_signals
+        if code > 0 and running.typed_signals & _ENDING_KEYS:
+            typed = True  # a program that turns a typed ctrl+c into an exit status (130)
+        crashed = code != 0 and not requested and not typed
+        if crashed:
+            self.crashes[process_id] = code
+            self.crash_times[process_id] = time.monotonic()
+        start = self.started_with.get(process_id)
+        death = death_details(running.process.pid, code, requested or typed,
+                              start.cwd if start else None,
+                              os.path.basename(running.process.args[0]
+                                               if running.process.args else "")[:15],
+                              running.started)
+        if death:
+            self.deaths[process_id] = death
+        # an end nobody asked for with a signal or a non-zero status is a failure, as
+        # headless ("process has died", ERROR), the tree and the exit status have it
+        self.states[process_id] = "failed" if crashed else "exited"
+        for plugin in self.plugins:
+            plugin.process_exited(process_id)
+        reason = describe_exit(code)
+        if "core" in death:
+            reason += f" (core: {death['core']})"
+        # `requested`: a stop asked by anyone (another client, `tuilaunch stop`), not a crash
+        self.emit(Event("exited", process_id, pid=running.process.pid, code=code,
+                         reason=reason, data={"requested": requested, **death}))
+        self.process_event(process_id, "exit", running.process.pid, code)
+        self.flag(process_id, "exit").set()
+        if self.should_respawn(running, code):
+            await self.respawn(running)
+        elif running.plan.respawn and code != 0 and not requested:
+            tries = self.retries.get(process_id, 0)
+            self.emit(Event("log", process_id, level="ERROR", reason=(
+                f"respawn gives up: it failed {tries + 1} times "
+                f"(respawn_max_retries={running.plan.respawn_max_retries})")))
+
+    def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:
+        return lambda _: self.lingering.discard(reader)
+
+
+def wants_tty(proc: ProcessPlan) -> bool:
+    """emulate_tty when the file says; else a terminal for every process whose output is
+    shown, so C/C++ programs print line by line instead of in bursts at exit."""
+    explicit = getattr(proc, "emulate_tty", None)
+    if explicit is not None:
+        return bool(explicit)
+    return getattr(proc, "output", "screen") in ("screen", "both")
+
+
+def close_quietly(fd: int) -> None:
+    try:
+        os.close(fd)
+    except OSError:
+        pass
