@@ -420,7 +420,7 @@ def test_the_readme_xml_example_reads_into_the_entities_it_shows(write):
     from tuilaunch.engine import load_file
     from tuilaunch.engine.describe import entities
 
-    readme = (EXAMPLES.parent / "README.md").read_text()
+    readme = (EXAMPLES.parent / "docs" / "launch-files.md").read_text()
     block = readme.split("```xml\n", 1)[1].split("```", 1)[0]
     loaded = load_file(str(write(block, "readme.launch.xml")))
     kinds = [type(e) for e in loaded.entities]
