@@ -4,7 +4,7 @@ For each other machine that has processes to run, the coordinator starts that ma
 share as a session of its own there (`ssh HOST tuilaunch FILE args... --detach --name NAME
 --share MACHINE --machines-text YAML`), then follows it through the session protocol over
 ssh (`open_remote_streams`): the share's events of its own processes are mirrored into this
-supervisor (`Placed.mirror`), so the one tree, the panes, the log files and the triggers here
+supervisor (`Supervisor.mirror`), so the one tree, the panes, the log files and the triggers here
 see them as local ones. What happens here (and on the other shares) to processes a share
 waits for is sent to it (`external_event`); a start, stop or restart of a process placed
 there is sent as the protocol's request; a relaunch is applied there too; the launch's
@@ -33,7 +33,7 @@ from ..process.logfiles import LogFile
 from ..process.output import screen_str
 from ..session.protocol import ProtocolError, decode, encode, event_from_dict
 from ..session.session_dir import launch_stem
-from ..supervisor.placed import Placed
+from ..supervisor.supervisor import Supervisor
 from .remote import RemoteError, RemoteLink, open_remote_streams, run_remote
 from .share_side import LINES_OP, ShareSide
 
@@ -93,7 +93,7 @@ class Share:
 class MachinesCoordinator(Plugin):
     """The launching side's plugin: runs the other machines' shares and mirrors them."""
 
-    def __init__(self, supervisor: Placed, placement: Placement, command: list[str],
+    def __init__(self, supervisor: Supervisor, placement: Placement, command: list[str],
                  arguments: Mapping[str, str], session_name: str | None = None,
                  environ: Mapping[str, str] | None = None) -> None:
         """`command` is FILE or PACKAGE FILE as given; `session_name` the launch's session
@@ -416,7 +416,7 @@ def _state_after(event: Event) -> str | None:
             "respawning": "respawning"}.get(event.kind)
 
 
-def placement_plugin(supervisor: Placed, placement: Placement | None, command: list[str],
+def placement_plugin(supervisor: Supervisor, placement: Placement | None, command: list[str],
                      arguments: Mapping[str, str], session_name: str | None = None,
                      ) -> Plugin | None:
     """The plugin a placed launch needs on this side, if any: a share's, or the

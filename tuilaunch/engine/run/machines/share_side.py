@@ -15,7 +15,7 @@ from typing import Any
 
 from ..plugins import Handler, Plugin
 from ..session.log_reader import LogLine, read_lines
-from ..supervisor.placed import Placed
+from ..supervisor.supervisor import Supervisor
 
 BACKFILL_LINES = 2000
 """Lines of a process sent at most per request (the newest); older ones stay in the log
@@ -27,7 +27,7 @@ LINES_OP = "share_lines"
 class ShareSide(Plugin):
     """A machine's share: hears what happens to the processes other machines run."""
 
-    def __init__(self, supervisor: Placed, machine: str) -> None:
+    def __init__(self, supervisor: Supervisor, machine: str) -> None:
         self.supervisor = supervisor
         self.seen: set[tuple[Any, ...]] = set()  # the coordinator repeats them on reconnect
         supervisor.set_placement(machine, None)

@@ -1,12 +1,17 @@
-"""The supervisor's state, and how it tells the world: events to consumers and launch.log.
+"""The supervisor's state, its collaborators, and how it tells the world: events to
+consumers and launch.log.
 
-`SupervisorCore` is the base of the supervisor's layers (core <- triggers <- plan_actions <-
-stopping <- respawn <- starting <- placed / interacting <- supervisor): each file holds one
-concern of the run and the `Supervisor` (run/supervisor.py) is the whole. Every event goes
+A concern that owns state of its own is an object the supervisor holds, with a small
+interface, made and tested alone: `triggers` (TriggerBook, triggers.py: what has happened,
+the event handlers), `stopper` (Stopper, stopping.py: the stop escalation), `respawner`
+(Respawner, respawn.py: the respawn policy and its backoff), `placing` (Placing, placed.py:
+which machine runs what). What acts on the run's shared state (the states, the running
+processes, the tasks) is the supervisor's own behaviour, one concern per file, stacked on
+this core: core <- plan_actions <- starting <- interacting <- supervisor. Every event goes
 through `emit`; a consumer that raises is reported once and never stops the launch.
 
-The state and the methods several layers share are public here (documented attributes), so
-no underscore name crosses a module; what one layer alone uses stays private to it.
+The state and the methods several files share are public here (documented attributes), so
+no underscore name crosses a module; what one file alone uses stays private to it.
 """
 
 from __future__ import annotations
@@ -26,6 +31,10 @@ from ..process.logfiles import LogFile
 from ..process.process_command import StartCommand
 from ..process.readers import ChannelReader, Running
 from ..process.watchdog import Watchdog
+from .placed import Placing
+from .respawn import Respawner
+from .stopping import Stopper
+from .triggers import TriggerBook
 
 
 class SupervisorCore:
@@ -43,18 +52,10 @@ class SupervisorCore:
         self.detached_actions: set[str] = set()
         """Action kinds performed in the background (a trigger does not wait for them)."""
         self.log_dir = log_dir
-        self.sigterm_timeout = sigterm_timeout
-        self.sigkill_timeout = sigkill_timeout
         self.consumers: list[Consumer] = []
         self.states: dict[str, str] = {
             p.id: ("pending" if p.enabled else "skipped") for p in plan.processes}
         self.states.update({a.id: ("pending" if a.enabled else "skipped") for a in plan.actions})
-        self.io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
-        """Event handlers on a process's output, by (process, stream)."""
-        self.on_shutdown: list[ActionPlan] = []
-        """OnShutdown handlers, run once when the launch begins to stop."""
-        self.any_watchers: dict[str, list[ActionPlan]] = {}
-        """Event handlers without a target (any process), by event kind."""
         self.last_event: dict[tuple[str, str], EventInfo] = {}
         """The latest event of each (process, kind), handed to the actions it triggers."""
         self.shutdown_requested = False
@@ -64,36 +65,18 @@ class SupervisorCore:
         """Processes that exited on their own with a non-zero status (not stopped by us)."""
         self.crash_times: dict[str, float] = {}
         """When each process last crashed (loop time), for the respawn policy."""
-        self.stop_time: float | None = None
-        """When the shutdown began (loop time), for its escalation deadlines."""
         self.running: dict[str, Running] = {}
         """The processes that run now, by id: their process, pty or pipes, readers."""
         self.lingering: set[ChannelReader] = set()
         """Output still open after its process exited (a grandchild holds the pipe)."""
-        self.happened: dict[tuple[str, str], asyncio.Event] = {}
-        """Set when (process, event kind) has happened: what triggers wait on."""
-        # lifecycle transitions seen per (node or "*", state filter), and an event pulsed at
-        # each: what re-runs the actions of an OnStateTransition on every match
-        self.occurrences: dict[tuple[str, str], int] = {}
-        """Lifecycle transitions seen per (node or "*", state filter)."""
-        self.pulses: dict[tuple[str, str], asyncio.Event] = {}
-        """Pulsed at each such transition."""
         self.busy = 0
         """Triggers sleeping or respawns scheduled: the run is not over while any is."""
         self.tasks: set[asyncio.Task[Any]] = set()
         """The supervisor's background tasks (`spawn_task`), cancelled at the end of a run."""
         self.shutting_down = False
         """The launch is stopping: nothing new starts, waits should give up."""
-        self.urgency = 0
-        """How hard the shutdown stops: 0 SIGINT first; 1 SIGTERM now; 2 SIGKILL now."""
-        self.hurry: asyncio.Event | None = None
-        """Set to make the shutdown's escalation skip to the urgency asked for."""
         self.changed = asyncio.Event()
         """Set at every event: the run loop looks again whether the launch is over."""
-        self.retries: dict[str, int] = {}
-        """Respawns of each process so far."""
-        self.quick_failures: dict[str, int] = {}
-        """Crashes in a row within 2 s of starting, by process (respawn back-off)."""
         self.keep_alive = False
         """Only shutdown ends the run (an interactive UI), not every process having exited."""
         self.reported: set[str] = set()
@@ -110,11 +93,29 @@ class SupervisorCore:
         self.deaths: dict[str, dict[str, str]] = {}
         """A crash's `signal` name and `core` location, until the process starts again."""
         self.watchdog = Watchdog()
+        self.triggers = TriggerBook()
+        """What has happened, and the event handlers by event."""
+        self.stopper = Stopper(sigterm_timeout, sigkill_timeout, self.emit,
+                               lambda: self.shutting_down)
+        """The stop escalation: SIGINT, SIGTERM, SIGKILL, and how hard the shutdown stops."""
+        self.respawner = Respawner()
+        """Whether a process that died comes back, after how long."""
+        self.placing = Placing()
+        """Which machine this supervisor is, and who starts the others' processes."""
         for plugin in plugins:
             self.add_plugin(plugin)
         log_dir.mkdir(parents=True, exist_ok=True)
         self.launch_log = LogFile(log_dir / "launch.log", self.report_io)
         """launch.log: every event but output, one line each."""
+
+    @property
+    def retries(self) -> dict[str, int]:
+        """Respawns of each process so far."""
+        return self.respawner.retries
+
+    def flag(self, process_id: str, what: str) -> asyncio.Event:
+        """Set when `what` ("start", "exit", "state:...") of `process_id` has happened."""
+        return self.triggers.flag(process_id, what)
 
     def add_plugin(self, plugin: SupervisorPlugin) -> None:
         """Plugs in before `run`: its action kinds join those the supervisor performs."""
@@ -180,19 +181,19 @@ class SupervisorCore:
         """A line in the launch pane on behalf of one action of the plan."""
         self.emit(Event("log", action.id, reason=text, level=level))
 
-    # Made by the later layers; declared here so the earlier ones can call them.
+    # Made by the later files; declared here so the earlier ones can call them.
 
     async def start(self, process_id: str) -> None:
-        raise NotImplementedError  # run/starting.py
+        raise NotImplementedError  # supervisor.py
 
     async def stop(self, process_id: str) -> None:
-        raise NotImplementedError  # run/stopping.py
+        raise NotImplementedError  # supervisor.py
 
     async def shutdown(self, reason: str = "shutdown") -> None:
-        raise NotImplementedError  # run/stopping.py
+        raise NotImplementedError  # supervisor.py
 
     async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
-        raise NotImplementedError  # run/plan_actions.py
+        raise NotImplementedError  # plan_actions.py
 
 
 def to_stderr(text: str) -> None:

@@ -1,4 +1,5 @@
-"""Performing the plan's actions: log, shutdown, stop, event callbacks, plugins' kinds.
+"""Performing the plan's actions: log, shutdown, stop, event callbacks, plugins' kinds; and
+waiting for their triggers (what has happened is in the TriggerBook, triggers.py).
 
 Kinds a plugin registered (`call_service`, `lifecycle_transition`, ...) go to it; event
 handlers' callbacks are called with the launch event, and what they return joins the run.
@@ -7,19 +8,77 @@ handlers' callbacks are called with the launch event, and what they return joins
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Callable
 from typing import Any
 
 from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
 from ...describe.python.launch_events import EventInfo, event_for
 from ...describe.substitutions import PerformContext, perform
-from ...plan.model import ActionPlan, ProcessPlan
+from ...plan.model import ActionPlan, ProcessPlan, Trigger
 from ..events import Event, LaunchEvent
 from ..process.readers import Running
-from .triggers import Triggers
+from .core import SupervisorCore
+from .triggers import flag_name, runs_in_shutdown
 
 
-class PlanActions(Triggers):
-    """Performing one action of the plan, and what event handlers add to the run."""
+class PlanActions(SupervisorCore):
+    """Waiting for triggers, performing one action of the plan, and what event handlers add
+    to the run."""
+
+    def state_reached(self, process_id: str, what: str) -> None:
+        """A lifecycle transition matching `what` (how a plugin, the lifecycle tracker,
+        reports a state): once for start-up chains, and counted for the handlers that run
+        on each match."""
+        self.triggers.state_reached(process_id, what)
+
+    async def _on_every_state(self, action: ActionPlan) -> None:
+        """launch_ros's OnStateTransition: the entities run on the first matching
+        transition and again on each later one (a node cycled by the operator or a
+        manager), until shutdown."""
+        trigger = action.trigger
+        assert trigger is not None and trigger.target is not None
+        key = (trigger.target, flag_name(trigger))
+        await self.when_ready(trigger, self.perform_action, action)
+        seen = self.triggers.transitions(key)
+        while not self.shutting_down:
+            await self.triggers.next_transition(key, seen)
+            seen += 1
+            if self.shutting_down or not action.enabled:
+                return
+            if trigger.delay:
+                await asyncio.sleep(trigger.delay)
+            await self.perform_action(action)
+
+    async def when_ready(self, trigger: Trigger | None, then: Callable[[Any], Any],
+                         item: Any) -> None:
+        chain: list[Trigger] = []
+        while trigger is not None:
+            chain.insert(0, trigger)
+            trigger = trigger.after
+        for step in chain:
+            if step.on == "shutdown" or step.on == "io":
+                return  # run by their own events, not as a start-up chain
+            if step.target is not None:
+                await self.flag(step.target, flag_name(step)).wait()
+            if step.delay:
+                self.busy += 1
+                try:
+                    await asyncio.sleep(step.delay)
+                finally:
+                    self.busy -= 1
+                    self.changed.set()
+            if self.shutting_down and not runs_in_shutdown(step, item):
+                return
+        result = then(item)
+        if asyncio.iscoroutine(result):
+            await result
+
+    def schedule_action(self, action: ActionPlan) -> None:
+        filing = self.triggers.file(action)
+        if filing == "every_state":
+            self.spawn_task(self._on_every_state(action))
+        elif filing == "chain":
+            self.spawn_task(self.when_ready(action.trigger, self.perform_action, action))
 
     def process_event(self, process_id: str, on: str, pid: int | None = None,
                       returncode: int | None = None) -> None:
@@ -28,7 +87,7 @@ class PlanActions(Triggers):
         event = event_for(on, process_name=process_id, pid=pid, returncode=returncode,
                           action=proc.source, cmd=proc.cmd)
         self.last_event[(process_id, on)] = event
-        for action in self.any_watchers.get(on, []):
+        for action in self.triggers.handlers_of(on):
             self.states[action.id] = "running"  # due now: the run must not end before it
             self.spawn_task(self.perform_action(action, event))
 
@@ -164,12 +223,11 @@ class PlanActions(Triggers):
     def deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
         """A block of a process's output, already in its log file: to the consumers."""
         self.emit(Event("output", running.plan.id, stream=stream, lines=lines))
-        if self.io_watchers or self.any_watchers:
+        if self.triggers.watches_output:
             self.dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
     def dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
-        watchers = [*self.io_watchers.get((process_id, stream), []),
-                    *self.any_watchers.get(f"io:{stream}", [])]
+        watchers = self.triggers.output_handlers(process_id, stream)
         source = self.plan.process(process_id).source if watchers else None
         for action in watchers:
             for line in lines:

@@ -1,42 +1,52 @@
-"""Respawn policy: whether a process that died comes back, and after how long (backoff)."""
+"""Respawn policy: whether a process that died comes back, and after how long (backoff).
+
+The `Respawner` owns the count of respawns and of quick failures in a row per process; it
+decides, the supervisor waits and starts (`Starting.respawn`). Made and tested alone:
+tests/test_supervisor_parts.py.
+"""
 
 from __future__ import annotations
 
-import asyncio
 import time
 
-from ..events import Event
-from ..process.readers import Running
-from .stopping import Stopping
+from ...plan.model import ProcessPlan
+
+QUICK = 2.0
+"""A run shorter than this (seconds) is a quick failure: the next delay doubles."""
+MAX_DELAY = 30.0
+"""The backoff's cap (seconds), unless the file's own respawn_delay is longer."""
 
 
-class Respawning(Stopping):
-    """Bringing a crashed process back, with backoff."""
+class Respawner:
+    """The respawn policy and its backoff."""
 
-    def should_respawn(self, running: Running, code: int) -> bool:
-        proc = running.plan
-        if not proc.respawn or running.stopping or self.shutting_down or code == 0:
+    def __init__(self) -> None:
+        self.retries: dict[str, int] = {}
+        """Respawns of each process so far."""
+        self.quick_failures: dict[str, int] = {}
+        """Crashes in a row within `QUICK` s of starting, by process (respawn back-off)."""
+
+    def wants(self, proc: ProcessPlan, code: int, requested: bool) -> bool:
+        """Whether `proc`, which exited with `code`, comes back; `requested`: it was
+        stopped by someone (a stop, the launch's shutdown), which never respawns."""
+        if not proc.respawn or requested or code == 0:
             return False  # a clean exit is a finished job, not a crash
         limit = proc.respawn_max_retries
         return limit < 0 or self.retries.get(proc.id, 0) < limit
 
-    async def respawn(self, running: Running) -> None:
-        proc = running.plan
+    def next_try(self, proc: ProcessPlan, started: float,
+                 now: float | None = None) -> tuple[int, float]:
+        """Counts one more respawn of `proc` (which had started at `started`, monotonic
+        time); returns its number and the seconds to wait before it."""
         tries = self.retries[proc.id] = self.retries.get(proc.id, 0) + 1
         # back off while it dies at once, so a crash loop does not spin the machine; a run
         # that lasted starts the count again (a driver that fails once an hour for days
         # comes back after its own delay, not after the cap)
-        quick = time.monotonic() - running.started < 2.0
+        quick = (time.monotonic() if now is None else now) - started < QUICK
         streak = self.quick_failures[proc.id] = (
             self.quick_failures.get(proc.id, 0) + 1 if quick else 0)
-        delay = min(max(proc.respawn_delay, 0.1) * 2 ** min(max(streak - 1, 0), 16), 30.0)
-        delay = max(delay, proc.respawn_delay)
-        self.states[proc.id] = "respawning"
-        self.busy += 1
-        self.emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s"))
-        try:
-            await asyncio.sleep(delay)
-        finally:
-            self.busy -= 1
-        if not self.shutting_down:
-            await self.start(proc.id)
+        delay = min(max(proc.respawn_delay, 0.1) * 2 ** min(max(streak - 1, 0), 16), MAX_DELAY)
+        return tries, max(delay, proc.respawn_delay)
+
+    def tries(self, process_id: str) -> int:
+        return self.retries.get(process_id, 0)

@@ -21,7 +21,7 @@ from ..process.logfiles import LogFile
 from ..process.process_command import death_details, start_command
 from ..process.readers import ChannelReader, Running
 from ..process.spawn import spawn
-from .respawn import Respawning
+from .plan_actions import PlanActions
 from .stopping import describe_exit, group_alive, kill_group
 
 _ENDING_KEYS = {signal.SIGINT, signal.SIGQUIT}
@@ -33,12 +33,9 @@ grandchild may hold the pipe for ever: its exit is then reported anyway, and wha
 still prints is read and logged until the launch ends."""
 
 
-class Starting(Respawning):
-    """Starting a process and following it until it has exited."""
-
-    async def start(self, process_id: str) -> None:
-        """Starts one process (also a stopped or exited one, from the UI)."""
-        self.start_now(process_id)
+class Starting(PlanActions):
+    """Starting a process, following it until it has exited, and bringing it back (the
+    policy is the Respawner's, respawn.py)."""
 
     def start_now(self, process_id: str) -> None:
         """From the check that the launch is not shutting down to the registration of the
@@ -212,10 +209,26 @@ class Starting(Respawning):
         if self.should_respawn(running, code):
             await self.respawn(running)
         elif running.plan.respawn and code != 0 and not requested:
-            tries = self.retries.get(process_id, 0)
+            tries = self.respawner.tries(process_id)
             self.emit(Event("log", process_id, level="ERROR", reason=(
                 f"respawn gives up: it failed {tries + 1} times "
                 f"(respawn_max_retries={running.plan.respawn_max_retries})")))
+
+    def should_respawn(self, running: Running, code: int) -> bool:
+        return self.respawner.wants(running.plan, code, running.stopping or self.shutting_down)
+
+    async def respawn(self, running: Running) -> None:
+        proc = running.plan
+        tries, delay = self.respawner.next_try(proc, running.started)
+        self.states[proc.id] = "respawning"
+        self.busy += 1
+        self.emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s"))
+        try:
+            await asyncio.sleep(delay)
+        finally:
+            self.busy -= 1
+        if not self.shutting_down:
+            await self.start(proc.id)
 
     def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:
         return lambda _: self.lingering.discard(reader)

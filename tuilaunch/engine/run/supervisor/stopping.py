@@ -1,7 +1,10 @@
-"""Stopping: SIGINT, then SIGTERM, then SIGKILL to each process group; shutdown; kill_all.
+"""Stopping: SIGINT, then SIGTERM, then SIGKILL to each process group.
 
 Each process leads its own process group; it is signalled as one. Each stage waits for the
-process's own sigterm_timeout / sigkill_timeout; the operator can hurry it (`escalate_now`).
+process's own sigterm_timeout / sigkill_timeout; the operator can hurry it
+(`Supervisor.escalate_now` -> `Stopper.insist`). The `Stopper` owns the escalation's state
+and is made and tested alone (tests/test_supervisor_parts.py); the supervisor's `stop`,
+`shutdown` and `kill_all` (run/supervisor/supervisor.py) use it.
 """
 
 from __future__ import annotations
@@ -10,66 +13,58 @@ import asyncio
 import os
 import signal
 import time
-from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
-from ..events import Event, LaunchEvent
+from ..events import Event
 from ..process.readers import Running
-from .plan_actions import PlanActions
 
 STAGES = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 STOP_RACE = 2.0
 """Seconds before a stop within which a child's death by that stop's signal counts as part
-of the stop (see Stopping.real_crashes)."""
+of the stop (see Stopper.real_crashes)."""
 
 
-class Stopping(PlanActions):
-    """Stopping processes and the launch."""
+class Stopper:
+    """The stop escalation: the signal each stopping process has reached, how hard the
+    shutdown stops (`urgency`) and when it began. It signals process groups and says each
+    step through `say`; `in_shutdown` tells it whether the launch is stopping."""
 
-    async def stop(self, process_id: str) -> None:
-        running = self.running.get(process_id)
-        if running is not None:
-            running.stopping = True
-            await self.escalate(running)
+    def __init__(self, sigterm_timeout: float, sigkill_timeout: float,
+                 say: Callable[[Event], None], in_shutdown: Callable[[], bool]) -> None:
+        self.sigterm_timeout = sigterm_timeout
+        self.sigkill_timeout = sigkill_timeout
+        self._say = say
+        self._in_shutdown = in_shutdown
+        self.urgency = 0
+        """How hard the shutdown stops: 0 SIGINT first; 1 SIGTERM now; 2 SIGKILL now."""
+        self.hurry: asyncio.Event | None = None
+        """Set to make the escalations skip to the urgency asked for."""
+        self.stop_time: float | None = None
+        """When the shutdown began (loop time), for its escalation deadlines."""
 
-    async def shutdown(self, reason: str = "shutdown") -> None:
-        if self.shutting_down:
-            return
-        self.shutting_down = True
+    def began(self) -> None:
+        """The launch's shutdown begins now."""
         self.stop_time = time.monotonic()
-        try:
-            self.emit(Event("shutdown", reason=reason))
-            for action in self.on_shutdown:
-                try:
-                    await self.perform_action(action, LaunchEvent(reason=reason))
-                except Exception as exc:  # an OnShutdown action never stops the shutdown
-                    self.report_io(f"on-shutdown action {action.id} raised "
-                                   f"{type(exc).__name__}: {exc}")
-        finally:
-            await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
-                                 return_exceptions=True)
-            self.changed.set()
 
-    def escalate_now(self) -> str | None:
-        """The operator insists (a second Ctrl+C): SIGTERM now; once more: SIGKILL.
+    def at_least(self, urgency: int) -> None:
+        """Stop at least this hard from now on (1: SIGTERM first, 2: SIGKILL)."""
+        self.urgency = max(self.urgency, urgency)
 
-        Returns the signal's name now sent, or None when nothing is left to stop."""
-        if not self.running:
-            return None
+    def insist(self) -> str:
+        """The operator insists: the next signal now; returns its name."""
         self.urgency = min(self.urgency + 1, len(STAGES) - 1)
         if self.hurry is not None:
             self.hurry.set()
         self.hurry = None
-        if not self.shutting_down:
-            self.spawn_task(self.shutdown("stop requested again"))
         return STAGES[self.urgency].name
 
     async def escalate(self, running: Running) -> None:
         """SIGINT, then SIGTERM, then SIGKILL, to the whole process group.
 
         The waits are the process's own sigterm_timeout / sigkill_timeout when it sets them;
-        each step is announced; `escalate_now` skips the wait."""
+        each step is announced; `insist` skips the wait."""
         running.stopping = True
         proc = running.plan
         waits = (proc.sigterm_timeout if proc.sigterm_timeout is not None
@@ -80,10 +75,10 @@ class Stopping(PlanActions):
         stage = 0
         why = ""
         while not running.exited.done():
-            stage = max(stage, self.urgency if self.shutting_down else 0)
+            stage = max(stage, self.urgency if self._in_shutdown() else 0)
             if stage > sent:
                 if stage > 0:
-                    self.emit(Event("log", proc.id, level="WARN", reason=(
+                    self._say(Event("log", proc.id, level="WARN", reason=(
                         f"{why}sending {STAGES[stage].name} to its process group")))
                 if not kill_group(running.process.pid, STAGES[stage]):
                     break  # the whole group is gone; the exit arrives through the pidfd
@@ -100,44 +95,27 @@ class Stopping(PlanActions):
             if running.exited.done():
                 break
             if stage == len(STAGES) - 1:
-                self.emit(Event("log", proc.id, level="ERROR", reason=(
+                self._say(Event("log", proc.id, level="ERROR", reason=(
                     f"still there {waits[stage]:g} s after SIGKILL (stuck in the kernel?); "
                     "no longer waiting for it")))
                 return
-            if self.urgency > stage and self.shutting_down:
+            if self.urgency > stage and self._in_shutdown():
                 why = "asked again: "
             else:
                 why = f"still running {waits[stage]:g} s after {STAGES[stage].name}: "
                 stage += 1
         await asyncio.shield(running.exited)
 
-    def kill_all(self) -> None:
-        """Last resort when the caller cannot wait (the UI is being torn down): SIGKILL,
-        and the watchdog sweeps what the processes left behind."""
-        self.shutting_down = True
-        for running in list(self.running.values()):
-            kill_group(running.process.pid, signal.SIGKILL)
-        self.remove_parameter_files()
-        self.watchdog.close()
-
-    def real_crashes(self) -> dict[str, int]:
+    def real_crashes(self, crashes: dict[str, int],
+                     crash_times: dict[str, float]) -> dict[str, int]:
         """Crashes, less the processes that died of the stop signal itself just before the
         stop was seen: a terminal's Ctrl+C or hang-up reaches a child that is still in
         tuilaunch's process group for the instant between its fork and its own session."""
         if self.stop_time is None:
-            return self.crashes
-        return {pid: code for pid, code in self.crashes.items()
+            return crashes
+        return {pid: code for pid, code in crashes.items()
                 if not (-code in STOP_SIGNALS and
-                        self.stop_time - self.crash_times[pid] < STOP_RACE)}
-
-    def remove_parameter_files(self) -> None:
-        for proc in self.plan.processes:
-            for path, _ in proc.generated_parameter_files:
-                Path(path).unlink(missing_ok=True)
-        try:
-            self.plan.params_dir.rmdir()
-        except OSError:
-            pass
+                        self.stop_time - crash_times[pid] < STOP_RACE)}
 
 
 def kill_group(pgid: int, sig: signal.Signals) -> bool:

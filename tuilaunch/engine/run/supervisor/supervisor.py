@@ -9,27 +9,35 @@ a dead terminal) never stops the reading of a pipe nor a shutdown.
 No thread per child: each child's exit is watched through a pidfd on the event loop, and
 its output through non-blocking reads on the same loop.
 
-The work is split by concern, one file each, stacked as layers of one class: core.py
-(state, events), triggers.py, plan_actions.py, stopping.py, respawn.py, starting.py,
-interacting.py; this file runs the whole and changes the plan. Plugins (run/plugins.py)
-add what needs ROS.
+A concern that owns state of its own is a collaborator the supervisor holds, made and
+tested alone: the TriggerBook (triggers.py), the Stopper (stopping.py), the Respawner
+(respawn.py), Placing (placed.py). The supervisor's own behaviour over the shared state is
+one concern per file, stacked on core.py (state, events): plan_actions.py (triggers waited
+for, actions performed), starting.py (a process's start, exit and respawn), interacting.py
+(the operator's hands on a process). This file runs the whole, stops, places, and changes
+the plan. Plugins (run/plugins.py) add what needs ROS.
 """
 
 from __future__ import annotations
 
 import asyncio
+import signal
 import time
+from pathlib import Path
 
+from ...errors import LaunchError
 from ...plan.model import Plan, PlanDiff, diff_plans
 from ..events import Consumer, Event, LaunchEvent
+from ..process.readers import Running
 from .interacting import Interacting
-from .placed import Placed
+from .placed import ELSEWHERE, RemoteControl
+from .stopping import kill_group
 
 __all__ = ["Consumer", "Event", "LaunchEvent", "Supervisor"]
 
 
-class Supervisor(Interacting, Placed):
-    """Runs a plan: see the layers it is made of (module docstring)."""
+class Supervisor(Interacting):
+    """Runs a plan: see what it is made of (module docstring)."""
 
     async def run(self, keep_alive: bool = False) -> int:
         """Runs until nothing can happen any more, or shutdown; returns an exit status.
@@ -47,7 +55,7 @@ class Supervisor(Interacting, Placed):
                     self.spawn_task(begun)
             for proc in self.plan.processes:
                 if not self.runs_here(proc.id):
-                    continue  # its machine's share starts it (run/placed.py)
+                    continue  # its machine's share starts it (placed.py)
                 if proc.enabled and proc.trigger is None:
                     self.start_now(proc.id)  # no task per process: start-up at the floor
                 elif proc.enabled:
@@ -58,7 +66,7 @@ class Supervisor(Interacting, Placed):
             while not self._settled():
                 self.changed.clear()
                 await self.changed.wait()
-            if not self.shutting_down and self.on_shutdown:
+            if not self.shutting_down and self.triggers.on_shutdown:
                 # as launch does when nothing is left to run: OnShutdown handlers see it
                 await self.shutdown("idle")
                 while not self._settled():
@@ -66,7 +74,7 @@ class Supervisor(Interacting, Placed):
                     await self.changed.wait()
         finally:
             await self._finish()
-        real = self.real_crashes()
+        real = self.stopper.real_crashes(self.crashes, self.crash_times)
         for process_id in set(self.crashes) - set(real):
             if self.states.get(process_id) == "failed":
                 self.states[process_id] = "exited"  # the stop's own signal, a hair early
@@ -77,7 +85,7 @@ class Supervisor(Interacting, Placed):
         """Whatever ended the run: nothing left running, nothing left open."""
         if self.running:  # cancelled from outside: stop what still runs, quickly
             self.shutting_down = True
-            self.urgency = max(self.urgency, 1)
+            self.stopper.at_least(1)
             await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
         await self._drain()
@@ -101,16 +109,18 @@ class Supervisor(Interacting, Placed):
         if self.shutting_down:
             # waiting actions, timers and respawns are cancelled when the run drains;
             # exit handlers of the processes being stopped still run, as in launch
-            return not self.running and not self.actions_due_in_shutdown()
+            return not self.running and not self.triggers.due_in_shutdown(
+                self.plan.actions, self.states, self.detached_actions)
         if self.keep_alive or self.running or self.busy or self.shutdown_requested:
             return False
         if any(state == "running" for state in self.states.values()):
             return False  # an action is waiting for its service or node
         # a pending item can still start only if what it waits for is alive or pending
         waiting = [p.trigger for p in self.plan.processes if self.states[p.id] == "pending"]
-        return not any(self.can_fire(trigger) for trigger in waiting) and not any(
-            self.action_can_fire(a) for a in self.plan.actions
-            if self.states.get(a.id) == "pending")
+        book, states, processes = self.triggers, self.states, self.plan.processes
+        return not any(book.can_fire(trigger, states, processes) for trigger in waiting) and \
+            not any(book.action_can_fire(a, states, processes) for a in self.plan.actions
+                    if states.get(a.id) == "pending")
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """Relaunch with new argument values: stop what changed, start what is new.
@@ -131,9 +141,7 @@ class Supervisor(Interacting, Placed):
                 # a kept process keeps its state: finished, failed, or still waiting
                 if proc.id not in self.running and proc.id not in diff.keep:
                     self.states[proc.id] = "pending" if proc.enabled else "skipped"
-            self.io_watchers.clear()
-            self.on_shutdown.clear()
-            self.any_watchers.clear()
+            self.triggers.forget_handlers()
             for proc in plan.processes:
                 if proc.id in diff.start and self.runs_here(proc.id):
                     self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
@@ -148,7 +156,7 @@ class Supervisor(Interacting, Placed):
         finally:
             self.busy -= 1
             self.changed.set()
-        self.set_placement(self.machine, self.remote)  # the new plan's placement
+        self.set_placement(self.placing.machine, self.placing.remote)  # the new plan's
         return diff
 
     async def restart(self, process_id: str, prefix: str | None = None,
@@ -182,3 +190,136 @@ class Supervisor(Interacting, Placed):
             if not task.done():
                 task.cancel()
         await asyncio.gather(*self.tasks, return_exceptions=True)
+
+    # --- stopping (the escalation is the Stopper's, stopping.py) ----------------------------
+
+    async def stop(self, process_id: str) -> None:
+        if not self.runs_here(process_id):
+            await self.placing.forward(self.plan, "stop", process_id)
+            return
+        running = self.running.get(process_id)
+        if running is not None:
+            running.stopping = True
+            await self.escalate(running)
+
+    async def shutdown(self, reason: str = "shutdown") -> None:
+        if self.shutting_down:
+            return
+        self.shutting_down = True
+        self.stopper.began()
+        try:
+            self.emit(Event("shutdown", reason=reason))
+            for action in self.triggers.on_shutdown:
+                try:
+                    await self.perform_action(action, LaunchEvent(reason=reason))
+                except Exception as exc:  # an OnShutdown action never stops the shutdown
+                    self.report_io(f"on-shutdown action {action.id} raised "
+                                   f"{type(exc).__name__}: {exc}")
+        finally:
+            await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
+                                 return_exceptions=True)
+            self.changed.set()
+
+    def escalate_now(self) -> str | None:
+        """The operator insists (a second Ctrl+C): SIGTERM now; once more: SIGKILL.
+
+        Returns the signal's name now sent, or None when nothing is left to stop."""
+        if not self.running:
+            return None
+        sent = self.stopper.insist()
+        if not self.shutting_down:
+            self.spawn_task(self.shutdown("stop requested again"))
+        return sent
+
+    async def escalate(self, running: Running) -> None:
+        """SIGINT, then SIGTERM, then SIGKILL, to the process's whole group."""
+        await self.stopper.escalate(running)
+
+    def kill_all(self) -> None:
+        """Last resort when the caller cannot wait (the UI is being torn down): SIGKILL,
+        and the watchdog sweeps what the processes left behind."""
+        self.shutting_down = True
+        for running in list(self.running.values()):
+            kill_group(running.process.pid, signal.SIGKILL)
+        self.remove_parameter_files()
+        self.watchdog.close()
+
+    def remove_parameter_files(self) -> None:
+        for proc in self.plan.processes:
+            for path, _ in proc.generated_parameter_files:
+                Path(path).unlink(missing_ok=True)
+        try:
+            self.plan.params_dir.rmdir()
+        except OSError:
+            pass
+
+    # --- placement over machines (which side runs what is Placing's, placed.py) -------------
+
+    def set_placement(self, machine: str | None, remote: RemoteControl | None) -> None:
+        """Before `run`: this side is `machine`'s share; `remote` starts and stops the
+        others (the launching side's coordinator), or None (another machine's share, which
+        only hears of them)."""
+        for item_id in self.placing.place(machine, remote, self.plan):
+            self.states[item_id] = ELSEWHERE
+
+    @property
+    def machine(self) -> str | None:
+        """The machine whose share this supervisor runs; None: the launching side."""
+        return self.placing.machine
+
+    def runs_actions(self) -> bool:
+        return self.placing.runs_actions()
+
+    def runs_here(self, process_id: str) -> bool:
+        """Whether this supervisor spawns it (actions always run where the launch runs)."""
+        return self.placing.runs_here(self.plan, process_id)
+
+    async def start(self, process_id: str) -> None:
+        """Starts one process (also a stopped or exited one, from the UI), here or on its
+        machine."""
+        if self.runs_here(process_id):
+            self.start_now(process_id)
+        elif self.placing.remote is None:
+            self.states[process_id] = ELSEWHERE  # its own machine starts it
+        else:
+            await self.placing.forward(self.plan, "start", process_id)
+
+    def mirror(self, event: Event, state: str | None = None) -> None:
+        """An event of a process another machine runs, as its share sent it, with the
+        state it left it in: told to the consumers and triggers as a local one is."""
+        process_id = event.process
+        if process_id is None or process_id not in self.states:
+            return
+        if event.kind == "output":
+            self.emit(event)
+            if self.triggers.watches_output:  # OnProcessIO handlers here
+                self.dispatch_io(process_id, event.stream or "stdout", event.lines,
+                                 self.placing.pids_elsewhere.get(process_id, 0))
+            return
+        if event.kind == "started" and event.pid is not None:
+            self.placing.pids_elsewhere[process_id] = event.pid
+        if state is not None:
+            self.states[process_id] = state
+        if event.kind == "exited" and event.code is not None:
+            self.exit_codes[process_id] = event.code
+            requested = bool((event.data or {}).get("requested"))
+            if event.code != 0 and not requested and not self.shutting_down:
+                self.crashes[process_id] = event.code
+                self.crash_times[process_id] = time.monotonic()
+        self.emit(event)
+        if event.kind == "started":
+            self.external_event(process_id, "start", event.pid)
+        elif event.kind == "exited":
+            self.external_event(process_id, "exit", event.pid, event.code)
+
+    def external_event(self, process_id: str, on: str, pid: int | None = None,
+                       code: int | None = None) -> None:
+        """A process run elsewhere started (`on` "start") or exited ("exit"): what waits
+        for it here (a start-up chain, an OnProcessStart/Exit handler) goes on."""
+        if on not in ("start", "exit"):
+            raise ValueError(f"an external event is start or exit, not {on!r}")
+        if process_id not in {p.id for p in self.plan.processes}:
+            raise LaunchError(f"no process {process_id!r} in this launch")
+        self.process_event(process_id, on, pid, code)
+        self.flag(process_id, on).set()
+        self.changed.set()

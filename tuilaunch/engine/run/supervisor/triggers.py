@@ -1,23 +1,42 @@
-"""When things happen: start-up chains (`when ready`), event watchers, lifecycle states.
+"""When things happen: the book of what has happened and of who waits for what.
 
-A process or action with a trigger waits for its target's start, exit or lifecycle state
-(and delay); handlers on output or shutdown are run by their events; an OnStateTransition
-re-runs on every matching transition. `state_reached` is how a plugin (the lifecycle
-tracker) reports a state.
+`TriggerBook` owns the trigger state of a run: the flags a start-up chain waits on (a
+process's start or exit, a lifecycle state), the count of lifecycle transitions an
+OnStateTransition re-runs on, and the event handlers filed by event (output, shutdown, any
+process's start or exit). It answers whether a trigger can still fire; the supervisor does
+the waiting and the performing (run/supervisor/plan_actions.py). It is made and read alone:
+tests/test_supervisor_parts.py.
 """
 
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Iterable, Mapping
+from typing import Any, Literal
 
-from ...plan.model import ActionPlan, Trigger
-from .core import SupervisorCore
+from ...plan.model import ActionPlan, ProcessPlan, Trigger
+
+Filing = Literal["handler", "every_state", "chain"]
+"""How an action waits: filed as an event handler, re-run on every lifecycle transition,
+or performed once its start-up chain has happened."""
 
 
-class Triggers(SupervisorCore):
-    """Waiting for triggers and dispatching event handlers."""
+class TriggerBook:
+    """What has happened (flags, transitions) and the event handlers, by event."""
+
+    def __init__(self) -> None:
+        self.happened: dict[tuple[str, str], asyncio.Event] = {}
+        """Set when (process, event kind) has happened: what triggers wait on."""
+        self.occurrences: dict[tuple[str, str], int] = {}
+        """Lifecycle transitions seen per (node or "*", state filter)."""
+        self.pulses: dict[tuple[str, str], asyncio.Event] = {}
+        """Pulsed at each such transition: what re-runs an OnStateTransition's actions."""
+        self.io_watchers: dict[tuple[str, str], list[ActionPlan]] = {}
+        """Event handlers on a process's output, by (process, stream)."""
+        self.on_shutdown: list[ActionPlan] = []
+        """OnShutdown handlers, run once when the launch begins to stop."""
+        self.any_watchers: dict[str, list[ActionPlan]] = {}
+        """Event handlers without a target (any process), by event kind."""
 
     def flag(self, process_id: str, what: str) -> asyncio.Event:
         return self.happened.setdefault((process_id, what), asyncio.Event())
@@ -32,66 +51,17 @@ class Triggers(SupervisorCore):
         if pulse is not None:
             pulse.set()
 
-    async def _on_every_state(self, action: ActionPlan) -> None:
-        """launch_ros's OnStateTransition: the entities run on the first matching
-        transition and again on each later one (a node cycled by the operator or a
-        manager), until shutdown."""
-        trigger = action.trigger
-        assert trigger is not None and trigger.target is not None
-        key = (trigger.target, flag_name(trigger))
-        await self.when_ready(trigger, self.perform_action, action)
-        seen = self.occurrences.get(key, 0)
-        while not self.shutting_down:
-            while self.occurrences.get(key, 0) <= seen:
-                await self.pulses.setdefault(key, asyncio.Event()).wait()
-            seen += 1
-            if self.shutting_down or not action.enabled:
-                return
-            if trigger.delay:
-                await asyncio.sleep(trigger.delay)
-            await self.perform_action(action)
+    def transitions(self, key: tuple[str, str]) -> int:
+        """How many matching lifecycle transitions were seen so far."""
+        return self.occurrences.get(key, 0)
 
-    def can_fire(self, trigger: Trigger | None) -> bool:
-        while trigger is not None:
-            if trigger.target == "*" and trigger.on == "state":
-                # any lifecycle node of the launch: one of them must still be able to run
-                if not self.flag("*", flag_name(trigger)).is_set() and not any(
-                        p.lifecycle and self.states.get(p.id) in ("running", "pending")
-                        for p in self.plan.processes):
-                    return False
-            if trigger.target not in (None, "*") and trigger.on in ("start", "exit", "state"):
-                assert trigger.target is not None
-                done = self.flag(trigger.target, flag_name(trigger)).is_set()
-                if not done and self.states.get(trigger.target) not in ("running", "pending"):
-                    return False
-            trigger = trigger.after
-        return True
+    async def next_transition(self, key: tuple[str, str], seen: int) -> None:
+        """Returns once more than `seen` matching transitions were seen."""
+        while self.occurrences.get(key, 0) <= seen:
+            await self.pulses.setdefault(key, asyncio.Event()).wait()
 
-    async def when_ready(self, trigger: Trigger | None, then: Callable[[Any], Any],
-                         item: Any) -> None:
-        chain: list[Trigger] = []
-        while trigger is not None:
-            chain.insert(0, trigger)
-            trigger = trigger.after
-        for step in chain:
-            if step.on == "shutdown" or step.on == "io":
-                return  # run by their own events, not as a start-up chain
-            if step.target is not None:
-                await self.flag(step.target, flag_name(step)).wait()
-            if step.delay:
-                self.busy += 1
-                try:
-                    await asyncio.sleep(step.delay)
-                finally:
-                    self.busy -= 1
-                    self.changed.set()
-            if self.shutting_down and not runs_in_shutdown(step, item):
-                return
-        result = then(item)
-        if asyncio.iscoroutine(result):
-            await result
-
-    def schedule_action(self, action: ActionPlan) -> None:
+    def file(self, action: ActionPlan) -> Filing:
+        """Files an event handler under its event; says how any other action waits."""
         chain = action.trigger
         while chain is not None and chain.on not in ("io", "shutdown"):
             chain = chain.after
@@ -107,11 +77,50 @@ class Triggers(SupervisorCore):
             self.io_watchers.setdefault(key, []).append(action)
         elif first is not None and first.on == "state" and first.repeat and \
                 first.target is not None:
-            self.spawn_task(self._on_every_state(action))
+            return "every_state"
         else:
-            self.spawn_task(self.when_ready(action.trigger, self.perform_action, action))
+            return "chain"
+        return "handler"
 
-    def action_can_fire(self, action: ActionPlan) -> bool:
+    def forget_handlers(self) -> None:
+        """A new plan files its handlers again (what has happened stays)."""
+        self.io_watchers.clear()
+        self.on_shutdown.clear()
+        self.any_watchers.clear()
+
+    @property
+    def watches_output(self) -> bool:
+        """Whether any handler waits on output: else a line costs no look-up."""
+        return bool(self.io_watchers or self.any_watchers)
+
+    def handlers_of(self, on: str) -> list[ActionPlan]:
+        """The handlers of every process's `on` ("start", "exit")."""
+        return self.any_watchers.get(on, [])
+
+    def output_handlers(self, process_id: str, stream: str) -> list[ActionPlan]:
+        return [*self.io_watchers.get((process_id, stream), []),
+                *self.any_watchers.get(f"io:{stream}", [])]
+
+    def can_fire(self, trigger: Trigger | None, states: Mapping[str, str],
+                 processes: Iterable[ProcessPlan]) -> bool:
+        """Whether what `trigger` waits for has happened or is alive or pending."""
+        while trigger is not None:
+            if trigger.target == "*" and trigger.on == "state":
+                # any lifecycle node of the launch: one of them must still be able to run
+                if not self.flag("*", flag_name(trigger)).is_set() and not any(
+                        p.lifecycle and states.get(p.id) in ("running", "pending")
+                        for p in processes):
+                    return False
+            if trigger.target not in (None, "*") and trigger.on in ("start", "exit", "state"):
+                assert trigger.target is not None
+                done = self.flag(trigger.target, flag_name(trigger)).is_set()
+                if not done and states.get(trigger.target) not in ("running", "pending"):
+                    return False
+            trigger = trigger.after
+        return True
+
+    def action_can_fire(self, action: ActionPlan, states: Mapping[str, str],
+                        processes: Iterable[ProcessPlan]) -> bool:
         """Whether a pending action may still run before the launch goes idle."""
         trigger = action.trigger
         if trigger is not None and trigger.target is None and trigger.on in ("start", "exit",
@@ -122,16 +131,17 @@ class Triggers(SupervisorCore):
             if chain.on == "shutdown":
                 return False
             if chain.on == "io" and chain.target is not None and \
-                    self.states.get(chain.target) not in ("running", "pending"):
+                    states.get(chain.target) not in ("running", "pending"):
                 return False
             chain = chain.after
-        return self.can_fire(trigger)
+        return self.can_fire(trigger, states, processes)
 
-    def actions_due_in_shutdown(self) -> bool:
+    def due_in_shutdown(self, actions: Iterable[ActionPlan], states: Mapping[str, str],
+                        detached: set[str]) -> bool:
         """Exit handlers whose process has just stopped, or that are still running."""
-        for action in self.plan.actions:
-            state = self.states.get(action.id)
-            if state == "running" and action.kind not in self.detached_actions:
+        for action in actions:
+            state = states.get(action.id)
+            if state == "running" and action.kind not in detached:
                 return True
             if state == "pending" and action.enabled and action.trigger is None:
                 return True  # performed by a handler just now, about to run
