@@ -10,34 +10,13 @@ from __future__ import annotations
 import asyncio
 import os
 import threading
-from dataclasses import dataclass
 from typing import Any
 
+from .calls import ParameterInfo, RosError, SetResult
 from .messages import MessageError, fill, import_type, to_plain
 
 PARAMETER_TYPES = {0: "not set", 1: "bool", 2: "int", 3: "float", 4: "str", 5: "bytes",
                    6: "bool[]", 7: "int[]", 8: "float[]", 9: "str[]"}
-
-
-class RosError(Exception):
-    """A ROS operation that did not succeed: timed out, service gone, refused."""
-
-
-@dataclass
-class ParameterInfo:
-    name: str
-    type: str
-    value: Any
-    description: str
-    read_only: bool
-    constraints: str
-
-
-@dataclass
-class SetResult:
-    name: str
-    successful: bool
-    reason: str
 
 
 def parameter_value(value: Any) -> Any:

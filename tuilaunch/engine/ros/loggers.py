@@ -9,12 +9,8 @@ offers that restart.
 from __future__ import annotations
 
 import asyncio
-from typing import TYPE_CHECKING
 
-from .bridge import RosError
-
-if TYPE_CHECKING:
-    from .bridge import RosBridge
+from .calls import BridgeCalls, RosError
 
 LEVELS = {"unset": 0, "debug": 10, "info": 20, "warn": 30, "error": 40, "fatal": 50}
 LEVEL_NAMES = {number: name for name, number in LEVELS.items()}
@@ -40,7 +36,7 @@ def logger_name(node: str) -> str:
     return node.strip("/").replace("/", ".")
 
 
-async def has_logger_service(bridge: RosBridge, node: str, wait: float = 2.0) -> bool:
+async def has_logger_service(bridge: BridgeCalls, node: str, wait: float = 2.0) -> bool:
     """Whether the node offers its logger service. A node's services are discovered a
     little after the node itself: a node just started gets `wait` seconds to show it."""
     wanted = f"{node}/set_logger_levels"
@@ -57,14 +53,14 @@ async def has_logger_service(bridge: RosBridge, node: str, wait: float = 2.0) ->
     return False
 
 
-async def _require_service(bridge: RosBridge, node: str) -> None:
+async def _require_service(bridge: BridgeCalls, node: str) -> None:
     if not await has_logger_service(bridge, node):
         raise NoLoggerService(
             f"{node} has no logger service (the node was not created with "
             f"enable_logger_service=True): restart it with --log-level to change its level")
 
 
-async def set_level(bridge: RosBridge, node: str, level: str | int,
+async def set_level(bridge: BridgeCalls, node: str, level: str | int,
                     logger: str | None = None, timeout: float = 5.0) -> None:
     """Sets the node's logger (or `logger`) to `level` (a name like `debug`, or a number)."""
     from rcl_interfaces.msg import LoggerLevel
@@ -82,7 +78,7 @@ async def set_level(bridge: RosBridge, node: str, level: str | int,
                            f"{result.reason or 'no reason given'}")
 
 
-async def get_levels(bridge: RosBridge, node: str, loggers: list[str] | None = None,
+async def get_levels(bridge: BridgeCalls, node: str, loggers: list[str] | None = None,
                      timeout: float = 5.0) -> dict[str, str]:
     """`{logger name: level name}` for the node's own logger (or the given loggers)."""
     from rcl_interfaces.srv import GetLoggerLevels

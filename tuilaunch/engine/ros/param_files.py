@@ -9,15 +9,12 @@ nested as `ns: {node: ...}`; later sections win.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import yaml
 
 from ..errors import LaunchError
-from .bridge import SetResult
-
-if TYPE_CHECKING:
-    from .bridge import RosBridge
+from .calls import BridgeCalls, SetResult
 
 
 def nested(values: dict[str, Any]) -> dict[str, Any]:
@@ -55,7 +52,7 @@ def params_yaml(node: str, values: dict[str, Any]) -> str:
                           allow_unicode=True)
 
 
-async def dump(bridge: RosBridge, node: str, timeout: float = 5.0) -> str:
+async def dump(bridge: BridgeCalls, node: str, timeout: float = 5.0) -> str:
     names = await bridge.list_parameters(node, timeout)
     values = await bridge.get_parameters(node, names, timeout)
     return params_yaml(node, values)
@@ -110,13 +107,13 @@ def text_values(text: str, node: str, path: str) -> dict[str, Any]:
     return values
 
 
-async def load(bridge: RosBridge, node: str, path: str, timeout: float = 5.0)\
+async def load(bridge: BridgeCalls, node: str, path: str, timeout: float = 5.0)\
         -> list[SetResult]:
     """Sets every parameter the file at `path` gives the node (see `load_values`)."""
     return await load_values(bridge, node, file_values(path, node), timeout)
 
 
-async def load_values(bridge: RosBridge, node: str, values: dict[str, Any],
+async def load_values(bridge: BridgeCalls, node: str, values: dict[str, Any],
                       timeout: float = 5.0) -> list[SetResult]:
     """Sets every parameter the file gives the node; the node's answer per parameter.
 

@@ -26,7 +26,7 @@ from typing import Any
 
 from rclpy.callback_groups import CallbackGroup
 
-from .bridge import RosError
+from .calls import RosError
 from .messages import MessageError, import_type
 
 
