@@ -1,0 +1,132 @@
+"""Actions that do something once the launch runs: log lines, service calls, parameter
+sets, timers, shutdown, emitted events (EmitEvent), stopping a process, and the Python
+functions (OpaqueFunction) run with the launch context."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from ...errors import DslError, caller_origin
+from ..conditions import Condition
+from ..substitutions import SubValue
+from .base import Entity, entity_list
+
+
+class LogInfo(Entity):
+    def __init__(self, *, msg: SubValue, condition: Condition | None = None, **_: Any) -> None:
+        self._init_entity(condition)
+        self.msg = msg
+
+
+class CallService(Entity):
+    """`sl.call_service`: wait for a service, call it with a request built from a dict."""
+
+    def __init__(self, server: SubValue, request: dict[str, Any] | None, verbosity: SubValue)\
+            -> None:
+        self._init_entity(None)
+        self.server = server
+        self.request = request or {}
+        self.verbosity = verbosity
+
+
+class SetParameters(Entity):
+    """`sl.set_parameters`: wait for a node, set parameters through its service."""
+
+    def __init__(self, node_name: SubValue, parameters: dict[str, Any], verbosity: SubValue)\
+            -> None:
+        self._init_entity(None)
+        self.node_name = node_name
+        self.parameters = dict(parameters)
+        self.verbosity = verbosity
+
+
+class TimerAction(Entity):
+    def __init__(self, *, period: Any, actions: Iterable[Any],
+                 condition: Condition | None = None, **_: Any) -> None:
+        # launch_ros's RosTimer counts ROS time; tuilaunch counts wall time for both
+        self._init_entity(condition)
+        self.period = period
+        self.actions = entity_list(list(actions))
+
+
+class Shutdown(Entity):
+    """An action that ends the whole launch (also `EmitEvent(event=Shutdown())`)."""
+
+    def __init__(self, *, reason: SubValue = "shutdown requested", condition: Condition | None
+                 = None, **_: Any) -> None:
+        self._init_entity(condition)
+        self.reason = reason
+
+
+EMITTED_EVENTS: dict[type, Callable[[Any, Condition | None], Entity]] = {}
+"""Event class -> the entity that performs `EmitEvent(event=...)`; one line per event kind."""
+
+
+def EmitEvent(*, event: Any, condition: Condition | None = None, **_: Any) -> Entity:
+    if isinstance(event, Shutdown):
+        event.condition = condition
+        event.origin = caller_origin()
+        return event
+    for kind, make in EMITTED_EVENTS.items():
+        if isinstance(event, kind):
+            entity = make(event, condition)
+            entity.origin = caller_origin()
+            return entity
+    raise DslError(f"tuilaunch does not support EmitEvent({type(event).__name__}) yet",
+                   caller_origin())
+
+
+class ActionMatcher:
+    """launch.events.matches_action(action): picks the process an event is about."""
+
+    def __init__(self, action: Any) -> None:
+        self.target = action
+
+    def __call__(self, candidate: Any) -> bool:
+        return candidate is self.target
+
+
+def matches_action(target_action: Any) -> ActionMatcher:
+    return ActionMatcher(target_action)
+
+
+class ShutdownProcess:
+    """launch.events.process.ShutdownProcess: stop one process (SIGINT, then escalate)."""
+
+    def __init__(self, *, process_matcher: Any) -> None:
+        self.process_matcher = process_matcher
+
+
+class StopProcess(Entity):
+    """What EmitEvent(ShutdownProcess(...)) does: stop the matched process."""
+
+    def __init__(self, target: Any, condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        self.target = target
+
+
+EMITTED_EVENTS[ShutdownProcess] = lambda event, condition: StopProcess(
+    getattr(event.process_matcher, "target", None), condition)
+
+
+class OpaqueFunction(Entity):
+    """A Python function run with the launch context: at resolve time, or, inside an event
+    handler, a timer or OnShutdown, by the supervisor when that event happens."""
+
+    def __init__(self, *, function: Callable[..., Any], args: Iterable[Any] | None = None,
+                 kwargs: dict[str, Any] | None = None, condition: Condition | None = None)\
+            -> None:
+        self._init_entity(condition)
+        self.function = function
+        self.args = list(args or [])
+        self.kwargs = dict(kwargs or {})
+
+
+class DslOpaque(Entity):
+    """SimpleLauncher's opaque-function mode: `sl.arg()` gives Python values inside."""
+
+    def __init__(self, launcher: Any, function: Callable[[], Any]) -> None:
+        self._init_entity(None)
+        self.launcher = launcher
+        self.function = function
