@@ -19,7 +19,6 @@ from __future__ import annotations
 import os
 import shlex
 import shutil
-import signal
 import socket
 import subprocess
 import sys
@@ -30,6 +29,7 @@ from pathlib import Path
 
 import pytest
 
+from .proc_tree import alive, descendants, end, environ, pids
 from .system_packages import apt_install
 
 SSHD = "/usr/sbin/sshd"
@@ -126,16 +126,16 @@ class Machine:
         """Ends what runs under this machine (sessions first, which stop their nodes), then
         its sshd."""
         marker = f"XDG_RUNTIME_DIR={self.runtime}".encode()
-        under = [pid for pid in _pids() if marker in _environ(pid).split(b"\0")]
-        under += _descendants(self.proc.pid)
-        _end(under)
+        under = [pid for pid in pids() if marker in environ(pid).split(b"\0")]
+        under += descendants(self.proc.pid)
+        end(under)
         self.proc.terminate()
         try:
             self.proc.wait(timeout=10)
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait()
-        _end(_descendants(self.proc.pid))
+        end(descendants(self.proc.pid))
         shutil.rmtree(self.runtime, ignore_errors=True)
 
 
@@ -197,59 +197,19 @@ def machines_fixture(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterato
         fleet.stop()
 
 
-# --- processes -------------------------------------------------------------------------------
-
-def _pids() -> list[int]:
-    return [int(entry.name) for entry in Path("/proc").iterdir() if entry.name.isdigit()]
-
-
-def _environ(pid: int) -> bytes:
-    try:
-        return Path(f"/proc/{pid}/environ").read_bytes()
-    except OSError:
-        return b""
-
-
-def _parent(pid: int) -> int:
-    try:
-        return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
-    except (OSError, IndexError, ValueError):
-        return 0
+def proxies_on(machine: Machine) -> list[int]:
+    """The `__proxy` processes under `machine` (the far end of each ssh link)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        try:
+            argv = (entry / "cmdline").read_bytes().split(b"\0")
+            environ = (entry / "environ").read_bytes()
+        except OSError:
+            continue
+        if b"__proxy" in argv and str(machine.runtime).encode() in environ:
+            found.append(int(entry.name))
+    return [pid for pid in found if alive(pid)]
 
 
-def _descendants(root: int) -> list[int]:
-    children: dict[int, list[int]] = {}
-    for pid in _pids():
-        children.setdefault(_parent(pid), []).append(pid)
-    found, todo = [], [root]
-    while todo:
-        for child in children.get(todo.pop(), []):
-            found.append(child)
-            todo.append(child)
-    return found
-
-
-def alive(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except (OSError, IndexError):
-        return False
-
-
-def _end(pids: list[int]) -> None:
-    """SIGTERM (a session server then stops its nodes), SIGKILL what is left after 30 s."""
-    pids = [p for p in dict.fromkeys(pids) if p != os.getpid()]
-    for pid in pids:
-        _signal(pid, signal.SIGTERM)
-    deadline = time.monotonic() + 30
-    while any(alive(p) for p in pids) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    for pid in pids:
-        _signal(pid, signal.SIGKILL)
-
-
-def _signal(pid: int, sig: int) -> None:
-    try:
-        os.kill(pid, sig)
-    except (ProcessLookupError, PermissionError):
-        pass
+__all__ = ["Machine", "Machines", "alive", "free_port", "keygen", "machines_fixture",
+           "proxies_on"]

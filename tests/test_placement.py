@@ -19,13 +19,13 @@ import subprocess
 import sys
 import tempfile
 import threading
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from .conftest import run_cli
+from .conftest import run_cli, wait_for
+from .proc_tree import cmdline, descendants
 from .sshd import Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
 
 LAUNCH = """
@@ -44,13 +44,6 @@ def generate_launch_description():
         OnProcessIO(target_action=far, on_stdout=lambda event: LogInfo(
             msg='heard ' + event.text.decode().strip())))])
 """
-
-
-def wait_for(check: Callable[[], object], limit: float = 60.0) -> None:
-    end = time.monotonic() + limit
-    while not check():
-        assert time.monotonic() < end, f"condition never held: {check}"
-        time.sleep(0.05)
 
 
 def remote_tuilaunch(folder: Path) -> Path:
@@ -149,6 +142,15 @@ class Headless:
             raise AssertionError(f"never printed {pattern!r}:\n{self.text}") from None
         return found[0]
 
+    def __enter__(self) -> Headless:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        """Whatever the test did: tuilaunch does not outlive it."""
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+
     def stop(self) -> int:
         self.proc.send_signal(signal.SIGINT)
         try:
@@ -180,8 +182,7 @@ def test_print_shows_where_each_process_runs(setup) -> None:
 
 def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, machines):
     launch, placement = setup
-    run = Headless(str(launch), "--machines", str(placement))
-    try:
+    with Headless(str(launch), "--machines", str(placement)) as run:
         started = run.wait_for(r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]")
         far_pid = int(started.group(1))
         run.wait_for(r"\[far-1@r1\] far tick")  # its output, labelled with its machine
@@ -197,10 +198,6 @@ def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, ma
         assert len(shares) == 1 and shares[0]["name"].endswith("-r1")
         assert alive(far_pid)  # a process of robot1's share (same pid space here)
         code = run.stop()
-    finally:
-        if run.proc.poll() is None:
-            run.proc.kill()
-            run.proc.wait()
     # stopping the launch stopped everything on robot1
     assert code == 0, run.text
     assert "[INFO] [far-1@r1]: process stopped" in run.text
@@ -274,17 +271,12 @@ async def attached_tree_shows_machine(name: str, status: dict) -> None:
 def test_an_unreachable_machine_fails_its_nodes_in_one_line_and_the_rest_runs(setup):
     launch, placement = setup
     placement.write_text(placement.read_text().replace("machine: r1", "machine: r3"))
-    run = Headless(str(launch), "--machines", str(placement))
-    try:
+    with Headless(str(launch), "--machines", str(placement)) as run:
         failed = run.wait_for(r"\[ERROR\] \[far-1@r3\]: failed to start: (.*)\n")
         assert re.fullmatch(r"cannot reach r3 \(robot3\): .*Connection refused",
                             failed.group(1)), failed.group(1)
         run.wait_for(r"\[solo-2\] solo up")
         code = run.stop()
-    finally:
-        if run.proc.poll() is None:
-            run.proc.kill()
-            run.proc.wait()
     assert code != 0
     assert "[near-3]: process started" not in run.text  # what it waits for never started
 
@@ -292,25 +284,19 @@ def test_an_unreachable_machine_fails_its_nodes_in_one_line_and_the_rest_runs(se
 def test_a_node_on_robot1_waits_for_a_node_here(setup, machines):
     launch, placement = setup
     placement.write_text(placement.read_text().replace("match: far-*", "match: near-*"))
-    run = Headless(str(launch), "--machines", str(placement))
-    try:
+    with Headless(str(launch), "--machines", str(placement)) as run:
         run.wait_for(r"\[INFO\] \[near-3@r1\]: process started")
         run.wait_for(r"\[near-3@r1\] near up|\[INFO\] \[near-3@r1\]")
         assert run.text.index("[far-1]: process started") < \
             run.text.index("[near-3@r1]: process started")
         code = run.stop()
-    finally:
-        if run.proc.poll() is None:
-            run.proc.kill()
-            run.proc.wait()
     assert code == 0, run.text
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
 
 
 def test_a_dropped_link_stops_nothing_and_is_made_again(setup, machines):
     launch, placement = setup
-    run = Headless(str(launch), "--machines", str(placement))
-    try:
+    with Headless(str(launch), "--machines", str(placement)) as run:
         far_pid = int(run.wait_for(
             r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]").group(1))
         run.wait_for(r"\[far-1@r1\] far tick")
@@ -326,10 +312,6 @@ def test_a_dropped_link_stops_nothing_and_is_made_again(setup, machines):
         wait_for(lambda: "r1: following session" in run.text[after:] and
                  "[far-1@r1] far tick" in run.text[after:].split("following session", 1)[-1])
         code = run.stop()
-    finally:
-        if run.proc.poll() is None:
-            run.proc.kill()
-            run.proc.wait()
     assert code == 0, run.text
     assert not alive(far_pid)
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
@@ -338,23 +320,23 @@ def test_a_dropped_link_stops_nothing_and_is_made_again(setup, machines):
     assert ticks == list(range(1, len(ticks) + 1)), ticks
 
 
+def assert_far_node_fails_alone(launch: Path, placement: Path, says: str) -> None:
+    """The node placed on robot1 fails in one line starting with `says`; the node here
+    runs all the same; the launch ends with a failure status."""
+    with Headless(str(launch), "--machines", str(placement)) as run:
+        failed = run.wait_for(r"\[ERROR\] \[far-1@r1\]: failed to start: (.*)\n")
+        assert failed.group(1).startswith(says), failed.group(1)
+        run.wait_for(r"\[solo-2\] solo up")
+        code = run.stop()
+    assert code != 0
+
+
 def test_a_missing_remote_tuilaunch_is_said_for_each_node_placed_there(setup, tmp_path):
     launch, placement = setup
     text = placement.read_text()
     placement.write_text(text.replace(str(tmp_path / "tl"), str(tmp_path / "nowhere" / "tl"),
                                       1))
-    run = Headless(str(launch), "--machines", str(placement))
-    try:
-        failed = run.wait_for(r"\[ERROR\] \[far-1@r1\]: failed to start: (.*)\n")
-        assert failed.group(1).startswith("r1 (robot1): tuilaunch not found there"), \
-            failed.group(1)
-        run.wait_for(r"\[solo-2\] solo up")
-        code = run.stop()
-    finally:
-        if run.proc.poll() is None:
-            run.proc.kill()
-            run.proc.wait()
-    assert code != 0
+    assert_far_node_fails_alone(launch, placement, "r1 (robot1): tuilaunch not found there")
 
 
 RELAUNCH = """
@@ -394,30 +376,6 @@ def test_a_relaunch_with_new_arguments_is_applied_on_robot1(setup, machines, wri
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
 
 
-def descendants(root: int) -> list[int]:
-    children: dict[int, list[int]] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                parent = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
-            except (OSError, IndexError, ValueError):
-                continue
-            children.setdefault(parent, []).append(int(entry.name))
-    found, todo = [], [root]
-    while todo:
-        for child in children.get(todo.pop(), []):
-            found.append(child)
-            todo.append(child)
-    return found
-
-
-def cmdline(pid: int) -> bytes:
-    try:
-        return Path(f"/proc/{pid}/cmdline").read_bytes()
-    except OSError:
-        return b""
-
-
 def test_a_refused_key_is_said_for_each_node_placed_there(setup, machines, tmp_path):
     launch, placement = setup
     stranger = tmp_path / "stranger_key"
@@ -427,18 +385,7 @@ def test_a_refused_key_is_said_for_each_node_placed_there(setup, machines, tmp_p
                                          stranger))
     placement.write_text(placement.read_text().replace("host: robot1,",
                                                        "host: robot1-stranger,"))
-    run = Headless(str(launch), "--machines", str(placement))
-    try:
-        failed = run.wait_for(r"\[ERROR\] \[far-1@r1\]: failed to start: (.*)\n")
-        assert failed.group(1).startswith("r1 (robot1-stranger) refused the login"), \
-            failed.group(1)
-        run.wait_for(r"\[solo-2\] solo up")
-        code = run.stop()
-    finally:
-        if run.proc.poll() is None:
-            run.proc.kill()
-            run.proc.wait()
-    assert code != 0
+    assert_far_node_fails_alone(launch, placement, "r1 (robot1-stranger) refused the login")
 
 
 def test_a_node_on_robot2_waits_for_a_node_on_robot1(setup, machines, tmp_path):
@@ -447,17 +394,12 @@ def test_a_node_on_robot2_waits_for_a_node_on_robot1(setup, machines, tmp_path):
     placement.write_text(placement.read_text().replace(
         "placement:\n", f"  r2: {{host: robot2, tuilaunch: {tool}}}\nplacement:\n") +
         "  - {match: near-*, machine: r2}\n")
-    run = Headless(str(launch), "--machines", str(placement))
-    try:
+    with Headless(str(launch), "--machines", str(placement)) as run:
         run.wait_for(r"\[INFO\] \[near-3@r2\]: process started")
         assert run.text.index("[far-1@r1]: process started") < \
             run.text.index("[near-3@r2]: process started")
         assert len(remote_sessions(machines, "robot2")) == 1
         code = run.stop()
-    finally:
-        if run.proc.poll() is None:
-            run.proc.kill()
-            run.proc.wait()
     assert code == 0, run.text
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
     wait_for(lambda: remote_sessions(machines, "robot2") == [])

@@ -15,7 +15,6 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -35,8 +34,16 @@ from tuilaunch.engine.run.machines.remote import (
 from tuilaunch.engine.run.session.protocol import decode, encode
 from tuilaunch.engine.run.session.session_dir import SessionError
 
-from .conftest import run_cli
-from .sshd import Machine, Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
+from .conftest import run_cli, wait_for
+from .sshd import (  # noqa: F401
+    Machine,
+    Machines,
+    alive,
+    free_port,
+    keygen,
+    machines_fixture,
+    proxies_on,
+)
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -47,13 +54,6 @@ def generate_launch_description():
         'sh', '-c', 'i=0; while true; do i=$((i+1)); echo tick $i; sleep 0.1; done']))
     return sl.launch_description()
 """
-
-
-def wait_for(check: Callable[[], object], limit: float = 30.0) -> None:
-    end = time.monotonic() + limit
-    while not check():
-        assert time.monotonic() < end, f"condition never held: {check}"
-        time.sleep(0.05)
 
 
 def start_on(machine: Machine, write, name: str) -> None:
@@ -79,20 +79,6 @@ def request(sock, op: str, request_id: int = 1, **fields) -> dict:
                 return message
     finally:
         reader.close()
-
-
-def proxies_on(machine: Machine) -> list[int]:
-    """The proxies running under `machine`'s sshd."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        try:
-            argv = (entry / "cmdline").read_bytes().split(b"\0")
-            environ = (entry / "environ").read_bytes()
-        except OSError:
-            continue
-        if b"__proxy" in argv and str(machine.runtime).encode() in environ:
-            found.append(int(entry.name))
-    return [pid for pid in found if alive(pid)]
 
 
 # --- addresses --------------------------------------------------------------------------------

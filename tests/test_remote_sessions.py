@@ -13,8 +13,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 from textual.widgets import Input
@@ -26,9 +24,10 @@ from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 
-from .conftest import run_cli
-from .sshd import Machine, Machines, alive, machines_fixture  # noqa: F401
+from .conftest import run_cli, wait_for
+from .sshd import Machine, Machines, alive, machines_fixture, proxies_on  # noqa: F401
 from .test_sessions import Terminal
+from .test_tui import until
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -40,13 +39,6 @@ def generate_launch_description():
     sl.add_action(ExecuteProcess(name='quiet', cmd=['sleep', '600']))
     return sl.launch_description()
 """
-
-
-def wait_for(check: Callable[[], object], limit: float = 30.0) -> None:
-    end = time.monotonic() + limit
-    while not check():
-        assert time.monotonic() < end, f"condition never held: {check}"
-        time.sleep(0.05)
 
 
 def there(machine: Machine) -> dict[str, str]:
@@ -160,20 +152,6 @@ def running_on(machine: Machine) -> list[int]:
     return found
 
 
-def proxies_on(machine: Machine) -> list[int]:
-    """The `__proxy` processes under `machine` (the far end of each ssh link)."""
-    found = []
-    for entry in Path("/proc").iterdir():
-        try:
-            argv = (entry / "cmdline").read_bytes().split(b"\0")
-            environ = (entry / "environ").read_bytes()
-        except OSError:
-            continue
-        if b"__proxy" in argv and str(machine.runtime).encode() in environ:
-            found.append(int(entry.name))
-    return [pid for pid in found if alive(pid)]
-
-
 def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, monkeypatch):
     """The TUI here, the launch on robot1: the link dropped says so, stops nothing, and
     once back shows what happened meanwhile, nothing twice and nothing missed."""
@@ -187,12 +165,6 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
     def ticks(app) -> list[str]:
         return [line.text for line in app.store.lines(View("ticker-1"))
                 if line.text.startswith("tick")]
-
-    async def until(pilot, check: Callable[[], object], limit: float = 60.0) -> None:
-        end = time.monotonic() + limit
-        while not check():
-            assert time.monotonic() < end, f"condition never held: {check}"
-            await pilot.pause(0.05)
 
     async def attached() -> None:
         app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
@@ -293,12 +265,6 @@ def test_attach_without_the_launch_file_here_draws_the_servers_plan(machines: Ma
     elsewhere = tmp_path / "operator"
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)
-
-    async def until(pilot, check: Callable[[], object], limit: float = 60.0) -> None:
-        end = time.monotonic() + limit
-        while not check():
-            assert time.monotonic() < end, f"condition never held: {check}"
-            await pilot.pause(0.05)
 
     async def attached() -> None:
         app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),

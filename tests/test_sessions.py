@@ -32,6 +32,8 @@ from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import LEVELS, View
 
 from .conftest import run_cli, wait_for
+from .proc_tree import alive as _alive
+from .proc_tree import end
 from .test_tui import until
 
 LAUNCH = """
@@ -58,16 +60,8 @@ def runtime(monkeypatch, tmp_path):
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(folder))
     monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
     yield folder
-    servers = []
-    for info in (folder / "tuilaunch").glob("*.json"):
-        pid = json.loads(info.read_text())["pid"]
-        servers.append(pid)
-        _signal(pid, signal.SIGTERM)
-    end = time.monotonic() + 30
-    while any(_alive(p) for p in servers) and time.monotonic() < end:
-        time.sleep(0.1)
-    for pid in servers:
-        _signal(pid, signal.SIGKILL)
+    end([json.loads(info.read_text())["pid"]
+         for info in (folder / "tuilaunch").glob("*.json")])
     # a server whose info was never written (it lost a race, or its test failed early) is
     # found by its log folder, which is this test's
     for entry in Path("/proc").iterdir():
@@ -77,11 +71,7 @@ def runtime(monkeypatch, tmp_path):
             continue
         if any(b"tuilaunch.engine.server_main" in a for a in argv) and any(
                 str(tmp_path).encode() in a for a in argv):
-            _signal(int(entry.name), signal.SIGTERM)
-            end = time.monotonic() + 30
-            while _alive(int(entry.name)) and time.monotonic() < end:
-                time.sleep(0.1)
-            _signal(int(entry.name), signal.SIGKILL)
+            end([int(entry.name)])
     shutil.rmtree(folder, ignore_errors=True)
 
 
@@ -90,21 +80,6 @@ def tl(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
     if check:
         assert done.returncode == 0, done.stderr
     return done
-
-
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as handle:
-            return handle.read().split(") ", 1)[1][0] != "Z"
-    except (OSError, IndexError):
-        return False
-
-
-def _signal(pid: int, sig: int) -> None:
-    try:
-        os.kill(pid, sig)
-    except ProcessLookupError:
-        pass
 
 
 def status(name: str) -> dict:

@@ -69,3 +69,30 @@ def substitute_text(text: str, context: PerformContext, origin: Any) -> str:
     except LaunchError as exc:
         raise LaunchError(f"in a parameter file with allow_substs: {exc.message}",
                           origin) from None
+
+
+def dotted(tree: dict[Any, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested mappings as dotted names: `{"a": {"b": 1}}` -> `{"a.b": 1}` (a parameter
+    file's section, a service request's fields)."""
+    out: dict[str, Any] = {}
+    for key, value in tree.items():
+        if isinstance(value, dict):
+            out.update(dotted(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def node_sections(loaded: dict[Any, Any], keys: tuple[str, ...] = ()) -> dict[str, dict[str, Any]]:
+    """Every `ros__parameters` block of a parameter file, by the node key above it
+    (`ns/node`, no leading slash; `**` for every node)."""
+    found: dict[str, dict[str, Any]] = {}
+    for key, value in loaded.items():
+        if key == "ros__parameters":
+            if isinstance(value, dict):
+                found["/".join(keys)] = value
+            continue
+        if isinstance(value, dict):
+            found.update(node_sections(value, (*keys, str(key).strip("/"))))
+    return found
+

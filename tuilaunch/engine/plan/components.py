@@ -18,47 +18,17 @@ from typing import Any
 import yaml
 
 from ..describe.entities import ComposableNode, pair_list
+from ..describe.parameter_files import dotted, node_sections
 from ..describe.substitutions import PerformContext, perform, perform_optional
 from ..describe.values import ParamValue, flatten_parameters
 from ..errors import LaunchError, Origin
-
-
-def _join(base: str, ns: str | None) -> str:
-    if not ns:
-        return base
-    joined = ns if ns.startswith("/") else base.rstrip("/") + "/" + ns
-    parts = [p for p in joined.split("/") if p]
-    return "/" + "/".join(parts)
+from .scope import join_namespace
 
 
 def _items(value: Any) -> list[Any]:
     if value is None:
         return []
     return list(value) if isinstance(value, list | tuple) else [value]
-
-
-def _flat_yaml(values: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in values.items():
-        if isinstance(value, dict):
-            out.update(_flat_yaml(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
-
-
-def _node_sections(loaded: Any, keys: list[str] | None = None,
-                   found: dict[str, Any] | None = None) -> dict[str, Any]:
-    """`ns/name -> parameters` for every `ros__parameters` block of a parameter file."""
-    keys = keys if keys is not None else []
-    found = found if found is not None else {}
-    for key, value in loaded.items():
-        if key == "ros__parameters":
-            found["/".join(keys)] = value
-            return found
-        if isinstance(value, dict):
-            _node_sections(value, [*keys, str(key).lstrip("/")], found)
-    return found
 
 
 def file_parameters(path: str, node_key: str, origin: Origin | None,
@@ -78,14 +48,13 @@ def file_parameters(path: str, node_key: str, origin: Origin | None,
         raise LaunchError(f"parameter file {path} is not valid YAML: {exc}", origin) from None
     if not isinstance(loaded, dict):
         raise LaunchError(f"parameter file {path} does not hold a mapping", origin)
-    sections = _node_sections(loaded)
+    sections = node_sections(loaded)
     if not sections:
-        return _flat_yaml(loaded)
+        return dotted(loaded)
     values: dict[str, Any] = {}
     for key in ("**", node_key):
-        section = sections.get(key)
-        if isinstance(section, dict):
-            values.update(_flat_yaml(section))
+        if key in sections:
+            values.update(dotted(sections[key]))
     return values
 
 
@@ -123,7 +92,7 @@ def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespa
     name = perform_optional(component.name, ctx) or ""
     own_ns = perform_optional(component.namespace, ctx)
     pushed = None if scope_namespace == "/" else scope_namespace
-    request_ns = "" if pushed is None and not own_ns else _join(pushed or "/", own_ns)
+    request_ns = "" if pushed is None and not own_ns else join_namespace(pushed or "/", own_ns)
     node_key = name.lstrip("/")
     if request_ns and request_ns != "/":
         node_key = f"{request_ns.strip('/')}/{node_key}"
@@ -150,7 +119,7 @@ def component_plan(component: ComposableNode, ctx: PerformContext, scope_namespa
     package = perform(component.package, ctx)
     plugin = perform(component.plugin, ctx)
     shown_ns = request_ns or "/"
-    full_name = (_join(shown_ns, name) if name else None)
+    full_name = (join_namespace(shown_ns, name) if name else None)
     return {
         "id": component_id,
         "package": package,

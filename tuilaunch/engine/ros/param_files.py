@@ -13,6 +13,7 @@ from typing import Any
 
 import yaml
 
+from ..describe.parameter_files import dotted, node_sections
 from ..errors import LaunchError
 from .calls import BridgeCalls, SetResult
 
@@ -33,17 +34,6 @@ def nested(values: dict[str, Any]) -> dict[str, Any]:
     return tree
 
 
-def flat(tree: dict[Any, Any], prefix: str = "") -> dict[str, Any]:
-    """The inverse of `nested`."""
-    out: dict[str, Any] = {}
-    for key, value in tree.items():
-        if isinstance(value, dict):
-            out.update(flat(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
-
-
 def params_yaml(node: str, values: dict[str, Any]) -> str:
     """The file text for `node` (a full name, `/ns/name`)."""
     values = {k: v for k, v in values.items() if v is not None}  # unset: nothing to write
@@ -56,19 +46,6 @@ async def dump(bridge: BridgeCalls, node: str, timeout: float = 5.0) -> str:
     names = await bridge.list_parameters(node, timeout)
     values = await bridge.get_parameters(node, names, timeout)
     return params_yaml(node, values)
-
-
-def sections(loaded: dict[Any, Any], keys: tuple[str, ...] = ()) -> dict[str, dict[str, Any]]:
-    """Every `ros__parameters` block of a file, by the node key above it (`ns/node`)."""
-    found: dict[str, dict[str, Any]] = {}
-    for key, value in loaded.items():
-        if key == "ros__parameters":
-            if isinstance(value, dict):
-                found["/".join(keys)] = value
-            continue
-        if isinstance(value, dict):
-            found.update(sections(value, (*keys, str(key).strip("/"))))
-    return found
 
 
 def file_values(path: str, node: str) -> dict[str, Any]:
@@ -93,14 +70,14 @@ def text_values(text: str, node: str, path: str) -> dict[str, Any]:
         raise LaunchError(f"parameter file {path}{where} is not valid YAML") from None
     if not isinstance(loaded, dict):
         raise LaunchError(f"parameter file {path} does not hold a mapping")
-    found = sections(loaded)
+    found = node_sections(loaded)
     if not found:
         raise LaunchError(f"parameter file {path} has no ros__parameters section")
     own = node.strip("/")
     values: dict[str, Any] = {}
     for key in ("**", own):
         if key in found:
-            values.update(flat(found[key]))
+            values.update(dotted(found[key]))
     if not values and not any(k in found for k in ("**", own)):
         raise LaunchError(f"parameter file {path} has no section for {node} "
                           f"(it has: {', '.join('/' + k for k in sorted(found))})")

@@ -79,34 +79,14 @@ class ConfirmScreen(ModalScreen[bool]):
         self.dismiss(event.button.id == "yes")
 
 
-class QuitScreen(ModalScreen[bool]):
-    DEFAULT_CSS = """
-    QuitScreen { align: center middle; }
-    QuitScreen > Vertical { width: 60; max-width: 100%; height: auto; padding: 1 2;
-                            border: round $warning; background: $surface; }
-    QuitScreen Horizontal { height: 3; }
-    """
-    BINDINGS = [Binding("y", "answer(True)", "Yes"), Binding("n,escape", "answer(False)", "No")]
+class QuitScreen(ConfirmScreen):
+    """Quitting while processes run: stop them all and quit, or keep running."""
 
     def __init__(self, running: list[str]) -> None:
-        super().__init__()
+        names = ", ".join(running[:8]) + (" ..." if len(running) > 8 else "")
+        super().__init__(f"{len(running)} processes still run: {names}\nStop them all and quit?",
+                         yes="Stop and quit (y)", no="Keep running (n)")
         self.running = running
-
-    def compose(self) -> ComposeResult:
-        names = ", ".join(self.running[:8]) + (" ..." if len(self.running) > 8 else "")
-        with Vertical():
-            yield Static(f"{len(self.running)} processes still run: {names}\n"
-                         "Stop them all and quit?")
-            with Horizontal():
-                yield Button("Stop and quit (y)", id="yes", variant="error")
-                yield Button("Keep running (n)", id="no")
-
-    def action_answer(self, answer: bool) -> None:
-        self.dismiss(answer)
-
-    @on(Button.Pressed)
-    def _pressed(self, event: Button.Pressed) -> None:
-        self.dismiss(event.button.id == "yes")
 
 
 class ChoiceScreen(ModalScreen[str | None]):

@@ -14,6 +14,7 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
+from ...engine.describe.parameter_files import dotted
 from ...engine.ros.bridge import RosError
 from ...engine.ros.messages import FieldInfo, MessageError, describe_fields, import_type
 from .fields import Field
@@ -244,7 +245,7 @@ class ServicesPanel(Horizontal):
         record = self.history[int(str(event.option.id)) - 1]
         flat = {path: yaml.safe_dump(value, default_flow_style=True).strip().removesuffix(
             "...").strip() if not isinstance(value, str) else value
-            for path, value in _flatten(record.request).items()}
+            for path, value in dotted(record.request).items()}
         self.select_service(record.service, record.type, flat)
         self.show_response(record.outcome, record.ok)
 
@@ -253,12 +254,3 @@ class ServicesPanel(Horizontal):
         response.update(Text(text))
         response.set_class(not ok, "error")
 
-
-def _flatten(values: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in values.items():
-        if isinstance(value, dict):
-            out.update(_flatten(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out
