@@ -84,6 +84,11 @@ class ClientHub:
         self.queues: set[ClientQueue] = set()
         self.writers: set[asyncio.StreamWriter] = set()
         self.tasks: set[asyncio.Task[Any]] = set()
+        self.connections: set[asyncio.Task[Any]] = set()
+        """The tasks serving each connection (`serve`), awaited at the end: one still
+        running when the loop closes is cancelled, and Python 3.11's stream server then
+        logs that cancellation as a traceback ("Exception in callback
+        StreamReaderProtocol.connection_made...")."""
         self.dropped_clients = 0
         self.ended = False  # the supervisor's run is over; writers send "ended" and stop
         self.status_code = 0
@@ -118,6 +123,10 @@ class ClientHub:
             await asyncio.wait([*self.tasks], timeout=5.0)
         for writer in list(self.writers):
             writer.close()
+        # each connection now reads its end and returns: wait for that, so none is left
+        # for the loop's close to cancel
+        if self.connections:
+            await asyncio.wait([*self.connections], timeout=5.0)
 
     async def serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         """One connection, from hello to its end (the unix server's client callback)."""
@@ -126,6 +135,9 @@ class ClientHub:
             writer.close()
             return
         self.writers.add(writer)
+        connection = asyncio.current_task()
+        if connection is not None:
+            self.connections.add(connection)
         lock = asyncio.Lock()
         queue: ClientQueue | None = None
         client = next(self.ids)
@@ -173,6 +185,8 @@ class ClientHub:
             self.clients.pop(client, None)
             self.gone(client)
             self.writers.discard(writer)
+            if connection is not None:
+                self.connections.discard(connection)
             writer.close()
 
     async def _pump(self, queue: ClientQueue, writer: asyncio.StreamWriter,
