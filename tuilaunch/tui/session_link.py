@@ -225,6 +225,8 @@ class SessionLink(App[int]):
         is_process = any(p.id == process for p in self.session.plan.processes)
         if event.kind == "started":
             self.asked_to_stop.discard(process)
+            # its node name is learnt again from this run's lines (a relaunch may move it)
+            self.store.reported.forget(process)
             tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
             if is_process:
                 return self.store.add_event(process, f"process started with pid [{event.pid}]")

@@ -1,0 +1,123 @@
+"""Relaunching as an operator does it: names that follow the nodes a relaunch moves, a
+launch file edited on disk, a mistyped argument, and what another client of the session sees.
+
+Real session servers running the demo's rclpy nodes (or shell processes), the TUI attached
+through Textual's pilot, and the command line run as a user types it."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+from textual.pilot import Pilot
+from textual.widgets import Input, Static
+
+from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.screens.dialogs import ChoiceScreen
+from tuilaunch.tui.screens.topics_panel import TopicsPanel
+
+from .test_sessions import runtime, status, tl  # noqa: F401
+from .test_tui import BRINGUP, until
+
+
+@asynccontextmanager
+async def session_tui(path: str, *args: str, wait: tuple[str, ...] = (),
+                      size: tuple[int, int] = (120, 36))\
+        -> AsyncIterator[tuple[TuiLaunchApp, Pilot, str]]:
+    """The launch in a session server (as `tuilaunch FILE` runs it), the TUI attached."""
+    name = tl(path, "--detach", *args).stdout.strip()
+    try:
+        for process in wait:
+            tl("wait", name, process, "running", "--timeout", "60")
+        info = status(name)
+        app = make_app(path, info["arguments"], Path(info["log_dir"]), session_name=name)
+        async with app.run_test(size=size) as pilot:
+            yield app, pilot, name
+    finally:
+        tl("stop", name, check=False)
+
+
+def detail(app: TuiLaunchApp) -> str:
+    return str(app.query_one("#detail", Static).render())
+
+
+def header(app: TuiLaunchApp) -> str:
+    return str(app.query_one("#status", Static).render())
+
+
+def preview_text(app: TuiLaunchApp) -> str:
+    return str(app.query_one("#args-preview", Static).render())
+
+
+async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F811
+    async with session_tui(BRINGUP, "robot:=rl1", "listener:=false", "services:=false",
+                           wait=("talker-1",)) as (app, pilot, name):
+        tree = app.launch_tree
+        await until(pilot, lambda: "talker-1" in tree.rows)
+        tree.move_cursor(tree.rows["talker-1"])
+        await until(pilot, lambda: "talker-1 (/rl1/talker)" in detail(app))
+        old_pid = status(name)["processes"][0]["pid"]
+
+        # the Args tab: robot rl1 -> rl2, F5
+        await pilot.press("2")
+        field = app.query_one("#arg-robot", Input)
+        field.focus()
+        await pilot.press("ctrl+u", *"rl2", "f5")
+        await until(pilot, lambda: app.session.arguments.get("robot") == "rl2")
+        await until(pilot, lambda: next(p for p in status(name)["processes"]
+                                        if p["id"] == "talker-1")["pid"] not in (None, old_pid),
+                    every=lambda: None)
+        await pilot.press("escape", "1")
+        tree.focus()
+        await until(pilot, lambda: "talker-1" in tree.rows)
+        tree.move_cursor(tree.rows["talker-1"])
+        # the header line and the tree follow the node to its new namespace
+        await until(pilot, lambda: "talker-1 (/rl2/talker)" in detail(app))
+        assert "robot:=rl2" in header(app)
+        assert "/rl1/" not in detail(app)
+
+        # o: the Topics tab lists the moved node's topics
+        await pilot.press("o")
+        panel = app.query_one(TopicsPanel)
+        assert app.tabs.active == "topics"
+        assert panel.node == "/rl2/talker"
+        await until(pilot, lambda: "/rl2/chatter" in panel.shown)
+        assert not any(topic.startswith("/rl1/") for topic in panel.shown)
+
+        # L: the log level question names the node where it is now
+        await pilot.press("1")
+        tree.focus()
+        tree.move_cursor(tree.rows["talker-1"])
+        await pilot.press("L")
+        await until(pilot, lambda: isinstance(app.screen, ChoiceScreen))
+        question = app.screen
+        assert isinstance(question, ChoiceScreen)
+        assert question.question.startswith("Log level of /rl2/talker (talker-1)")
+        await pilot.press("escape")
+
+    # the command line, after the relaunch, finds the node by its process id too
+    async with session_tui(BRINGUP, "robot:=rl3", "listener:=false", "services:=false",
+                           wait=("talker-1",)) as (app, pilot, name):
+        await until(pilot, lambda: "talker-1" in app.launch_tree.rows)
+        # the talker reported its name in its first line: the server learnt /rl3/talker
+        await until(pilot, lambda: "/rl3/chatter" in tl("topics", name, "--node",
+                                                        "talker-1", check=False).stdout,
+                    every=lambda: None)
+        await pilot.press("2")
+        app.query_one("#arg-robot", Input).focus()
+        await pilot.press("ctrl+u", *"rl4", "f5")
+        await until(pilot, lambda: status(name)["arguments"].get("robot") == "rl4")
+        tl("wait", name, "talker-1", "running", "--timeout", "60")
+        topics = tl("topics", name, "--node", "talker-1", check=False)
+        for _ in range(3):  # its name is learnt from its first line after the start
+            if topics.returncode == 0 and "/rl4/chatter" in topics.stdout:
+                break
+            await pilot.pause(1.0)
+            topics = tl("topics", name, "--node", "talker-1", check=False)
+        assert topics.returncode == 0, topics.stderr
+        assert "/rl4/chatter" in topics.stdout and "/rl3/" not in topics.stdout
+        dumped = tl("params", name, "talker-1", "--dump")
+        assert dumped.stdout.startswith("/rl4/talker:")
+        level = tl("log-level", name, "talker-1", "debug", check=False)
+        assert "/rl3/talker" not in level.stdout + level.stderr
