@@ -121,3 +121,87 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         assert dumped.stdout.startswith("/rl4/talker:")
         level = tl("log-level", name, "talker-1", "debug", check=False)
         assert "/rl3/talker" not in level.stdout + level.stderr
+
+
+EDITABLE = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('word', 'alpha')
+    sl.add_action(ExecuteProcess(name='echo', cmd=[
+        'sh', '-c', 'echo {said} "$0"; exec sleep 600', sl.arg('word')]))
+    {extra}
+    return sl.launch_description()
+"""
+EXTRA = "sl.add_action(ExecuteProcess(name='extra', cmd=['sh', '-c', 'exec sleep 600']))"
+
+
+def pid_of(name: str, process: str) -> int | None:
+    return next(p["pid"] for p in status(name)["processes"] if p["id"] == process)
+
+
+async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_loads(
+        runtime, write):  # noqa: F811
+    path = write(EDITABLE.format(said="word", extra=""))
+    async with session_tui(str(path), wait=("echo-1",)) as (app, pilot, name):
+        first = pid_of(name, "echo-1")
+        # the operator edits the file: the echo says another thing, a process is added
+        path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+        await pilot.press("2")
+        await until(pilot, lambda: "changed on disk" in preview_text(app))
+        assert "test_launch.py changed on disk: adds: extra-2; changes: echo-1" \
+            in preview_text(app)
+        # and changes an argument too, then F5: the edited file runs, with the new value
+        app.query_one("#arg-word", Input).focus()
+        await pilot.press("ctrl+u", *"beta", "f5")
+        await until(pilot, lambda: status(name)["arguments"] == {"word": "beta"})
+        tl("wait", name, "extra-2", "running", "--timeout", "60")
+        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        assert pid_of(name, "echo-1") != first
+        await until(pilot, lambda: "said beta" in tl("logs", name, "echo-1").stdout,
+                    every=lambda: None)
+        await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
+
+        # a file that no longer loads: F5 is refused with file:line, nothing stops
+        running = {p: pid_of(name, p) for p in ("echo-1", "extra-2")}
+        path.write_text(EDITABLE.format(said="said", extra=EXTRA).replace(
+            "return sl.launch_description()", "return sl.launch_description("))
+        await pilot.press("escape", "f5")
+        await until(pilot, lambda: "no longer loads" in preview_text(app))
+        text = preview_text(app)
+        assert f"{path}:10: syntax error" in text
+        assert "the launch runs on as it was" in text
+        assert app.query_one("#args-preview").has_class("error")
+        assert {p: pid_of(name, p) for p in running} == running
+        assert status(name)["arguments"] == {"word": "beta"}
+
+
+async def test_the_session_refuses_a_relaunch_of_a_file_that_no_longer_loads(
+        runtime, write):  # noqa: F811
+    """Another client (or a TUI whose preview came before the edit) asks the server to
+    apply: the server reads the file again and refuses, with the file's line."""
+    from tuilaunch.client.link import open_link
+    from tuilaunch.engine.run.session.session_dir import SessionError
+
+    path = write(EDITABLE.format(said="word", extra=""))
+    name = tl(str(path), "--detach").stdout.strip()
+    try:
+        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        before = pid_of(name, "echo-1")
+        path.write_text(EDITABLE.format(said="word", extra="raise RuntimeError('oops')"))
+        link = open_link(name)
+        try:
+            try:
+                link.request("apply", arguments={"word": "gamma"})
+                raise AssertionError("the relaunch was applied")
+            except SessionError as exc:
+                message = str(exc)
+        finally:
+            link.close()
+        assert "cannot apply: the launch file no longer loads" in message
+        assert f"{path}:9" in message and "RuntimeError: oops" in message
+        assert pid_of(name, "echo-1") == before
+        assert status(name)["arguments"] == {}
+    finally:
+        tl("stop", name, check=False)
