@@ -14,9 +14,11 @@ from textual.pilot import Pilot
 from textual.widgets import Input, Static
 
 from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ChoiceScreen
 from tuilaunch.tui.screens.topics_panel import TopicsPanel
 
+from .conftest import run_cli
 from .test_sessions import runtime, status, tl  # noqa: F401
 from .test_tui import BRINGUP, until
 
@@ -205,3 +207,45 @@ async def test_the_session_refuses_a_relaunch_of_a_file_that_no_longer_loads(
         assert status(name)["arguments"] == {}
     finally:
         tl("stop", name, check=False)
+
+
+TYPO = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('robot', 'r1')
+    with sl.group(ns=sl.arg('robot')):
+        sl.add_action(ExecuteProcess(name='say', cmd=['sh', '-c', 'echo in "$0"; exec sleep 600',
+                                                      sl.arg('robot')]))
+    return sl.launch_description()
+"""
+
+
+async def test_a_mistyped_argument_is_said_in_the_tui_and_not_shown_as_applied(
+        runtime, write):  # noqa: F811
+    path = write(TYPO)
+    async with session_tui(str(path), "robto:=r2", wait=("say-1",)) as (app, pilot, name):
+        await until(pilot, lambda: "say-1" in app.launch_tree.rows)
+        said = [n.message for n in app._notifications]
+        assert any("argument 'robto' is not declared by test_launch.py or its includes; "
+                   "did you mean 'robot'?" in message for message in said), said
+        # the header lists what applies, and the typo apart, never as applied
+        await until(pilot, lambda: "not declared: robto" in header(app))
+        assert "robto:=r2" not in header(app)
+        # the launch pane keeps it after the toast is gone
+        lines = [line.text for line in app.store.lines(View("launch"))]
+        assert any("did you mean 'robot'?" in line for line in lines), lines
+        assert "in r1" in tl("logs", name, "say-1").stdout
+
+
+def test_a_mistyped_argument_keeps_its_warning_line_headless_and_in_print(write):
+    path = write(TYPO.replace("exec sleep 600", "true"))
+    printed = run_cli(str(path), "robto:=r2", "--print")
+    assert printed.returncode == 0
+    assert "argument 'robto' is not declared by test_launch.py or its includes; did you mean " \
+        "'robot'?" in printed.stdout + printed.stderr
+    ran = run_cli(str(path), "robto:=r2", "--headless")
+    assert ran.returncode == 0, ran.stderr
+    assert "tuilaunch: warning: argument 'robto' is not declared by test_launch.py or its " \
+        "includes; did you mean 'robot'? (declared: robot)" in ran.stderr

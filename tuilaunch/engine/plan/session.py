@@ -115,6 +115,12 @@ class Session:
             self.loaded, self.stamp = preview.loaded, preview.stamp
         return self.plan
 
+    def undeclared(self) -> list[str]:
+        """Values given for arguments the file does not declare (a typo: `robto:=r2`): they
+        change nothing, so they are not shown as applied."""
+        declared = {a.name for a in self.plan.arguments}
+        return [name for name in self.arguments if name not in declared]
+
     def checkpoint(self) -> dict[str, Any]:
         """The session as it is, for `rollback` (a relaunch the supervisor refused)."""
         return dict(vars(self))
