@@ -269,6 +269,9 @@ def test_attach_without_the_launch_file_here_draws_the_servers_plan(machines: Ma
     async def attached() -> None:
         app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
                        session_name="far", session_host="robot1")
+        # robot1 shares this filesystem: the file goes back where its server reads it
+        # again at each relaunch, the client having chosen to draw the server's plan
+        (tmp_path / "moved-away").rename(files)
         async with app.run_test(size=(100, 30)) as pilot:
             await until(pilot, lambda: any(line.text.startswith("tick") for line in
                                            app.store.lines(View("ticker-1"))))

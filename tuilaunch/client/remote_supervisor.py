@@ -223,11 +223,14 @@ class RemoteSupervisor:
         assert isinstance(self.session, ServedSession)
         self.session.adopt(await self._call("plan"))
 
-    def _adopt(self, arguments: dict[str, str]) -> None:
-        """Another client relaunched with these values: resolve the same plan here."""
-        if isinstance(self.session, ServedSession) or arguments == self.session.arguments:
+    def _adopt(self, arguments: dict[str, str], relaunched: bool = False) -> None:
+        """Another client relaunched with these values: resolve the same plan here.
+        `relaunched`: the server read the launch file again, so it is read here too (an
+        edited file with the same values is a relaunch as well)."""
+        if isinstance(self.session, ServedSession) or (
+                arguments == self.session.arguments and not relaunched):
             return
-        preview = self.session.preview(arguments)
+        preview = self.session.preview(arguments, reread=relaunched)
         if preview.plan is not None:
             self.session.accept(preview)
 
@@ -318,7 +321,7 @@ class RemoteSupervisor:
             else:
                 self._last_event = max(self._last_event, event.time)
             if event.kind == "relaunched":
-                self._adopt(dict(item.split(":=", 1) for item in event.lines))
+                self._adopt(dict(item.split(":=", 1) for item in event.lines), True)
             if event.kind == "exited" and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
             if event.kind == "lifecycle" and event.process:

@@ -45,7 +45,8 @@ class ServedSession(Session):
         self.plan = plan_from_json(result["plan"])
         self.arguments = {str(k): str(v) for k, v in result["arguments"].items()}
 
-    def preview(self, edits: Mapping[str, str], running: set[str] | None = None) -> Preview:
+    def preview(self, edits: Mapping[str, str], running: set[str] | None = None,
+                reread: bool = False) -> Preview:
         """As Session.preview, resolved by the server (from the UI thread: one round trip)."""
         values = {**self.arguments, **edits}
         if self._request is None or self._loop is None:
@@ -59,9 +60,13 @@ class ServedSession(Session):
             return Preview(values, None, None, str(exc) or "the session did not answer")
         if result.get("error") is not None or result.get("plan") is None:
             return Preview(values, None, None, str(result.get("error")))
+        edit = result.get("file_changes")
         return Preview(dict(result["arguments"]), plan_from_json(result["plan"]),
                        PlanDiff(list(result["keep"]), list(result["stop"]),
-                                list(result["start"])), None)
+                                list(result["start"])), None,
+                       None if edit is None else PlanDiff(list(edit["keep"]),
+                                                          list(edit["stop"]),
+                                                          list(edit["start"])))
 
     def accept(self, preview: Preview) -> Plan:
         assert preview.plan is not None

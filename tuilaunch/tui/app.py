@@ -171,6 +171,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         loop.add_signal_handler(signal.SIGTERM, self.terminated)
         loop.add_signal_handler(signal.SIGHUP, self.terminal_hung_up)
         self.update_status()
+        self.say_plan_warnings()
         tree.focus()
         self.tab_shown("nodes")
 

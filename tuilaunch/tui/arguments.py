@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import os
+
 from textual import on, work
 
+from ..engine.errors import LaunchError
+from ..engine.plan.model import ArgumentInfo, PlanDiff
 from ..engine.plan.session import Preview
 from .screens.args_panel import ArgsPanel, check_plan, check_values
 from .session_link import SessionLink
@@ -17,24 +21,19 @@ class Arguments(SessionLink):
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
         self.preview_values(event.values)
 
-    def preview_values(self, values: dict[str, str]) -> None:
+    def preview_values(self, values: dict[str, str], reread: bool = False) -> None:
         """What these form values would do; a value the plan cannot use is an error here,
-        and F5 never applies it."""
+        and F5 never applies it. The launch file is read again when it changed on disk
+        (`reread`: whatever its stamp says, as F5 does), and what the edit changes is said."""
         current = {a.name: a.value for a in self.session.plan.arguments}
         edits = {k: v for k, v in values.items() if v != current.get(k)}
         panel = self.args_panel
         tree = self.launch_tree
-        if not edits:
-            self.preview = None
-            tree.set_preview(None)
-            panel.set_preview_text("No change from what runs now.", error=False)
-            self.refresh_bindings()
-            return
         running = {p for p, s in (self.supervisor.states.items() if self.supervisor else ())
                    if s == "running"}
         problem = check_values(self.session.plan.arguments, edits)
         if problem is None:
-            self.preview = self.session.preview(edits, running)
+            self.preview = self.session.preview(edits, running, reread=reread)
             if self.preview.plan is not None:
                 problem = check_plan(self.preview.plan)
         else:
@@ -43,19 +42,34 @@ class Arguments(SessionLink):
             self.preview = Preview(self.preview.arguments, None, None, problem)
         if self.preview.error is not None or self.preview.diff is None:
             tree.set_preview(None)
-            panel.set_preview_text(f"Cannot apply: {self.preview.error}", error=True)
+            error = self.preview.error or "the plan could not be made"
+            panel.set_preview_text(f"Cannot apply: {error}" + (
+                "; the launch runs on as it was" if "no longer loads" in error else ""),
+                error=True)
+        elif not edits and self.preview.file_changes is None:
+            self.preview = None
+            tree.set_preview(None)
+            panel.set_preview_text("No change from what runs now.", error=False)
         else:
             tree.set_preview(self.preview.diff)
-            panel.set_preview_text(_describe_diff(self.preview), error=False)
+            panel.set_preview_text(_describe_diff(self.preview, self.session.path),
+                                   error=False)
         self.refresh_bindings()
+
+    def tab_shown(self, pane: str) -> None:
+        super().tab_shown(pane)
+        if pane == "args" and self.supervisor is not None:
+            # the file may have been edited meanwhile: the preview says so before F5
+            self.preview_values(self.args_panel.values())
 
     @on(ArgsPanel.ApplyRequested)
     def _apply_requested(self) -> None:
         self.action_apply()
 
     def action_apply(self) -> None:
-        # the form as it is now: keys typed just before F5 may not have been previewed yet
-        self.preview_values(self.args_panel.values())
+        # the form as it is now: keys typed just before F5 may not have been previewed yet;
+        # and the file as it is now, as a new ros2 launch would read it
+        self.preview_values(self.args_panel.values(), reread=True)
         preview = self.preview
         if preview is None or preview.plan is None or preview.diff is None:
             self.notify("nothing to apply" if preview is None else
@@ -66,14 +80,29 @@ class Arguments(SessionLink):
     @work(group="relaunch", exclusive=True, exit_on_error=False)
     async def relaunch(self, preview: Preview) -> None:
         assert self.supervisor is not None
+        saved = self.session.checkpoint()
         plan = self.session.accept(preview)
         self.own_relaunch = [f"{k}:={v}" for k, v in self.session.arguments.items()]
-        diff = await self.engine.run(self.supervisor.replace_plan(plan))
+        try:
+            diff = await self.engine.run(self.supervisor.replace_plan(plan))
+        except LaunchError as exc:
+            # the session refused (its file no longer loads there): nothing changed
+            self.session.rollback(saved)
+            self.own_relaunch = None
+            message = str(exc).split(": cannot apply: ", 1)[-1]
+            self.args_panel.set_preview_text(
+                f"Not applied: {message}; the launch runs on as it was.", error=True)
+            self.notify(message, title="relaunch refused", severity="error")
+            return
         self.preview = None
         tree = self.launch_tree
         tree.set_preview(None)
         tree.show_plan(plan, self.supervisor.states)
         self.describe_waiting()
+        if _form_of(plan.arguments) != _form_of(self.args_panel.arguments):
+            # the edited file declares other arguments: the form is the new file's
+            self.args_panel.arguments = plan.arguments
+            self.args_panel.refresh(recompose=True)
         self.args_panel.set_preview_text(
             f"Applied. Stopped: {', '.join(diff.stop) or 'none'}; started: "
             f"{', '.join(diff.start) or 'none'}.", error=False)
@@ -81,19 +110,37 @@ class Arguments(SessionLink):
         self.refresh_bindings()
 
 
-def _describe_diff(preview: Preview) -> str:
+def _describe_diff(preview: Preview, path: str) -> str:
     assert preview.diff is not None and preview.plan is not None
+    text = ""
+    edit = preview.file_changes
+    if edit is not None:
+        # what the edited file alone changes, with the values that run now
+        name = os.path.basename(path)
+        text = f"{name} changed on disk: " + (_diff_words(edit, "adds", "changes", "removes")
+                                               or "no process changes") + ". "
     diff = preview.diff
     if diff.empty:
-        return "No process changes; F5 applies the new values anyway."
+        return text + "No process changes; F5 applies the new values anyway."
+    return text + _diff_words(diff, "would start", "would restart", "would stop") + \
+        ".  F5 applies."
+
+
+def _diff_words(diff: PlanDiff, start: str, restart: str, stop: str) -> str:
     stop_only = [p for p in diff.stop if p not in diff.start]
-    restart = [p for p in diff.stop if p in diff.start]
+    restarted = [p for p in diff.stop if p in diff.start]
     start_only = [p for p in diff.start if p not in diff.stop]
     parts = []
     if start_only:
-        parts.append(f"would start: {', '.join(start_only)}")
-    if restart:
-        parts.append(f"would restart: {', '.join(restart)}")
+        parts.append(f"{start}: {', '.join(start_only)}")
+    if restarted:
+        parts.append(f"{restart}: {', '.join(restarted)}")
     if stop_only:
-        parts.append(f"would stop: {', '.join(stop_only)}")
-    return "; ".join(parts) + ".  F5 applies."
+        parts.append(f"{stop}: {', '.join(stop_only)}")
+    return "; ".join(parts)
+
+
+def _form_of(arguments: list[ArgumentInfo]) -> list[tuple[object, ...]]:
+    """What the form shows of each argument, apart from the value typed."""
+    return [(a.name, a.default, a.description, a.type, tuple(a.choices or ()), a.file)
+            for a in arguments]

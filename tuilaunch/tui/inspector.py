@@ -56,6 +56,7 @@ class Inspector(Navigation):
     def tab_shown(self, pane: str) -> None:
         """Measures what the tab on screen shows, and only that: rates and echo for the
         Topics tab, CPU and memory for the Nodes tab."""
+        super().tab_shown(pane)
         self.topics_panel.set_shown(pane == "topics")
         nodes = pane == "nodes"
         if nodes != self.watching_resources and self.supervisor is not None:

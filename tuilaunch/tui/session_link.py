@@ -225,6 +225,8 @@ class SessionLink(App[int]):
         is_process = any(p.id == process for p in self.session.plan.processes)
         if event.kind == "started":
             self.asked_to_stop.discard(process)
+            # its node name is learnt again from this run's lines (a relaunch may move it)
+            self.store.reported.forget(process)
             tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
             if is_process:
                 return self.store.add_event(process, f"process started with pid [{event.pid}]")
@@ -264,6 +266,17 @@ class SessionLink(App[int]):
         self.notify(f"relaunched by another client: {' '.join(arguments) or 'defaults'}")
         self.refresh_bindings()
 
+    def say_plan_warnings(self) -> None:
+        """What the plan warns about (a mistyped argument, a missing parameter file), said
+        in the TUI: printed before it took the screen, it would only be seen after quitting."""
+        lines: list[Line] = []
+        for warning in self.session.plan.warnings:
+            lines += self.store.add_event("launch", f"warning: {warning}", WARN)
+            self.notify(warning, title="warning", severity="warning", timeout=20)
+        if lines:
+            self.output_panel.append(lines)
+            self.output_panel.flush()
+
     def update_status(self) -> None:
         if self.supervisor is None:
             return
@@ -275,7 +288,11 @@ class SessionLink(App[int]):
         order = ("running", "pending", "stopping", "exited", "failed", "respawning", "skipped")
         text = "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in order
                          if counts.get(s))
-        args = " ".join(f"{k}:={v}" for k, v in self.session.arguments.items())
+        undeclared = self.session.undeclared()
+        args = " ".join(f"{k}:={v}" for k, v in self.session.arguments.items()
+                        if k not in undeclared)
+        if undeclared:  # a typo applies nothing: said, never listed with what applies
+            args += f"  not declared: {', '.join(undeclared)}"
         prefix = ""
         if self.quitting:
             still = self.running()

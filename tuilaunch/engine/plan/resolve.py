@@ -16,6 +16,7 @@ include / event handler -> walk -> visit); its visits call each other and stay t
 from __future__ import annotations
 
 import atexit
+import difflib
 import os
 import re
 import shutil
@@ -143,9 +144,7 @@ class Resolver:
         declared = set(self.arguments)
         for name in self.cli_arguments:
             if name not in declared:
-                self.warnings.append(
-                    f"argument '{name}' is not declared by {os.path.basename(loaded.path)} "
-                    f"or its includes (declared: {', '.join(sorted(declared)) or 'none'})")
+                self.warnings.append(undeclared_warning(name, declared, loaded.path))
         plan = Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
                     root, self.params_dir, self.warnings)
         plan.entity_ids = self.entity_ids
@@ -527,3 +526,11 @@ def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
 
 
 __all__ = ["Resolver", "declared_arguments", "join_namespace", "resolve"]
+
+
+def undeclared_warning(name: str, declared: set[str], path: str) -> str:
+    """A mistyped argument (`robto:=r2`): said, with the declared name it most resembles."""
+    close = difflib.get_close_matches(name, sorted(declared), n=1)
+    guess = f"; did you mean '{close[0]}'?" if close else ""
+    return (f"argument '{name}' is not declared by {os.path.basename(path)} or its "
+            f"includes{guess} (declared: {', '.join(sorted(declared)) or 'none'})")

@@ -65,7 +65,11 @@ class Inspector(Plugin):
 
     def learn_names(self, event: Event) -> None:
         """Learns the node name a process reports in its log lines, for the nodes the launch
-        file does not name: stops reading a process's lines once one is known."""
+        file does not name: stops reading a process's lines once one is known, and starts
+        again when the process starts again (a relaunch may have moved it)."""
+        if event.kind == "started" and event.process is not None:
+            self.reported.forget(event.process)
+            return
         if event.kind != "output" or event.process is None or self.reported.get(event.process):
             return
         plan = self.supervisor.plan

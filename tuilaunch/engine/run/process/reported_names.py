@@ -3,7 +3,10 @@
 A node whose name is chosen by its own code (`Node(package=..., executable=...)` without
 `name=`) has no full name in the plan; rcutils' console format carries its logger name
 (`[INFO] [1795323834.94] [r1.talker]: ...`), which is the node's namespace and name joined by
-dots. The TUI and the session server both map such processes to graph nodes this way.
+dots. The TUI and the session server both map such processes to graph nodes this way, and
+both forget a process's names when it starts again (`forget` at its `started` event): a
+relaunch, a restart or a respawn may run it under another namespace (robot:=r1 -> r2), and
+only the lines of its current run say where it is now.
 """
 
 from __future__ import annotations
@@ -44,6 +47,12 @@ class ReportedNames:
             match = ROS_LOG_PREFIX.match(strip_ansi(raw))
             if match and match.group(3):
                 self.add_logger(process, match.group(3))
+
+    def forget(self, process: str) -> None:
+        """The process starts again: the names of its previous run no longer hold."""
+        names = self.names.get(process)
+        if names:
+            names.clear()  # in place: views hold this dict and its sets
 
     def get(self, process: str) -> set[str]:
         return self.names.get(process, set())

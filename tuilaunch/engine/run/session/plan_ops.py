@@ -1,7 +1,8 @@
 """The session's plan over the protocol, for a client that cannot read the launch file (a
 TUI on an operator's laptop, the file on the robot): `plan` sends the plan the session runs
 and its arguments; `preview {arguments, running}` says what those values would do, resolved
-here where the file, the packages and the processes are. `apply` then relaunches."""
+here where the file, the packages and the processes are (`file_changes`: the file was
+edited on disk, and what the edit alone changes). `apply` then relaunches."""
 
 from __future__ import annotations
 
@@ -32,8 +33,11 @@ def plan_handlers(session: Session) -> dict[str, Handler]:
                                  None if running is None else {str(p) for p in running})
         if result.plan is None or result.diff is None:
             return {"arguments": result.arguments, "error": result.error}
-        diff = result.diff
+        diff, edit = result.diff, result.file_changes
         return {"arguments": result.arguments, "plan": result.plan.to_json(),
-                "keep": diff.keep, "stop": diff.stop, "start": diff.start, "error": None}
+                "keep": diff.keep, "stop": diff.stop, "start": diff.start, "error": None,
+                # the launch file was edited on disk: what the edit alone changes
+                "file_changes": None if edit is None else {
+                    "keep": edit.keep, "stop": edit.stop, "start": edit.start}}
 
     return {"plan": plan, "preview": preview}

@@ -320,7 +320,9 @@ class SessionServer:
         async with self.apply_lock:
             running = {p for p, s in self.supervisor.states.items() if s == "running"}
             set_command_line(None, arguments)  # sys.argv as a file reads it, again
-            preview = self.session.preview(arguments, running)
+            # the file is read again, as a new ros2 launch would: an edited file runs, and
+            # one that no longer loads is refused while the launch runs on as it was
+            preview = self.session.preview(arguments, running, reread=True)
             if preview.error is not None or preview.plan is None:
                 raise LaunchError(f"cannot apply: {preview.error}")
             plan = self.session.accept(preview)

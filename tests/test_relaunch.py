@@ -1,0 +1,251 @@
+"""Relaunching as an operator does it: names that follow the nodes a relaunch moves, a
+launch file edited on disk, a mistyped argument, and what another client of the session sees.
+
+Real session servers running the demo's rclpy nodes (or shell processes), the TUI attached
+through Textual's pilot, and the command line run as a user types it."""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+from textual.pilot import Pilot
+from textual.widgets import Input, Static
+
+from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.dialogs import ChoiceScreen
+from tuilaunch.tui.screens.topics_panel import TopicsPanel
+
+from .conftest import run_cli
+from .test_sessions import runtime, status, tl  # noqa: F401
+from .test_tui import BRINGUP, until
+
+
+@asynccontextmanager
+async def session_tui(path: str, *args: str, wait: tuple[str, ...] = (),
+                      size: tuple[int, int] = (120, 36))\
+        -> AsyncIterator[tuple[TuiLaunchApp, Pilot, str]]:
+    """The launch in a session server (as `tuilaunch FILE` runs it), the TUI attached."""
+    name = tl(path, "--detach", *args).stdout.strip()
+    try:
+        for process in wait:
+            tl("wait", name, process, "running", "--timeout", "60")
+        info = status(name)
+        app = make_app(path, info["arguments"], Path(info["log_dir"]), session_name=name)
+        async with app.run_test(size=size) as pilot:
+            yield app, pilot, name
+    finally:
+        tl("stop", name, check=False)
+
+
+def detail(app: TuiLaunchApp) -> str:
+    return str(app.query_one("#detail", Static).render())
+
+
+def header(app: TuiLaunchApp) -> str:
+    return str(app.query_one("#status", Static).render())
+
+
+def preview_text(app: TuiLaunchApp) -> str:
+    return str(app.query_one("#args-preview", Static).render())
+
+
+async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F811
+    async with session_tui(BRINGUP, "robot:=rl1", "listener:=false", "services:=false",
+                           wait=("talker-1",)) as (app, pilot, name):
+        tree = app.launch_tree
+        await until(pilot, lambda: "talker-1" in tree.rows)
+        tree.move_cursor(tree.rows["talker-1"])
+        await until(pilot, lambda: "talker-1 (/rl1/talker)" in detail(app))
+        old_pid = status(name)["processes"][0]["pid"]
+
+        # the Args tab: robot rl1 -> rl2, F5
+        await pilot.press("2")
+        field = app.query_one("#arg-robot", Input)
+        field.focus()
+        await pilot.press("ctrl+u", *"rl2", "f5")
+        await until(pilot, lambda: app.session.arguments.get("robot") == "rl2")
+        await until(pilot, lambda: next(p for p in status(name)["processes"]
+                                        if p["id"] == "talker-1")["pid"] not in (None, old_pid),
+                    every=lambda: None)
+        await pilot.press("escape", "1")
+        tree.focus()
+        await until(pilot, lambda: "talker-1" in tree.rows)
+        tree.move_cursor(tree.rows["talker-1"])
+        # the header line and the tree follow the node to its new namespace
+        await until(pilot, lambda: "talker-1 (/rl2/talker)" in detail(app))
+        assert "robot:=rl2" in header(app)
+        assert "/rl1/" not in detail(app)
+
+        # o: the Topics tab lists the moved node's topics
+        await pilot.press("o")
+        panel = app.query_one(TopicsPanel)
+        assert app.tabs.active == "topics"
+        assert panel.node == "/rl2/talker"
+        await until(pilot, lambda: "/rl2/chatter" in panel.shown)
+        assert not any(topic.startswith("/rl1/") for topic in panel.shown)
+
+        # L: the log level question names the node where it is now
+        await pilot.press("1")
+        tree.focus()
+        tree.move_cursor(tree.rows["talker-1"])
+        await pilot.press("L")
+        await until(pilot, lambda: isinstance(app.screen, ChoiceScreen))
+        question = app.screen
+        assert isinstance(question, ChoiceScreen)
+        assert question.question.startswith("Log level of /rl2/talker (talker-1)")
+        await pilot.press("escape")
+
+    # the command line, after the relaunch, finds the node by its process id too
+    async with session_tui(BRINGUP, "robot:=rl3", "listener:=false", "services:=false",
+                           wait=("talker-1",)) as (app, pilot, name):
+        await until(pilot, lambda: "talker-1" in app.launch_tree.rows)
+        # the talker reported its name in its first line: the server learnt /rl3/talker
+        await until(pilot, lambda: "/rl3/chatter" in tl("topics", name, "--node",
+                                                        "talker-1", check=False).stdout,
+                    every=lambda: None)
+        await pilot.press("2")
+        app.query_one("#arg-robot", Input).focus()
+        await pilot.press("ctrl+u", *"rl4", "f5")
+        await until(pilot, lambda: status(name)["arguments"].get("robot") == "rl4")
+        tl("wait", name, "talker-1", "running", "--timeout", "60")
+        topics = tl("topics", name, "--node", "talker-1", check=False)
+        for _ in range(3):  # its name is learnt from its first line after the start
+            if topics.returncode == 0 and "/rl4/chatter" in topics.stdout:
+                break
+            await pilot.pause(1.0)
+            topics = tl("topics", name, "--node", "talker-1", check=False)
+        assert topics.returncode == 0, topics.stderr
+        assert "/rl4/chatter" in topics.stdout and "/rl3/" not in topics.stdout
+        dumped = tl("params", name, "talker-1", "--dump")
+        assert dumped.stdout.startswith("/rl4/talker:")
+        level = tl("log-level", name, "talker-1", "debug", check=False)
+        assert "/rl3/talker" not in level.stdout + level.stderr
+
+
+EDITABLE = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('word', 'alpha')
+    sl.add_action(ExecuteProcess(name='echo', cmd=[
+        'sh', '-c', 'echo {said} "$0"; exec sleep 600', sl.arg('word')]))
+    {extra}
+    return sl.launch_description()
+"""
+EXTRA = "sl.add_action(ExecuteProcess(name='extra', cmd=['sh', '-c', 'exec sleep 600']))"
+
+
+def pid_of(name: str, process: str) -> int | None:
+    return next(p["pid"] for p in status(name)["processes"] if p["id"] == process)
+
+
+async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_loads(
+        runtime, write):  # noqa: F811
+    path = write(EDITABLE.format(said="word", extra=""))
+    async with session_tui(str(path), wait=("echo-1",)) as (app, pilot, name):
+        first = pid_of(name, "echo-1")
+        # the operator edits the file: the echo says another thing, a process is added
+        path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+        await pilot.press("2")
+        await until(pilot, lambda: "changed on disk" in preview_text(app))
+        assert "test_launch.py changed on disk: adds: extra-2; changes: echo-1" \
+            in preview_text(app)
+        # and changes an argument too, then F5: the edited file runs, with the new value
+        app.query_one("#arg-word", Input).focus()
+        await pilot.press("ctrl+u", *"beta", "f5")
+        await until(pilot, lambda: status(name)["arguments"] == {"word": "beta"})
+        tl("wait", name, "extra-2", "running", "--timeout", "60")
+        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        assert pid_of(name, "echo-1") != first
+        await until(pilot, lambda: "said beta" in tl("logs", name, "echo-1").stdout,
+                    every=lambda: None)
+        await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
+
+        # a file that no longer loads: F5 is refused with file:line, nothing stops
+        running = {p: pid_of(name, p) for p in ("echo-1", "extra-2")}
+        path.write_text(EDITABLE.format(said="said", extra=EXTRA).replace(
+            "return sl.launch_description()", "return sl.launch_description("))
+        await pilot.press("escape", "f5")
+        await until(pilot, lambda: "no longer loads" in preview_text(app))
+        text = preview_text(app)
+        assert f"{path}:10: syntax error" in text
+        assert "the launch runs on as it was" in text
+        assert app.query_one("#args-preview").has_class("error")
+        assert {p: pid_of(name, p) for p in running} == running
+        assert status(name)["arguments"] == {"word": "beta"}
+
+
+async def test_the_session_refuses_a_relaunch_of_a_file_that_no_longer_loads(
+        runtime, write):  # noqa: F811
+    """Another client (or a TUI whose preview came before the edit) asks the server to
+    apply: the server reads the file again and refuses, with the file's line."""
+    from tuilaunch.client.link import open_link
+    from tuilaunch.engine.run.session.session_dir import SessionError
+
+    path = write(EDITABLE.format(said="word", extra=""))
+    name = tl(str(path), "--detach").stdout.strip()
+    try:
+        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        before = pid_of(name, "echo-1")
+        path.write_text(EDITABLE.format(said="word", extra="raise RuntimeError('oops')"))
+        link = open_link(name)
+        try:
+            try:
+                link.request("apply", arguments={"word": "gamma"})
+                raise AssertionError("the relaunch was applied")
+            except SessionError as exc:
+                message = str(exc)
+        finally:
+            link.close()
+        assert "cannot apply: the launch file no longer loads" in message
+        assert f"{path}:9" in message and "RuntimeError: oops" in message
+        assert pid_of(name, "echo-1") == before
+        assert status(name)["arguments"] == {}
+    finally:
+        tl("stop", name, check=False)
+
+
+TYPO = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('robot', 'r1')
+    with sl.group(ns=sl.arg('robot')):
+        sl.add_action(ExecuteProcess(name='say', cmd=['sh', '-c', 'echo in "$0"; exec sleep 600',
+                                                      sl.arg('robot')]))
+    return sl.launch_description()
+"""
+
+
+async def test_a_mistyped_argument_is_said_in_the_tui_and_not_shown_as_applied(
+        runtime, write):  # noqa: F811
+    path = write(TYPO)
+    async with session_tui(str(path), "robto:=r2", wait=("say-1",)) as (app, pilot, name):
+        await until(pilot, lambda: "say-1" in app.launch_tree.rows)
+        said = [n.message for n in app._notifications]
+        assert any("argument 'robto' is not declared by test_launch.py or its includes; "
+                   "did you mean 'robot'?" in message for message in said), said
+        # the header lists what applies, and the typo apart, never as applied
+        await until(pilot, lambda: "not declared: robto" in header(app))
+        assert "robto:=r2" not in header(app)
+        # the launch pane keeps it after the toast is gone
+        lines = [line.text for line in app.store.lines(View("launch"))]
+        assert any("did you mean 'robot'?" in line for line in lines), lines
+        assert "in r1" in tl("logs", name, "say-1").stdout
+
+
+def test_a_mistyped_argument_keeps_its_warning_line_headless_and_in_print(write):
+    path = write(TYPO.replace("exec sleep 600", "true"))
+    printed = run_cli(str(path), "robto:=r2", "--print")
+    assert printed.returncode == 0
+    assert "argument 'robto' is not declared by test_launch.py or its includes; did you mean " \
+        "'robot'?" in printed.stdout + printed.stderr
+    ran = run_cli(str(path), "robto:=r2", "--headless")
+    assert ran.returncode == 0, ran.stderr
+    assert "tuilaunch: warning: argument 'robto' is not declared by test_launch.py or its " \
+        "includes; did you mean 'robot'? (declared: robot)" in ran.stderr
