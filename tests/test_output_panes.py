@@ -73,3 +73,69 @@ def test_a_wide_character_takes_two_columns_before_a_tab():
 
     assert expand_tabs("日本\tx") == "日本    x"  # 4 columns of text, 4 of spaces
     assert expand_tabs("e\u0301\tx") == "e\u0301       x"  # a combining accent takes none
+
+
+# --- a scrolled-back view under a flood --------------------------------------------------
+
+
+def number_of(row: str) -> int:
+    return int(row.split("line ", 1)[1].split()[0])
+
+
+async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp_path):
+    # ~2,000 lines a second into a 500-line scrollback: trimmed several times a second
+    app = make_app(launch(write, ("flooder", ["2000"])), {}, tmp_path / "log",
+                   scrollback=500)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "flooder-1")
+        panel = panel_of(app)
+        view = panel.line_view
+        await until(pilot, lambda: len(view.lines) == 500)
+        view.focus()
+        await pilot.press("pageup")
+        assert not view.following
+        await pilot.pause()
+        held = rows(app)
+        assert all("line " in r for r in held)
+        # more than two scrollbacks' worth arrive below: what the user reads stays
+        await until(pilot, lambda: panel.unseen > 1200)
+        await pilot.pause(0.6)  # past a repaint
+        assert rows(app) == held
+        status = str(panel._status.render())
+        assert " new" in status and "(G" in status
+        assert len(status) <= panel._status.size.width  # fits the pane at 80 columns
+
+        # a search over what is held: its matches neither come nor go
+        await pilot.press("slash", *"00 of", "enter")
+        await until(pilot, lambda: "/00 of 1/" in str(panel._status.render()))
+        count = str(panel._status.render()).split("/00 of 1/", 1)[1].split()[0]
+        on_screen = [r for r in rows(app) if "00 of" in r]
+        assert on_screen
+        for step in range(2, 5):
+            await pilot.press("n")
+            await pilot.pause(0.3)
+            assert f"/00 of {step}/{count}" in str(panel._status.render())
+        # down past the last held line: what came meanwhile follows on, after a line
+        # saying how many did not fit aside
+        await pilot.press("escape")
+        view.focus()
+        for _ in range(60):
+            if any("lines here are only in the log file" in r for r in rows(app)):
+                break
+            await pilot.press("pagedown")
+        shown = rows(app)
+        gap = next(i for i, r in enumerate(shown) if "only in the log file" in r)
+        assert shown[gap].startswith("-- ")
+        after = [number_of(r) for r in shown[gap + 1:]]
+        assert after == list(range(after[0], after[0] + len(after)))  # none missing
+        assert not view.following
+        await pilot.press("end")
+        assert view.following
+        await until(pilot, lambda: number_of(rows(app)[-1]) > number_of(held[-1]) + 1200)
+        # down at the newest line keeps following
+        newest = number_of(rows(app)[-1])
+        await pilot.press("down", "down")
+        assert view.following
+        await until(pilot, lambda: number_of(rows(app)[-1]) > newest)
+        assert app.supervisor is not None
+        await app.engine.run(app.supervisor.shutdown("test over"))

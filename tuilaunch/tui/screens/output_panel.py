@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from rich.cells import cell_len
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
@@ -90,28 +91,39 @@ class OutputPanel(Vertical):
 
     def update_status(self) -> None:
         lines = self._lines
-        parts = [self.view.process or "all nodes", f"{LEVELS[self.view.min_level]}+"]
+        # each part in full and short: the short forms when the full line does not fit the
+        # pane's width (an 80-column terminal leaves the pane about 50)
+        parts = [(self.view.process or "all nodes",) * 2,
+                 (f"{LEVELS[self.view.min_level]}+",) * 2]
         if self.view.text:
-            parts.append(f"only '{self.view.text}'")
+            parts.append((f"only '{self.view.text}'", f"\\{self.view.text}"))
         if self.search:
             matches = lines.matches()
             where = f"{self.match_index + 1}/{len(matches)}" if matches else "no match"
-            parts.append(f"/{self.search} {where}")
+            parts.append((f"/{self.search} {where}",) * 2)
         if lines.wrap:
-            parts.append("wrap")
+            parts.append(("wrap", "z"))
         if not lines.following:
             unseen = lines.unseen
-            parts.append(f"{plural(unseen, 'new line')} (G: follow)" if unseen
-                         else "paused (G: follow)")
+            parts.append((f"{plural(unseen, 'new line')} (G: follow)", f"{unseen} new (G)")
+                         if unseen else ("paused (G: follow)", "paused (G)"))
         dropped = self.store.dropped
         hidden = dropped.total if self.view.process is None else \
             dropped.per_process.get(self.view.process, 0)
         if hidden:
-            parts.append(f"{hidden} not drawn (in log)")
-        text = "  ".join(parts)
+            parts.append((f"{hidden} not drawn (in log)", f"{hidden} not drawn"))
+        text = "  ".join(full for full, _ in parts)
+        width = self._status.size.width
+        if width and cell_len(text) > width:
+            text = " ".join(short for _, short in parts)
         if text != self._status_text:  # an unchanged line is not sent to the terminal again
             self._status_text = text
-            self._status.update(Text(text))
+            # still too long (a long node name): cut where it shows, with an ellipsis
+            self._status.update(Text(text, no_wrap=True, overflow="ellipsis"))
+
+    def on_resize(self) -> None:
+        self._status_text = ""  # measured again against the new width
+        self.call_after_refresh(self.update_status)
 
     # --- search and filters --------------------------------------------------------------
 
@@ -194,7 +206,7 @@ class OutputPanel(Vertical):
     def pane_lines(self) -> list[str]:
         """The pane's lines in full, as the processes printed them."""
         prefixed = self.view.process is None
-        return [line.formatted(prefixed) for line in self._lines.lines]
+        return [line.formatted(prefixed) for line in (*self._lines.lines, *self._lines.newer)]
 
     def pane_text(self) -> str:
         return "\n".join(self.pane_lines()) + "\n"
@@ -208,7 +220,7 @@ class OutputPanel(Vertical):
 
     def action_copy(self) -> None:
         self.app.copy_to_clipboard(self.pane_text())
-        self.notify(f"copied {len(self._lines.lines)} lines (OSC 52 clipboard)")
+        self.notify(f"copied {len(self.pane_lines())} lines (OSC 52 clipboard)")
 
 
 class NodesView(Horizontal):
