@@ -139,3 +139,53 @@ async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp
         await until(pilot, lambda: number_of(rows(app)[-1]) > newest)
         assert app.supervisor is not None
         await app.engine.run(app.supervisor.shutdown("test over"))
+
+
+# --- the pane's habits ---------------------------------------------------------------------
+
+
+async def test_an_empty_filter_says_so_and_esc_shows_all_again(write, tmp_path):
+    app = make_app(launch(write, ("tab_printer", [])), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "tab_printer-1")
+        await until(pilot, lambda: any("end" in r for r in rows(app)))
+        panel = panel_of(app)
+        await pilot.press("backslash", *"zzz", "enter")
+        await until(pilot, lambda: rows(app)[0] == "no line matches 'zzz' (esc: show all)")
+        assert "only 'zzz'" in str(panel._status.render())
+        await pilot.press("escape")
+        await until(pilot, lambda: any("PID" in r for r in rows(app)))
+        assert "only" not in str(panel._status.render())
+        # the level filter says its own word; a search that finds nothing says so too
+        await pilot.press("l", "l", "l")
+        await until(pilot, lambda: rows(app)[0] == "no line at ERROR or above (l: next level)")
+        await pilot.press("l", "l")
+        await until(pilot, lambda: any("PID" in r for r in rows(app)))
+        await pilot.press("slash", *"qqq", "enter")
+        await until(pilot, lambda: "/qqq no line matches" in str(panel._status.render()))
+        assert any("no line matches 'qqq'" in n.message for n in app._notifications)
+        assert any("PID" in r for r in rows(app))  # a search hides nothing
+        assert app.supervisor is not None
+        await app.engine.run(app.supervisor.shutdown("test over"))
+
+
+async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path):
+    missing = "no-such-program-" + "x" * 60
+    path = write(f"""
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([ExecuteProcess(name='absent', cmd=[{missing!r}])])
+        """)
+    app = make_app(str(path), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "absent-1")
+        await until(pilot, lambda: app.supervisor is not None
+                    and app.supervisor.states.get("absent-1") == "failed")
+        # the detail line wraps instead of cutting the reason at the screen's edge
+        detail = app.query_one("#detail")
+        await until(pilot, lambda: missing in str(detail.render()))
+        assert detail.size.height >= 2
+        # so does tuilaunch's own line in the pane: every part of it is on screen
+        await until(pilot, lambda: "failed:" in "".join(rows(app)))
+        assert missing in "".join(r.strip() for r in rows(app))

@@ -93,6 +93,8 @@ class LineView(Widget, can_focus=True):
         self.prefixed = True
         self.search = ""
         self.current_match: int | None = None  # absolute index
+        self.empty_text = ""
+        """Said on the first row when there is no line (a filter nothing matches)."""
         self.max_fps = max_fps
         self._dirty = False
         self._painted_at = 0.0
@@ -160,13 +162,11 @@ class LineView(Widget, can_focus=True):
 
     def _bottom(self) -> int:
         height = max(self.size.height, 1)
-        if self.wrap:
-            rows, index = 0, self.top
-            while index < self.total and rows < height:
-                rows += len(self._wrapped(index))
-                index += 1
-            return index - 1
-        return min(self.top + height - 1, self.total - 1)
+        rows, index = 0, max(self.top, self.first)
+        while index < self.total and rows < height:
+            rows += self._row_count(index)
+            index += 1
+        return index - 1
 
     # --- repainting ------------------------------------------------------------------
 
@@ -221,13 +221,27 @@ class LineView(Widget, can_focus=True):
             return [text]
         return list(text.wrap(self.app.console, width, no_wrap=False))
 
+    def _rows(self, index: int) -> list[Text]:
+        """A line's rows: tuilaunch's own lines (a death and its reason) always wrap, so
+        they are read whole at 80 columns; the others only with `z`."""
+        if self.wrap or self.lines[index - self.first].event:
+            return self._wrapped(index)
+        return [self._text(index)]
+
+    def _row_count(self, index: int) -> int:
+        if self.wrap or self.lines[index - self.first].event:
+            return len(self._wrapped(index))
+        return 1
+
     def _compose_frame(self) -> list[Strip]:
         width, height = self.size.width, self.size.height
         rows: list[Text] = []
-        if self.following:
+        if not self.lines and self.empty_text:
+            rows.append(Text(self.empty_text, "italic", no_wrap=True, end=""))
+        elif self.following:
             index = self.total - 1
             while index >= self.first and len(rows) < height:
-                rows[0:0] = self._wrapped(index) if self.wrap else [self._text(index)]
+                rows[0:0] = self._rows(index)
                 index -= 1
             rows = rows[-height:] if rows else rows
             self.top = index + 1 if self.total else 0
@@ -235,7 +249,7 @@ class LineView(Widget, can_focus=True):
             self.top = max(min(self.top, self.total - 1), self.first)
             index = self.top
             while index < self.total and len(rows) < height:
-                rows += self._wrapped(index) if self.wrap else [self._text(index)]
+                rows += self._rows(index)
                 index += 1
             rows = rows[:height]
         base = self.rich_style

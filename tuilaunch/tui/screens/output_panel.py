@@ -75,11 +75,23 @@ class OutputPanel(Vertical):
         self._rebuild()
 
     def _rebuild(self) -> None:
+        self._lines.empty_text = self._nothing_shown()
         self._lines.reset(self.store.lines(self.view))
         if self.search:
             self._lines.search = self.search
         self.match_index = -1
         self.update_status()
+
+    def _nothing_shown(self) -> str:
+        """What an empty pane says: which filter hides every line, and the key that
+        undoes it."""
+        level = self.view.min_level
+        if self.view.text:
+            which = f"no {LEVELS[level]}+ line" if level else "no line"
+            return f"{which} matches '{self.view.text}' (esc: show all)"
+        if level:
+            return f"no line at {LEVELS[level]} or above (l: next level)"
+        return ""
 
     def append(self, lines: list[Line]) -> None:
         self._lines.append([line for line in lines if self.view.accepts(line)])
@@ -99,7 +111,8 @@ class OutputPanel(Vertical):
             parts.append((f"only '{self.view.text}'", f"\\{self.view.text}"))
         if self.search:
             matches = lines.matches()
-            where = f"{self.match_index + 1}/{len(matches)}" if matches else "no match"
+            where = f"{self.match_index + 1}/{len(matches)}" if matches else \
+                "no line matches"
             parts.append((f"/{self.search} {where}",) * 2)
         if lines.wrap:
             parts.append(("wrap", "z"))
@@ -156,15 +169,21 @@ class OutputPanel(Vertical):
         self.match_index = -1
         if term:
             self.action_next_match()
+            if not self._lines.matches():
+                self.notify(f"no line matches '{term}'", severity="warning")
         self.update_status()
 
     def action_clear_search(self) -> None:
-        """Escape: closes an open field, else clears the search."""
+        """Escape: closes an open field, else clears the search and the text filter."""
         open_fields = [f for f in self.query(Field) if f.has_class("shown")]
         for field in open_fields:
             field.remove_class("shown")
         if not open_fields:
-            self.set_search("")
+            if self.search:
+                self.set_search("")
+            if self.view.text:
+                self.view.text = ""
+                self._rebuild()
         self.update_status()
 
     def _jump(self, step: int) -> None:
