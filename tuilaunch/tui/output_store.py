@@ -12,7 +12,7 @@ from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from ..engine.run.process.output import strip_ansi
+from ..engine.run.process.output import expand_tabs, strip_ansi
 from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
@@ -25,7 +25,7 @@ _ROS_PREFIX = ROS_LOG_PREFIX
 @dataclass(frozen=True, slots=True)
 class Line:
     process: str
-    text: str  # as the process printed it, without colour codes
+    text: str  # as the process printed it, without colour codes, tabs expanded
     level: int  # index into LEVELS
     stamp: float = 0.0  # the ROS stamp when the line has one, else the arrival time
     body: int = 0  # where the message starts after the `[LEVEL] [stamp] [logger]:` prefix
@@ -51,7 +51,10 @@ def level_of(text: str, stream: str) -> int:
 
 def parse(process: str, raw: str, stream: str, now: float) -> tuple[Line, str | None]:
     """A Line, and the logger name it reports (`r1.talker`), if it has the ROS prefix."""
-    text = strip_ansi(raw)  # colours are shown by level, never as raw escapes
+    # colours are shown by level, never as raw escapes; tabs become spaces once, here, on
+    # arrival, after the colour codes (which take no columns) are gone: every repaint,
+    # search highlight, pan and wrap then measures the text as drawn
+    text = expand_tabs(strip_ansi(raw))
     match = _ROS_PREFIX.match(text)
     if not match:
         return Line(process, text, WARN if stream == "stderr" else INFO, now), None
@@ -106,7 +109,8 @@ class OutputStore:
 
     def add_event(self, process: str, text: str, level: int = INFO) -> list[Line]:
         """A line from tuilaunch about the process (it started, died, respawns)."""
-        return self._keep(process, [Line(process, text, level, time.time(), 0, True)])
+        return self._keep(process, [Line(process, expand_tabs(text), level, time.time(), 0,
+                                         True)])
 
     def count_dropped(self, process: str, count: int) -> None:
         self.dropped.per_process[process] = self.dropped.per_process.get(process, 0) + count

@@ -5,6 +5,11 @@ position, so nothing looks changed) and repaints its scrollbar with every line. 
 draws only its visible rows, has no scrollbar (the pane's status line says where you are),
 and repaints only when `flush` finds a change, at most `max_fps` times a second, so a
 terminal over ssh receives what changed on screen and nothing else.
+
+Scrolled back, the view holds still: its lines are frozen while the user reads, so a flood
+neither trims what is on screen nor moves a search's matches. What arrives meanwhile waits
+aside (the newest `max_lines` of it; the log files keep every line) and joins when the user
+moves down past the last frozen line or follows again (`G`, `end`).
 """
 
 from __future__ import annotations
@@ -75,6 +80,10 @@ class LineView(Widget, can_focus=True):
         super().__init__(**kwargs)  # type: ignore[arg-type]
         self.lines: deque[Line] = deque(maxlen=max_lines)
         self.total = 0  # lines ever appended: absolute indices stay valid while trimming
+        self.newer: deque[Line] = deque(maxlen=max_lines)
+        """Lines that came while scrolled back: kept aside so the view holds still."""
+        self.skipped = 0
+        """Lines that came while scrolled back and did not fit aside (all in the log files)."""
         self.following = True
         self.top = 0  # absolute index of the first visible line when not following
         self.x = 0
@@ -84,6 +93,8 @@ class LineView(Widget, can_focus=True):
         self.prefixed = True
         self.search = ""
         self.current_match: int | None = None  # absolute index
+        self.empty_text = ""
+        """Said on the first row when there is no line (a filter nothing matches)."""
         self.max_fps = max_fps
         self._dirty = False
         self._painted_at = 0.0
@@ -102,6 +113,8 @@ class LineView(Widget, can_focus=True):
     def reset(self, lines: Iterable[Line]) -> None:
         self.lines.clear()
         self.lines.extend(lines)
+        self.newer.clear()
+        self.skipped = 0
         self.total = len(self.lines)
         self.following = True
         self.x = 0
@@ -111,30 +124,49 @@ class LineView(Widget, can_focus=True):
     def append(self, lines: list[Line]) -> None:
         if not lines:
             return
-        visible_before = self.following or self._bottom() >= self.total - 1
+        if not self.following and (self.newer or len(self.lines) + len(lines)
+                                   > max(self.size.height, 1)):
+            # scrolled back over a full screen: what the user reads stays; the lines wait
+            self.skipped += max(len(self.newer) + len(lines) - (self.newer.maxlen or 0), 0)
+            self.newer.extend(lines)
+            return
         self.lines.extend(lines)
         self.total += len(lines)
-        if not self.following and self.top < self.first:
-            # what was on screen has been trimmed away: stay at the oldest line kept
-            self.top = self.first
-            self._dirty = True
-        if self.following or visible_before:
-            self._dirty = True  # otherwise nothing visible changed: only the count did
+        self._dirty = True
+
+    def thaw(self, count: int | None = None) -> None:
+        """The oldest `count` lines that waited (all when None) join the view, after a line
+        saying how many did not fit aside (the log files have them). A few at a time as
+        the user moves down, so the lines on screen are not trimmed away."""
+        if not self.newer and not self.skipped:
+            return
+        waiting: list[Line] = []
+        if self.skipped:
+            process = self.newer[0].process if self.newer else "launch"
+            waiting.append(Line(process, f"{self.skipped} lines here are only in the "
+                                         "log file", 0, time.time(), 0, True))
+            self.skipped = 0
+        take = len(self.newer) if count is None else min(count, len(self.newer))
+        waiting += [self.newer.popleft() for _ in range(take)]
+        self.lines.extend(waiting)
+        self.total += len(waiting)
+        self.top = max(self.top, self.first)
+        self._dirty = True
 
     @property
     def unseen(self) -> int:
         """Lines below the last one on screen (exact, whatever was trimmed meanwhile)."""
-        return 0 if self.following else max(self.total - 1 - self._bottom(), 0)
+        if self.following:
+            return 0
+        return max(self.total - 1 - self._bottom(), 0) + len(self.newer) + self.skipped
 
     def _bottom(self) -> int:
         height = max(self.size.height, 1)
-        if self.wrap:
-            rows, index = 0, self.top
-            while index < self.total and rows < height:
-                rows += len(self._wrapped(index))
-                index += 1
-            return index - 1
-        return min(self.top + height - 1, self.total - 1)
+        rows, index = 0, max(self.top, self.first)
+        while index < self.total and rows < height:
+            rows += self._row_count(index)
+            index += 1
+        return index - 1
 
     # --- repainting ------------------------------------------------------------------
 
@@ -189,13 +221,27 @@ class LineView(Widget, can_focus=True):
             return [text]
         return list(text.wrap(self.app.console, width, no_wrap=False))
 
+    def _rows(self, index: int) -> list[Text]:
+        """A line's rows: tuilaunch's own lines (a death and its reason) always wrap, so
+        they are read whole at 80 columns; the others only with `z`."""
+        if self.wrap or self.lines[index - self.first].event:
+            return self._wrapped(index)
+        return [self._text(index)]
+
+    def _row_count(self, index: int) -> int:
+        if self.wrap or self.lines[index - self.first].event:
+            return len(self._wrapped(index))
+        return 1
+
     def _compose_frame(self) -> list[Strip]:
         width, height = self.size.width, self.size.height
         rows: list[Text] = []
-        if self.following:
+        if not self.lines and self.empty_text:
+            rows.append(Text(self.empty_text, "italic", no_wrap=True, end=""))
+        elif self.following:
             index = self.total - 1
             while index >= self.first and len(rows) < height:
-                rows[0:0] = self._wrapped(index) if self.wrap else [self._text(index)]
+                rows[0:0] = self._rows(index)
                 index -= 1
             rows = rows[-height:] if rows else rows
             self.top = index + 1 if self.total else 0
@@ -203,7 +249,7 @@ class LineView(Widget, can_focus=True):
             self.top = max(min(self.top, self.total - 1), self.first)
             index = self.top
             while index < self.total and len(rows) < height:
-                rows += self._wrapped(index) if self.wrap else [self._text(index)]
+                rows += self._rows(index)
                 index += 1
             rows = rows[:height]
         base = self.rich_style
@@ -237,17 +283,23 @@ class LineView(Widget, can_focus=True):
         return self.top
 
     def scroll_to_line(self, index: int) -> None:
-        """Shows line `index` (absolute) near the middle; leaves follow unless at the end."""
+        """Shows line `index` (absolute) near the middle, and holds it there: a flood does
+        not carry it away (`G` follows again)."""
         height = max(self.size.height, 1)
-        self.top = max(index - height // 2, self.first)
-        self.following = self.top + height >= self.total and not self.wrap
+        self._visible_top()
+        self.following = False
+        self.top = max(min(index - height // 2, self.total - height), self.first)
         self._invalidate(now=True)
 
     def action_scroll(self, step: int) -> None:
         top = self._visible_top()
+        if self.following and step > 0:
+            return  # already at the newest line: stay there, following
+        if step > 0 and self._bottom() + step >= self.total:
+            self.thaw(step)  # moving past the last frozen line: what waited comes next
         self.top = max(min(top + step, self.total - 1), self.first)
         # at the newest line (scrolled back down, or nothing to scroll): follow
-        self.following = self._bottom() >= self.total - 1
+        self.following = self._bottom() >= self.total - 1 and not self.newer
         self._moved()
 
     def action_page(self, direction: int) -> None:
@@ -259,6 +311,7 @@ class LineView(Widget, can_focus=True):
         self._moved()
 
     def action_follow(self) -> None:
+        self.thaw()
         self.following = True
         self._moved()
 

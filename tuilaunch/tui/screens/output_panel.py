@@ -5,6 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from rich.cells import cell_len
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
@@ -74,11 +75,23 @@ class OutputPanel(Vertical):
         self._rebuild()
 
     def _rebuild(self) -> None:
+        self._lines.empty_text = self._nothing_shown()
         self._lines.reset(self.store.lines(self.view))
         if self.search:
             self._lines.search = self.search
         self.match_index = -1
         self.update_status()
+
+    def _nothing_shown(self) -> str:
+        """What an empty pane says: which filter hides every line, and the key that
+        undoes it."""
+        level = self.view.min_level
+        if self.view.text:
+            which = f"no {LEVELS[level]}+ line" if level else "no line"
+            return f"{which} matches '{self.view.text}' (esc: show all)"
+        if level:
+            return f"no line at {LEVELS[level]} or above (l: next level)"
+        return ""
 
     def append(self, lines: list[Line]) -> None:
         self._lines.append([line for line in lines if self.view.accepts(line)])
@@ -90,28 +103,40 @@ class OutputPanel(Vertical):
 
     def update_status(self) -> None:
         lines = self._lines
-        parts = [self.view.process or "all nodes", f"{LEVELS[self.view.min_level]}+"]
+        # each part in full and short: the short forms when the full line does not fit the
+        # pane's width (an 80-column terminal leaves the pane about 50)
+        parts = [(self.view.process or "all nodes",) * 2,
+                 (f"{LEVELS[self.view.min_level]}+",) * 2]
         if self.view.text:
-            parts.append(f"only '{self.view.text}'")
+            parts.append((f"only '{self.view.text}'", f"\\{self.view.text}"))
         if self.search:
             matches = lines.matches()
-            where = f"{self.match_index + 1}/{len(matches)}" if matches else "no match"
-            parts.append(f"/{self.search} {where}")
+            where = f"{self.match_index + 1}/{len(matches)}" if matches else \
+                "no line matches"
+            parts.append((f"/{self.search} {where}",) * 2)
         if lines.wrap:
-            parts.append("wrap")
+            parts.append(("wrap", "z"))
         if not lines.following:
             unseen = lines.unseen
-            parts.append(f"{plural(unseen, 'new line')} (G: follow)" if unseen
-                         else "paused (G: follow)")
+            parts.append((f"{plural(unseen, 'new line')} (G: follow)", f"{unseen} new (G)")
+                         if unseen else ("paused (G: follow)", "paused (G)"))
         dropped = self.store.dropped
         hidden = dropped.total if self.view.process is None else \
             dropped.per_process.get(self.view.process, 0)
         if hidden:
-            parts.append(f"{hidden} not drawn (in log)")
-        text = "  ".join(parts)
+            parts.append((f"{hidden} not drawn (in log)", f"{hidden} not drawn"))
+        text = "  ".join(full for full, _ in parts)
+        width = self._status.size.width
+        if width and cell_len(text) > width:
+            text = " ".join(short for _, short in parts)
         if text != self._status_text:  # an unchanged line is not sent to the terminal again
             self._status_text = text
-            self._status.update(Text(text))
+            # still too long (a long node name): cut where it shows, with an ellipsis
+            self._status.update(Text(text, no_wrap=True, overflow="ellipsis"))
+
+    def on_resize(self) -> None:
+        self._status_text = ""  # measured again against the new width
+        self.call_after_refresh(self.update_status)
 
     # --- search and filters --------------------------------------------------------------
 
@@ -144,15 +169,21 @@ class OutputPanel(Vertical):
         self.match_index = -1
         if term:
             self.action_next_match()
+            if not self._lines.matches():
+                self.notify(f"no line matches '{term}'", severity="warning")
         self.update_status()
 
     def action_clear_search(self) -> None:
-        """Escape: closes an open field, else clears the search."""
+        """Escape: closes an open field, else clears the search and the text filter."""
         open_fields = [f for f in self.query(Field) if f.has_class("shown")]
         for field in open_fields:
             field.remove_class("shown")
         if not open_fields:
-            self.set_search("")
+            if self.search:
+                self.set_search("")
+            if self.view.text:
+                self.view.text = ""
+                self._rebuild()
         self.update_status()
 
     def _jump(self, step: int) -> None:
@@ -194,7 +225,7 @@ class OutputPanel(Vertical):
     def pane_lines(self) -> list[str]:
         """The pane's lines in full, as the processes printed them."""
         prefixed = self.view.process is None
-        return [line.formatted(prefixed) for line in self._lines.lines]
+        return [line.formatted(prefixed) for line in (*self._lines.lines, *self._lines.newer)]
 
     def pane_text(self) -> str:
         return "\n".join(self.pane_lines()) + "\n"
@@ -208,7 +239,7 @@ class OutputPanel(Vertical):
 
     def action_copy(self) -> None:
         self.app.copy_to_clipboard(self.pane_text())
-        self.notify(f"copied {len(self._lines.lines)} lines (OSC 52 clipboard)")
+        self.notify(f"copied {len(self.pane_lines())} lines (OSC 52 clipboard)")
 
 
 class NodesView(Horizontal):

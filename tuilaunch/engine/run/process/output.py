@@ -1,12 +1,14 @@
-"""Turning a process's raw bytes into lines: partial lines, `\\r` progress, bad UTF-8.
+"""Turning a process's raw bytes into lines: partial lines, `\\r` progress, bad UTF-8, tabs.
 
 Log files keep each line's bytes as the process wrote them (`feed_raw`); what a screen
-shows is cleaned once, here (`screen_text`).
+shows is cleaned once, here (`screen_text`, and `expand_tabs` once its colour codes are
+gone).
 """
 
 from __future__ import annotations
 
 import re
+import unicodedata
 
 ANSI = re.compile(r"\x1b\[[0-9;?]*[ -/]*[@-~]|\x1b\][^\x07]*\x07")
 MAX_LINE = 64 * 1024
@@ -14,6 +16,42 @@ MAX_LINE = 64 * 1024
 
 def strip_ansi(text: str) -> str:
     return ANSI.sub("", text)
+
+
+TAB_STOP = 8
+"""A terminal's tab stops: every 8 columns."""
+
+
+def cell_width(char: str) -> int:
+    """Columns a character takes on a terminal: 2 for a wide one (CJK), 0 for a combining
+    mark, else 1."""
+    if char.isascii():
+        return 1
+    if unicodedata.combining(char):
+        return 0
+    return 2 if unicodedata.east_asian_width(char) in "WF" else 1
+
+
+def expand_tabs(text: str) -> str:
+    """Each tab as the spaces to the next 8-column stop, as a terminal moves the cursor:
+    gdb's `120\t../sysdeps/...` and ps's tables line up, and a screen drawing the line
+    never meets a tab (whose width it does not know). Columns count cells: a wide
+    character takes two. Call it on a line without colour codes (they take no columns)."""
+    if "\t" not in text:
+        return text
+    if text.isascii():
+        return text.expandtabs(TAB_STOP)
+    out: list[str] = []
+    column = 0
+    for char in text:
+        if char == "\t":
+            spaces = TAB_STOP - column % TAB_STOP
+            out.append(" " * spaces)
+            column += spaces
+        else:
+            out.append(char)
+            column += cell_width(char)
+    return "".join(out)
 
 
 def screen_text(raw: bytes) -> str:

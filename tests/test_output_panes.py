@@ -1,0 +1,191 @@
+"""The output panes as a user reads them, against real processes: tabs line up as in a
+terminal, a scrolled-back view holds still under a flood, the pane's habits (follow, Esc,
+an empty result, a status that fits), and typing into a node that prompts without a
+newline."""
+
+from __future__ import annotations
+
+from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.screens.output_panel import OutputPanel
+
+from .terminal_harness import PROGRAMS
+from .test_tui import until
+
+LAUNCH = f"""
+import sys
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+PROGRAMS = {str(PROGRAMS)!r}
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(name=name, cmd=[sys.executable, PROGRAMS + '/' + name + '.py', *args],
+                       output='screen')
+        for name, args in {{programs}}])
+"""
+
+
+def launch(write, *programs: tuple[str, list[str]]) -> str:
+    return str(write(LAUNCH.replace("{programs}", repr(list(programs)))))
+
+
+def panel_of(app: TuiLaunchApp) -> OutputPanel:
+    return app.query_one(OutputPanel)
+
+
+def rows(app: TuiLaunchApp) -> list[str]:
+    """The pane's rows as the user reads them."""
+    return panel_of(app).line_view.visible_text()
+
+
+async def select(app: TuiLaunchApp, pilot, process: str) -> None:
+    tree = app.launch_tree
+    await until(pilot, lambda: process in tree.rows)
+    tree.move_cursor(tree.rows[process])
+    await until(pilot, lambda: panel_of(app).view.process == process)
+
+
+# --- tabs ---------------------------------------------------------------------------------
+
+
+async def test_tabs_line_up_at_8_columns_as_in_a_terminal(write, tmp_path):
+    app = make_app(launch(write, ("tab_printer", [])), {}, tmp_path / "log")
+    async with app.run_test(size=(120, 24)) as pilot:
+        await select(app, pilot, "tab_printer-1")
+        await until(pilot, lambda: any("end" in r for r in rows(app)))
+        shown = [r.split(" ", 1)[1] for r in rows(app) if r.startswith("I ")]
+        # each cell starts on the column a terminal's 8-column tab stops put it
+        assert shown == [
+            "120     ../sysdeps/unix/sysv/linux/nanosleep.c: No such file or directory.",
+            "PID     TTY     TIME    CMD",
+            "1       pts/0   00:00:01        bash",
+            "12345678        pts/12  00:00:00        ps",
+            "ab      cd      end",
+        ]
+        # the log file keeps the line as it was printed
+        log = next((tmp_path / "log").rglob("tab_printer-1*.log")).read_text()
+        assert "120\t../sysdeps/" in log
+        assert app.supervisor is not None
+        await app.engine.run(app.supervisor.shutdown("test over"))
+
+
+def test_a_wide_character_takes_two_columns_before_a_tab():
+    from tuilaunch.engine.run.process.output import expand_tabs
+
+    assert expand_tabs("日本\tx") == "日本    x"  # 4 columns of text, 4 of spaces
+    assert expand_tabs("e\u0301\tx") == "e\u0301       x"  # a combining accent takes none
+
+
+# --- a scrolled-back view under a flood --------------------------------------------------
+
+
+def number_of(row: str) -> int:
+    return int(row.split("line ", 1)[1].split()[0])
+
+
+async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp_path):
+    # ~2,000 lines a second into a 500-line scrollback: trimmed several times a second
+    app = make_app(launch(write, ("flooder", ["2000"])), {}, tmp_path / "log",
+                   scrollback=500)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "flooder-1")
+        panel = panel_of(app)
+        view = panel.line_view
+        await until(pilot, lambda: len(view.lines) == 500)
+        view.focus()
+        await pilot.press("pageup")
+        assert not view.following
+        await pilot.pause()
+        held = rows(app)
+        assert all("line " in r for r in held)
+        # more than two scrollbacks' worth arrive below: what the user reads stays
+        await until(pilot, lambda: panel.unseen > 1200)
+        await pilot.pause(0.6)  # past a repaint
+        assert rows(app) == held
+        status = str(panel._status.render())
+        assert " new" in status and "(G" in status
+        assert len(status) <= panel._status.size.width  # fits the pane at 80 columns
+
+        # a search over what is held: its matches neither come nor go
+        await pilot.press("slash", *"00 of", "enter")
+        await until(pilot, lambda: "/00 of 1/" in str(panel._status.render()))
+        count = str(panel._status.render()).split("/00 of 1/", 1)[1].split()[0]
+        on_screen = [r for r in rows(app) if "00 of" in r]
+        assert on_screen
+        for step in range(2, 5):
+            await pilot.press("n")
+            await pilot.pause(0.3)
+            assert f"/00 of {step}/{count}" in str(panel._status.render())
+        # down past the last held line: what came meanwhile follows on, after a line
+        # saying how many did not fit aside
+        await pilot.press("escape")
+        view.focus()
+        for _ in range(60):
+            if any("lines here are only in the log file" in r for r in rows(app)):
+                break
+            await pilot.press("pagedown")
+        shown = rows(app)
+        gap = next(i for i, r in enumerate(shown) if "only in the log file" in r)
+        assert shown[gap].startswith("-- ")
+        after = [number_of(r) for r in shown[gap + 1:]]
+        assert after == list(range(after[0], after[0] + len(after)))  # none missing
+        assert not view.following
+        await pilot.press("end")
+        assert view.following
+        await until(pilot, lambda: number_of(rows(app)[-1]) > number_of(held[-1]) + 1200)
+        # down at the newest line keeps following
+        newest = number_of(rows(app)[-1])
+        await pilot.press("down", "down")
+        assert view.following
+        await until(pilot, lambda: number_of(rows(app)[-1]) > newest)
+        assert app.supervisor is not None
+        await app.engine.run(app.supervisor.shutdown("test over"))
+
+
+# --- the pane's habits ---------------------------------------------------------------------
+
+
+async def test_an_empty_filter_says_so_and_esc_shows_all_again(write, tmp_path):
+    app = make_app(launch(write, ("tab_printer", [])), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "tab_printer-1")
+        await until(pilot, lambda: any("end" in r for r in rows(app)))
+        panel = panel_of(app)
+        await pilot.press("backslash", *"zzz", "enter")
+        await until(pilot, lambda: rows(app)[0] == "no line matches 'zzz' (esc: show all)")
+        assert "only 'zzz'" in str(panel._status.render())
+        await pilot.press("escape")
+        await until(pilot, lambda: any("PID" in r for r in rows(app)))
+        assert "only" not in str(panel._status.render())
+        # the level filter says its own word; a search that finds nothing says so too
+        await pilot.press("l", "l", "l")
+        await until(pilot, lambda: rows(app)[0] == "no line at ERROR or above (l: next level)")
+        await pilot.press("l", "l")
+        await until(pilot, lambda: any("PID" in r for r in rows(app)))
+        await pilot.press("slash", *"qqq", "enter")
+        await until(pilot, lambda: "/qqq no line matches" in str(panel._status.render()))
+        assert any("no line matches 'qqq'" in n.message for n in app._notifications)
+        assert any("PID" in r for r in rows(app))  # a search hides nothing
+        assert app.supervisor is not None
+        await app.engine.run(app.supervisor.shutdown("test over"))
+
+
+async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path):
+    missing = "no-such-program-" + "x" * 60
+    path = write(f"""
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([ExecuteProcess(name='absent', cmd=[{missing!r}])])
+        """)
+    app = make_app(str(path), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "absent-1")
+        await until(pilot, lambda: app.supervisor is not None
+                    and app.supervisor.states.get("absent-1") == "failed")
+        # the detail line wraps instead of cutting the reason at the screen's edge
+        detail = app.query_one("#detail")
+        await until(pilot, lambda: missing in str(detail.render()))
+        assert detail.size.height >= 2
+        # so does tuilaunch's own line in the pane: every part of it is on screen
+        await until(pilot, lambda: "failed:" in "".join(rows(app)))
+        assert missing in "".join(r.strip() for r in rows(app))
