@@ -30,6 +30,7 @@ from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
 from .arguments import Arguments
 from .inspector import Inspector
+from .key_order import KeyOrder
 from .keyboard import NodeKeyboard
 from .navigation import Navigation
 from .node_commands import NodeCommands
@@ -54,10 +55,11 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments, Quitting):
+class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments, Quitting,
+                   KeyOrder):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
     concern does lives in its mixin (session_link, node_commands, navigation, arguments,
-    quitting, inspector)."""
+    quitting, inspector); key_order hands the keys out one after the other."""
 
     CSS_PATH = "screens/app.tcss"
     TITLE = "tuilaunch"
@@ -86,6 +88,11 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 "opens it again"),
         Binding("R", "reconnect", "Reconnect", show=False,
                 tooltip="Reconnect a dropped link to the session's machine now"),
+        # named here, ctrl+p too: Textual adds its own only when no binding opens the palette
+        Binding("ctrl+p", "command_palette", "palette", show=False, priority=True,
+                tooltip="Open the command palette"),
+        Binding("colon", "command_palette", "Commands", show=False,
+                tooltip="The command palette, as ctrl+p (as in vim, k9s)"),
         Binding("question_mark", "help", "Help"),
         Binding("q", "request_quit", "Quit"),
         Binding("ctrl+c", "request_quit", "Quit", show=False, priority=True),

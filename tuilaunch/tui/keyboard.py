@@ -5,6 +5,7 @@ in-process supervisor."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from rich.text import Text
@@ -13,6 +14,7 @@ from textual.binding import Binding
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.run.supervisor.supervisor import Event
+from .key_order import hold_keys
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TypingLine
 from .session_link import SessionLink
@@ -75,20 +77,25 @@ class NodeKeyboard(SessionLink):
             self.notify(f"{process} is not running ({state}): there is nothing to type into",
                         severity="warning")
             return
-        self.run_worker(self._take_keyboard(process), group="typing", exit_on_error=False)
+        # the keys typed right after `i` are for the node: they wait for its typing line
+        release = hold_keys(self)
+        self.run_worker(self._take_keyboard(process, release), group="typing",
+                        exit_on_error=False)
 
-    async def _take_keyboard(self, process: str) -> None:
+    async def _take_keyboard(self, process: str, release: Callable[[], None]) -> None:
         try:
             await self.engine.run(take_keyboard(self.supervisor, process))
         except LaunchError as exc:
+            release()
             self.notify(str(exc), severity="error")
             return
         self.typing_to = process
         self.typed_line = ""
         line = TypingLine(self._typed, id="typing-line")
         self._typing_line = line
-        self.query_one("#nodes-tab").mount(line, before="#nodes-split")
-        line.focus()
+        await self.query_one("#nodes-tab").mount(line, before="#nodes-split")
+        self.screen.set_focus(line)
+        release()
         self._show_typing()
         self.refresh_bindings()
 

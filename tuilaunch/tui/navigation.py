@@ -7,6 +7,7 @@ from textual.screen import ModalScreen
 from textual.widget import Widget
 from textual.widgets import Button, OptionList, TabbedContent, TabPane
 
+from .key_order import reroute_key
 from .screens.dialogs import HelpScreen
 from .screens.fields import Field, after_escape
 from .screens.params_panel import ParamsPanel
@@ -36,7 +37,7 @@ class Navigation(SessionLink):
             self.action_tab(("nodes", "args", "services", "params", "topics")[
                 int(following.key) - 1])
         else:
-            self.post_message(following)
+            reroute_key(self, following)
 
     def action_leave_field(self) -> None:
         """Escape in a text field: out of it, to where the tab's work starts, so the next

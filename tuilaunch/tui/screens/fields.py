@@ -17,6 +17,8 @@ from textual import events
 from textual.keys import _character_to_key
 from textual.widgets import Input
 
+from ..key_order import reroute_key
+
 # Textual reads ESC and a digit arriving in one read (esc then 3, typed fast over ssh or sent
 # by tmux) as the character macOS's option key gives: in a field that is "leave, then 3"
 ESC_DIGITS = {"¡": "1", "™": "2", "£": "3", "¢": "4", "∞": "5", "§": "6", "¶": "7",
@@ -53,7 +55,7 @@ class Field(Input):
         if self.screen.focused is not self:
             event.stop()
             event.prevent_default()
-            self.app.post_message(events.Key(event.key, event.character))
+            reroute_key(self.app, events.Key(event.key, event.character))
             return
         if event.key == "enter" and self.leave_on_enter:
             event.stop()
@@ -67,7 +69,7 @@ class Field(Input):
             event.prevent_default()
             await self.run_action("app.leave_field")
             if following is not None:
-                self.app.post_message(following)
+                reroute_key(self.app, following)
             return
         if event.is_printable:
             await super()._on_key(event)

@@ -1,0 +1,235 @@
+"""Keys are handled one after the other, each where the focus is once the key before it is done.
+
+Textual forwards each key to the widget focused when the app reads it, then handles it
+later, as it bubbles from that widget's message queue to the app, where the bindings run.
+Keys that arrive in one read (over ssh, pasted, sent by tmux) are all forwarded before the
+first of them has run: after `/` opens the search field, the `s` of `/set` had already
+been sent to the tree, and reached the app's `s` binding (stop the node) instead of the
+field. Here a key's trip is tracked, and the keys that arrive meanwhile wait; the next one
+goes out once the trip is over and what it set in motion (a focus change, a dialog being
+pushed, a field being mounted) has been processed, so it is sent to the widget that has
+the focus then. An action that opens its field later (after a worker) holds the keys
+until then (`hold_keys`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from textual import events
+from textual._context import active_message_pump
+from textual.app import App
+from textual.message_pump import MessagePump
+from textual.widget import Widget
+
+STUCK_AFTER = 3.0
+"""Seconds after which a key whose trip never reported its end no longer holds the others
+back (a widget removed with the key in its queue): the keys go on as Textual sends them."""
+
+
+class TrackedKey(events.Key):
+    """A key on its trip through the widgets; tells the app when the trip is over."""
+
+    def __init__(self, key: str, character: str | None, done: Callable[[TrackedKey], None])\
+            -> None:
+        super().__init__(key, character)
+        self._done = done
+        self._finished = False
+        self.holder: MessagePump | None = None
+        """The widget (or screen, or app) whose queue the key is in, or that handles it."""
+
+    def finish(self) -> None:
+        if not self._finished:
+            self._finished = True
+            self._done(self)
+
+    def stop(self, stop: bool = True) -> TrackedKey:
+        super().stop(stop)
+        if stop:  # its trip ends where it is handled, once the handler returns
+            pump = active_message_pump.get(None)
+            if pump is None:
+                self.finish()
+            else:
+                pump.call_next(self.finish)
+        return self
+
+    def _bubble_to(self, widget: MessagePump) -> None:
+        self.holder = widget
+        super()._bubble_to(widget)
+
+    def _set_forwarded(self) -> None:
+        super()._set_forwarded()
+        if self.holder is None:
+            self.holder = forward_target(self)
+
+
+TrackedKey.handler_name = "on_key"  # handled as the key it is: on_key, key_..., bindings
+
+
+def forward_target(key: events.Key) -> MessagePump | None:
+    app = active_message_pump.get(None)
+    if isinstance(app, App):
+        return app.focused or app.screen
+    return None
+
+
+class KeyOrder(App[int]):
+    """The app's side: keys wait their turn; `reroute_key` puts a key back first in line."""
+
+    def __init__(self, *args: Any, **options: Any) -> None:
+        super().__init__(*args, **options)
+        self._key_in_flight: events.Key | None = None
+        """The key on its trip, or the one released to go next (then not yet tracked)."""
+        self._key_started = 0.0
+        self._keys_waiting: deque[events.Key] = deque()
+        self._first_in_line = 0
+        """Where a rerouted key goes in the waiting line: after those rerouted by the same
+        key, before the keys read after it."""
+        self._key_holds = 0
+        self._stuck_timer: Any = None
+        self._settling: asyncio.Task[None] | None = None
+
+    async def on_event(self, event: events.Event) -> None:
+        if not isinstance(event, events.Key):
+            await super().on_event(event)
+            return
+        if event.is_forwarded:  # back at the app: its bindings run here, then the trip ends
+            try:
+                await super().on_event(event)
+            finally:
+                if isinstance(event, TrackedKey):
+                    event.finish()
+            return
+        if event is not self._key_in_flight and (
+                self._key_in_flight is not None or self._keys_waiting or self._key_holds):
+            self._keys_waiting.append(event)
+            self._watch_stuck()
+            return
+        # no sender: a key sent by the app would stop at the screen, its trip ending
+        # there before the app's bindings ran
+        tracked = TrackedKey(event.key, event.character, self._key_done)
+        tracked._sender = None
+        self._key_in_flight = tracked
+        self._key_started = time.monotonic()
+        self._first_in_line = 0
+        try:
+            await super().on_event(tracked)
+        finally:
+            if not tracked.is_forwarded:  # a priority binding took it, or nothing could
+                tracked.finish()
+
+    def reroute_key(self, key: events.Key) -> None:
+        """A key that reached a widget it was not meant for (a field the user has left,
+        escape read together with the next key) goes out again, before the keys read
+        after it."""
+        if self._key_in_flight is None and not self._keys_waiting and not self._key_holds:
+            self.post_message(key)
+            return
+        self._keys_waiting.insert(self._first_in_line, key)
+        self._first_in_line += 1
+
+    def hold_keys(self) -> Callable[[], None]:
+        """For an action whose field opens later (after a worker): the keys typed after it
+        wait until the returned callable is called, so they reach that field."""
+        self._key_holds += 1
+        released = False
+
+        def release() -> None:
+            nonlocal released
+            if not released:
+                released = True
+                self._key_holds -= 1
+                self._next_key()
+
+        return release
+
+    def _key_done(self, key: TrackedKey) -> None:
+        if self._key_in_flight is not key:
+            return
+        self._key_in_flight = None
+        if self._keys_waiting:
+            # what this key set in motion is processed first: a focus change, a dialog
+            self._settling = asyncio.create_task(self._settle_then_next())
+
+    async def _settle_then_next(self) -> None:
+        await settle(self)
+        self._next_key()
+
+    def _next_key(self) -> None:
+        if self._key_in_flight is not None or self._key_holds or not self._keys_waiting:
+            return
+        key = self._keys_waiting.popleft()
+        self._key_in_flight = key  # this one goes next; keys read meanwhile wait
+        self._key_started = time.monotonic()
+        self.post_message(key)
+
+    def _watch_stuck(self) -> None:
+        if self._stuck_timer is None:
+            self._stuck_timer = self.set_timer(STUCK_AFTER / 4, self._check_stuck)
+
+    def _check_stuck(self) -> None:
+        self._stuck_timer = None
+        key = self._key_in_flight
+        if key is None and not self._key_holds:
+            self._next_key()
+        elif key is not None and (lost(key) or
+                                  time.monotonic() - self._key_started > STUCK_AFTER):
+            self._key_in_flight = None
+            self._next_key()
+        elif self._key_holds and time.monotonic() - self._key_started > STUCK_AFTER * 4:
+            self._key_holds = 0  # an action that never released them: the keys go on
+            self._next_key()
+        if self._keys_waiting:
+            self._watch_stuck()
+
+
+def lost(key: events.Key) -> bool:
+    """The key is in the queue of a widget that is gone, and will never come back."""
+    holder = key.holder if isinstance(key, TrackedKey) else None
+    if holder is None:
+        return False
+    if holder._closing or holder._closed:
+        return True
+    return isinstance(holder, Widget) and not holder.is_attached
+
+
+async def settle(app: App[Any]) -> None:
+    """Returns once the app, the screen, the focused widget and every widget with messages
+    waiting have processed what is in their queues now (as Pilot waits for the screen)."""
+    try:
+        screen = app.screen
+    except Exception:
+        return
+    pumps: list[MessagePump] = [app, screen]
+    if app.focused is not None:
+        pumps.append(app.focused)
+    pumps.extend(w for w in screen.walk_children(with_self=False)
+                 if isinstance(w, MessagePump) and not w._message_queue.empty()
+                 and w not in pumps)
+    loop = asyncio.get_running_loop()
+    waiting = []
+    for pump in pumps:
+        future = loop.create_future()
+        if pump.call_later(lambda f=future: f.done() or f.set_result(None)):
+            waiting.append(future)
+    if waiting:
+        await asyncio.wait(waiting, timeout=STUCK_AFTER)
+
+
+def reroute_key(app: App[Any], key: events.Key) -> None:
+    """Sends a key out again, first in line when the app orders its keys."""
+    if isinstance(app, KeyOrder):
+        app.reroute_key(key)
+    else:
+        app.post_message(key)
+
+
+def hold_keys(app: App[Any]) -> Callable[[], None]:
+    """The keys typed from now on wait until the returned callable is called."""
+    if isinstance(app, KeyOrder):
+        return app.hold_keys()
+    return lambda: None
