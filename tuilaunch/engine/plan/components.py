@@ -15,8 +15,6 @@ import os
 from collections.abc import Callable
 from typing import Any
 
-import yaml
-
 from ..describe.entities import ComposableNode, pair_list
 from ..describe.substitutions import PerformContext, perform, perform_optional
 from ..describe.values import ParamValue, flatten_parameters
@@ -67,6 +65,8 @@ def file_parameters(path: str, node_key: str, origin: Origin | None,
 
     `substitute` performs `$(var x)` and friends in the text first (ParameterFile with
     allow_substs)."""
+    import yaml  # here: a launch without components does not load it
+
     try:
         with open(path) as handle:
             text = handle.read()
