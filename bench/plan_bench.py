@@ -1,7 +1,9 @@
 """Time and peak memory to load a launch file and resolve its plan, for 10/100/1000 nodes.
 
-Each size runs in its own process so peak memory (ru_maxrss) belongs to that size alone.
-Target: 1000 nodes resolved in under a second on the project machine.
+Each size runs in its own process so peak memory (ru_maxrss) belongs to that size alone;
+the plan (load + resolve) is the best of 3 such processes. Target: a plan of 1000 nodes in
+at most 0.1 s. ros2 launch is not installed here (its own figure would be its
+`generate_launch_description` and visit of the same file).
 
     python bench/plan_bench.py
 """
@@ -9,6 +11,7 @@ Target: 1000 nodes resolved in under a second on the project machine.
 from __future__ import annotations
 
 import json
+import os
 import resource
 import subprocess
 import sys
@@ -82,16 +85,19 @@ def main() -> None:
     baseline = json.loads(subprocess.run(
         [sys.executable, __file__, "--one", "1"], capture_output=True, text=True,
         check=True).stdout)
-    print(f"{'nodes':>6} {'load s':>8} {'resolve s':>10} {'re-resolve s':>13} "
+    print(f"{'nodes':>6} {'plan s':>8} {'load s':>8} {'resolve s':>10} {'re-resolve s':>13} "
           f"{'peak RSS MB':>12} {'over 1-node MB':>15}")
     for size in SIZES:
-        done = subprocess.run([sys.executable, __file__, "--one", str(size)],
-                              capture_output=True, text=True, check=True)
-        row = json.loads(done.stdout)
-        print(f"{row['nodes']:>6} {row['load_s']:>8.3f} {row['resolve_s']:>10.3f} "
+        rows = [json.loads(subprocess.run([sys.executable, __file__, "--one", str(size)],
+                                          capture_output=True, text=True, check=True).stdout)
+                for _ in range(3)]
+        row = min(rows, key=lambda r: r["load_s"] + r["resolve_s"])
+        print(f"{row['nodes']:>6} {row['load_s'] + row['resolve_s']:>8.3f} "
+              f"{row['load_s']:>8.3f} {row['resolve_s']:>10.3f} "
               f"{row['re_resolve_s']:>13.3f} {row['peak_rss_mb']:>12.1f} "
               f"{row['peak_rss_mb'] - baseline['peak_rss_mb']:>15.1f}")
-    print("target: 1000 nodes resolved in under 1 s")
+    print(f"target: a plan (load + resolve) of 1000 nodes in at most 0.1 s; load average "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
 
 
 if __name__ == "__main__":

@@ -131,9 +131,11 @@ def _show_arguments(loaded: LoadedFile, arguments: dict[str, str]) -> int:
 def is_command(argv: list[str]) -> bool:
     """A session command, unless the word names an existing file (launched, as it always
     was); `tuilaunch -- WORD ...` forces the launch form, e.g. for a package named `status`."""
+    if not argv or os.path.exists(argv[0]):
+        return False  # a launch file: the commands' module (and what it imports) not loaded
     from .commands import COMMANDS
 
-    return bool(argv) and argv[0] in COMMANDS and not os.path.exists(argv[0])
+    return argv[0] in COMMANDS
 
 
 def _reopen_closed_std_streams() -> None:

@@ -22,6 +22,14 @@ QUEUE_LIMIT = 1 << 20
 """Bytes of output waiting for a slow reader before lines are skipped: a second of a busy
 robot's output, far more than a terminal that keeps up ever has waiting."""
 
+GATHER = 0.003
+"""Seconds the writer lets output gather after it wakes: under a flood it then wakes a few
+hundred times a second for large writes, not once per block of lines (each wake-up takes
+the interpreter's lock from the loop that reads the nodes); a line still shows at once to
+the eye."""
+GATHER_BELOW = 64 << 10
+"""Bytes queued under which the writer lets more gather; past it, it writes at once."""
+
 EXIT_PATIENCE = 5.0
 """At exit, how long to wait for a reader that takes nothing before leaving the rest."""
 
@@ -76,6 +84,11 @@ class BackgroundWriter:
             with self._ready:
                 while not self._queue and not self._skipped and not self._closed:
                     self._ready.wait()
+                # only while little waits: a reader that lags gets the rest at once
+                gather = not self._closed and self._queued < GATHER_BELOW
+            if gather:
+                time.sleep(GATHER)
+            with self._ready:
                 if not self._queue and not self._skipped:
                     return  # closed, and all written
                 text = "".join(self._queue)

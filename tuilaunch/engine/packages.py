@@ -22,11 +22,17 @@ def _is_prefix(path: Path) -> bool:
 
 def environment_prefixes() -> list[Path]:
     """AMENT_PREFIX_PATH, then the running interpreter's prefix if it is an ament prefix."""
-    prefixes = [Path(p) for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    return list(_prefixes(os.environ.get("AMENT_PREFIX_PATH", "")))
+
+
+@lru_cache(maxsize=4)
+def _prefixes(variable: str) -> tuple[Path, ...]:
+    # cached on the variable's value: a plan asks once per node, and 1000 nodes must plan fast
+    prefixes = [Path(p) for p in variable.split(os.pathsep) if p]
     own = Path(sys.prefix)
     if _is_prefix(own) and own not in prefixes:
         prefixes.append(own)
-    return prefixes
+    return tuple(prefixes)
 
 
 def ensure_environment() -> None:
@@ -58,7 +64,12 @@ def _package_prefix_map(search_path: str) -> dict[str, Path]:
 
 
 def known_packages() -> dict[str, Path]:
-    return _package_prefix_map(os.pathsep.join(str(p) for p in environment_prefixes()))
+    return _package_prefix_map(_search_path(os.environ.get("AMENT_PREFIX_PATH", "")))
+
+
+@lru_cache(maxsize=4)
+def _search_path(variable: str) -> str:
+    return os.pathsep.join(str(p) for p in _prefixes(variable))
 
 
 def package_prefix(package: str, origin: Origin | None = None) -> Path:
@@ -79,9 +90,10 @@ def package_share(package: str, origin: Origin | None = None) -> Path:
 
 def find_executable(package: str, executable: str, origin: Origin | None = None) -> Path:
     """`<prefix>/lib/<package>/<executable>`, as ros2 run finds it."""
-    candidate = package_prefix(package, origin) / "lib" / package / executable
-    if candidate.is_file() and os.access(candidate, os.X_OK):
-        return candidate
+    # plain strings, not Path arithmetic: this runs once per node of the plan
+    candidate = os.path.join(package_prefix(package, origin), "lib", package, executable)
+    if os.path.isfile(candidate) and os.access(candidate, os.X_OK):
+        return Path(candidate)
     lib = package_prefix(package, origin) / "lib" / package
     available = sorted(p.name for p in lib.iterdir() if os.access(p, os.X_OK)) if lib.is_dir()\
         else []

@@ -128,6 +128,8 @@ def slash_join(left: SubValue, right: SubValue) -> SimpleSubstitution:
 
 def flatten(value: SubValue) -> list[Any]:
     """Nested lists and tuples of parts into one flat list, dropping None."""
+    if type(value) is str:  # the common case first: a plan flattens every text of every node
+        return [value]
     if isinstance(value, list | tuple):
         out: list[Any] = []
         for item in value:
@@ -142,6 +144,8 @@ def is_lazy(value: SubValue) -> bool:
 
 def perform(value: SubValue, context: PerformContext) -> str:
     """Any text-like value (str, number, substitution, list of them) as one string."""
+    if type(value) is str:  # most texts of a plan are plain: no generator, no join
+        return value
     return "".join(
         _perform_one(part, context) if isinstance(part, Substitution) else _plain_text(part)
         for part in flatten(value)

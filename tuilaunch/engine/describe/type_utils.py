@@ -12,8 +12,6 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Any
 
-import yaml
-
 from ..errors import LaunchError, Origin
 from .substitutions import PerformContext, perform
 
@@ -57,13 +55,13 @@ def _numbers_as_floats(value: Any) -> Any:
     return value
 
 
-# libyaml when present: files repeat the same short values thousands of times
-_LOADER: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
 @lru_cache(maxsize=4096)
 def _yaml_load_cached(text: str) -> Any:
-    return yaml.load(text, Loader=_LOADER)
+    # pyyaml imported on first use: a launch of plain processes starts without it; libyaml
+    # when present: files repeat the same short values thousands of times
+    import yaml
+
+    return yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
 
 
 def _yaml_load(text: str) -> Any:
@@ -74,6 +72,8 @@ def _yaml_load(text: str) -> Any:
 def _as_yaml(text: str, can_be_str: bool) -> Any:
     if not text:
         return text
+    import yaml
+
     try:
         value = _numbers_as_floats(_yaml_load(text))
     except yaml.YAMLError:
@@ -142,6 +142,8 @@ def check_yaml_value(value: Any, spec: TypeSpec, can_be_str: bool = True) -> Any
     if spec.startswith("list_of_"):
         if not isinstance(value, list):
             raise ValueError("expected a list")
+        import yaml
+
         return coerce_text(yaml.safe_dump(value, default_flow_style=True), spec, can_be_str)
     kind = SCALARS[spec]
     if kind is bool:

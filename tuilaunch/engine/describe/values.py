@@ -6,6 +6,7 @@ Values known only as substitutions are read as YAML once performed, as launch_ro
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any
 
 from ..errors import LaunchError, Origin
@@ -33,17 +34,25 @@ def _is_string_typed(value: Any) -> bool:
 
 def yaml_typed(text: str) -> ParamValue:
     """A performed string as ROS would type it: bool, int, float, homogeneous list or str."""
+    typed = _yaml_typed(text)
+    return list(typed) if isinstance(typed, tuple) else typed  # each caller its own list
+
+
+@lru_cache(maxsize=1024)
+def _yaml_typed(text: str) -> bool | int | float | str | tuple[Any, ...]:
+    # cached: the same argument reaches every node of a large plan, and pyyaml's parser costs
+    # a tenth of a millisecond a value
     import yaml  # here, not at the top: a launch without parameters starts sooner
 
     try:
-        loaded = yaml.safe_load(text)
+        loaded = yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except yaml.YAMLError:
         return text
     if isinstance(loaded, bool | int | float | str):
         return loaded
     if isinstance(loaded, list) and loaded and all(isinstance(v, bool | int | float | str)
                                                    for v in loaded):
-        return loaded
+        return tuple(loaded)
     return text
 
 

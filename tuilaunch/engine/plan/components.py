@@ -15,8 +15,6 @@ import os
 from collections.abc import Callable
 from typing import Any
 
-import yaml
-
 from ..describe.entities import ComposableNode, pair_list
 from ..describe.parameter_files import dotted, node_sections
 from ..describe.substitutions import PerformContext, perform, perform_optional
@@ -37,6 +35,8 @@ def file_parameters(path: str, node_key: str, origin: Origin | None,
 
     `substitute` performs `$(var x)` and friends in the text first (ParameterFile with
     allow_substs)."""
+    import yaml  # here: a launch without components does not load it
+
     try:
         with open(path) as handle:
             text = handle.read()

@@ -28,9 +28,10 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
-import yaml
+if TYPE_CHECKING:  # pyyaml is imported where a machines file is read, not by every launch
+    import yaml
 
 from ..errors import LaunchError, Origin
 from .model import Plan
@@ -183,6 +184,8 @@ def load_machines(path: str | Path) -> Machines:
 
 
 def parse_machines(text: str, path: str = "<machines>") -> Machines:
+    import yaml
+
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError as exc:
@@ -264,6 +267,8 @@ def _origin(node: yaml.Node, path: str) -> Origin:
 
 def _mapping(node: yaml.Node, path: str, where: str) -> dict[str, tuple[yaml.Node, yaml.Node]]:
     """A mapping's keys (strings, each once) -> (key node, value node)."""
+    import yaml
+
     if not isinstance(node, yaml.MappingNode):
         raise MachinesError(f"{where} must be a mapping", _origin(node, path))
     out: dict[str, tuple[yaml.Node, yaml.Node]] = {}
@@ -287,6 +292,8 @@ def _only(fields: Mapping[str, tuple[yaml.Node, yaml.Node]], path: str, known: s
 
 def _string(node: yaml.Node, path: str, where: str) -> str:
     """A scalar as the text written (`5` and `true` stay "5" and "true": env values)."""
+    import yaml
+
     if not isinstance(node, yaml.ScalarNode) or node.tag == "tag:yaml.org,2002:null":
         raise MachinesError(f"{where} must be a single value", _origin(node, path))
     return str(node.value)

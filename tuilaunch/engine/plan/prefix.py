@@ -34,6 +34,8 @@ LAUNCH_PREFIX_FILTER = "launch-prefix-filter"
 
 def split_prefix(text: str, what: str = LAUNCH_PREFIX) -> list[str]:
     """The words of a prefix, split as a shell does; one line naming `what` when it cannot."""
+    if not text or text.isspace():  # no prefix, the common case: shlex costs per node
+        return []
     try:
         return shlex.split(text)
     except ValueError as exc:  # an unclosed quote

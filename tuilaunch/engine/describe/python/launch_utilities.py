@@ -10,8 +10,6 @@ import os
 from collections.abc import Iterable
 from typing import Any
 
-import yaml
-
 from ...errors import DslError, caller_origin
 from ..substitutions import PerformContext, Substitution, TextSubstitution, flatten, perform
 
@@ -75,6 +73,8 @@ def coerce_to_type(value: str, data_type: Any = None, *, can_be_str: bool = Fals
         return data_type(value)
     if data_type is bool:
         return value.strip().lower() in ("true", "1")
+    import yaml  # here: a launch that never reads a value as YAML does not load it
+
     try:
         return yaml.safe_load(value)
     except yaml.YAMLError:

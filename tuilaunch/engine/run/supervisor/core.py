@@ -138,7 +138,8 @@ class SupervisorCore:
                 consumer(event)
             except Exception as exc:
                 self._consumer_failed(consumer, exc)
-        self.changed.set()
+        if event.kind != "output":  # output settles nothing: no wake-up of `run` per block
+            self.changed.set()
 
     def log(self, text: str, level: str = "INFO") -> None:
         """A line for the launch pane and launch.log from whoever runs the supervisor."""
