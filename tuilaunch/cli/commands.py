@@ -47,6 +47,9 @@ def main(argv: list[str]) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt:
+        # Ctrl+C on `logs -f`, `wait`, `echo`: said, never silence nor a traceback (hz and
+        # echo say what they had first)
+        print("tuilaunch: interrupted", file=sys.stderr)
         return 130
 
 
