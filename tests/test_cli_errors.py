@@ -223,3 +223,13 @@ def generate_launch_description():
         "found on PATH" in out
     assert "[ERROR] [viz-2]: failed to start: package 'no_such_pkg_tl' not found" in out
     assert "[fine-3] fine" in out
+
+
+def test_version_prints_the_installed_version_and_exits():
+    from importlib import metadata
+
+    result = run_cli("--version")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == f"tuilaunch {metadata.version('tuilaunch')}\n"
+    # with a file too, as ros2 launch FILE --version would
+    assert run_cli(BRINGUP, "--version").stdout == result.stdout

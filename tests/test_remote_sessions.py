@@ -78,7 +78,8 @@ def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
 
     wait_for(lambda: "tick 3\n" in run_cli("logs", "robot1:far", "ticker-1").stdout)
     logs = run_cli("logs", "robot1:far", "ticker-1").stdout.splitlines()
-    assert logs[:3] == ["tick 1", "tick 2", "tick 3"]
+    assert logs[0].startswith("[INFO] [ticker-1]: process started with pid [")  # launch.log
+    assert logs[1:4] == ["tick 1", "tick 2", "tick 3"]
     every = run_cli("logs", "robot1:far").stdout
     assert "[ticker-1] tick 1" in every
 
@@ -319,9 +320,10 @@ def test_attach_on_a_terminal_and_logs_follow_through_the_link(machines: Machine
         lines = []
         for line in follow.stdout:  # the file's lines, then the live ones, no gap
             lines.append(line.rstrip("\n"))
-            if len(lines) >= 40:
+            if len(lines) >= 41:
                 break
-        assert lines == [f"tick {i}" for i in range(1, 41)]
+        assert lines[0].startswith("[INFO] [ticker-1]: process started with pid [")
+        assert lines[1:] == [f"tick {i}" for i in range(1, 41)]
     finally:
         os.killpg(follow.pid, signal.SIGTERM)
         follow.wait()

@@ -26,74 +26,18 @@ from ..engine.plan.machines import placement_from_text
 from ..engine.run.machines.remote import check_host, list_remote, open_remote_link, parse_address
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
-from ..tui.output_store import LEVELS
-from .inspector import add_commands
+from . import inspector
 from .logs import cmd_logs as cmd_logs  # found by name in main
-
-COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait", "topics", "hz", "echo",
-            "params", "log-level")
-PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
-                  "cancelled")
-LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
-
-
-def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="tuilaunch", description="Control launches running as sessions.")
-    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    ls = commands.add_parser("ls", help="running sessions")
-    ls.add_argument("host", nargs="?", help="the sessions on this machine (as ssh names it)")
-    ls.add_argument("--json", action="store_true", help="one JSON list")
-    attach = commands.add_parser("attach", help="the TUI on a running session")
-    attach.add_argument("name", nargs="?", metavar="[HOST:]NAME",
-                        help="the session (default: the only one here)")
-    attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
-    stop = commands.add_parser("stop", help="stop every process of a session, then exit")
-    stop.add_argument("name", nargs="?", metavar="[HOST:]NAME")
-    status = commands.add_parser("status", help="each process's state")
-    status.add_argument("name", nargs="?", metavar="[HOST:]NAME")
-    status.add_argument("--json", action="store_true", help="one JSON object")
-    logs = commands.add_parser("logs", help="the output of a session's processes")
-    logs.add_argument("name", nargs="?", metavar="[HOST:]NAME")
-    logs.add_argument("process", nargs="?", help="a process id or node name (default: all)")
-    logs.add_argument("-f", "--follow", action="store_true", help="keep printing new lines")
-    logs.add_argument("--since", metavar="T",
-                      help="only lines from T on: 30s, 5m, 2h ago, a unix time, or an ISO "
-                      "time (2026-11-22T08:30:00, or 08:30 today)")
-    logs.add_argument("--level", metavar="L", type=str.upper, choices=LEVELS,
-                      help=f"only lines at this ROS level or above ({', '.join(LEVELS)})")
-    restart = commands.add_parser("restart", help="restart one process")
-    restart.add_argument("name", metavar="[HOST:]NAME")
-    restart.add_argument("process")
-    restart.add_argument("--prefix", metavar="CMD",
-                         help="run it under a tool until a restart without one, e.g. "
-                         "'gdb -q -ex run --args' (type into it in the TUI with i)")
-    restart.add_argument("--log-level", metavar="LEVEL",
-                         help="append --ros-args --log-level LEVEL (debug, info, warn, error, "
-                         "fatal; kept across respawns until a restart gives another; '' "
-                         "drops it)")
-    wait = commands.add_parser(
-        "wait", help="wait until a process is in a state (exit status 0) or time runs out (1)")
-    wait.add_argument("name", metavar="[HOST:]NAME")
-    wait.add_argument("process")
-    wait.add_argument("state", help=f"{', '.join(PROCESS_STATES)}, or a lifecycle state: "
-                      f"{', '.join(LIFECYCLE_STATES)}")
-    wait.add_argument("--timeout", type=float, default=None, metavar="S",
-                      help="give up after S seconds (exit status 1)")
-    for sub in (ls, attach, stop, status, logs, restart, wait):
-        _common(sub)
-    add_commands(commands, _common)
-    return parser
-
-
-def _common(sub: argparse.ArgumentParser) -> None:
-    sub.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+from .parsers import COMMANDS as COMMANDS
+from .parsers import LIFECYCLE_STATES, PROCESS_STATES, commands_parser
 
 
 def main(argv: list[str]) -> int:
-    options = _parser().parse_args(argv)
+    options = commands_parser().parse_args(argv)
     try:
-        handler = getattr(options, "handler", None) or globals()[f"cmd_{options.command}"]
+        # cmd_NAME here (ls ... wait, logs, completion), or in inspector.py
+        function = f"cmd_{options.command.replace('-', '_')}"
+        handler = globals().get(function) or getattr(inspector, function)
         return int(handler(options) or 0)
     except LaunchError as exc:
         print(f"tuilaunch {options.command}: error: {exc}", file=sys.stderr)
@@ -103,6 +47,9 @@ def main(argv: list[str]) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt:
+        # Ctrl+C on `logs -f`, `wait`, `echo`: said, never silence nor a traceback (hz and
+        # echo say what they had first)
+        print("tuilaunch: interrupted", file=sys.stderr)
         return 130
 
 
@@ -414,3 +361,10 @@ def _table(rows: Sequence[tuple[str, ...]], indent: str = "") -> None:
     for row in rows:
         cells = [cell.ljust(width) for cell, width in zip(row, widths, strict=True)]
         print((indent + "  ".join(cells)).rstrip())
+
+
+def cmd_completion(options: argparse.Namespace) -> int:
+    from .completion import shell_code
+
+    print(shell_code(options.shell), end="")
+    return 0

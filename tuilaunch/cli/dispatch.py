@@ -18,56 +18,7 @@ from ..engine.packages import ensure_environment, find_launch_file_in_share
 from ..engine.plan.machines import Placement, load_placement, placement_from_text
 from ..engine.plan.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
-
-
-def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="tuilaunch",
-        description="Run a ROS 2 launch file (SimpleLauncher DSL, launch API, XML or YAML) in "
-        "a terminal UI.",
-        epilog="Arguments are given as name:=value, as with ros2 launch.")
-    parser.add_argument("items", nargs="+", metavar="FILE | PACKAGE FILE | name:=value",
-                        help="a launch file, or a package and a launch file in its share, "
-                        "then launch arguments")
-    parser.add_argument("-s", "--show-args", action="store_true",
-                        help="list the launch arguments and exit")
-    parser.add_argument("-p", "--print", dest="print_plan", action="store_true",
-                        help="print what would run with these arguments and exit")
-    parser.add_argument("--json", action="store_true", help="with --print: one JSON object")
-    parser.add_argument("--headless", action="store_true",
-                        help="run without the TUI, printing each line as [process-id] line "
-                        "(the default when not in a terminal)")
-    parser.add_argument("--scrollback", type=int, default=5000, metavar="LINES",
-                        help="TUI: lines kept per node's pane (log files keep all; "
-                        "default 5000)")
-    parser.add_argument("--detach", action="store_true",
-                        help="start the launch as a background session, print its name, and "
-                        "exit (tuilaunch attach NAME opens it)")
-    parser.add_argument("--name", metavar="NAME",
-                        help="the session's name (default: the file's stem and a number)")
-    parser.add_argument("--keep-on-hangup", action="store_true",
-                        help="TUI: a dropped terminal (SIGHUP) detaches instead of stopping "
-                        "the launch")
-    parser.add_argument("--machines", metavar="MACHINES.yaml",
-                        help="run each node on the machine this file places it on (over "
-                        "ssh); with --print, show where each runs")
-    # how the launching side starts another machine's share of the launch (machines_share)
-    parser.add_argument("--share", metavar="MACHINE", help=argparse.SUPPRESS)
-    parser.add_argument("--machines-text", metavar="YAML", help=argparse.SUPPRESS)
-    parser.add_argument("--launch-prefix", metavar="CMD",
-                        help="as ros2 launch: put CMD (e.g. 'gdb -ex run --args') before "
-                        "each executable without a prefix of its own (launch-prefix:=CMD)")
-    parser.add_argument("--launch-prefix-filter", metavar="REGEX",
-                        help="as ros2 launch: only executables whose name REGEX matches from "
-                        "its start get --launch-prefix (launch-prefix-filter:=REGEX)")
-    parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
-    parser.epilog = (parser.epilog or "") + (
-        "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
-        "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
-        "hz NAME TOPIC | echo NAME TOPIC | params NAME NODE --dump/--load FILE | log-level "
-        "NAME NODE LEVEL (tuilaunch COMMAND -h). On another machine: ls HOST, and HOST:NAME "
-        "for NAME (over ssh).")
-    return parser
+from .parsers import COMMANDS, launch_parser
 
 
 def split_items(items: list[str]) -> tuple[list[str], dict[str, str]]:
@@ -131,11 +82,7 @@ def _show_arguments(loaded: LoadedFile, arguments: dict[str, str]) -> int:
 def is_command(argv: list[str]) -> bool:
     """A session command, unless the word names an existing file (launched, as it always
     was); `tuilaunch -- WORD ...` forces the launch form, e.g. for a package named `status`."""
-    if not argv or os.path.exists(argv[0]):
-        return False  # a launch file: the commands' module (and what it imports) not loaded
-    from .commands import COMMANDS
-
-    return argv[0] in COMMANDS
+    return bool(argv) and argv[0] in COMMANDS and not os.path.exists(argv[0])
 
 
 def _reopen_closed_std_streams() -> None:
@@ -194,7 +141,7 @@ def _main(argv: list[str] | None) -> int:
         return command_main(argv)
     if argv[:1] == ["--"]:
         argv = argv[1:]
-    options = _parser().parse_intermixed_args(argv)
+    options = launch_parser().parse_intermixed_args(argv)
     ensure_environment()
     # a launch file's own print() must not corrupt the JSON a tool reads on stdout
     file_output = contextlib.redirect_stdout(sys.stderr) if options.print_plan and \

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 from ..client.link import open_link
@@ -21,47 +21,6 @@ from ..engine.run.session.session_dir import SessionError
 SLACK = 30.0
 """Seconds a reply may take beyond the work asked for (a bridge made for the request waits
 for discovery; a topic's publisher is waited for 5 s; a node has 5 s to answer)."""
-
-
-def add_commands(commands: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
-    """The inspector's sub-commands, on the session commands' parser."""
-    topics = commands.add_parser("topics", help="topics, their types, publishers and "
-                                 "subscribers (with their processes) and QoS problems")
-    topics.add_argument("name", metavar="[HOST:]NAME", help="the session")
-    topics.add_argument("--node", metavar="NODE",
-                        help="only this node's topics (full name or process id)")
-    topics.add_argument("--json", action="store_true", help="one JSON object")
-    topics.set_defaults(handler=cmd_topics)
-    hz = commands.add_parser("hz", help="a topic's rate and bandwidth, measured for a while")
-    hz.add_argument("name", metavar="[HOST:]NAME")
-    hz.add_argument("topic")
-    hz.add_argument("--window", type=float, default=5.0, metavar="S",
-                    help="seconds to measure (default 5)")
-    hz.add_argument("--json", action="store_true", help="one JSON object")
-    hz.set_defaults(handler=cmd_hz)
-    echo = commands.add_parser("echo", help="a topic's messages as YAML")
-    echo.add_argument("name", metavar="[HOST:]NAME")
-    echo.add_argument("topic")
-    echo.add_argument("--count", type=int, metavar="N", help="stop after N messages")
-    echo.add_argument("--timeout", type=float, metavar="S",
-                      help="give up after S seconds without the messages (exit status 1)")
-    echo.set_defaults(handler=cmd_echo)
-    params = commands.add_parser("params", help="a node's live parameters as a params file, "
-                                 "or such a file loaded into it")
-    params.add_argument("name", metavar="[HOST:]NAME")
-    params.add_argument("node", help="full node name or process id")
-    what = params.add_mutually_exclusive_group(required=True)
-    what.add_argument("--dump", action="store_true",
-                      help="print the parameters as YAML a launch file loads")
-    what.add_argument("--load", metavar="FILE", help="set the parameters a params file gives")
-    params.set_defaults(handler=cmd_params)
-    level = commands.add_parser("log-level", help="set a node's logger level")
-    level.add_argument("name", metavar="[HOST:]NAME")
-    level.add_argument("node", help="full node name or process id")
-    level.add_argument("level", help="debug, info, warn, error, fatal or unset")
-    level.set_defaults(handler=cmd_log_level)
-    for sub in (topics, hz, echo, params, level):
-        common(sub)
 
 
 def ask(name: str, op: str, wait: float = 0.0, **fields: Any) -> Any:
@@ -220,4 +179,4 @@ def cmd_log_level(options: argparse.Namespace) -> int:
     return 0
 
 
-__all__ = ["add_commands"]
+__all__ = ["cmd_echo", "cmd_hz", "cmd_log_level", "cmd_params", "cmd_topics"]

@@ -1,14 +1,18 @@
-"""`tuilaunch logs [HOST:]NAME [PROCESS] [-f] [--since T] [--level L]`: a session's output.
+"""`tuilaunch logs [HOST:]NAME [PROCESS] [-f] [-n N] [--since T] [--level L]`: a session's
+output, and its processes' lives (starts, exits with their code or signal, respawns) in the
+words `--headless` prints them, so `--level ERROR` shows a crash.
 
-Read from the log files (on another machine, page by page through the server's
+Read from the log files and launch.log (on another machine, through the server's
 `read_log`), merged in time order; with `-f`, the lines that come after, from the events.
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
 import datetime
 import heapq
+import io
 import os
 import re
 import sys
@@ -17,16 +21,29 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ..client.link import Link, open_link
+from ..engine.run.events import Event
 from ..engine.run.process.output import strip_ansi
-from ..engine.run.session.log_reader import LogLine, read_lines
+from ..engine.run.session.log_reader import (
+    LAUNCH_LOG,
+    LIFE_KINDS,
+    LogLine,
+    life_event,
+    log_size,
+    read_lines,
+    tail_lines,
+)
 from ..engine.run.session.protocol import event_from_dict
 from ..engine.run.session.session_dir import SessionError
 from ..tui.output_store import LEVELS, level_of
+from .headless import Printer
 
 
 def cmd_logs(options: argparse.Namespace) -> int:
     since = parse_since(options.since) if options.since else None
     minimum = LEVELS.index(options.level) if options.level else 0
+    last = options.lines
+    if last is not None and last < 0:
+        raise SessionError(f"--lines {last} is not a number of lines", hint="0 or more")
     link = open_link(options.name, timeout=None)
     try:
         status = link.request("status", short=True, resources=False)
@@ -39,8 +56,14 @@ def cmd_logs(options: argparse.Namespace) -> int:
         if options.follow:
             subscribed = link.request("subscribe", short=True)
             offsets = {p: subscribed["offsets"].get(p, 0) for p in wanted}
+        # launch.log's size after the subscription: its events come after, as events
+        launch_end = _launch_log_size(link, log_dir)
         out = sys.stdout
         colour = out.isatty() and not os.environ.get("NO_COLOR")
+        life = Printer(io.StringIO())
+        told: set[tuple[str, str, int | None, int]] = set()
+        kept: collections.deque[str] | None = None if last is None else \
+            collections.deque(maxlen=last)
 
         def show(process: str, line: LogLine) -> None:
             if since is not None and line.time < since:
@@ -48,15 +71,44 @@ def cmd_logs(options: argparse.Namespace) -> int:
             text = line.text if colour else strip_ansi(line.text)
             if minimum and level_of(text, line.stream) < minimum:
                 return
-            out.write(f"[{process}] {text}\n" if prefixed else text + "\n")
+            # a life line names its process already, as --headless prints it
+            text = f"[{process}] {text}\n" if prefixed and line.stream != "life" else \
+                text + "\n"
+            if kept is not None:
+                kept.append(text)
+            else:
+                out.write(text)
 
+        def tell(event: Event) -> None:
+            """A start, an exit, a respawn ... in the headless printer's words."""
+            key = (event.kind, event.process or "", event.pid, round(event.time * 1000))
+            if key in told:
+                return  # launch.log had it, and the subscription's history too
+            told.add(key)
+            text = life.format(event).replace(", cmd ''", "").rstrip("\n")
+            if text and event.process:
+                show(event.process, LogLine(event.time, "life", text))
+
+        # without a filter, -n N reads only each file's tail
+        tail = last if last is not None and since is None and not minimum else None
         if link.host is None:
-            streams = [tagged(p, read_lines(log_dir / f"{p}.log", offsets[p]))
+            streams = [tagged(p, _local_lines(log_dir / f"{p}.log", offsets[p], tail))
                        for p in wanted]
+            events = read_lines(log_dir / "launch.log", launch_end)
         else:  # the files are on the other machine: its server reads them for us
-            streams = [tagged(p, remote_lines(link, p, offsets[p])) for p in wanted]
-        for _, process, line in heapq.merge(*streams, key=lambda item: item[0]):
-            show(process, line)
+            streams = [tagged(p, _remote_tail(link, p, offsets[p], tail) if tail is not None
+                              else remote_lines(link, p, offsets[p])) for p in wanted]
+            events = remote_lines(link, LAUNCH_LOG, launch_end)
+        lives = [(e.time, e.process or "", e) for e in map(life_event, events)
+                 if e is not None and e.process in offsets]
+        for _, process, item in heapq.merge(*streams, lives, key=lambda item: item[0]):
+            if isinstance(item, Event):
+                tell(item)
+            elif isinstance(item, LogLine):
+                show(process, item)
+        if kept is not None:
+            out.write("".join(kept))
+            kept = None  # followed lines are printed as they come
         out.flush()
         if not options.follow:
             return 0
@@ -72,10 +124,34 @@ def cmd_logs(options: argparse.Namespace) -> int:
                 elif event.kind == "dropped" and event.process in offsets:
                     print(f"tuilaunch logs: {event.code} lines of {event.process} skipped "
                           f"(too slow a reader); they are in {log_dir}", file=sys.stderr)
+                elif event.kind in LIFE_KINDS and event.process in offsets:
+                    tell(event)
             out.flush()
         return 0
     finally:
         link.close()
+
+
+def _launch_log_size(link: Link, log_dir: Path) -> int:
+    if link.host is None:
+        return log_size(log_dir / "launch.log")
+    return int(link.request("read_log", short=True, process=LAUNCH_LOG, limit=0)["size"])
+
+
+def _local_lines(path: Path, end: int | None, tail: int | None) -> Iterator[LogLine]:
+    if tail is None:
+        return read_lines(path, end)
+    return iter(tail_lines(path, log_size(path) if end is None else end, tail))
+
+
+def _remote_tail(link: Link, process: str, end: int | None, count: int) -> Iterator[LogLine]:
+    """The last `count` lines of a log file on the session's machine, in one answer."""
+    if count <= 0:
+        return
+    page = link.request("read_log", short=True, process=process, end=end, limit=count,
+                        tail=True)
+    for stamp, stream, text in page["lines"]:
+        yield LogLine(float(stamp), str(stream), str(text))
 
 
 def remote_lines(link: Link, process: str, end: int | None) -> Iterator[LogLine]:

@@ -8,9 +8,19 @@ from __future__ import annotations
 
 import collections
 import os
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+
+from ..events import Event
+
+LAUNCH_LOG = "@launch"
+"""What `read_log` takes, instead of a process id, for launch.log: every event but output,
+`<time> <kind> <process> pid=.. code=.. requested=1 level=.. reason=..` (supervisor/core.py)."""
+LIFE_KINDS = ("started", "exited", "failed", "respawning", "log", "lifecycle", "component")
+"""The events of a process's life that `tuilaunch logs` tells among its lines."""
+_DETAIL = re.compile(r"(pid|code|requested|level)=(\S*)\s*")
 
 
 @dataclass(frozen=True)
@@ -74,6 +84,31 @@ def tail_lines(path: Path, end: int, count: int) -> list[LogLine]:
     raws = data.split(b"\n")[:-1][-count:]
     lines = [parse(raw.decode("utf-8", "replace")) for raw in raws]
     return [line for line in lines if line is not None]
+
+
+def life_event(line: LogLine) -> Event | None:
+    """A launch.log line (read as a LogLine: kind as its stream) as the Event it was, if it
+    tells a process's life."""
+    if line.stream not in LIFE_KINDS:
+        return None
+    process, _, detail = line.text.partition(" ")
+    if not process:
+        return None
+    fields: dict[str, str] = {}
+    position = 0
+    while (match := _DETAIL.match(detail, position)) is not None:
+        fields[match.group(1)] = match.group(2)
+        position = match.end()
+    rest = detail[position:]
+    reason = rest[len("reason="):] if rest.startswith("reason=") else None
+    try:
+        pid = int(fields["pid"]) if "pid" in fields else None
+        code = int(fields["code"]) if "code" in fields else None
+    except ValueError:
+        return None
+    return Event(line.stream, process, pid=pid, code=code, reason=reason,
+                 level=fields.get("level") or "INFO", time=line.time,
+                 data={"requested": fields.get("requested") == "1"})
 
 
 def log_size(path: Path) -> int:

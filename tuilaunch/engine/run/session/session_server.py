@@ -35,7 +35,7 @@ from .clients import ClientHub
 from .clients import ClientQueue as ClientQueue
 from .clients import op_name as op_name
 from .keyboard import Keyboard
-from .log_reader import READ_LOG_LIMIT, read_log
+from .log_reader import LAUNCH_LOG, READ_LOG_LIMIT, read_log
 from .protocol import event_to_dict
 from .resource_watch import ResourceWatch, usage_fields
 from .resources import Usage
@@ -288,8 +288,10 @@ class SessionServer:
         if op == "find":
             return self.find_process(str(message.get("process")))
         if op == "read_log":
-            # by id only: the file is the plan's own, never a path a client names
-            process = self.find_process(str(message.get("process")))
+            # by id only: the file is the plan's own, never a path a client names; LAUNCH_LOG
+            # is launch.log, the processes' starts and ends (`tuilaunch logs`)
+            asked = str(message.get("process"))
+            process = "launch" if asked == LAUNCH_LOG else self.find_process(asked)
             end = message.get("end")
             return read_log(self.log_dir / f"{process}.log", int(message.get("start") or 0),
                             None if end is None else int(end), int(message.get("skip") or 0),

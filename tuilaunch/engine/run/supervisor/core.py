@@ -129,7 +129,13 @@ class SupervisorCore:
     def emit(self, event: Event) -> None:
         """Tells every consumer; one that raises is reported once and never stops us."""
         if event.kind != "output":
+            # `tuilaunch logs` tells a process's life from these lines (log_reader.life_events):
+            # a stop asked for is no crash, and a log line keeps its level; reason comes last
+            requested = 1 if (event.data or {}).get("requested") else None
+            level = event.level if event.level != "INFO" else None
             detail = " ".join(f"{k}={v}" for k, v in (("pid", event.pid), ("code", event.code),
+                                                       ("requested", requested),
+                                                       ("level", level),
                                                        ("reason", event.reason)) if v is not None)
             self.launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
                                    f"{detail}\n".encode())

@@ -1,0 +1,143 @@
+"""`tuilaunch logs` as `tail` and as the launch's story: `-n N` (with and without `-f`), and
+the starts, exits (code or signal), respawns and restarts of each process among its lines,
+in the words --headless prints them, so `--level ERROR` shows a crash."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from .conftest import run_cli, wait_for
+
+LAUNCH = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+
+
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(name='three', output='screen',
+                       cmd=['sh', '-c', 'echo three says hi; sleep 0.5; exit 3']),
+        ExecuteProcess(name='segv', output='screen',
+                       cmd=['sh', '-c', 'echo segv says hi; sleep 0.5; kill -SEGV $$']),
+        ExecuteProcess(name='again', output='screen', respawn=True, respawn_delay=0.2,
+                       respawn_max_retries=1, cmd=['sh', '-c', 'echo again; exit 1']),
+        ExecuteProcess(name='counter', output='screen',
+                       cmd=['sh', '-c', 'i=1; while [ $i -le 50 ]; do echo line $i; '
+                            'i=$((i+1)); done; exec sleep 600']),
+    ])
+"""
+
+
+def tl(*args: str) -> str:
+    done = run_cli(*args)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+@pytest.fixture
+def session(tmp_path: Path) -> Iterator[str]:
+    runtime = Path(tempfile.mkdtemp(prefix="tl"))  # short: socket paths are limited
+    patch = pytest.MonkeyPatch()
+    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    patch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
+    (tmp_path / "life.launch.py").write_text(LAUNCH)
+    try:
+        name = tl(str(tmp_path / "life.launch.py"), "--detach", "--name", "life").strip()
+        for process, state in (("three-1", "failed"), ("segv-2", "failed"),
+                               ("counter-4", "running")):
+            tl("wait", name, process, state, "--timeout", "60")
+        wait_for(lambda: "respawn gives up" in tl("logs", name, "again-3"), what="2 tries")
+        wait_for(lambda: "line 50" in tl("logs", name, "counter-4"), what="50 lines")
+        yield name
+        run_cli("stop", name)
+    finally:
+        for info in (runtime / "tuilaunch").glob("*.json"):  # a failed stop leaves none
+            try:
+                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
+            except (ProcessLookupError, ValueError, KeyError):
+                pass
+        patch.undo()
+
+
+def test_logs_tell_starts_exits_signals_and_respawns(session):
+    three = tl("logs", session, "three-1").splitlines()
+    assert three[0].startswith("[INFO] [three-1]: process started with pid [")
+    assert three[1] == "three says hi"
+    assert three[2].startswith("[ERROR] [three-1]: process has died [pid ")
+    assert three[2].endswith(", exit code 3].")
+    errors = tl("logs", session, "--level", "ERROR").splitlines()
+    assert any("[segv-2]: process has died" in line and "killed by SIGSEGV" in line
+               for line in errors), errors
+    assert any("[three-1]: process has died" in line for line in errors)
+    assert "[ERROR] [again-3]: respawn gives up: it failed 2 times " \
+        "(respawn_max_retries=1)" in errors
+    assert not any("says hi" in line or "started" in line for line in errors)
+    again = tl("logs", session, "again-3")
+    assert "[WARN] [again-3]: respawning (try 1 in 0.2 s)" in again
+    assert again.count("process started with pid") == 2
+    # every process's story, merged in time: a life line is not prefixed twice
+    everything = tl("logs", session)
+    assert "[segv-2] segv says hi" in everything
+    assert "[INFO] [counter-4]: process started with pid [" in everything
+    assert "[counter-4] [INFO] [counter-4]" not in everything
+
+
+def test_a_restart_is_a_stop_asked_for_then_a_start(session):
+    tl("restart", session, "counter-4")
+    wait_for(lambda: tl("logs", session, "counter-4").count("process started") == 2,
+             what="the second start")
+    story = [line for line in tl("logs", session, "counter-4").splitlines()
+             if not line.startswith("line ")]
+    assert story[0].startswith("[INFO] [counter-4]: process started with pid [")
+    assert story[1].startswith("[INFO] [counter-4]: process stopped [pid ")
+    assert "killed by SIGINT" in story[1]
+    assert story[2].startswith("[INFO] [counter-4]: process started with pid [")
+    assert "counter-4" not in tl("logs", session, "--level", "WARN")  # no crash
+
+
+def test_lines_keeps_the_last_n_as_tail(session):
+    assert tl("logs", session, "counter-4", "-n", "3").splitlines() == [
+        "line 48", "line 49", "line 50"]
+    assert tl("logs", session, "counter-4", "--lines", "0") == ""
+    # with a filter: the last N of what passes it
+    assert len(tl("logs", session, "--level", "ERROR", "-n", "2").splitlines()) == 2
+    bad = run_cli("logs", session, "-n", "-2")
+    assert bad.returncode == 2 and "--lines -2 is not a number of lines" in bad.stderr
+    assert "Traceback" not in bad.stderr
+
+
+def test_lines_with_follow_prints_the_last_n_then_the_new_ones(session):
+    follower = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", session,
+                                 "counter-4", "-f", "-n", "2"], stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+    try:
+        assert follower.stdout is not None
+        assert [follower.stdout.readline().rstrip("\n") for _ in range(2)] == [
+            "line 49", "line 50"]
+        tl("restart", session, "counter-4")
+        seen = []
+        end = time.monotonic() + 60
+        while "line 1" not in seen:
+            assert time.monotonic() < end, seen
+            seen.append(follower.stdout.readline().rstrip("\n"))
+        assert seen[0].startswith("[INFO] [counter-4]: process stopped [pid ")
+        assert seen[1].startswith("[INFO] [counter-4]: process started with pid [")
+        assert seen[2] == "line 1"
+        follower.send_signal(signal.SIGINT)
+        _, errors = follower.communicate(timeout=30)
+        assert follower.returncode == 130
+        assert errors == "tuilaunch: interrupted\n"
+    finally:
+        if follower.poll() is None:
+            follower.kill()
+            follower.wait()

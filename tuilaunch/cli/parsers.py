@@ -1,0 +1,200 @@
+"""The command line's two parsers: the launcher's (`tuilaunch FILE name:=value`) and the
+session commands' (`tuilaunch ls | attach | ...`).
+
+Kept apart from the commands themselves and importing nothing but argparse: shell completion
+builds them on every Tab press, before any of the engine is loaded (completion.py)."""
+
+from __future__ import annotations
+
+import argparse
+
+COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait", "topics", "hz", "echo",
+            "params", "log-level", "completion")
+PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
+                  "cancelled")
+LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
+LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
+"""The ROS levels, lowest first (as tui/output_store.py ranks a line)."""
+NODE_LEVELS = ("debug", "info", "warn", "error", "fatal", "unset")
+"""What `log-level` sets a node's logger to."""
+SHELLS = ("bash", "zsh")
+HZ_WINDOW = 10000
+"""`hz -w`'s default, as ros2 topic hz's: the rate is taken over the last N messages."""
+
+
+def version() -> str:
+    """The installed distribution's version (pyproject.toml's), else the package's own."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("tuilaunch")
+    except metadata.PackageNotFoundError:
+        from .. import __version__
+
+        return __version__
+
+
+class _Version(argparse.Action):
+    """`--version`, looked up only when asked (not on every Tab press)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: object, option_string: str | None = None) -> None:
+        print(f"tuilaunch {version()}")
+        parser.exit()
+
+
+def launch_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="tuilaunch",
+        description="Run a ROS 2 launch file (SimpleLauncher DSL, launch API, XML or YAML) in "
+        "a terminal UI.",
+        epilog="Arguments are given as name:=value, as with ros2 launch.")
+    parser.add_argument("items", nargs="+", metavar="FILE | PACKAGE FILE | name:=value",
+                        help="a launch file, or a package and a launch file in its share, "
+                        "then launch arguments")
+    parser.add_argument("--version", action=_Version, nargs=0,
+                        help="print tuilaunch's version and exit")
+    parser.add_argument("-s", "--show-args", action="store_true",
+                        help="list the launch arguments and exit")
+    parser.add_argument("-p", "--print", dest="print_plan", action="store_true",
+                        help="print what would run with these arguments and exit")
+    parser.add_argument("--json", action="store_true", help="with --print: one JSON object")
+    parser.add_argument("--headless", action="store_true",
+                        help="run without the TUI, printing each line as [process-id] line "
+                        "(the default when not in a terminal)")
+    parser.add_argument("--scrollback", type=int, default=5000, metavar="LINES",
+                        help="TUI: lines kept per node's pane (log files keep all; "
+                        "default 5000)")
+    parser.add_argument("--detach", action="store_true",
+                        help="start the launch as a background session, print its name, and "
+                        "exit (tuilaunch attach NAME opens it)")
+    parser.add_argument("--name", metavar="NAME",
+                        help="the session's name (default: the file's stem and a number)")
+    parser.add_argument("--keep-on-hangup", action="store_true",
+                        help="TUI: a dropped terminal (SIGHUP) detaches instead of stopping "
+                        "the launch")
+    parser.add_argument("--machines", metavar="MACHINES.yaml",
+                        help="run each node on the machine this file places it on (over "
+                        "ssh); with --print, show where each runs")
+    # how the launching side starts another machine's share of the launch (machines_share)
+    parser.add_argument("--share", metavar="MACHINE", help=argparse.SUPPRESS)
+    parser.add_argument("--machines-text", metavar="YAML", help=argparse.SUPPRESS)
+    parser.add_argument("--launch-prefix", metavar="CMD",
+                        help="as ros2 launch: put CMD (e.g. 'gdb -ex run --args') before "
+                        "each executable without a prefix of its own (launch-prefix:=CMD)")
+    parser.add_argument("--launch-prefix-filter", metavar="REGEX",
+                        help="as ros2 launch: only executables whose name REGEX matches from "
+                        "its start get --launch-prefix (launch-prefix-filter:=REGEX)")
+    parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
+    parser.epilog = (parser.epilog or "") + (
+        "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
+        "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
+        "hz NAME TOPIC | echo NAME TOPIC | params NAME NODE --dump/--load FILE | log-level "
+        "NAME NODE LEVEL (tuilaunch COMMAND -h). On another machine: ls HOST, and HOST:NAME "
+        "for NAME (over ssh). Tab completion: eval \"$(tuilaunch completion bash)\" (or zsh).")
+    return parser
+
+
+def commands_parser() -> argparse.ArgumentParser:
+    """The session commands; each sub-parser's positionals are named `name` (the session),
+    `process`, `node`, `topic`, `state`, `level`: completion.py completes them by name."""
+    parser = argparse.ArgumentParser(
+        prog="tuilaunch", description="Control launches running as sessions.")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    ls = commands.add_parser("ls", help="running sessions")
+    ls.add_argument("host", nargs="?", help="the sessions on this machine (as ssh names it)")
+    ls.add_argument("--json", action="store_true", help="one JSON list")
+    attach = commands.add_parser("attach", help="the TUI on a running session")
+    attach.add_argument("name", nargs="?", metavar="[HOST:]NAME",
+                        help="the session (default: the only one here)")
+    attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
+    stop = commands.add_parser("stop", help="stop every process of a session, then exit")
+    stop.add_argument("name", nargs="?", metavar="[HOST:]NAME")
+    status = commands.add_parser("status", help="each process's state")
+    status.add_argument("name", nargs="?", metavar="[HOST:]NAME")
+    status.add_argument("--json", action="store_true", help="one JSON object")
+    logs = commands.add_parser("logs", help="the output of a session's processes")
+    logs.add_argument("name", nargs="?", metavar="[HOST:]NAME")
+    logs.add_argument("process", nargs="?", help="a process id or node name (default: all)")
+    logs.add_argument("-f", "--follow", action="store_true", help="keep printing new lines")
+    logs.add_argument("-n", "--lines", type=int, metavar="N",
+                      help="only the last N lines (as tail -n); with -f, the last N and then "
+                      "the new ones")
+    logs.add_argument("--since", metavar="T",
+                      help="only lines from T on: 30s, 5m, 2h ago, a unix time, or an ISO "
+                      "time (2026-11-22T08:30:00, or 08:30 today)")
+    logs.add_argument("--level", metavar="L", type=str.upper, choices=LEVELS,
+                      help=f"only lines at this ROS level or above ({', '.join(LEVELS)})")
+    restart = commands.add_parser("restart", help="restart one process")
+    restart.add_argument("name", metavar="[HOST:]NAME")
+    restart.add_argument("process")
+    restart.add_argument("--prefix", metavar="CMD",
+                         help="run it under a tool until a restart without one, e.g. "
+                         "'gdb -q -ex run --args' (type into it in the TUI with i)")
+    restart.add_argument("--log-level", metavar="LEVEL",
+                         help="append --ros-args --log-level LEVEL (debug, info, warn, error, "
+                         "fatal; kept across respawns until a restart gives another; '' "
+                         "drops it)")
+    wait = commands.add_parser(
+        "wait", help="wait until a process is in a state (exit status 0) or time runs out (1)")
+    wait.add_argument("name", metavar="[HOST:]NAME")
+    wait.add_argument("process")
+    wait.add_argument("state", help=f"{', '.join(PROCESS_STATES)}, or a lifecycle state: "
+                      f"{', '.join(LIFECYCLE_STATES)}")
+    wait.add_argument("--timeout", type=float, default=None, metavar="S",
+                      help="give up after S seconds (exit status 1)")
+    subs = [ls, attach, stop, status, logs, restart, wait]
+    subs += _inspector_commands(commands)
+    completion = commands.add_parser(
+        "completion", help="the shell code of Tab completion: "
+        "eval \"$(tuilaunch completion bash)\" in ~/.bashrc (or zsh in ~/.zshrc)")
+    completion.add_argument("shell", choices=SHELLS)
+    subs.append(completion)
+    for sub in subs:
+        sub.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
+    return parser
+
+
+def _inspector_commands(commands: argparse._SubParsersAction[argparse.ArgumentParser])\
+        -> list[argparse.ArgumentParser]:
+    """topics, hz, echo, params, log-level (inspector.py runs them)."""
+    topics = commands.add_parser("topics", help="topics, their types, publishers and "
+                                 "subscribers (with their processes) and QoS problems")
+    topics.add_argument("name", metavar="[HOST:]NAME", help="the session")
+    topics.add_argument("--node", metavar="NODE",
+                        help="only this node's topics (full name or process id)")
+    topics.add_argument("-v", "--verbose", action="store_true",
+                        help="each publisher and subscriber with its node, process and QoS "
+                        "(as ros2 topic info -v)")
+    topics.add_argument("--json", action="store_true", help="one JSON object")
+    hz = commands.add_parser("hz", help="a topic's rate and bandwidth, a block every second "
+                             "until Ctrl+C (as ros2 topic hz and bw)")
+    hz.add_argument("name", metavar="[HOST:]NAME")
+    hz.add_argument("topic")
+    hz.add_argument("-w", "--window", type=int, default=HZ_WINDOW, metavar="N",
+                    help=f"the rate over the last N messages (default {HZ_WINDOW}, as ros2 "
+                    "topic hz)")
+    hz.add_argument("--duration", type=float, metavar="S",
+                    help="measure for S seconds, print the figures once and exit")
+    hz.add_argument("--json", action="store_true",
+                    help="one JSON object after --duration (default 5 s)")
+    echo = commands.add_parser("echo", help="a topic's messages as YAML, until Ctrl+C")
+    echo.add_argument("name", metavar="[HOST:]NAME")
+    echo.add_argument("topic")
+    echo.add_argument("--count", type=int, metavar="N", help="stop after N messages")
+    echo.add_argument("--once", action="store_true", help="stop after one message")
+    echo.add_argument("--timeout", type=float, metavar="S",
+                      help="give up after S seconds without the messages (exit status 1)")
+    params = commands.add_parser("params", help="a node's live parameters as a params file, "
+                                 "or such a file loaded into it")
+    params.add_argument("name", metavar="[HOST:]NAME")
+    params.add_argument("node", help="full node name or process id")
+    what = params.add_mutually_exclusive_group(required=True)
+    what.add_argument("--dump", action="store_true",
+                      help="print the parameters as YAML a launch file loads")
+    what.add_argument("--load", metavar="FILE", help="set the parameters a params file gives")
+    level = commands.add_parser("log-level", help="set a node's logger level")
+    level.add_argument("name", metavar="[HOST:]NAME")
+    level.add_argument("node", help="full node name or process id")
+    level.add_argument("level", help=", ".join(NODE_LEVELS))
+    return [topics, hz, echo, params, level]
