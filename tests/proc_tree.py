@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
 import time
 from pathlib import Path
+from typing import Any
 
 
 def pids() -> list[int]:
@@ -73,3 +75,13 @@ def end(pids: list[int], grace: float = 30.0) -> None:
         time.sleep(0.05)
     for pid in pids:
         send(pid, signal.SIGKILL)
+
+
+def terminate(proc: subprocess.Popen[Any], grace: float = 10.0) -> None:
+    """SIGTERM to a child of the test, SIGKILL if it is still there after `grace` seconds."""
+    proc.terminate()
+    try:
+        proc.wait(timeout=grace)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from .proc_tree import alive, descendants, end, environ, pids
+from .proc_tree import alive, descendants, end, environ, pids, terminate
 from .system_packages import apt_install
 
 SSHD = "/usr/sbin/sshd"
@@ -129,12 +129,7 @@ class Machine:
         under = [pid for pid in pids() if marker in environ(pid).split(b"\0")]
         under += descendants(self.proc.pid)
         end(under)
-        self.proc.terminate()
-        try:
-            self.proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
+        terminate(self.proc)
         end(descendants(self.proc.pid))
         shutil.rmtree(self.runtime, ignore_errors=True)
 

@@ -611,8 +611,11 @@ def test_a_bad_ros_domain_id_fails_the_ros_actions_not_the_launcher(write, tmp_p
     """rmw_fastrtps ends a process that makes a node in domain 300 (exit 1, no exception):
     tuilaunch's own ROS actions must fail with a line saying why, and the launch run on."""
     started, _ = launches
+    # `exec`: a shell that forks `sleep` loses a SIGINT arriving between that fork and the
+    # exec (the copy's handler takes it, then exec drops it) and waits for a sleep that
+    # never got it: the stop needed SIGTERM, 3 runs in 5 on a busy machine
     path = launch_file(write, """
-sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; sleep 600'], name='plain'))
+sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; exec sleep 600'], name='plain'))
 sl.call_service('/somewhere/reset')""")
     env = {**os.environ, "ROS_LOG_DIR": str(tmp_path), "ROS_DOMAIN_ID": "300"}
     proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],

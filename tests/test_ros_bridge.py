@@ -14,6 +14,8 @@ from tuilaunch.engine.packages import package_prefix
 from tuilaunch.engine.ros.bridge import RosBridge, RosError
 from tuilaunch.engine.ros.messages import MessageError, describe_fields, import_type
 
+from .inspector_helpers import run
+
 SLOW_SERVER = textwrap.dedent("""
     import time, rclpy
     from std_srvs.srv import Trigger
@@ -50,17 +52,6 @@ def nodes() -> Iterator[None]:
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
-
-
-def run(coro_factory):
-    """Runs one scenario with a fresh bridge, closed afterwards whatever happens."""
-    async def scenario():
-        bridge = RosBridge("tuilaunch_test")
-        try:
-            return await coro_factory(bridge)
-        finally:
-            bridge.close()
-    return asyncio.run(scenario())
 
 
 async def _wait_listed(bridge: RosBridge, name: str) -> list[str]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -266,7 +267,10 @@ def generate_launch_description():
         numbers = [line.split(" ", 2)[2] for line in
                    (folder / f"{name}.log").read_text().splitlines()]
         assert numbers == [str(n) for n in range(1, count + 1)]
-        assert out.count(f"[{name}] ") == count
+    # headless shows no line past 1 MB waiting for a reader slower than the flood (this
+    # test's, on a busy machine) and says how many: shown + said is every line
+    skipped = sum(int(n) for n in re.findall(r"(\d+) output lines not shown", out))
+    assert out.count("[flood0-1] ") + out.count("[flood1-2] ") + skipped == 2 * count
 
 
 def test_stop_restart_and_start_one_process_while_the_others_run(write, tmp_path):

@@ -56,7 +56,7 @@ def make_supervisor(plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
 
     `placement` (`--machines`, applied to `plan`): the processes placed on other machines
     run there, in shares this launch starts with `command` (FILE or PACKAGE FILE as given)
-    and `arguments`, named after `session_name` (run/machines_share.py)."""
+    and `arguments`, named after `session_name` (run/machines/machines_share.py)."""
     supervisor = RosSupervisor(plan, log_dir, sigterm_timeout=sigterm_timeout,
                                sigkill_timeout=sigkill_timeout, bridge_factory=bridge_factory,
                                service_timeout=service_timeout)

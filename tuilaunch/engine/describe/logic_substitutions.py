@@ -44,15 +44,15 @@ class EqualsSubstitution(Substitution):
     def __init__(self, left: SubValue, right: SubValue) -> None:
         self.left, self.right = left, right
 
+    negate = False
+
     def perform(self, context: PerformContext) -> str:
-        return str(_texts_equal(perform(self.left, context), perform(self.right, context)))\
-            .lower()
+        equal = _texts_equal(perform(self.left, context), perform(self.right, context))
+        return str(equal != self.negate).lower()
 
 
 class NotEqualsSubstitution(EqualsSubstitution):
-    def perform(self, context: PerformContext) -> str:
-        return str(not _texts_equal(perform(self.left, context), perform(self.right, context)))\
-            .lower()
+    negate = True
 
 
 def _texts_equal(left: str, right: str) -> bool:
@@ -81,11 +81,9 @@ class IfElseSubstitution(Substitution):
         return perform(self.if_value if value else self.else_value, context)
 
 
-class AllSubstitution(_BoolSubstitution):
-    def perform(self, context: PerformContext) -> str:
-        return str(all(self._bool(v, context) for v in self.operands)).lower()
+class AllSubstitution(AndSubstitution):
+    """launch's AllSubstitution: true when every operand is."""
 
 
-class AnySubstitution(_BoolSubstitution):
-    def perform(self, context: PerformContext) -> str:
-        return str(any(self._bool(v, context) for v in self.operands)).lower()
+class AnySubstitution(OrSubstitution):
+    """launch's AnySubstitution: true when one operand is."""

@@ -16,36 +16,42 @@ from .values import typed_value
 from .xacro_run import run_xacro
 
 
-class FindPackageShare(Substitution):
+class _PackagePath(Substitution):
+    """A path of a package found in the ament index, when performed or by `find`."""
+
+    tag = ""
+
     def __init__(self, package: SubValue) -> None:
         self.package = package
         self.origin = caller_origin()
 
+    def locate(self, package_name: str) -> str:
+        raise NotImplementedError
+
     def perform(self, context: PerformContext) -> str:
-        return str(package_share(perform(self.package, context), self.origin))
+        return self.locate(perform(self.package, context))
 
     def find(self, package_name: str) -> str:
-        """launch_ros's FindPackageShare.find: files call it while they load."""
+        """launch_ros's FindPackageShare.find / FindPackagePrefix.find: files call it while
+        they load."""
+        return self.locate(package_name)
+
+    def describe(self) -> str:
+        return f"$({self.tag} {describe(self.package)})"
+
+
+class FindPackageShare(_PackagePath):
+    tag = "find-pkg-share"
+
+    def locate(self, package_name: str) -> str:
         return str(package_share(package_name, self.origin))
 
-    def describe(self) -> str:
-        return f"$(find-pkg-share {describe(self.package)})"
 
+class FindPackagePrefix(_PackagePath):
+    tag = "find-pkg-prefix"
 
-class FindPackagePrefix(Substitution):
-    def __init__(self, package: SubValue) -> None:
-        self.package = package
-        self.origin = caller_origin()
-
-    def perform(self, context: PerformContext) -> str:
-        return str(package_prefix(perform(self.package, context), self.origin))
-
-    def find(self, package_name: str) -> str:
-        """launch_ros's FindPackagePrefix.find."""
+    def locate(self, package_name: str) -> str:
         return str(package_prefix(package_name, self.origin))
-
-    def describe(self) -> str:
-        return f"$(find-pkg-prefix {describe(self.package)})"
 
 
 class ExecutableInPackage(Substitution):

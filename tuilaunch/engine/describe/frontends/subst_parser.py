@@ -163,12 +163,15 @@ class _Reader:
 
     def template(self, quote: str | None) -> list[Part]:
         """Text and substitutions up to the end (or up to the closing quote)."""
+        return self._scan(quote or "", quote)
+
+    def _scan(self, stops: str, quote: str | None) -> list[Part]:
+        """Text and substitutions up to one of `stops` (or the end); a backslash escapes
+        the next character."""
         parts: list[Part] = []
         start = self.pos
         while self.pos < len(self.text):
             char = self.text[self.pos]
-            if quote is not None and char == quote:
-                break
             if char == "\\" and self.pos + 1 < len(self.text):
                 self.pos += 2
                 continue
@@ -177,6 +180,8 @@ class _Reader:
                 parts.append(self.substitution(quote))
                 start = self.pos
                 continue
+            if char in stops:
+                break
             self.pos += 1
         parts.append(_unescape(self.text[start:self.pos]))
         return _merge(parts)
@@ -228,24 +233,7 @@ class _Reader:
                 raise SubstitutionSyntaxError(f"quote {char} is not closed", opening)
             self.pos += 1
             return quoted or [""]
-        stops = " ()" + (quote or "'\"")
-        parts: list[Part] = []
-        start = self.pos
-        while self.pos < len(self.text):
-            char = self.text[self.pos]
-            if char == "\\" and self.pos + 1 < len(self.text):
-                self.pos += 2
-                continue
-            if self.at_substitution():
-                parts.append(_unescape(self.text[start:self.pos]))
-                parts.append(self.substitution(quote))
-                start = self.pos
-                continue
-            if char in stops:
-                break
-            self.pos += 1
-        parts.append(_unescape(self.text[start:self.pos]))
-        return _merge(parts)
+        return self._scan(" ()" + (quote or "'\""), quote)
 
 
 def parse_substitutions(text: str, origin: Origin | None = None) -> list[Part]:

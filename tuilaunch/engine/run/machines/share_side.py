@@ -1,7 +1,7 @@
 """A machine's share of a placed launch (`--share MACHINE`): what it answers the
 launching side beyond the usual session requests.
 
-The share runs only the processes placed on its machine (run/placed.py); the launching
+The share runs only the processes placed on its machine (run/supervisor/placed.py); the launching
 side tells it when the others start and exit (`external_event`), so a node here can wait
 for one elsewhere, and asks it for the lines its nodes printed while no link was there to
 carry them (`share_lines`, read from its log files).

@@ -2,8 +2,9 @@
 this run), its environment, its directory; that as a paste-ready shell line; and what is
 known of a death nobody asked for (the signal, the core).
 
-The supervisor builds a process's start from here (run/starting.py) and the session server
-reports the same thing in `status`, so the line an operator pastes is the one that ran.
+The supervisor builds a process's start from here (run/supervisor/starting.py) and the
+session server reports the same thing in `status`, so the line an operator pastes is the
+one that ran.
 """
 
 from __future__ import annotations

@@ -20,6 +20,10 @@ from .output import LineSplitter, screen_lines
 from .spawn import Channel
 from .terminal_input import InputRefused, TerminalInput
 
+DRAIN_CHUNKS = 256
+"""Reads, at most, of what is already waiting in a channel when it is closed (1 MB from a
+terminal, 16 MB from a pipe): a grandchild that floods for ever does not hold the end."""
+
 Deliver = Callable[["Running", str, list[str]], None]
 """What a reader calls with each block of lines: (process, channel name, lines)."""
 
@@ -64,6 +68,19 @@ class ChannelReader:
                           block.count(b"\n"))
         self.deliver(running, self.channel.name, screen_lines(block))
 
+    def _drain(self) -> None:
+        """What the channel already holds is read and logged before it is closed: a launch
+        that ends while a grandchild's output waits there (read one chunk per wake-up, and
+        the loop was slow) loses none of it."""
+        for _ in range(DRAIN_CHUNKS):
+            try:
+                chunk = os.read(self.channel.fd, 1 << 16)
+            except OSError:  # BlockingIOError: nothing more now; EIO: the other side closed
+                return
+            if not chunk:
+                return
+            self._deliver(self.splitter.feed_block(chunk))
+
     def close(self) -> None:
         if self.done.done():
             return
@@ -71,6 +88,7 @@ class ChannelReader:
             asyncio.get_running_loop().remove_reader(self.channel.fd)
         except RuntimeError:
             pass  # the loop is gone: nothing to unregister
+        self._drain()
         if self.input is not None:
             self.input.close()
         os.close(self.channel.fd)

@@ -6,7 +6,7 @@ here, in a bounded buffer, and is written when the loop says the terminal takes 
 does not fit is dropped and counted, so the caller can say so.
 
 A child whose terminal is not its controlling terminal (the fast vfork start, see
-run/spawn.py) gets no signal from the kernel for a typed ctrl+c. The writer does what the
+run/process/spawn.py) gets no signal from the kernel for a typed ctrl+c. The writer does what the
 terminal would: while the terminal's settings have ISIG on (a line reader, a shell; tcgetattr
 on the master reports the slave's settings on Linux), the INTR, QUIT and SUSP characters
 (ctrl+c, ctrl+\\, ctrl+z by default) are SIGINT, SIGQUIT and SIGTSTP to the child's process

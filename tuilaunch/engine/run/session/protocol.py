@@ -18,7 +18,7 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   first `skip`, the first `limit` (or with `tail` the last), as `{"lines": [[time, stream,
   text]...], "next": byte to ask again from, "size": the file's size, "skipped": lines left
   out}`; to a
-  machine's share of a placed launch (run/machines_share.py): external_event {process, on:
+  machine's share of a placed launch (run/machines/machines_share.py): external_event {process, on:
   start|exit, pid, code},
   share_lines {process, start, end, after}.
   Resources (run/resource_watch.py): `status` gives each process `cpu_percent` (% of one

@@ -30,7 +30,8 @@ _ENDING_KEYS = {signal.SIGINT, signal.SIGQUIT}
 EOF_GRACE = 1.0
 """Seconds to wait, once a process is reaped, for the end of its output. A daemonised
 grandchild may hold the pipe for ever: its exit is then reported anyway, and whatever it
-still prints is read and logged until the launch ends."""
+still prints is read and logged until the launch ends, and what waits in the channel then
+is read before it is closed (ChannelReader.close)."""
 
 
 class Starting(PlanActions):

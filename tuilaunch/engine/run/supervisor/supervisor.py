@@ -2,7 +2,7 @@
 
 Each process leads its own process group (its own session); the supervisor signals the
 group as one. A watchdog process stops every process of the launch if tuilaunch dies,
-however it dies (run/watchdog.py). Every output line goes to the process's log file before
+however it dies (run/process/watchdog.py). Every output line goes to the process's log file before
 any consumer sees it; consumers only get events, and a consumer that fails (a closed stdout,
 a dead terminal) never stops the reading of a pipe nor a shutdown.
 

@@ -1,0 +1,78 @@
+"""Output on a busy machine: the two ways the flood test (test_supervisor.py) lost lines
+when the machine was loaded.
+
+- Lines still waiting in a process's terminal when the launch ended were dropped: the
+  reader takes one chunk per wake-up and gives up waiting for the end of a process's output
+  after a second, so a loop held up by the machine closed it with lines unread. They are
+  now read and logged before the channel is closed.
+- Headless stdout shows no line past 1 MB waiting for a reader that is slower than the
+  flood (a busy test process reading a pipe is one): those lines are counted on screen and
+  are in the log; what a reader sees plus what it is told it missed is every line.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import re
+import sys
+import threading
+import time
+
+from tuilaunch.cli.stdout_writer import BackgroundWriter
+from tuilaunch.engine import load_file, resolve
+from tuilaunch.engine.run.supervisor.supervisor import Supervisor
+
+LATE = """import os, time
+time.sleep(1.5)  # its parent has exited by then: the launch is ending
+os.write(1, b''.join(b'%d\\n' % i for i in range(1, 2001)))
+"""
+
+
+def test_output_waiting_in_a_terminal_when_the_launch_ends_is_all_logged(write, tmp_path):
+    """A shell leaves a child behind that prints 2000 lines (9 KB, what a terminal holds)
+    into the terminal while the supervisor's loop is held up (here by a slow consumer, on
+    a busy machine by the CPU): the launch ends, and the log file has every line."""
+    (tmp_path / "late.py").write_text(LATE)
+    path = write(f"""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='shell', cmd=[
+        'sh', '-c', '{sys.executable} {tmp_path / "late.py"} & exit 0'])])
+""")
+    plan = resolve(load_file(str(path)), {}, params_dir=tmp_path / "params")
+    supervisor = Supervisor(plan, tmp_path / "log")
+
+    def held_up(event) -> None:
+        if event.kind == "exited":
+            time.sleep(2.5)  # meanwhile the late child prints and exits
+
+    supervisor.subscribe(held_up)
+    assert asyncio.run(supervisor.run()) == 0
+    logged = (tmp_path / "log" / "shell-1.log").read_text().splitlines()
+    assert [line.split(" ", 2)[2] for line in logged] == [str(n) for n in range(1, 2001)]
+
+
+def test_a_slow_reader_sees_every_line_or_is_told_how_many_it_was_not_shown():
+    read_end, write_end = os.pipe()
+    writer = BackgroundWriter(write_end, "utf-8", lambda exc: None,
+                              lambda n: f"{n} output lines not shown\n", limit=64 << 10)
+    line, count = "[flood-1] 123456\n", 40_000
+    for _ in range(count):  # nobody reads yet: the pipe fills, then the queue
+        writer.write(line, 1)
+    got: list[bytes] = []
+
+    def read() -> None:
+        while chunk := os.read(read_end, 1 << 16):
+            got.append(chunk)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()  # the reader comes back
+    writer.close()
+    os.close(write_end)
+    reader.join(30)
+    os.close(read_end)
+    out = b"".join(got).decode()
+    skipped = sum(int(n) for n in re.findall(r"(\d+) output lines not shown", out))
+    assert skipped > 0 and out.count(line) + skipped == count
