@@ -6,6 +6,7 @@ through Textual's pilot, and the command line run as a user types it."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -25,15 +26,17 @@ from .test_tui import BRINGUP, until
 
 @asynccontextmanager
 async def session_tui(path: str, *args: str, wait: tuple[str, ...] = (),
-                      size: tuple[int, int] = (120, 36))\
+                      size: tuple[int, int] = (120, 36), owner: bool = True)\
         -> AsyncIterator[tuple[TuiLaunchApp, Pilot, str]]:
-    """The launch in a session server (as `tuilaunch FILE` runs it), the TUI attached."""
+    """The launch in a session server and the TUI on it: as `tuilaunch FILE` runs it
+    (`owner`), or as `tuilaunch attach` opens it."""
     name = tl(path, "--detach", *args).stdout.strip()
     try:
         for process in wait:
             tl("wait", name, process, "running", "--timeout", "60")
         info = status(name)
-        app = make_app(path, info["arguments"], Path(info["log_dir"]), session_name=name)
+        app = make_app(path, info["arguments"], Path(info["log_dir"]), session_name=name,
+                       owner=owner)
         async with app.run_test(size=size) as pilot:
             yield app, pilot, name
     finally:
@@ -249,3 +252,99 @@ def test_a_mistyped_argument_keeps_its_warning_line_headless_and_in_print(write)
     assert ran.returncode == 0, ran.stderr
     assert "tuilaunch: warning: argument 'robto' is not declared by test_launch.py or its " \
         "includes; did you mean 'robot'? (declared: robot)" in ran.stderr
+
+
+SHELL = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('word', 'alpha')
+    sl.add_action(ExecuteProcess(name='echo', cmd=[
+        'sh', '-c', 'echo word "$0"; exec sleep 600', sl.arg('word')]))
+    sl.add_action(ExecuteProcess(name='bad', cmd=['sh', '-c', 'sleep 1; exit 3']))
+    return sl.launch_description()
+"""
+
+
+def apply_elsewhere(name: str, **arguments: str) -> None:
+    """Another operator's client relaunches the session."""
+    from tuilaunch.client.link import open_link
+
+    link = open_link(name)
+    try:
+        link.request("apply", arguments=arguments)
+    finally:
+        link.close()
+
+
+async def test_an_attached_client_says_when_the_session_is_stopped_elsewhere(
+        runtime, write):  # noqa: F811
+    path = write(SHELL)
+    # a relaunch made by another client before this one attached
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    apply_elsewhere(name, word="beta")
+    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    info = status(name)
+    app = make_app(str(path), info["arguments"], Path(info["log_dir"]), session_name=name)
+    try:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await until(pilot, lambda: "echo-1" in app.launch_tree.rows)
+            await until(pilot, lambda: app.query_one("#arg-word", Input).value == "beta")
+            # what happened before attaching is in the panes, not news in a toast
+            said = [n.message for n in app._notifications]
+            assert not any("relaunched by another client" in m for m in said), said
+            # a relaunch while attached is news
+            apply_elsewhere(name, word="gamma")
+            await until(pilot, lambda: any("relaunched by another client: word:=gamma"
+                                           in n.message for n in app._notifications))
+            # `tuilaunch stop` elsewhere: said here before the TUI leaves
+            stopping = run_cli("stop", name)
+            assert stopping.returncode == 0, stopping.stderr
+            await until(pilot, lambda: "stopped elsewhere" in header(app))
+            assert f"session {name} was stopped elsewhere (tuilaunch stop); leaving" \
+                == header(app)
+            assert any("stopped elsewhere" in n.message for n in app._notifications)
+            assert app.is_running  # still on screen, long enough to be read
+            await until(pilot, lambda: not app.is_running)
+    finally:
+        tl("stop", name, check=False)
+    assert app.ended_elsewhere == "tuilaunch stop"
+
+
+def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
+    """`tuilaunch attach` on a terminal: stopped elsewhere, it leaves a line in the shell;
+    `tuilaunch FILE` quit after a process failed leaves what failed and where its log is."""
+    from .test_sessions import Terminal
+
+    path = write(SHELL)
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    attached = Terminal("attach", name)
+    try:
+        attached.read_until(b"echo-1")
+        assert run_cli("stop", name).returncode == 0
+        assert attached.wait_exit() == 1  # bad-2 failed in this launch
+        attached.read_until(f"session {name} was stopped elsewhere (tuilaunch stop)".encode())
+        attached.read_until(b"tuilaunch: bad-2 failed (exit code 3)")
+    finally:
+        attached.close()
+
+    owner = Terminal(str(path))
+    try:
+        owner.read_until(b"bad-2")
+        names = [line.split()[0] for line in tl("ls").stdout.splitlines()[1:] if line]
+        tl("wait", names[-1], "bad-2", "failed", "--timeout", "60")
+        log_dir = status(names[-1])["log_dir"]
+        os.write(owner.master, b"q")
+        owner.read_until(b"Stop")
+        os.write(owner.master, b"y")
+        assert owner.wait_exit() == 1
+        owner.read_until(b"every log of this launch")
+        text = owner.screen.decode(errors="replace")
+        assert f"tuilaunch: bad-2 failed (exit code 3); its output: {log_dir}/bad-2.log" in text
+        assert f"tuilaunch: every log of this launch: {log_dir}" in text
+        assert "echo-1 failed" not in text  # stopped by the quit: not a failure
+    finally:
+        owner.close()
