@@ -72,8 +72,11 @@ class Arguments(SessionLink):
         self.preview_values(self.args_panel.values(), reread=True)
         preview = self.preview
         if preview is None or preview.plan is None or preview.diff is None:
+            error = "" if preview is None else str(preview.error)
             self.notify("nothing to apply" if preview is None else
-                        f"cannot apply: {preview.error}", severity="warning")
+                        f"cannot apply: {error}" + ("; the launch runs on as it was"
+                                                    if "no longer loads" in error else ""),
+                        severity="warning")
             return
         self.relaunch(preview)
 
