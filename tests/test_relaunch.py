@@ -348,3 +348,41 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
         assert "echo-1 failed" not in text  # stopped by the quit: not a failure
     finally:
         owner.close()
+
+
+MAIN = """
+import os
+from launch import LaunchDescription
+from launch.actions import IncludeLaunchDescription
+from launch.launch_description_sources import PythonLaunchDescriptionSource
+def generate_launch_description():
+    here = os.path.dirname(__file__)
+    return LaunchDescription([IncludeLaunchDescription(
+        PythonLaunchDescriptionSource(os.path.join(here, 'part_launch.py')))])
+"""
+PART = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='part', cmd=[
+        'sh', '-c', 'echo {said}; exec sleep 600'])])
+"""
+
+
+async def test_an_edited_included_file_is_previewed_and_applied_by_f5(
+        runtime, write):  # noqa: F811
+    part = write(PART.format(said="first"), "part_launch.py")
+    path = write(MAIN, "main_launch.py")
+    async with session_tui(str(path), wait=("part-1",)) as (app, pilot, name):
+        first = pid_of(name, "part-1")
+        part.write_text(PART.format(said="second"))
+        await pilot.press("2")
+        await until(pilot, lambda: "changed on disk" in preview_text(app))
+        assert preview_text(app).startswith(
+            "a file main_launch.py includes changed on disk: changes: part-1.")
+        await pilot.press("f5")
+        await until(pilot, lambda: "Applied." in preview_text(app))
+        tl("wait", name, "part-1", "running", "--timeout", "60")
+        assert pid_of(name, "part-1") != first
+        await until(pilot, lambda: "second" in tl("logs", name, "part-1").stdout,
+                    every=lambda: None)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 from textual import on, work
 
 from ..engine.errors import LaunchError
@@ -52,8 +50,7 @@ class Arguments(SessionLink):
             panel.set_preview_text("No change from what runs now.", error=False)
         else:
             tree.set_preview(self.preview.diff)
-            panel.set_preview_text(_describe_diff(self.preview, self.session.path),
-                                   error=False)
+            panel.set_preview_text(_describe_diff(self.preview), error=False)
         self.refresh_bindings()
 
     def tab_shown(self, pane: str) -> None:
@@ -113,15 +110,14 @@ class Arguments(SessionLink):
         self.refresh_bindings()
 
 
-def _describe_diff(preview: Preview, path: str) -> str:
+def _describe_diff(preview: Preview) -> str:
     assert preview.diff is not None and preview.plan is not None
     text = ""
     edit = preview.file_changes
     if edit is not None:
         # what the edited file alone changes, with the values that run now
-        name = os.path.basename(path)
-        text = f"{name} changed on disk: " + (_diff_words(edit, "adds", "changes", "removes")
-                                               or "no process changes") + ". "
+        alters = _diff_words(edit, "adds", "changes", "removes") or "no process changes"
+        text = f"{preview.edited or 'the launch file'} changed on disk: {alters}. "
     diff = preview.diff
     if diff.empty:
         return text + "No process changes; F5 applies the new values anyway."
