@@ -232,7 +232,10 @@ async def test_a_mistyped_argument_is_said_in_the_tui_and_not_shown_as_applied(
         # the header lists what applies, and the typo apart, never as applied
         await until(pilot, lambda: "not declared: robto" in header(app))
         assert "robto:=r2" not in header(app)
-        # the launch pane keeps it after the toast is gone
+        # the all nodes pane keeps it after the toast is gone
+        await pilot.press("a")
+        await until(pilot, lambda: any("did you mean 'robot'?" in line
+                                       for line in app.output_panel.pane_lines()))
         lines = [line.text for line in app.store.lines(View("launch"))]
         assert any("did you mean 'robot'?" in line for line in lines), lines
         assert "in r1" in tl("logs", name, "say-1").stdout

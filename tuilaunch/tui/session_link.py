@@ -43,6 +43,8 @@ status line, footer): a display over a link is sent a pane's worth of lines a se
 the pane repaints once a second and shows no more."""
 ENDED_ELSEWHERE_PAUSE = 3.0
 """Seconds a client shows that its session was stopped elsewhere before it leaves."""
+WARNINGS_SHOWN = 3
+"""The plan's warnings shown as toasts when the TUI opens; all are in the all nodes pane."""
 INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources"})
 """What the session server measures for a client that asks (tui/inspector.py shows it)."""
 
@@ -289,11 +291,18 @@ class SessionLink(App[int]):
         """What the plan warns about (a mistyped argument, a missing parameter file), said
         in the TUI: printed before it took the screen, it would only be seen after quitting."""
         lines: list[Line] = []
-        attached = self.session_name is not None and not self.owner
-        for warning in self.session.plan.warnings:
+        warnings = self.session.plan.warnings
+        for warning in warnings:
             lines += self.store.add_event("launch", f"warning: {warning}", WARN)
-            if not attached:  # the operator who gave the values; attach finds it in the pane
+        # to the operator who gave the values (an attached client finds them in the all
+        # nodes pane, as `launch` lines);
+        # a few at most: a column of toasts would hide the screen
+        if self.session_name is None or self.owner:
+            for warning in warnings[:WARNINGS_SHOWN]:
                 self.notify(warning, title="warning", severity="warning", timeout=20)
+            if len(warnings) > WARNINGS_SHOWN:
+                self.notify(f"{len(warnings) - WARNINGS_SHOWN} more warnings: in the all "
+                            "nodes pane (a)", severity="warning", timeout=20)
         if lines:
             self.output_panel.append(lines)
             self.output_panel.flush()
