@@ -101,6 +101,15 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         assert question.question.startswith("Log level of /rl2/talker (talker-1)")
         await pilot.press("escape")
 
+        # the topics listed by `o` follow the node when the next relaunch moves it again
+        await pilot.press("2")
+        app.query_one("#arg-robot", Input).focus()
+        await pilot.press("ctrl+u", *"rl5", "f5")
+        await until(pilot, lambda: panel.node == "/rl5/talker")
+        await pilot.press("escape", "5")
+        await until(pilot, lambda: "/rl5/chatter" in panel.shown)
+        assert not any(topic.startswith("/rl2/") for topic in panel.shown)
+
     # the command line, after the relaunch, finds the node by its process id too
     async with session_tui(BRINGUP, "robot:=rl3", "listener:=false", "services:=false",
                            wait=("talker-1",)) as (app, pilot, name):
