@@ -19,10 +19,13 @@ class Arguments(SessionLink):
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
         self.preview_values(event.values)
 
-    def preview_values(self, values: dict[str, str], reread: bool = False) -> None:
+    def preview_values(self, values: dict[str, str], reread: bool = False,
+                       shown: bool = False) -> None:
         """What these form values would do; a value the plan cannot use is an error here,
         and F5 never applies it. The launch file is read again when it changed on disk
-        (`reread`: whatever its stamp says, as F5 does), and what the edit changes is said."""
+        (`reread`: whatever its stamp says, as F5 does), and what the edit changes is said.
+        `shown`: the tab came on screen, nothing was typed."""
+        previous = self.preview
         current = {a.name: a.value for a in self.session.plan.arguments}
         edits = {k: v for k, v in values.items() if v != current.get(k)}
         panel = self.args_panel
@@ -47,7 +50,8 @@ class Arguments(SessionLink):
         elif not edits and self.preview.file_changes is None:
             self.preview = None
             tree.set_preview(None)
-            panel.set_preview_text("No change from what runs now.", error=False)
+            if not (shown and previous is None):  # the tab's hint stays until an edit
+                panel.set_preview_text("No change from what runs now.", error=False)
         else:
             tree.set_preview(self.preview.diff)
             panel.set_preview_text(_describe_diff(self.preview), error=False)
@@ -57,7 +61,7 @@ class Arguments(SessionLink):
         super().tab_shown(pane)
         if pane == "args" and self.supervisor is not None:
             # the file may have been edited meanwhile: the preview says so before F5
-            self.preview_values(self.args_panel.values())
+            self.preview_values(self.args_panel.values(), shown=True)
 
     @on(ArgsPanel.ApplyRequested)
     def _apply_requested(self) -> None:
