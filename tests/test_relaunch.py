@@ -6,6 +6,7 @@ through Textual's pilot, and the command line run as a user types it."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -25,15 +26,17 @@ from .test_tui import BRINGUP, until
 
 @asynccontextmanager
 async def session_tui(path: str, *args: str, wait: tuple[str, ...] = (),
-                      size: tuple[int, int] = (120, 36))\
+                      size: tuple[int, int] = (120, 36), owner: bool = True)\
         -> AsyncIterator[tuple[TuiLaunchApp, Pilot, str]]:
-    """The launch in a session server (as `tuilaunch FILE` runs it), the TUI attached."""
+    """The launch in a session server and the TUI on it: as `tuilaunch FILE` runs it
+    (`owner`), or as `tuilaunch attach` opens it."""
     name = tl(path, "--detach", *args).stdout.strip()
     try:
         for process in wait:
             tl("wait", name, process, "running", "--timeout", "60")
         info = status(name)
-        app = make_app(path, info["arguments"], Path(info["log_dir"]), session_name=name)
+        app = make_app(path, info["arguments"], Path(info["log_dir"]), session_name=name,
+                       owner=owner)
         async with app.run_test(size=size) as pilot:
             yield app, pilot, name
     finally:
@@ -98,6 +101,15 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         assert question.question.startswith("Log level of /rl2/talker (talker-1)")
         await pilot.press("escape")
 
+        # the topics listed by `o` follow the node when the next relaunch moves it again
+        await pilot.press("2")
+        app.query_one("#arg-robot", Input).focus()
+        await pilot.press("ctrl+u", *"rl5", "f5")
+        await until(pilot, lambda: panel.node == "/rl5/talker")
+        await pilot.press("escape", "5")
+        await until(pilot, lambda: "/rl5/chatter" in panel.shown)
+        assert not any(topic.startswith("/rl2/") for topic in panel.shown)
+
     # the command line, after the relaunch, finds the node by its process id too
     async with session_tui(BRINGUP, "robot:=rl3", "listener:=false", "services:=false",
                            wait=("talker-1",)) as (app, pilot, name):
@@ -111,12 +123,8 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         await pilot.press("ctrl+u", *"rl4", "f5")
         await until(pilot, lambda: status(name)["arguments"].get("robot") == "rl4")
         tl("wait", name, "talker-1", "running", "--timeout", "60")
+        # at once: the server waits a moment for the restarted talker to say its name
         topics = tl("topics", name, "--node", "talker-1", check=False)
-        for _ in range(3):  # its name is learnt from its first line after the start
-            if topics.returncode == 0 and "/rl4/chatter" in topics.stdout:
-                break
-            await pilot.pause(1.0)
-            topics = tl("topics", name, "--node", "talker-1", check=False)
         assert topics.returncode == 0, topics.stderr
         assert "/rl4/chatter" in topics.stdout and "/rl3/" not in topics.stdout
         dumped = tl("params", name, "talker-1", "--dump")
@@ -233,7 +241,10 @@ async def test_a_mistyped_argument_is_said_in_the_tui_and_not_shown_as_applied(
         # the header lists what applies, and the typo apart, never as applied
         await until(pilot, lambda: "not declared: robto" in header(app))
         assert "robto:=r2" not in header(app)
-        # the launch pane keeps it after the toast is gone
+        # the all nodes pane keeps it after the toast is gone
+        await pilot.press("a")
+        await until(pilot, lambda: any("did you mean 'robot'?" in line
+                                       for line in app.output_panel.pane_lines()))
         lines = [line.text for line in app.store.lines(View("launch"))]
         assert any("did you mean 'robot'?" in line for line in lines), lines
         assert "in r1" in tl("logs", name, "say-1").stdout
@@ -249,3 +260,137 @@ def test_a_mistyped_argument_keeps_its_warning_line_headless_and_in_print(write)
     assert ran.returncode == 0, ran.stderr
     assert "tuilaunch: warning: argument 'robto' is not declared by test_launch.py or its " \
         "includes; did you mean 'robot'? (declared: robot)" in ran.stderr
+
+
+SHELL = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('word', 'alpha')
+    sl.add_action(ExecuteProcess(name='echo', cmd=[
+        'sh', '-c', 'echo word "$0"; exec sleep 600', sl.arg('word')]))
+    sl.add_action(ExecuteProcess(name='bad', cmd=['sh', '-c', 'sleep 1; exit 3']))
+    return sl.launch_description()
+"""
+
+
+def apply_elsewhere(name: str, **arguments: str) -> None:
+    """Another operator's client relaunches the session."""
+    from tuilaunch.client.link import open_link
+
+    link = open_link(name)
+    try:
+        link.request("apply", arguments=arguments)
+    finally:
+        link.close()
+
+
+async def test_an_attached_client_says_when_the_session_is_stopped_elsewhere(
+        runtime, write):  # noqa: F811
+    path = write(SHELL)
+    # a relaunch made by another client before this one attached
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    apply_elsewhere(name, word="beta")
+    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    info = status(name)
+    app = make_app(str(path), info["arguments"], Path(info["log_dir"]), session_name=name)
+    try:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await until(pilot, lambda: "echo-1" in app.launch_tree.rows)
+            await until(pilot, lambda: app.query_one("#arg-word", Input).value == "beta")
+            # what happened before attaching is in the panes, not news in a toast
+            said = [n.message for n in app._notifications]
+            assert not any("relaunched by another client" in m for m in said), said
+            # a relaunch while attached is news
+            apply_elsewhere(name, word="gamma")
+            await until(pilot, lambda: any("relaunched by another client: word:=gamma"
+                                           in n.message for n in app._notifications))
+            # `tuilaunch stop` elsewhere: said here before the TUI leaves
+            stopping = run_cli("stop", name)
+            assert stopping.returncode == 0, stopping.stderr
+            await until(pilot, lambda: "stopped elsewhere" in header(app))
+            assert f"session {name} was stopped elsewhere (tuilaunch stop); leaving" \
+                == header(app)
+            assert any("stopped elsewhere" in n.message for n in app._notifications)
+            assert app.is_running  # still on screen, long enough to be read
+            await until(pilot, lambda: not app.is_running)
+    finally:
+        tl("stop", name, check=False)
+    assert app.ended_elsewhere == "tuilaunch stop"
+
+
+def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
+    """`tuilaunch attach` on a terminal: stopped elsewhere, it leaves a line in the shell;
+    `tuilaunch FILE` quit after a process failed leaves what failed and where its log is."""
+    from .test_sessions import Terminal
+
+    path = write(SHELL)
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    attached = Terminal("attach", name)
+    try:
+        attached.read_until(b"echo-1")
+        assert run_cli("stop", name).returncode == 0
+        assert attached.wait_exit() == 1  # bad-2 failed in this launch
+        attached.read_until(f"session {name} was stopped elsewhere (tuilaunch stop)".encode())
+        attached.read_until(b"tuilaunch: bad-2 failed (exit code 3)")
+    finally:
+        attached.close()
+
+    owner = Terminal(str(path))
+    try:
+        owner.read_until(b"bad-2")
+        names = [line.split()[0] for line in tl("ls").stdout.splitlines()[1:] if line]
+        tl("wait", names[-1], "bad-2", "failed", "--timeout", "60")
+        log_dir = status(names[-1])["log_dir"]
+        os.write(owner.master, b"q")
+        owner.read_until(b"Stop")
+        os.write(owner.master, b"y")
+        assert owner.wait_exit() == 1
+        owner.read_until(b"every log of this launch")
+        text = owner.screen.decode(errors="replace")
+        assert f"tuilaunch: bad-2 failed (exit code 3); its output: {log_dir}/bad-2.log" in text
+        assert f"tuilaunch: every log of this launch: {log_dir}" in text
+        assert "echo-1 failed" not in text  # stopped by the quit: not a failure
+    finally:
+        owner.close()
+
+
+MAIN = """
+import os
+from launch import LaunchDescription
+from launch.actions import IncludeLaunchDescription
+from launch.launch_description_sources import PythonLaunchDescriptionSource
+def generate_launch_description():
+    here = os.path.dirname(__file__)
+    return LaunchDescription([IncludeLaunchDescription(
+        PythonLaunchDescriptionSource(os.path.join(here, 'part_launch.py')))])
+"""
+PART = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='part', cmd=[
+        'sh', '-c', 'echo {said}; exec sleep 600'])])
+"""
+
+
+async def test_an_edited_included_file_is_previewed_and_applied_by_f5(
+        runtime, write):  # noqa: F811
+    part = write(PART.format(said="first"), "part_launch.py")
+    path = write(MAIN, "main_launch.py")
+    async with session_tui(str(path), wait=("part-1",)) as (app, pilot, name):
+        first = pid_of(name, "part-1")
+        part.write_text(PART.format(said="second"))
+        await pilot.press("2")
+        await until(pilot, lambda: "changed on disk" in preview_text(app))
+        assert preview_text(app).startswith(
+            "a file main_launch.py includes changed on disk: changes: part-1.")
+        await pilot.press("f5")
+        await until(pilot, lambda: "Applied." in preview_text(app))
+        tl("wait", name, "part-1", "running", "--timeout", "60")
+        assert pid_of(name, "part-1") != first
+        await until(pilot, lambda: "second" in tl("logs", name, "part-1").stdout,
+                    every=lambda: None)

@@ -111,6 +111,22 @@ def report_end(app: Any, name: str) -> None:
         log = Path(app.supervisor.log_dir) / "session.log"
         print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "
               f"messages: {log})", file=sys.stderr)
+    elif getattr(app, "ended_elsewhere", None):
+        print(f"session {name} was stopped elsewhere ({app.ended_elsewhere})", file=sys.stderr)
+    if not getattr(app, "detached", False) and isinstance(app.supervisor, RemoteSupervisor):
+        report_failures(app.supervisor)
+
+
+def report_failures(supervisor: RemoteSupervisor) -> None:
+    """What failed, left in the shell's scrollback as ros2 launch leaves it: each failed
+    process with its exit code or signal and its log file, then the launch's log folder."""
+    failed = [p for p, state in supervisor.states.items() if state == "failed"]
+    for process in failed:
+        reason = supervisor.reasons.get(process) or "failed"
+        print(f"tuilaunch: {process} failed ({reason}); its output: "
+              f"{supervisor.log_dir / f'{process}.log'}", file=sys.stderr)
+    if failed:
+        print(f"tuilaunch: every log of this launch: {supervisor.log_dir}", file=sys.stderr)
 
 
 def argument_line(arguments: dict[str, str]) -> str:

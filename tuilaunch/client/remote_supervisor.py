@@ -101,6 +101,12 @@ class RemoteSupervisor:
         self.log_dir = Path(info["log_dir"])
         self.states: dict[str, str] = {}
         self.exit_codes: dict[str, int] = {}
+        self.reasons: dict[str, str] = {}
+        """How each process last ended or failed to start (`exit code 1`, `killed by
+        SIGSEGV`), as the server said it: what the shell is told after a failed run."""
+        self.shutdown_reason: str | None = None
+        """Why the session began to stop, as its server said (`tuilaunch stop`, another
+        client's quit, a signal): a client that did not ask says it before leaving."""
         self.consumers: list[Consumer] = []
         self.history: list[Event] = []
         self.detached = False
@@ -144,6 +150,7 @@ class RemoteSupervisor:
         self.lifecycle.states.update(result.get("lifecycle") or {})
         self._adopt(result["arguments"])
         self.history = self._replay(result["offsets"], result["recent"], scrollback)
+        self._note_ends(self.history)
         return self
 
     @classmethod
@@ -178,6 +185,7 @@ class RemoteSupervisor:
             raise RemoteError(f"{host}: session {name} did not answer ({exc or 'timeout'})")\
                 from None
         self.history = merged(lines, result["recent"])
+        self._note_ends(self.history)
         self._note_recent(result["recent"])
         return self
 
@@ -208,6 +216,12 @@ class RemoteSupervisor:
                     raise SessionError(f"session {self.name}: {message.get('error')}")
                 return message.get("result")
             self._early.append(message)
+
+    def _note_ends(self, events: list[Event]) -> None:
+        """How processes ended before this client came (the server's recent events)."""
+        for event in events:
+            if event.kind in ("exited", "failed") and event.process and event.reason:
+                self.reasons[event.process] = event.reason
 
     def _note_recent(self, recent: list[dict[str, Any]]) -> None:
         for data in recent:
@@ -324,6 +338,10 @@ class RemoteSupervisor:
                 self._adopt(dict(item.split(":=", 1) for item in event.lines), True)
             if event.kind == "exited" and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
+            if event.kind in ("exited", "failed") and event.process and event.reason:
+                self.reasons[event.process] = event.reason
+            if event.kind == "shutdown":
+                self.shutdown_reason = event.reason or "stop requested"
             if event.kind == "lifecycle" and event.process:
                 self.lifecycle.follow(event.process, event.reason or "")
             self._deliver(event)

@@ -66,7 +66,8 @@ class ServedSession(Session):
                                 list(result["start"])), None,
                        None if edit is None else PlanDiff(list(edit["keep"]),
                                                           list(edit["stop"]),
-                                                          list(edit["start"])))
+                                                          list(edit["start"])),
+                       edited=result.get("edited"))
 
     def accept(self, preview: Preview) -> Plan:
         assert preview.plan is not None

@@ -169,7 +169,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         tree.show_plan(self.session.plan, self.supervisor.states)
         self.describe_waiting()
         if isinstance(self.supervisor, RemoteSupervisor):
-            self.show_events(self.supervisor.history)  # what was printed before we came
+            self.replaying = True  # what was printed before we came: shown, not news
+            self.show_events(self.supervisor.history)
+            self.replaying = False
             for process, state in self.supervisor.lifecycle.states.items():
                 tree.set_lifecycle(process, state)  # states reached before we came
         self.run_supervisor()

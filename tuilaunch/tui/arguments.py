@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 from textual import on, work
 
 from ..engine.errors import LaunchError
@@ -21,10 +19,13 @@ class Arguments(SessionLink):
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
         self.preview_values(event.values)
 
-    def preview_values(self, values: dict[str, str], reread: bool = False) -> None:
+    def preview_values(self, values: dict[str, str], reread: bool = False,
+                       shown: bool = False) -> None:
         """What these form values would do; a value the plan cannot use is an error here,
         and F5 never applies it. The launch file is read again when it changed on disk
-        (`reread`: whatever its stamp says, as F5 does), and what the edit changes is said."""
+        (`reread`: whatever its stamp says, as F5 does), and what the edit changes is said.
+        `shown`: the tab came on screen, nothing was typed."""
+        previous = self.preview
         current = {a.name: a.value for a in self.session.plan.arguments}
         edits = {k: v for k, v in values.items() if v != current.get(k)}
         panel = self.args_panel
@@ -49,18 +50,18 @@ class Arguments(SessionLink):
         elif not edits and self.preview.file_changes is None:
             self.preview = None
             tree.set_preview(None)
-            panel.set_preview_text("No change from what runs now.", error=False)
+            if not (shown and previous is None):  # the tab's hint stays until an edit
+                panel.set_preview_text("No change from what runs now.", error=False)
         else:
             tree.set_preview(self.preview.diff)
-            panel.set_preview_text(_describe_diff(self.preview, self.session.path),
-                                   error=False)
+            panel.set_preview_text(_describe_diff(self.preview), error=False)
         self.refresh_bindings()
 
     def tab_shown(self, pane: str) -> None:
         super().tab_shown(pane)
         if pane == "args" and self.supervisor is not None:
             # the file may have been edited meanwhile: the preview says so before F5
-            self.preview_values(self.args_panel.values())
+            self.preview_values(self.args_panel.values(), shown=True)
 
     @on(ArgsPanel.ApplyRequested)
     def _apply_requested(self) -> None:
@@ -72,8 +73,11 @@ class Arguments(SessionLink):
         self.preview_values(self.args_panel.values(), reread=True)
         preview = self.preview
         if preview is None or preview.plan is None or preview.diff is None:
+            error = "" if preview is None else str(preview.error)
             self.notify("nothing to apply" if preview is None else
-                        f"cannot apply: {preview.error}", severity="warning")
+                        f"cannot apply: {error}" + ("; the launch runs on as it was"
+                                                    if "no longer loads" in error else ""),
+                        severity="warning")
             return
         self.relaunch(preview)
 
@@ -110,15 +114,14 @@ class Arguments(SessionLink):
         self.refresh_bindings()
 
 
-def _describe_diff(preview: Preview, path: str) -> str:
+def _describe_diff(preview: Preview) -> str:
     assert preview.diff is not None and preview.plan is not None
     text = ""
     edit = preview.file_changes
     if edit is not None:
         # what the edited file alone changes, with the values that run now
-        name = os.path.basename(path)
-        text = f"{name} changed on disk: " + (_diff_words(edit, "adds", "changes", "removes")
-                                               or "no process changes") + ". "
+        alters = _diff_words(edit, "adds", "changes", "removes") or "no process changes"
+        text = f"{preview.edited or 'the launch file'} changed on disk: {alters}. "
     diff = preview.diff
     if diff.empty:
         return text + "No process changes; F5 applies the new values anyway."

@@ -34,6 +34,9 @@ class Inspector(Navigation):
         self.log_levels: dict[str, str] = {}
         """The level last set per process (the level dialog starts there)."""
         self.qos_timer: Timer | None = None
+        self.topics_process: str | None = None
+        """The process whose node's topics `o` listed: the list follows the node when a
+        relaunch or a restart moves it."""
 
     async def inspect(self, op: str, **fields: Any) -> Any:
         """A session request's result; raises SessionError with the server's message."""
@@ -139,8 +142,23 @@ class Inspector(Navigation):
         process = self.selected_process()
         if process is None:
             return
+        self.topics_process = process
         self.topics_panel.show_node(self.node_name(process))
         self.action_tab("topics")
+
+    def update_detail(self) -> None:
+        super().update_detail()
+        self._follow_topics_node()
+
+    def _follow_topics_node(self) -> None:
+        """After events: the node `o` listed may now be elsewhere (robot:=r1 -> r2)."""
+        process, panel = self.topics_process, self.topics_panel
+        if process is None or panel.node is None:
+            self.topics_process = None  # `x` listed all topics: nothing to follow
+            return
+        name = self.node_name(process)
+        if name not in (panel.node, process):  # known again, and somewhere else
+            panel.show_node(name)
 
     def action_log_level(self) -> None:
         process = self.selected_process()

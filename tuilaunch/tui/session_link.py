@@ -41,6 +41,10 @@ PANE_CHROME = 6
 """Rows of the screen that are not the output pane (status, tabs, detail, the pane's own
 status line, footer): a display over a link is sent a pane's worth of lines a second, as
 the pane repaints once a second and shows no more."""
+ENDED_ELSEWHERE_PAUSE = 3.0
+"""Seconds a client shows that its session was stopped elsewhere before it leaves."""
+WARNINGS_SHOWN = 3
+"""The plan's warnings shown as toasts when the TUI opens; all are in the all nodes pane."""
 INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources"})
 """What the session server measures for a client that asks (tui/inspector.py shows it)."""
 
@@ -100,6 +104,10 @@ class SessionLink(App[int]):
         self.exit_status = 0
         self.quitting = False
         self.terminal_lost = False
+        self.ended_elsewhere: str | None = None
+        """Why the session ended when neither this client nor its terminal asked
+        (`tuilaunch stop`, another client's quit): said on screen, then in the shell."""
+        self.replaying = False  # showing what happened before this client came
         self._bridge: RosBridge | None = None
         self._bridge_lock = threading.Lock()
         # stops the operator asked for: their non-zero exit is not a failure
@@ -124,6 +132,18 @@ class SessionLink(App[int]):
             self._bridge = None
         self.drain()  # the last states and lines, then no more ticks during teardown
         self.drain_timer.stop()
+        supervisor = self.supervisor
+        if isinstance(supervisor, RemoteSupervisor) and not (
+                self.quitting or self.detached or supervisor.detached or supervisor.lost
+                or supervisor.killed_server or self.terminal_lost):
+            # the session ended and nobody here asked: say so before the screen goes
+            self.ended_elsewhere = supervisor.shutdown_reason or "stopped"
+            text = f"session {self.session_name} was stopped elsewhere " \
+                   f"({self.ended_elsewhere}); leaving"
+            self._status_text = text
+            self.status_bar.update(Text(text, style="bold"))
+            self.notify(text, title="session stopped", severity="warning")
+            await asyncio.sleep(ENDED_ELSEWHERE_PAUSE)
         if self.terminal_lost:
             # Textual's teardown writes to the terminal and blocks forever on a hung-up one;
             # every process is stopped and every log closed, so leave now
@@ -263,16 +283,26 @@ class SessionLink(App[int]):
         self.launch_tree.set_preview(None)
         self.args_panel.arguments = self.session.plan.arguments
         self.args_panel.refresh(recompose=True)
-        self.notify(f"relaunched by another client: {' '.join(arguments) or 'defaults'}")
+        if not self.replaying:  # a relaunch before this client came is no news to it
+            self.notify(f"relaunched by another client: {' '.join(arguments) or 'defaults'}")
         self.refresh_bindings()
 
     def say_plan_warnings(self) -> None:
         """What the plan warns about (a mistyped argument, a missing parameter file), said
         in the TUI: printed before it took the screen, it would only be seen after quitting."""
         lines: list[Line] = []
-        for warning in self.session.plan.warnings:
+        warnings = self.session.plan.warnings
+        for warning in warnings:
             lines += self.store.add_event("launch", f"warning: {warning}", WARN)
-            self.notify(warning, title="warning", severity="warning", timeout=20)
+        # to the operator who gave the values (an attached client finds them in the all
+        # nodes pane, as `launch` lines);
+        # a few at most: a column of toasts would hide the screen
+        if self.session_name is None or self.owner:
+            for warning in warnings[:WARNINGS_SHOWN]:
+                self.notify(warning, title="warning", severity="warning", timeout=20)
+            if len(warnings) > WARNINGS_SHOWN:
+                self.notify(f"{len(warnings) - WARNINGS_SHOWN} more warnings: in the all "
+                            "nodes pane (a)", severity="warning", timeout=20)
         if lines:
             self.output_panel.append(lines)
             self.output_panel.flush()

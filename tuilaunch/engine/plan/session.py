@@ -44,8 +44,11 @@ class Preview:
     diff: PlanDiff | None
     error: str | None
     file_changes: PlanDiff | None = None
-    """The launch file changed on disk since the running plan was made from it: what the
-    edited file alone changes (with the values that run now). None when it did not."""
+    """The launch file (or a file it includes) changed on disk since the running plan was
+    made: what the edit alone changes (with the values that run now). None when it did not
+    (or, for an included file, when argument edits come with it: their diff says it all)."""
+    edited: str | None = None
+    """Which file changed, for the operator: `bringup.py`, or `a file bringup.py includes`."""
     loaded: LoadedFile | None = None
     """The file as read for this preview (`accept` keeps it)."""
     stamp: Stamp = None
@@ -94,8 +97,10 @@ class Session:
             plan = self._resolve(values, loaded)
         except LaunchError as exc:
             return Preview(values, None, None, str(exc), loaded=loaded, stamp=stamp)
-        file_changes = None
+        file_changes, edited = None, None
+        name = os.path.basename(self.path)
         if stamp != self.stamp:
+            edited = name
             try:
                 same_values = plan if values == self.arguments else self._resolve(
                     self.arguments, loaded)
@@ -103,8 +108,14 @@ class Session:
                 file_changes = diff_plans(self.plan, same_values)
             except LaunchError:  # the edit needs the new values: the whole diff says it
                 file_changes = diff_plans(self.plan, plan)
+        elif values == self.arguments:
+            # included files are read again at every resolve: with the same values, any
+            # change comes from one of them
+            changes = diff_plans(self.plan, plan)
+            if not changes.empty:
+                file_changes, edited = changes, f"a file {name} includes"
         return Preview(values, plan, diff_plans(self.plan, plan, running), None,
-                       file_changes, loaded, stamp)
+                       file_changes=file_changes, edited=edited, loaded=loaded, stamp=stamp)
 
     def accept(self, preview: Preview) -> Plan:
         """Makes a previewed plan the current one (the supervisor then runs it)."""

@@ -174,6 +174,28 @@ class Inspector(Plugin):
                               f"give the node's full name (/ns/name)")
         return names[0]
 
+    async def current_name(self, ref: Any) -> str:
+        """`node_name`, waiting a moment for a process that has just started again (a
+        relaunch, a restart, a respawn) to say its name in its first log line."""
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + NODE_WAIT
+        while True:
+            try:
+                return self.node_name(ref)
+            except LaunchError:
+                process = self.process_of(ref)
+                if process is None or self.reported.get(process) or loop.time() > deadline \
+                        or self.supervisor.states.get(process) != "running":
+                    raise
+            await asyncio.sleep(0.1)
+
+    def process_of(self, ref: Any) -> str | None:
+        assert self.find_process is not None
+        try:
+            return self.find_process(str(ref))
+        except LaunchError:
+            return None
+
     async def require_node(self, bridge: Any, node: str) -> None:
         loop = asyncio.get_running_loop()
         deadline = loop.time() + NODE_WAIT
@@ -193,7 +215,7 @@ class Inspector(Plugin):
 
     async def topics(self, message: dict[str, Any]) -> dict[str, Any]:
         node = message.get("node")
-        only = self.node_name(node) if node else None
+        only = await self.current_name(node) if node else None
         bridge = await self.bridge()
         if only is not None:
             await self.require_node(bridge, only)
@@ -339,7 +361,7 @@ class Inspector(Plugin):
     # --- parameters and loggers --------------------------------------------------------------
 
     async def params_dump(self, message: dict[str, Any]) -> dict[str, Any]:
-        node = self.node_name(message.get("node"))
+        node = await self.current_name(message.get("node"))
         bridge = await self.bridge()
         await self.require_node(bridge, node)
         try:
@@ -350,7 +372,7 @@ class Inspector(Plugin):
     async def params_load(self, message: dict[str, Any]) -> dict[str, Any]:
         from .param_files import load_values, text_values
 
-        node = self.node_name(message.get("node"))
+        node = await self.current_name(message.get("node"))
         text = message.get("yaml")
         if not isinstance(text, str):
             raise ValueError("params_load needs the file's text as yaml")
@@ -368,7 +390,7 @@ class Inspector(Plugin):
         from .loggers import NoLoggerService, level_number
 
         ref = message.get("node")
-        node = self.node_name(ref)
+        node = await self.current_name(ref)
         level = str(message.get("level") or "")
         try:
             level_number(level)

@@ -38,6 +38,7 @@ def plan_handlers(session: Session) -> dict[str, Handler]:
                 "keep": diff.keep, "stop": diff.stop, "start": diff.start, "error": None,
                 # the launch file was edited on disk: what the edit alone changes
                 "file_changes": None if edit is None else {
-                    "keep": edit.keep, "stop": edit.stop, "start": edit.start}}
+                    "keep": edit.keep, "stop": edit.stop, "start": edit.start},
+                "edited": result.edited}
 
     return {"plan": plan, "preview": preview}
