@@ -33,8 +33,11 @@ def panel_of(app: TuiLaunchApp) -> OutputPanel:
 
 
 def rows(app: TuiLaunchApp) -> list[str]:
-    """The pane's rows as the user reads them."""
-    return panel_of(app).line_view.visible_text()
+    """The pane's rows as the user reads them, to the last one written."""
+    shown = panel_of(app).line_view.visible_text()
+    while shown and not shown[-1]:
+        shown.pop()
+    return shown
 
 
 async def select(app: TuiLaunchApp, pilot, process: str) -> None:
@@ -189,3 +192,42 @@ async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path
         # so does tuilaunch's own line in the pane: every part of it is on screen
         await until(pilot, lambda: "failed:" in "".join(rows(app)))
         assert missing in "".join(r.strip() for r in rows(app))
+
+
+# --- typing into a node --------------------------------------------------------------------
+
+
+def footer_keys(app: TuiLaunchApp) -> list[str]:
+    """The footer as the user reads it: `key description` for each key it offers."""
+    return [f"{key.key_display} {key.description}" for key in app.query("FooterKey")
+            if not key.disabled]
+
+
+async def test_typing_into_a_prompt_without_a_newline(write, tmp_path):
+    app = make_app(launch(write, ("prompt_reader", [])), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "prompt_reader-1")
+        # gdb's `(gdb) ` waits without a newline: shown as it stands, before any Enter
+        await until(pilot, lambda: rows(app)[-2:] == ["I ready", "I (gdb)"])
+        await pilot.press("i")
+        await until(pilot, lambda: app.typing_to == "prompt_reader-1")
+        await until(pilot, lambda: footer_keys(app) == ["ctrl+] Give the keys back"])
+        # the terminal's echo shows as it comes; a backspace erases, it leaves no space
+        await pilot.press(*"abc", "backspace")
+        await until(pilot, lambda: rows(app)[-1] == "I (gdb) ab")
+        await pilot.press("enter")
+        await until(pilot, lambda: "I answer: ab" in rows(app))
+        texts = [line.text for line in panel_of(app).line_view.lines]
+        assert texts[-2:] == ["(gdb) ab", "answer: ab"]
+        await until(pilot, lambda: rows(app)[-1] == "I (gdb)")  # the next prompt
+        # a ctrl+c typed into it ends it: the operator's doing, not a failure
+        await pilot.press("ctrl+c")
+        await until(pilot, lambda: any("process stopped by a key typed into it" in r
+                                       for r in rows(app)))
+        assert app.supervisor is not None
+        assert app.supervisor.states["prompt_reader-1"] == "exited"
+        assert app.launch_tree.states["prompt_reader-1"] == "exited"
+        assert "failed" not in str(app.status_bar.render())
+        await until(pilot, lambda: app.typing_to is None)
+        await until(pilot, lambda: "ctrl+] Give the keys back" not in footer_keys(app)
+                    and any("Stop" in key for key in footer_keys(app)))

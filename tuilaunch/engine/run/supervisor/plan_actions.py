@@ -167,6 +167,11 @@ class PlanActions(Triggers):
         if self.io_watchers or self.any_watchers:
             self.dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
+    def deliver_partial(self, running: Running, stream: str, text: str) -> None:
+        """A line the process left unfinished (a prompt): shown until its whole line comes.
+        An output event without lines, so nothing counts it as one (nor logs it)."""
+        self.emit(Event("output", running.plan.id, stream=stream, data={"partial": text}))
+
     def dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
         watchers = [*self.io_watchers.get((process_id, stream), []),
                     *self.any_watchers.get(f"io:{stream}", [])]
