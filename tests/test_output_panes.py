@@ -5,10 +5,13 @@ newline."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.screens.output_panel import OutputPanel
 
 from .terminal_harness import PROGRAMS
+from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
 
 LAUNCH = f"""
@@ -231,3 +234,30 @@ async def test_typing_into_a_prompt_without_a_newline(write, tmp_path):
         await until(pilot, lambda: app.typing_to is None)
         await until(pilot, lambda: "ctrl+] Give the keys back" not in footer_keys(app)
                     and any("Stop" in key for key in footer_keys(app)))
+
+
+def test_a_client_attaching_to_a_session_sees_the_waiting_prompt(write, runtime):  # noqa: F811
+    import asyncio
+
+    path = launch(write, ("prompt_reader", []))
+    name = tl(path, "--detach").stdout.strip()
+    tl("wait", name, "prompt_reader-1", "running", "--timeout", "60")
+    log_dir = Path(status(name)["log_dir"])
+
+    async def scenario() -> None:
+        # attached after the prompt was printed: the log file has only `ready`
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await select(app, pilot, "prompt_reader-1")
+            await until(pilot, lambda: rows(app)[-2:] == ["I ready", "I (gdb)"])
+            await pilot.press("i")
+            await until(pilot, lambda: app.typing_to == "prompt_reader-1")
+            await pilot.press(*"bt", "enter")
+            await until(pilot, lambda: rows(app)[-3:] == ["I (gdb) bt", "I answer: bt",
+                                                         "I (gdb)"])
+            await pilot.press("ctrl+right_square_bracket")
+            await pilot.press("d")
+            await until(pilot, lambda: getattr(app.supervisor, "detached", False))
+
+    asyncio.run(scenario())
+    tl("stop", name)
