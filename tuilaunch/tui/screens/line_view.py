@@ -94,9 +94,9 @@ class LineView(Widget, can_focus=True):
         self.search = ""
         self.current_match: int | None = None  # absolute index
         self.empty_text = ""
+        """Said on the first row when there is no line (a filter nothing matches)."""
         self.partials: list[Line] = []
         """Unfinished lines (a prompt) shown below the last line while following."""
-        """Said on the first row when there is no line (a filter nothing matches)."""
         self.max_fps = max_fps
         self._dirty = False
         self._painted_at = 0.0
