@@ -115,7 +115,7 @@ class OutputPanel(Vertical):
         # each part in full and short: the short forms when the full line does not fit the
         # pane's width (an 80-column terminal leaves the pane about 50)
         parts = [(self.view.process or "all nodes",) * 2,
-                 (f"{LEVELS[self.view.min_level]}+",) * 2]
+                 (f"{LEVELS[self.view.min_level]}+", f"{LEVELS[self.view.min_level][0]}+")]
         if self.view.text:
             parts.append((f"only '{self.view.text}'", f"\\{self.view.text}"))
         if self.search:
@@ -133,7 +133,7 @@ class OutputPanel(Vertical):
         hidden = dropped.total if self.view.process is None else \
             dropped.per_process.get(self.view.process, 0)
         if hidden:
-            parts.append((f"{hidden} not drawn (in log)", f"{hidden} not drawn"))
+            parts.append((f"{hidden} not drawn (in log)", f"{hidden} in log"))
         text = "  ".join(full for full, _ in parts)
         width = self._status.size.width
         if width and cell_len(text) > width:
