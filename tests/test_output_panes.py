@@ -5,10 +5,13 @@ newline."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.screens.output_panel import OutputPanel
 
 from .terminal_harness import PROGRAMS
+from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
 
 LAUNCH = f"""
@@ -33,8 +36,11 @@ def panel_of(app: TuiLaunchApp) -> OutputPanel:
 
 
 def rows(app: TuiLaunchApp) -> list[str]:
-    """The pane's rows as the user reads them."""
-    return panel_of(app).line_view.visible_text()
+    """The pane's rows as the user reads them, to the last one written."""
+    shown = panel_of(app).line_view.visible_text()
+    while shown and not shown[-1]:
+        shown.pop()
+    return shown
 
 
 async def select(app: TuiLaunchApp, pilot, process: str) -> None:
@@ -108,7 +114,9 @@ async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp
         # a search over what is held: its matches neither come nor go
         await pilot.press("slash", *"00 of", "enter")
         await until(pilot, lambda: "/00 of 1/" in str(panel._status.render()))
-        count = str(panel._status.render()).split("/00 of 1/", 1)[1].split()[0]
+        status = str(panel._status.render())
+        assert len(status) <= panel._status.size.width  # shortened, not cut
+        count = status.split("/00 of 1/", 1)[1].split()[0]
         on_screen = [r for r in rows(app) if "00 of" in r]
         assert on_screen
         for step in range(2, 5):
@@ -123,8 +131,12 @@ async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp
             if any("lines here are only in the log file" in r for r in rows(app)):
                 break
             await pilot.press("pagedown")
-        shown = rows(app)
-        gap = next(i for i, r in enumerate(shown) if "only in the log file" in r)
+        for _ in range(30):  # line by line until the marker is in the upper half
+            shown = rows(app)
+            gap = next(i for i, r in enumerate(shown) if "only in the log file" in r)
+            if gap < 10:
+                break
+            await pilot.press("down")
         assert shown[gap].startswith("-- ")
         after = [number_of(r) for r in shown[gap + 1:]]
         assert after == list(range(after[0], after[0] + len(after)))  # none missing
@@ -189,3 +201,69 @@ async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path
         # so does tuilaunch's own line in the pane: every part of it is on screen
         await until(pilot, lambda: "failed:" in "".join(rows(app)))
         assert missing in "".join(r.strip() for r in rows(app))
+
+
+# --- typing into a node --------------------------------------------------------------------
+
+
+def footer_keys(app: TuiLaunchApp) -> list[str]:
+    """The footer as the user reads it: `key description` for each key it offers."""
+    return [f"{key.key_display} {key.description}" for key in app.query("FooterKey")
+            if not key.disabled]
+
+
+async def test_typing_into_a_prompt_without_a_newline(write, tmp_path):
+    app = make_app(launch(write, ("prompt_reader", [])), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "prompt_reader-1")
+        # gdb's `(gdb) ` waits without a newline: shown as it stands, before any Enter
+        await until(pilot, lambda: rows(app)[-2:] == ["I ready", "I (gdb)"])
+        await pilot.press("i")
+        await until(pilot, lambda: app.typing_to == "prompt_reader-1")
+        await until(pilot, lambda: footer_keys(app) == ["ctrl+] Give the keys back"])
+        # the terminal's echo shows as it comes; a backspace erases, it leaves no space
+        await pilot.press(*"abc", "backspace")
+        await until(pilot, lambda: rows(app)[-1] == "I (gdb) ab")
+        await pilot.press("enter")
+        await until(pilot, lambda: "I answer: ab" in rows(app))
+        texts = [line.text for line in panel_of(app).line_view.lines]
+        assert texts[-2:] == ["(gdb) ab", "answer: ab"]
+        await until(pilot, lambda: rows(app)[-1] == "I (gdb)")  # the next prompt
+        # a ctrl+c typed into it ends it: the operator's doing, not a failure
+        await pilot.press("ctrl+c")
+        await until(pilot, lambda: any("process stopped by a key typed into it" in r
+                                       for r in rows(app)))
+        assert app.supervisor is not None
+        assert app.supervisor.states["prompt_reader-1"] == "exited"
+        assert app.launch_tree.states["prompt_reader-1"] == "exited"
+        assert "failed" not in str(app.status_bar.render())
+        await until(pilot, lambda: app.typing_to is None)
+        await until(pilot, lambda: "ctrl+] Give the keys back" not in footer_keys(app)
+                    and any("Stop" in key for key in footer_keys(app)))
+
+
+def test_a_client_attaching_to_a_session_sees_the_waiting_prompt(write, runtime):  # noqa: F811
+    import asyncio
+
+    path = launch(write, ("prompt_reader", []))
+    name = tl(path, "--detach").stdout.strip()
+    tl("wait", name, "prompt_reader-1", "running", "--timeout", "60")
+    log_dir = Path(status(name)["log_dir"])
+
+    async def scenario() -> None:
+        # attached after the prompt was printed: the log file has only `ready`
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(80, 24)) as pilot:
+            await select(app, pilot, "prompt_reader-1")
+            await until(pilot, lambda: rows(app)[-2:] == ["I ready", "I (gdb)"])
+            await pilot.press("i")
+            await until(pilot, lambda: app.typing_to == "prompt_reader-1")
+            await pilot.press(*"bt", "enter")
+            await until(pilot, lambda: rows(app)[-3:] == ["I (gdb) bt", "I answer: bt",
+                                                         "I (gdb)"])
+            await pilot.press("ctrl+right_square_bracket")
+            await pilot.press("d")
+            await until(pilot, lambda: getattr(app.supervisor, "detached", False))
+
+    asyncio.run(scenario())
+    tl("stop", name)

@@ -86,6 +86,8 @@ class Printer:
 
     def format(self, event: Event) -> str:
         if event.kind == "output":
+            if not event.lines:
+                return ""  # an unfinished line shown by a TUI: printed once it is whole
             prefix = f"[{self.label(event)}] "
             text = prefix + ("\n" + prefix).join(event.lines) + "\n"
             return text if self.colour or "\x1b" not in text else strip_ansi(text)

@@ -31,7 +31,8 @@ def batched(events: list[Event]) -> list[Event]:
     for event in events:
         last = out[-1] if out else None
         if (event.kind == "output" and last is not None and last.kind == "output"
-                and last.process == event.process and last.stream == event.stream):
+                and last.process == event.process and last.stream == event.stream
+                and event.lines and last.data is None):
             last.lines.append(*event.lines)
         else:
             out.append(event)

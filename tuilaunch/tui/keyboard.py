@@ -52,8 +52,10 @@ class NodeKeyboard(SessionLink):
     # --- which keys apply -----------------------------------------------------------------
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        if self.typing_to is not None and action in ("request_quit", "command_palette"):
-            return False  # ctrl+c, ctrl+p are the node's keys while typing
+        if self.typing_to is not None:
+            # every key is the node's while typing (ctrl+c, ctrl+p too): the footer offers
+            # only ctrl+], not tuilaunch's stop or restart
+            return False
         if action in ("type_into", "run_under", "command_line"):
             if self.supervisor is None or self.tabs.active != "nodes":
                 return False

@@ -96,6 +96,11 @@ class OutputStore:
         # launch file does not name them: process id -> {`/ns/name`, ...} (a few at most)
         self.reported = ReportedNames()
         self.reported_names = self.reported.names
+        self.partials: dict[tuple[str, str], Line] = {}
+        """The unfinished line each process's stream left waiting (a prompt such as gdb's
+        `(gdb) `), by (process, stream): shown below its lines until the whole line comes."""
+        self.partials_changed = 0
+        """Counts changes to `partials`, so a pane redraws them only when they change."""
 
     def add(self, process: str, stream: str, texts: Iterable[str]) -> list[Line]:
         now = time.time()
@@ -105,7 +110,20 @@ class OutputStore:
             if logger:
                 self.reported.add_logger(process, logger)
             lines.append(line)
+        if lines and self.partials.pop((process, stream), None) is not None:
+            self.partials_changed += 1  # the whole line replaces what was shown of it
         return self._keep(process, lines)
+
+    def set_partial(self, process: str, stream: str, text: str) -> None:
+        """The line a process left unfinished, as it stands (empty: none)."""
+        if text:
+            self.partials[(process, stream)] = parse(process, text, stream, time.time())[0]
+        elif self.partials.pop((process, stream), None) is None:
+            return
+        self.partials_changed += 1
+
+    def partial_lines(self, view: View) -> list[Line]:
+        return [line for line in self.partials.values() if view.accepts(line)]
 
     def add_event(self, process: str, text: str, level: int = INFO) -> list[Line]:
         """A line from tuilaunch about the process (it started, died, respawns)."""

@@ -187,6 +187,9 @@ class SessionLink(App[int]):
         fresh: list[Line] = []
         for event in events:
             if event.kind == "output" and event.process:
+                if event.data and "partial" in event.data:  # a prompt waiting, unfinished
+                    self.store.set_partial(event.process, event.stream or "stdout",
+                                           str(event.data["partial"]))
                 fresh += self.store.add(event.process, event.stream or "stdout", event.lines)
             elif event.kind == "log":
                 if event.process and self.supervisor is not None:
@@ -262,6 +265,9 @@ class SessionLink(App[int]):
             tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
             if code == 0:
                 text, level = f"process has finished cleanly [pid {event.pid}]", INFO
+            elif event.data and event.data.get("typed"):
+                text, level = (f"process stopped by a key typed into it [pid {event.pid}, "
+                               f"{event.reason}]"), INFO
             elif asked:
                 text, level = f"process stopped [pid {event.pid}, {event.reason}]", INFO
             else:

@@ -27,6 +27,10 @@ class TypingLine(Static, can_focus=True):
     TypingLine { height: 1; padding: 0 1; background: $warning 40%; color: $text;
                  text-style: bold; }
     """
+    # what the footer offers while typing (the app's own keys are hidden meanwhile); the
+    # key itself reaches `on_key` like any other, which gives the keys back
+    BINDINGS = [Binding("ctrl+right_square_bracket", "give_back", "Give the keys back",
+                        key_display="ctrl+]")]
 
     def __init__(self, send: Callable[[str, str | None], None], id: str | None = None) -> None:
         super().__init__("", id=id)
@@ -40,6 +44,9 @@ class TypingLine(Static, can_focus=True):
     def on_paste(self, event: events.Paste) -> None:
         event.stop()
         self.send("paste", event.text)
+
+    def action_give_back(self) -> None:
+        self.send("ctrl+right_square_bracket", None)
 
 
 class PrefixPrompt(ModalScreen[str | None]):

@@ -95,6 +95,8 @@ class LineView(Widget, can_focus=True):
         self.current_match: int | None = None  # absolute index
         self.empty_text = ""
         """Said on the first row when there is no line (a filter nothing matches)."""
+        self.partials: list[Line] = []
+        """Unfinished lines (a prompt) shown below the last line while following."""
         self.max_fps = max_fps
         self._dirty = False
         self._painted_at = 0.0
@@ -120,6 +122,15 @@ class LineView(Widget, can_focus=True):
         self.x = 0
         self.current_match = None
         self._invalidate(now=True)
+
+    def set_partials(self, lines: list[Line]) -> None:
+        """The unfinished lines to show below the last one; a prompt shows at once (a
+        prompt comes alone, never in a flood)."""
+        if lines == self.partials:
+            return
+        self.partials = lines
+        if self.following:
+            self._invalidate(now=True)
 
     def append(self, lines: list[Line]) -> None:
         if not lines:
@@ -239,6 +250,8 @@ class LineView(Widget, can_focus=True):
         if not self.lines and self.empty_text:
             rows.append(Text(self.empty_text, "italic", no_wrap=True, end=""))
         elif self.following:
+            rows = [display_text(line, self.prefixed, self.show_time, self.raw)
+                    for line in self.partials][-height:]
             index = self.total - 1
             while index >= self.first and len(rows) < height:
                 rows[0:0] = self._rows(index)

@@ -46,6 +46,7 @@ class OutputPanel(Vertical):
         self._status_text = ""
         self._lines = LineView(max_lines=max_lines, max_fps=max_fps, id="output-lines")
         self._lines.on_move = self.update_status
+        self._partials_seen = -1  # the store's partials_changed when last shown
 
     def compose(self) -> ComposeResult:
         yield self._status
@@ -77,6 +78,8 @@ class OutputPanel(Vertical):
     def _rebuild(self) -> None:
         self._lines.empty_text = self._nothing_shown()
         self._lines.reset(self.store.lines(self.view))
+        self._partials_seen = -1
+        self._show_partials()
         if self.search:
             self._lines.search = self.search
         self.match_index = -1
@@ -96,8 +99,14 @@ class OutputPanel(Vertical):
     def append(self, lines: list[Line]) -> None:
         self._lines.append([line for line in lines if self.view.accepts(line)])
 
+    def _show_partials(self) -> None:
+        if self._partials_seen != self.store.partials_changed:
+            self._partials_seen = self.store.partials_changed
+            self._lines.set_partials(self.store.partial_lines(self.view))
+
     def flush(self) -> None:
         """Called on the app's tick: repaints what changed, at the pane's rate."""
+        self._show_partials()
         self._lines.flush()
         self.update_status()
 
@@ -106,7 +115,7 @@ class OutputPanel(Vertical):
         # each part in full and short: the short forms when the full line does not fit the
         # pane's width (an 80-column terminal leaves the pane about 50)
         parts = [(self.view.process or "all nodes",) * 2,
-                 (f"{LEVELS[self.view.min_level]}+",) * 2]
+                 (f"{LEVELS[self.view.min_level]}+", f"{LEVELS[self.view.min_level][0]}+")]
         if self.view.text:
             parts.append((f"only '{self.view.text}'", f"\\{self.view.text}"))
         if self.search:
@@ -124,7 +133,7 @@ class OutputPanel(Vertical):
         hidden = dropped.total if self.view.process is None else \
             dropped.per_process.get(self.view.process, 0)
         if hidden:
-            parts.append((f"{hidden} not drawn (in log)", f"{hidden} not drawn"))
+            parts.append((f"{hidden} not drawn (in log)", f"{hidden} in log"))
         text = "  ".join(full for full, _ in parts)
         width = self._status.size.width
         if width and cell_len(text) > width:

@@ -308,8 +308,9 @@ class MachinesCoordinator(Plugin):
             if event.process not in mine:
                 continue
             if event.kind == "output":
-                share.last_output[event.process] = event.time
-                self._log_output(share, event)
+                if event.lines:  # not an unfinished line (a prompt), shown until it is whole
+                    share.last_output[event.process] = event.time
+                    self._log_output(share, event)
                 self.supervisor.mirror(event)
                 continue
             key = (event.kind, event.process, event.pid, event.time)

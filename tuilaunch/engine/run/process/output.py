@@ -54,29 +54,50 @@ def expand_tabs(text: str) -> str:
     return "".join(out)
 
 
+def backspaced(text: str) -> str:
+    """What backspaces leave on a line: a terminal moves the cursor one column back and what
+    comes next overwrites, so a line reader's echo of an erased character (`\\b \\b`)
+    leaves nothing, not a space."""
+    if "\b" not in text:
+        return text
+    out: list[str] = []
+    cursor = 0
+    for char in text:
+        if char == "\b":
+            cursor = max(cursor - 1, 0)
+            continue
+        if cursor < len(out):
+            out[cursor] = char
+        else:
+            out.append(char)
+        cursor += 1
+    return "".join(out).rstrip(" ")
+
+
 def screen_text(raw: bytes) -> str:
-    """What a terminal would leave on the line: a bare `\\r` rewinds it, NULs show nothing."""
+    """What a terminal would leave on the line: a bare `\\r` rewinds it, a backspace steps
+    back, NULs show nothing."""
     if raw.endswith(b"\r"):
         raw = raw[:-1]
     if b"\r" in raw:
         raw = raw.rsplit(b"\r", 1)[1]
-    return raw.decode("utf-8", errors="replace").replace("\x00", "")
+    return backspaced(raw.decode("utf-8", errors="replace").replace("\x00", ""))
 
 
 def screen_str(text: str) -> str:
     """`screen_text` of a line already decoded, as the log files' lines are read back."""
-    if "\r" not in text and "\x00" not in text:
+    if "\r" not in text and "\x00" not in text and "\b" not in text:
         return text
     if text.endswith("\r"):
         text = text[:-1]
-    return text.rsplit("\r", 1)[-1].replace("\x00", "")
+    return backspaced(text.rsplit("\r", 1)[-1].replace("\x00", ""))
 
 
 def screen_lines(block: bytes) -> list[str]:
     """The screen text of a block of whole lines (each ending in `\n`)."""
     body = block[:-1]
     text = body.decode("utf-8", errors="replace")
-    if "\r" in text or "\x00" in text:
+    if "\r" in text or "\x00" in text or "\b" in text:
         return [screen_text(line) for line in body.split(b"\n")]
     return text.split("\n")
 
@@ -89,6 +110,11 @@ class LineSplitter:
 
     def __init__(self) -> None:
         self._tail = b""
+
+    @property
+    def tail(self) -> bytes:
+        """The unfinished line so far (a prompt waiting for its answer)."""
+        return self._tail
 
     def feed_block(self, chunk: bytes) -> bytes:
         """The complete lines this chunk ends, as one block of bytes, each line ending in

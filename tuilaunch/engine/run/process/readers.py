@@ -2,7 +2,9 @@
 
 Each channel (a pipe or a pseudo-terminal) is read on the event loop without a thread: one
 chunk per wake-up, whole lines to the log file as bytes first, then handed to the
-supervisor as screen lines.
+supervisor as screen lines. A line left unfinished while the channel is quiet (gdb's
+`(gdb) `, a question waiting for its answer) is handed on as it stands, to be shown until
+the whole line replaces it; the log file gets it once it is whole.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from typing import Any
 
 from ...plan.model import ProcessPlan
 from .logfiles import LogFile
-from .output import LineSplitter, screen_lines
+from .output import LineSplitter, screen_lines, screen_text
 from .spawn import Channel
 from .terminal_input import InputRefused, TerminalInput
 
@@ -26,13 +28,25 @@ terminal, 16 MB from a pipe): a grandchild that floods for ever does not hold th
 
 Deliver = Callable[["Running", str, list[str]], None]
 """What a reader calls with each block of lines: (process, channel name, lines)."""
+Partial = Callable[["Running", str, str], None]
+"""What a reader calls with an unfinished line the process left waiting: (process, channel
+name, the line so far as a screen shows it)."""
+
+PARTIAL_AFTER = 0.05
+"""Seconds a channel must stay quiet before its unfinished line is shown: a prompt waits
+that long for sure, while a flood's chunks that end mid-line are never shown half."""
 
 
 class ChannelReader:
     """One output channel of a child, read on the loop until its end."""
 
-    def __init__(self, running: Running, channel: Channel, deliver: Deliver) -> None:
+    def __init__(self, running: Running, channel: Channel, deliver: Deliver,
+                 partial: Partial | None = None) -> None:
         self.deliver = deliver
+        self.partial = partial
+        self._shown_tail = b""  # the unfinished line handed on last, not to repeat it
+        self._read_since = False  # a chunk came since the quiet timer was set
+        self._quiet: asyncio.TimerHandle | None = None
         self.running = running
         self.channel = channel
         self.splitter = LineSplitter()
@@ -55,13 +69,33 @@ class ChannelReader:
             chunk = b""  # EIO: a pseudo-terminal whose other side is closed
         if chunk:
             self._deliver(self.splitter.feed_block(chunk))
+            if self.partial is not None and self.splitter.tail:
+                self._read_since = True
+                if self._quiet is None:
+                    self._quiet = asyncio.get_running_loop().call_later(
+                        PARTIAL_AFTER, self._quiet_now)
         else:
             self.close()
+
+    def _quiet_now(self) -> None:
+        """The quiet timer: hands on the unfinished line once nothing came for a while."""
+        self._quiet = None
+        tail = self.splitter.tail
+        if not tail or self.done.done():
+            return
+        if self._read_since:  # still coming: look again later (one timer per channel)
+            self._read_since = False
+            self._quiet = asyncio.get_running_loop().call_later(PARTIAL_AFTER, self._quiet_now)
+            return
+        if tail != self._shown_tail and self.partial is not None:
+            self._shown_tail = tail
+            self.partial(self.running, self.channel.name, screen_text(tail))
 
     def _deliver(self, block: bytes) -> None:
         """Whole lines, as one block: to the log file as bytes, then to the supervisor."""
         if not block:
             return
+        self._shown_tail = b""  # the whole lines replace what was shown of the last one
         running = self.running
         prefix = f"{time.time():.6f}".encode() + self.stamp
         running.log.write(prefix + block[:-1].replace(b"\n", b"\n" + prefix) + b"\n",
@@ -91,6 +125,9 @@ class ChannelReader:
         self._drain()
         if self.input is not None:
             self.input.close()
+        if self._quiet is not None:
+            self._quiet.cancel()
+            self._quiet = None
         os.close(self.channel.fd)
         try:
             self._deliver(self.splitter.flush_block())

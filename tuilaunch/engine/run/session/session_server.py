@@ -80,6 +80,9 @@ class SessionServer:
         self.pids: dict[str, int] = {}
         self.details: dict[str, str] = {}
         self.recent: collections.deque[Event] = collections.deque(maxlen=RECENT_EVENTS)
+        self.partials: dict[tuple[str, str], Event] = {}
+        """Each stream's unfinished line (a prompt waiting): a client that attaches now sees
+        it too, as the log files hold only whole lines."""
         self.apply_lock = asyncio.Lock()  # argument edits from several clients, one at a time
 
     def add_handler(self, op: str, handler: Handler) -> None:
@@ -126,6 +129,12 @@ class SessionServer:
     # --- the supervisor's events -------------------------------------------------------------
 
     def _on_event(self, event: Event) -> None:
+        if event.kind == "output" and event.process is not None:
+            key = (event.process, event.stream or "stdout")
+            if event.data and "partial" in event.data:
+                self.partials[key] = event
+            elif event.lines:
+                self.partials.pop(key, None)
         if event.kind != "output":
             self.recent.append(event)
             if event.process is not None:
@@ -235,7 +244,8 @@ class SessionServer:
             result.update(plugin.snapshot())
         result.update({"states": dict(self.supervisor.states),
                        "offsets": self._log_sizes(),
-                       "recent": [event_to_dict(e) for e in self.recent],
+                       "recent": [event_to_dict(e) for e in [*self.recent,
+                                                             *self.partials.values()]],
                        "arguments": self.session.arguments})
         return result
 

@@ -226,6 +226,11 @@ class PlanActions(SupervisorCore):
         if self.triggers.watches_output:
             self.dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
+    def deliver_partial(self, running: Running, stream: str, text: str) -> None:
+        """A line the process left unfinished (a prompt): shown until its whole line comes.
+        An output event without lines, so nothing counts it as one (nor logs it)."""
+        self.emit(Event("output", running.plan.id, stream=stream, data={"partial": text}))
+
     def dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
         watchers = self.triggers.output_handlers(process_id, stream)
         source = self.plan.process(process_id).source if watchers else None

@@ -98,7 +98,8 @@ class Starting(PlanActions):
             self.running[process_id] = running
             self._watch_exit(running)
             for channel in child.channels:
-                running.readers.append(ChannelReader(running, channel, self.deliver_lines))
+                running.readers.append(ChannelReader(running, channel, self.deliver_lines,
+                                                     self.deliver_partial))
         except Exception as exc:
             # nothing may run that nobody reads or stops
             kill_group(popen.pid, signal.SIGKILL)
@@ -202,9 +203,11 @@ class Starting(PlanActions):
         reason = describe_exit(code)
         if "core" in death:
             reason += f" (core: {death['core']})"
-        # `requested`: a stop asked by anyone (another client, `tuilaunch stop`), not a crash
+        # `requested`: a stop asked by anyone (another client, `tuilaunch stop`, a ctrl+c
+        # typed into it: `typed`), not a crash
         self.emit(Event("exited", process_id, pid=running.process.pid, code=code,
-                         reason=reason, data={"requested": requested, **death}))
+                         reason=reason, data={"requested": requested or typed,
+                                              "typed": typed, **death}))
         self.process_event(process_id, "exit", running.process.pid, code)
         self.flag(process_id, "exit").set()
         if self.should_respawn(running, code):
