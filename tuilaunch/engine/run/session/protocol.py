@@ -6,7 +6,12 @@ message longer than MAX_MESSAGE is refused rather than buffered without bound.
 Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
   most output lines per batch and the least seconds between batches, for a display that
   cannot show more; kinds?: only events of these kinds; fair?: past max_lines, the lines
-  dropped are the loudest process's, not the oldest}, status {resources?: false skips
+  dropped are the loudest process's, not the oldest; only?: the one process whose output
+  to send (the others' stays in the log files: see view); plain?: output without colour
+  codes, for a display that shows none}, view {only: a process id or
+  null for all} changes `only`: an event of kind "view" (process: the new `only`, data
+  {offsets: {process: its log file's size}}) then marks in the stream where the switch
+  happened, so the client reads from the files what it was not sent, status {resources?: false skips
   the CPU/memory sampling}, find {process},
   start/stop {process}, restart {process, prefix?: a tool run before the command (`gdb -q
   -ex run --args`) until a restart without one, log_level?: `--ros-args --log-level` kept
@@ -25,9 +30,12 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   core), `rss_bytes` and `threads` over its process tree (None when not running);
   watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a
   second an event of kind "resources", data {process: {cpu_percent, rss_bytes, threads,
-  growing}} (whole percents, memory to 64 KiB: what a display shows).
+  growing}} (whole percents, memory to 64 KiB: what a display shows), with only the
+  processes whose figures changed since the watcher's last event (all in its first; a
+  process that stopped once, with None figures).
   The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
-  topics {node?} -> {"topics": [{name, types, publishers: [{node, in_launch, process,
+  topics {node?, problems_only?: only the topics with QoS problems} -> {"topics": [{name,
+  types, publishers: [{node, in_launch, process,
   qos}], subscribers, qos_problems: [sentence]}]};
   hz {topic, window: s} -> {topic, rate_hz, bytes_per_s, messages, window_s} after window s;
   watch_rates {topics: [...]} -> {unmeasured: {topic: why}}: this client's topics ([]: none);
@@ -51,7 +59,8 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   kept; `typing` {client, process} or null.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
-  [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
+  [...], "states": {process: state}} (the states that changed since this client's last
+  batch; left out when none did)` (a relaunch is an event of kind "relaunched" whose
   lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
   keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
   and "core" for a crash; event times are to the millisecond; consecutive output of one
@@ -99,10 +108,14 @@ def event_to_dict(event: Event) -> dict[str, Any]:
     # millisecond (what the log files keep), as sub-millisecond digits are noise that no
     # compression squeezes over an ssh link
     data: dict[str, Any] = {"kind": event.kind, "time": round(event.time, 3)}
+    output = event.kind == "output"
     for name in ("process", "pid", "stream", "code", "reason"):
         value = getattr(event, name)
-        if value is not None:
-            data[name] = value
+        if value is None or (output and (name == "pid" or value == "stdout")):
+            continue  # output: its pid is the started event's; stdout is the default stream
+        if name == "reason" and event.kind == "dropped":
+            continue  # the count says it; the sentence is the client's to write
+        data[name] = value
     if event.lines:
         data["lines"] = event.lines
     if event.level != "INFO":
