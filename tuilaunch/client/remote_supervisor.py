@@ -35,6 +35,7 @@ from ..engine.run.session.log_reader import LogLine, tail_lines
 from ..engine.run.session.protocol import (
     MAX_MESSAGE,
     ProtocolError,
+    Stamps,
     decode,
     encode,
     event_from_dict,
@@ -100,6 +101,7 @@ class RemoteSupervisor:
         """Processes not shown, and the byte of their log file from which their lines were
         not sent: read from there when they are shown again."""
         self._usage: dict[str, Any] = {}  # the figures of `resources`, which sends changes
+        self._stamps = Stamps()  # the current batch's output stamps
         self._retry: asyncio.Event | None = None
         self.watches: dict[str, dict[str, Any]] = {}
         """The inspector's streams asked for and not ended (rates, echo, resources), as the
@@ -309,6 +311,7 @@ class RemoteSupervisor:
                 except SessionError as exc:
                     self._deliver(Event("log", reason=str(exc), level="ERROR"))
             if kind == "events":
+                self._stamps = Stamps()  # each batch's stamps count from its first
                 events = message.get("events") or []
                 if not any(data.get("kind") == "view" for data in events):
                     self._take(message)
@@ -337,6 +340,8 @@ class RemoteSupervisor:
     def _take(self, message: dict[str, Any]) -> None:
         self.states.update(message.get("states") or {})
         for data in message.get("events") or []:
+            if "stamps" in data:
+                self._stamps.unpack(data)
             event = event_from_dict(data)
             if event.kind == "output" and event.process:
                 self._count(event.process, len(event.lines))
@@ -352,9 +357,11 @@ class RemoteSupervisor:
                 self.lifecycle.follow(event.process, event.reason or "")
             if event.kind == "resources":
                 # the server sends the figures that moved: the consumers get them all
-                self._usage.update(event.data or {})
+                for process, figures in (event.data or {}).items():
+                    if isinstance(figures, dict):
+                        self._usage[process] = {**self._usage.get(process, {}), **figures}
                 self._usage = {p: f for p, f in self._usage.items()
-                               if isinstance(f, dict) and f.get("rss_bytes") is not None}
+                               if f.get("rss_bytes") is not None}
                 event.data = dict(self._usage)
             self._deliver(event)
 

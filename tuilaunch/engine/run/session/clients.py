@@ -13,6 +13,7 @@ import asyncio
 import dataclasses
 import itertools
 import os
+import re
 import socket
 import struct
 from collections.abc import Awaitable, Callable
@@ -22,7 +23,7 @@ from ...errors import LaunchError
 from ..event_buffer import EventBuffer
 from ..events import Event
 from ..process.output import strip_ansi
-from .protocol import ProtocolError, decode, encode, event_to_dict
+from .protocol import ProtocolError, Stamps, decode, encode, event_to_dict
 
 CLIENT_MAX_LINES = 20_000
 """Output lines queued per client before the oldest are dropped for that client."""
@@ -56,8 +57,8 @@ class ClientQueue:
             return
         if self.only is not None and event.kind == "output" and event.process != self.only:
             return  # not on its screen: in the log file, read if it switches to it
-        if self.plain and event.kind == "output" and any("\x1b" in line for line in event.lines):
-            event = dataclasses.replace(event, lines=[strip_ansi(line) for line in event.lines])
+        if self.plain and event.kind == "output":
+            event = dataclasses.replace(event, lines=[shown_line(line) for line in event.lines])
         if event.kind != "output":
             self.events += 1
             if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
@@ -236,7 +237,13 @@ class ClientHub:
                    if e.process is not None and e.process in states
                    and queue.sent_states.get(e.process) != states[e.process]}
         queue.sent_states.update(touched)  # a flood's batches do not repeat "running"
-        batch: dict[str, Any] = {"type": "events", "events": [event_to_dict(e) for e in events]}
+        batch: dict[str, Any] = {"type": "events",
+                                 "events": [event_to_dict(e, queue.plain) for e in events]}
+        if queue.plain:
+            stamps = Stamps()
+            for data in batch["events"]:
+                if data["kind"] == "output":
+                    stamps.pack(data)
         if touched:
             batch["states"] = touched
         await send_message(writer, lock, batch)
@@ -256,6 +263,17 @@ class ClientHub:
             await send_message(writer, lock, reply)
         except (ConnectionError, OSError):
             pass  # the asker is gone; what it asked for was done all the same
+
+
+_ROS_STAMP = re.compile(r"^(\[[A-Z]+\]\s*\[\d+\.\d{3})\d+\]")
+
+
+def shown_line(line: str) -> str:
+    """A line as a display shows it: without colour codes, its ROS stamp to the
+    millisecond (the pane's time column; the log file keeps the nanoseconds)."""
+    if "\x1b" in line:
+        line = strip_ansi(line)
+    return _ROS_STAMP.sub(r"\1]", line, count=1) if line.startswith("[") else line
 
 
 def _only(message: dict[str, Any]) -> str | None:

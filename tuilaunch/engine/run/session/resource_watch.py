@@ -98,7 +98,8 @@ class ResourceWatch:
                 # only the figures that moved (at the precision shown) cross the link; a
                 # process that stopped is sent once with None figures
                 last = self.sent.get(client, {})
-                changed = {p: f for p, f in data.items() if last.get(p) != f}
+                changed = {p: {k: v for k, v in f.items() if last.get(p, {}).get(k, v) != v
+                               or p not in last} for p, f in data.items() if last.get(p) != f}
                 changed.update({p: usage_fields(None) for p in last if p not in data})
                 self.sent[client] = data
                 if changed or not last:
