@@ -819,3 +819,60 @@ def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, 
     tl("stop", name)
     shutil.rmtree(ros_home, ignore_errors=True)
     assert not any(_alive(pid) for pid in before.values())
+
+
+TWO_PANES = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    for side in ('left', 'right'):
+        sl.add_action(ExecuteProcess(name=side, cmd=[
+            'sh', '-c', 'i=0; while true; do i=$((i+1)); echo $0 $i; sleep 0.02; done', side]))
+    return sl.launch_description()
+"""
+
+
+def test_a_client_is_sent_only_the_pane_it_shows_and_reads_the_others_when_shown(
+        runtime, write):
+    """A display over a link shows one pane: the server sends no other process's lines;
+    when it switches panes, the lines it was not sent are read from the log file, so the
+    pane shown has every line, in order, none twice."""
+    path = str(write(TWO_PANES))
+    name = tl(path, "--detach").stdout.strip()
+    tl("wait", name, "right-2", "running", "--timeout", "60")
+
+    def numbers(seen: list, process: str) -> list[int]:
+        return [int(line.split()[1]) for e in seen if e.kind == "output"
+                and e.process == process for line in e.lines]
+
+    async def scenario() -> None:
+        client = await RemoteSupervisor.open(name, Session(path, {}))
+        seen: list = []
+        everything: list = []
+        client.subscribe(seen.append)
+        client.subscribe(everything.append)
+        task = asyncio.ensure_future(client.run())
+
+        async def until_true(check, limit: float = 60.0) -> None:
+            end = time.monotonic() + limit
+            while not check():
+                assert time.monotonic() < end, "never happened"
+                await asyncio.sleep(0.05)
+
+        await client.show("left-1")
+        await until_true(lambda: len(numbers(seen, "left-1")) > 20)
+        seen.clear()
+        await until_true(lambda: len(numbers(seen, "left-1")) > 50)  # a second or more
+        assert numbers(seen, "right-2") == []  # not on screen: not sent
+        await client.show("right-2")
+        await until_true(lambda: len(numbers(seen, "right-2")) > 100)
+        # what it was not sent came from the log file: from the first line on, every
+        # line once and in order (the replay at attach, the events, the file's part)
+        right = numbers(client.history, "right-2") + numbers(everything, "right-2")
+        assert right == list(range(1, len(right) + 1))
+        await client.detach()
+        await task
+
+    asyncio.run(scenario())
+    tl("stop", name)

@@ -35,6 +35,7 @@ from ..engine.run.session.log_reader import LogLine, tail_lines
 from ..engine.run.session.protocol import (
     MAX_MESSAGE,
     ProtocolError,
+    Stamps,
     decode,
     encode,
     event_from_dict,
@@ -92,6 +93,15 @@ class RemoteSupervisor:
         self._from: dict[str, int] = {}
         self._received: dict[str, int] = {}
         self._last_event = 0.0  # the time of the latest state event received
+        self.only: str | None = None
+        """The process whose output this client's screen shows (None: all): the server
+        sends no other process's lines, read from its log file when shown (`show`)."""
+        self._stream_only: str | None = None  # `only` as of the last event received
+        self._hidden: dict[str, int] = {}
+        """Processes not shown, and the byte of their log file from which their lines were
+        not sent: read from there when they are shown again."""
+        self._usage: dict[str, Any] = {}  # the figures of `resources`, which sends changes
+        self._stamps = Stamps()  # the current batch's output stamps
         self._retry: asyncio.Event | None = None
         self.watches: dict[str, dict[str, Any]] = {}
         """The inspector's streams asked for and not ended (rates, echo, resources), as the
@@ -194,9 +204,11 @@ class RemoteSupervisor:
         log files' sizes it answers with."""
         # fair: with a screenful a second, a loud node must not hide the others' lines
         result: dict[str, Any] = await self._call(
-            "subscribe", max_lines=self.max_lines, interval=self.interval, fair=True)
+            "subscribe", max_lines=self.max_lines, interval=self.interval, fair=True,
+            only=self.only, plain=True)  # the TUI shows no colour codes: none are sent
         self._from = dict(result["offsets"])
         self._received = {}
+        self._usage = {}
         return result
 
     async def _call(self, op: str, **fields: Any) -> Any:
@@ -316,7 +328,25 @@ class RemoteSupervisor:
                 except SessionError as exc:
                     self._deliver(Event("log", reason=str(exc), level="ERROR"))
             if kind == "events":
-                self._take(message)
+                self._stamps = Stamps()  # each batch's stamps count from its first
+                events = message.get("events") or []
+                if not any(data.get("kind") == "view" for data in events):
+                    self._take(message)
+                    continue
+                # the screen switched panes there: what the pane now shown was not sent
+                # is read from the log files at that point of the stream
+                self.states.update(message.get("states") or {})
+                for data in events:
+                    if data.get("kind") == "view":
+                        try:
+                            await self._switched(data.get("process"),
+                                                 (data.get("data") or {}).get("offsets") or {})
+                        except (ConnectionError, ProtocolError):
+                            return None  # the reconnection reads the gap
+                        except SessionError as exc:
+                            self._deliver(Event("log", reason=str(exc), level="ERROR"))
+                    else:
+                        self._take({"events": [data]})
             elif kind == "reply":
                 future = self._replies.pop(message.get("id", -1), None)
                 if future is not None and not future.done():
@@ -327,6 +357,8 @@ class RemoteSupervisor:
     def _take(self, message: dict[str, Any]) -> None:
         self.states.update(message.get("states") or {})
         for data in message.get("events") or []:
+            if "stamps" in data:
+                self._stamps.unpack(data)
             event = event_from_dict(data)
             if event.kind == "output" and event.process:
                 self._count(event.process, len(event.lines))
@@ -344,6 +376,57 @@ class RemoteSupervisor:
                 self.shutdown_reason = event.reason or "stop requested"
             if event.kind == "lifecycle" and event.process:
                 self.lifecycle.follow(event.process, event.reason or "")
+            if event.kind == "resources":
+                # the server sends the figures that moved: the consumers get them all
+                for process, figures in (event.data or {}).items():
+                    if isinstance(figures, dict):
+                        self._usage[process] = {**self._usage.get(process, {}), **figures}
+                self._usage = {p: f for p, f in self._usage.items()
+                               if f.get("rss_bytes") is not None}
+                event.data = dict(self._usage)
+            self._deliver(event)
+
+    # --- the pane shown ------------------------------------------------------------------
+
+    async def show(self, process: str | None) -> None:
+        """The screen now shows `process`'s output (None: every process's): the server then
+        sends only those lines, and the lines of a pane shown again that it did not send
+        are read from its log file (`_switched`, when the switch comes back in the
+        stream), so switching panes never misses a line."""
+        if process == self.only:
+            return
+        self.only = process
+        if self.link_lost is None:
+            await self._request("view", only=process)
+
+    def _shown(self, process: str, only: str | None) -> bool:
+        return only is None or process == only
+
+    async def _switched(self, only: str | None, offsets: dict[str, int]) -> None:
+        """A `view` event: from here the stream carries `only`'s lines; `offsets` are the
+        log files' sizes at that instant."""
+        before, self._stream_only = self._stream_only, only
+        processes = set(offsets) | {p.id for p in self.plan.processes}
+        lines: dict[str, list[LogLine]] = {}
+        notes: list[Event] = []
+        for process in sorted(processes):
+            end = offsets.get(process, 0)
+            if not self._shown(process, only):
+                if self._shown(process, before):
+                    self._hidden[process] = end  # its lines from here stay over there
+                continue
+            if self._shown(process, before) and process not in self._hidden:
+                continue  # shown all along: its lines came as events
+            begin = self._hidden.pop(process, 0)
+            if end > begin:
+                page = await self._call("read_log", process=process, start=begin, end=end,
+                                        limit=self.scrollback, tail=True)
+                lines[process] = [LogLine(*line) for line in page["lines"]]
+                if page.get("skipped"):
+                    notes.append(Event("dropped", process, code=int(page["skipped"])))
+            # everything up to `end` is now here; its events from the stream come after it
+            self._from[process], self._received[process] = end, 0
+        for event in notes + merged(lines, []):
             self._deliver(event)
 
     def _count(self, process: str, lines: int) -> None:
@@ -432,8 +515,8 @@ class RemoteSupervisor:
         notes: list[Event] = []
         for process, end in result["offsets"].items():
             begin, skip = start.get(process, 0), received.get(process, 0)
-            if end <= begin:
-                continue
+            if not self._shown(process, self._stream_only) or end <= begin:
+                continue  # a pane not shown is read from its file when it is
             page = await self._call("read_log", process=process, start=begin, skip=skip,
                                     end=end, limit=self.scrollback, tail=True)
             lines[process] = [LogLine(*line) for line in page["lines"]]
@@ -446,6 +529,8 @@ class RemoteSupervisor:
             event = event_from_dict(data)
             if event.kind == "exited" and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
+        # the pane shown may have changed while the link was down: read what it lacks
+        await self._switched(self.only, result["offsets"])
         return notes + merged(lines, recent)
 
     def _deliver(self, event: Event) -> None:

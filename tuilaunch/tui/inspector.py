@@ -82,7 +82,7 @@ class Inspector(Navigation):
         if not any(p.kind in ("node", "container") for p in self.session.plan.processes):
             return  # a launch of plain processes: the server need not start ROS for us
         try:
-            result = await self.inspect("topics")
+            result = await self.inspect("topics", problems_only=True)
         except SessionError:
             return  # no ROS here, or the server is busy: the marks stay as they were
         self.launch_tree.set_qos_problems(self.qos_problems_by_process(

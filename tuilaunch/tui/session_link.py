@@ -182,6 +182,7 @@ class SessionLink(App[int]):
         self.show_events(self.buffer.drain())
 
     def show_events(self, events: list[Event]) -> None:
+        self._tell_pane_shown()
         tree = self.launch_tree
         panel = self.output_panel
         fresh: list[Line] = []
@@ -231,6 +232,16 @@ class SessionLink(App[int]):
             self.update_detail()
         elif self.quit_started is not None:
             self.update_status()  # the signal stage moves on with time
+
+    def _tell_pane_shown(self) -> None:
+        """Over an ssh link the server sends only the output pane's process's lines (all
+        for the all-nodes pane); the others' are read from their log files when shown."""
+        supervisor = self.supervisor
+        if not isinstance(supervisor, RemoteSupervisor) or supervisor.host is None:
+            return
+        shown = self.output_panel.view.process
+        if shown != supervisor.only:  # set on the engine thread: asked again until it is
+            self.engine.submit(supervisor.show(shown))
 
     def inspector_event(self, event: Event) -> None:
         """A `rates`, `echo` or `resources` event (the Inspector mixin shows them)."""

@@ -220,6 +220,8 @@ class Inspector(Plugin):
         if only is not None:
             await self.require_node(bridge, only)
         result: dict[str, Any] = await bridge.topics(self.node_processes(), only)
+        if message.get("problems_only"):  # the TUI's QoS check: a few bytes, not the graph
+            result["topics"] = [t for t in result.get("topics") or [] if t.get("qos_problems")]
         return result
 
     async def hz(self, message: dict[str, Any]) -> dict[str, Any]:

@@ -10,8 +10,10 @@ batches go out, never interleaved inside a line.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 import itertools
 import os
+import re
 import socket
 import struct
 from collections.abc import Awaitable, Callable
@@ -20,7 +22,8 @@ from typing import Any
 from ...errors import LaunchError
 from ..event_buffer import EventBuffer
 from ..events import Event
-from .protocol import ProtocolError, decode, encode, event_to_dict
+from ..process.output import strip_ansi
+from .protocol import ProtocolError, Stamps, decode, encode, event_to_dict
 
 CLIENT_MAX_LINES = 20_000
 """Output lines queued per client before the oldest are dropped for that client."""
@@ -33,9 +36,16 @@ class ClientQueue:
 
     def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
                  on_overflow: Callable[[], None] | None = None,
-                 kinds: frozenset[str] | None = None, fair: bool = False) -> None:
+                 kinds: frozenset[str] | None = None, fair: bool = False,
+                 only: str | None = None, plain: bool = False) -> None:
         self.buffer = EventBuffer(max_lines=max_lines, fair=fair)
         self.kinds = kinds  # only these kinds of events (`tuilaunch echo` wants no output)
+        self.only = only
+        """The one process whose output this client shows (its focused pane), None for all:
+        the others' lines stay in their log files until it asks (`view`)."""
+        self.plain = plain  # a display that shows no colour codes is not sent them
+        self.sent_states: dict[str, str] = {}
+        """The states this client was last told: a batch carries only the ones changed."""
         self.on_overflow = on_overflow
         self.interval = interval  # a display asks for no more batches than it draws
         self.events = 0
@@ -45,6 +55,10 @@ class ClientQueue:
     def __call__(self, event: Event) -> None:
         if self.kinds is not None and event.kind not in self.kinds:
             return
+        if self.only is not None and event.kind == "output" and event.process != self.only:
+            return  # not on its screen: in the log file, read if it switches to it
+        if self.plain and event.kind == "output":
+            event = dataclasses.replace(event, lines=[shown_line(line) for line in event.lines])
         if event.kind != "output":
             self.events += 1
             if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
@@ -73,12 +87,14 @@ class ClientHub:
                  snapshot: Callable[[], dict[str, Any]],
                  answer: Callable[[dict[str, Any]], Awaitable[Any]],
                  states: Callable[[], dict[str, str]],
-                 gone: Callable[[int], None]) -> None:
+                 gone: Callable[[int], None],
+                 offsets: Callable[[], dict[str, int]] | None = None) -> None:
         self.hello = hello
         self.snapshot = snapshot
         self.answer = answer
         self.states = states
         self.gone = gone
+        self.offsets = offsets or (lambda: {})  # each log file's size, now
         self.ids = itertools.count(1)
         self.clients: dict[int, ClientQueue] = {}  # subscribed clients' queues, by client id
         self.queues: set[ClientQueue] = set()
@@ -165,15 +181,21 @@ class ClientHub:
                         max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
                         writer.transport.abort,
                         frozenset(map(str, kinds)) if isinstance(kinds, list) else None,
-                        bool(message.get("fair")))
+                        bool(message.get("fair")), _only(message), bool(message.get("plain")))
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result = self.snapshot()
+                    queue.sent_states = dict(result.get("states") or {})
                     self.queues.add(queue)
                     self.clients[client] = queue
                     await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
                                                       "ok": True, "result": result})
                     self.spawn(self._pump(queue, writer, lock))
+                    continue
+                if message.get("op") == "view" and queue is not None:
+                    self._view(queue, _only(message))
+                    await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
+                                                      "ok": True, "result": {}})
                     continue
                 self.spawn(self._answer(message, writer, lock))
         except (ConnectionError, OSError):
@@ -188,6 +210,15 @@ class ClientHub:
             if connection is not None:
                 self.connections.discard(connection)
             writer.close()
+
+    def _view(self, queue: ClientQueue, only: str | None) -> None:
+        """The client now shows `only`'s output (None: every process's). A `view` event in
+        its stream marks the switch, with each log file's size at that instant: the lines
+        before it that the client was not sent are in the files up to there, and the lines
+        after it come as events."""
+        queue.only = only
+        queue.buffer(Event("view", only, data={"offsets": self.offsets()}))
+        queue.ready.set()
 
     async def _pump(self, queue: ClientQueue, writer: asyncio.StreamWriter,
                     lock: asyncio.Lock) -> None:
@@ -217,9 +248,19 @@ class ClientHub:
             return
         states = self.states()
         touched = {e.process: states[e.process] for e in events
-                   if e.process is not None and e.process in states}
-        await send_message(writer, lock, {"type": "events", "states": touched,
-                                          "events": [event_to_dict(e) for e in events]})
+                   if e.process is not None and e.process in states
+                   and queue.sent_states.get(e.process) != states[e.process]}
+        queue.sent_states.update(touched)  # a flood's batches do not repeat "running"
+        batch: dict[str, Any] = {"type": "events",
+                                 "events": [event_to_dict(e, queue.plain) for e in events]}
+        if queue.plain:
+            stamps = Stamps()
+            for data in batch["events"]:
+                if data["kind"] == "output":
+                    stamps.pack(data)
+        if touched:
+            batch["states"] = touched
+        await send_message(writer, lock, batch)
 
     async def _answer(self, message: dict[str, Any], writer: asyncio.StreamWriter,
                       lock: asyncio.Lock) -> None:
@@ -236,6 +277,22 @@ class ClientHub:
             await send_message(writer, lock, reply)
         except (ConnectionError, OSError):
             pass  # the asker is gone; what it asked for was done all the same
+
+
+_ROS_STAMP = re.compile(r"^(\[[A-Z]+\]\s*\[\d+\.\d{3})\d+\]")
+
+
+def shown_line(line: str) -> str:
+    """A line as a display shows it: without colour codes, its ROS stamp to the
+    millisecond (the pane's time column; the log file keeps the nanoseconds)."""
+    if "\x1b" in line:
+        line = strip_ansi(line)
+    return _ROS_STAMP.sub(r"\1]", line, count=1) if line.startswith("[") else line
+
+
+def _only(message: dict[str, Any]) -> str | None:
+    only = message.get("only")
+    return None if only is None else str(only)
 
 
 def op_name(message: dict[str, Any]) -> str:

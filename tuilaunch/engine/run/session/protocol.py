@@ -6,7 +6,14 @@ message longer than MAX_MESSAGE is refused rather than buffered without bound.
 Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interval: the
   most output lines per batch and the least seconds between batches, for a display that
   cannot show more; kinds?: only events of these kinds; fair?: past max_lines, the lines
-  dropped are the loudest process's, not the oldest}, status {resources?: false skips
+  dropped are the loudest process's, not the oldest; only?: the one process whose output
+  to send (the others' stays in the log files: see view); plain?: for a display, output as
+  it shows it (no colour codes, ROS stamps to the millisecond, sent apart as "stamps":
+  [ms, or the difference from the batch's stamp before; null for a line without]) and
+  output and dropped events without their time (stamped on arrival)}, view {only: a process id or
+  null for all} changes `only`: an event of kind "view" (process: the new `only`, data
+  {offsets: {process: its log file's size}}) then marks in the stream where the switch
+  happened, so the client reads from the files what it was not sent, status {resources?: false skips
   the CPU/memory sampling}, find {process},
   start/stop {process}, restart {process, prefix?: a tool run before the command (`gdb -q
   -ex run --args`) until a restart without one, log_level?: `--ros-args --log-level` kept
@@ -25,9 +32,12 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   core), `rss_bytes` and `threads` over its process tree (None when not running);
   watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a
   second an event of kind "resources", data {process: {cpu_percent, rss_bytes, threads,
-  growing}} (whole percents, memory to 64 KiB: what a display shows).
+  growing}} (whole percents, memory to 64 KiB: what a display shows), with only the
+  figures that changed since the watcher's last event (all in its first; a process that
+  stopped once, with None figures).
   The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
-  topics {node?} -> {"topics": [{name, types, publishers: [{node, in_launch, process,
+  topics {node?, problems_only?: only the topics with QoS problems} -> {"topics": [{name,
+  types, publishers: [{node, in_launch, process,
   qos}], subscribers, qos_problems: [sentence]}]};
   hz {topic, window: s} -> {topic, rate_hz, bytes_per_s, messages, window_s} after window s;
   watch_rates {topics: [...]} -> {unmeasured: {topic: why}}: this client's topics ([]: none);
@@ -51,7 +61,8 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   kept; `typing` {client, process} or null.
 Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
-  [...], "states": {process: state}}` (a relaunch is an event of kind "relaunched" whose
+  [...], "states": {process: state}} (the states that changed since this client's last
+  batch; left out when none did)` (a relaunch is an event of kind "relaunched" whose
   lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
   keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
   and "core" for a crash; event times are to the millisecond; consecutive output of one
@@ -65,6 +76,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from typing import Any
 
 from ..events import Event
@@ -94,15 +106,22 @@ def decode(line: bytes) -> dict[str, Any]:
     return message
 
 
-def event_to_dict(event: Event) -> dict[str, Any]:
+def event_to_dict(event: Event, display: bool = False) -> dict[str, Any]:
     # defaults are left out: an output batch is then mostly its lines; the time to the
     # millisecond (what the log files keep), as sub-millisecond digits are noise that no
-    # compression squeezes over an ssh link
-    data: dict[str, Any] = {"kind": event.kind, "time": round(event.time, 3)}
+    # compression squeezes over an ssh link. `display`: for a screen, which stamps output
+    # on arrival and shows no time of its own for a count of lines not sent
+    data: dict[str, Any] = {"kind": event.kind}
+    output = event.kind == "output"
+    if not (display and event.kind in ("output", "dropped")):
+        data["time"] = round(event.time, 3)
     for name in ("process", "pid", "stream", "code", "reason"):
         value = getattr(event, name)
-        if value is not None:
-            data[name] = value
+        if value is None or (output and (name == "pid" or value == "stdout")):
+            continue  # output: its pid is the started event's; stdout is the default stream
+        if name == "reason" and event.kind == "dropped":
+            continue  # the count says it; the sentence is the client's to write
+        data[name] = value
     if event.lines:
         data["lines"] = event.lines
     if event.level != "INFO":
@@ -110,6 +129,54 @@ def event_to_dict(event: Event) -> dict[str, Any]:
     if event.data is not None:
         data["data"] = event.data  # a component's result, a lifecycle state, a stop asked
     return data
+
+
+_STAMPED = re.compile(r"^(\[[A-Z]+\] )\[(\d+)\.(\d{3})\] ")
+
+
+class Stamps:
+    """A display's batch carries each output line's ROS stamp (already to the millisecond,
+    as shown) as a number apart from the line, the difference in ms from the stamp before
+    it in the batch: the digits that change from line to line are what a compressing
+    link cannot squeeze. One per batch on each side, in the batch's order."""
+
+    def __init__(self) -> None:
+        self.last: int | None = None
+
+    def pack(self, data: dict[str, Any]) -> None:
+        """An output event's dict: its stamped lines lose their stamp to `stamps`."""
+        lines: list[str] = []
+        stamps: list[int | None] = []
+        stamped = False
+        for line in data.get("lines") or []:
+            match = _STAMPED.match(line)
+            if match is None:
+                lines.append(line)
+                stamps.append(None)
+                continue
+            ms = int(match.group(2)) * 1000 + int(match.group(3))
+            stamps.append(ms if self.last is None else ms - self.last)
+            self.last, stamped = ms, True
+            lines.append(match.group(1) + line[match.end():])
+        if stamped:
+            data["lines"], data["stamps"] = lines, stamps
+
+    def unpack(self, data: dict[str, Any]) -> None:
+        stamps = data.pop("stamps", None)
+        if not isinstance(stamps, list):
+            return
+        given = data.get("lines") or []
+        lines = []
+        for line, step in zip(given, stamps + [None] * (len(given) - len(stamps)),
+                              strict=False):  # a line is never lost to a short list
+            if not isinstance(step, int):
+                lines.append(line)
+                continue
+            ms = step if self.last is None else self.last + step
+            self.last = ms
+            level = line.index("] ") + 2
+            lines.append(f"{line[:level]}[{ms // 1000}.{ms % 1000:03d}] {line[level:]}")
+        data["lines"] = lines
 
 
 def event_from_dict(data: dict[str, Any]) -> Event:

@@ -57,6 +57,7 @@ class ResourceWatch:
         self.send = send
         self.sampler = ResourceSampler()
         self.watchers: set[int] = set()
+        self.sent: dict[int, dict[str, Any]] = {}  # what each watcher was last told
         self.last_sample: float | None = None
         self.task: asyncio.Task[None] | None = None
 
@@ -74,6 +75,7 @@ class ResourceWatch:
     def watch(self, client: int, on: bool) -> None:
         if on:
             self.watchers.add(client)
+            self.sent[client] = {}  # a new watch is told every figure first
             if self.task is None:
                 self.task = asyncio.ensure_future(self._loop())
         else:
@@ -81,6 +83,7 @@ class ResourceWatch:
 
     def forget(self, client: int) -> None:
         self.watchers.discard(client)
+        self.sent.pop(client, None)
         if not self.watchers and self.task is not None:
             self.task.cancel()
             self.task = None
@@ -92,7 +95,15 @@ class ResourceWatch:
             data = {process: shown_fields(usage_fields(usage))
                     for process, usage in self.sample().items()}
             for client in list(self.watchers):
-                self.send(Event("resources", data=data), client)
+                # only the figures that moved (at the precision shown) cross the link; a
+                # process that stopped is sent once with None figures
+                last = self.sent.get(client, {})
+                changed = {p: {k: v for k, v in f.items() if last.get(p, {}).get(k, v) != v
+                               or p not in last} for p, f in data.items() if last.get(p) != f}
+                changed.update({p: usage_fields(None) for p in last if p not in data})
+                self.sent[client] = data
+                if changed or not last:
+                    self.send(Event("resources", data=changed), client)
 
     def close(self) -> None:
         self.watchers.clear()

@@ -66,7 +66,8 @@ class SessionServer:
         self.supervisor.subscribe(self._on_event)
         self._handlers: dict[str, Handler] = {}
         self.hub = ClientHub(self.info, self._snapshot, self._perform,
-                             lambda: self.supervisor.states, self._client_gone)
+                             lambda: self.supervisor.states, self._client_gone,
+                             self._log_sizes)
         self.socket = SessionSocket(name, self.hub.serve, self.info, self._log)
         self.resources = ResourceWatch(self._running_pids, self.send)
         self.keyboard = Keyboard(self.supervisor, self.find_process)
