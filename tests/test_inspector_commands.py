@@ -58,8 +58,9 @@ def generate_launch_description():
 FAST, STRICT, BUSY, PLAIN, ANON = "fast-1", "strict-2", "busy-3", "plain-4", "inspector_node-5"
 
 
-def tl(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    return run_cli(*args, timeout=timeout)
+def tl(*args: str, timeout: float = 120, env: dict[str, str] | None = None)\
+        -> subprocess.CompletedProcess[str]:
+    return run_cli(*args, timeout=timeout, env=env)
 
 
 def ok(*args: str) -> str:
@@ -144,9 +145,23 @@ def test_topics_map_endpoints_to_processes_and_say_qos_problems(session):
     anon = eventually(lambda: topics_of(session).get("/insp/anon_topic"))
     assert [(e["node"], e["in_launch"], e["process"]) for e in anon["publishers"]] == \
         [("/insp/anon", True, ANON)]
-    table = ok("topics", session)
-    assert "/insp/fast [fast-1]" in table and "/insp/strict [strict-2]" in table
-    assert "QoS problems" in table and problem in table
+    table = tl("topics", session, env={"COLUMNS": "60"}).stdout
+    lines = table.split("\n\nQoS problems")[0].splitlines()
+    assert lines[0].split() == ["TOPIC", "TYPE", "PUB", "SUB", "QOS"]
+    assert all(len(line) <= 60 for line in table.splitlines())
+    scan_line = next(line for line in lines if line.startswith("/insp/scan "))
+    assert scan_line.split()[-3:] == ["1", "1", "!!"]  # one each way, and a QoS problem
+    assert "std_msgs/" in scan_line
+    assert "QoS problems" in table and "cannot talk" in table
+    # -v: each endpoint with its node, process and QoS, as ros2 topic info -v
+    verbose = ok("topics", session, "-v", "--node", FAST)
+    scan_info = verbose.split("Topic: /insp/scan\n")[1].split("Topic: ")[0]
+    assert "Type: std_msgs/msg/String" in scan_info
+    assert "Publisher count: 1" in scan_info and "Subscription count: 1" in scan_info
+    assert "Node name: fast\nNode namespace: /insp\nProcess: fast-1\n" in scan_info
+    assert "Node name: strict\nNode namespace: /insp\nProcess: strict-2\n" in scan_info
+    assert "  Reliability: BEST_EFFORT" in scan_info and "  Reliability: RELIABLE" in scan_info
+    assert "QoS problem: " in scan_info
 
 
 def test_hz_measures_a_known_rate_and_refuses_a_topic_nobody_publishes(session):

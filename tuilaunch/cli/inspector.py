@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
+import textwrap
 import time
-from collections.abc import Sequence
 from typing import Any
 
 from ..client.link import open_link
@@ -35,11 +36,6 @@ def ask(name: str, op: str, wait: float = 0.0, **fields: Any) -> Any:
 
 # --- topics ----------------------------------------------------------------------------------
 
-def endpoint_text(endpoint: dict[str, Any]) -> str:
-    process = endpoint.get("process")
-    return f"{endpoint['node']} [{process}]" if process else endpoint["node"]
-
-
 def cmd_topics(options: argparse.Namespace) -> int:
     fields = {"node": options.node} if options.node else {}
     graph = ask(options.name, "topics", **fields)
@@ -50,25 +46,74 @@ def cmd_topics(options: argparse.Namespace) -> int:
     if not topics:
         print("no topics" + (f" of {options.node}" if options.node else ""))
         return 0
-    rows = [("TOPIC", "TYPE", "PUBLISHERS", "SUBSCRIBERS")]
-    for topic in topics:
-        rows.append((topic["name"], ", ".join(topic["types"]),
-                     ", ".join(map(endpoint_text, topic["publishers"])) or "-",
-                     ", ".join(map(endpoint_text, topic["subscribers"])) or "-"))
-    table(rows)
+    width = shutil.get_terminal_size().columns  # COLUMNS first, then the terminal, else 80
+    if options.verbose:
+        print("\n".join(topic_info(topic) for topic in topics).rstrip("\n"))
+        return 0
+    print("\n".join(topic_lines(topics, width)))
     problems = [p for topic in topics for p in topic["qos_problems"]]
     if problems:
         print()
         print("QoS problems (these pairs exchange no message):")
         for problem in problems:
-            print(f"  {problem}")
+            print(textwrap.fill(problem, width, initial_indent="  ", subsequent_indent="    "))
     return 0
 
 
-def table(rows: Sequence[tuple[str, ...]]) -> None:
-    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-    for row in rows:
-        print("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip())
+def cut(text: str, width: int) -> str:
+    return text if len(text) <= width else text[:max(width - 1, 0)] + "…"
+
+
+def topic_lines(topics: list[dict[str, Any]], width: int) -> list[str]:
+    """One line per topic within `width`: name, type, publisher and subscriber counts, and
+    `!!` where a pair cannot talk. The type is cut first, then the name."""
+    rows = [(t["name"], ", ".join(t["types"]), str(len(t["publishers"])),
+             str(len(t["subscribers"])), "!!" if t["qos_problems"] else "") for t in topics]
+    header = ("TOPIC", "TYPE", "PUB", "SUB", "QOS")
+    pubs = max(len(header[2]), *(len(r[2]) for r in rows))
+    subs = max(len(header[3]), *(len(r[3]) for r in rows))
+    fixed = pubs + subs + len(header[4]) + 8  # four gaps of two
+    names = max(len(header[0]), *(len(r[0]) for r in rows))
+    types = max(len(header[1]), *(len(r[1]) for r in rows))
+    room = max(width - fixed, 16)
+    if names + types > room:  # the type gives way first, down to 12, then the name
+        types = max(room - names, min(types, 12))
+        names = max(room - types, 4)
+    lines = []
+    for row in (header, *rows):
+        line = (f"{cut(row[0], names).ljust(names)}  {cut(row[1], types).ljust(types)}  "
+                f"{row[2].rjust(pubs)}  {row[3].rjust(subs)}  {row[4]}")
+        lines.append(line.rstrip())
+    return lines
+
+
+def topic_info(topic: dict[str, Any]) -> str:
+    """`ros2 topic info -v`'s shape, each endpoint with its node, process and QoS."""
+    lines = [f"Topic: {topic['name']}", f"Type: {', '.join(topic['types'])}", ""]
+    for kind, label in (("publishers", "Publisher"), ("subscribers", "Subscription")):
+        lines += [f"{label} count: {len(topic[kind])}", ""]
+        for endpoint in topic[kind]:
+            qos = endpoint.get("qos") or {}
+            node = endpoint["node"]
+            namespace, _, name = node.rpartition("/")
+            history = str(qos.get("history", "unknown")).upper()
+            depth = qos.get("depth")
+            lines += [f"Node name: {name}", f"Node namespace: {namespace or '/'}",
+                      f"Process: {endpoint.get('process') or '(not of this launch)'}",
+                      f"Topic type: {', '.join(topic['types'])}",
+                      f"Endpoint type: {label.upper()}", "QoS profile:",
+                      f"  Reliability: {str(qos.get('reliability')).upper()}",
+                      f"  History (Depth): {history}" + (f" ({depth})" if depth else ""),
+                      f"  Durability: {str(qos.get('durability')).upper()}",
+                      f"  Deadline: {str(qos.get('deadline')).capitalize()}",
+                      f"  Liveliness: {str(qos.get('liveliness')).upper()}",
+                      "  Liveliness lease duration: "
+                      f"{str(qos.get('liveliness_lease_duration')).capitalize()}", ""]
+    for problem in topic["qos_problems"]:
+        lines.append(f"QoS problem: {problem}")
+    if topic["qos_problems"]:
+        lines.append("")
+    return "\n".join(lines) + "\n"
 
 
 # --- hz --------------------------------------------------------------------------------------
