@@ -58,8 +58,9 @@ def generate_launch_description():
 FAST, STRICT, BUSY, PLAIN, ANON = "fast-1", "strict-2", "busy-3", "plain-4", "inspector_node-5"
 
 
-def tl(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    return run_cli(*args, timeout=timeout)
+def tl(*args: str, timeout: float = 120, env: dict[str, str] | None = None)\
+        -> subprocess.CompletedProcess[str]:
+    return run_cli(*args, timeout=timeout, env=env)
 
 
 def ok(*args: str) -> str:
@@ -144,26 +145,91 @@ def test_topics_map_endpoints_to_processes_and_say_qos_problems(session):
     anon = eventually(lambda: topics_of(session).get("/insp/anon_topic"))
     assert [(e["node"], e["in_launch"], e["process"]) for e in anon["publishers"]] == \
         [("/insp/anon", True, ANON)]
-    table = ok("topics", session)
-    assert "/insp/fast [fast-1]" in table and "/insp/strict [strict-2]" in table
-    assert "QoS problems" in table and problem in table
+    table = tl("topics", session, env={"COLUMNS": "60"}).stdout
+    lines = table.split("\n\nQoS problems")[0].splitlines()
+    assert lines[0].split() == ["TOPIC", "TYPE", "PUB", "SUB", "QOS"]
+    assert all(len(line) <= 60 for line in table.splitlines())
+    scan_line = next(line for line in lines if line.startswith("/insp/scan "))
+    assert scan_line.split()[-3:] == ["1", "1", "!!"]  # one each way, and a QoS problem
+    assert "std_msgs/" in scan_line
+    assert "QoS problems" in table and "cannot talk" in table
+    # -v: each endpoint with its node, process and QoS, as ros2 topic info -v
+    verbose = ok("topics", session, "-v", "--node", FAST)
+    scan_info = verbose.split("Topic: /insp/scan\n")[1].split("Topic: ")[0]
+    assert "Type: std_msgs/msg/String" in scan_info
+    assert "Publisher count: 1" in scan_info and "Subscription count: 1" in scan_info
+    assert "Node name: fast\nNode namespace: /insp\nProcess: fast-1\n" in scan_info
+    assert "Node name: strict\nNode namespace: /insp\nProcess: strict-2\n" in scan_info
+    assert "  Reliability: BEST_EFFORT" in scan_info and "  Reliability: RELIABLE" in scan_info
+    assert "QoS problem: " in scan_info
 
 
 def test_hz_measures_a_known_rate_and_refuses_a_topic_nobody_publishes(session):
-    result = json.loads(ok("hz", session, "/insp/scan", "--window", "3", "--json"))
+    result = json.loads(ok("hz", session, "/insp/scan", "--duration", "3", "--json"))
     assert result["topic"] == "/insp/scan"
     assert 10 < result["rate_hz"] < 30  # published at 20 Hz; loose: the machine is shared
     assert result["bytes_per_s"] > 0 and result["messages"] > 10
-    text = ok("hz", session, "insp/chatter", "--window", "2")
-    assert text.startswith("average rate: ") and "average bandwidth: " in text
+    assert 0 < result["min_s"] <= result["max_s"] and result["std_dev_s"] >= 0
+    assert result["window"] == result["messages"] - 1  # periods between the messages
+    assert result["size_min"] <= result["size_mean"] <= result["size_max"]
+    # -w N: the figures over the last N periods, as ros2 topic hz -w
+    assert json.loads(ok("hz", session, "/insp/scan", "--duration", "2", "-w", "5",
+                         "--json"))["window"] == 5
+    text = ok("hz", session, "insp/chatter", "--duration", "2")
+    lines = text.splitlines()
+    assert lines[0].startswith("average rate: ")
+    assert lines[1].startswith("\tmin: ") and " std dev: " in lines[1] and " window: " in \
+        lines[1]
+    assert lines[2].startswith("average bandwidth: ") and " messages" in lines[2]
+    assert lines[3].startswith("\tmessage size mean: ")
     started = time.monotonic()
-    error = one_line_error(tl("hz", session, "/insp/orphan", "--window", "1"), "hz")
+    error = one_line_error(tl("hz", session, "/insp/orphan", "--duration", "1"), "hz")
     assert "topic /insp/orphan has no publisher (waited 5 s)" in error
-    missing = one_line_error(tl("hz", session, "/insp/nowhere", "--window", "1"), "hz")
+    missing = one_line_error(tl("hz", session, "/insp/nowhere", "--duration", "1"), "hz")
     assert "no topic /insp/nowhere on the ROS graph" in missing
     assert time.monotonic() - started < 100  # never a hang (the deadlines are ~5 s each)
     unknown = one_line_error(tl("hz", "nosuch", "/insp/scan"), "hz")
     assert "no running session named nosuch" in unknown
+    bad = one_line_error(tl("hz", session, "/insp/scan", "-w", "0"), "hz")
+    assert "--window 0 is not a positive number of messages" in bad
+
+
+def interrupted(args: list[str], ready: Callable[[str], bool]) -> tuple[int, str, str]:
+    """Runs a command until its output satisfies `ready`, then Ctrl+C (SIGINT) as a terminal
+    sends it: its exit status, its whole output and its errors."""
+    command = subprocess.Popen([sys.executable, "-m", "tuilaunch", *args],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert command.stdout is not None
+        out = ""
+        end = time.monotonic() + 120
+        while not ready(out):
+            assert time.monotonic() < end, out
+            line = command.stdout.readline()
+            assert line, f"it ended: {out}"
+            out += line
+        command.send_signal(signal.SIGINT)
+        # read on from the same buffered stream (communicate() would skip what it holds)
+        rest = command.stdout.read()
+        assert command.stderr is not None
+        errors = command.stderr.read()
+        return command.wait(timeout=60), out + rest, errors
+    finally:
+        if command.poll() is None:
+            command.kill()
+            command.wait()
+
+
+def test_hz_streams_a_block_a_second_until_ctrl_c_then_says_the_figures(session):
+    status, out, errors = interrupted(["hz", session, "/insp/scan"],
+                                      lambda out: out.count("average rate: ") >= 2)
+    assert status == 0 and errors == ""
+    blocks = out.split("average rate: ")[1:]
+    assert len(blocks) >= 3  # two streamed, and the figures at Ctrl+C
+    for block in blocks:
+        rate = float(block.split("\n")[0])
+        assert 10 < rate < 30
+        assert "\tmin: " in block and "average bandwidth: " in block
 
 
 def test_echo_prints_count_messages_as_yaml(session):
@@ -171,6 +237,21 @@ def test_echo_prints_count_messages_as_yaml(session):
     documents = [d for d in out.split("---\n") if d.strip()]
     assert len(documents) == 2 and out.endswith("---\n")
     assert all(d.startswith("data: hello ") for d in documents)
+    once = ok("echo", session, "/insp/chatter", "--once")
+    assert once.count("---\n") == 1 and once.startswith("data: hello ")
+
+
+def test_echo_runs_until_ctrl_c_and_honours_its_timeout(session):
+    status, out, errors = interrupted(["echo", session, "/insp/chatter"],
+                                      lambda out: out.count("---\n") >= 3)
+    assert status == 130 and errors == "tuilaunch: interrupted\n"
+    assert out.count("data: hello ") >= 3
+    # --timeout is the whole wait, the publisher's included
+    error = one_line_error(tl("echo", session, "/insp/orphan", "--timeout", "2"), "echo")
+    assert "topic /insp/orphan has no publisher (waited 2 s)" in error
+    # no count: what came within the time is enough
+    timed = tl("echo", session, "/insp/chatter", "--timeout", "3")
+    assert timed.returncode == 0 and "data: hello " in timed.stdout
 
 
 def test_status_shows_cpu_memory_and_threads_per_process(session):

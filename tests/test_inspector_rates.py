@@ -147,3 +147,33 @@ def test_throttle_lets_a_few_messages_a_second_through():
     throttle = Throttle(per_second=4)
     passed = [t for t in (i / 16 for i in range(32)) if throttle.ready(now=t)]
     assert passed == [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75]
+
+
+def test_a_transient_local_history_is_not_counted_as_messages_published_now():
+    """/rosout, /tf_static, maps: a new subscription is handed the kept history at once.
+    Counted, 50 kept messages inflate a 2 Hz topic's rate tenfold; the Topics tab's windows
+    and `hz`'s message windows count only what is published after they matched, as ros2
+    topic hz does."""
+    from tuilaunch.engine.ros.rates import RateMeter
+
+    topic = f"{NS}/kept"
+
+    async def scenario(bridge: RosBridge) -> tuple[dict[str, Any], dict[str, Any]]:
+        await bridge.start_rates([topic], window_s=10.0, wait=30)
+        meter = RateMeter(bridge.node)
+        await meter.start(topic, wait=30, messages=100)
+        tab = await reading(bridge, topic, 3)
+
+        async def counted() -> dict[str, Any] | None:
+            result = meter.read(topic)[topic]
+            return result if result["messages"] >= 3 else None
+        hz = await eventually(counted, 60, "3 messages counted by hz's window")
+        meter.stop_all()
+        await bridge.stop_rates()
+        return tab, hz
+
+    with ros_nodes(["kept", "--namespace", NS, "--pub", "kept", "--rate", "2",
+                    "--transient-local", "--depth", "100", "--burst", "50"]):
+        tab, hz = run(scenario)
+    assert tab["messages"] < 50 and tab["rate_hz"] < 5  # published at 2 Hz
+    assert hz["messages"] < 50 and hz["rate_hz"] < 5

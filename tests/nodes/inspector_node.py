@@ -20,6 +20,9 @@ parser.add_argument("--sub")
 parser.add_argument("--rate", type=float, default=10.0)
 parser.add_argument("--best-effort", action="store_true")
 parser.add_argument("--transient-local", action="store_true")
+parser.add_argument("--depth", type=int, default=10, help="the history a publisher keeps")
+parser.add_argument("--burst", type=int, default=0,
+                    help="publish N messages at once before the timer starts")
 parser.add_argument("--array", type=int, default=0, help="publish Int32MultiArray of N")
 parser.add_argument("--params", action="store_true")
 parser.add_argument("--logger-service", action="store_true")
@@ -31,7 +34,7 @@ args = parser.parse_args(remove_ros_args(sys.argv)[1:])
 rclpy.init()
 node = rclpy.create_node(args.name, namespace=args.namespace,
                          enable_logger_service=args.logger_service)
-qos = QoSProfile(depth=10)
+qos = QoSProfile(depth=args.depth)
 if args.best_effort:
     qos.reliability = ReliabilityPolicy.BEST_EFFORT
 if args.transient_local:
@@ -53,6 +56,8 @@ if args.pub:
         else:
             publisher.publish(String(data=f"hello {count}"))
 
+    for _ in range(args.burst):  # a transient-local history a late subscriber is handed
+        publish()
     node.create_timer(1.0 / args.rate, publish)
 if args.sub:
     node.create_subscription(String, args.sub, lambda msg: None, qos)

@@ -18,7 +18,6 @@ from ..engine.packages import ensure_environment, find_launch_file_in_share
 from ..engine.plan.machines import Placement, load_placement, placement_from_text
 from ..engine.plan.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
-from .parsers import COMMANDS, launch_parser
 
 
 def split_items(items: list[str]) -> tuple[list[str], dict[str, str]]:
@@ -82,6 +81,8 @@ def _show_arguments(loaded: LoadedFile, arguments: dict[str, str]) -> int:
 def is_command(argv: list[str]) -> bool:
     """A session command, unless the word names an existing file (launched, as it always
     was); `tuilaunch -- WORD ...` forces the launch form, e.g. for a package named `status`."""
+    from .parsers import COMMANDS
+
     return bool(argv) and argv[0] in COMMANDS and not os.path.exists(argv[0])
 
 
@@ -141,6 +142,8 @@ def _main(argv: list[str] | None) -> int:
         return command_main(argv)
     if argv[:1] == ["--"]:
         argv = argv[1:]
+    from .parsers import launch_parser
+
     options = launch_parser().parse_intermixed_args(argv)
     ensure_environment()
     # a launch file's own print() must not corrupt the JSON a tool reads on stdout

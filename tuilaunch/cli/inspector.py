@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
-from collections.abc import Sequence
+import textwrap
+import time
 from typing import Any
 
 from ..client.link import open_link
@@ -34,11 +36,6 @@ def ask(name: str, op: str, wait: float = 0.0, **fields: Any) -> Any:
 
 # --- topics ----------------------------------------------------------------------------------
 
-def endpoint_text(endpoint: dict[str, Any]) -> str:
-    process = endpoint.get("process")
-    return f"{endpoint['node']} [{process}]" if process else endpoint["node"]
-
-
 def cmd_topics(options: argparse.Namespace) -> int:
     fields = {"node": options.node} if options.node else {}
     graph = ask(options.name, "topics", **fields)
@@ -49,25 +46,74 @@ def cmd_topics(options: argparse.Namespace) -> int:
     if not topics:
         print("no topics" + (f" of {options.node}" if options.node else ""))
         return 0
-    rows = [("TOPIC", "TYPE", "PUBLISHERS", "SUBSCRIBERS")]
-    for topic in topics:
-        rows.append((topic["name"], ", ".join(topic["types"]),
-                     ", ".join(map(endpoint_text, topic["publishers"])) or "-",
-                     ", ".join(map(endpoint_text, topic["subscribers"])) or "-"))
-    table(rows)
+    width = shutil.get_terminal_size().columns  # COLUMNS first, then the terminal, else 80
+    if options.verbose:
+        print("\n".join(topic_info(topic) for topic in topics).rstrip("\n"))
+        return 0
+    print("\n".join(topic_lines(topics, width)))
     problems = [p for topic in topics for p in topic["qos_problems"]]
     if problems:
         print()
         print("QoS problems (these pairs exchange no message):")
         for problem in problems:
-            print(f"  {problem}")
+            print(textwrap.fill(problem, width, initial_indent="  ", subsequent_indent="    "))
     return 0
 
 
-def table(rows: Sequence[tuple[str, ...]]) -> None:
-    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-    for row in rows:
-        print("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip())
+def cut(text: str, width: int) -> str:
+    return text if len(text) <= width else text[:max(width - 1, 0)] + "…"
+
+
+def topic_lines(topics: list[dict[str, Any]], width: int) -> list[str]:
+    """One line per topic within `width`: name, type, publisher and subscriber counts, and
+    `!!` where a pair cannot talk. The type is cut first, then the name."""
+    rows = [(t["name"], ", ".join(t["types"]), str(len(t["publishers"])),
+             str(len(t["subscribers"])), "!!" if t["qos_problems"] else "") for t in topics]
+    header = ("TOPIC", "TYPE", "PUB", "SUB", "QOS")
+    pubs = max(len(header[2]), *(len(r[2]) for r in rows))
+    subs = max(len(header[3]), *(len(r[3]) for r in rows))
+    fixed = pubs + subs + len(header[4]) + 8  # four gaps of two
+    names = max(len(header[0]), *(len(r[0]) for r in rows))
+    types = max(len(header[1]), *(len(r[1]) for r in rows))
+    room = max(width - fixed, 16)
+    if names + types > room:  # the type gives way first, down to 12, then the name
+        types = max(room - names, min(types, 12))
+        names = max(room - types, 4)
+    lines = []
+    for row in (header, *rows):
+        line = (f"{cut(row[0], names).ljust(names)}  {cut(row[1], types).ljust(types)}  "
+                f"{row[2].rjust(pubs)}  {row[3].rjust(subs)}  {row[4]}")
+        lines.append(line.rstrip())
+    return lines
+
+
+def topic_info(topic: dict[str, Any]) -> str:
+    """`ros2 topic info -v`'s shape, each endpoint with its node, process and QoS."""
+    lines = [f"Topic: {topic['name']}", f"Type: {', '.join(topic['types'])}", ""]
+    for kind, label in (("publishers", "Publisher"), ("subscribers", "Subscription")):
+        lines += [f"{label} count: {len(topic[kind])}", ""]
+        for endpoint in topic[kind]:
+            qos = endpoint.get("qos") or {}
+            node = endpoint["node"]
+            namespace, _, name = node.rpartition("/")
+            history = str(qos.get("history", "unknown")).upper()
+            depth = qos.get("depth")
+            lines += [f"Node name: {name}", f"Node namespace: {namespace or '/'}",
+                      f"Process: {endpoint.get('process') or '(not of this launch)'}",
+                      f"Topic type: {', '.join(topic['types'])}",
+                      f"Endpoint type: {label.upper()}", "QoS profile:",
+                      f"  Reliability: {str(qos.get('reliability')).upper()}",
+                      f"  History (Depth): {history}" + (f" ({depth})" if depth else ""),
+                      f"  Durability: {str(qos.get('durability')).upper()}",
+                      f"  Deadline: {str(qos.get('deadline')).capitalize()}",
+                      f"  Liveliness: {str(qos.get('liveliness')).upper()}",
+                      "  Liveliness lease duration: "
+                      f"{str(qos.get('liveliness_lease_duration')).capitalize()}", ""]
+    for problem in topic["qos_problems"]:
+        lines.append(f"QoS problem: {problem}")
+    if topic["qos_problems"]:
+        lines.append("")
+    return "\n".join(lines) + "\n"
 
 
 # --- hz --------------------------------------------------------------------------------------
@@ -80,20 +126,73 @@ def size_text(value: float) -> str:
     return f"{value:.2f} GB"
 
 
+def hz_block(result: dict[str, Any]) -> str:
+    """ros2 topic hz's two lines, then ros2 topic bw's two (its units: one for all four
+    figures, chosen by the bandwidth)."""
+    lines = [f"average rate: {result['rate_hz']:.3f}",
+             f"\tmin: {result['min_s']:.3f}s max: {result['max_s']:.3f}s std dev: "
+             f"{result['std_dev_s']:.5f}s window: {result['window']}"]
+    bandwidth = result.get("bytes_per_s")
+    if bandwidth is not None:
+        scale, unit = next(((s, u) for s, u in ((1, "B"), (1e3, "KB"), (1e6, "MB"))
+                            if bandwidth < s * 1000), (1e6, "MB"))
+        figures = [f"{result[k] / scale:.2f} {unit}" for k in ("size_mean", "size_min",
+                                                                "size_max")]
+        lines += [f"average bandwidth: {bandwidth / scale:.2f} {unit}/s from "
+                  f"{result['window'] + 1} messages",
+                  f"\tmessage size mean: {figures[0]} min: {figures[1]} max: {figures[2]}"]
+    return "\n".join(lines) + "\n"
+
+
 def cmd_hz(options: argparse.Namespace) -> int:
-    if not options.window > 0:
-        raise SessionError(f"--window {options.window:g} is not a positive number of seconds")
-    result = ask(options.name, "hz", options.window, topic=options.topic,
-                 window=options.window)
+    """A block every second until Ctrl+C (then the figures so far), or once after
+    `--duration` (`--json`: one object, after 5 s unless told)."""
+    if options.window < 1:
+        raise SessionError(f"--window {options.window} is not a positive number of messages")
+    duration = options.duration if options.duration is not None else \
+        (5.0 if options.json else None)
+    if duration is not None and not duration > 0:
+        raise SessionError(f"--duration {duration:g} is not a positive number of seconds")
+    link = open_link(options.name, timeout=SLACK)
+    try:
+        link.request("subscribe", max_lines=1, kinds=["hz"])  # no output lines wanted
+        link.request("hz_watch", topic=options.topic, messages=options.window)
+        end = None if duration is None else time.monotonic() + duration
+        shown = 0  # messages counted at the last block: a block only when new ones came
+        last: dict[str, Any] | None = None
+        try:
+            link.sock.settimeout(None)
+            while True:
+                try:
+                    message = link.receive_until(end)
+                except TimeoutError:
+                    break
+                if message is None or message.get("type") == "ended":
+                    raise SessionError(f"session {link.name} ended")
+                for event in message.get("events") or []:
+                    if event.get("kind") != "hz":
+                        continue
+                    last = event.get("data") or {}
+                    if end is None and last["rate_hz"] is not None and \
+                            last["messages"] > shown:
+                        shown = last["messages"]
+                        sys.stdout.write(hz_block(last))
+                        sys.stdout.flush()
+        except KeyboardInterrupt:
+            # Ctrl+C ends a stream: the figures so far, as the last word
+            if last is not None and last["rate_hz"] is not None:
+                sys.stdout.write(hz_block(last))
+            return 0
+        result = link.request("hz_read", short=True, topic=options.topic)
+    finally:
+        link.close()
     if options.json:
         print(json.dumps(result, indent=2))
     elif result["rate_hz"] is not None:
-        print(f"average rate: {result['rate_hz']:.3f}")
-        print(f"\twindow: {result['window_s']:g} s, {result['messages']} messages")
-        print(f"average bandwidth: {size_text(result['bytes_per_s'] or 0.0)}/s")
+        sys.stdout.write(hz_block(result))
     if result["rate_hz"] is None:
         print(f"tuilaunch hz: {result['topic']}: {result['messages']} message(s) in "
-              f"{result['window_s']:g} s: too few for a rate", file=sys.stderr)
+              f"{result['elapsed_s']:g} s: too few for a rate", file=sys.stderr)
         return 1
     return 0
 
@@ -101,37 +200,51 @@ def cmd_hz(options: argparse.Namespace) -> int:
 # --- echo ------------------------------------------------------------------------------------
 
 def cmd_echo(options: argparse.Namespace) -> int:
-    if options.count is not None and options.count < 1:
-        raise SessionError(f"--count {options.count} is not a positive number")
+    """Messages until Ctrl+C, `--count N` or `--once`; `--timeout S` is the whole wait,
+    the publisher's included."""
+    count = 1 if options.once else options.count
+    if count is not None and count < 1:
+        raise SessionError(f"--count {count} is not a positive number")
+    if options.timeout is not None and not options.timeout > 0:
+        raise SessionError(f"--timeout {options.timeout:g} is not a positive number of "
+                           "seconds")
+    end = None if options.timeout is None else time.monotonic() + options.timeout
     link = open_link(options.name, timeout=SLACK)
+    shown = 0
     try:
         link.request("subscribe", max_lines=1, kinds=["echo"])  # no output lines wanted
         fields: dict[str, Any] = {"topic": options.topic, "max_per_s": 0}
-        if options.count is not None:
-            fields["count"] = options.count
+        if count is not None:
+            fields["count"] = count
+        if options.timeout is not None:
+            fields["wait"] = options.timeout
         link.request("echo", **fields)
-        link.sock.settimeout(options.timeout)
-        shown = 0
-        try:
-            for message in link.messages():
-                if message.get("type") == "ended":
-                    raise SessionError(f"session {link.name} ended")
-                for event in message.get("events") or []:
-                    data = event.get("data") or {}
-                    if event.get("kind") != "echo":
-                        continue
-                    sys.stdout.write(data.get("text", ""))
-                    sys.stdout.flush()
-                    shown += 1
-                    if options.count is not None and shown >= options.count:
-                        return 0
-        except TimeoutError:
-            print(f"tuilaunch echo: {shown} message(s) of {options.topic} in "
-                  f"{options.timeout:g} s", file=sys.stderr)
-            return 1
-        raise SessionError(f"session {link.name} closed the connection")
+        link.sock.settimeout(None)
+        while True:
+            try:
+                message = link.receive_until(end)
+            except TimeoutError:
+                break
+            if message is None or message.get("type") == "ended":
+                raise SessionError(f"session {link.name} ended")
+            for event in message.get("events") or []:
+                data = event.get("data") or {}
+                if event.get("kind") != "echo":
+                    continue
+                sys.stdout.write(data.get("text", ""))
+                sys.stdout.flush()
+                shown += 1
+                if count is not None and shown >= count:
+                    return 0
     finally:
         link.close()
+    # the time ran out: enough when no count was asked and something came
+    if count is None and shown:
+        return 0
+    wanted = f" of {count}" if count is not None else ""
+    print(f"tuilaunch echo: {shown}{wanted} message(s) of {options.topic} in "
+          f"{options.timeout:g} s", file=sys.stderr)
+    return 1
 
 
 # --- parameters and loggers ------------------------------------------------------------------

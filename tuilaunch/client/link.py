@@ -3,7 +3,9 @@ by name; what to say of a server that does not answer."""
 
 from __future__ import annotations
 
+import select
 import socket
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -120,6 +122,32 @@ class Link:
         if not line:
             return None
         return decode(line)
+
+    def receive_until(self, deadline: float | None) -> dict[str, Any] | None:
+        """The next message (events that came with a reply first), waiting until
+        `deadline` (time.monotonic) at most, then TimeoutError. Unlike a socket timeout,
+        which leaves the reader unusable, the link can be read and asked again after it:
+        `hz --duration` asks for the final figures, `echo --timeout` says what came."""
+        if self.pending:
+            return self.pending.pop(0)
+        while deadline is not None and not self._buffered():
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise TimeoutError
+            if select.select([self.sock], [], [], remaining)[0]:
+                break
+        return self.receive()
+
+    def _buffered(self) -> bool:
+        """Whether a message is already read from the socket, in the reader's buffer."""
+        waited = self.sock.gettimeout()
+        self.sock.settimeout(0.0)  # peek returns what it holds instead of waiting
+        try:
+            return bool(self._file.peek(1))
+        except OSError:
+            return False
+        finally:
+            self.sock.settimeout(waited)
 
     def request(self, op: str, short: bool = False, **fields: Any) -> Any:
         """The reply to `op`; `short`: an answer the server gives at once (status, find),

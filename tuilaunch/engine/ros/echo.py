@@ -100,7 +100,8 @@ async def start_echo(node: Any, topic: str, wait: float = 5.0, keep: int = 100)\
     cls = message_class(infos[0].topic_type)
     echo = EchoSubscription(topic, cls, keep)
     echo.subscription = node.create_subscription(
-        cls, topic, echo.add, matching_qos([i.qos_profile for i in infos]), raw=True)
+        cls, topic, echo.add, matching_qos([i.qos_profile for i in infos], replay=True),
+        raw=True)
     return echo
 
 

@@ -56,6 +56,9 @@ class Inspector(Plugin):
         self.unmeasured: dict[str, str] = {}  # watched topics not measured yet: why
         self.rates_task: asyncio.Task[None] | None = None
         self.echoes: dict[tuple[int, str], asyncio.Task[None]] = {}
+        self.hz_streams: dict[tuple[int, str], tuple[asyncio.Task[None], Any]] = {}
+        """`tuilaunch hz` clients' measures, by (client, topic): the task sending the
+        figures, and the meter."""
         self.pending: set[asyncio.Task[None]] = set()
         self.bridge_lock = asyncio.Lock()
         self.discovered = False
@@ -87,6 +90,7 @@ class Inspector(Plugin):
     def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
         self.find_process = find_process
         return {"topics": self.topics, "hz": self.hz, "watch_rates": self.watch_rates,
+                "hz_watch": self.hz_watch, "hz_read": self.hz_read,
                 "echo": self.echo, "echo_stop": self.echo_stop,
                 "params_dump": self.params_dump, "params_load": self.params_load,
                 "log_level": self.log_level}
@@ -94,18 +98,22 @@ class Inspector(Plugin):
     def client_gone(self, client: int) -> None:
         for key in [k for k in self.echoes if k[0] == client]:
             self.echoes.pop(key).cancel()
+        for key in [k for k in self.hz_streams if k[0] == client]:
+            self.hz_streams.pop(key)[0].cancel()
         if self.rate_watch.pop(client, None) is not None:
             task = asyncio.ensure_future(self.update_rates())
             self.pending.add(task)  # kept until done: a bare task may be collected
             task.add_done_callback(self.pending.discard)
 
     async def close(self) -> None:
-        for task in [*self.echoes.values(), self.rates_task]:
+        for task in [*self.echoes.values(), *(t for t, _ in self.hz_streams.values()),
+                     self.rates_task]:
             if task is not None:
                 task.cancel()
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await task
         self.echoes.clear()
+        self.hz_streams.clear()
         self.rate_watch.clear()
         bridge = self.ros.made
         if bridge is not None:
@@ -245,6 +253,54 @@ class Inspector(Plugin):
         finally:
             meter.stop_all()
 
+    async def hz_watch(self, message: dict[str, Any]) -> dict[str, Any]:
+        """`tuilaunch hz`: the topic measured over its last `messages` messages (as ros2
+        topic hz -w), its figures sent to the client as an "hz" event every `every` s until
+        it leaves; `hz_read` gives them at once."""
+        from .rates import RateMeter
+
+        topic = topic_of(message)
+        client = int(message["client"])
+        if self.clients is None or not self.clients.subscribed(client):
+            raise LaunchError("hz sends its figures as events: subscribe first")
+        messages = message.get("messages", 10000)
+        if not isinstance(messages, int) or messages < 1:
+            raise ValueError(f"messages {messages!r} is not a positive number")
+        every = float(message.get("every") or 1.0)
+        bridge = await self.bridge()
+        meter = RateMeter(bridge.node)
+        try:
+            await meter.start(topic, wait=PUBLISHER_WAIT, messages=messages)
+        except RosError:
+            meter.stop_all()
+            raise LaunchError(f"{await self.publisher_problem(bridge, topic)} "
+                              f"(waited {PUBLISHER_WAIT:g} s)") from None
+        old = self.hz_streams.pop((client, topic), None)
+        if old is not None:
+            old[0].cancel()
+        task = asyncio.ensure_future(self.stream_hz(meter, topic, client, every))
+        self.hz_streams[(client, topic)] = (task, meter)
+        return {}
+
+    async def stream_hz(self, meter: Any, topic: str, client: int, every: float) -> None:
+        try:
+            while True:
+                await asyncio.sleep(every)
+                for result in meter.read(topic).values():
+                    self.send(Event("hz", data=result), client)
+        finally:
+            meter.stop_all()
+            entry = self.hz_streams.get((client, topic))
+            if entry is not None and entry[0] is asyncio.current_task():
+                del self.hz_streams[(client, topic)]
+
+    async def hz_read(self, message: dict[str, Any]) -> dict[str, Any]:
+        entry = self.hz_streams.get((int(message["client"]), topic_of(message)))
+        if entry is None:
+            raise LaunchError(f"{topic_of(message)} is not measured for this client")
+        result: dict[str, Any] = entry[1].read(topic_of(message))[topic_of(message)]
+        return result
+
     async def watch_rates(self, message: dict[str, Any]) -> dict[str, Any]:
         topics = message.get("topics") or []
         if not isinstance(topics, list) or not all(isinstance(t, str) for t in topics):
@@ -321,12 +377,14 @@ class Inspector(Plugin):
         if count is not None and (not isinstance(count, int) or count < 1):
             raise ValueError(f"count {count!r} is not a positive number")
         per_s = float(message.get("max_per_s", ECHO_DEFAULT_PER_S) or 0.0)
+        # `echo --timeout 3` waits 3 s for a publisher, not the usual 5
+        wait = min(float(message.get("wait") or PUBLISHER_WAIT), PUBLISHER_WAIT)
         bridge = await self.bridge()
         try:
-            stream = await bridge.start_echo(topic, wait=PUBLISHER_WAIT)
+            stream = await bridge.start_echo(topic, wait=wait)
         except RosError:
             raise LaunchError(f"{await self.publisher_problem(bridge, topic)} "
-                              f"(waited {PUBLISHER_WAIT:g} s)") from None
+                              f"(waited {wait:g} s)") from None
         old = self.echoes.pop((client, topic), None)
         if old is not None:
             old.cancel()

@@ -5,8 +5,15 @@ between consecutive messages of the window; the bandwidth is the bytes of the wi
 messages over the time from its first message to now. The window here is a time span
 (`window_s`) rather than a message count, so a 1 Hz and a 1 kHz topic read alike.
 
+`hz` on the command line keeps ros2's own window instead (`MessageWindow`: the last N
+messages, with min, max and standard deviation of the periods, and ros2 topic bw's figures).
+
 Subscriptions are generic (`raw=True`: serialized bytes, never deserialized, so measuring
-costs little) with a QoS that matches the publishers', as ros2cli's `choose_qos` does.
+costs little) with a reliability that matches the publishers', and always volatile: a
+transient-local topic (/rosout, /tf_static, /robot_description, maps) would otherwise hand
+the new subscription its publishers' kept history at once and inflate the rate. As with
+`ros2 topic hz` (which subscribes with the volatile sensor-data profile), only what is
+published after the subscription matched is counted.
 
 Messages are not delivered by the bridge's executor: an executor callback costs about half a
 millisecond of Python per message, a whole core for a 1 kHz topic, and falls behind it. Each
@@ -22,6 +29,7 @@ import threading
 import time
 from collections import deque
 from contextlib import ExitStack
+from itertools import pairwise
 from typing import Any
 
 from rclpy.callback_groups import CallbackGroup
@@ -41,16 +49,17 @@ def message_class(type_name: str) -> Any:
                            f"ros-{distro}-{package.replace('_', '-')}") from None
 
 
-def matching_qos(publisher_profiles: list[Any]) -> Any:
-    """A subscriber QoS every publisher can talk to: best effort if any publisher is,
-    transient local only if all are (then late-joining reads the kept messages too)."""
+def matching_qos(publisher_profiles: list[Any], replay: bool = False) -> Any:
+    """A subscriber QoS every publisher can talk to: best effort if any publisher is.
+    `replay` (echo): transient local if all publishers are, so late-joining reads the kept
+    messages too; otherwise volatile, so nothing published before it is counted."""
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     qos = QoSProfile(depth=10)
     if any(p.reliability == ReliabilityPolicy.BEST_EFFORT for p in publisher_profiles):
         qos.reliability = ReliabilityPolicy.BEST_EFFORT
-    if publisher_profiles and all(p.durability == DurabilityPolicy.TRANSIENT_LOCAL
-                                  for p in publisher_profiles):
+    if replay and publisher_profiles and all(p.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                                             for p in publisher_profiles):
         qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
     return qos
 
@@ -119,6 +128,52 @@ class RateWindow:
                 "messages": len(samples), "window_s": round(span, 3)}
 
 
+class MessageWindow:
+    """The last `size` periods between messages (so `size + 1` receive times) and the
+    messages' sizes, as `ros2 topic hz -w` and `ros2 topic bw` keep them. Thread-safe."""
+
+    def __init__(self, topic: str, size: int = 10000) -> None:
+        self.topic = topic
+        self.size = size
+        self.started = time.monotonic()
+        self.samples: deque[tuple[float, int]] = deque(maxlen=size + 1)
+        self.received = 0
+        self.lock = threading.Lock()
+
+    def add_many(self, samples: list[tuple[float, int]]) -> None:
+        with self.lock:
+            self.samples.extend(samples)
+            self.received += len(samples)
+
+    def result(self, now: float | None = None) -> dict[str, Any]:
+        """ros2 topic hz's figures (`rate_hz`, `min_s`, `max_s`, `std_dev_s` of the periods,
+        `window`: how many periods), ros2 topic bw's (`bytes_per_s` over the window's
+        messages up to now, `size_mean`, `size_min`, `size_max`), `messages` received in
+        all and `elapsed_s` since the measure began. None where there is too little."""
+        now = time.monotonic() if now is None else now
+        with self.lock:
+            samples = list(self.samples)
+            received = self.received
+        periods = [b[0] - a[0] for a, b in pairwise(samples)]
+        rate = low = high = deviation = None
+        if periods:
+            mean = sum(periods) / len(periods)
+            rate = 1.0 / mean if mean > 0 else None
+            low, high = min(periods), max(periods)
+            deviation = (sum((p - mean) ** 2 for p in periods) / len(periods)) ** 0.5
+        sizes = [size for _, size in samples]
+        bandwidth = None
+        if len(samples) >= 2 and now > samples[0][0]:
+            bandwidth = sum(sizes) / (now - samples[0][0])
+        return {"topic": self.topic, "rate_hz": rate, "min_s": low, "max_s": high,
+                "std_dev_s": deviation, "window": len(periods), "messages": received,
+                "bytes_per_s": bandwidth,
+                "size_mean": sum(sizes) / len(sizes) if sizes else None,
+                "size_min": min(sizes) if sizes else None,
+                "size_max": max(sizes) if sizes else None,
+                "elapsed_s": round(now - self.started, 3)}
+
+
 class NotByExecutor(CallbackGroup):
     """A callback group whose entities no executor waits on or runs (Executor.can_execute
     asks the group): the subscriptions belong to the bridge's node, so they are made and
@@ -149,33 +204,41 @@ class RateMeter:
 
     def __init__(self, node: Any) -> None:
         self.node = node
-        self.windows: dict[str, RateWindow] = {}
+        self.windows: dict[str, RateWindow | MessageWindow] = {}
         self.subscriptions: dict[str, Any] = {}
         self.group = NotByExecutor()
         self.lock = threading.Lock()  # guards the two dicts and `changed` with the thread
         # the thread's wake-up when the topics change, None while no thread runs
         self.changed: Any = None
 
-    async def start(self, topic: str, window_s: float = 10.0, wait: float = 5.0) -> None:
-        """Measures `topic` from now on (a no-op when it already is, bar a new window)."""
+    async def start(self, topic: str, window_s: float = 10.0, wait: float = 5.0,
+                    messages: int | None = None) -> None:
+        """Measures `topic` from now on (a no-op when it already is, bar a new window);
+        `messages`: over the last N messages (MessageWindow) rather than `window_s`."""
         if topic in self.windows:
-            self.windows[topic].window_s = window_s
+            self.set_window(topic, window_s)
             return
         infos = await wait_for_publishers(self.node, topic, wait)
         cls = message_class(infos[0].topic_type)
         if topic in self.windows:  # started by another caller while this one waited
-            self.windows[topic].window_s = window_s
+            self.set_window(topic, window_s)
             return
         subscription = self.node.create_subscription(
             cls, topic, lambda _data: None, matching_qos([i.qos_profile for i in infos]),
             callback_group=self.group, raw=True)
         with self.lock:
-            self.windows[topic] = RateWindow(topic, window_s)
+            self.windows[topic] = RateWindow(topic, window_s) if messages is None else \
+                MessageWindow(topic, messages)
             self.subscriptions[topic] = subscription
             if self.changed is None:
                 self.start_thread()
             else:
                 self.changed.trigger()
+
+    def set_window(self, topic: str, window_s: float) -> None:
+        window = self.windows[topic]
+        if isinstance(window, RateWindow):
+            window.window_s = window_s
 
     def start_thread(self) -> None:
         from rclpy.guard_condition import GuardCondition
@@ -253,7 +316,7 @@ class RateMeter:
                 except InvalidHandle:
                     del self.subscriptions[topic], self.windows[topic]
 
-    def serve(self, wait_set: Any, measured: list[tuple[Any, RateWindow]],
+    def serve(self, wait_set: Any, measured: list[tuple[Any, RateWindow | MessageWindow]],
               changed: Any) -> None:
         """Waits and takes with this set of subscriptions until the set changes."""
         clock = time.monotonic

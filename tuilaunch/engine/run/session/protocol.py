@@ -40,10 +40,15 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   types, publishers: [{node, in_launch, process,
   qos}], subscribers, qos_problems: [sentence]}]};
   hz {topic, window: s} -> {topic, rate_hz, bytes_per_s, messages, window_s} after window s;
+  hz_watch {topic, messages?: N (default 10000), every?: s (default 1)} -> {}: events "hz",
+  data {topic, rate_hz, min_s, max_s, std_dev_s, window, messages, bytes_per_s, size_mean,
+  size_min, size_max, elapsed_s} (ros2 topic hz and bw's figures over the last N messages),
+  to this subscribed client every `every` s until it leaves; hz_read {topic} -> that data now;
   watch_rates {topics: [...]} -> {unmeasured: {topic: why}}: this client's topics ([]: none);
   the union over clients is measured, and each watcher gets about once a second an event
   "rates", data {topic: {rate_hz, bytes_per_s}} (None until measured);
-  echo {topic, count?, max_per_s? (default 5; 0: every message)} -> {}: events "echo", data
+  echo {topic, count?, max_per_s? (default 5; 0: every message), wait? (s for a publisher,
+  at most 5)} -> {}: events "echo", data
   {topic, text: one message's YAML ending in "---"}, to this client until echo_stop {topic}
   or `count` messages (the last has data "done": true); a subscribed client only;
   params_dump {node} -> {yaml}; params_load {node, yaml, source?: its file name for
