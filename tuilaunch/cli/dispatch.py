@@ -18,6 +18,7 @@ from ..engine.packages import ensure_environment, find_launch_file_in_share
 from ..engine.plan.machines import Placement, load_placement, placement_from_text
 from ..engine.plan.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
+from ..engine.run.lean_asyncio import asyncio_without_tls
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -160,6 +161,7 @@ def _reopen_closed_std_streams() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    asyncio_without_tls()  # a launch, the TUI and the session commands: 4 MB less each
     _reopen_closed_std_streams()
     try:
         return _main(argv)
