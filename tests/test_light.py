@@ -8,19 +8,28 @@ Whether rclpy is loaded is read from outside, as a user could: the launcher's me
 
 from __future__ import annotations
 
+import asyncio
 import json
 import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
 import pytest
+from textual import events
+
+from tuilaunch.cli.commands import start_session
+from tuilaunch.engine.run.session import session_dir
+from tuilaunch.tui.app import make_app
+from tuilaunch.tui.output_store import View
 
 from .conftest import wait_for
 from .inspector_helpers import NODE_SCRIPT
 from .test_sessions import runtime, tl  # noqa: F401  (runtime: a fixture)
+from .test_tui import until
 
 PLAIN = """
 from launch import LaunchDescription
@@ -133,3 +142,97 @@ def test_asyncio_without_tls_still_runs_and_ssl_still_imports():
                           timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["False", "ran", "True"]
+
+
+# --- the TUI first: the tree is on screen before the first process starts -----------------
+
+FIRST = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sh', '-c', 'touch "$0"; echo first up; exec sleep 600',
+                            {marker!r}], name='first'),
+        ExecuteProcess(cmd=['sleep', '600'], name='second')])
+"""
+
+
+def tui_launch(write, tmp_path: Path) -> tuple[Path, Path]:
+    marker = tmp_path / "first-started"
+    return write(FIRST.format(marker=str(marker))), marker
+
+
+def test_the_tree_is_drawn_before_the_first_process_starts(runtime, write, tmp_path):  # noqa: F811
+    """As `tuilaunch FILE` in a terminal: the app draws the plan's tree, every process
+    waiting; only once that frame is out does the session's server, and so the launch,
+    start; then the same tree follows the processes."""
+    path, marker = tui_launch(write, tmp_path)
+    log_dir = tmp_path / "log"
+    order: list[str] = []
+    seen_at_start: dict[str, object] = {}
+
+    def start_server() -> subprocess.Popen[bytes]:
+        # what the user has on screen at the instant the launch is started
+        seen_at_start["marker"] = marker.exists()
+        seen_at_start["rows"] = {process: str(row.label)
+                                 for process, row in app.launch_tree.rows.items()}
+        order.append("launch started")
+        return start_session(str(path), {}, "first", log_dir)[1]
+
+    def hook(message: object) -> None:
+        if isinstance(message, events.Ready):  # posted once the first frame is displayed
+            order.append("first frame")
+
+    app = make_app(str(path), {}, log_dir, session_name="first", owner=True,
+                   start_server=start_server)
+
+    async def scenario() -> None:
+        async with app.run_test(size=(100, 30), message_hook=hook) as pilot:
+            await until(pilot, lambda: app.supervisor is not None and
+                        app.supervisor.states.get("first-1") == "running")
+            assert "running" in str(app.launch_tree.rows["first-1"].label)
+            await until(pilot, lambda: any("first up" in line.text
+                                           for line in app.store.lines(View("first-1"))))
+            await pilot.press("q")
+            await pilot.press("y")
+            await until(pilot, lambda: not app.is_running)
+
+    asyncio.run(scenario())
+    assert order == ["first frame", "launch started"]
+    assert seen_at_start["marker"] is False  # no process of the launch had started
+    rows = seen_at_start["rows"]
+    assert isinstance(rows, dict) and set(rows) == {"first-1", "second-2"}
+    assert all("waiting" in label for label in rows.values())
+    assert marker.exists()  # and then it did start
+    server = app.server_process
+    assert server is not None
+    assert server.wait(timeout=60) == 0
+
+
+def test_quitting_while_the_launch_starts_leaves_nothing_running(runtime, write, tmp_path):  # noqa: F811
+    """q in the instant between the first frame and the server's answer: the app leaves,
+    and the server it was starting stops with every process it had started."""
+    path, _marker = tui_launch(write, tmp_path)
+    log_dir = tmp_path / "log"
+    gate = threading.Event()
+
+    def start_server() -> subprocess.Popen[bytes]:
+        gate.wait(60)  # held until the app has quit
+        return start_session(str(path), {}, "quitter", log_dir)[1]
+
+    app = make_app(str(path), {}, log_dir, session_name="quitter", owner=True,
+                   start_server=start_server)
+
+    async def scenario() -> None:
+        async with app.run_test(size=(100, 30)) as pilot:
+            await pilot.press("q")
+            await until(pilot, lambda: not app.is_running)
+
+    asyncio.run(scenario())
+    gate.set()
+    wait_for(lambda: app.server_process is not None, 60, "the server started")
+    server = app.server_process
+    assert server is not None
+    # told to stop as soon as it was up: a server ends once every process it started has
+    server.wait(timeout=60)
+    assert not session_dir.is_alive("quitter")
