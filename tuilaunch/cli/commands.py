@@ -55,6 +55,17 @@ def main(argv: list[str]) -> int:
 
 # --- starting ------------------------------------------------------------------------------
 
+def session_name_for(path: str, name: str | None) -> str:
+    """The name a new session of `path` takes: `name` as given, else the file's stem and the
+    first free number; a name a live session holds is refused."""
+    name = session_dir.check_name(name) if name else session_dir.new_name(
+        session_dir.launch_stem(path))
+    if session_dir.is_alive(name):
+        raise SessionError(f"a session named {name} is already running",
+                           hint="choose another --name, or tuilaunch attach " + name)
+    return name
+
+
 def start_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
                   positional: list[str] | None = None,
                   timeout: float = 60.0, placement: dict[str, Any] | None = None,
@@ -63,11 +74,7 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
     `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv;
     `placement` (`--machines`) is {"text", "path", "share"} as engine/server_main.py reads
     it."""
-    name = session_dir.check_name(name) if name else session_dir.new_name(
-        session_dir.launch_stem(path))
-    if session_dir.is_alive(name):
-        raise SessionError(f"a session named {name} is already running",
-                           hint="choose another --name, or tuilaunch attach " + name)
+    name = session_name_for(path, name)
     log_dir.mkdir(parents=True, exist_ok=True)
     server_log = log_dir / "session.log"
     with open(server_log, "ab") as errors:

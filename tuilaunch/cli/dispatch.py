@@ -18,6 +18,7 @@ from ..engine.packages import ensure_environment, find_launch_file_in_share
 from ..engine.plan.machines import Placement, load_placement, placement_from_text
 from ..engine.plan.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
+from ..engine.run.lean_asyncio import asyncio_without_tls
 
 
 def split_items(items: list[str]) -> tuple[list[str], dict[str, str]]:
@@ -110,6 +111,7 @@ def _reopen_closed_std_streams() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    asyncio_without_tls()  # a launch, the TUI and the session commands: 4 MB less each
     _reopen_closed_std_streams()
     try:
         return _main(argv)
@@ -236,21 +238,37 @@ def _start_detached(path: str, arguments: dict[str, str], options: argparse.Name
 
 def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
              log_dir: Path, positional: list[str]) -> int:
-    """The launch runs in a session server; this TUI is its first client."""
+    """The launch runs in a session server; this TUI is its first client. The server, and
+    so every process of the launch, starts once the TUI shows the tree (`start_server`)."""
     from ..tui.app import make_app
+    from .commands import report_end, session_name_for
 
-    started = _start_server(path, arguments, options, log_dir, positional)
-    if started is None:
+    try:
+        name = session_name_for(path, options.name)
+    except LaunchError as exc:
+        print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
-    name, server = started
+
+    def start_server() -> subprocess.Popen[bytes]:
+        from .commands import start_session
+
+        placement: Placement | None = options.placement
+        placed = None if placement is None else {
+            "text": placement.text, "path": placement.machines.path, "share": placement.share}
+        return start_session(path, arguments, name, log_dir, positional, placement=placed)[1]
+
     app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
                    owner=True, keep_on_hangup=options.keep_on_hangup,
-                   placement=options.placement)
+                   placement=options.placement, start_server=start_server)
     status = app.run()
-    from .commands import report_end
-
+    if app.start_error is not None:
+        print(f"tuilaunch: error: {app.start_error}", file=sys.stderr)
+        return 2
+    if app.quit_before_start:
+        return status or 0  # its server, if it came up, stops every process it started
     report_end(app, name)
-    if not app.detached:
+    server = app.server_process
+    if not app.detached and server is not None:
         try:
             server.wait(timeout=15)
         except subprocess.TimeoutExpired:

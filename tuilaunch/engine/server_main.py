@@ -8,22 +8,26 @@ that wires the ROS plugins in (engine/launcher.py); `tuilaunch launch --detach` 
 
 from __future__ import annotations
 
-import asyncio
 import json
 import sys
 from pathlib import Path
 
-from .describe.python.loader import set_command_line
-from .errors import LaunchError
-from .launcher import make_supervisor
-from .packages import ensure_environment
-from .plan.machines import placement_from_text
-from .plan.session import Session
-from .run.session.plan_ops import plan_handlers
-from .run.session.session_server import SessionServer
+from .run.lean_asyncio import asyncio_without_tls
 
 
 def main(argv: list[str]) -> int:
+    asyncio_without_tls()  # first: the modules below import asyncio
+    import asyncio
+
+    from .describe.python.loader import set_command_line
+    from .errors import LaunchError
+    from .launcher import make_supervisor
+    from .packages import ensure_environment
+    from .plan.machines import placement_from_text
+    from .plan.session import Session
+    from .run.session.plan_ops import plan_handlers
+    from .run.session.session_server import SessionServer
+
     name, path, log_dir, arguments_json = argv[:4]
     command = json.loads(argv[4]) if len(argv) > 4 else [path]
     arguments = json.loads(arguments_json)

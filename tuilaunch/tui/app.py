@@ -24,7 +24,6 @@ from textual.widgets import Footer, Static, TabbedContent, TabPane
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
 from ..client.served_session import ServedSession
 from ..engine.errors import LaunchError
-from ..engine.launcher import make_supervisor
 from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
@@ -136,6 +135,27 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
         sys.setswitchinterval(0.001)
         self.engine = EngineThread()
+        loop = asyncio.get_running_loop()
+        loop.add_signal_handler(signal.SIGTERM, self.terminated)
+        loop.add_signal_handler(signal.SIGHUP, self.terminal_hung_up)
+        if self.start_server is not None:
+            # nothing runs yet: the tree shows the plan, every process waiting, and the
+            # launch starts once it is on screen (on_ready)
+            self.launch_tree.show_plan(self.session.plan, {})
+            self.describe_waiting()
+            self.status_bar.update(f"starting {Path(self.session.plan.file).name}...")
+            self.launch_tree.focus()
+            return
+        self.wire_supervisor()
+
+    def on_ready(self) -> None:
+        """The first frame is on the terminal."""
+        if self.start_server is not None:
+            self.start_launch()
+
+    def wire_supervisor(self) -> None:
+        """Follows the launch: the supervisor (a session's, or in-process) wired to the
+        panels; on mount, or once the session's server is up."""
         # built on the engine thread, whose loop its asyncio objects belong to
         if self.session_host is not None:
             # the session is on another machine: the protocol crosses an ssh link
@@ -157,6 +177,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
             remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
             self.supervisor = remote
         else:
+            from ..engine.launcher import make_supervisor  # in-process: the tests' launch
+
             self.supervisor = self.engine.call(lambda: make_supervisor(
                 self.session.plan, self.log_dir, sigterm_timeout=self.sigterm_timeout,
                 sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
@@ -176,9 +198,6 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 tree.set_lifecycle(process, state)  # states reached before we came
         self.run_supervisor()
         self.drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
-        loop = asyncio.get_running_loop()
-        loop.add_signal_handler(signal.SIGTERM, self.terminated)
-        loop.add_signal_handler(signal.SIGHUP, self.terminal_hung_up)
         self.update_status()
         self.say_plan_warnings()
         tree.focus()

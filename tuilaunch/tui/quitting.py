@@ -107,6 +107,7 @@ class Quitting(SessionLink):
         The reason goes into launch.log, so a stop nobody asked for at the keyboard is told
         apart later."""
         if self.supervisor is None:
+            self.abandon_start()  # its server, if it is coming up, stops at once
             self.exit(0)
             return
         self.quitting = True

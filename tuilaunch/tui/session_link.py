@@ -9,18 +9,22 @@ from __future__ import annotations
 
 import asyncio
 import os
+import subprocess
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.text import Text
 from textual import work
 from textual.app import App
+from textual.message import Message
 from textual.timer import Timer
 from textual.widgets import Static, TabbedContent
 
 from ..client.remote_supervisor import RemoteSupervisor
-from ..engine.launcher import RosSupervisor
+from ..engine.errors import LaunchError
 from ..engine.plan.session import Preview, Session
 from ..engine.ros.bridge import RosBridge
 from ..engine.run.engine_thread import EngineThread
@@ -31,6 +35,9 @@ from .output_store import ERROR, INFO, WARN, Line, OutputStore
 from .screens.args_panel import ArgsPanel
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree
+
+if TYPE_CHECKING:
+    from ..engine.launcher import RosSupervisor
 
 # the UI's tick: events are taken from the engine this often; the output pane repaints at
 # most PANE_FPS times a second and only when what it shows changed, so a terminal over ssh
@@ -47,6 +54,14 @@ WARNINGS_SHOWN = 3
 """The plan's warnings shown as toasts when the TUI opens; all are in the all nodes pane."""
 INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources"})
 """What the session server measures for a client that asks (tui/inspector.py shows it)."""
+
+
+class ServerStarted(Message):
+    """The session's server answers (`error` None), or could not start (why)."""
+
+    def __init__(self, error: str | None) -> None:
+        super().__init__()
+        self.error = error
 
 
 class SessionLink(App[int]):
@@ -73,7 +88,8 @@ class SessionLink(App[int]):
                  pane_fps: float = PANE_FPS, session_name: str | None = None,
                  owner: bool = False, keep_on_hangup: bool = False,
                  session_host: str | None = None,
-                 remote_link: RemoteLink | None = None) -> None:
+                 remote_link: RemoteLink | None = None,
+                 start_server: Callable[[], subprocess.Popen[bytes]] | None = None) -> None:
         no_color = os.environ.get("NO_COLOR")
         super().__init__()
         # no animated tab underlines or scrolling: every frame is bytes over ssh
@@ -115,6 +131,13 @@ class SessionLink(App[int]):
         self.quit_started: float | None = None
         self._status_text = ""
         self._detail_text = ""
+        # the session's server not started yet: it is, once the tree is on screen (on_ready)
+        self.start_server = start_server
+        self.server_process: subprocess.Popen[bytes] | None = None
+        self.start_error: str | None = None  # why the server did not start (said on exit)
+        self._start_lock = threading.Lock()  # the server comes up while the app may leave
+        self._start_thread: threading.Thread | None = None
+        self.quit_before_start = False  # left before following the launch: it is stopped
 
     def bridge(self) -> RosBridge:
         """The one rclpy context, shared by the supervisor's actions and the panels."""
@@ -150,7 +173,65 @@ class SessionLink(App[int]):
             os._exit(self.exit_status)
         self.exit(self.exit_status)
 
+    def start_launch(self) -> None:
+        """Starts the session's server, and so the launch, then follows it as a client.
+
+        On a thread of its own, not a worker: a quit while the server comes up must not wait
+        for it, and the thread, not killed at exit, still stops what it started."""
+        with self._start_lock:
+            if self.quit_before_start:
+                return
+            self._start_thread = threading.Thread(target=self._start_server,
+                                                  name="session-start")
+            self._start_thread.start()
+
+    def _start_server(self) -> None:
+        assert self.start_server is not None
+        try:
+            server = self.start_server()
+        except LaunchError as exc:
+            self.post_message(ServerStarted(str(exc)))  # dropped if the app is gone
+            return
+        with self._start_lock:
+            self.server_process = server
+            abandoned = self.quit_before_start
+        if abandoned:  # the app was left while the server came up: the launch stops at once
+            server.terminate()
+            if self.terminal_lost:  # the UI is stuck on the dead terminal (abandon_start)
+                server.wait()
+                os._exit(0)
+            return
+        self.post_message(ServerStarted(None))
+
+    def on_server_started(self, message: ServerStarted) -> None:
+        if message.error is not None:
+            self.start_error = message.error
+            self.exit(2, return_code=2)
+        elif not self.quit_before_start:
+            self.wire_supervisor()
+
+    def abandon_start(self) -> None:
+        """Leaving before the launch is followed (q, SIGHUP or SIGTERM while its server comes
+        up): the server is stopped as soon as it is up, and with it what it started."""
+        if self.supervisor is not None or self.start_server is None:
+            return
+        with self._start_lock:
+            self.quit_before_start = True
+            server = self.server_process
+            starting = self._start_thread is not None and server is None
+        if server is not None:
+            server.terminate()
+        if self.terminal_lost and not starting:
+            # Textual's teardown blocks on a dead terminal (as in run_supervisor), and
+            # nothing is left to stop; else the starting thread leaves once it has
+            os._exit(0)
+
+    def wire_supervisor(self) -> None:
+        """Connects the panels to the supervisor (the app's on_mount)."""
+        raise NotImplementedError
+
     def on_unmount(self) -> None:
+        self.abandon_start()
         # any exit path that skipped the graceful shutdown still leaves no process behind
         if self.supervisor is not None:
             self.kill_all()

@@ -23,7 +23,6 @@ from ..run.plugins import Clients, Handler, Plugin
 from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
 from .bridge import RosError
-from .echo import message_yaml
 
 if TYPE_CHECKING:
     from ..run.supervisor.supervisor import Supervisor
@@ -481,6 +480,8 @@ def topic_of(message: dict[str, Any]) -> str:
 def take_texts(stream: Any, newest_only: bool) -> list[str]:
     """The stream's kept messages as YAML (in a worker thread: deserializing costs); when
     throttled, only the newest: a screen shows what the topic says now."""
+    from .echo import message_yaml  # loads rclpy: only once a client echoes a topic
+
     messages = stream.take()
     if newest_only:
         messages = messages[-1:]

@@ -3,6 +3,7 @@ node's live parameters written to a params file, or a file loaded into it."""
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
@@ -91,6 +92,7 @@ class ParamsPanel(Horizontal):
         self.node: str | None = None
         self.params: dict[str, ParameterInfo] = {}
         self.current: str | None = None
+        self.listed = False  # the nodes were asked for (the tab was shown)
 
     def compose(self) -> ComposeResult:
         with Vertical(id="prm-left"):
@@ -111,12 +113,18 @@ class ParamsPanel(Horizontal):
         for key, title in (("name", "name"), ("value", "value"), ("launch", "launch file"),
                            ("type", "type"), ("ro", "ro")):
             table.add_column(title, key=key)
-        self.refresh_nodes()
+
+    def on_show(self) -> None:
+        # listed when first shown: rclpy starts in the UI only for someone who looks
+        if not self.listed:
+            self.listed = True
+            self.refresh_nodes()
 
     @work(group="params-nodes", exclusive=True, exit_on_error=False)
     async def refresh_nodes(self) -> None:
         try:
-            self.nodes = await self.bridge().list_nodes()
+            bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
+            self.nodes = await bridge.list_nodes()
         except Exception as exc:  # the panel reports, the app keeps running
             self.show_result(f"cannot list nodes: {exc}", ok=False)
             return

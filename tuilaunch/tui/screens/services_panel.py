@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -108,6 +109,7 @@ class ServicesPanel(Horizontal):
         self.selected: tuple[str, str] | None = None
         self.fields: list[tuple[str, FieldInfo]] = []
         self.history: list[CallRecord] = []
+        self.listed = False  # the services were asked for (the tab was shown)
 
     def compose(self) -> ComposeResult:
         with Vertical(id="svc-left"):
@@ -124,12 +126,18 @@ class ServicesPanel(Horizontal):
 
     def on_mount(self) -> None:
         self.query_one("#svc-history", OptionList).border_title = "history"
-        self.refresh_services()
+
+    def on_show(self) -> None:
+        # listed when first shown: rclpy starts in the UI only for someone who looks
+        if not self.listed:
+            self.listed = True
+            self.refresh_services()
 
     @work(group="services-list", exclusive=True, exit_on_error=False)
     async def refresh_services(self) -> None:
         try:
-            self.services = await self.bridge().list_services()
+            bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
+            self.services = await bridge.list_services()
         except Exception as exc:  # a graph query must never take the panel down
             self.show_response(f"cannot list services: {exc}", ok=False)
             return

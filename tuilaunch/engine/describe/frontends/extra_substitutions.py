@@ -4,7 +4,6 @@ that the Python side of the engine had no class for."""
 from __future__ import annotations
 
 import atexit
-import hashlib
 import os
 import shutil
 import tempfile
@@ -87,6 +86,8 @@ class SubstitutedParameterFile(Substitution):
             column = exc.offset - (text.rfind("\n", 0, exc.offset) + 1) + 1
             raise LaunchError(f"{exc.message} (parameter file with allow_substs)",
                               Origin(path, line, column)) from None
+        import hashlib  # OpenSSL's libcrypto: megabytes of memory, only for the files that ask
+
         content = perform(parts, context)
         digest = hashlib.sha1(f"{path}\0{content}".encode()).hexdigest()[:16]
         out = os.path.join(_SUBSTITUTED_DIR, f"{os.path.basename(path)}.{digest}.yaml")

@@ -8,7 +8,6 @@ names, as simple_launch picks them.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 import shlex
@@ -192,6 +191,8 @@ class _BridgeConfigPath(Substitution):
         self.name, self.content = name, content
 
     def perform(self, context: PerformContext) -> str:
+        import hashlib  # OpenSSL's libcrypto: megabytes of memory, only for the files that ask
+
         name = perform(self.name, context)
         digest = hashlib.sha1(
             (name + "\0" + perform(self.content, context)).encode()).hexdigest()[:12]
