@@ -394,3 +394,31 @@ async def test_an_edited_included_file_is_previewed_and_applied_by_f5(
         assert pid_of(name, "part-1") != first
         await until(pilot, lambda: "second" in tl("logs", name, "part-1").stdout,
                     every=lambda: None)
+
+
+def test_the_session_reads_an_edited_file_and_keeps_the_running_one_when_it_breaks(write):
+    """The engine's rules under the form: a preview reads the file when it changed on disk
+    and says what the edit alone alters; a file that no longer loads leaves the session
+    (plan, values, file) as it was; F5 (`reread`) reads it whatever its stamp says."""
+    from tuilaunch.engine.plan.session import Session
+
+    path = write(EDITABLE.format(said="word", extra=""))
+    session = Session(str(path), {})
+    assert session.preview({}).file_changes is None  # nothing changed on disk
+    path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+    preview = session.preview({"word": "beta"})
+    assert preview.edited == "test_launch.py"
+    assert preview.file_changes is not None
+    assert (preview.file_changes.start, preview.file_changes.stop) == (
+        ["echo-1", "extra-2"], ["echo-1"])
+    assert preview.diff is not None and "extra-2" in preview.diff.start
+    before = session.plan
+    path.write_text("def generate_launch_description(:\n")
+    broken = session.preview({"word": "gamma"}, reread=True)
+    assert broken.plan is None and broken.error is not None
+    assert broken.error.startswith(f"the launch file no longer loads: {path}:1: syntax error")
+    assert session.plan is before and session.arguments == {}
+    path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+    session.accept(session.preview({"word": "beta"}, reread=True))
+    assert [p.id for p in session.plan.processes] == ["echo-1", "extra-2"]
+    assert session.preview({}).file_changes is None  # what runs is the file on disk
