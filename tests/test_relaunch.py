@@ -144,7 +144,8 @@ def generate_launch_description():
     {extra}
     return sl.launch_description()
 """
-EXTRA = "sl.add_action(ExecuteProcess(name='extra', cmd=['sh', '-c', 'exec sleep 600']))"
+EXTRA = ("sl.declare_arg('loud', 'no'); "
+         "sl.add_action(ExecuteProcess(name='extra', cmd=['sh', '-c', 'exec sleep 600']))")
 
 
 def pid_of(name: str, process: str) -> int | None:
@@ -172,6 +173,8 @@ async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_lo
         await until(pilot, lambda: "said beta" in tl("logs", name, "echo-1").stdout,
                     every=lambda: None)
         await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
+        # the argument the edited file declares joins the form
+        await until(pilot, lambda: bool(app.query("#arg-loud")))
 
         # a file that no longer loads: F5 is refused with file:line, nothing stops
         running = {p: pid_of(name, p) for p in ("echo-1", "extra-2")}
