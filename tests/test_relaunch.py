@@ -425,3 +425,37 @@ def test_the_session_reads_an_edited_file_and_keeps_the_running_one_when_it_brea
     session.accept(session.preview({"word": "beta"}, reread=True))
     assert [p.id for p in session.plan.processes] == ["echo-1", "extra-2"]
     assert session.preview({}).file_changes is None  # what runs is the file on disk
+
+
+async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_would_change(
+        runtime, write):  # noqa: F811
+    """The file was edited while the session ran: `tuilaunch attach` draws the plan that
+    runs (the server's), and its Args tab says what the edit would change."""
+    from tuilaunch.cli.commands import edited_since
+    from tuilaunch.client.served_session import ServedSession
+
+    path = write(EDITABLE.format(said="word", extra=""))
+    name = tl(str(path), "--detach").stdout.strip()
+    try:
+        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        info = status(name)
+        assert not edited_since(info)
+        path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+        assert edited_since(info)
+        app = make_app(str(path), info["arguments"], Path(info["log_dir"]),
+                       session_name=name, served=edited_since(info))
+        async with app.run_test(size=(120, 36)) as pilot:
+            assert isinstance(app.session, ServedSession)
+            await until(pilot, lambda: "echo-1" in app.launch_tree.rows)
+            assert "extra-2" not in app.launch_tree.rows  # not running: not in the tree
+            await pilot.press("2")
+            await until(pilot, lambda: "changed on disk" in preview_text(app))
+            assert "test_launch.py changed on disk: adds: extra-2; changes: echo-1" \
+                in preview_text(app)
+            await pilot.press("f5")
+            await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
+            tl("wait", name, "extra-2", "running", "--timeout", "60")
+            app.action_detach()
+            await until(pilot, lambda: app.detached)
+    finally:
+        tl("stop", name, check=False)
