@@ -144,7 +144,8 @@ def generate_launch_description():
     {extra}
     return sl.launch_description()
 """
-EXTRA = "sl.add_action(ExecuteProcess(name='extra', cmd=['sh', '-c', 'exec sleep 600']))"
+EXTRA = ("sl.declare_arg('loud', 'no'); "
+         "sl.add_action(ExecuteProcess(name='extra', cmd=['sh', '-c', 'exec sleep 600']))")
 
 
 def pid_of(name: str, process: str) -> int | None:
@@ -172,6 +173,8 @@ async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_lo
         await until(pilot, lambda: "said beta" in tl("logs", name, "echo-1").stdout,
                     every=lambda: None)
         await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
+        # the argument the edited file declares joins the form
+        await until(pilot, lambda: bool(app.query("#arg-loud")))
 
         # a file that no longer loads: F5 is refused with file:line, nothing stops
         running = {p: pid_of(name, p) for p in ("echo-1", "extra-2")}
@@ -394,3 +397,65 @@ async def test_an_edited_included_file_is_previewed_and_applied_by_f5(
         assert pid_of(name, "part-1") != first
         await until(pilot, lambda: "second" in tl("logs", name, "part-1").stdout,
                     every=lambda: None)
+
+
+def test_the_session_reads_an_edited_file_and_keeps_the_running_one_when_it_breaks(write):
+    """The engine's rules under the form: a preview reads the file when it changed on disk
+    and says what the edit alone alters; a file that no longer loads leaves the session
+    (plan, values, file) as it was; F5 (`reread`) reads it whatever its stamp says."""
+    from tuilaunch.engine.plan.session import Session
+
+    path = write(EDITABLE.format(said="word", extra=""))
+    session = Session(str(path), {})
+    assert session.preview({}).file_changes is None  # nothing changed on disk
+    path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+    preview = session.preview({"word": "beta"})
+    assert preview.edited == "test_launch.py"
+    assert preview.file_changes is not None
+    assert (preview.file_changes.start, preview.file_changes.stop) == (
+        ["echo-1", "extra-2"], ["echo-1"])
+    assert preview.diff is not None and "extra-2" in preview.diff.start
+    before = session.plan
+    path.write_text("def generate_launch_description(:\n")
+    broken = session.preview({"word": "gamma"}, reread=True)
+    assert broken.plan is None and broken.error is not None
+    assert broken.error.startswith(f"the launch file no longer loads: {path}:1: syntax error")
+    assert session.plan is before and session.arguments == {}
+    path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+    session.accept(session.preview({"word": "beta"}, reread=True))
+    assert [p.id for p in session.plan.processes] == ["echo-1", "extra-2"]
+    assert session.preview({}).file_changes is None  # what runs is the file on disk
+
+
+async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_would_change(
+        runtime, write):  # noqa: F811
+    """The file was edited while the session ran: `tuilaunch attach` draws the plan that
+    runs (the server's), and its Args tab says what the edit would change."""
+    from tuilaunch.cli.commands import edited_since
+    from tuilaunch.client.served_session import ServedSession
+
+    path = write(EDITABLE.format(said="word", extra=""))
+    name = tl(str(path), "--detach").stdout.strip()
+    try:
+        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        info = status(name)
+        assert not edited_since(info)
+        path.write_text(EDITABLE.format(said="said", extra=EXTRA))
+        assert edited_since(info)
+        app = make_app(str(path), info["arguments"], Path(info["log_dir"]),
+                       session_name=name, served=edited_since(info))
+        async with app.run_test(size=(120, 36)) as pilot:
+            assert isinstance(app.session, ServedSession)
+            await until(pilot, lambda: "echo-1" in app.launch_tree.rows)
+            assert "extra-2" not in app.launch_tree.rows  # not running: not in the tree
+            await pilot.press("2")
+            await until(pilot, lambda: "changed on disk" in preview_text(app))
+            assert "test_launch.py changed on disk: adds: extra-2; changes: echo-1" \
+                in preview_text(app)
+            await pilot.press("f5")
+            await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
+            tl("wait", name, "extra-2", "running", "--timeout", "60")
+            app.action_detach()
+            await until(pilot, lambda: app.detached)
+    finally:
+        tl("stop", name, check=False)

@@ -124,6 +124,17 @@ def report_end(app: Any, name: str) -> None:
         report_failures(app.supervisor)
 
 
+def edited_since(info: dict[str, Any]) -> bool:
+    """The session's launch file was edited (or removed) since its plan was read from it:
+    the TUI then draws the plan that runs, sent by the server, and its preview says what
+    the edit would change."""
+    from ..engine.plan.session import file_stamp
+
+    read = info.get("file_stamp")
+    now = file_stamp(info["file"])
+    return read is not None and (now is None or list(now) != list(read))
+
+
 def report_failures(supervisor: RemoteSupervisor) -> None:
     """What failed, left in the shell's scrollback as ros2 launch leaves it: each failed
     process with its exit code or signal and its log file, then the launch's log folder."""
@@ -243,7 +254,8 @@ def cmd_attach(options: argparse.Namespace) -> int:
             if placed else None
         app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
                        scrollback=options.scrollback, session_name=info["name"],
-                       session_host=host, remote_link=remote, placement=placement)
+                       session_host=host, remote_link=remote, placement=placement,
+                       served=host is None and edited_since(info))
         status = app.run() or 0
     finally:
         if remote is not None:

@@ -158,6 +158,14 @@ class RemoteSupervisor:
         result = message["result"]
         self.states = dict(result["states"])
         self.lifecycle.states.update(result.get("lifecycle") or {})
+        if isinstance(session, ServedSession):  # the plan that runs, not the file's
+            session.connect(self.request, asyncio.get_running_loop())
+            try:
+                await asyncio.wait_for(self._fetch_plan(), ANSWER_TIMEOUT)
+            except (TimeoutError, ProtocolError, ConnectionError) as exc:
+                writer.close()
+                raise SessionError(f"session {name} did not send its plan ({exc or 'timeout'})")\
+                    from None
         self._adopt(result["arguments"])
         self.history = self._replay(result["offsets"], result["recent"], scrollback)
         self._note_ends(self.history)

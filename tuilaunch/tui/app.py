@@ -244,6 +244,7 @@ def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any
     another machine (`session_host`) is drawn from the plan its server sends: the launch file
     need not be readable here (`path` only names it)."""
     placement = options.pop("placement", None)
-    if options.get("session_host") is not None and not os.access(path, os.R_OK):
+    served = options.pop("served", False)  # the file here is not the one the session runs
+    if served or (options.get("session_host") is not None and not os.access(path, os.R_OK)):
         return TuiLaunchApp(ServedSession(path, arguments), log_dir, **options)
     return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)

@@ -10,6 +10,7 @@ from typing import Any
 from textual import work
 from textual.timer import Timer
 
+from ..engine.run.process.reported_names import current_node_name
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.supervisor import Event
 from .navigation import Navigation
@@ -122,8 +123,8 @@ class Inspector(Navigation):
     def node_name(self, process: str) -> str:
         """The ROS name of a process's node: the plan's, else the one it reports."""
         proc = self.session.plan.process(process)
-        reported = sorted(self.store.reported_names.get(process, ()))
-        return proc.full_name or (reported[0] if reported else process)
+        return current_node_name(proc.full_name,
+                                 self.store.reported_names.get(process, ())) or process
 
     def selected_process(self) -> str | None:
         node = self.launch_tree.cursor_node

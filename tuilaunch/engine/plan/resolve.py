@@ -525,12 +525,12 @@ def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
     return resolver.resolve(loaded)
 
 
-__all__ = ["Resolver", "declared_arguments", "join_namespace", "resolve"]
-
-
 def undeclared_warning(name: str, declared: set[str], path: str) -> str:
     """A mistyped argument (`robto:=r2`): said, with the declared name it most resembles."""
     close = difflib.get_close_matches(name, sorted(declared), n=1)
     guess = f"; did you mean '{close[0]}'?" if close else ""
     return (f"argument '{name}' is not declared by {os.path.basename(path)} or its "
             f"includes{guess} (declared: {', '.join(sorted(declared)) or 'none'})")
+
+
+__all__ = ["Resolver", "declared_arguments", "join_namespace", "resolve"]

@@ -12,6 +12,7 @@ from textual.widgets.tree import TreeNode
 
 from ...engine.plan.components import component_label
 from ...engine.plan.model import Plan, PlanDiff, TreeItem
+from ...engine.run.process.reported_names import current_node_name
 from .units import short_bytes, usage_text
 
 ALL = "__all__"
@@ -275,8 +276,7 @@ class LaunchTree(Tree[RowData]):
             text = f"{self.action_labels.get(ref, ref)} [{ref}]: {word}"
         else:
             proc = self.plan.process(ref)
-            reported = sorted(self.reported.get(ref, ()))
-            name = proc.full_name or (reported[0] if reported else proc.label)
+            name = current_node_name(proc.full_name, self.reported.get(ref, ())) or proc.label
             text = f"{ref} ({name}): {word}"
             if self.lifecycle.get(ref):
                 text += f", lifecycle state {self.lifecycle[ref]}"

@@ -26,6 +26,16 @@ MAX_NAMES = 8
 other processes' lines, which would only mislead."""
 
 
+def current_node_name(full_name: str | None, reported: Iterable[str]) -> str | None:
+    """The one rule for a process's node name in every view: the name the plan gives it,
+    else the one its current run reported (the first in order when its sub-loggers add
+    more); None until it says."""
+    if full_name:
+        return full_name
+    names = sorted(reported)
+    return names[0] if names else None
+
+
 def node_of_logger(logger: str) -> str:
     """`r1.talker` -> `/r1/talker`."""
     return "/" + logger.replace(".", "/")

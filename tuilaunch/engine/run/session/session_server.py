@@ -175,6 +175,9 @@ class SessionServer:
                 "command": self.command,
                 "arguments": self.session.arguments, "pid": os.getpid(),
                 "started": self.started, "log_dir": str(self.log_dir),
+                # the launch file as the plan that runs was read from it (a client that
+                # finds it edited since draws the server's plan, not the file's)
+                "file_stamp": getattr(self.session, "stamp", None),
                 **self._placement_info()}
 
     def _placement_info(self) -> dict[str, Any]:
