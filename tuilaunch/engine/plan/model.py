@@ -165,6 +165,9 @@ class ActionPlan:
     origin: Origin | None
     source: Any = field(default=None, repr=False, compare=False)
     configurations: dict[str, str] = field(default_factory=dict, repr=False, compare=False)
+    # the environment changes in scope (name -> value, None: unset): os.environ shows them
+    # while the action's launch-time code runs, as in launch
+    environ: dict[str, str | None] = field(default_factory=dict, repr=False, compare=False)
 
     def to_json(self) -> dict[str, Any]:
         return {

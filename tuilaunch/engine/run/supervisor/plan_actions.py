@@ -10,6 +10,7 @@ import asyncio
 from typing import Any
 
 from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
+from ...describe.environ import shown_environ
 from ...describe.python.launch_events import EventInfo, event_for
 from ...describe.substitutions import PerformContext, perform
 from ...plan.model import ActionPlan, ProcessPlan
@@ -88,7 +89,7 @@ class PlanActions(Triggers):
             elif action.kind == "shutdown":
                 self._request_shutdown(str(action.data))
             elif action.kind == "log":
-                self.log_action(action, self._perform(action, action.source.msg, event))
+                ok = self._log(action, event)
             elif action.kind == "event_callback":
                 ok = self._run_callbacks(action, event or LaunchEvent())
             elif action.kind == "deferred":
@@ -105,6 +106,17 @@ class PlanActions(Triggers):
         self.states[action.id] = "done" if ok else "failed"
         self.emit(Event("finished", action.id, reason=self.states[action.id]))
         self.flag(action.id, "exit").set()
+
+    def _log(self, action: ActionPlan, event: LaunchEvent | None) -> bool:
+        from ...errors import LaunchError
+
+        try:
+            message = self._perform(action, action.source.msg, event)
+        except LaunchError as exc:  # as launch: this action fails, the launch goes on
+            self.log_action(action, str(exc).replace("\n", " "), "ERROR")
+            return False
+        self.log_action(action, message)
+        return True
 
     def _request_shutdown(self, reason: str) -> None:
         """A Shutdown action: the run must not end before the shutdown has begun."""
@@ -123,20 +135,14 @@ class PlanActions(Triggers):
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
         context = PerformContext(action.configurations, None,
                                  event_locals={"event": event or LaunchEvent()})
-        return perform(value, context)
+        with shown_environ(action.environ):
+            return perform(value, context)
 
     def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
         """Launch-file functions called with the event; what they return is carried out."""
-        source = action.source
-        launcher = getattr(source, "launcher", None)
-        produced: list[Any] = []
         try:
-            for callback in source.callbacks:
-                if launcher is not None:
-                    with launcher.capture() as added:
-                        produced += entity_list(callback(event)) + added
-                else:
-                    produced += entity_list(call_handler(callback, event, action))
+            with shown_environ(action.environ):
+                produced = self._call_back(action, event)
         except Exception as exc:  # a user's callback must never stop the launch
             self.log_action(action, f"event callback ({action.origin}) raised "
                             f"{type(exc).__name__}: {exc}", "ERROR")
@@ -150,6 +156,18 @@ class PlanActions(Triggers):
             if not self._carry_out(action, entity, event):
                 rest.append(entity)
         return self._perform_at_event(action, rest, event) if rest else True
+
+    def _call_back(self, action: ActionPlan, event: LaunchEvent) -> list[Any]:
+        source = action.source
+        launcher = getattr(source, "launcher", None)
+        produced: list[Any] = []
+        for callback in source.callbacks:
+            if launcher is not None:
+                with launcher.capture() as added:
+                    produced += entity_list(callback(event)) + added
+            else:
+                produced += entity_list(call_handler(callback, event, action))
+        return produced
 
     def _carry_out(self, action: ActionPlan, entity: Entity, event: EventInfo) -> bool:
         """Log lines and shutdown at once; False for what must be resolved into the plan."""
