@@ -130,6 +130,9 @@ class SupervisorCore:
         if event.kind != "output":
             detail = " ".join(f"{k}={v}" for k, v in (("pid", event.pid), ("code", event.code),
                                                        ("reason", event.reason)) if v is not None)
+            logger = (event.data or {}).get("logger")
+            if event.kind == "log" and logger:  # a LogInfo line, as ros2 launch logs it
+                detail = f"[{event.level}] [{logger}]: {event.reason}"
             self.launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
                                    f"{detail}\n".encode())
         for consumer in list(self.consumers):
@@ -176,9 +179,12 @@ class SupervisorCore:
             self.report_io(f"internal error: {type(exc).__name__}: {exc}")
             self.changed.set()
 
-    def log_action(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
-        """A line in the launch pane on behalf of one action of the plan."""
-        self.emit(Event("log", action.id, reason=text, level=level))
+    def log_action(self, action: ActionPlan, text: str, level: str = "INFO",
+                   logger: str | None = None) -> None:
+        """A line in the launch pane on behalf of one action of the plan; `logger` names
+        who says it in headless output and launch.log (LogInfo: launch's `launch.user`)."""
+        self.emit(Event("log", action.id, reason=text, level=level,
+                        data={"logger": logger} if logger else None))
 
     # Made by the later layers; declared here so the earlier ones can call them.
 
@@ -189,6 +195,9 @@ class SupervisorCore:
         raise NotImplementedError  # run/stopping.py
 
     async def shutdown(self, reason: str = "shutdown") -> None:
+        raise NotImplementedError  # run/stopping.py
+
+    async def tell_shutdown(self, reason: str) -> None:
         raise NotImplementedError  # run/stopping.py
 
     async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:

@@ -11,12 +11,14 @@ from typing import Any
 
 from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
 from ...describe.environ import shown_environ
-from ...describe.python.launch_events import EventInfo, event_for
+from ...describe.python.launch_events import EventInfo, ProcessExited, event_for
 from ...describe.substitutions import PerformContext, perform
 from ...plan.model import ActionPlan, ProcessPlan
 from ..events import Event, LaunchEvent
 from ..process.readers import Running
 from .triggers import Triggers
+
+USER_LOGGER = "launch.user"  # the logger launch's LogInfo writes with
 
 
 class PlanActions(Triggers):
@@ -87,7 +89,13 @@ class PlanActions(Triggers):
             if runner is not None:
                 ok = await runner(action)
             elif action.kind == "shutdown":
-                self._request_shutdown(str(action.data))
+                if isinstance(event, ProcessExited):  # launch's Shutdown action says so
+                    self.log_action(action, f"process[{event.process_name}] was required: "
+                                    "shutting down launched system", logger="launch")
+                if self.shutting_down and not _in_shutdown_handler(action):
+                    await self.tell_shutdown(str(action.data))  # before the run may end
+                else:
+                    self._request_shutdown(str(action.data), action)
             elif action.kind == "log":
                 ok = self._log(action, event)
             elif action.kind == "event_callback":
@@ -115,13 +123,19 @@ class PlanActions(Triggers):
         except LaunchError as exc:  # as launch: this action fails, the launch goes on
             self.log_action(action, str(exc).replace("\n", " "), "ERROR")
             return False
-        self.log_action(action, message)
+        self.log_action(action, message, logger=USER_LOGGER)
         return True
 
-    def _request_shutdown(self, reason: str) -> None:
-        """A Shutdown action: the run must not end before the shutdown has begun."""
+    def _request_shutdown(self, reason: str, action: ActionPlan) -> None:
+        """A Shutdown action: the run must not end before the shutdown has begun. While
+        the launch already stops (an exit handler of a process the first shutdown stopped),
+        launch emits the event again and OnShutdown handlers see it, unless they asked."""
+        first = not (self.shutting_down or self.shutdown_requested)
         self.shutdown_requested = True
-        self.spawn_task(self.shutdown(reason))
+        if first:
+            self.spawn_task(self.shutdown(reason))
+        elif not _in_shutdown_handler(action):
+            self.spawn_task(self.tell_shutdown(reason))
 
     async def _stop_process(self, action: ActionPlan) -> bool:
         """EmitEvent(ShutdownProcess(process_matcher=matches_action(x)))."""
@@ -172,9 +186,10 @@ class PlanActions(Triggers):
     def _carry_out(self, action: ActionPlan, entity: Entity, event: EventInfo) -> bool:
         """Log lines and shutdown at once; False for what must be resolved into the plan."""
         if isinstance(entity, LogInfo):
-            self.log_action(action, self._perform(action, entity.msg, event))
+            self.log_action(action, self._perform(action, entity.msg, event),
+                            logger=USER_LOGGER)
         elif isinstance(entity, Shutdown):
-            self._request_shutdown(self._perform(action, entity.reason, event))
+            self._request_shutdown(self._perform(action, entity.reason, event), action)
         else:
             return False
         return True
@@ -194,6 +209,15 @@ class PlanActions(Triggers):
                 event = event_for("io", stream, process_name=process_id, pid=pid,
                                   text=(line + "\n").encode(), action=source)
                 self.spawn_task(self.perform_action(action, event))
+
+
+def _in_shutdown_handler(action: ActionPlan) -> bool:
+    step = action.trigger
+    while step is not None:
+        if step.on == "shutdown":
+            return True
+        step = step.after
+    return False
 
 
 def call_handler(callback: Any, event: EventInfo, action: ActionPlan) -> Any:

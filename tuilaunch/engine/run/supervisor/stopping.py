@@ -39,17 +39,23 @@ class Stopping(PlanActions):
         self.shutting_down = True
         self.stop_time = time.monotonic()
         try:
-            self.emit(Event("shutdown", reason=reason))
-            for action in self.on_shutdown:
-                try:
-                    await self.perform_action(action, LaunchEvent(reason=reason))
-                except Exception as exc:  # an OnShutdown action never stops the shutdown
-                    self.report_io(f"on-shutdown action {action.id} raised "
-                                   f"{type(exc).__name__}: {exc}")
+            await self.tell_shutdown(reason)
         finally:
             await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
             self.changed.set()
+
+    async def tell_shutdown(self, reason: str) -> None:
+        """The Shutdown event: said, and seen by the OnShutdown handlers. A Shutdown action
+        performed while the launch already stops calls this again, as launch emits its
+        event again (its handlers see both reasons)."""
+        self.emit(Event("shutdown", reason=reason))
+        for action in self.on_shutdown:
+            try:
+                await self.perform_action(action, LaunchEvent(reason=reason))
+            except Exception as exc:  # an OnShutdown action never stops the shutdown
+                self.report_io(f"on-shutdown action {action.id} raised "
+                               f"{type(exc).__name__}: {exc}")
 
     def escalate_now(self) -> str | None:
         """The operator insists (a second Ctrl+C): SIGTERM now; once more: SIGKILL.
