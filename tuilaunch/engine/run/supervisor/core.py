@@ -59,6 +59,9 @@ class SupervisorCore:
         """The latest event of each (process, kind), handed to the actions it triggers."""
         self.shutdown_requested = False
         """A Shutdown action or an operator asked the launch to end."""
+        self.failed_parts: set[str] = set()
+        """What failed inside a process (a component its container could not load), by id:
+        the launch then ends non-zero, as the action that loads it would."""
         self.exit_codes: dict[str, int] = {}
         self.crashes: dict[str, int] = {}
         """Processes that exited on their own with a non-zero status (not stopped by us)."""

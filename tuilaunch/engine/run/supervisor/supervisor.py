@@ -71,7 +71,7 @@ class Supervisor(Interacting, Placed):
             if self.states.get(process_id) == "failed":
                 self.states[process_id] = "exited"  # the stop's own signal, a hair early
         failed = [item for item, state in self.states.items() if state == "failed"]
-        return 1 if failed or real else 0
+        return 1 if failed or real or self.failed_parts else 0
 
     async def _finish(self) -> None:
         """Whatever ended the run: nothing left running, nothing left open."""
