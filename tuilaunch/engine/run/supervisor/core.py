@@ -59,6 +59,9 @@ class SupervisorCore:
         """The latest event of each (process, kind), handed to the actions it triggers."""
         self.shutdown_requested = False
         """A Shutdown action or an operator asked the launch to end."""
+        self.detached_tasks: dict[str, asyncio.Task[Any]] = {}
+        """Running call_service / set_parameters actions: the shutdown stops them as it
+        stops processes (simple_launch runs them as nodes), and their exit handlers run."""
         self.failed_parts: set[str] = set()
         """What failed inside a process (a component its container could not load), by id:
         the launch then ends non-zero, as the action that loads it would."""

@@ -84,6 +84,9 @@ class PlanActions(Triggers):
         self.emit(Event("started", action.id))
         self.flag(action.id, "start").set()
         ok = True
+        task = asyncio.current_task()
+        if action.kind in self.detached_actions and task is not None:
+            self.detached_tasks[action.id] = task
         try:
             runner = self.action_runners.get(action.kind)
             if runner is not None:
@@ -109,8 +112,14 @@ class PlanActions(Triggers):
             else:
                 self.log_action(action, f"{action.kind} is not supported yet; skipped", "WARN")
         except asyncio.CancelledError:
-            self.states[action.id] = "cancelled"
-            raise
+            if self.detached_tasks.get(action.id) is not task or not self.shutting_down:
+                self.states[action.id] = "cancelled"
+                raise
+            # stopped by the shutdown (stop_detached_actions), as simple_launch's
+            # call_service node is: it has finished, and its exit handlers run
+        finally:
+            if self.detached_tasks.get(action.id) is task:
+                del self.detached_tasks[action.id]
         self.states[action.id] = "done" if ok else "failed"
         self.emit(Event("finished", action.id, reason=self.states[action.id]))
         self.flag(action.id, "exit").set()

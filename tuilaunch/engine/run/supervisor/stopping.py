@@ -41,6 +41,8 @@ class Stopping(PlanActions):
         try:
             await self.tell_shutdown(reason)
         finally:
+            for task in list(self.detached_tasks.values()):
+                task.cancel()
             await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
             self.changed.set()
