@@ -228,3 +228,23 @@ def generate_launch_description():
     done = run_cli(str(path), "--print", "--json")
     data = json.loads(done.stdout)
     assert data["processes"][0]["env"]["TL_JSON"] == "yes"
+
+
+def test_print_json_says_what_tuilaunch_changes_in_every_environment_on_purpose(write):
+    """Started without its virtual environment on PATH, tuilaunch puts its bin/ first (for
+    scripts that start with `/usr/bin/env python3`): --print --json says so, and why."""
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(cmd=['true'], name='one')])
+""")
+    import sys
+
+    venv_bin = os.path.dirname(sys.executable)
+    done = run_cli(str(path), "--print", "--json", env={"PATH": "/usr/bin:/bin"})
+    changes = json.loads(done.stdout)["environment_changes"]
+    if os.path.isdir(os.path.join(sys.prefix, "share", "ament_index")):
+        assert changes["PATH"]["before"] == "/usr/bin:/bin"
+        assert changes["PATH"]["after"] == f"{venv_bin}:/usr/bin:/bin"
+        assert "python3" in changes["PATH"]["why"]
+    else:  # not an ament prefix: nothing is changed
+        assert "PATH" not in changes

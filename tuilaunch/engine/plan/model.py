@@ -12,6 +12,7 @@ from typing import Any
 
 from ..describe.conditions import ConditionOutcome
 from ..errors import Origin
+from ..packages import ENVIRONMENT_CHANGES
 
 
 @dataclass
@@ -239,6 +240,8 @@ class Plan:
             "actions": [a.to_json() for a in self.actions],
             "tree": self.tree.to_json(),
             "warnings": self.warnings,
+            # what tuilaunch changes on purpose in every child's environment, and why
+            "environment_changes": dict(ENVIRONMENT_CHANGES),
         }
 
 
