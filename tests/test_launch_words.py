@@ -67,6 +67,7 @@ def generate_launch_description():
     ])
 """)
     out = run_headless(path, until=("process started",))
+    assert "[WARNING] [launch]: user interrupted with ctrl-c (SIGINT)" in out.splitlines(), out
     assert "[INFO] [launch.user]: shutdown because: ctrl-c (SIGINT)" in out.splitlines(), out
 
 

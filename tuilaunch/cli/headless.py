@@ -174,6 +174,9 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
             reason = "ctrl-c (SIGINT)" if sig == signal.SIGINT else f"received {sig.name}"
             stopping.add(asyncio.ensure_future(supervisor.shutdown(reason)))
             if sig == signal.SIGINT:
+                # ros2 launch's line, which people grep for
+                printer(Event("log", "launch", reason="user interrupted with ctrl-c (SIGINT)",
+                              level="WARNING"))
                 printer.say("stopping: Ctrl+C again sends SIGTERM now, a third time SIGKILL")
             return
         sent = supervisor.escalate_now()
