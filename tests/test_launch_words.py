@@ -151,3 +151,16 @@ def generate_launch_description():
     finally:
         tl("stop", "words")
     assert marker.read_text() == "ctrl-c (SIGINT)"
+
+
+def test_an_xml_node_with_on_exit_shutdown_ends_the_launch_as_launch_does(write):
+    path = write("""<launch>
+  <executable cmd="sleep 60" name="sleeper"/>
+  <executable cmd="true" name="required" on_exit="shutdown"/>
+</launch>
+""", "required.launch.xml")
+    done = run_cli(str(path), "--headless")
+    lines = done.stdout.splitlines()
+    assert "[INFO] [launch]: process[required-2] was required: shutting down launched " \
+        "system" in lines, done.stdout
+    assert "[INFO] [launch]: shutdown (reason not given)" in lines, done.stdout
