@@ -118,6 +118,9 @@ def generate_launch_description():
         OpaqueFunction(function=show, args=['reset']),
         AppendEnvironmentVariable('A', 'x', separator=';'),
         OpaqueFunction(function=show, args=['appended']),
+        SetEnvironmentVariable('A', ''),
+        AppendEnvironmentVariable('A', 'y'),  # set, even empty: launch adds the separator
+        OpaqueFunction(function=show, args=['appended to empty']),
     ])
 """)
     before = dict(os.environ)
@@ -132,6 +135,7 @@ def generate_launch_description():
         "popped from the shell unscoped",
         "reset from the shell None",
         "appended from the shell x",
+        "appended to empty from the shell :y",
     ]
     assert dict(os.environ) == before  # the launcher's own environment is back
 
