@@ -296,3 +296,55 @@ def generate_launch_description():
     # the scope's file first, then the component's own, its $(var ...) performed
     assert cam["parameters"] == {"from_scope": 1, "fps": 60, "frame": "camera_link"}
     assert cam["parameter_files"] == [str(scoped), str(templated)]
+
+
+def _exit_status_after(path: Path, env: dict[str, str], text: str) -> tuple[int, str]:
+    """Runs headless until `text` is printed, then Ctrl+C: the exit status and the output."""
+    import subprocess
+
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env={**os.environ, **env}, start_new_session=True)
+    assert proc.stdout is not None
+    seen = ""
+    try:
+        for line in proc.stdout:
+            seen += line
+            if text in line:
+                break
+        proc.send_signal(signal.SIGINT)
+        seen += proc.communicate(timeout=120)[0]
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return proc.returncode, seen
+
+
+ONE_COMPONENT = HEADER + """
+def generate_launch_description():
+    container = ComposableNodeContainer(
+        name='box', namespace='', package='tuilaunch_demos', executable='component_container',
+        composable_node_descriptions=[{listed}])
+    return LaunchDescription([container, LoadComposableNodes(
+        target_container=container, composable_node_descriptions=[{loaded}])])
+"""
+
+
+def test_the_exit_status_says_a_component_failed_wherever_it_was_given(
+        write, composition_interfaces):
+    """A component the container could not load ends the launch non-zero, whether the
+    container lists it or a LoadComposableNodes action loads it."""
+    good = "ComposableNode(package='tuilaunch_demos', plugin='tuilaunch_demos::Talker', " \
+        "name='t{}')"
+    bad = "ComposableNode(package='tuilaunch_demos', plugin='tuilaunch_demos::Nothing', " \
+        "name='broken')"
+    env = with_interfaces(composition_interfaces)
+    for listed, loaded, expected in ((bad, good.format(2), 1), (good.format(1), bad, 1),
+                                     (good.format(1), good.format(2), 0)):
+        path = write(ONE_COMPONENT.format(listed=listed, loaded=loaded))
+        last = "unique id 2" if expected == 0 else "could not load"
+        status, out = _exit_status_after(path, env, last)
+        if expected:
+            assert "could not load tuilaunch_demos::Nothing" in out, out
+        assert status == expected, out

@@ -485,3 +485,22 @@ def generate_launch_description():
         assert done.returncode == 0, done.stderr
         actions = json.loads(done.stdout)["actions"]
         assert actions[0]["data"] == f"world is {world}"
+
+
+def test_gz_launch_says_which_world_file_it_found(write, gz, world):
+    path = write(f"""
+from simple_launch import SimpleLauncher
+
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.gz_launch({str(world)!r}, '-r')
+    sl.gz_launch('nowhere.sdf')
+    return sl.launch_description()
+""")
+    done = run_cli(str(path), "--print")
+    lines = done.stdout.splitlines()
+    # as simple_launch's console.info / console.warn print them
+    assert f'\x1b[92m[simple_launch]: Gazebo world "shapes" found @ {world}\x1b[0m' in lines, \
+        done.stdout + done.stderr
+    assert '\x1b[93m[simple_launch]: Could not read Gazebo world @ "nowhere.sdf"\x1b[0m' \
+        in lines

@@ -141,7 +141,7 @@ def test_bringup_runs_real_nodes_with_their_namespaces_and_parameters(tmp_path, 
     assert "service_server" not in seen
     os.killpg(proc.pid, signal.SIGINT)
     rest = proc.communicate(timeout=60)[0]
-    assert "shutdown (received SIGINT)" in rest
+    assert "shutdown (ctrl-c (SIGINT))" in rest  # ros2 launch's reason
     pids = pids_of(tmp_path)
     assert len(pids) == 4 and wait_gone(pids) == []
     logs = next(tmp_path.glob("*-tuilaunch-*"))

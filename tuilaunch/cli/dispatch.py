@@ -160,7 +160,9 @@ def _main(argv: list[str] | None) -> int:
             key, value = item.split(":=", 1)
             arguments[key] = value
         path = find_launch_file(positional)
-        set_command_line(positional, arguments)
+        # `ros2 launch FILE --show-args` shows the flag to the file (simple_launch reads it)
+        set_command_line(positional + (["--show-args"] if options.show_args else []),
+                         arguments)
         with file_output:
             loaded = load_file(path)
             if options.show_args:

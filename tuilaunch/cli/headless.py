@@ -109,7 +109,9 @@ class Printer:
                 return ""  # "waiting for the service": the result line follows
             return f"[{event.level}] [{self.label(event)}]: {event.reason}\n"
         if event.kind == "log":
-            return f"[{event.level}] [{event.process or 'launch.user'}]: {event.reason}\n"
+            # LogInfo speaks as launch.user, as in ros2 launch (people grep for it)
+            who = (event.data or {}).get("logger") or event.process or "launch.user"
+            return f"[{event.level}] [{who}]: {event.reason}\n"
         return f"[INFO] [launch]: {event.kind} ({event.reason})\n"
 
     def _exit_line(self, event: Event) -> str:
@@ -170,8 +172,13 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
         nonlocal asked
         asked += 1
         if asked == 1:
-            stopping.add(asyncio.ensure_future(supervisor.shutdown(f"received {sig.name}")))
+            # ros2 launch's reason for Ctrl+C; it has none for the others (it cancels)
+            reason = "ctrl-c (SIGINT)" if sig == signal.SIGINT else f"received {sig.name}"
+            stopping.add(asyncio.ensure_future(supervisor.shutdown(reason)))
             if sig == signal.SIGINT:
+                # ros2 launch's line, which people grep for
+                printer(Event("log", "launch", reason="user interrupted with ctrl-c (SIGINT)",
+                              level="WARNING"))
                 printer.say("stopping: Ctrl+C again sends SIGTERM now, a third time SIGKILL")
             return
         sent = supervisor.escalate_now()

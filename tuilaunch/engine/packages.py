@@ -35,18 +35,32 @@ def _prefixes(variable: str) -> tuple[Path, ...]:
     return tuple(prefixes)
 
 
+ENVIRONMENT_CHANGES: dict[str, dict[str, str]] = {}
+"""What `ensure_environment` changed in tuilaunch's environment, and so in every child's
+(ros2 launch changes nothing): name -> {"before", "after", "why"}; `--print --json` shows it."""
+
+
 def ensure_environment() -> None:
     """Make AMENT_PREFIX_PATH name the interpreter's prefix, for us and for every child."""
     prefixes = environment_prefixes()
     joined = os.pathsep.join(str(p) for p in prefixes)
     if joined and os.environ.get("AMENT_PREFIX_PATH") != joined:
-        os.environ["AMENT_PREFIX_PATH"] = joined
+        _changed("AMENT_PREFIX_PATH", joined, "the packages installed in tuilaunch's own "
+                 "environment are found as a sourced workspace's would be")
         _package_prefix_map.cache_clear()
     bin_dir = str(Path(sys.executable).parent)
     # Scripts installed in a virtualenv prefix start with `/usr/bin/env python3`: that must
     # find this interpreter even when the venv was not activated, as sourcing would do.
     if _is_prefix(Path(sys.prefix)) and bin_dir not in os.environ.get("PATH", "").split(":"):
-        os.environ["PATH"] = bin_dir + os.pathsep + os.environ.get("PATH", "")
+        _changed("PATH", bin_dir + os.pathsep + os.environ.get("PATH", ""),
+                 "scripts installed in tuilaunch's virtual environment start with "
+                 "`/usr/bin/env python3`: they must find its interpreter, as sourcing would")
+
+
+def _changed(name: str, value: str, why: str) -> None:
+    before = ENVIRONMENT_CHANGES.get(name, {}).get("before", os.environ.get(name, ""))
+    os.environ[name] = value
+    ENVIRONMENT_CHANGES[name] = {"before": before, "after": value, "why": why}
 
 
 @lru_cache(maxsize=4)

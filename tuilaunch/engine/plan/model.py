@@ -12,6 +12,7 @@ from typing import Any
 
 from ..describe.conditions import ConditionOutcome
 from ..errors import Origin
+from ..packages import ENVIRONMENT_CHANGES
 
 
 @dataclass
@@ -165,6 +166,9 @@ class ActionPlan:
     origin: Origin | None
     source: Any = field(default=None, repr=False, compare=False)
     configurations: dict[str, str] = field(default_factory=dict, repr=False, compare=False)
+    # the environment changes in scope (name -> value, None: unset): os.environ shows them
+    # while the action's launch-time code runs, as in launch
+    environ: dict[str, str | None] = field(default_factory=dict, repr=False, compare=False)
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -236,6 +240,8 @@ class Plan:
             "actions": [a.to_json() for a in self.actions],
             "tree": self.tree.to_json(),
             "warnings": self.warnings,
+            # what tuilaunch changes on purpose in every child's environment, and why
+            "environment_changes": dict(ENVIRONMENT_CHANGES),
         }
 
 

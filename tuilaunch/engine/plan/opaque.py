@@ -7,6 +7,7 @@ import sys
 from typing import Any
 
 from ..describe.entities import DslOpaque, Entity, OpaqueFunction, entity_list
+from ..describe.environ import Overlay, captured_environ
 from ..describe.python.loader import compat_modules, known_launch_files, unsupported_import
 from ..describe.substitutions import PerformContext
 from ..errors import LaunchError, origin_from_traceback, origin_outside_tuilaunch
@@ -17,10 +18,11 @@ def is_custom_action(entity: Any) -> bool:
     return isinstance(entity, Entity) and callable(getattr(entity, "execute", None))
 
 
-def perform_opaque(entity: Any, context: PerformContext) -> list[Any]:
-    """The entities an opaque entity produces in this context."""
+def perform_opaque(entity: Any, context: PerformContext) -> tuple[list[Any], Overlay]:
+    """The entities an opaque entity produces in this context, and what it wrote into
+    os.environ (launch keeps that for what follows)."""
     try:
-        with compat_modules():
+        with compat_modules(), captured_environ() as environ:
             if isinstance(entity, DslOpaque):
                 with entity.launcher.opaque_scope(context) as root:
                     result = entity.function()
@@ -42,4 +44,4 @@ def perform_opaque(entity: Any, context: PerformContext) -> list[Any]:
             else f"{type(entity).__name__}.execute()"
         raise LaunchError(missing or f"{what} raised {type(exc).__name__}: {exc}",
                           origin or entity.origin) from None
-    return produced
+    return produced, environ

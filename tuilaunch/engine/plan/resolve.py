@@ -58,6 +58,7 @@ from ..describe.entities import (
     UnsetLaunchConfiguration,
     entity_list,
 )
+from ..describe.environ import EnvironView
 from ..describe.events import When
 from ..describe.lifecycle import ChangeStateAction, LifecycleTransition
 from ..describe.python.loader import (
@@ -111,6 +112,7 @@ class Resolver:
         # does not stop the walk (ros2 launch lists arguments without values)
         self.lenient = False
         self.first_error: LaunchError | None = None
+        self._environ: EnvironView | None = None
         self.process_planner = ProcessPlanner(self._next_id, params_dir, self.warnings)
         self.action_planner = ActionPlanner(self._action_id, self.entity_ids, self.processes)
 
@@ -124,7 +126,7 @@ class Resolver:
     # --- entry -------------------------------------------------------------------------
 
     def resolve(self, loaded: LoadedFile) -> Plan:
-        scope = Scope(dict(self.cli_arguments), loaded.path)
+        scope = Scope(dict(self.cli_arguments), loaded.path, env=dict(loaded.environ))
         root = TreeItem("group", os.path.basename(loaded.path), True)
         self._include_stack = [os.path.realpath(loaded.path)]
         self.walk(loaded.entities, scope, root)
@@ -157,6 +159,16 @@ class Resolver:
                 trigger.target = self.entity_ids.get(id(trigger.target_entity))
 
     def walk(self, entities: list[Any], scope: Scope, parent: TreeItem) -> None:
+        if self._environ is None:
+            # the outermost walk: while it lasts, os.environ shows the environment of the
+            # scope being visited, as launch's does; the launcher's own comes back after
+            self._environ = EnvironView()
+            try:
+                self.walk(entities, scope, parent)
+            finally:
+                self._environ.restore()
+                self._environ = None
+            return
         for entity in entities:
             if self.lenient:
                 self._visit_leniently(entity, scope, parent)
@@ -201,7 +213,7 @@ class Resolver:
                           enabled, scope.skipped_by, scope.trigger,
                           getattr(entities[0], "origin", None) if entities else None,
                           Deferred(entities, replace(scope, trigger=None), reason),
-                          dict(scope.configurations))
+                          dict(scope.configurations), dict(scope.env))
         self.actions.append(plan)
         for entity in entities:
             self.entity_ids[id(entity)] = action_id
@@ -234,6 +246,8 @@ class Resolver:
     # --- dispatch ----------------------------------------------------------------------
 
     def visit(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
+        if self._environ is not None:
+            self._environ.show(scope.env)
         if isinstance(entity, LaunchDescription):
             self.walk(entity.entities, scope, parent)
         elif isinstance(entity, DeclareLaunchArgument):
@@ -433,6 +447,8 @@ class Resolver:
                 raise
             return
         scope.launch_file = loaded.path
+        if enabled:
+            scope.env.update(loaded.environ)  # its module code's os.environ writes
         real = os.path.realpath(loaded.path)
         if real in self._include_stack:
             if not enabled:
@@ -452,7 +468,8 @@ class Resolver:
         """OpaqueFunctions, SimpleLauncher's opaque mode, and third-party actions' execute()."""
         if not self._gate(entity, scope)[0]:
             return
-        produced = perform_opaque(entity, scope.context())
+        produced, environ = perform_opaque(entity, scope.context())
+        scope.env.update(environ)
         self.walk(produced, scope, parent)
 
     # --- processes -------------------------------------------------------------------------

@@ -126,7 +126,7 @@ def apply_scope_action(entity: Any, scope: Scope) -> None:
         separator = perform(entity.separator, ctx)
         prepend = entity.prepend if isinstance(entity.prepend, bool) else \
             text_to_bool(perform(entity.prepend, ctx)) or False
-        if old:
+        if old is not None:  # launch: set, even empty, gets the separator
             value = value + separator + old if prepend else old + separator + value
         scope.env[name] = value
     elif isinstance(entity, UnsetLaunchConfiguration):

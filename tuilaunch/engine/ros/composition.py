@@ -226,6 +226,10 @@ class ComponentLoader(Plugin):
         data = {"component": component["id"], "state": state, "text": text,
                 "container": component.get("container"), **extra}
         self.results[component["id"]] = data
+        if state == "failed":  # the exit status says so, listed in a container or not
+            self.supervisor.failed_parts.add(component["id"])
+        elif state == "loaded":  # loaded again after its container restarted
+            self.supervisor.failed_parts.discard(component["id"])
         self.supervisor.emit(Event("component", owner, reason=text, level=level, data=data))
 
 

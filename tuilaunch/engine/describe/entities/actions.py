@@ -53,7 +53,7 @@ class TimerAction(Entity):
 class Shutdown(Entity):
     """An action that ends the whole launch (also `EmitEvent(event=Shutdown())`)."""
 
-    def __init__(self, *, reason: SubValue = "shutdown requested", condition: Condition | None
+    def __init__(self, *, reason: SubValue = "reason not given", condition: Condition | None
                  = None, **_: Any) -> None:
         self._init_entity(condition)
         self.reason = reason

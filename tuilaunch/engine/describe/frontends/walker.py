@@ -294,8 +294,8 @@ class Walker:
         if action != "shutdown":
             raise element.error(f"on_exit={action!r}: only on_exit=\"shutdown\" exists",
                                 at="on_exit")
-        handler = ent.OnProcessExit(target_action=process,
-                                    on_exit=[ent.Shutdown(reason="on_exit=shutdown")])
+        # launch's parser gives `[Shutdown()]`: its reason is launch's default
+        handler = ent.OnProcessExit(target_action=process, on_exit=[ent.Shutdown()])
         return [ent.RegisterEventHandler(handler)]
 
     def node_arguments(self, element: Element) -> dict[str, Any]:

@@ -47,6 +47,7 @@ from ..substitutions import (
     perform,
     slash_join,
 )
+from ..values import yaml_single_quoted
 from .gazebo import GZ_AXES, GazeboBridge, GazeboLauncher
 
 
@@ -132,9 +133,19 @@ class SimpleLauncher(GazeboLauncher):
                 "use_sim_time", use_sim_time,
                 description="Force use_sim_time parameter of instantiated nodes")
         elif use_sim_time == "auto":
+            from . import console
+            from .gazebo import only_show_args
             from .sim_clock import clock_is_published
 
+            if only_show_args():
+                console.warn("This launch file will forward use_sim_time to all nodes if "
+                             "/clock is advertized at the time of the launch")
+                return
             self.sim_time = clock_is_published()
+            console.info("SimpleLauncher(use_sim_time='auto'): " + (
+                "found a /clock topic, forwarding use_sim_time:=True to all nodes"
+                if self.sim_time else
+                "no /clock topic found, forwarding use_sim_time:=False to all nodes"))
         else:
             raise DslError(
                 f"use_sim_time must be None, True, False or 'auto', got {use_sim_time!r}",
@@ -383,7 +394,12 @@ class SimpleLauncher(GazeboLauncher):
         if isinstance(path, str) and path.endswith(".urdf") and xacro_args is None:
             with open(path) as handle:
                 return handle.read()
-        return self._try_perform(Xacro(path, pair_list(xacro_args, "xacro_args")))
+        description = Xacro(path, pair_list(xacro_args, "xacro_args"))
+        if self._context is None:
+            return description
+        # in an opaque function too, as the parameter launch_ros reads from simple_launch's
+        # quoted xacro output: line breaks folded as YAML folds them
+        return yaml_single_quoted(perform(description, self._context))
 
     def robot_state_publisher(self, package: SubValue = None, description_file: SubValue = None,
                               description_dir: SubValue = None, xacro_args: Any = None,

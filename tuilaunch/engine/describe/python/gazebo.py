@@ -27,6 +27,7 @@ from ..substitutions import (
     flatten,
     perform,
 )
+from . import console
 
 if TYPE_CHECKING:
     from contextlib import AbstractContextManager
@@ -281,6 +282,9 @@ class GazeboBridge:
         if GazeboBridge._world_name is not None:
             return GazeboBridge._world_name
         if only_show_args():
+            GazeboBridge._world_name = "dummy"  # silent afterwards, as simple_launch
+            console.warn("This launch file will request information on a running Gazebo "
+                         "instance at the time of the launch")
             return "dummy"
         found = _world_from_running_gazebo()
         if found is None:
@@ -290,6 +294,7 @@ class GazeboBridge:
                 "running Gazebo answered `gz model --list`", caller_origin(),
                 hint="call GazeboBridge.set_world_name('<world>') before using the world name")
         GazeboBridge._world_name = found
+        console.info(f'GazeboBridge: found world "{found}"')
         return found
 
     @staticmethod
@@ -454,6 +459,20 @@ def _remember_world(world_file: SubValue, gz_args: SubValue) -> None:
     name = world_name_in(found) if found else None
     if name:
         GazeboBridge.set_world_name(name)
+    # simple_launch says what it found, once per world file, unless only listing arguments
+    if only_show_args() or (found is not None and found in _announced_worlds):
+        return
+    if found is None:
+        console.warn(f'Could not read Gazebo world @ "{world_file}"')
+        return
+    _announced_worlds.add(found)
+    if name:
+        console.info(f'Gazebo world "{name}" found @ {found}')
+    else:
+        console.warn(f"Could not get the name of Gazebo world {found}")
+
+
+_announced_worlds: set[str] = set()
 
 
 __all__ = ["GazeboBridge", "GazeboLauncher", "gazebo_message", "only_show_args",

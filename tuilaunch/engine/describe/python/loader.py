@@ -11,7 +11,7 @@ import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import ModuleType
 from typing import Any
 
@@ -24,6 +24,7 @@ from ...errors import (
     origin_outside_tuilaunch,
 )
 from ..entities import LaunchDescription, entity_list
+from ..environ import Overlay, captured_environ
 
 _lock = threading.RLock()
 _loaded_files: set[str] = set()
@@ -51,10 +52,13 @@ def _argv() -> list[str]:
 
 @dataclass
 class LoadedFile:
-    """A launch file's Description: its top-level entities, lazy until resolved."""
+    """A launch file's Description: its top-level entities, lazy until resolved, and what
+    its module code and generate_launch_description() wrote into os.environ (kept for what
+    follows, as launch keeps it; os.environ itself is put back)."""
 
     path: str
     entities: list[Any]
+    environ: Overlay = field(default_factory=dict)
 
 
 def known_launch_files() -> set[str]:
@@ -131,7 +135,7 @@ def load_file(path: str, origin: Origin | None = None) -> LoadedFile:
     module = ModuleType(os.path.splitext(os.path.basename(path))[0].replace(".", "_"))
     module.__file__ = path
     try:
-        with compat_modules():
+        with compat_modules(), captured_environ() as environ:
             exec(code, module.__dict__)
             generate = module.__dict__.get("generate_launch_description")
             if not callable(generate):
@@ -167,5 +171,5 @@ def load_file(path: str, origin: Origin | None = None) -> LoadedFile:
         raise LaunchError("generate_launch_description() returned None", Origin(path, line),
                           hint="return sl.launch_description() or a LaunchDescription")
     if isinstance(description, LaunchDescription):
-        return LoadedFile(path, list(description.entities))
-    return LoadedFile(path, entity_list(description))
+        return LoadedFile(path, list(description.entities), environ)
+    return LoadedFile(path, entity_list(description), environ)

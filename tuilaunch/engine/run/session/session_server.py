@@ -238,7 +238,8 @@ class SessionServer:
         self.supervisor.log(text, level)
 
     def _signalled(self, sig: signal.Signals) -> None:
-        self.hub.spawn(self.supervisor.shutdown(f"received {sig.name}"))
+        reason = "ctrl-c (SIGINT)" if sig == signal.SIGINT else f"received {sig.name}"
+        self.hub.spawn(self.supervisor.shutdown(reason))  # ros2 launch's words for SIGINT
 
     def _snapshot(self) -> dict[str, Any]:
         """What a client gets with its subscription: the plugins' snapshots, the states

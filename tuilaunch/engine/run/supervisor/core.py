@@ -60,6 +60,12 @@ class SupervisorCore:
         """The latest event of each (process, kind), handed to the actions it triggers."""
         self.shutdown_requested = False
         """A Shutdown action or an operator asked the launch to end."""
+        self.detached_tasks: dict[str, asyncio.Task[Any]] = {}
+        """Running call_service / set_parameters actions: the shutdown stops them as it
+        stops processes (simple_launch runs them as nodes), and their exit handlers run."""
+        self.failed_parts: set[str] = set()
+        """What failed inside a process (a component its container could not load), by id:
+        the launch then ends non-zero, as the action that loads it would."""
         self.exit_codes: dict[str, int] = {}
         self.crashes: dict[str, int] = {}
         """Processes that exited on their own with a non-zero status (not stopped by us)."""
@@ -137,6 +143,9 @@ class SupervisorCore:
                                                        ("requested", requested),
                                                        ("level", level),
                                                        ("reason", event.reason)) if v is not None)
+            logger = (event.data or {}).get("logger")
+            if event.kind == "log" and logger:  # a LogInfo line, as ros2 launch logs it
+                detail = f"[{event.level}] [{logger}]: {event.reason}"
             self.launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
                                    f"{detail}\n".encode())
         for consumer in list(self.consumers):
@@ -184,9 +193,12 @@ class SupervisorCore:
             self.report_io(f"internal error: {type(exc).__name__}: {exc}")
             self.changed.set()
 
-    def log_action(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
-        """A line in the launch pane on behalf of one action of the plan."""
-        self.emit(Event("log", action.id, reason=text, level=level))
+    def log_action(self, action: ActionPlan, text: str, level: str = "INFO",
+                   logger: str | None = None) -> None:
+        """A line in the launch pane on behalf of one action of the plan; `logger` names
+        who says it in headless output and launch.log (LogInfo: launch's `launch.user`)."""
+        self.emit(Event("log", action.id, reason=text, level=level,
+                        data={"logger": logger} if logger else None))
 
     # Made by the later files; declared here so the earlier ones can call them.
 
@@ -197,6 +209,9 @@ class SupervisorCore:
         raise NotImplementedError  # supervisor.py
 
     async def shutdown(self, reason: str = "shutdown") -> None:
+        raise NotImplementedError  # supervisor.py
+
+    async def tell_shutdown(self, reason: str) -> None:
         raise NotImplementedError  # supervisor.py
 
     async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:

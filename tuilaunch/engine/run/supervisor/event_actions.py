@@ -44,7 +44,7 @@ def scope_of(plan: Plan, action: ActionPlan) -> Scope:
     else:
         launch_file = action.origin.file if action.origin else plan.file
         scope = Scope(dict(action.configurations), os.path.abspath(launch_file),
-                      action.namespace)
+                      action.namespace, env=dict(action.environ))
     return replace(scope, trigger=None, enabled=True, skipped_by=None)
 
 

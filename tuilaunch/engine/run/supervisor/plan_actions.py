@@ -12,13 +12,16 @@ from collections.abc import Callable
 from typing import Any
 
 from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
-from ...describe.python.launch_events import EventInfo, event_for
+from ...describe.environ import shown_environ
+from ...describe.python.launch_events import EventInfo, ProcessExited, event_for
 from ...describe.substitutions import PerformContext, perform
 from ...plan.model import ActionPlan, ProcessPlan, Trigger
 from ..events import Event, LaunchEvent
 from ..process.readers import Running
 from .core import SupervisorCore
 from .triggers import flag_name, runs_in_shutdown
+
+USER_LOGGER = "launch.user"  # the logger launch's LogInfo writes with
 
 
 class PlanActions(SupervisorCore):
@@ -140,14 +143,23 @@ class PlanActions(SupervisorCore):
         self.emit(Event("started", action.id))
         self.flag(action.id, "start").set()
         ok = True
+        task = asyncio.current_task()
+        if action.kind in self.detached_actions and task is not None:
+            self.detached_tasks[action.id] = task
         try:
             runner = self.action_runners.get(action.kind)
             if runner is not None:
                 ok = await runner(action)
             elif action.kind == "shutdown":
-                self._request_shutdown(str(action.data))
+                if isinstance(event, ProcessExited):  # launch's Shutdown action says so
+                    self.log_action(action, f"process[{event.process_name}] was required: "
+                                    "shutting down launched system", logger="launch")
+                if self.shutting_down and not _in_shutdown_handler(action):
+                    await self.tell_shutdown(str(action.data))  # before the run may end
+                else:
+                    self._request_shutdown(str(action.data), action)
             elif action.kind == "log":
-                self.log_action(action, self._perform(action, action.source.msg, event))
+                ok = self._log(action, event)
             elif action.kind == "event_callback":
                 ok = self._run_callbacks(action, event or LaunchEvent())
             elif action.kind == "deferred":
@@ -159,16 +171,39 @@ class PlanActions(SupervisorCore):
             else:
                 self.log_action(action, f"{action.kind} is not supported yet; skipped", "WARN")
         except asyncio.CancelledError:
-            self.states[action.id] = "cancelled"
-            raise
+            if self.detached_tasks.get(action.id) is not task or not self.shutting_down:
+                self.states[action.id] = "cancelled"
+                raise
+            # stopped by the shutdown (stop_detached_actions), as simple_launch's
+            # call_service node is: it has finished, and its exit handlers run
+        finally:
+            if self.detached_tasks.get(action.id) is task:
+                del self.detached_tasks[action.id]
         self.states[action.id] = "done" if ok else "failed"
         self.emit(Event("finished", action.id, reason=self.states[action.id]))
         self.flag(action.id, "exit").set()
 
-    def _request_shutdown(self, reason: str) -> None:
-        """A Shutdown action: the run must not end before the shutdown has begun."""
+    def _log(self, action: ActionPlan, event: LaunchEvent | None) -> bool:
+        from ...errors import LaunchError
+
+        try:
+            message = self._perform(action, action.source.msg, event)
+        except LaunchError as exc:  # as launch: this action fails, the launch goes on
+            self.log_action(action, str(exc).replace("\n", " "), "ERROR")
+            return False
+        self.log_action(action, message, logger=USER_LOGGER)
+        return True
+
+    def _request_shutdown(self, reason: str, action: ActionPlan) -> None:
+        """A Shutdown action: the run must not end before the shutdown has begun. While
+        the launch already stops (an exit handler of a process the first shutdown stopped),
+        launch emits the event again and OnShutdown handlers see it, unless they asked."""
+        first = not (self.shutting_down or self.shutdown_requested)
         self.shutdown_requested = True
-        self.spawn_task(self.shutdown(reason))
+        if first:
+            self.spawn_task(self.shutdown(reason))
+        elif not _in_shutdown_handler(action):
+            self.spawn_task(self.tell_shutdown(reason))
 
     async def _stop_process(self, action: ActionPlan) -> bool:
         """EmitEvent(ShutdownProcess(process_matcher=matches_action(x)))."""
@@ -182,20 +217,14 @@ class PlanActions(SupervisorCore):
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
         context = PerformContext(action.configurations, None,
                                  event_locals={"event": event or LaunchEvent()})
-        return perform(value, context)
+        with shown_environ(action.environ):
+            return perform(value, context)
 
     def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
         """Launch-file functions called with the event; what they return is carried out."""
-        source = action.source
-        launcher = getattr(source, "launcher", None)
-        produced: list[Any] = []
         try:
-            for callback in source.callbacks:
-                if launcher is not None:
-                    with launcher.capture() as added:
-                        produced += entity_list(callback(event)) + added
-                else:
-                    produced += entity_list(call_handler(callback, event, action))
+            with shown_environ(action.environ):
+                produced = self._call_back(action, event)
         except Exception as exc:  # a user's callback must never stop the launch
             self.log_action(action, f"event callback ({action.origin}) raised "
                             f"{type(exc).__name__}: {exc}", "ERROR")
@@ -210,12 +239,25 @@ class PlanActions(SupervisorCore):
                 rest.append(entity)
         return self._perform_at_event(action, rest, event) if rest else True
 
+    def _call_back(self, action: ActionPlan, event: LaunchEvent) -> list[Any]:
+        source = action.source
+        launcher = getattr(source, "launcher", None)
+        produced: list[Any] = []
+        for callback in source.callbacks:
+            if launcher is not None:
+                with launcher.capture() as added:
+                    produced += entity_list(callback(event)) + added
+            else:
+                produced += entity_list(call_handler(callback, event, action))
+        return produced
+
     def _carry_out(self, action: ActionPlan, entity: Entity, event: EventInfo) -> bool:
         """Log lines and shutdown at once; False for what must be resolved into the plan."""
         if isinstance(entity, LogInfo):
-            self.log_action(action, self._perform(action, entity.msg, event))
+            self.log_action(action, self._perform(action, entity.msg, event),
+                            logger=USER_LOGGER)
         elif isinstance(entity, Shutdown):
-            self._request_shutdown(self._perform(action, entity.reason, event))
+            self._request_shutdown(self._perform(action, entity.reason, event), action)
         else:
             return False
         return True
@@ -239,6 +281,15 @@ class PlanActions(SupervisorCore):
                 event = event_for("io", stream, process_name=process_id, pid=pid,
                                   text=(line + "\n").encode(), action=source)
                 self.spawn_task(self.perform_action(action, event))
+
+
+def _in_shutdown_handler(action: ActionPlan) -> bool:
+    step = action.trigger
+    while step is not None:
+        if step.on == "shutdown":
+            return True
+        step = step.after
+    return False
 
 
 def call_handler(callback: Any, event: EventInfo, action: ActionPlan) -> Any:

@@ -79,7 +79,7 @@ class Supervisor(Interacting):
             if self.states.get(process_id) == "failed":
                 self.states[process_id] = "exited"  # the stop's own signal, a hair early
         failed = [item for item, state in self.states.items() if state == "failed"]
-        return 1 if failed or real else 0
+        return 1 if failed or real or self.failed_parts else 0
 
     async def _finish(self) -> None:
         """Whatever ended the run: nothing left running, nothing left open."""
@@ -208,17 +208,25 @@ class Supervisor(Interacting):
         self.shutting_down = True
         self.stopper.began()
         try:
-            self.emit(Event("shutdown", reason=reason))
-            for action in self.triggers.on_shutdown:
-                try:
-                    await self.perform_action(action, LaunchEvent(reason=reason))
-                except Exception as exc:  # an OnShutdown action never stops the shutdown
-                    self.report_io(f"on-shutdown action {action.id} raised "
-                                   f"{type(exc).__name__}: {exc}")
+            await self.tell_shutdown(reason)
         finally:
+            for task in list(self.detached_tasks.values()):
+                task.cancel()
             await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
                                  return_exceptions=True)
             self.changed.set()
+
+    async def tell_shutdown(self, reason: str) -> None:
+        """The Shutdown event: said, and seen by the OnShutdown handlers. A Shutdown action
+        performed while the launch already stops calls this again, as launch emits its
+        event again (its handlers see both reasons)."""
+        self.emit(Event("shutdown", reason=reason))
+        for action in self.triggers.on_shutdown:
+            try:
+                await self.perform_action(action, LaunchEvent(reason=reason))
+            except Exception as exc:  # an OnShutdown action never stops the shutdown
+                self.report_io(f"on-shutdown action {action.id} raised "
+                               f"{type(exc).__name__}: {exc}")
 
     def escalate_now(self) -> str | None:
         """The operator insists (a second Ctrl+C): SIGTERM now; once more: SIGKILL.

@@ -1,0 +1,166 @@
+"""The words a headless run prints where ros2 launch prints them, per launch's sources.
+
+- LogInfo logs with `launch.logging.get_logger('launch.user')` (launch/actions/log_info.py):
+  `[INFO] [launch.user]: message`, on screen and in the launch's log file.
+- LaunchService's SIGINT handler shuts down with reason `ctrl-c (SIGINT)`; `idle` when
+  nothing is left; a `Shutdown()` action's event carries its reason (`reason not given` by
+  default) and is emitted again when the launch already stops, so OnShutdown handlers see
+  each (launch/launch_service.py, launch/actions/shutdown_action.py).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+
+from .conftest import run_cli, run_headless, wait_for
+
+HEADER = """
+import os
+from launch import LaunchDescription
+from launch.actions import (EmitEvent, ExecuteProcess, LogInfo, RegisterEventHandler,
+                            Shutdown)
+from launch.event_handlers import OnProcessExit, OnShutdown
+from launch.events import Shutdown as ShutdownEvent
+from launch.substitutions import LocalSubstitution
+"""
+
+ON_SHUTDOWN = """
+        RegisterEventHandler(OnShutdown(on_shutdown=[
+            LogInfo(msg=['shutdown because: ', LocalSubstitution('event.reason')])])),
+"""
+
+
+def test_log_info_speaks_as_launch_user_on_screen_and_in_the_log_file(write, tmp_path):
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([LogInfo(msg='hello from the file')])
+""")
+    log_root = tmp_path / "logs"
+    done = run_cli(str(path), "--headless", env={"ROS_LOG_DIR": str(log_root)})
+    assert "[INFO] [launch.user]: hello from the file" in done.stdout.splitlines(), done.stdout
+    launch_log = next(log_root.glob("*-tuilaunch-*")) / "launch.log"
+    assert "[INFO] [launch.user]: hello from the file" in launch_log.read_text()
+
+
+def test_simple_launch_log_info_speaks_as_launch_user(write):
+    path = write("""
+from simple_launch import SimpleLauncher
+
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.log_info('from simple_launch')
+    return sl.launch_description()
+""")
+    done = run_cli(str(path), "--headless")
+    assert "[INFO] [launch.user]: from simple_launch" in done.stdout.splitlines(), done.stdout
+
+
+def test_ctrl_c_is_the_reason_on_shutdown_handlers_see(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sleep', '60'], name='sleeper'),""" + ON_SHUTDOWN + """
+    ])
+""")
+    out = run_headless(path, until=("process started",))
+    assert "[WARNING] [launch]: user interrupted with ctrl-c (SIGINT)" in out.splitlines(), out
+    assert "[INFO] [launch.user]: shutdown because: ctrl-c (SIGINT)" in out.splitlines(), out
+
+
+def test_idle_and_a_shutdown_action_pass_their_reasons(write):
+    idle = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(cmd=['true']),""" + ON_SHUTDOWN + """])
+""", "idle_launch.py")
+    done = run_cli(str(idle), "--headless")
+    assert "[INFO] [launch.user]: shutdown because: idle" in done.stdout.splitlines()
+
+    given = write(HEADER + """
+def generate_launch_description():
+    quick = ExecuteProcess(cmd=['true'], name='quick')
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sleep', '60'], name='sleeper'),
+        quick,
+        RegisterEventHandler(OnProcessExit(target_action=quick, on_exit=[
+            Shutdown(reason='quick is done')])),
+        RegisterEventHandler(OnProcessExit(target_action=quick, on_exit=[
+            EmitEvent(event=ShutdownEvent())])),""" + ON_SHUTDOWN + """
+    ])
+""", "given_launch.py")
+    done = run_cli(str(given), "--headless")
+    lines = done.stdout.splitlines()
+    assert "[INFO] [launch]: process[quick-2] was required: shutting down launched system" \
+        in lines, done.stdout
+    # both Shutdown events reach the handler, in the order they were emitted
+    reasons = [line for line in lines if "shutdown because" in line]
+    assert reasons == ["[INFO] [launch.user]: shutdown because: quick is done",
+                       "[INFO] [launch.user]: shutdown because: reason not given"], lines
+
+
+def test_a_shutdown_emitted_while_stopping_is_seen_again(write, tmp_path):
+    """An exit handler of a process the first shutdown stopped emits Shutdown (a viewer's
+    `Shutdown(reason='Window closed')`): OnShutdown handlers see that reason too."""
+    path = write(HEADER + """
+def generate_launch_description():
+    viewer = ExecuteProcess(cmd=['sleep', '60'], name='viewer')
+    return LaunchDescription([
+        viewer,
+        RegisterEventHandler(OnProcessExit(target_action=viewer, on_exit=[
+            Shutdown(reason='Window closed')])),""" + ON_SHUTDOWN + """
+    ])
+""")
+    out = run_headless(path, until=("process started",)).splitlines()
+    reasons = [line for line in out if "shutdown because" in line]
+    assert reasons == ["[INFO] [launch.user]: shutdown because: ctrl-c (SIGINT)",
+                       "[INFO] [launch.user]: shutdown because: Window closed"], out
+
+
+def test_a_session_stopped_by_sigint_says_ctrl_c(write, tmp_path):
+    """The session server (a detached launch) gets SIGINT as ros2 launch would."""
+    marker = tmp_path / "reason.txt"
+    path = write(HEADER + f"""
+def remember(event, context):
+    with open({str(marker)!r}, 'w') as handle:
+        handle.write(event.reason)
+    return []
+
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sleep', '60'], name='sleeper'),
+        RegisterEventHandler(OnShutdown(on_shutdown=remember)),
+    ])
+""")
+    runtime = tmp_path / "run"
+    runtime.mkdir(mode=0o700)
+    env = {**os.environ, "XDG_RUNTIME_DIR": str(runtime)}
+
+    def tl(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([sys.executable, "-m", "tuilaunch", *args], env=env,
+                              capture_output=True, text=True, timeout=120)
+
+    tl(str(path), "--detach", "--name", "words")
+    try:
+        tl("wait", "words", "sleeper-1", "running", "--timeout", "60")
+        server = json.loads(tl("status", "words", "--json").stdout)["pid"]
+        os.kill(server, signal.SIGINT)
+        wait_for(lambda: marker.exists() and marker.read_text(), what="the OnShutdown handler")
+    finally:
+        tl("stop", "words")
+    assert marker.read_text() == "ctrl-c (SIGINT)"
+
+
+def test_an_xml_node_with_on_exit_shutdown_ends_the_launch_as_launch_does(write):
+    path = write("""<launch>
+  <executable cmd="sleep 60" name="sleeper"/>
+  <executable cmd="true" name="required" on_exit="shutdown"/>
+</launch>
+""", "required.launch.xml")
+    done = run_cli(str(path), "--headless")
+    lines = done.stdout.splitlines()
+    assert "[INFO] [launch]: process[required-2] was required: shutting down launched " \
+        "system" in lines, done.stdout
+    assert "[INFO] [launch]: shutdown (reason not given)" in lines, done.stdout
