@@ -19,7 +19,7 @@ from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ChoiceScreen
 from tuilaunch.tui.screens.topics_panel import TopicsPanel
 
-from .conftest import run_cli
+from .conftest import run_cli, wait_for
 from .test_sessions import runtime, status, tl  # noqa: F401
 from .test_tui import BRINGUP, until
 
@@ -344,8 +344,13 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
 
     owner = Terminal(str(path))
     try:
-        owner.read_until(b"bad-2")
-        names = [line.split()[0] for line in tl("ls").stdout.splitlines()[1:] if line]
+        owner.read_until(b"bad-2")  # the tree is drawn before the session's server is up
+
+        def sessions() -> list[str]:
+            return [line.split()[0] for line in tl("ls").stdout.splitlines()[1:] if line]
+
+        wait_for(sessions, what="the TUI's session in tuilaunch ls")
+        names = sessions()
         tl("wait", names[-1], "bad-2", "failed", "--timeout", "60")
         log_dir = status(names[-1])["log_dir"]
         os.write(owner.master, b"q")
