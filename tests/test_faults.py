@@ -277,14 +277,17 @@ parent = sl.add_action(ExecuteProcess(cmd=['sh', '-c',
     'setsid sh -c "echo daemon \\\\$\\\\$; exec {tag} 600" & sleep 0.2; echo parent done'],
     name='parent'))
 sl.add_action(RegisterEventHandler(OnProcessExit(target_action=parent,
-    on_exit=lambda event, context: [LogInfo(msg='saw the exit')])))""")
+    on_exit=lambda event, context: [LogInfo(msg='saw the exit')])))
+sl.add_action(ExecuteProcess(cmd=['{tag}', '600'], name='keeper'))""")
     proc = start_headless(str(path), log_dir=tmp_path)
     started.append(proc)
     seen = read_until(proc, "saw the exit", limit=30)
     daemon = int(seen.split("[parent-1] daemon ")[1].split()[0])
     assert "[INFO] [parent-1]: process has finished cleanly [pid" in seen
-    assert alive(daemon)  # the exit was reported while the daemon still held the pipe
-    assert proc.wait(timeout=30) == 0
+    # the launch runs on (keeper): the exit was reported while the daemon still held the pipe
+    assert alive(daemon)
+    os.killpg(proc.pid, signal.SIGINT)
+    assert proc.wait(timeout=60) == 0
     assert wait_gone([daemon]) == []  # and the launch did not leave it behind
 
 
