@@ -404,8 +404,10 @@ def generate_launch_description():
     events: list[Event] = []
     supervisor.subscribe(events.append)
     active = asyncio.Event()
+    # the activate's outcome is said after the state event: wait for the words, not the state
     supervisor.subscribe(lambda e: active.set()
-                         if e.kind == "lifecycle" and e.reason == "active" else None)
+                         if e.kind == "log" and "/slow: activate done" in (e.reason or "")
+                         else None)
     run = asyncio.ensure_future(supervisor.run())
     try:
         await asyncio.wait_for(active.wait(), 60)
