@@ -54,6 +54,8 @@ class NodeKeyboard(SessionLink):
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if self.typing_to is not None and action in ("request_quit", "command_palette"):
             return False  # ctrl+c, ctrl+p are the node's keys while typing
+        if action == "find":  # `/` into a list's filter: the tabs whose panel has no `/`
+            return self.tabs.active in ("services", "params")
         if action in ("type_into", "run_under", "command_line"):
             if self.supervisor is None or self.tabs.active != "nodes":
                 return False
