@@ -8,6 +8,7 @@ import json
 import os
 import re
 import sys
+import time
 
 import pytest
 from textual import events
@@ -20,7 +21,7 @@ from tuilaunch.tui.screens.fields import Field
 from .test_interact import PROGRAMS
 from .test_sessions import runtime  # noqa: F401  (a fixture: a private session folder)
 from .test_tui import pids, until
-from .test_tui_long_sessions import read_until, start_on_pty, stop_pty
+from .test_tui_long_sessions import read_for, read_until, start_on_pty, stop_pty
 
 TWO = f"""
 import sys
@@ -312,7 +313,10 @@ def test_quitting_a_session_offers_detach_and_d_leaves_it_running(write, tmp_pat
         os.write(master, b"q")
         read_until(master, b"Or detach")
         os.write(master, b"d")
-        proc.wait(timeout=60)  # the window closes ...
+        end = time.monotonic() + 60
+        while proc.poll() is None:  # the window closes (what it writes is read) ...
+            assert time.monotonic() < end, "the TUI did not leave after d"
+            read_for(master, 0.2)
         (session,) = json.loads(tl("ls", "--json").stdout)  # ... and the launch runs on
         name = session["name"]
         assert '"running"' in tl("status", name, "--json").stdout
@@ -331,3 +335,18 @@ async def test_a_paste_right_after_slash_is_searched(write, tmp_path):
         await until(pilot, lambda: app.output_panel.search == "start")
         assert pids(app) == before
         await shutdown(app)
+
+
+def test_escape_and_a_backslash_in_one_write_leave_the_search_and_open_the_filter(write,
+                                                                                   tmp_path):
+    """A terminal sends ESC then `\\` typed fast as one read, which Textual alone reads as
+    `\\` (the escape lost): it must leave the search, then open the text filter."""
+    proc, master = start_on_pty(tmp_path, str(write(TWO)))
+    try:
+        read_until(master, b"2 running")
+        os.write(master, b"/abc")
+        read_until(master, b"abc")
+        os.write(master, b"\x1b\\ready\r")
+        read_until(master, b"only 'ready'")
+    finally:
+        stop_pty(proc, master)

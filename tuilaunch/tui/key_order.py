@@ -17,7 +17,7 @@ from __future__ import annotations
 import asyncio
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from textual import events
@@ -44,6 +44,30 @@ def after_escape(event: events.Key) -> events.Key | None:
     if event.key.startswith("alt+") and len(character) == 1 and character.isprintable():
         return events.Key(_character_to_key(character), character)
     return None
+
+
+def keep_escape_before_punctuation() -> None:
+    """Textual's terminal parser reads ESC and a letter in one read as `alt+LETTER`, but
+    ESC and `/`, `:`, `\\` ... as the character alone: the escape is lost, and `esc /`
+    typed fast in the search field types `/` into it. Here those come as `alt+slash` ...
+    too, which the app splits into the two keys (after_escape)."""
+    from textual._xterm_parser import XTermParser
+
+    original = XTermParser._sequence_to_key_events
+    if getattr(original, "keeps_escape", False):
+        return
+
+    def sequence_to_key_events(self: XTermParser, sequence: str, alt: bool = False)\
+            -> Iterable[events.Key]:
+        for key in original(self, sequence, alt):
+            if alt and len(sequence) == 1 and key.character == sequence and \
+                    sequence.isprintable() and not key.key.startswith("alt+"):
+                yield events.Key(f"alt+{key.key}", key.character)
+            else:
+                yield key
+
+    sequence_to_key_events.keeps_escape = True  # type: ignore[attr-defined]
+    XTermParser._sequence_to_key_events = sequence_to_key_events  # type: ignore[method-assign]
 
 
 STUCK_AFTER = 3.0
@@ -102,6 +126,7 @@ class KeyOrder(App[int]):
 
     def __init__(self, *args: Any, **options: Any) -> None:
         super().__init__(*args, **options)
+        keep_escape_before_punctuation()
         self._key_in_flight: events.Key | events.Paste | None = None
         """The key on its trip, or the one released to go next (then not yet tracked)."""
         self._key_started = 0.0
