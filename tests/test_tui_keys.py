@@ -350,3 +350,18 @@ def test_escape_and_a_backslash_in_one_write_leave_the_search_and_open_the_filte
         read_until(master, b"only 'ready'")
     finally:
         stop_pty(proc, master)
+
+
+async def test_the_footer_does_not_offer_keys_a_field_types(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(app, pilot)
+        offered = {b.binding.description for b in app.screen.active_bindings.values()
+                   if b.binding.show}
+        assert {"Search", "Filter"} <= offered  # in the tree: / and \ are commands
+        burst(app, "slash")
+        await until(pilot, lambda: app.focused is field(app, "search-input"))
+        offered = {b.binding.description for b in app.screen.active_bindings.values()
+                   if b.binding.show}
+        assert not {"Search", "Filter", "Level", "Quit"} & offered  # typed into the field
+        await shutdown(app)

@@ -91,13 +91,18 @@ class NodeKeyboard(SessionLink):
             release()
             self.notify(str(exc), severity="error")
             return
-        self.typing_to = process
-        self.typed_line = ""
-        line = TypingLine(self._typed, id="typing-line")
-        self._typing_line = line
-        await self.query_one("#nodes-tab").mount(line, before="#nodes-split")
-        self.screen.set_focus(line)
-        release()
+        except BaseException:
+            release()
+            raise
+        try:
+            self.typing_to = process
+            self.typed_line = ""
+            line = TypingLine(self._typed, id="typing-line")
+            self._typing_line = line
+            await self.query_one("#nodes-tab").mount(line, before="#nodes-split")
+            self.screen.set_focus(line)
+        finally:
+            release()  # the keys typed after `i` go to the line, or on as before
         self._show_typing()
         self.refresh_bindings()
 

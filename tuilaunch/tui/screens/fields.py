@@ -12,9 +12,11 @@ has the focus now, instead of being typed into a field the user has left.
 
 from __future__ import annotations
 
+import unicodedata
 from typing import Any
 
 from textual import events
+from textual.keys import _get_unicode_name_from_key
 from textual.widgets import Checkbox, Input
 
 from ..key_order import reroute_key
@@ -32,6 +34,18 @@ class Field(Input):
         # a blinking cursor repaints the field twice a second for nothing: bytes over ssh
         self.cursor_blink = False
         self.leave_on_enter = leave_on_enter
+
+    def check_consume_key(self, key: str, character: str | None) -> bool:
+        """The footer leaves out the keys a field types: Textual knows no character for
+        `slash`, `backslash`... and offered `/ Search` while the search field had the keys."""
+        if character is None:
+            character = {"slash": "/", "backslash": "\\"}.get(key)
+        if character is None:
+            try:
+                character = unicodedata.lookup(_get_unicode_name_from_key(key))
+            except KeyError:
+                pass
+        return super().check_consume_key(key, character)
 
     async def _on_key(self, event: events.Key) -> None:
         if self.screen.focused is not self:
