@@ -159,8 +159,6 @@ class KeyOrder(App[int]):
             self._keys_waiting.append(event)
             self._watch_stuck()
             return
-        # no sender: a key sent by the app would stop at the screen, its trip ending
-        # there before the app's bindings ran
         following = after_escape(event)
         if following is not None:
             # ESC and the next key in one read (typed fast, over ssh, tmux) are parsed as
@@ -168,6 +166,8 @@ class KeyOrder(App[int]):
             self._keys_waiting.appendleft(following)
             event = events.Key("escape", "\x1b")
         tracked = TrackedKey(event.key, event.character, self._key_done)
+        # no sender: a key sent by the app would stop at the screen, its trip ending
+        # there before the app's bindings ran
         tracked._sender = None
         self._key_in_flight = tracked
         self._key_started = time.monotonic()
