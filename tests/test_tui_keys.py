@@ -365,3 +365,15 @@ async def test_the_footer_does_not_offer_keys_a_field_types(write, tmp_path):
                    if b.binding.show}
         assert not {"Search", "Filter", "Level", "Quit"} & offered  # typed into the field
         await shutdown(app)
+
+
+async def test_c_then_y_in_one_read_copies_the_command_line(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(app, pilot)
+        select(app, "lines-1")
+        await pilot.pause()
+        burst(app, "c", "y")  # the dialog comes after a round trip: y waits for it
+        await until(pilot, lambda: "line_reader.py" in app.clipboard)
+        await until(pilot, lambda: dialogs(app) == [])  # y copied and closed it
+        await shutdown(app)

@@ -231,21 +231,24 @@ class NodeKeyboard(SessionLink):
     def action_command_line(self) -> None:
         process = self._one_process()
         if process is not None:
-            self.run_worker(self._show_command(process), group="commands",
+            # `c y` typed together copies the command: the y waits for its dialog
+            release = hold_keys(self)
+            self.run_worker(self._show_command(process, release), group="commands",
                             exit_on_error=False)
 
-    async def _show_command(self, process: str) -> None:
+    async def _show_command(self, process: str, release: Callable[[], None]) -> None:
         try:
             command = await self.engine.run(command_of(self.supervisor, process))
+            line = command.get("command_line")
+            if not line:
+                self.notify(f"{process} has no command line (it could not be resolved)",
+                            severity="warning")
+                return
+            self.push_screen(CommandScreen(process, line))
         except LaunchError as exc:
             self.notify(str(exc), severity="error")
-            return
-        line = command.get("command_line")
-        if not line:
-            self.notify(f"{process} has no command line (it could not be resolved)",
-                        severity="warning")
-            return
-        self.push_screen(CommandScreen(process, line))
+        finally:
+            release()
 
 
 # --- the same calls on a session's server or an in-process supervisor --------------------
