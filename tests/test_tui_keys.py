@@ -4,17 +4,24 @@ after a key that opens a field reaches that field, in order, and never the tree'
 
 from __future__ import annotations
 
+import json
 import os
+import re
+import sys
+import time
 
+import pytest
 from textual import events
+from textual.widgets import Input
 
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.fields import Field
 
 from .test_interact import PROGRAMS
+from .test_sessions import runtime  # noqa: F401  (a fixture: a private session folder)
 from .test_tui import pids, until
-from .test_tui_long_sessions import read_until, start_on_pty, stop_pty
+from .test_tui_long_sessions import read_for, read_until, start_on_pty, stop_pty
 
 TWO = f"""
 import sys
@@ -102,6 +109,7 @@ async def test_keys_after_i_reach_the_node_in_order(write, tmp_path):
         burst(app, "ctrl+right_square_bracket", "q")  # the keys are back: q asks to quit
         await until(pilot, lambda: type(app.screen).__name__ == "QuitScreen")
         burst(app, "n")
+        await until(pilot, lambda: type(app.screen).__name__ != "QuitScreen")
         await shutdown(app)
 
 
@@ -133,10 +141,13 @@ async def test_a_value_typed_after_the_args_tab_key_in_one_read_goes_into_its_fi
     app = make_app(str(write(TWO)), {}, tmp_path / "log")
     async with app.run_test(size=(80, 24)) as pilot:
         before = await started(app, pilot)
-        # the Args tab, the robot's field, its value replaced: one read
-        burst(app, "2", "ctrl+u", *"r2sq")
+        # the Args tab, tab past Apply and Defaults into the robot's field, its value
+        # replaced: one read
+        burst(app, "2", "tab", "tab", "ctrl+u", *"r2sq")
         await until(pilot, lambda: field(app, "arg-robot").value == "r2sq")
         assert not app.quitting and pids(app) == before
+        await until(pilot, lambda: app.preview is not None
+                    and app.preview.arguments.get("robot") == "r2sq")
         await shutdown(app)
 
 
@@ -153,3 +164,216 @@ def test_a_search_written_to_a_real_terminal_in_one_write_stops_nothing(write, t
         read_until(master, b"2 processes still run")
     finally:
         stop_pty(proc, master)
+
+
+# --- focus and dialogs: the habits of a keyboard user -------------------------------------
+
+
+def dialogs(app: TuiLaunchApp) -> list[str]:
+    return [type(screen).__name__ for screen in app.screen_stack[1:]]
+
+
+async def test_ctrl_c_twice_asks_once_and_n_leaves_no_question(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        before = await started(app, pilot)
+        burst(app, "ctrl+c", "ctrl+c")
+        await until(pilot, lambda: dialogs(app) == ["QuitScreen"])
+        burst(app, "q", "ctrl+c")
+        await pilot.pause(0.3)
+        assert dialogs(app) == ["QuitScreen"]
+        burst(app, "n")
+        await until(pilot, lambda: dialogs(app) == [])
+        assert pids(app) == before
+        await shutdown(app)
+
+
+async def test_tab_keys_and_q_work_from_every_tab_and_the_focus_is_never_a_field(write,
+                                                                               tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(app, pilot)
+        for key, tab in (("2", "args"), ("3", "services"), ("4", "params"), ("5", "topics"),
+                         ("1", "nodes")):
+            burst(app, key, "q")  # the tab, then q at once: the quit question, nothing typed
+            await until(pilot, lambda: dialogs(app) == ["QuitScreen"])
+            assert app.tabs.active == tab
+            burst(app, "n")
+            await until(pilot, lambda: dialogs(app) == [])
+            assert not isinstance(app.focused, Input), (tab, app.focused)
+            assert app.focused is not None and app.focused.has_pseudo_class("focus")
+        assert field(app, "arg-robot").value == "r1"  # no q, no digit typed into it
+        # each tab's list has its filter one `/` away, and esc comes back to the list
+        burst(app, "3", "slash", *"srv")
+        await until(pilot, lambda: field(app, "svc-filter").value == "srv")
+        burst(app, "escape", "q")
+        await until(pilot, lambda: dialogs(app) == ["QuitScreen"])
+        burst(app, "n")
+        await until(pilot, lambda: dialogs(app) == [])
+        assert app.focused is app.query_one("#svc-list")
+        await shutdown(app)
+
+
+async def test_leaving_the_search_goes_back_where_it_was_typed(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(app, pilot)
+        tree = app.launch_tree
+        burst(app, "slash", *"abc", "escape")  # from the tree: back to the tree
+        await until(pilot, lambda: app.focused is tree)
+        burst(app, "backslash", *"ready", "enter")
+        await until(pilot, lambda: app.output_panel.view.text == "ready")
+        assert app.focused is tree
+        lines = app.output_panel.line_view
+        app.screen.set_focus(lines)
+        burst(app, "slash", *"x", "enter")  # from the pane: back to the pane
+        await until(pilot, lambda: app.output_panel.search == "x")
+        assert app.focused is lines
+        await shutdown(app)
+
+
+async def test_f1_and_the_palettes_keys_show_the_keys_and_esc_closes_them(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(app, pilot)
+        burst(app, "f1")
+        await until(pilot, lambda: dialogs(app) == ["HelpScreen"])
+        burst(app, "escape")
+        await until(pilot, lambda: dialogs(app) == [])
+        burst(app, "ctrl+p", *"keys")
+        await until(pilot, lambda: dialogs(app) == ["CommandPalette"]
+                    and app.screen.query_one("CommandInput").value == "keys")
+        await until(pilot, lambda: "Keys" in str(app.screen.query_one("CommandList")
+                                                  .get_option_at_index(0).prompt))
+        burst(app, "enter")
+        await until(pilot, lambda: dialogs(app) == ["HelpScreen"])
+        assert not app.query("HelpPanel")  # not Textual's side panel (30 of 80 columns)
+        burst(app, "escape")
+        await until(pilot, lambda: dialogs(app) == [])
+        await shutdown(app)
+
+
+def start_on_console(tmp_path, *argv: str, term: str = "linux"):
+    """The TUI on a pseudo-terminal that says it is a Linux console (or another TERM)."""
+    import fcntl
+    import pty
+    import struct
+    import subprocess
+    import termios
+
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 80, 0, 0))
+    env = {**os.environ, "ROS_LOG_DIR": str(tmp_path), "TERM": term}
+    proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", *argv], stdin=slave,
+                            stdout=slave, stderr=slave, env=env, start_new_session=True)
+    os.close(slave)
+    return proc, master
+
+
+CONSOLE = """
+from launch.actions import ExecuteProcess
+from simple_launch import SimpleLauncher
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.declare_arg('loud', True, description='talk')
+    sl.declare_arg('quiet', False, description='listen')
+    sl.add_action(ExecuteProcess(name='quiet', cmd=['sleep', '600']))
+    return sl.launch_description()
+"""
+
+
+@pytest.mark.usefixtures("runtime")
+def test_a_linux_console_gets_ascii_lines_and_a_checkbox_that_reads_its_value(write,
+                                                                               tmp_path):
+    proc, master = start_on_console(tmp_path, str(write(CONSOLE)))
+    try:
+        screen = read_until(master, b"1 running")
+        os.write(master, b"2")
+        screen += read_until(master, b"listen")
+        os.write(master, b"3")
+        screen += read_until(master, b"services")
+        os.write(master, b"q")
+        screen += read_until(master, b"Stop them all and quit?")
+        # the characters drawn, without the colour changes between them
+        text = re.sub(r"\x1b\[[0-9;]*m", "", screen.decode("utf-8", "replace"))
+        drawn = [glyph for glyph in "▎▊▔▁╸╺━├└│╭╮╰╯▐▌" if glyph in text]
+        assert not drawn, drawn
+        assert "[X]" in text and "[ ]" in text  # true and false read apart
+    finally:
+        stop_pty(proc, master)
+
+
+@pytest.mark.usefixtures("runtime")
+def test_quitting_a_session_offers_detach_and_d_leaves_it_running(write, tmp_path):
+    from .test_sessions import tl
+
+    proc, master = start_on_console(tmp_path, str(write(CONSOLE)), term="xterm-256color")
+    try:
+        read_until(master, b"1 running")
+        os.write(master, b"q")
+        read_until(master, b"Or detach")
+        os.write(master, b"d")
+        end = time.monotonic() + 60
+        while proc.poll() is None:  # the window closes (what it writes is read) ...
+            assert time.monotonic() < end, "the TUI did not leave after d"
+            read_for(master, 0.2)
+        (session,) = json.loads(tl("ls", "--json").stdout)  # ... and the launch runs on
+        name = session["name"]
+        assert '"running"' in tl("status", name, "--json").stdout
+        tl("stop", name)
+    finally:
+        stop_pty(proc, master)
+
+
+async def test_a_paste_right_after_slash_is_searched(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        before = await started(app, pilot)
+        burst(app, "slash")  # `/`, then a bracketed paste, in one read
+        app.post_message(events.Paste("start"))
+        burst(app, "enter")
+        await until(pilot, lambda: app.output_panel.search == "start")
+        assert pids(app) == before
+        await shutdown(app)
+
+
+def test_escape_and_a_backslash_in_one_write_leave_the_search_and_open_the_filter(write,
+                                                                                   tmp_path):
+    """A terminal sends ESC then `\\` typed fast as one read, which Textual alone reads as
+    `\\` (the escape lost): it must leave the search, then open the text filter."""
+    proc, master = start_on_pty(tmp_path, str(write(TWO)))
+    try:
+        read_until(master, b"2 running")
+        os.write(master, b"/abc")
+        read_until(master, b"abc")
+        os.write(master, b"\x1b\\ready\r")
+        read_until(master, b"only 'ready'")
+    finally:
+        stop_pty(proc, master)
+
+
+async def test_the_footer_does_not_offer_keys_a_field_types(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(app, pilot)
+        offered = {b.binding.description for b in app.screen.active_bindings.values()
+                   if b.binding.show}
+        assert {"Search", "Filter"} <= offered  # in the tree: / and \ are commands
+        burst(app, "slash")
+        await until(pilot, lambda: app.focused is field(app, "search-input"))
+        offered = {b.binding.description for b in app.screen.active_bindings.values()
+                   if b.binding.show}
+        assert not {"Search", "Filter", "Level", "Quit"} & offered  # typed into the field
+        await shutdown(app)
+
+
+async def test_c_then_y_in_one_read_copies_the_command_line(write, tmp_path):
+    app = make_app(str(write(TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await started(app, pilot)
+        select(app, "lines-1")
+        await pilot.pause()
+        burst(app, "c", "y")  # the dialog comes after a round trip: y waits for it
+        await until(pilot, lambda: "line_reader.py" in app.clipboard)
+        await until(pilot, lambda: dialogs(app) == [])  # y copied and closed it
+        await shutdown(app)

@@ -39,7 +39,7 @@ from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
-from .screens.tree_panel import LaunchTree
+from .screens.tree_panel import LaunchTree, ascii_terminal
 from .session_link import DRAIN_HZ, PANE_CHROME
 
 
@@ -93,6 +93,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         Binding("colon", "command_palette", "Commands", show=False,
                 tooltip="The command palette, as ctrl+p (as in vim, k9s)"),
         Binding("question_mark", "help", "Help"),
+        Binding("f1", "help", "Help", show=False, tooltip="The keys"),
+        Binding("slash", "find", "Filter", show=False,
+                tooltip="Services, Params: into the list's filter field"),
         Binding("q", "request_quit", "Quit"),
         Binding("ctrl+c", "request_quit", "Quit", show=False, priority=True),
     ]
@@ -132,6 +135,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         self.detail_bar = self.query_one("#detail", Static)
         self.topics_panel = self.query_one(TopicsPanel)
         self.launch_tree.reported = self.store.reported_names
+        if ascii_terminal():  # app.tcss draws ASCII lines for this class
+            self.add_class("-ascii")
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
         sys.setswitchinterval(0.001)
         self.engine = EngineThread()
@@ -206,7 +211,10 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
     # --- command palette ---------------------------------------------------------------------
 
     def get_system_commands(self, screen: Screen[Any]) -> Iterable[SystemCommand]:
-        yield from super().get_system_commands(screen)
+        for command in super().get_system_commands(screen):
+            if command.title != "Keys":  # Textual's side panel took 30 of 80 columns
+                yield command
+        yield SystemCommand("Keys", "All the keys (F1, ?); esc closes", self.action_help)
         yield SystemCommand("Stop selected", "Stop the selected node or group", self.action_stop)
         yield SystemCommand("Restart selected", "Restart the selected node or group",
                             self.action_restart)

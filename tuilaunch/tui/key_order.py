@@ -17,14 +17,58 @@ from __future__ import annotations
 import asyncio
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from textual import events
 from textual._context import active_message_pump
 from textual.app import App
+from textual.keys import _character_to_key
 from textual.message_pump import MessagePump
 from textual.widget import Widget
+
+# Textual reads ESC and a digit arriving in one read (esc then 3, typed fast over ssh or sent
+# by tmux) as the character macOS's option key gives: in a field that is "leave, then 3"
+ESC_DIGITS = {"¡": "1", "™": "2", "£": "3", "¢": "4", "∞": "5", "§": "6", "¶": "7",
+              "•": "8", "ª": "9", "º": "0"}
+
+
+def after_escape(event: events.Key) -> events.Key | None:
+    """The key typed right after escape, when both came in one read: ESC and a digit read
+    as the option-key character, ESC and another key as `alt+KEY` (no alt binding of ours
+    or of Input's uses a printable key)."""
+    character = event.character or ""
+    if character in ESC_DIGITS:
+        digit = ESC_DIGITS[character]
+        return events.Key(digit, digit)
+    if event.key.startswith("alt+") and len(character) == 1 and character.isprintable():
+        return events.Key(_character_to_key(character), character)
+    return None
+
+
+def keep_escape_before_punctuation() -> None:
+    """Textual's terminal parser reads ESC and a letter in one read as `alt+LETTER`, but
+    ESC and `/`, `:`, `\\` ... as the character alone: the escape is lost, and `esc /`
+    typed fast in the search field types `/` into it. Here those come as `alt+slash` ...
+    too, which the app splits into the two keys (after_escape)."""
+    from textual._xterm_parser import XTermParser
+
+    original = XTermParser._sequence_to_key_events
+    if getattr(original, "keeps_escape", False):
+        return
+
+    def sequence_to_key_events(self: XTermParser, sequence: str, alt: bool = False)\
+            -> Iterable[events.Key]:
+        for key in original(self, sequence, alt):
+            if alt and len(sequence) == 1 and key.character == sequence and \
+                    sequence.isprintable() and not key.key.startswith("alt+"):
+                yield events.Key(f"alt+{key.key}", key.character)
+            else:
+                yield key
+
+    sequence_to_key_events.keeps_escape = True  # type: ignore[attr-defined]
+    XTermParser._sequence_to_key_events = sequence_to_key_events  # type: ignore[method-assign]
+
 
 STUCK_AFTER = 3.0
 """Seconds after which a key whose trip never reported its end no longer holds the others
@@ -82,10 +126,11 @@ class KeyOrder(App[int]):
 
     def __init__(self, *args: Any, **options: Any) -> None:
         super().__init__(*args, **options)
-        self._key_in_flight: events.Key | None = None
+        keep_escape_before_punctuation()
+        self._key_in_flight: events.Key | events.Paste | None = None
         """The key on its trip, or the one released to go next (then not yet tracked)."""
         self._key_started = 0.0
-        self._keys_waiting: deque[events.Key] = deque()
+        self._keys_waiting: deque[events.Key | events.Paste] = deque()
         self._first_in_line = 0
         """Where a rerouted key goes in the waiting line: after those rerouted by the same
         key, before the keys read after it."""
@@ -94,8 +139,13 @@ class KeyOrder(App[int]):
         self._settling: asyncio.Task[None] | None = None
 
     async def on_event(self, event: events.Event) -> None:
-        if not isinstance(event, events.Key):
+        if not isinstance(event, (events.Key, events.Paste)):
             await super().on_event(event)
+            return
+        if not self.screen_stack:  # the app is ending: no widget left to take a key
+            return
+        if isinstance(event, events.Paste):
+            await self._paste(event)
             return
         if event.is_forwarded:  # back at the app: its bindings run here, then the trip ends
             try:
@@ -109,9 +159,15 @@ class KeyOrder(App[int]):
             self._keys_waiting.append(event)
             self._watch_stuck()
             return
+        following = after_escape(event)
+        if following is not None:
+            # ESC and the next key in one read (typed fast, over ssh, tmux) are parsed as
+            # one alt-key: they are the two keys the user typed, escape first
+            self._keys_waiting.appendleft(following)
+            event = events.Key("escape", "\x1b")
+        tracked = TrackedKey(event.key, event.character, self._key_done)
         # no sender: a key sent by the app would stop at the screen, its trip ending
         # there before the app's bindings ran
-        tracked = TrackedKey(event.key, event.character, self._key_done)
         tracked._sender = None
         self._key_in_flight = tracked
         self._key_started = time.monotonic()
@@ -121,6 +177,23 @@ class KeyOrder(App[int]):
         finally:
             if not tracked.is_forwarded:  # a priority binding took it, or nothing could
                 tracked.finish()
+
+    async def _paste(self, paste: events.Paste) -> None:
+        """Pasted text (one event, bracketed paste) takes its turn among the keys: `/` then
+        a paste searches for the pasted text. It goes to the widget focused when its turn
+        comes; its handling starts no trip of bindings to wait for."""
+        if paste.is_forwarded:
+            await super().on_event(paste)
+            return
+        if paste is not self._key_in_flight and (
+                self._key_in_flight is not None or self._keys_waiting or self._key_holds):
+            self._keys_waiting.append(paste)
+            self._watch_stuck()
+            return
+        self._key_in_flight = None
+        await super().on_event(paste)
+        if self._keys_waiting:
+            self._settling = asyncio.create_task(self._settle_then_next())
 
     def reroute_key(self, key: events.Key) -> None:
         """A key that reached a widget it was not meant for (a field the user has left,
@@ -187,7 +260,7 @@ class KeyOrder(App[int]):
             self._watch_stuck()
 
 
-def lost(key: events.Key) -> bool:
+def lost(key: events.Event) -> bool:
     """The key is in the queue of a widget that is gone, and will never come back."""
     holder = key.holder if isinstance(key, TrackedKey) else None
     if holder is None:

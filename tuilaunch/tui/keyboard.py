@@ -56,6 +56,8 @@ class NodeKeyboard(SessionLink):
             # every key is the node's while typing (ctrl+c, ctrl+p too): the footer offers
             # only ctrl+], not tuilaunch's stop or restart
             return False
+        if action == "find":  # `/` into a list's filter: the tabs whose panel has no `/`
+            return self.tabs.active in ("services", "params")
         if action in ("type_into", "run_under", "command_line"):
             if self.supervisor is None or self.tabs.active != "nodes":
                 return False
@@ -91,13 +93,18 @@ class NodeKeyboard(SessionLink):
             release()
             self.notify(str(exc), severity="error")
             return
-        self.typing_to = process
-        self.typed_line = ""
-        line = TypingLine(self._typed, id="typing-line")
-        self._typing_line = line
-        await self.query_one("#nodes-tab").mount(line, before="#nodes-split")
-        self.screen.set_focus(line)
-        release()
+        except BaseException:
+            release()
+            raise
+        try:
+            self.typing_to = process
+            self.typed_line = ""
+            line = TypingLine(self._typed, id="typing-line")
+            self._typing_line = line
+            await self.query_one("#nodes-tab").mount(line, before="#nodes-split")
+            self.screen.set_focus(line)
+        finally:
+            release()  # the keys typed after `i` go to the line, or on as before
         self._show_typing()
         self.refresh_bindings()
 
@@ -226,21 +233,24 @@ class NodeKeyboard(SessionLink):
     def action_command_line(self) -> None:
         process = self._one_process()
         if process is not None:
-            self.run_worker(self._show_command(process), group="commands",
+            # `c y` typed together copies the command: the y waits for its dialog
+            release = hold_keys(self)
+            self.run_worker(self._show_command(process, release), group="commands",
                             exit_on_error=False)
 
-    async def _show_command(self, process: str) -> None:
+    async def _show_command(self, process: str, release: Callable[[], None]) -> None:
         try:
             command = await self.engine.run(command_of(self.supervisor, process))
+            line = command.get("command_line")
+            if not line:
+                self.notify(f"{process} has no command line (it could not be resolved)",
+                            severity="warning")
+                return
+            self.push_screen(CommandScreen(process, line))
         except LaunchError as exc:
             self.notify(str(exc), severity="error")
-            return
-        line = command.get("command_line")
-        if not line:
-            self.notify(f"{process} has no command line (it could not be resolved)",
-                        severity="warning")
-            return
-        self.push_screen(CommandScreen(process, line))
+        finally:
+            release()
 
 
 # --- the same calls on a session's server or an in-process supervisor --------------------

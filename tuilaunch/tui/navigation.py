@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 from textual import events, on
-from textual.screen import ModalScreen
 from textual.widget import Widget
-from textual.widgets import Button, OptionList, TabbedContent, TabPane
+from textual.widgets import Button, Input, OptionList, TabbedContent, TabPane
 
-from .key_order import reroute_key
 from .screens.dialogs import HelpScreen
-from .screens.fields import Field, after_escape
+from .screens.fields import Field
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .session_link import SessionLink
+
+OPENED_BY_KEY = frozenset({"search-input", "filter-input", "tpc-filter", "svc-filter",
+                           "prm-filter"})
+"""Fields a key opens (`/`, `\\`): leaving one goes back to where that key was typed."""
 
 
 class Navigation(SessionLink):
@@ -25,32 +27,43 @@ class Navigation(SessionLink):
             self._enter_tab(tab)
         self.refresh_bindings()
 
-    def on_key(self, event: events.Key) -> None:
-        """ESC and a key read together arrive as one key (see fields.py): outside a field,
-        where escape leaves nothing, that is the key alone. Not in a dialog: there escape
-        answers no, and the key must not answer again."""
-        following = after_escape(event)
-        if following is None or isinstance(self.screen, ModalScreen):
-            return
-        event.stop()
-        if following.key in ("1", "2", "3", "4", "5"):
-            self.action_tab(("nodes", "args", "services", "params", "topics")[
-                int(following.key) - 1])
-        else:
-            reroute_key(self, following)
+    FILTERS = {"services": "#svc-filter", "params": "#prm-filter"}
+    """The tabs whose list has a filter field that `/` opens (Nodes and Topics bind `/`)."""
+
+    _left_for_field: Widget | None = None
+    """The widget the user was on before going into a text field: escape and enter in a
+    search or filter field go back there."""
+
+    def on_descendant_focus(self, event: events.DescendantFocus) -> None:
+        if not isinstance(event.widget, Input):
+            self._left_for_field = event.widget
+
+    def action_find(self) -> None:
+        """`/` in the Services and Params tabs: into the list's filter field."""
+        selector = self.FILTERS.get(self.tabs.active)
+        if selector is not None:
+            self.screen.set_focus(self.query_one(selector, Field))
 
     def action_leave_field(self) -> None:
-        """Escape in a text field: out of it, to where the tab's work starts, so the next
-        keys (1-4, s, q, ...) are commands again. The focus moves at once, not on the next
-        tick, so keys typed right after escape go to the new place."""
+        """Escape in a text field: out of it, back where the user was before it (the tree
+        after `/` or `\\`), else to where the tab's work starts, so the next keys (1-5, s,
+        q, ...) are commands again. The focus moves at once, not on the next tick, so keys
+        typed right after escape go to the new place."""
         focused = self.focused
         if isinstance(focused, Field) and focused.id in ("search-input", "filter-input"):
             self.output_panel.action_clear_search()
-            self.screen.set_focus(self.output_panel.line_view)
+        before = self._left_for_field
+        if isinstance(focused, Field) and focused.id in OPENED_BY_KEY and \
+                isinstance(before, Widget) and before.is_attached and before.focusable \
+                and before.screen is self.screen and pane_of(before) == pane_of(focused):
+            self.screen.set_focus(before)
             return
         self.screen.set_focus(self._home(self.tabs.active))
 
     def _home(self, pane: str) -> Widget:
+        """Where a tab's work starts: never a text field, so that the tab keys, q and the
+        tab's own keys work as soon as the tab is shown (a field is entered with tab, `/`
+        or a click)."""
         if pane == "args":
             return self.query_one("#apply", Button)
         if pane == "services":
@@ -73,27 +86,19 @@ class Navigation(SessionLink):
     def _enter_tab(self, pane: str) -> None:
         """Keyboard first: each tab puts the cursor where work starts, at once, so keys
         typed right after the tab key go there; again once the tab is laid out."""
-        target: Widget | None = None
-        if pane == "nodes":
-            target = self.launch_tree
-        elif pane == "args":
-            editors = self.args_panel.query(".arg-editor")
-            target = editors.first() if editors else self.query_one("#apply", Button)
-        elif pane == "services":
+        if pane == "services":
             self.query_one(ServicesPanel).refresh_services()
-            target = self.query_one("#svc-filter")
         elif pane == "params":
             self.query_one(ParamsPanel).refresh_nodes()
-            target = self.query_one("#prm-filter")
-        elif pane == "topics":
-            target = self.query_one("#tpc-table")
-        if target is not None:
-            self.screen.set_focus(target)
-            self.call_after_refresh(self._refocus, pane, target)
+        target = self._home(pane)
+        self.screen.set_focus(target)
+        self.call_after_refresh(self._refocus, pane, target)
 
     def _refocus(self, pane: str, target: Widget) -> None:
         if not self.is_running or not self.screen_stack:
             return
+        if self.screen is not target.screen:
+            return  # a dialog came up meanwhile (q right after the tab key): it keeps the keys
         if self.tabs.active == pane and self.focused is not target and not (
                 isinstance(self.focused, Widget) and pane_of(self.focused) == pane):
             self.screen.set_focus(target)

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from typing import Any
 
 from ..client.remote_supervisor import RemoteSupervisor
 from .screens.dialogs import ConfirmScreen, QuitScreen
@@ -23,23 +25,36 @@ class Quitting(SessionLink):
             self.notify("no link is down", severity="information")
 
     def action_request_quit(self) -> None:
+        if self._asking_to_quit():
+            return  # q or ctrl+c again while the question is shown: one question
         running = self.running()
         if self.session_host is not None and not self.quitting:
             self._quit_remote(running)
             return
         if self.quitting:
-            if running and not isinstance(self.screen, ConfirmScreen):
+            if running:
                 self._offer_kill(running)
             return
         if not running:
             self.stop_all_and_exit()
             return
 
-        def answered(stop: bool | None) -> None:
-            if stop:
+        def answered(answer: str | None) -> None:
+            if answer == "stop":
                 self.stop_all_and_exit()
+            elif answer == "detach":
+                self.action_detach()
 
-        self.push_screen(QuitScreen(running), answered)
+        # a session runs on without this window: detaching is one of the answers
+        self._ask_quit(QuitScreen(running, detach=self.session_name is not None), answered)
+
+    def _asking_to_quit(self) -> bool:
+        return any(getattr(screen, "quit_question", False) for screen in self.screen_stack)
+
+    def _ask_quit(self, screen: ConfirmScreen | QuitScreen, answered: Callable[[Any], None])\
+            -> None:
+        screen.quit_question = True
+        self.push_screen(screen, answered)
 
     def _quit_remote(self, running: list[str]) -> None:
         """On another machine's session, quitting leaves it running unless the operator
@@ -58,7 +73,7 @@ class Quitting(SessionLink):
                 self.action_detach()
 
         names = ", ".join(running[:8]) + (" ..." if len(running) > 8 else "")
-        self.push_screen(ConfirmScreen(
+        self._ask_quit(ConfirmScreen(
             f"{len(running)} processes run on {self.session_host}: {names}\n"
             "Stop them all, or leave them running there and detach?",
             "Stop and quit (y)", "Detach (n)"), answered)
@@ -72,7 +87,7 @@ class Quitting(SessionLink):
             if yes and self.supervisor is not None:
                 self.kill_all()
 
-        self.push_screen(ConfirmScreen(
+        self._ask_quit(ConfirmScreen(
             f"Still stopping: {', '.join(running[:6])} ({self.signal_stage()}).\n"
             "Kill them now with SIGKILL?", "Kill now (y)", "Keep waiting (n)"), answered)
 

@@ -15,7 +15,7 @@ from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
 from ...engine.describe.substitutions import text_to_bool
 from ...engine.plan.model import ArgumentInfo, Plan
-from .fields import Field
+from .fields import Field, Toggle
 
 # ROS 2 name rules (rcl's validate_namespace / validate_node_name)
 _NAMESPACE = re.compile(r"^(/|(/[A-Za-z_][A-Za-z0-9_]*)+)$")
@@ -96,7 +96,8 @@ class ArgsPanel(Vertical):
         with Horizontal(id="args-actions"):
             yield Button("Apply (F5)", id="apply", variant="primary", compact=True)
             yield Button("Defaults", id="defaults", compact=True)
-        with VerticalScroll(id="args-form"):
+        # not a tab stop of its own: tab goes from the buttons straight to the values
+        with VerticalScroll(id="args-form", can_focus=False):
             for arg in self.arguments:
                 with Vertical(classes="arg-row", id=f"row-{arg.name}"):
                     with Horizontal(classes="arg-line"):
@@ -124,7 +125,7 @@ class ArgsPanel(Vertical):
                           classes="arg-editor", compact=True)
         if arg.type == "bool" and text_to_bool(value) is not None:
             state = bool(text_to_bool(value))
-            return Checkbox("true" if state else "false", value=state, id=name,
+            return Toggle("true" if state else "false", value=state, id=name,
                             classes="arg-editor", compact=True)
         # typed as text and checked as a whole by the preview: Input's number types drop
         # a refused character silently (1.5 in an int field became 15)

@@ -6,7 +6,7 @@ from rich.text import Text
 from textual import events, on
 from textual.app import ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, Vertical
+from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.screen import ModalScreen
 from textual.widgets import Button, Input, OptionList, Static
 from textual.widgets.option_list import Option
@@ -14,37 +14,50 @@ from textual.widgets.option_list import Option
 from .fields import Field
 
 KEYS = """\
-[b]Anywhere[/b] (in a text field, esc leaves it first)
-  1-5     tabs: Nodes Args Services Params Topics   ? help  ctrl+p palette
-  q ctrl+c  quit (asks while nodes run; again while stopping: kill now)
-  F5      apply edited arguments   d  detach (tuilaunch attach: back)
-[b]Nodes[/b] (arrows: tree; tab: into the pane)
-  s r t   stop / restart / start   a      all nodes' output
-  / n N   search, next / previous  l \\    level / text filter
-  G end   follow the newest line   z T f  wrap / time / as printed
-  < >     narrower / wider tree    w y    save / copy the pane (OSC 52)
-  o       the node's topics        L      the node's log level
-  i       type into it (ctrl+] ends)  g    restart it under a tool (gdb...)
-  c       its exact command line (y: copy)
-  rows: CPU% and memory (wide tree), ↑mem memory keeps growing,
-        ✗qos in a publisher/subscriber pair whose QoS cannot talk
-[b]Topics[/b] (rates for the rows on screen)
-  /  filter   e  echo (again: stop)   x  all topics (after o)   u  update
+[b]Anywhere[/b] (a text field: esc leaves it first)
+  1-5  tabs: Nodes Args Services Params Topics    ? F1  these keys
+  q ctrl+c  quit (asks while nodes run; d there: detach; again: kill now)
+  F5   apply edited arguments   d  detach   ctrl+p :  command palette
+  tab shift+tab  next / previous widget, into the fields; esc: back
+[b]Nodes[/b]
+  s r t  stop / restart / start   a      all nodes' output
+  / n N  search, next / previous  l \\    level / text filter
+  G end  follow the newest line   z T f  wrap / time / as printed
+  < >    narrower / wider tree    w y    save / copy the pane (OSC 52)
+  o      the node's topics        L      the node's log level
+  i      type into it (ctrl+] ends)   g  restart it under a tool (gdb...)
+  c      its exact command line (y: copy)
+  rows: CPU% and memory (wide tree); UPmem memory keeps growing;
+        XQOS: a publisher/subscriber pair whose QoS cannot talk
+[b]Topics[/b]  / filter  e echo (again: stop)  x all topics (after o)  u update
+[b]Services, Params[/b]  / filter the list; enter: call, set
 [b]Params[/b]  w o  write the node's parameters to a file / load a file
-[b]Args, Services, Params[/b]  tab shift+tab between fields; enter: call, set
 """
 
 
+def keys_text(ascii_only: bool) -> str:
+    """The keys, with the marks the tree draws on this terminal."""
+    up, cross = ("^", "x") if ascii_only else ("↑", "✗")
+    return KEYS.replace("UPmem", f"{up}mem").replace("XQOS", f"{cross}qos")
+
+
 class HelpScreen(ModalScreen[None]):
+    """The keys, over the screen; scrolls when the terminal is short."""
+
     DEFAULT_CSS = """
     HelpScreen { align: center middle; }
-    HelpScreen > Static { width: auto; max-width: 100%; height: auto; padding: 1 2;
-                          border: round $primary; background: $surface; }
+    HelpScreen > VerticalScroll { width: auto; max-width: 100%; height: auto;
+                                  max-height: 100%; padding: 0 1;
+                                  border: round $primary; background: $surface; }
+    HelpScreen Static { width: auto; }
     """
-    BINDINGS = [Binding("escape,q,question_mark", "dismiss", "Close")]
+    BINDINGS = [Binding("escape,q,question_mark,f1", "dismiss", "Close")]
 
     def compose(self) -> ComposeResult:
-        yield Static(KEYS)
+        from .tree_panel import ascii_terminal
+
+        with VerticalScroll():
+            yield Static(keys_text(ascii_terminal()))
 
 
 class ConfirmScreen(ModalScreen[bool]):
@@ -57,6 +70,9 @@ class ConfirmScreen(ModalScreen[bool]):
     ConfirmScreen Horizontal { height: 3; }
     """
     BINDINGS = [Binding("y", "answer(True)", "Yes"), Binding("n,escape", "answer(False)", "No")]
+
+    quit_question: bool = False
+    """It asks about quitting: q or ctrl+c again does not ask a second time."""
 
     def __init__(self, question: str, yes: str = "Yes (y)", no: str = "No (n)") -> None:
         super().__init__()
@@ -79,14 +95,51 @@ class ConfirmScreen(ModalScreen[bool]):
         self.dismiss(event.button.id == "yes")
 
 
-class QuitScreen(ConfirmScreen):
-    """Quitting while processes run: stop them all and quit, or keep running."""
+class QuitScreen(ModalScreen[str]):
+    """Quit while processes run: stop them all ("stop"), keep running ("keep"), or, for a
+    session, leave it running without this window ("detach")."""
 
-    def __init__(self, running: list[str]) -> None:
-        names = ", ".join(running[:8]) + (" ..." if len(running) > 8 else "")
-        super().__init__(f"{len(running)} processes still run: {names}\nStop them all and quit?",
-                         yes="Stop and quit (y)", no="Keep running (n)")
+    DEFAULT_CSS = """
+    QuitScreen { align: center middle; }
+    QuitScreen > Vertical { width: 64; max-width: 100%; height: auto; padding: 1 2;
+                            border: round $warning; background: $surface; }
+    QuitScreen Horizontal { height: auto; }
+    """
+    BINDINGS = [Binding("y", "answer('stop')", "Stop and quit"),
+                Binding("n,escape", "answer('keep')", "Keep running"),
+                Binding("d", "answer('detach')", "Detach", show=False)]
+
+    quit_question = True
+
+    def __init__(self, running: list[str], detach: bool = False) -> None:
+        super().__init__()
         self.running = running
+        self.detach = detach
+
+    def compose(self) -> ComposeResult:
+        names = ", ".join(self.running[:8]) + (" ..." if len(self.running) > 8 else "")
+        question = f"{len(self.running)} processes still run: {names}\nStop them all and quit?"
+        if self.detach:
+            question += "\nOr detach: they run on, tuilaunch attach comes back to them."
+        with Vertical():
+            yield Static(Text(question))
+            with Horizontal():
+                yield Button("Stop and quit (y)", id="stop", variant="error")
+                if self.detach:
+                    yield Button("Detach (d)", id="detach", variant="primary")
+                yield Button("Keep running (n)", id="keep")
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "answer" and parameters == ("detach",) and not self.detach:
+            return False
+        return True
+
+    def action_answer(self, answer: str) -> None:
+        self.dismiss(answer)
+
+    @on(Button.Pressed)
+    def _pressed(self, event: Button.Pressed) -> None:
+        self.dismiss(event.button.id or "keep")
 
 
 class ChoiceScreen(ModalScreen[str | None]):

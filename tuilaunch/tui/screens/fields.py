@@ -4,38 +4,22 @@ Over ssh several keys often arrive in one read. Textual's Input inserts printabl
 they reach it, but its editing keys (backspace, ctrl+u, ...) are bindings that run only after
 the key has bubbled up to the app, so `ctrl+u 3` in one read could insert `3` first and then
 erase it. Here the field runs its own bindings as the key arrives, before the next key.
-Escape leaves the field at once (and enter, for a field that closes on submit); keys that
+Escape leaves the field at once (and enter, for a field that closes on submit; escape and a
+key read together are split into the two by the app, key_order.py); keys that
 reached the field after it lost the focus go back to the app, in order, for the widget that
 has the focus now, instead of being typed into a field the user has left.
 """
 
 from __future__ import annotations
 
+import unicodedata
 from typing import Any
 
 from textual import events
-from textual.keys import _character_to_key
-from textual.widgets import Input
+from textual.keys import _get_unicode_name_from_key
+from textual.widgets import Checkbox, Input
 
 from ..key_order import reroute_key
-
-# Textual reads ESC and a digit arriving in one read (esc then 3, typed fast over ssh or sent
-# by tmux) as the character macOS's option key gives: in a field that is "leave, then 3"
-ESC_DIGITS = {"¡": "1", "™": "2", "£": "3", "¢": "4", "∞": "5", "§": "6", "¶": "7",
-              "•": "8", "ª": "9", "º": "0"}
-
-
-def after_escape(event: events.Key) -> events.Key | None:
-    """The key typed right after escape, when both came in one read: ESC and a digit read
-    as the option-key character, ESC and another key as `alt+KEY` (no alt binding of ours
-    or of Input's uses a printable key)."""
-    character = event.character or ""
-    if character in ESC_DIGITS:
-        digit = ESC_DIGITS[character]
-        return events.Key(digit, digit)
-    if event.key.startswith("alt+") and len(character) == 1 and character.isprintable():
-        return events.Key(_character_to_key(character), character)
-    return None
 
 
 class Field(Input):
@@ -51,6 +35,18 @@ class Field(Input):
         self.cursor_blink = False
         self.leave_on_enter = leave_on_enter
 
+    def check_consume_key(self, key: str, character: str | None) -> bool:
+        """The footer leaves out the keys a field types: Textual knows no character for
+        `slash`, `backslash`... and offered `/ Search` while the search field had the keys."""
+        if character is None:
+            character = {"slash": "/", "backslash": "\\"}.get(key)
+        if character is None:
+            try:
+                character = unicodedata.lookup(_get_unicode_name_from_key(key))
+            except KeyError:
+                pass
+        return super().check_consume_key(key, character)
+
     async def _on_key(self, event: events.Key) -> None:
         if self.screen.focused is not self:
             event.stop()
@@ -63,13 +59,10 @@ class Field(Input):
             await self.action_submit()
             await self.run_action("app.leave_field")
             return
-        following = after_escape(event)
-        if event.key == "escape" or following is not None:
+        if event.key == "escape":
             event.stop()
             event.prevent_default()
             await self.run_action("app.leave_field")
-            if following is not None:
-                reroute_key(self.app, following)
             return
         if event.is_printable:
             await super()._on_key(event)
@@ -82,3 +75,20 @@ class Field(Input):
             await self.run_action(binding.action)
             return
         await super()._on_key(event)
+
+
+class Toggle(Checkbox):
+    """A checkbox that reads true or false without colour: `X` or blank in its box, and
+    the box `[ ]` on a console whose font has no half blocks (TERM=linux)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        from .tree_panel import ascii_terminal
+
+        super().__init__(*args, **kwargs)
+        if ascii_terminal():
+            self.BUTTON_LEFT, self.BUTTON_RIGHT = "[", "]"
+        self.BUTTON_INNER = "X" if self.value else " "
+
+    def watch_value(self) -> None:
+        self.BUTTON_INNER = "X" if self.value else " "
+        super().watch_value()

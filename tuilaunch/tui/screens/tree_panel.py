@@ -74,6 +74,7 @@ class LaunchTree(Tree[RowData]):
         if self.ascii:
             self.ICON_NODE = "+ "
             self.ICON_NODE_EXPANDED = "- "
+            self.LINES = {style: ("  ", "| ", "`-", "|-") for style in self.LINES}
         self.rows: dict[str, TreeNode[RowData]] = {}
         self.plan: Plan | None = None
         self.details: dict[str, str] = {}
