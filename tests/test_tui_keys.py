@@ -159,7 +159,7 @@ def test_a_search_written_to_a_real_terminal_in_one_write_stops_nothing(write, t
         os.write(master, b"\x1b[B\x1b[B\x1b[B")  # down to quiet-2 (root, all nodes, lines)
         read_until(master, b"quiet-2  ")
         os.write(master, b"/set\r")
-        read_until(master, b"/set no match")
+        read_until(master, b"/set no line matches")
         os.write(master, b"q")  # the question counts what still runs: both
         read_until(master, b"2 processes still run")
     finally:
