@@ -27,7 +27,7 @@ from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.plan.resolve import remove_default_params_dir
 from ..engine.plan.session import Preview, Session
-from ..engine.ros.bridge import RosBridge
+from ..engine.ros.bridge import RosBridge, in_plan
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.machines.remote import RemoteLink
@@ -295,6 +295,8 @@ class SessionLink(App[int]):
             elif event.kind == "relaunched" and self.supervisor is not None:
                 # any client's relaunch: the session already holds the new plan
                 tree.show_plan(self.session.plan, self.supervisor.states)
+                if self._bridge is not None:  # the Services and Params tabs' clients
+                    self._bridge.drop_clients(in_plan(self.session.plan))
                 self.describe_waiting()
                 if event.lines != self.own_relaunch:
                     self._relaunched_elsewhere(event.lines)
