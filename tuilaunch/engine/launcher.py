@@ -18,6 +18,7 @@ from .ros.actions import RosActions
 from .ros.composition import ComponentLoader
 from .ros.inspector import Inspector
 from .ros.lifecycle import LifecycleTracker
+from .run.events import Event
 from .run.machines.machines_share import placement_plugin
 from .run.supervisor.supervisor import Supervisor
 
@@ -38,6 +39,16 @@ class RosSupervisor(Supervisor):
         # the bridge last: its close (the ROS node) comes after the others let go of it
         for plugin in (self.lifecycle, self.components, self.inspector, self.ros):
             self.add_plugin(plugin)
+        self.subscribe(self._forget_moved_services)
+
+    def _forget_moved_services(self, event: Event) -> None:
+        """After a relaunch, the bridge's clients of services no node of the new plan
+        offers are destroyed: they would keep a moved namespace's services on the graph."""
+        bridge = self.ros.made
+        if event.kind == "relaunched" and bridge is not None:
+            from .ros.bridge import in_plan
+
+            bridge.drop_clients(in_plan(self.plan))
 
     def bridge(self) -> Any:
         """The rclpy bridge the launch's ROS actions use (made on first use)."""

@@ -25,8 +25,9 @@ from textual.widgets import Static, TabbedContent
 
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
+from ..engine.plan.resolve import remove_default_params_dir
 from ..engine.plan.session import Preview, Session
-from ..engine.ros.bridge import RosBridge
+from ..engine.ros.bridge import RosBridge, in_plan
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.machines.remote import RemoteLink
@@ -170,7 +171,7 @@ class SessionLink(App[int]):
         if self.terminal_lost:
             # Textual's teardown writes to the terminal and blocks forever on a hung-up one;
             # every process is stopped and every log closed, so leave now
-            os._exit(self.exit_status)
+            leave_now(self.exit_status)
         self.exit(self.exit_status)
 
     def start_launch(self) -> None:
@@ -199,7 +200,7 @@ class SessionLink(App[int]):
             server.terminate()
             if self.terminal_lost:  # the UI is stuck on the dead terminal (abandon_start)
                 server.wait()
-                os._exit(0)
+                leave_now(0)
             return
         self.post_message(ServerStarted(None))
 
@@ -224,7 +225,7 @@ class SessionLink(App[int]):
         if self.terminal_lost and not starting:
             # Textual's teardown blocks on a dead terminal (as in run_supervisor), and
             # nothing is left to stop; else the starting thread leaves once it has
-            os._exit(0)
+            leave_now(0)
 
     def wire_supervisor(self) -> None:
         """Connects the panels to the supervisor (the app's on_mount)."""
@@ -294,6 +295,8 @@ class SessionLink(App[int]):
             elif event.kind == "relaunched" and self.supervisor is not None:
                 # any client's relaunch: the session already holds the new plan
                 tree.show_plan(self.session.plan, self.supervisor.states)
+                if self._bridge is not None:  # the Services and Params tabs' clients
+                    self._bridge.drop_clients(in_plan(self.session.plan))
                 self.describe_waiting()
                 if event.lines != self.own_relaunch:
                     self._relaunched_elsewhere(event.lines)
@@ -471,6 +474,13 @@ class SessionLink(App[int]):
             elif proc.error:
                 tree.details[proc.id] = f"({proc.error})"
             tree.refresh_row(proc.id)
+
+
+def leave_now(status: int) -> None:
+    """Ends the process at once (Textual's teardown would block on a hung-up terminal),
+    leaving behind nothing atexit would have removed: the plan's parameter folder."""
+    remove_default_params_dir()
+    os._exit(status)
 
 
 def _detail(event: Event) -> str:

@@ -520,6 +520,15 @@ def default_params_dir() -> Path:
     return _params_dir
 
 
+def remove_default_params_dir() -> None:
+    """What the atexit hook does, for a process that leaves with os._exit (a TUI whose
+    terminal hung up cannot run Textual's teardown), so no folder is left in $TMPDIR."""
+    global _params_dir
+    if _params_dir is not None:
+        shutil.rmtree(_params_dir, True)
+        _params_dir = None
+
+
 def declared_arguments(loaded: LoadedFile, arguments: Mapping[str, str] | None = None)\
         -> tuple[list[ArgumentInfo], LaunchError | None]:
     """Every argument the file and its includes declare, for `--show-args`, found without

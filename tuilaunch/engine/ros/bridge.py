@@ -10,10 +10,14 @@ from __future__ import annotations
 import asyncio
 import os
 import threading
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from .calls import ParameterInfo, RosError, SetResult
 from .messages import MessageError, fill, import_type, to_plain
+
+if TYPE_CHECKING:
+    from ..plan.model import Plan
 
 PARAMETER_TYPES = {0: "not set", 1: "bool", 2: "int", 3: "float", 4: "str", 5: "bytes",
                    6: "bool[]", 7: "int[]", 8: "float[]", 9: "str[]"}
@@ -168,6 +172,16 @@ class RosBridge:
                 client = self._clients[key] = self.node.create_client(service_class, name)
             return client
 
+    def drop_clients(self, keep: Callable[[str], bool]) -> list[str]:
+        """Destroys the kept clients of the services `keep` refuses; their names. A client
+        is an endpoint of its service: kept after a relaunch moved its node (robot:=r1 ->
+        r2), it would keep /r1/talker/get_parameters listed on the graph for good."""
+        with self._clients_lock:
+            stale = [key for key in self._clients if not keep(key[0])]
+            for key in stale:
+                self.node.destroy_client(self._clients.pop(key))
+        return sorted({name for name, _ in stale})
+
     async def call_service(self, name: str, request: dict[str, Any], timeout: float = 5.0,
                            wait: float | None = 0.0, service_type: str | None = None)\
             -> tuple[dict[str, Any], dict[str, Any]]:
@@ -294,6 +308,21 @@ class RosBridge:
         from .loggers import get_levels
 
         return await get_levels(self, node, timeout=timeout)
+
+def in_plan(plan: Plan) -> Callable[[str], bool]:
+    """Whether a service may belong to a node of `plan`: under one of its nodes' full
+    names or namespaces (a node named in its code is known by its namespace only; the root
+    namespace alone keeps nothing, or every client would stay)."""
+    roots: set[str] = set()
+    for proc in plan.processes:
+        if not proc.enabled:
+            continue
+        for name in (proc.full_name, proc.namespace if proc.kind != "process" else None,
+                     *(str(c.get("full_name") or "") for c in proc.components)):
+            if name and name.strip("/"):
+                roots.add(name.rstrip("/") + "/")
+    return lambda service: any(service.startswith(root) for root in roots)
+
 
 def _settle(done: asyncio.Future[Any], future: Any) -> None:
     if done.done():

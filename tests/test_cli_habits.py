@@ -1,0 +1,86 @@
+"""The command line's habits (issue 26, item 8) that no other test file holds, each tried as
+a user tries it: real launches, the command run as a shell runs it."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+from tuilaunch.client.link import open_link
+from tuilaunch.engine.ros.bridge import RosBridge
+from tuilaunch.engine.run.session import session_dir
+
+from .conftest import wait_for
+from .inspector_helpers import eventually, run
+from .test_sessions import Terminal, tl
+from .test_sessions import runtime as runtime  # the private session folder
+
+TALKER = """
+from launch import LaunchDescription
+from launch_ros.actions import Node
+def generate_launch_description():
+    return LaunchDescription([Node(package='tuilaunch_demos', executable='talker',
+                                   name='talker', parameters=[{'rate': 5.0}])])
+"""
+
+
+def test_a_foreground_tui_closed_by_sighup_leaves_no_parameter_folder(runtime, write,
+                                                                       tmp_path, monkeypatch):
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    monkeypatch.setenv("TMPDIR", str(tmp))
+    terminal = Terminal(str(write(TALKER)))
+    try:
+        terminal.read_until(b"1 running")
+        # the TUI's plan and the server's each wrote the node's parameters
+        assert len(list(tmp.glob("tuilaunch-*-params-*"))) == 2
+        os.kill(terminal.proc.pid, signal.SIGHUP)  # the ssh link or the tmux pane is gone
+        terminal.wait_exit()
+    finally:
+        terminal.close()
+    wait_for(lambda: not session_dir.live_sessions(), what="the launch stopped")
+    wait_for(lambda: not list(tmp.glob("tuilaunch-*")),
+             what=f"no folder left in $TMPDIR: {list(tmp.iterdir())}")
+
+
+ROBOT = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import Node
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('robot', default_value='r1'),
+        Node(package='tuilaunch_demos', executable='talker', name='talker',
+             namespace=LaunchConfiguration('robot'))])
+"""
+
+
+def dumped(session: str, node: str) -> None:
+    """`params --dump` answered, once the node is on the graph (running comes first)."""
+    wait_for(lambda: "rate:" in tl("params", session, node, "--dump", check=False).stdout,
+             what=f"{node}'s parameters")
+
+
+def test_a_relaunched_namespace_leaves_no_stale_service_on_the_graph(runtime, write):
+    name = tl(str(write(ROBOT)), "--detach").stdout.strip()
+    tl("wait", name, "talker-1", "running", "--timeout", "60")
+    # the session's bridge calls /r1/talker's parameter services: its clients are made
+    dumped(name, "/r1/talker")
+    link = open_link(name)
+    try:  # what the Args tab's F5 asks: robot:=r2
+        link.request("apply", arguments={"robot": "r2"})
+    finally:
+        link.close()
+    tl("wait", name, "talker-1", "running", "--timeout", "60")
+    dumped(name, "/r2/talker")
+
+    async def r1_gone(bridge: RosBridge) -> None:
+        async def listed() -> bool:
+            services = [s for s, _ in await bridge.list_services()]
+            return any(s.startswith("/r2/talker/") for s in services) and not any(
+                s.startswith("/r1/") for s in services)
+        await eventually(listed, what="no /r1 service listed, /r2/talker's are")
+
+    run(r1_gone)
+    tl("stop", name)
