@@ -176,7 +176,9 @@ async def test_log_level_key_sets_it_or_offers_a_restart(demo):
         tree.move_cursor(tree.rows["mapper-2"])
         await pilot.pause()
         await pilot.press("L", "w")
-        await until(pilot, lambda: isinstance(app.screen, ConfirmScreen), limit=60)
+        # pushed, then composed: the question is there once its Static is
+        await until(pilot, lambda: isinstance(app.screen, ConfirmScreen)
+                    and bool(app.screen.query(Static)), limit=60)
         question = str(app.screen.query_one(Static).render())
         assert "no logger service" in question and "--log-level warn" in question
         old_pid = status(app.session_name or "")
