@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import textwrap
 
 import pytest
 
@@ -233,3 +234,54 @@ def test_version_prints_the_installed_version_and_exits():
     assert result.stdout == f"tuilaunch {metadata.version('tuilaunch')}\n"
     # with a file too, as ros2 launch FILE --version would
     assert run_cli(BRINGUP, "--version").stdout == result.stdout
+
+
+def one_error(result: subprocess.CompletedProcess[str]) -> str:
+    assert result.returncode == 2, result.stdout
+    assert "Traceback" not in result.stderr
+    assert result.stderr.startswith("tuilaunch: error: "), result.stderr
+    return result.stderr
+
+
+def test_mistyped_files_and_packages_get_a_did_you_mean(tmp_path):
+    near = str(EXAMPLES / "brinup.py")
+    assert "hint: did you mean 'bringup.py'?" in one_error(run_cli(near, "--print"))
+    prefix = tmp_path / "prefix"
+    make_package(prefix, "fancy_robot", files={"launch/fancy.launch.py": "x = 1\n",
+                                               "launch/sim_launch.xml": "<launch/>\n",
+                                               "config/a.yaml": "{}\n"})
+    env = {"AMENT_PREFIX_PATH": f"{prefix}{os.pathsep}{os.environ.get('AMENT_PREFIX_PATH', '')}"}
+    wrong = one_error(run_cli("fancy_robto", "fancy.launch.py", "--print", env=env))
+    assert "package 'fancy_robto' not found" in wrong and "did you mean 'fancy_robot'" in wrong
+    # a package without a file: its launch files
+    bare = one_error(run_cli("fancy_robot", "--print", env=env))
+    assert "fancy_robot is a package: give one of its launch files too " \
+        "(fancy.launch.py, sim_launch.xml)" in bare
+    missing = one_error(run_cli("fancy_robot", "fancy_launch.py", "--print", env=env))
+    assert "did you mean 'fancy.launch.py'?" in missing
+    assert "its launch files: fancy.launch.py, sim_launch.xml" in missing
+
+
+def test_an_argument_without_its_colon_and_a_file_that_is_no_launch_file(tmp_path):
+    error = one_error(run_cli(BRINGUP, "robot=r2", "--print"))
+    assert "'robot=r2' is not a launch argument: ros2 launch arguments are written with " \
+        "':='" in error and "hint: robot:=r2" in error
+    notes = tmp_path / "notes.txt"
+    notes.write_text("remember the milk\n")
+    error = one_error(run_cli(str(notes), "--print"))
+    assert f"{notes} is not a launch file" in error
+
+
+def test_print_counts_only_the_processes_that_can_start(write):
+    path = write("from launch.actions import ExecuteProcess\n" + HEADER + textwrap.dedent("""\
+        sl = SimpleLauncher()
+        sl.node('no_such_package_x', 'talker')
+        sl.node('no_such_package_y', 'listener')
+        sl.add_action(ExecuteProcess(cmd=['true'], name='fine'))
+        def generate_launch_description():
+            return sl.launch_description()
+        """))
+    result = run_cli(str(path), "--print")
+    assert result.returncode == 3
+    assert result.stdout.splitlines()[0].endswith(
+        ": 1 of 3 processes will run (2 cannot start: !!)")

@@ -103,6 +103,14 @@ def test_a_restart_is_a_stop_asked_for_then_a_start(session):
     assert "killed by SIGINT" in story[1]
     assert story[2].startswith("[INFO] [counter-4]: process started with pid [")
     assert "counter-4" not in tl("logs", session, "--level", "WARN")  # no crash
+    # status no longer tells the end before the restart as the process's current story
+    counter = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
+                   if p["id"] == "counter-4")
+    assert counter["state"] == "running"
+    assert counter["exit_code"] is None and counter["detail"] is None
+    three = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
+                 if p["id"] == "three-1")
+    assert three["exit_code"] == 3 and three["detail"] == "exit code 3"
 
 
 def test_lines_keeps_the_last_n_as_tail(session):
