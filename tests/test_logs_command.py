@@ -149,3 +149,42 @@ def test_lines_with_follow_prints_the_last_n_then_the_new_ones(session):
         if follower.poll() is None:
             follower.kill()
             follower.wait()
+
+
+STUBBORN = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+
+
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(name='stubborn', output='screen', sigterm_timeout='4',
+                       cmd=['sh', '-c', 'trap "" INT; echo ready; '
+                            'while true; do sleep 0.2 || true; done']),
+    ])
+"""
+
+
+def test_stop_says_what_it_waits_for_while_a_process_ignores_sigint(tmp_path):
+    runtime = Path(tempfile.mkdtemp(prefix="tl"))
+    patch = pytest.MonkeyPatch()
+    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    patch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
+    (tmp_path / "stubborn.launch.py").write_text(STUBBORN)
+    try:
+        name = tl(str(tmp_path / "stubborn.launch.py"), "--detach", "--name", "stub").strip()
+        wait_for(lambda: "ready" in tl("logs", name, "stubborn-1"), what="ready")
+        stopped = run_cli("stop", name)
+        assert stopped.returncode == 0, stopped.stderr
+        assert stopped.stdout == f"session {name} stopped\n"
+        assert "tuilaunch stop: waiting for stubborn-1 (" in stopped.stderr
+        assert "tuilaunch stop: stubborn-1: still running 4 s after SIGINT: sending SIGTERM " \
+            "to its process group" in stopped.stderr
+        assert "Traceback" not in stopped.stderr
+    finally:
+        for info in (runtime / "tuilaunch").glob("*.json"):
+            try:
+                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
+            except (ProcessLookupError, ValueError, KeyError):
+                pass
+        patch.undo()
