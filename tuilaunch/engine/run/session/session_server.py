@@ -319,6 +319,12 @@ class SessionServer:
         if matches:
             raise LaunchError(f"{ref!r} names several processes: {', '.join(matches)}",
                               hint="use a process id")
+        for plugin in self.supervisor.plugins:
+            # a node named in its own code, by the name it reported (the inspector learns it)
+            named = getattr(plugin, "process_named", None)
+            found = named(ref) if named is not None else None
+            if found is not None:
+                return str(found)
         raise LaunchError(f"no process {ref!r}",
                           hint=f"processes: {', '.join(p.id for p in processes)}")
 
