@@ -285,3 +285,15 @@ def test_print_counts_only_the_processes_that_can_start(write):
     assert result.returncode == 3
     assert result.stdout.splitlines()[0].endswith(
         ": 1 of 3 processes will run (2 cannot start: !!)")
+
+
+def test_a_value_the_args_tab_refuses_is_refused_on_the_command_line_too():
+    from tuilaunch.engine import load_file, resolve
+    from tuilaunch.engine.plan.argument_checks import check_values
+
+    words = check_values(resolve(load_file(BRINGUP), {}).arguments, {"rate": "abc"})
+    result = run_cli(BRINGUP, "rate:=abc", "--print")
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert result.stderr == f"tuilaunch: error: {words}\n"
+    assert "argument 'rate' needs a number, got 'abc'" in result.stderr
+    assert run_cli(BRINGUP, "rate:=3", "--print").returncode == 0

@@ -179,6 +179,11 @@ def _main(argv: list[str] | None) -> int:
             if options.show_args:
                 return _show_arguments(loaded, arguments)
             plan = resolve(loaded, arguments)
+            from ..engine.plan.argument_checks import check_values
+
+            refused = check_values(plan.arguments, arguments)  # the Args tab's own words
+            if refused is not None:
+                raise LaunchError(refused)
             if placement is not None:
                 placement.apply(plan)
     except LaunchError as exc:
