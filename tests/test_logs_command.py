@@ -113,6 +113,13 @@ def test_a_restart_is_a_stop_asked_for_then_a_start(session):
     assert three["exit_code"] == 3 and three["detail"] == "exit code 3"
 
 
+def test_waiting_for_a_process_that_ended_for_good_says_so_at_once(session):
+    done = run_cli("wait", session, "three-1", "running")  # no --timeout: it must not hang
+    assert done.returncode == 1
+    assert done.stderr.startswith("tuilaunch wait: three-1 failed, not running")
+    assert f"tuilaunch restart {session} three-1 starts it again" in done.stderr
+
+
 def test_lines_keeps_the_last_n_as_tail(session):
     assert tl("logs", session, "counter-4", "-n", "3").splitlines() == [
         "line 48", "line 49", "line 50"]

@@ -330,6 +330,12 @@ def cmd_wait(options: argparse.Namespace) -> int:
         current = result["states"].get(process)
         last: dict[str, Any] = {"events": result.get("recent") or []}
         while current != state:
+            if state in ("running", "respawning") and current in ENDED_STATES:
+                # it ended and nothing will start it again on its own: no wait forever
+                print(f"tuilaunch wait: {process} {current}, not {state}"
+                      f"{_ended_how(last, process)}: tuilaunch restart {link.label} "
+                      f"{process} starts it again", file=sys.stderr)
+                return 1
             if state == "exited" and current == "failed":
                 # a crash ended it: not the end asked for, and that one will not come
                 print(f"tuilaunch wait: {process} failed, not exited: "
@@ -355,6 +361,17 @@ def cmd_wait(options: argparse.Namespace) -> int:
         return 0
     finally:
         link.close()
+
+
+ENDED_STATES = ("exited", "failed", "done", "cancelled", "skipped")
+"""States a process leaves only when someone restarts it (a respawn is `respawning`)."""
+
+
+def _ended_how(message: dict[str, Any], process: str) -> str:
+    for data in reversed(message.get("events") or []):
+        if data.get("process") == process and data.get("reason"):
+            return f" ({data['reason']})"
+    return ""
 
 
 def _death(message: dict[str, Any], process: str) -> str:
