@@ -361,13 +361,13 @@ def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):
 
 
 async def server_subscribes(bridge: RosBridge, topics: list[str], wanted: bool) -> None:
-    """Waits until the session's bridge (node /tuilaunch) subscribes to each topic, or to
+    """Waits until the session's bridge (node /tuilaunch_PID) subscribes to each topic, or to
     none of them, as another node on the graph sees it."""
     async def check() -> bool:
         for topic in topics:
             infos = await asyncio.to_thread(bridge.node.get_subscriptions_info_by_topic,
                                             topic)
-            if any(full_node_name(i.node_name, i.node_namespace) == "/tuilaunch"
+            if any(full_node_name(i.node_name, i.node_namespace).startswith("/tuilaunch_")
                    for i in infos) != wanted:
                 return False
         return True
