@@ -120,6 +120,31 @@ def test_waiting_for_a_process_that_ended_for_good_says_so_at_once(session):
     assert f"tuilaunch restart {session} three-1 starts it again" in done.stderr
 
 
+def test_ctrl_c_on_wait_says_interrupted(session):
+    waiting = subprocess.Popen([sys.executable, "-m", "tuilaunch", "wait", session,
+                                "counter-4", "exited"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        # waiting once it holds its connection to the session (a socket among its files)
+        wait_for(lambda: waiting.poll() is None and _has_socket(waiting.pid), what="waiting")
+        waiting.send_signal(signal.SIGINT)
+        out, errors = waiting.communicate(timeout=30)
+        assert waiting.returncode == 130 and out == ""
+        assert errors == "tuilaunch: interrupted\n"
+    finally:
+        if waiting.poll() is None:
+            waiting.kill()
+            waiting.wait()
+
+
+def _has_socket(pid: int) -> bool:
+    folder = Path(f"/proc/{pid}/fd")
+    try:
+        return any(os.readlink(folder / fd).startswith("socket:") for fd in os.listdir(folder))
+    except OSError:
+        return False
+
+
 def test_lines_keeps_the_last_n_as_tail(session):
     assert tl("logs", session, "counter-4", "-n", "3").splitlines() == [
         "line 48", "line 49", "line 50"]
