@@ -297,3 +297,42 @@ def test_a_value_the_args_tab_refuses_is_refused_on_the_command_line_too():
     assert result.stderr == f"tuilaunch: error: {words}\n"
     assert "argument 'rate' needs a number, got 'abc'" in result.stderr
     assert run_cli(BRINGUP, "rate:=3", "--print").returncode == 0
+
+
+def test_an_argument_an_include_overrides_is_said(tmp_path):
+    (tmp_path / "child.launch.py").write_text(textwrap.dedent("""\
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument, ExecuteProcess
+        from launch.substitutions import LaunchConfiguration
+
+
+        def generate_launch_description():
+            return LaunchDescription([
+                DeclareLaunchArgument('rate', default_value='1.0'),
+                ExecuteProcess(cmd=['echo', LaunchConfiguration('rate')], name='child'),
+            ])
+        """))
+    parent = tmp_path / "parent.launch.py"
+    parent.write_text(textwrap.dedent("""\
+        import os
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument, IncludeLaunchDescription
+        from launch.launch_description_sources import PythonLaunchDescriptionSource
+
+
+        def generate_launch_description():
+            return LaunchDescription([
+                DeclareLaunchArgument('rate', default_value='2.0'),
+                IncludeLaunchDescription(
+                    PythonLaunchDescriptionSource(
+                        os.path.join(os.path.dirname(__file__), 'child.launch.py')),
+                    launch_arguments={'rate': '5.0'}.items()),
+            ])
+        """))
+    said = run_cli(str(parent), "rate:=3", "--print")
+    assert said.returncode == 0, said.stderr
+    assert f"{parent}:10: the include of child.launch.py passes rate:=5.0, which overrides " \
+        "rate:=3 from the command line in that file" in said.stdout + said.stderr
+    # the same value, or none given: nothing to say
+    assert "overrides" not in run_cli(str(parent), "rate:=5.0", "--print").stdout
+    assert "overrides" not in run_cli(str(parent), "--print").stdout
