@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import textwrap
 
 import pytest
 
@@ -233,3 +234,105 @@ def test_version_prints_the_installed_version_and_exits():
     assert result.stdout == f"tuilaunch {metadata.version('tuilaunch')}\n"
     # with a file too, as ros2 launch FILE --version would
     assert run_cli(BRINGUP, "--version").stdout == result.stdout
+
+
+def one_error(result: subprocess.CompletedProcess[str]) -> str:
+    assert result.returncode == 2, result.stdout
+    assert "Traceback" not in result.stderr
+    assert result.stderr.startswith("tuilaunch: error: "), result.stderr
+    return result.stderr
+
+
+def test_mistyped_files_and_packages_get_a_did_you_mean(tmp_path):
+    near = str(EXAMPLES / "brinup.py")
+    assert "hint: did you mean 'bringup.py'?" in one_error(run_cli(near, "--print"))
+    prefix = tmp_path / "prefix"
+    make_package(prefix, "fancy_robot", files={"launch/fancy.launch.py": "x = 1\n",
+                                               "launch/sim_launch.xml": "<launch/>\n",
+                                               "config/a.yaml": "{}\n"})
+    env = {"AMENT_PREFIX_PATH": f"{prefix}{os.pathsep}{os.environ.get('AMENT_PREFIX_PATH', '')}"}
+    wrong = one_error(run_cli("fancy_robto", "fancy.launch.py", "--print", env=env))
+    assert "package 'fancy_robto' not found" in wrong and "did you mean 'fancy_robot'" in wrong
+    # a package without a file: its launch files
+    bare = one_error(run_cli("fancy_robot", "--print", env=env))
+    assert "fancy_robot is a package: give one of its launch files too " \
+        "(fancy.launch.py, sim_launch.xml)" in bare
+    missing = one_error(run_cli("fancy_robot", "fancy_launch.py", "--print", env=env))
+    assert "did you mean 'fancy.launch.py'?" in missing
+    assert "its launch files: fancy.launch.py, sim_launch.xml" in missing
+
+
+def test_an_argument_without_its_colon_and_a_file_that_is_no_launch_file(tmp_path):
+    error = one_error(run_cli(BRINGUP, "robot=r2", "--print"))
+    assert "'robot=r2' is not a launch argument: ros2 launch arguments are written with " \
+        "':='" in error and "hint: robot:=r2" in error
+    notes = tmp_path / "notes.txt"
+    notes.write_text("remember the milk\n")
+    error = one_error(run_cli(str(notes), "--print"))
+    assert f"{notes} is not a launch file" in error
+
+
+def test_print_counts_only_the_processes_that_can_start(write):
+    path = write("from launch.actions import ExecuteProcess\n" + HEADER + textwrap.dedent("""\
+        sl = SimpleLauncher()
+        sl.node('no_such_package_x', 'talker')
+        sl.node('no_such_package_y', 'listener')
+        sl.add_action(ExecuteProcess(cmd=['true'], name='fine'))
+        def generate_launch_description():
+            return sl.launch_description()
+        """))
+    result = run_cli(str(path), "--print")
+    assert result.returncode == 3
+    assert result.stdout.splitlines()[0].endswith(
+        ": 1 of 3 processes will run (2 cannot start: !!)")
+
+
+def test_a_value_the_args_tab_refuses_is_refused_on_the_command_line_too():
+    from tuilaunch.engine import load_file, resolve
+    from tuilaunch.engine.plan.argument_checks import check_values
+
+    words = check_values(resolve(load_file(BRINGUP), {}).arguments, {"rate": "abc"})
+    result = run_cli(BRINGUP, "rate:=abc", "--print")
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert result.stderr == f"tuilaunch: error: {words}\n"
+    assert "argument 'rate' needs a number, got 'abc'" in result.stderr
+    assert run_cli(BRINGUP, "rate:=3", "--print").returncode == 0
+
+
+def test_an_argument_an_include_overrides_is_said(tmp_path):
+    (tmp_path / "child.launch.py").write_text(textwrap.dedent("""\
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument, ExecuteProcess
+        from launch.substitutions import LaunchConfiguration
+
+
+        def generate_launch_description():
+            return LaunchDescription([
+                DeclareLaunchArgument('rate', default_value='1.0'),
+                ExecuteProcess(cmd=['echo', LaunchConfiguration('rate')], name='child'),
+            ])
+        """))
+    parent = tmp_path / "parent.launch.py"
+    parent.write_text(textwrap.dedent("""\
+        import os
+        from launch import LaunchDescription
+        from launch.actions import DeclareLaunchArgument, IncludeLaunchDescription
+        from launch.launch_description_sources import PythonLaunchDescriptionSource
+
+
+        def generate_launch_description():
+            return LaunchDescription([
+                DeclareLaunchArgument('rate', default_value='2.0'),
+                IncludeLaunchDescription(
+                    PythonLaunchDescriptionSource(
+                        os.path.join(os.path.dirname(__file__), 'child.launch.py')),
+                    launch_arguments={'rate': '5.0'}.items()),
+            ])
+        """))
+    said = run_cli(str(parent), "rate:=3", "--print")
+    assert said.returncode == 0, said.stderr
+    assert f"{parent}:10: the include of child.launch.py passes rate:=5.0, which overrides " \
+        "rate:=3 from the command line in that file" in said.stdout + said.stderr
+    # the same value, or none given: nothing to say
+    assert "overrides" not in run_cli(str(parent), "rate:=5.0", "--print").stdout
+    assert "overrides" not in run_cli(str(parent), "--print").stdout

@@ -364,13 +364,13 @@ def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):
 
 
 async def server_subscribes(bridge: RosBridge, topics: list[str], wanted: bool) -> None:
-    """Waits until the session's bridge (node /tuilaunch) subscribes to each topic, or to
+    """Waits until the session's bridge (node /tuilaunch_PID) subscribes to each topic, or to
     none of them, as another node on the graph sees it."""
     async def check() -> bool:
         for topic in topics:
             infos = await asyncio.to_thread(bridge.node.get_subscriptions_info_by_topic,
                                             topic)
-            if any(full_node_name(i.node_name, i.node_namespace) == "/tuilaunch"
+            if any(full_node_name(i.node_name, i.node_namespace).startswith("/tuilaunch_")
                    for i in infos) != wanted:
                 return False
         return True
@@ -394,3 +394,15 @@ def test_a_client_that_leaves_stops_its_rates_and_echo_measurements(session):
         await server_subscribes(bridge, topics, False)
 
     run_bridge(scenario)
+
+
+def test_a_node_named_in_its_code_is_named_like_a_process_id(session):
+    """/insp/anon: the launch file gives no name; once its log lines said it, the full
+    name works for wait, logs and status as the process id does."""
+    eventually(lambda: "/insp/anon" in ok("topics", session, "-v", "--node", ANON))
+    assert ok("wait", session, "/insp/anon", "running", "--timeout", "30") == ""
+    first = ok("logs", session, "/insp/anon").splitlines()[0]
+    assert first == ok("logs", session, ANON).splitlines()[0]
+    assert first.startswith(f"[INFO] [{ANON}]: process started with pid [")
+    unknown = one_line_error(tl("wait", session, "/insp/nobody", "running"), "wait")
+    assert "no process '/insp/nobody'" in unknown

@@ -103,6 +103,46 @@ def test_a_restart_is_a_stop_asked_for_then_a_start(session):
     assert "killed by SIGINT" in story[1]
     assert story[2].startswith("[INFO] [counter-4]: process started with pid [")
     assert "counter-4" not in tl("logs", session, "--level", "WARN")  # no crash
+    # status no longer tells the end before the restart as the process's current story
+    counter = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
+                   if p["id"] == "counter-4")
+    assert counter["state"] == "running"
+    assert counter["exit_code"] is None and counter["detail"] is None
+    three = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
+                 if p["id"] == "three-1")
+    assert three["exit_code"] == 3 and three["detail"] == "exit code 3"
+
+
+def test_waiting_for_a_process_that_ended_for_good_says_so_at_once(session):
+    done = run_cli("wait", session, "three-1", "running")  # no --timeout: it must not hang
+    assert done.returncode == 1
+    assert done.stderr.startswith("tuilaunch wait: three-1 failed, not running")
+    assert f"tuilaunch restart {session} three-1 starts it again" in done.stderr
+
+
+def test_ctrl_c_on_wait_says_interrupted(session):
+    waiting = subprocess.Popen([sys.executable, "-m", "tuilaunch", "wait", session,
+                                "counter-4", "exited"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        # waiting once it holds its connection to the session (a socket among its files)
+        wait_for(lambda: waiting.poll() is None and _has_socket(waiting.pid), what="waiting")
+        waiting.send_signal(signal.SIGINT)
+        out, errors = waiting.communicate(timeout=30)
+        assert waiting.returncode == 130 and out == ""
+        assert errors == "tuilaunch: interrupted\n"
+    finally:
+        if waiting.poll() is None:
+            waiting.kill()
+            waiting.wait()
+
+
+def _has_socket(pid: int) -> bool:
+    folder = Path(f"/proc/{pid}/fd")
+    try:
+        return any(os.readlink(folder / fd).startswith("socket:") for fd in os.listdir(folder))
+    except OSError:
+        return False
 
 
 def test_lines_keeps_the_last_n_as_tail(session):
@@ -141,3 +181,42 @@ def test_lines_with_follow_prints_the_last_n_then_the_new_ones(session):
         if follower.poll() is None:
             follower.kill()
             follower.wait()
+
+
+STUBBORN = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+
+
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(name='stubborn', output='screen', sigterm_timeout='4',
+                       cmd=['sh', '-c', 'trap "" INT; echo ready; '
+                            'while true; do sleep 0.2 || true; done']),
+    ])
+"""
+
+
+def test_stop_says_what_it_waits_for_while_a_process_ignores_sigint(tmp_path):
+    runtime = Path(tempfile.mkdtemp(prefix="tl"))
+    patch = pytest.MonkeyPatch()
+    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    patch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
+    (tmp_path / "stubborn.launch.py").write_text(STUBBORN)
+    try:
+        name = tl(str(tmp_path / "stubborn.launch.py"), "--detach", "--name", "stub").strip()
+        wait_for(lambda: "ready" in tl("logs", name, "stubborn-1"), what="ready")
+        stopped = run_cli("stop", name)
+        assert stopped.returncode == 0, stopped.stderr
+        assert stopped.stdout == f"session {name} stopped\n"
+        assert "tuilaunch stop: waiting for stubborn-1 (" in stopped.stderr
+        assert "tuilaunch stop: stubborn-1: still running 4 s after SIGINT: sending SIGTERM " \
+            "to its process group" in stopped.stderr
+        assert "Traceback" not in stopped.stderr
+    finally:
+        for info in (runtime / "tuilaunch").glob("*.json"):
+            try:
+                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
+            except (ProcessLookupError, ValueError, KeyError):
+                pass
+        patch.undo()

@@ -18,6 +18,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import textwrap
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -414,3 +415,29 @@ def test_a_mistake_in_the_machines_file_is_one_line_naming_file_and_line(write, 
     assert done.stderr.startswith(f"tuilaunch: error: {machines_file}:2:8: machines.r1: "
                                   "unknown field 'hots'\n"), done.stderr
     assert "Traceback" not in done.stderr and done.stdout == ""
+
+
+def test_a_rule_naming_a_node_that_names_itself_says_why_it_places_nothing(tmp_path):
+    """`/r1/talker` for a node the launch file does not name (shown `/r1/<talker>`):
+    nothing is known of its name before it runs, and the warning offers the process id."""
+    launch = tmp_path / "unnamed.launch.py"
+    launch.write_text(textwrap.dedent("""\
+        from launch import LaunchDescription
+        from launch_ros.actions import Node, PushRosNamespace
+        from launch.actions import GroupAction
+
+
+        def generate_launch_description():
+            return LaunchDescription([GroupAction([
+                PushRosNamespace('r1'),
+                Node(package='tuilaunch_demos', executable='talker'),
+            ])])
+        """))
+    machines = tmp_path / "machines.yaml"
+    machines.write_text("machines:\n  nuc: {host: nuc.local}\n"
+                        "placement:\n  - {match: /r1/talker, machine: nuc}\n")
+    printed = run_cli(str(launch), "--machines", str(machines), "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert "placement rule '/r1/talker' -> nuc places no process: /r1/<talker> names " \
+        "itself in its code (the launch file gives no name), so a placement rule cannot " \
+        "know it before it runs; match its process id instead: 'talker-*'" in printed.stdout

@@ -264,13 +264,46 @@ def cmd_attach(options: argparse.Namespace) -> int:
     return status
 
 
+STOP_NOTICE = 3.0
+"""After this many seconds, and as often again, `stop` says which processes it waits for."""
+
+
 def cmd_stop(options: argparse.Namespace) -> int:
     link = open_link(options.name, timeout=None)
     name = link.label
     pid = int(link.info["pid"]) if link.host is None else 0  # a pid there is not ours
     try:
-        link.request("shutdown", reason="tuilaunch stop")
-        link.wait_closed()  # the server closes its connections once every process is gone
+        # the ends and the escalation's words, as the TUI's countdown shows them
+        subscribed = link.request("subscribe", max_lines=1,
+                                  kinds=["exited", "failed", "log", "ended"])
+        waiting = {p for p, state in (subscribed.get("states") or {}).items()
+                   if state in ("running", "respawning")}
+        asking = link.send("shutdown", reason="tuilaunch stop")  # its reply comes at the end
+        asked = time.monotonic()
+        notice = asked + STOP_NOTICE
+        # the server closes its connections once every process is gone
+        while True:
+            try:
+                message = link.receive_until(notice)
+            except TimeoutError:
+                if waiting:
+                    print(f"tuilaunch stop: waiting for {', '.join(sorted(waiting))} "
+                          f"({time.monotonic() - asked:.0f} s)", file=sys.stderr)
+                notice = time.monotonic() + STOP_NOTICE
+                continue
+            if message is None:
+                break
+            if message.get("type") == "reply" and message.get("id") == asking and \
+                    not message.get("ok"):
+                raise SessionError(f"session {name}: {message.get('error')}")
+            for event in message.get("events") or []:
+                process = event.get("process")
+                if event.get("kind") in ("exited", "failed"):
+                    waiting.discard(process)
+                elif event.get("kind") == "log" and process in waiting and \
+                        event.get("level") in ("WARN", "ERROR"):
+                    print(f"tuilaunch stop: {process}: {event.get('reason')}",
+                          file=sys.stderr)
     finally:
         link.close()
     deadline = time.monotonic() + 10
@@ -332,6 +365,12 @@ def cmd_wait(options: argparse.Namespace) -> int:
         current = result["states"].get(process)
         last: dict[str, Any] = {"events": result.get("recent") or []}
         while current != state:
+            if state in ("running", "respawning") and current in ENDED_STATES:
+                # it ended and nothing will start it again on its own: no wait forever
+                print(f"tuilaunch wait: {process} {current}, not {state}"
+                      f"{_ended_how(last, process)}: tuilaunch restart {link.label} "
+                      f"{process} starts it again", file=sys.stderr)
+                return 1
             if state == "exited" and current == "failed":
                 # a crash ended it: not the end asked for, and that one will not come
                 print(f"tuilaunch wait: {process} failed, not exited: "
@@ -357,6 +396,17 @@ def cmd_wait(options: argparse.Namespace) -> int:
         return 0
     finally:
         link.close()
+
+
+ENDED_STATES = ("exited", "failed", "done", "cancelled", "skipped")
+"""States a process leaves only when someone restarts it (a respawn is `respawning`)."""
+
+
+def _ended_how(message: dict[str, Any], process: str) -> str:
+    for data in reversed(message.get("events") or []):
+        if data.get("process") == process and data.get("reason"):
+            return f" ({data['reason']})"
+    return ""
 
 
 def _death(message: dict[str, Any], process: str) -> str:

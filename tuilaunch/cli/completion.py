@@ -43,11 +43,6 @@ REMOTE_TIMEOUT = 3.0
 """An ssh round trip for `HOST:<TAB>` (sessions there) or a session's processes there."""
 SESSION_TIMEOUT = 1.5
 """A local session's answer (its processes, nodes, topics)."""
-LAUNCH_SUFFIXES = tuple(f"{sep}launch.{ext}" for sep in "._"
-                        for ext in ("py", "xml", "yaml", "yml"))
-"""A launch file in a package's share, as ros2 launch lists them."""
-LAUNCH_EXTENSIONS = (".py", ".xml", ".yaml", ".yml", ".launch")
-"""Files offered as a launch file given by path."""
 _OPTIONS_WITH_VALUE = {"--scrollback", "--name", "--machines", "--share", "--machines-text",
                        "--launch-prefix", "--launch-prefix-filter"}
 
@@ -147,6 +142,8 @@ def _launch_file(positional: list[str]) -> str | None:
 
 def path_candidates(prefix: str) -> list[str]:
     """Folders (`name/`, completed without a space) and files that may be launch files."""
+    from .suggest import LAUNCH_EXTENSIONS
+
     folder, _slash, start = prefix.rpartition("/")
     where = os.path.expanduser(folder + "/" if folder or prefix.startswith("/") else ".")
     found = []
@@ -178,13 +175,11 @@ def package_names() -> list[str]:
 
 def share_launch_files(package: str) -> list[str]:
     """The launch files below a package's share, by name (what PACKAGE FILE takes)."""
-    from ..engine.packages import ensure_environment, package_share
+    from ..engine.packages import ensure_environment
+    from .suggest import launch_files
 
     ensure_environment()
-    found: set[str] = set()
-    for _root, _dirs, files in os.walk(package_share(package)):
-        found.update(f for f in files if f.endswith(LAUNCH_SUFFIXES))
-    return sorted(found)
+    return launch_files(package)
 
 
 def _declared(file: str, words: list[str]) -> list[Any]:
@@ -281,13 +276,14 @@ def session_names(prefix: str, **_: Any) -> list[str]:
     return [n for n in session_dir.live_sessions(clean=False) if n.startswith(prefix)]
 
 
-def _ask(parsed_args: argparse.Namespace, op: str, **fields: Any) -> Any:
+def _ask(parsed_args: argparse.Namespace, op: str, wait: float | None = None,
+         **fields: Any) -> Any:
     """One request to the session named on the line (a host's over ssh), time-limited."""
     from ..client.link import open_link
 
     address = getattr(parsed_args, "name", None)
     remote = address is not None and ":" in address
-    wait = REMOTE_TIMEOUT if remote else SESSION_TIMEOUT
+    wait = wait or (REMOTE_TIMEOUT if remote else SESSION_TIMEOUT)
     link = open_link(address, timeout=wait, answer_timeout=wait)
     try:
         return link.request(op, short=True, **fields)
@@ -314,7 +310,8 @@ def nodes(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
 
 
 def topics(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
-    graph = _ask(parsed_args, "topics")
+    # the session's first `topics` makes its ROS node and waits for discovery: more time
+    graph = _ask(parsed_args, "topics", wait=REMOTE_TIMEOUT)
     return _starting((t["name"] for t in graph["topics"]), prefix)
 
 

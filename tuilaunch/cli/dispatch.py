@@ -43,12 +43,21 @@ def find_launch_file(positional: list[str]) -> str:
             raise PackageError(f"{path} is a directory, not a launch file",
                                hint="give the launch file inside it, or PACKAGE FILE")
         if not os.path.isfile(path):
-            raise PackageError(f"launch file {path} does not exist",
-                               hint="give a path, or PACKAGE FILE to search a package's share")
+            from .suggest import missing_file
+
+            raise missing_file(path)
         return path
     if len(positional) == 2:
+        from .suggest import missing_in_package, missing_package
+
         package, name = positional
-        return str(find_launch_file_in_share(package, name))
+        unknown = missing_package(package)
+        if unknown is not None:
+            raise unknown
+        try:
+            return str(find_launch_file_in_share(package, name))
+        except PackageError as exc:
+            raise missing_in_package(package, name, exc) from None
     raise LaunchError(f"expected FILE or PACKAGE FILE, got {' '.join(positional)!r}",
                       hint="launch arguments are written name:=value")
 
@@ -159,15 +168,26 @@ def _main(argv: list[str] | None) -> int:
         for item in prefix_arguments(options.launch_prefix, options.launch_prefix_filter):
             key, value = item.split(":=", 1)
             arguments[key] = value
+        from .suggest import check_assignments, not_a_launch_file
+
+        check_assignments(positional)
         path = find_launch_file(positional)
         # `ros2 launch FILE --show-args` shows the flag to the file (simple_launch reads it)
         set_command_line(positional + (["--show-args"] if options.show_args else []),
                          arguments)
         with file_output:
-            loaded = load_file(path)
+            try:
+                loaded = load_file(path)
+            except LaunchError as exc:
+                raise not_a_launch_file(path, exc) from None
             if options.show_args:
                 return _show_arguments(loaded, arguments)
             plan = resolve(loaded, arguments)
+            from ..engine.plan.argument_checks import check_values
+
+            refused = check_values(plan.arguments, arguments)  # the Args tab's own words
+            if refused is not None:
+                raise LaunchError(refused)
             if placement is not None:
                 placement.apply(plan)
     except LaunchError as exc:

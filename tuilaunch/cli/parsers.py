@@ -184,7 +184,8 @@ def _inspector_commands(commands: argparse._SubParsersAction[argparse.ArgumentPa
     echo.add_argument("--count", type=int, metavar="N", help="stop after N messages")
     echo.add_argument("--once", action="store_true", help="stop after one message")
     echo.add_argument("--timeout", type=float, metavar="S",
-                      help="give up after S seconds without the messages (exit status 1)")
+                      help="stop after S seconds, the wait for a publisher included (exit "
+                      "status 1 when fewer than --count, or no message, came)")
     params = commands.add_parser("params", help="a node's live parameters as a params file, "
                                  "or such a file loaded into it")
     params.add_argument("name", metavar="[HOST:]NAME")

@@ -78,8 +78,14 @@ def _component_line(component: dict[str, Any]) -> str:
 
 
 def format_tree(plan: Plan) -> str:
-    lines = [f"{os.path.basename(plan.file)}: {len(plan.enabled_processes())} of "
-             f"{len(plan.processes)} processes will run"]
+    enabled = plan.enabled_processes()
+    # a process marked !! cannot start (checked here; one placed elsewhere, there)
+    blocked = sum(1 for p in enabled if p.error and p.machine is None)
+    header = f"{os.path.basename(plan.file)}: {len(enabled) - blocked} of " \
+        f"{len(plan.processes)} processes will run"
+    if blocked:
+        header += f" ({blocked} cannot start: !!)"
+    lines = [header]
 
     def walk(item: TreeItem, prefix: str) -> None:
         for index, child in enumerate(item.children):

@@ -123,6 +123,13 @@ class Link:
             return None
         return decode(line)
 
+    def send(self, op: str, **fields: Any) -> int:
+        """Asks without waiting for the reply (it comes among the messages, with this id):
+        `stop` reads the stopping's events while the server works on the shutdown."""
+        self._next_id += 1
+        self.sock.sendall(encode({"id": self._next_id, "op": op, **fields}))
+        return self._next_id
+
     def receive_until(self, deadline: float | None) -> dict[str, Any] | None:
         """The next message (events that came with a reply first), waiting until
         `deadline` (time.monotonic) at most, then TimeoutError. Unlike a socket timeout,

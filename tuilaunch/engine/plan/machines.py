@@ -105,7 +105,7 @@ class Placement:
         for rule in unused_rules(plan.processes, self.machines):
             where = f"{rule.origin}: " if rule.origin else ""
             plan.warnings.append(f"{where}placement rule {rule.match!r} -> {rule.machine} "
-                                 "places no process")
+                                 f"places no process{self_named(rule, plan.processes)}")
         return plan
 
     def used(self, plan: Plan) -> list[Machine]:
@@ -139,6 +139,24 @@ def place(processes: Iterable[Placeable], machines: Machines) -> dict[str, str |
         placed[proc.id] = next((rule.machine for rule in machines.rules
                                 if rule.matches(proc.id, proc.full_name)), None)
     return placed
+
+
+def self_named(rule: Rule, processes: Iterable[Placeable]) -> str:
+    """Why a node-name rule matches nothing when it names nodes that choose their own name
+    (shown `/r1/<talker>`: the launch file gives none, so it is known only once the node
+    runs), and the process ids that would match them."""
+    if not rule.match.startswith("/"):
+        return ""
+    named = [p for p in processes if p.full_name is None and
+             _glob(rule.match).fullmatch(str(getattr(p, "label", "")).replace("<", "")
+                                         .replace(">", "")) is not None]
+    if not named:
+        return ""
+    labels = ", ".join(str(getattr(p, "label", p.id)) for p in named)
+    ids = sorted({re.sub(r"-\d+$", "-*", p.id) for p in named})
+    return (f": {labels} name{'s' if len(named) == 1 else ''} itself in its code (the launch "
+            f"file gives no name), so a placement rule cannot know it before it runs; match "
+            f"its process id instead: {', '.join(repr(i) for i in ids)}")
 
 
 def unused_rules(processes: Iterable[Placeable], machines: Machines) -> list[Rule]:

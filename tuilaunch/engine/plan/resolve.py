@@ -435,6 +435,14 @@ class Resolver:
             values = [(perform(k, ctx), perform(v, ctx)) for k, v in include.launch_arguments]
             for key, value in values:
                 outer.configurations[key] = value
+                given = self.cli_arguments.get(key)
+                if given is not None and given != value:
+                    # as in ros2 launch the include's value wins there: said, not hidden
+                    where = f"{include.origin}: " if include.origin else ""
+                    self.warnings.append(
+                        f"{where}the include of {os.path.basename(path)} passes {key}:="
+                        f"{value}, which overrides {key}:={given} from the command line "
+                        "in that file")
         scope = outer.child(False)
         scope.enabled, scope.skipped_by = enabled, skipped
         item = TreeItem("include", f"include {os.path.basename(path)}", enabled,

@@ -80,8 +80,11 @@ def check_domain_id() -> None:
 
 
 class RosBridge:
-    def __init__(self, node_name: str = "tuilaunch") -> None:
+    def __init__(self, node_name: str | None = None) -> None:
         check_domain_id()
+        # one name per process (a session's server, each TUI): several nodes of one name
+        # make `ros2 node list` warn and confuse who is who
+        node_name = node_name or f"tuilaunch_{os.getpid()}"
         import rclpy
         from rclpy.context import Context
         from rclpy.executors import MultiThreadedExecutor

@@ -7,6 +7,7 @@ need the executor). The output is plain dicts, the JSON of `tuilaunch topics --j
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -116,15 +117,22 @@ def topic_entry(node: Any, name: str, types: list[str], processes: Mapping[str, 
             "qos_problems": problems}
 
 
+OWN_NODE = re.compile(r"^tuilaunch(_\d+)?$")
+"""The name of tuilaunch's own bridge nodes (ros/bridge.py)."""
+
+
 def topics_graph(node: Any, processes: Mapping[str, str] | None = None,
                  only_node: str | None = None, hide_self: bool = True) -> dict[str, Any]:
     """`{"topics": [...]}` for every topic `node` has discovered.
 
     `processes` maps full node names (`/ns/name`) to this launch's process ids; `only_node`
-    keeps the topics that node publishes or subscribes; `hide_self` leaves out `node`'s own
+    keeps the topics that node publishes or subscribes; `hide_self` leaves out tuilaunch's own
     endpoints (the inspector's rate and echo subscriptions), and topics only it uses."""
     processes = processes or {}
     hidden = {full_node_name(node.get_name(), node.get_namespace())} if hide_self else set()
+    if hide_self:  # every tuilaunch's bridge (a session's server, each TUI: tuilaunch_PID)
+        hidden |= {full_node_name(name, namespace) for name, namespace in
+                   node.get_node_names_and_namespaces() if OWN_NODE.match(name)}
     topics = []
     for name, types in sorted(node.get_topic_names_and_types()):
         entry = topic_entry(node, name, list(types), processes, hidden)

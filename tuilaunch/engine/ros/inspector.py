@@ -160,6 +160,12 @@ class Inspector(Plugin):
                     found[str(component["full_name"])] = proc.id
         return found
 
+    def process_named(self, node: str) -> str | None:
+        """The one process whose log lines reported this full node name (a node the launch
+        file does not name), for `wait`, `logs`, `restart` as for a process id."""
+        owners = [process for process, names in self.reported.names.items() if node in names]
+        return owners[0] if len(owners) == 1 else None
+
     def node_name(self, ref: Any) -> str:
         """A node given as its full name or its process id (or the launch's node name)."""
         if not isinstance(ref, str) or not ref:

@@ -14,36 +14,13 @@ from textual.widget import Widget
 from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
 from ...engine.describe.substitutions import text_to_bool
+from ...engine.plan.argument_checks import check_values as check_values
 from ...engine.plan.model import ArgumentInfo, Plan
 from .fields import Field, Toggle
 
 # ROS 2 name rules (rcl's validate_namespace / validate_node_name)
 _NAMESPACE = re.compile(r"^(/|(/[A-Za-z_][A-Za-z0-9_]*)+)$")
 _NODE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-
-
-def check_values(arguments: list[ArgumentInfo], values: dict[str, str]) -> str | None:
-    """Why a typed value cannot be used for its argument's type, or None."""
-    types = {a.name: a for a in arguments}
-    for name, text in values.items():
-        arg = types.get(name)
-        if arg is None:
-            continue
-        if arg.choices and text not in arg.choices:
-            return f"argument '{name}' must be one of {', '.join(arg.choices)}, got {text!r}"
-        if arg.type == "int":
-            try:
-                int(text.strip())
-            except ValueError:
-                return f"argument '{name}' needs a whole number, got {text!r}"
-        elif arg.type == "float":
-            try:
-                float(text.strip())
-            except ValueError:
-                return f"argument '{name}' needs a number, got {text!r}"
-        elif arg.type == "bool" and text_to_bool(text) is None:
-            return f"argument '{name}' needs true or false, got {text!r}"
-    return None
 
 
 def check_plan(plan: Plan) -> str | None:

@@ -141,6 +141,8 @@ class SessionServer:
             if event.process is not None:
                 if event.kind == "started" and event.pid is not None:
                     self.pids[event.process] = event.pid
+                    # a restart or respawn: the last end's words are history now
+                    self.details.pop(event.process, None)
                 if event.reason is not None and event.kind != "log":
                     self.details[event.process] = event.reason
         self.hub.broadcast(event)
@@ -200,7 +202,9 @@ class SessionServer:
             processes.append({
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
                 "pid": self.pids.get(proc.id) if state == "running" else None,
-                "exit_code": self.supervisor.exit_codes.get(proc.id),
+                # the last end's code, until the process starts again
+                "exit_code": None if state in ("running", "pending") else
+                self.supervisor.exit_codes.get(proc.id),
                 "detail": self.details.get(proc.id), "machine": proc.machine, **fields,
                 # the exact start (argv, paste-ready line, env changes); a crash's signal/core
                 **self.supervisor.command_of(proc.id),
@@ -330,6 +334,12 @@ class SessionServer:
         if matches:
             raise LaunchError(f"{ref!r} names several processes: {', '.join(matches)}",
                               hint="use a process id")
+        for plugin in self.supervisor.plugins:
+            # a node named in its own code, by the name it reported (the inspector learns it)
+            named = getattr(plugin, "process_named", None)
+            found = named(ref) if named is not None else None
+            if found is not None:
+                return str(found)
         raise LaunchError(f"no process {ref!r}",
                           hint=f"processes: {', '.join(p.id for p in processes)}")
 

@@ -1,0 +1,94 @@
+"""What a mistyped launch command line is told: `did you mean` for a file and a package, the
+launch files of a package given without one, a `name=value` missing its colon, a file that
+is no launch file."""
+
+from __future__ import annotations
+
+import difflib
+import os
+import re
+from pathlib import Path
+
+from ..engine.errors import LaunchError, PackageError
+from ..engine.packages import known_packages, package_share
+
+LAUNCH_SUFFIXES = tuple(f"{sep}launch.{ext}" for sep in "._"
+                        for ext in ("py", "xml", "yaml", "yml"))
+"""A launch file in a package's share, as ros2 launch lists them."""
+LAUNCH_EXTENSIONS = (".py", ".xml", ".yaml", ".yml", ".launch")
+_ASSIGNMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_.-]*)=(.*)$", re.S)
+
+
+def check_assignments(positional: list[str]) -> None:
+    """`robot=r2`: a launch argument missing its colon, not a package or a file name."""
+    for word in positional:
+        match = _ASSIGNMENT.match(word)
+        if match and not os.path.exists(word):
+            raise LaunchError(f"{word!r} is not a launch argument: ros2 launch arguments "
+                              "are written with ':='",
+                              hint=f"{match.group(1)}:={match.group(2)}")
+
+
+def _guess(word: str, choices: list[str]) -> str:
+    close = difflib.get_close_matches(word, choices, n=3, cutoff=0.6)
+    return f"did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+
+
+def launch_files(package: str) -> list[str]:
+    found: set[str] = set()
+    for _root, _dirs, files in os.walk(package_share(package)):
+        found.update(f for f in files if f.endswith(LAUNCH_SUFFIXES))
+    return sorted(found)
+
+
+def missing_file(path: str) -> PackageError:
+    """A FILE that does not exist: a package of that name lists its launch files, else the
+    names in its folder that resemble it."""
+    if path in known_packages():
+        files = launch_files(path)
+        listed = ", ".join(files) if files else "none in its share"
+        return PackageError(f"{path} is a package: give one of its launch files too "
+                            f"({listed})", hint=f"tuilaunch {path} FILE")
+    folder = Path(path).parent
+    try:
+        names = [e.name for e in os.scandir(folder) if e.is_file() or e.is_dir()]
+    except OSError:
+        names = []
+    guess = _guess(Path(path).name, names)
+    if not guess and "/" not in path:
+        guess = _guess(path, list(known_packages()))
+        guess = guess.replace("did you mean", "did you mean the package") if guess else ""
+    hint = guess or "give a path, or PACKAGE FILE to search a package's share"
+    return PackageError(f"launch file {path} does not exist", hint=hint)
+
+
+def missing_package(package: str) -> PackageError | None:
+    """A PACKAGE not in the ament index, with the names it resembles; None when it is."""
+    packages = known_packages()
+    if package in packages:
+        return None
+    guess = _guess(package, list(packages))
+    return PackageError(f"package '{package}' not found in the ament index",
+                        hint=guess or "source the workspace that provides it, or install it "
+                        "into this environment")
+
+
+def missing_in_package(package: str, name: str, error: PackageError) -> PackageError:
+    """A FILE not in a PACKAGE's share: the launch files it has."""
+    if "not found in package" not in str(error):
+        return error
+    files = launch_files(package)
+    guess = _guess(name, files)
+    listed = f"its launch files: {', '.join(files)}" if files else \
+        "its share has no launch file"
+    return PackageError(f"launch file '{name}' not found in package '{package}'",
+                        hint=f"{guess} ({listed})" if guess else listed)
+
+
+def not_a_launch_file(path: str, error: LaunchError) -> LaunchError:
+    """A file the loader could not read whose name says it is no launch file."""
+    if path.endswith(LAUNCH_EXTENSIONS):
+        return error
+    return LaunchError(f"{path} is not a launch file: ros2 launch files are Python (.py), "
+                       "XML (.launch.xml) or YAML (.launch.yaml)",
+                       hint=f"as Python, it reads: {error}")
