@@ -51,6 +51,8 @@ FLOOD_CODE = ("import time\ni = 0\nwhile True:\n    for _ in range(200):\n"
 def relay(host: str, port: int, counter: str) -> None:
     """ssh's ProxyCommand: stdin/stdout <-> TCP, the bytes both ways written to `counter`."""
     sock = socket.create_connection((host, port))
+    # a file per connection: a reconnection (or a second connection) adds, never overwrites
+    counter = counter.replace(".bytes", f"-{os.getpid()}.bytes")
     total = 0
     last = 0.0
     streams = [sys.stdin.fileno(), sock]

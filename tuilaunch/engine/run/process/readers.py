@@ -20,9 +20,6 @@ from .output import LineSplitter, screen_lines
 from .spawn import Channel
 from .terminal_input import InputRefused, TerminalInput
 
-PTY_READ = 4000
-"""A read this long may have left more waiting (a pseudo-terminal gives 4095 bytes a read)."""
-
 Deliver = Callable[["Running", str, list[str]], None]
 """What a reader calls with each block of lines: (process, channel name, lines)."""
 
@@ -44,30 +41,18 @@ class ChannelReader:
         asyncio.get_running_loop().add_reader(channel.fd, self._readable)
 
     def _readable(self) -> None:
-        # at most 64 KB per wake-up: a flooding process shares the loop with the others
-        # and the UI; its pipe holds it back meanwhile, and nothing is lost
+        # one chunk per wake-up: a flooding process shares the loop with the others and
+        # the UI; its pipe holds it back meanwhile, and nothing is lost
         try:
             chunk = os.read(self.channel.fd, 1 << 16)
         except BlockingIOError:
             return
         except OSError:
             chunk = b""  # EIO: a pseudo-terminal whose other side is closed
-        if not chunk:
+        if chunk:
+            self._deliver(self.splitter.feed_block(chunk))
+        else:
             self.close()
-            return
-        # a pseudo-terminal gives at most 4 KB a read: while it was full, its writer has
-        # likely refilled it meanwhile, and one block of up to 64 KB costs the log file and
-        # the consumers one pass instead of sixteen
-        more = chunk
-        while len(more) >= PTY_READ and len(chunk) < 1 << 16:
-            try:
-                more = os.read(self.channel.fd, 1 << 16)
-            except OSError:
-                break  # nothing more now (or the end, seen on the next wake-up)
-            if not more:
-                break
-            chunk += more
-        self._deliver(self.splitter.feed_block(chunk))
 
     def _deliver(self, block: bytes) -> None:
         """Whole lines, as one block: to the log file as bytes, then to the supervisor."""
