@@ -10,7 +10,6 @@ batches go out, never interleaved inside a line.
 from __future__ import annotations
 
 import asyncio
-import dataclasses
 import itertools
 import os
 import re
@@ -57,8 +56,6 @@ class ClientQueue:
             return
         if self.only is not None and event.kind == "output" and event.process != self.only:
             return  # not on its screen: in the log file, read if it switches to it
-        if self.plain and event.kind == "output":
-            event = dataclasses.replace(event, lines=[shown_line(line) for line in event.lines])
         if event.kind != "output":
             self.events += 1
             if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
@@ -239,10 +236,11 @@ class ClientHub:
         queue.sent_states.update(touched)  # a flood's batches do not repeat "running"
         batch: dict[str, Any] = {"type": "events",
                                  "events": [event_to_dict(e, queue.plain) for e in events]}
-        if queue.plain:
+        if queue.plain:  # on what is sent, not on every line of a flood
             stamps = Stamps()
             for data in batch["events"]:
                 if data["kind"] == "output":
+                    data["lines"] = [shown_line(line) for line in data.get("lines") or []]
                     stamps.pack(data)
         if touched:
             batch["states"] = touched
