@@ -10,6 +10,7 @@ batches go out, never interleaved inside a line.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import itertools
 import os
 import re
@@ -49,6 +50,7 @@ class ClientQueue:
         self.interval = interval  # a display asks for no more batches than it draws
         self.events = 0
         self.ready = asyncio.Event()
+        self.prompt = asyncio.Event()  # send now, without waiting for the interval
         self.overflowed = False
 
     def __call__(self, event: Event) -> None:
@@ -202,6 +204,7 @@ class ClientHub:
         queue.only = only
         queue.buffer(Event("view", only, data={"offsets": self.offsets()}))
         queue.ready.set()
+        queue.prompt.set()
 
     async def _pump(self, queue: ClientQueue, writer: asyncio.StreamWriter,
                     lock: asyncio.Lock) -> None:
@@ -214,7 +217,10 @@ class ClientHub:
                     break
                 await self._send_events(queue, writer, lock)
                 if queue.interval:
-                    await asyncio.sleep(queue.interval)
+                    # a pane switched meanwhile (`view`) is not kept waiting the interval
+                    with contextlib.suppress(TimeoutError):
+                        await asyncio.wait_for(queue.prompt.wait(), queue.interval)
+                    queue.prompt.clear()
             if self.ended:
                 await self._send_events(queue, writer, lock)
                 await send_message(writer, lock, {"type": "ended", "status": self.status_code})
