@@ -5,7 +5,9 @@ Side by side, at 80x24, with the demo (examples/bringup.py) running as a session
   - `tuilaunch attach robot1:NAME`: the TUI here, only the session protocol crosses;
   - `ssh -t robot1 tuilaunch attach NAME`: the same TUI drawn over ssh, as without it.
 Each idle (the demo alone) and under a flood (the demo and a node printing 2,000 lines a
-second). The bytes are counted on the TCP connection itself (ssh's ProxyCommand is a relay
+second), the latter twice: with the all-nodes pane, and with the talker's pane shown (the
+flood then off screen: only the pane shown is sent; the drawn TUI draws what it shows).
+ros2 launch has no attach over a link: ssh drawing the TUI is the reference here. The bytes are counted on the TCP connection itself (ssh's ProxyCommand is a relay
 that counts), so they are what crosses the link: encrypted, with ssh's own keep-alives.
 Also: the time to attach, from the command's start to the first node line on screen.
 
@@ -37,6 +39,9 @@ MARKERS = {"demo": b"says hi", "flood": b"of the lidar"}
 """A node's line on screen: the talker's; under the flood, the flooder's (what a screen
 showing the newest lines shows)."""
 
+TALKER_ROW = b"\x1b[B" * 3
+"""Down the tree from its first row to talker-1: its pane is shown (one write)."""
+
 FLOODER = """
     from launch.actions import ExecuteProcess
     sl.add_action(ExecuteProcess(name='flood', cmd=[{python!r}, '-c', {code!r}]))
@@ -51,6 +56,8 @@ FLOOD_CODE = ("import time\ni = 0\nwhile True:\n    for _ in range(200):\n"
 def relay(host: str, port: int, counter: str) -> None:
     """ssh's ProxyCommand: stdin/stdout <-> TCP, the bytes both ways written to `counter`."""
     sock = socket.create_connection((host, port))
+    # a file per connection: a reconnection (or a second connection) adds, never overwrites
+    counter = counter.replace(".bytes", f"-{os.getpid()}.bytes")
     total = 0
     last = 0.0
     streams = [sys.stdin.fileno(), sock]
@@ -97,9 +104,10 @@ class Link:
         return total
 
 
-def measure(argv: list[str], env: dict[str, str], link: Link, tag: str, marker: bytes)\
-        -> tuple[float, float]:
-    """Seconds to the first node line, and link bytes/s over WINDOW once settled."""
+def measure(argv: list[str], env: dict[str, str], link: Link, tag: str, marker: bytes,
+            keys: bytes = b"") -> tuple[float, float]:
+    """Seconds to the first node line, and link bytes/s over WINDOW once settled (after
+    `keys`, typed as one write once the first node line is on screen)."""
     saved = dict(os.environ)
     os.environ.update(env)
     try:
@@ -111,6 +119,8 @@ def measure(argv: list[str], env: dict[str, str], link: Link, tag: str, marker: 
     try:
         term.read_until(marker, limit=90)
         attach = time.perf_counter() - start
+        if keys:
+            term.press(keys)
         term.settle(5.0)  # the first screen and the replay are out
         before = link.count(tag)
         term.rate(WINDOW)  # the terminal is read meanwhile, as a terminal would
@@ -146,25 +156,33 @@ def main() -> None:
         FLOODER.format(python=sys.executable, code=FLOOD_CODE)))
     rows = []
     try:
-        for name, path in (("demo", bringup), ("flood", flood)):
-            start_session(machines, path, name)
+        # the flood twice: the all-nodes pane, then the talker's pane (3 rows down the
+        # tree), where the flood is not on screen
+        for name, path, session, keys in (("demo", bringup, "demo", b""),
+                                          ("flood", flood, "flood", b""),
+                                          ("focused", flood, "flood", TALKER_ROW)):
+            if name != "focused":
+                start_session(machines, path, session)
             ours = measure(
-                [sys.executable, "-m", "tuilaunch", "attach", f"robot1:{name}"],
+                [sys.executable, "-m", "tuilaunch", "attach", f"robot1:{session}"],
                 {"TUILAUNCH_SSH_COMMAND": link.ssh(f"ours-{name}"),
                  "TUILAUNCH_REMOTE": remote}, link, f"ours-{name}",
-                MARKERS[name])
+                MARKERS[session], keys)
             drawn = measure(
                 [*shlex.split(link.ssh(f"drawn-{name}")), "-t", "robot1",
-                 f"{remote} attach {name}"], {}, link, f"drawn-{name}", MARKERS[name])
+                 f"{remote} attach {session}"], {}, link, f"drawn-{name}", MARKERS[session],
+                keys)
             # the same with ssh's compression, which our link always asks for
             squeezed = measure(
                 [*shlex.split(link.ssh(f"drawnc-{name}")), "-C", "-t", "robot1",
-                 f"{remote} attach {name}"], {}, link, f"drawnc-{name}",
-                MARKERS[name])
+                 f"{remote} attach {session}"], {}, link, f"drawnc-{name}",
+                MARKERS[session], keys)
             rows.append((name, ours, drawn, squeezed))
-            subprocess.run([sys.executable, "-m", "tuilaunch", "stop", f"robot1:{name}"],
-                           env={**os.environ, "TUILAUNCH_SSH_COMMAND": machines.ssh_command,
-                                "TUILAUNCH_REMOTE": remote}, capture_output=True)
+            if name != "flood":
+                subprocess.run([sys.executable, "-m", "tuilaunch", "stop",
+                                f"robot1:{session}"],
+                               env={**os.environ, "TUILAUNCH_SSH_COMMAND": machines.ssh_command,
+                                    "TUILAUNCH_REMOTE": remote}, capture_output=True)
     finally:
         machines.stop()
     print("bytes/s crossing the ssh link (TCP, both ways), 80x24, the TUI attached to a "
@@ -172,7 +190,8 @@ def main() -> None:
     print(f"  {'':18}{'attach robot1:NAME':>20}{'ssh -t ... attach':>20}{'fewer':>7}"
           f"{'ssh -C -t ...':>16}{'fewer':>7}")
     for name, ours, drawn, squeezed in rows:
-        label = "demo, idle" if name == "demo" else "demo + 2,000 l/s"
+        label = {"demo": "demo, idle", "flood": "demo + 2,000 l/s",
+                 "focused": "same, talker pane"}[name]
         print(f"  {label:18}{ours[1]:>16,.0f} B/s{drawn[1]:>16,.0f} B/s"
               f"{drawn[1] / max(ours[1], 1):>6.1f}x{squeezed[1]:>12,.0f} B/s"
               f"{squeezed[1] / max(ours[1], 1):>6.1f}x")

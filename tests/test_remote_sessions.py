@@ -377,3 +377,33 @@ def test_a_batch_carries_each_run_of_a_process_lines_once():
         ("output", "a", "stdout", ["1", "2", "3"]), ("output", "a", "stderr", ["oops"]),
         ("output", "b", "stdout", ["b1"]), ("exited", "b", None, []),
         ("output", "a", "stderr", ["again"])]
+
+
+def test_a_display_gets_lines_as_it_shows_them_and_stamps_to_the_millisecond():
+    """Over a link a display's lines come without colour codes and with their ROS stamp to
+    the millisecond (the pane's time column), sent apart as differences: what it shows
+    is restored exactly, whatever the order of the stamps and the lines without one."""
+    from tuilaunch.engine.run.session.clients import shown_line
+    from tuilaunch.engine.run.session.protocol import Stamps, decode, encode
+
+    raw = ["\x1b[0m[INFO] [1795636064.475123456] [r1.talker]: hi 1\x1b[0m",
+           "a plain line [1795636064.475]",
+           "[WARN] [1795636064.470999999] [r1.talker]: earlier",
+           "[ERROR] [1795636065.001000000] [r1.x]: later"]
+    shown = [shown_line(line) for line in raw]
+    assert shown == ["[INFO] [1795636064.475] [r1.talker]: hi 1",
+                     "a plain line [1795636064.475]",
+                     "[WARN] [1795636064.470] [r1.talker]: earlier",
+                     "[ERROR] [1795636065.001] [r1.x]: later"]
+    sent = [{"kind": "output", "process": "p", "lines": shown[:2]},
+            {"kind": "output", "process": "q", "lines": shown[2:]}]
+    packer = Stamps()
+    for data in sent:
+        packer.pack(data)
+    wire = decode(encode({"type": "events", "events": sent}))
+    assert all("1795636064" not in line for e in wire["events"] for line in e["lines"]
+               if line.startswith("["))
+    unpacker = Stamps()
+    for data in wire["events"]:
+        unpacker.unpack(data)
+    assert [line for e in wire["events"] for line in e["lines"]] == shown

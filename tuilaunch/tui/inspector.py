@@ -21,6 +21,8 @@ LEVELS = ["debug", "info", "warn", "error", "fatal"]
 QOS_CHECK_S = 5.0
 """While the Nodes tab shows, the graph's QoS problems are asked for this often (the tree
 marks the nodes in one)."""
+QOS_CHECK_LINK_S = 30.0
+"""The same for a session over an ssh link: a few bytes a second less on the link."""
 
 
 class Inspector(Navigation):
@@ -68,7 +70,10 @@ class Inspector(Navigation):
             self.run_worker(self._watch_resources(nodes), group="inspector",
                             exit_on_error=False)
             if self.qos_timer is None:
-                self.qos_timer = self.set_interval(QOS_CHECK_S, self.check_qos, pause=True)
+                # over an ssh link each check is a round trip for marks that rarely change
+                every = QOS_CHECK_S if getattr(self.supervisor, "host", None) is None \
+                    else QOS_CHECK_LINK_S
+                self.qos_timer = self.set_interval(every, self.check_qos, pause=True)
             if nodes:
                 self.check_qos()
                 self.qos_timer.resume()

@@ -26,9 +26,6 @@ DRAIN_CHUNKS = 256
 """Reads, at most, of what is already waiting in a channel when it is closed (1 MB from a
 terminal, 16 MB from a pipe): a grandchild that floods for ever does not hold the end."""
 
-PTY_READ = 4000
-"""A read this long may have left more waiting (a pseudo-terminal gives 4095 bytes a read)."""
-
 Deliver = Callable[["Running", str, list[str]], None]
 """What a reader calls with each block of lines: (process, channel name, lines)."""
 Partial = Callable[["Running", str, str], None]
@@ -62,8 +59,8 @@ class ChannelReader:
         asyncio.get_running_loop().add_reader(channel.fd, self._readable)
 
     def _readable(self) -> None:
-        # at most 64 KB per wake-up: a flooding process shares the loop with the others
-        # and the UI; its pipe holds it back meanwhile, and nothing is lost
+        # one chunk per wake-up: a flooding process shares the loop with the others and
+        # the UI; its pipe holds it back meanwhile, and nothing is lost
         try:
             chunk = os.read(self.channel.fd, 1 << 16)
         except BlockingIOError:
@@ -73,18 +70,6 @@ class ChannelReader:
         if not chunk:
             self.close()
             return
-        # a pseudo-terminal gives at most 4 KB a read: while it was full, its writer has
-        # likely refilled it meanwhile, and one block of up to 64 KB costs the log file and
-        # the consumers one pass instead of sixteen
-        more = chunk
-        while len(more) >= PTY_READ and len(chunk) < 1 << 16:
-            try:
-                more = os.read(self.channel.fd, 1 << 16)
-            except OSError:
-                break  # nothing more now (or the end, seen on the next wake-up)
-            if not more:
-                break
-            chunk += more
         self._deliver(self.splitter.feed_block(chunk))
         if self.partial is not None and self.splitter.tail:
             self._read_since = True

@@ -10,7 +10,7 @@ batches go out, never interleaved inside a line.
 from __future__ import annotations
 
 import asyncio
-import dataclasses
+import contextlib
 import itertools
 import os
 import re
@@ -50,6 +50,7 @@ class ClientQueue:
         self.interval = interval  # a display asks for no more batches than it draws
         self.events = 0
         self.ready = asyncio.Event()
+        self.prompt = asyncio.Event()  # send now, without waiting for the interval
         self.overflowed = False
 
     def __call__(self, event: Event) -> None:
@@ -57,8 +58,6 @@ class ClientQueue:
             return
         if self.only is not None and event.kind == "output" and event.process != self.only:
             return  # not on its screen: in the log file, read if it switches to it
-        if self.plain and event.kind == "output":
-            event = dataclasses.replace(event, lines=[shown_line(line) for line in event.lines])
         if event.kind != "output":
             self.events += 1
             if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
@@ -219,6 +218,7 @@ class ClientHub:
         queue.only = only
         queue.buffer(Event("view", only, data={"offsets": self.offsets()}))
         queue.ready.set()
+        queue.prompt.set()
 
     async def _pump(self, queue: ClientQueue, writer: asyncio.StreamWriter,
                     lock: asyncio.Lock) -> None:
@@ -231,7 +231,10 @@ class ClientHub:
                     break
                 await self._send_events(queue, writer, lock)
                 if queue.interval:
-                    await asyncio.sleep(queue.interval)
+                    # a pane switched meanwhile (`view`) is not kept waiting the interval
+                    with contextlib.suppress(TimeoutError):
+                        await asyncio.wait_for(queue.prompt.wait(), queue.interval)
+                    queue.prompt.clear()
             if self.ended:
                 await self._send_events(queue, writer, lock)
                 await send_message(writer, lock, {"type": "ended", "status": self.status_code})
@@ -253,10 +256,11 @@ class ClientHub:
         queue.sent_states.update(touched)  # a flood's batches do not repeat "running"
         batch: dict[str, Any] = {"type": "events",
                                  "events": [event_to_dict(e, queue.plain) for e in events]}
-        if queue.plain:
+        if queue.plain:  # on what is sent, not on every line of a flood
             stamps = Stamps()
             for data in batch["events"]:
                 if data["kind"] == "output":
+                    data["lines"] = [shown_line(line) for line in data.get("lines") or []]
                     stamps.pack(data)
         if touched:
             batch["states"] = touched
