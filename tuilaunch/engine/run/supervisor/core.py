@@ -146,7 +146,7 @@ class SupervisorCore:
             logger = (event.data or {}).get("logger")
             if event.kind == "log" and logger:  # a LogInfo line, as ros2 launch logs it
                 detail = f"[{event.level}] [{logger}]: {event.reason}"
-            self.launch_log.write(f"{event.time:.3f} {event.kind} {event.process or ''} "
+            self.launch_log.write(f"{event.time:.6f} {event.kind} {event.process or ''} "
                                    f"{detail}\n".encode())
         for consumer in list(self.consumers):
             try:
@@ -166,7 +166,7 @@ class SupervisorCore:
         if text in self.reported:
             return
         self.reported.add(text)
-        self.launch_log.write(f"{time.time():.3f} error  reason={text}\n".encode())
+        self.launch_log.write(f"{time.time():.6f} error  reason={text}\n".encode())
         to_stderr(f"tuilaunch: {text}; the launch goes on")
 
     def report_io(self, text: str) -> None:
