@@ -41,6 +41,14 @@ def keys_text(ascii_only: bool) -> str:
     return KEYS.replace("UPmem", f"{up}mem").replace("XQOS", f"{cross}qos")
 
 
+def dialog_css(screen: str, width: int, border: str = "primary", more: str = "") -> str:
+    """A dialog's look: a box of `width` columns (at most the terminal's) in the middle of the
+    screen, framed in the theme's `border` colour; `more`: rules of its own."""
+    return (f"{screen} {{ align: center middle; }}\n"
+            f"{screen} > Vertical {{ width: {width}; max-width: 100%; height: auto; "
+            f"padding: 1 2; border: round ${border}; background: $surface; }}\n{more}\n")
+
+
 class HelpScreen(ModalScreen[None]):
     """The keys, over the screen; scrolls when the terminal is short."""
 
@@ -63,12 +71,8 @@ class HelpScreen(ModalScreen[None]):
 class ConfirmScreen(ModalScreen[bool]):
     """A yes/no question with the keys on its buttons."""
 
-    DEFAULT_CSS = """
-    ConfirmScreen { align: center middle; }
-    ConfirmScreen > Vertical { width: 60; max-width: 100%; height: auto; padding: 1 2;
-                               border: round $warning; background: $surface; }
-    ConfirmScreen Horizontal { height: 3; }
-    """
+    DEFAULT_CSS = dialog_css("ConfirmScreen", 60, "warning",
+                             more="ConfirmScreen Horizontal { height: 3; }")
     BINDINGS = [Binding("y", "answer(True)", "Yes"), Binding("n,escape", "answer(False)", "No")]
 
     quit_question: bool = False
@@ -99,12 +103,8 @@ class QuitScreen(ModalScreen[str]):
     """Quit while processes run: stop them all ("stop"), keep running ("keep"), or, for a
     session, leave it running without this window ("detach")."""
 
-    DEFAULT_CSS = """
-    QuitScreen { align: center middle; }
-    QuitScreen > Vertical { width: 64; max-width: 100%; height: auto; padding: 1 2;
-                            border: round $warning; background: $surface; }
-    QuitScreen Horizontal { height: auto; }
-    """
+    DEFAULT_CSS = dialog_css("QuitScreen", 64, "warning",
+                             more="QuitScreen Horizontal { height: auto; }")
     BINDINGS = [Binding("y", "answer('stop')", "Stop and quit"),
                 Binding("n,escape", "answer('keep')", "Keep running"),
                 Binding("d", "answer('detach')", "Detach", show=False)]
@@ -145,12 +145,8 @@ class QuitScreen(ModalScreen[str]):
 class ChoiceScreen(ModalScreen[str | None]):
     """One of a few answers, picked with arrows and enter or with its first letter."""
 
-    DEFAULT_CSS = """
-    ChoiceScreen { align: center middle; }
-    ChoiceScreen > Vertical { width: 60; max-width: 100%; height: auto; padding: 1 2;
-                              border: round $primary; background: $surface; }
-    ChoiceScreen OptionList { height: auto; max-height: 10; }
-    """
+    DEFAULT_CSS = dialog_css("ChoiceScreen", 60,
+                             more="ChoiceScreen OptionList { height: auto; max-height: 10; }")
     BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
 
     def __init__(self, question: str, choices: list[str], current: str | None = None) -> None:
@@ -185,11 +181,7 @@ class ChoiceScreen(ModalScreen[str | None]):
 class PathScreen(ModalScreen[str | None]):
     """Asks for a file path, offering one; enter takes it, escape cancels."""
 
-    DEFAULT_CSS = """
-    PathScreen { align: center middle; }
-    PathScreen > Vertical { width: 70; max-width: 100%; height: auto; padding: 1 2;
-                            border: round $primary; background: $surface; }
-    """
+    DEFAULT_CSS = dialog_css("PathScreen", 70)
     BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
 
     def __init__(self, question: str, default: str = "") -> None:
