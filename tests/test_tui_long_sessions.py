@@ -545,7 +545,7 @@ async def test_params_launch_column_matches_a_node_by_the_name_it_reports(tmp_pa
         await pilot.press("4")
         panel = app.query_one(ParamsPanel)
         await until(pilot, lambda: "/tuip/control/configurable" in panel.nodes,
-                    every=panel.refresh_nodes)
+                    every=panel.refresh_listing)
         panel.load_node("/tuip/control/configurable")
         table = app.query_one("#prm-table", DataTable)
         await until(pilot, lambda: "mode" in panel.params and table.row_count > 0)
