@@ -70,6 +70,22 @@ def run_cli(*args: str, env: dict[str, str] | None = None, timeout: float = 120)
                           text=True, timeout=timeout, env={**os.environ, **(env or {})})
 
 
+def sl_file(body: str, header: str = "from simple_launch import SimpleLauncher\n") -> str:
+    """A simple_launch launch file: `header`, then a generate_launch_description that makes
+    `sl = SimpleLauncher()`, runs `body` (lines at the function's indent) and returns
+    `sl.launch_description()`. Its first line of `body` is line 5 of the file."""
+    return (header + "\ndef generate_launch_description():\n    sl = SimpleLauncher()\n"
+            + body.removeprefix("\n") + "    return sl.launch_description()\n")
+
+
+def python_prints(code: str, timeout: float = 120) -> str:
+    """What a fresh interpreter running `code` prints; it must exit 0."""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=timeout)
+    assert done.returncode == 0, done.stdout + done.stderr
+    return done.stdout
+
+
 def wait_for(check: Callable[[], object], timeout: float = 60.0, what: str = "") -> None:
     """Polls `check` until it holds. The timeout only guards against a hang (a busy machine
     is slow, never wrong); when it runs out the failure names what was awaited."""

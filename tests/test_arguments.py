@@ -6,22 +6,19 @@ import pytest
 
 from tuilaunch.engine import ArgumentError, LaunchError
 
-from .conftest import plan_of
+from .conftest import plan_of, sl_file
 
 HEADER = "from simple_launch import SimpleLauncher\n"
 
 
 def test_raw_defaults_are_typed_and_described(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('flag', True, description='a switch')
     sl.declare_arg('count', 3)
     sl.declare_arg('gain', 0.5)
     sl.declare_arg('color', [255, 0, 0])
     sl.declare_arg('mode', 'a', choices=['a', 'b'])
-    return sl.launch_description()
-""")
+"""))
     args = {a.name: a for a in plan_of(path, count=4).arguments}
     assert [(a.default, a.type) for a in args.values()] == [
         ("True", "bool"), ("3", "int"), ("0.5", "float"), ("[255, 0, 0]", "list"), ("a", "str")]
@@ -30,14 +27,11 @@ def generate_launch_description():
 
 
 def test_list_default_round_trips_through_py_eval_and_opaque_function(write):
-    substitution = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    substitution = write(sl_file("""
     sl.declare_arg('color', [255, 0, 0])
     rgb = sl.py_eval("' '.join(str(c/255) for c in ", sl.arg('color'), ')')
     sl.node('tuilaunch_demos', 'talker', parameters={'message': rgb})
-    return sl.launch_description()
-""", "subst.py")
+"""), "subst.py")
     opaque = write(HEADER + """
 sl = SimpleLauncher()
 sl.declare_arg('color', [255, 0, 0])
@@ -79,41 +73,32 @@ generate_launch_description = sl.launch_description(opaque_function=setup)
 
 
 def test_arg_map_accepts_names_and_a_tuple(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('a', 'x')
     sl.declare_arg('b', 'y')
     m1 = sl.arg_map('a', 'b')
     m2 = sl.arg_map(('a', 'b'))
     assert list(m1) == list(m2) == ['a', 'b']
     sl.node('tuilaunch_demos', 'talker', parameters=m1)
-    return sl.launch_description()
-""")
+"""))
     assert plan_of(path, b="z").processes[0].parameters == {"a": "x", "b": "z"}
 
 
 def test_py_eval_tolerates_lowercase_booleans(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     c1 = sl.declare_arg('c1', True)
     c2 = sl.declare_arg('c2', False)
     with sl.group(if_condition=sl.py_eval(c1, ' and not ', c2)):
         sl.node('tuilaunch_demos', 'talker')
-    return sl.launch_description()
-""")
+"""))
     assert plan_of(path, c1="true", c2="false").processes[0].enabled
     assert not plan_of(path, c1="true", c2="true").processes[0].enabled
 
 
 def test_value_outside_choices_is_refused_with_the_choices(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('mode', 'idle', choices=['idle', 'patrol'])
-    return sl.launch_description()
-""")
+"""))
     with pytest.raises(ArgumentError) as info:
         plan_of(path, mode="fly")
     text = str(info.value)
@@ -121,14 +106,11 @@ def generate_launch_description():
 
 
 def test_non_boolean_condition_names_the_argument(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('robot1', False)
     with sl.group(if_arg='robot1'):
         sl.node('tuilaunch_demos', 'talker')
-    return sl.launch_description()
-""")
+"""))
     with pytest.raises(ArgumentError) as info:
         plan_of(path, robot1="maybe")
     assert "argument 'robot1' = 'maybe'" in str(info.value)
@@ -136,22 +118,16 @@ def generate_launch_description():
 
 
 def test_undeclared_command_line_argument_is_a_warning(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('robot', 'r1')
-    return sl.launch_description()
-""")
+"""))
     (warning,) = plan_of(path, robto="r2").warnings
     assert "'robto'" in warning and "robot" in warning
 
 
 def test_argument_used_but_never_declared(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.node('tuilaunch_demos', 'talker', name=sl.arg('ghost'))
-    return sl.launch_description()
-""")
+"""))
     with pytest.raises(LaunchError, match="'ghost' is used but has no value"):
         plan_of(path)

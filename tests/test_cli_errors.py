@@ -11,7 +11,7 @@ import textwrap
 
 import pytest
 
-from .conftest import EXAMPLES, run_cli, run_headless
+from .conftest import EXAMPLES, run_cli, run_headless, sl_file
 from .launch_world import make_package
 
 HEADER = "from simple_launch import SimpleLauncher\n"
@@ -80,12 +80,9 @@ def test_syntax_error_names_file_and_line(write):
 
 
 def test_exception_in_launch_file_names_file_and_line(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     x = {}['missing']
-    return sl.launch_description()
-""")
+"""))
     check_error(run_cli(str(path), "--print"), f"{path}:5", "KeyError")
 
 
@@ -96,24 +93,18 @@ def test_debug_shows_the_traceback(write):
 
 
 def test_wrong_dsl_arguments(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.node('tuilaunch_demos', 'talker', paramters={'a': 1})
-    return sl.launch_description()
-""")
+"""))
     check_error(run_cli(str(path), "--print"), f"{path}:5", "unknown argument(s): paramters")
 
 
 def test_unknown_package_and_executable(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.node('no_such_pkg', 'x')
     sl.node('tuilaunch_demos', 'no_such_exe')
     sl.node('tuilaunch_demos', 'talker')
-    return sl.launch_description()
-""")
+"""))
     result = run_cli(str(path), "--print", "--json")
     check_error(result, "package 'no_such_pkg' not found in the ament index",
                 "executable 'no_such_exe' not found in package 'tuilaunch_demos'",

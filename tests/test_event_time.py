@@ -26,12 +26,14 @@ from launch_ros.actions import Node
 """
 
 
-def world(tmp_path):
+def world(tmp_path, **more_env: str):
+    """The fake_robot package's environment (with `more_env`, e.g. how long a probe lives) and
+    the folder its probes report into."""
     prefix = tmp_path / "prefix"
     make_package(prefix, "fake_robot", ["driver", "spawner", "rviz2", "sleeper"])
     probes = tmp_path / "probes"
     probes.mkdir()
-    return world_env(prefix, tmp_path, probes), probes
+    return {**world_env(prefix, tmp_path, probes), **more_env}, probes
 
 
 def headless(path, env, *args, timeout=120):
@@ -100,8 +102,7 @@ def generate_launch_description():
 
 
 def test_exit_handlers_fire_when_shutdown_stops_their_target(write, tmp_path):
-    env, _ = world(tmp_path)
-    env["PROBE_SECONDS"] = "60"
+    env, _ = world(tmp_path, PROBE_SECONDS="60")
     path = write(HEADER + """
 def generate_launch_description():
     driver = Node(package='fake_robot', executable='driver', name='driver')
@@ -186,8 +187,7 @@ def generate_launch_description():
 
 
 def test_shutdown_process_event_stops_only_its_target(write, tmp_path):
-    env, _ = world(tmp_path)
-    env["PROBE_SECONDS_SLEEPER"] = "60"
+    env, _ = world(tmp_path, PROBE_SECONDS_SLEEPER="60")
     path = write(HEADER + """
 def generate_launch_description():
     sleeper = Node(package='fake_robot', executable='sleeper', name='sleeper')

@@ -17,7 +17,7 @@ import yaml
 
 from tuilaunch.engine.describe.python.gazebo import gazebo_message, reset_world_name
 
-from .conftest import plan_of, run_cli
+from .conftest import plan_of, run_cli, sl_file
 from .fake_prefix import make_prefix, prefix_env, probe_records
 
 WORLD_SDF = """<?xml version="1.0"?>
@@ -60,6 +60,9 @@ def node_arguments(proc):
     """A node's own arguments: its argv between the executable and --ros-args."""
     end = proc.cmd.index("--ros-args") if "--ros-args" in proc.cmd else len(proc.cmd)
     return proc.cmd[1:end]
+
+
+GAZEBO_HEADER = "from simple_launch import SimpleLauncher, GazeboBridge\n"
 
 
 def bridge_config(plan, name="gz_bridge"):
@@ -122,33 +125,25 @@ def generate_launch_description():
 
 
 def test_world_tf_is_skipped_for_a_world_named_world_and_takes_an_explicit_frame(write, gz):
-    path = write("""
-from simple_launch import SimpleLauncher, GazeboBridge
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     GazeboBridge.set_world_name('world')
     sl.gz_world_tf()
     with sl.group(ns='explicit'):
         sl.gz_world_tf(sl.declare_arg('frame', 'map'))
-    return sl.launch_description()
-""")
+""", GAZEBO_HEADER))
     plan = plan_of(path, frame="arena")
     assert [(p.full_name, p.cmd[4]) for p in plan.processes] == [
         ("/explicit/gz_world_tf", "arena")]
 
 
 def test_spawn_from_topic_with_declared_axes_and_from_file(write, gz):
-    path = write("""
-from simple_launch import SimpleLauncher
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_gazebo_axes()
     robot = sl.declare_arg('robot', 'r1')
     with sl.group(ns=robot):
         sl.spawn_gz_model(robot, spawn_args=sl.gazebo_axes_args())
     sl.spawn_gz_model('box', model_file='/models/box.sdf', spawn_args=['-z', '2'])
-    return sl.launch_description()
-""")
+"""))
     plan = plan_of(path, robot="bot", x=1, yaw=1.57)
     names = [a.name for a in plan.arguments]
     assert names[:6] == ["x", "y", "z", "yaw", "pitch", "roll"]
@@ -163,14 +158,10 @@ def generate_launch_description():
 
 
 def test_only_the_axes_given_are_declared_with_their_defaults(write, gz):
-    path = write("""
-from simple_launch import SimpleLauncher
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_gazebo_axes(yaw=3.14, z=0.5, elevation=2)
     sl.spawn_gz_model('m', spawn_args=sl.gazebo_axes_args())
-    return sl.launch_description()
-""")
+"""))
     plan = plan_of(path)
     assert [(a.name, a.default) for a in plan.arguments] == [("yaw", "3.14"), ("z", "0.5")]
     create = by_exe(plan, "create")[0]
@@ -193,10 +184,7 @@ generate_launch_description = sl.launch_description(opaque_function=setup)
 
 
 def test_bridge_directions_message_types_and_lazy_tuples(write, gz):
-    path = write("""
-from simple_launch import SimpleLauncher, GazeboBridge
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     robot = sl.declare_arg('robot', 'r1')
     sl.create_gz_bridge([
         GazeboBridge('/model'/robot/'/pose', 'pose_gt', 'geometry_msgs/Pose',
@@ -207,8 +195,7 @@ def generate_launch_description():
         GazeboBridge('/custom', 'custom', 'my_msgs/Thing', GazeboBridge.gz2ros,
                      'gz.msgs.Thing'),
     ], 'bridge')
-    return sl.launch_description()
-""")
+""", GAZEBO_HEADER))
     config = bridge_config(plan_of(path, robot="bot"), "bridge")
     assert config == [
         {"gz_topic_name": "/model/bot//pose", "gz_type_name": "gz.msgs.Pose",
@@ -226,15 +213,11 @@ def generate_launch_description():
 
 
 def test_a_changed_bridge_set_gets_a_new_config_file(write, gz):
-    path = write("""
-from simple_launch import SimpleLauncher, GazeboBridge
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     robot = sl.declare_arg('robot', 'r1')
     sl.create_gz_bridge(GazeboBridge('/model'/robot/'pose', 'pose', 'geometry_msgs/Pose',
                                      GazeboBridge.gz2ros))
-    return sl.launch_description()
-""")
+""", GAZEBO_HEADER))
 
     def config_file(robot: str) -> str:
         plan = plan_of(path, robot=robot)
@@ -244,17 +227,13 @@ def generate_launch_description():
 
 
 def test_image_bridges_use_ros_gz_image_and_add_camera_info(write, gz):
-    path = write("""
-from simple_launch import SimpleLauncher, GazeboBridge
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     robot = sl.declare_arg('robot', 'turret')
     sl.create_gz_bridge([
         GazeboBridge(robot + '/image', 'image', 'sensor_msgs/Image', GazeboBridge.gz2ros),
         GazeboBridge('/depth', 'depth', 'sensor_msgs/Image', GazeboBridge.gz2ros),
     ], name='cam')
-    return sl.launch_description()
-""")
+""", GAZEBO_HEADER))
     plan = plan_of(path)
     image = next(p for p in plan.processes if p.name == "cam_image")
     assert (image.package, image.executable) == ("ros_gz_image", "image_bridge")
@@ -441,15 +420,11 @@ def generate_launch_description():
 
 
 def test_spawn_args_may_be_a_string_or_nested_lists(write, gz):
-    path = write("""
-from simple_launch import SimpleLauncher
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_gazebo_axes(x=1.0, y=2.0)
     sl.spawn_gz_model('a', spawn_args='-z 0.3 -Y 1')
     sl.spawn_gz_model('b', spawn_args=[sl.gazebo_axes_args(), ['-z', '0.1']])
-    return sl.launch_description()
-""")
+"""))
     a, b = by_exe(plan_of(path), "create")
     assert node_arguments(a) == ["-z", "0.3", "-Y", "1", "-topic", "robot_description",
                                  "-name", "a"]
@@ -468,13 +443,9 @@ def test_world_name_asked_from_a_running_gazebo(write, tmp_path, answer, world):
     gz_script = fake_bin / "gz"
     gz_script.write_text(f"#!/bin/sh\n[ \"$1 $2\" = 'model --list' ] && echo '{answer}'\n")
     gz_script.chmod(0o755)
-    path = write("""
-from simple_launch import SimpleLauncher, GazeboBridge
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.log_info('world is ' + GazeboBridge.world())
-    return sl.launch_description()
-""")
+""", GAZEBO_HEADER))
     env = {"PATH": f"{fake_bin}:{Path(sys.executable).parent}:/usr/bin:/bin",
            "GZ_VERSION": "harmonic"}
     done = run_cli(str(path), "--print", "--json", env=env)

@@ -6,7 +6,7 @@ import pytest
 
 from tuilaunch.engine import DslError
 
-from .conftest import enabled_names, plan_of
+from .conftest import enabled_names, plan_of, sl_file
 
 HEADER = """
 from simple_launch import SimpleLauncher
@@ -15,9 +15,7 @@ from simple_launch.events import When, OnProcessStart, OnProcessExit, OnProcessI
 
 
 def test_relative_namespaces_append_and_absolute_ones_reset(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     with sl.group(ns='robot'):
         sl.node('tuilaunch_demos', 'talker', name='a')
         with sl.group(ns='arm'):
@@ -27,8 +25,7 @@ def generate_launch_description():
         sl.node('tuilaunch_demos', 'talker', name='d', namespace='sub')
         sl.node('tuilaunch_demos', 'talker', name='e', namespace='/elsewhere')
     sl.node('tuilaunch_demos', 'talker', name='f')
-    return sl.launch_description()
-""")
+""", HEADER))
     plan = plan_of(path)
     assert [p.full_name for p in plan.processes] == [
         "/robot/a", "/robot/arm/b", "/absolute/c", "/robot/sub/d", "/elsewhere/e", "/f"]
@@ -48,21 +45,16 @@ def generate_launch_description():
 
 
 def test_namespace_from_an_argument(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('robot', 'r1')
     with sl.group(ns=sl.arg('robot')):
         sl.node('tuilaunch_demos', 'talker', name='t')
-    return sl.launch_description()
-""")
+""", HEADER))
     assert plan_of(path).processes[0].full_name == "/r1/t"
     assert plan_of(path, robot="r7").processes[0].full_name == "/r7/t"
 
 
-NESTED = HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+NESTED = sl_file("""
     sl.declare_arg('outer', True)
     sl.declare_arg('inner', True)
     with sl.group(if_arg='outer'):
@@ -71,8 +63,7 @@ def generate_launch_description():
             sl.node('tuilaunch_demos', 'talker', name='not_inner')
         with sl.group(if_arg='inner'):
             sl.node('tuilaunch_demos', 'talker', name='both')
-    return sl.launch_description()
-"""
+""", HEADER)
 
 
 @pytest.mark.parametrize("outer,inner,expected", [
@@ -94,9 +85,7 @@ def test_skipped_process_names_the_condition_that_was_false(write):
 
 
 def test_if_condition_and_unless_condition_take_raw_values_and_substitutions(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('flag', False)
     with sl.group(if_condition=True):
         sl.node('tuilaunch_demos', 'talker', name='raw_true')
@@ -106,21 +95,17 @@ def generate_launch_description():
         sl.node('tuilaunch_demos', 'talker', name='unless_flag')
     with sl.group(if_arg=sl.py_eval('not ', sl.arg('flag'))):
         sl.node('tuilaunch_demos', 'talker', name='non_string_if_arg')
-    return sl.launch_description()
-""")
+""", HEADER))
     assert enabled_names(plan_of(path)) == {"/raw_true", "/unless_flag", "/non_string_if_arg"}
     assert enabled_names(plan_of(path, flag="true")) == {"/raw_true"}
 
 
 def test_a_group_takes_only_one_condition(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('a', True)
     with sl.group(if_arg='a', unless_arg='a'):
         pass
-    return sl.launch_description()
-""")
+""", HEADER))
     from tuilaunch.engine import load_file
 
     with pytest.raises(DslError) as info:
@@ -129,9 +114,7 @@ def generate_launch_description():
 
 
 def test_event_groups_nest_and_wait_for_their_events(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('delay', 4.0)
     main = sl.node('tuilaunch_demos', 'talker', name='main')
     with sl.group(when=When(main, OnProcessStart, 1.)):
@@ -142,8 +125,7 @@ def generate_launch_description():
         sl.node('tuilaunch_demos', 'talker', name='last')
         with sl.group(when=When(delay=2.)):
             sl.node('tuilaunch_demos', 'talker', name='later')
-    return sl.launch_description()
-""")
+""", HEADER))
     plan = plan_of(path, delay="2.5")
     main, other, deep, last, later = plan.processes
     assert main.trigger is None
@@ -176,13 +158,10 @@ def generate_launch_description():
 
 
 def test_when_on_process_io_needs_the_stream(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     node = sl.node('tuilaunch_demos', 'talker')
     When(node, OnProcessIO)
-    return sl.launch_description()
-""")
+""", HEADER))
     from tuilaunch.engine import load_file
 
     with pytest.raises(DslError, match="io='stdout'"):

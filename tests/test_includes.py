@@ -6,17 +6,14 @@ import pytest
 
 from tuilaunch.engine import PackageError
 
-from .conftest import plan_of, run_cli
+from .conftest import plan_of, run_cli, sl_file
 
 HEADER = "from simple_launch import SimpleLauncher\n"
 
-CHILD = HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+CHILD = sl_file("""
     sl.declare_arg('robot', 'child_default')
     sl.node('tuilaunch_demos', 'talker', name=sl.arg('robot'))
-    return sl.launch_description()
-"""
+""")
 
 
 def parent_text(scope: bool, args: str) -> str:
@@ -48,15 +45,12 @@ def test_included_file_sees_command_line_value_when_not_passed(write):
 
 
 def test_include_from_package_share_with_and_without_launch_dir(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     with sl.group(ns='a'):
         sl.include('tuilaunch_demos', 'monitor.launch.py', launch_arguments={'topic': 'x'})
     with sl.group(ns='b'):
         sl.include('tuilaunch_demos', 'monitor.launch.py', 'launch')
-    return sl.launch_description()
-""")
+"""))
     a, b = plan_of(path).processes
     assert (a.full_name, a.remappings) == ("/a/monitor", [["chatter", "x"]])
     assert (b.full_name, b.remappings) == ("/b/monitor", [["chatter", "/chatter"]])
@@ -64,36 +58,27 @@ def generate_launch_description():
 
 
 def test_include_of_unknown_package_or_file_names_it(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.include('no_such_pkg', 'x.launch.py')
-    return sl.launch_description()
-""")
+"""))
     with pytest.raises(PackageError) as info:
         plan_of(path)
     assert "package 'no_such_pkg' not found" in str(info.value) and f"{path}:5" in str(info.value)
-    missing = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    missing = write(sl_file("""
     sl.include('tuilaunch_demos', 'nope.launch.py')
-    return sl.launch_description()
-""", "missing.py")
+"""), "missing.py")
     with pytest.raises(PackageError, match=r"'nope\.launch\.py' not found in the share of "
                        r"package 'tuilaunch_demos'"):
         plan_of(missing)
 
 
 def test_disabled_include_of_a_missing_package_is_not_an_error(write):
-    path = write(HEADER + """
-def generate_launch_description():
-    sl = SimpleLauncher()
+    path = write(sl_file("""
     sl.declare_arg('sim', False)
     with sl.group(if_arg='sim'):
         sl.include('gazebo_not_installed', 'sim.launch.py')
     sl.node('tuilaunch_demos', 'talker')
-    return sl.launch_description()
-""")
+"""))
     plan = plan_of(path)
     assert [p.enabled for p in plan.processes] == [True]
     with pytest.raises(PackageError, match="gazebo_not_installed"):

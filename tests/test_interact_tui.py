@@ -5,7 +5,6 @@ gives them back; `g` restarts a node under a tool from a prompt; `c` shows its c
 from __future__ import annotations
 
 import asyncio
-from pathlib import Path
 
 import pytest
 from textual.widgets import Input
@@ -15,7 +14,7 @@ from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 
 from .test_interact import LAUNCH, logs, process
-from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
+from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
 
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
@@ -32,9 +31,7 @@ def pane(app, process_id: str) -> str:
 
 def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
     path = str(write(LAUNCH))
-    name = tl(path, "--detach").stdout.strip()
-    tl("wait", name, "keys-2", "running", "--timeout", "60")
-    log_dir = Path(status(name)["log_dir"])
+    name, log_dir = detached_with(path, "keys-2")
 
     async def scenario() -> None:
         app = make_app(path, {}, log_dir, session_name=name)
@@ -95,9 +92,7 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
 
 def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
     path = str(write(LAUNCH))
-    name = tl(path, "--detach").stdout.strip()
-    tl("wait", name, "keys-2", "running", "--timeout", "60")
-    log_dir = Path(status(name)["log_dir"])
+    name, log_dir = detached_with(path, "keys-2")
     before = process(name, "keys-2")["pid"]
 
     async def scenario() -> None:

@@ -26,7 +26,7 @@ from tuilaunch.engine.run.session import session_dir
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
 
-from .conftest import wait_for
+from .conftest import python_prints, wait_for
 from .inspector_helpers import NODE_SCRIPT
 from .test_sessions import runtime, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
@@ -122,10 +122,7 @@ def test_the_launchers_modules_import_no_rclpy(module):
     code = (f"import sys, {module}\n"
             "print(sorted({m.split('.')[0] for m in sys.modules} & "
             "{'rclpy', 'rcl_interfaces', 'lifecycle_msgs', 'composition_interfaces'}))")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "[]"
+    assert python_prints(code).strip() == "[]"
 
 
 def test_asyncio_without_tls_still_runs_and_ssl_still_imports():
@@ -138,10 +135,7 @@ def test_asyncio_without_tls_still_runs_and_ssl_still_imports():
             "print('ssl' in sys.modules, asyncio.run(asyncio.sleep(0, 'ran')))\n"
             "import ssl\n"
             "print(ssl.create_default_context() is not None)\n")
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.split() == ["False", "ran", "True"]
+    assert python_prints(code).split() == ["False", "ran", "True"]
 
 
 # --- the TUI first: the tree is on screen before the first process starts -----------------

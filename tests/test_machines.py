@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 import textwrap
 
 import pytest
@@ -17,7 +15,7 @@ from tuilaunch.engine.plan.machines import (
     unused_rules,
 )
 
-from .conftest import plan_of
+from .conftest import plan_of, python_prints
 
 EXAMPLE = """\
 machines:
@@ -147,5 +145,4 @@ def test_the_plan_layer_reads_it_without_the_run_layer():
                                                             'textual')))
         print(bad); sys.exit(1 if bad else 0)
     """)
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert done.returncode == 0, done.stdout + done.stderr
+    python_prints(code)

@@ -5,13 +5,11 @@ newline."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.screens.output_panel import OutputPanel
 
 from .terminal_harness import PROGRAMS
-from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
+from .test_sessions import detached_with, runtime, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
 
 LAUNCH = f"""
@@ -246,9 +244,7 @@ def test_a_client_attaching_to_a_session_sees_the_waiting_prompt(write, runtime)
     import asyncio
 
     path = launch(write, ("prompt_reader", []))
-    name = tl(path, "--detach").stdout.strip()
-    tl("wait", name, "prompt_reader-1", "running", "--timeout", "60")
-    log_dir = Path(status(name)["log_dir"])
+    name, log_dir = detached_with(path, "prompt_reader-1")
 
     async def scenario() -> None:
         # attached after the prompt was printed: the log file has only `ready`

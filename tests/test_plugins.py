@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import subprocess
-import sys
 import tempfile
 from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
@@ -19,6 +17,8 @@ from tuilaunch.engine.run.session import session_dir
 from tuilaunch.engine.run.session.protocol import decode, encode
 from tuilaunch.engine.run.session.session_server import SessionServer
 from tuilaunch.engine.run.supervisor.supervisor import Supervisor
+
+from .conftest import python_prints
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -39,15 +39,10 @@ def test_the_run_layer_loads_without_ros_and_the_engine_without_textual():
     run_only = ("import sys, tuilaunch.engine.run.supervisor.supervisor\n"
                 "import tuilaunch.engine.run.session.session_server\n"
                 "print([m for m in sys.modules if m.startswith('tuilaunch.engine.ros')])")
-    done = subprocess.run([sys.executable, "-c", run_only], capture_output=True, text=True,
-                          timeout=60)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "[]"
-    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                          timeout=60)
-    assert done.returncode == 0, done.stderr
-    assert "textual" not in done.stdout  # the wired engine has ROS, never Textual
-    assert "tuilaunch.engine.ros.lifecycle" in done.stdout
+    assert python_prints(run_only, timeout=60).strip() == "[]"
+    wired = python_prints(probe, timeout=60)
+    assert "textual" not in wired  # the wired engine has ROS, never Textual
+    assert "tuilaunch.engine.ros.lifecycle" in wired
 
 
 class Greeter(Plugin):

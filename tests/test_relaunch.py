@@ -265,17 +265,8 @@ def test_a_mistyped_argument_keeps_its_warning_line_headless_and_in_print(write)
         "includes; did you mean 'robot'? (declared: robot)" in ran.stderr
 
 
-SHELL = """
-from simple_launch import SimpleLauncher
-from launch.actions import ExecuteProcess
-def generate_launch_description():
-    sl = SimpleLauncher()
-    sl.declare_arg('word', 'alpha')
-    sl.add_action(ExecuteProcess(name='echo', cmd=[
-        'sh', '-c', 'echo word "$0"; exec sleep 600', sl.arg('word')]))
-    sl.add_action(ExecuteProcess(name='bad', cmd=['sh', '-c', 'sleep 1; exit 3']))
-    return sl.launch_description()
-"""
+SHELL = EDITABLE.format(said="word", extra=(
+    "sl.add_action(ExecuteProcess(name='bad', cmd=['sh', '-c', 'sleep 1; exit 3']))"))
 
 
 def apply_elsewhere(name: str, **arguments: str) -> None:

@@ -90,6 +90,14 @@ def pids(name: str) -> dict[str, int]:
     return {p["id"]: p["pid"] for p in status(name)["processes"] if p["pid"]}
 
 
+def detached_with(path: str, process: str) -> tuple[str, Path]:
+    """A session of `path` started detached, once `process` runs: its name and its log
+    folder, for a TUI to attach to."""
+    name = tl(path, "--detach").stdout.strip()
+    tl("wait", name, process, "running", "--timeout", "60")
+    return name, Path(status(name)["log_dir"])
+
+
 def start_detached(write, *args: str) -> str:
     path = write(LAUNCH)
     name = tl(str(path), "--detach", *args).stdout.strip()

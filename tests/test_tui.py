@@ -166,7 +166,7 @@ async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
         await pilot.press("3")
         panel = app.query_one(ServicesPanel)
         await until(pilot, lambda: "/tui3/enable" in dict(panel.services),
-                    every=panel.refresh_services)
+                    every=panel.refresh_listing)
         await pilot.press("slash", *"tui3/enable")  # the tab shows the list; / filters it
         await pilot.press("enter")  # picks the first match and moves to the form
         assert panel.selected == ("/tui3/enable", "std_srvs/srv/SetBool")
@@ -201,7 +201,7 @@ async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
         await pilot.press("4")
         panel = app.query_one(ParamsPanel)
         await until(pilot, lambda: "/tui4/control/configurable" in panel.nodes,
-                    every=panel.refresh_nodes)
+                    every=panel.refresh_listing)
         await pilot.press("slash", *"tui4/control")  # the tab shows the list; / filters it
         await pilot.press("enter")
         table = app.query_one("#prm-table", DataTable)

@@ -9,6 +9,9 @@ import os
 import re
 import sys
 import time
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import Any
 
 import pytest
 from textual import events
@@ -74,11 +77,22 @@ async def shutdown(app: TuiLaunchApp) -> None:
         await app.engine.run(app.supervisor.shutdown("test over"))
 
 
-async def test_a_search_typed_in_one_burst_is_searched_and_never_stops_the_node(write,
-                                                                               tmp_path):
+@asynccontextmanager
+async def two_started(write, tmp_path) -> AsyncIterator[tuple[TuiLaunchApp, Any, dict[str, int]]]:
+    """The TUI of TWO at 80x24, both processes started and quiet-2 selected: the app, its
+    pilot and the processes' pids; the launch is shut down afterwards."""
     app = make_app(str(write(TWO)), {}, tmp_path / "log")
     async with app.run_test(size=(80, 24)) as pilot:
         before = await started(app, pilot)
+        try:
+            yield app, pilot, before
+        finally:
+            await shutdown(app)
+
+
+async def test_a_search_typed_in_one_burst_is_searched_and_never_stops_the_node(write,
+                                                                               tmp_path):
+    async with two_started(write, tmp_path) as (app, pilot, before):
         # `/set`, `/rst` and `\st` each as one read: search / filter text, no s, r, t
         burst(app, "slash", *"set")
         await until(pilot, lambda: field(app, "search-input").value == "set")
@@ -92,13 +106,10 @@ async def test_a_search_typed_in_one_burst_is_searched_and_never_stops_the_node(
         assert pids(app) == before  # nothing was stopped, restarted or started
         assert app.supervisor is not None
         assert app.supervisor.states["quiet-2"] == "running"
-        await shutdown(app)
 
 
 async def test_keys_after_i_reach_the_node_in_order(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        before = await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, before):
         select(app, "lines-1")
         await pilot.pause()
         # i, then a line with s, r, t, q and a digit in it, Enter: one read
@@ -110,13 +121,10 @@ async def test_keys_after_i_reach_the_node_in_order(write, tmp_path):
         await until(pilot, lambda: type(app.screen).__name__ == "QuitScreen")
         burst(app, "n")
         await until(pilot, lambda: type(app.screen).__name__ != "QuitScreen")
-        await shutdown(app)
 
 
 async def test_the_palette_and_a_field_opened_by_a_tab_key_get_the_burst(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        before = await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, before):
         # ctrl+p and a command's words in one read: the words are in the palette's input
         burst(app, "ctrl+p", *"stop")
         await until(pilot, lambda: type(app.screen).__name__ == "CommandPalette")
@@ -133,14 +141,11 @@ async def test_the_palette_and_a_field_opened_by_a_tab_key_get_the_burst(write, 
         burst(app, "5", "slash", *"chat")
         await until(pilot, lambda: field(app, "tpc-filter").value == "chat")
         assert pids(app) == before
-        await shutdown(app)
 
 
 async def test_a_value_typed_after_the_args_tab_key_in_one_read_goes_into_its_field(
         write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        before = await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, before):
         # the Args tab, tab past Apply and Defaults into the robot's field, its value
         # replaced: one read
         burst(app, "2", "tab", "tab", "ctrl+u", *"r2sq")
@@ -148,7 +153,6 @@ async def test_a_value_typed_after_the_args_tab_key_in_one_read_goes_into_its_fi
         assert not app.quitting and pids(app) == before
         await until(pilot, lambda: app.preview is not None
                     and app.preview.arguments.get("robot") == "r2sq")
-        await shutdown(app)
 
 
 def test_a_search_written_to_a_real_terminal_in_one_write_stops_nothing(write, tmp_path):
@@ -174,9 +178,7 @@ def dialogs(app: TuiLaunchApp) -> list[str]:
 
 
 async def test_ctrl_c_twice_asks_once_and_n_leaves_no_question(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        before = await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, before):
         burst(app, "ctrl+c", "ctrl+c")
         await until(pilot, lambda: dialogs(app) == ["QuitScreen"])
         burst(app, "q", "ctrl+c")
@@ -185,14 +187,11 @@ async def test_ctrl_c_twice_asks_once_and_n_leaves_no_question(write, tmp_path):
         burst(app, "n")
         await until(pilot, lambda: dialogs(app) == [])
         assert pids(app) == before
-        await shutdown(app)
 
 
 async def test_tab_keys_and_q_work_from_every_tab_and_the_focus_is_never_a_field(write,
                                                                                tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, _):
         for key, tab in (("2", "args"), ("3", "services"), ("4", "params"), ("5", "topics"),
                          ("1", "nodes")):
             burst(app, key, "q")  # the tab, then q at once: the quit question, nothing typed
@@ -211,13 +210,10 @@ async def test_tab_keys_and_q_work_from_every_tab_and_the_focus_is_never_a_field
         burst(app, "n")
         await until(pilot, lambda: dialogs(app) == [])
         assert app.focused is app.query_one("#svc-list")
-        await shutdown(app)
 
 
 async def test_leaving_the_search_goes_back_where_it_was_typed(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, _):
         tree = app.launch_tree
         burst(app, "slash", *"abc", "escape")  # from the tree: back to the tree
         await until(pilot, lambda: app.focused is tree)
@@ -229,13 +225,10 @@ async def test_leaving_the_search_goes_back_where_it_was_typed(write, tmp_path):
         burst(app, "slash", *"x", "enter")  # from the pane: back to the pane
         await until(pilot, lambda: app.output_panel.search == "x")
         assert app.focused is lines
-        await shutdown(app)
 
 
 async def test_f1_and_the_palettes_keys_show_the_keys_and_esc_closes_them(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, _):
         burst(app, "f1")
         await until(pilot, lambda: dialogs(app) == ["HelpScreen"])
         burst(app, "escape")
@@ -250,7 +243,6 @@ async def test_f1_and_the_palettes_keys_show_the_keys_and_esc_closes_them(write,
         assert not app.query("HelpPanel")  # not Textual's side panel (30 of 80 columns)
         burst(app, "escape")
         await until(pilot, lambda: dialogs(app) == [])
-        await shutdown(app)
 
 
 def start_on_console(tmp_path, *argv: str, term: str = "linux"):
@@ -326,15 +318,12 @@ def test_quitting_a_session_offers_detach_and_d_leaves_it_running(write, tmp_pat
 
 
 async def test_a_paste_right_after_slash_is_searched(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        before = await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, before):
         burst(app, "slash")  # `/`, then a bracketed paste, in one read
         app.post_message(events.Paste("start"))
         burst(app, "enter")
         await until(pilot, lambda: app.output_panel.search == "start")
         assert pids(app) == before
-        await shutdown(app)
 
 
 def test_escape_and_a_backslash_in_one_write_leave_the_search_and_open_the_filter(write,
@@ -353,9 +342,7 @@ def test_escape_and_a_backslash_in_one_write_leave_the_search_and_open_the_filte
 
 
 async def test_the_footer_does_not_offer_keys_a_field_types(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, _):
         offered = {b.binding.description for b in app.screen.active_bindings.values()
                    if b.binding.show}
         assert {"Search", "Filter"} <= offered  # in the tree: / and \ are commands
@@ -364,16 +351,12 @@ async def test_the_footer_does_not_offer_keys_a_field_types(write, tmp_path):
         offered = {b.binding.description for b in app.screen.active_bindings.values()
                    if b.binding.show}
         assert not {"Search", "Filter", "Level", "Quit"} & offered  # typed into the field
-        await shutdown(app)
 
 
 async def test_c_then_y_in_one_read_copies_the_command_line(write, tmp_path):
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        await started(app, pilot)
+    async with two_started(write, tmp_path) as (app, pilot, _):
         select(app, "lines-1")
         await pilot.pause()
         burst(app, "c", "y")  # the dialog comes after a round trip: y waits for it
         await until(pilot, lambda: "line_reader.py" in app.clipboard)
         await until(pilot, lambda: dialogs(app) == [])  # y copied and closed it
-        await shutdown(app)

@@ -11,6 +11,8 @@ import select
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from textual import events
@@ -543,7 +545,7 @@ async def test_params_launch_column_matches_a_node_by_the_name_it_reports(tmp_pa
         await pilot.press("4")
         panel = app.query_one(ParamsPanel)
         await until(pilot, lambda: "/tuip/control/configurable" in panel.nodes,
-                    every=panel.refresh_nodes)
+                    every=panel.refresh_listing)
         panel.load_node("/tuip/control/configurable")
         table = app.query_one("#prm-table", DataTable)
         await until(pilot, lambda: "mode" in panel.params and table.row_count > 0)
@@ -680,48 +682,44 @@ async def test_focus_shows_in_reverse_video_and_one_new_line_is_singular(write, 
         await app.engine.run(app.supervisor.shutdown("test over"))
 
 
-def test_escape_and_a_digit_in_one_write_leave_the_field_and_switch_tabs(write, tmp_path):
-    """Over a real terminal ESC+3 in one read is parsed as one key: still leave, then 3."""
-    path = write("""
-        from launch import LaunchDescription
-        from launch.actions import DeclareLaunchArgument, ExecuteProcess
-        def generate_launch_description():
-            return LaunchDescription([DeclareLaunchArgument('label', default_value='x'),
-                                      ExecuteProcess(name='quiet', cmd=['sleep', '600'])])
-        """)
-    proc, master = start_on_pty(tmp_path, str(path))
+ONE_ARGUMENT = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([DeclareLaunchArgument('label', default_value='x'),
+                              ExecuteProcess(name='quiet', cmd=['sleep', '600'])])
+"""
+
+
+@contextmanager
+def arguments_tab_on_a_pty(write, tmp_path) -> Iterator[int]:
+    """A launch of one argument run on a real pty, its Arguments tab (2) shown: the pty's
+    master end; the launch is stopped afterwards."""
+    proc, master = start_on_pty(tmp_path, str(write(ONE_ARGUMENT)))
     try:
         read_until(master, b"1 running")
         os.write(master, b"2")
         read_until(master, b"Apply (F5)")
         read_for(master, 0.3)
+        yield master
+    finally:
+        stop_pty(proc, master)
+
+
+def test_escape_and_a_digit_in_one_write_leave_the_field_and_switch_tabs(write, tmp_path):
+    """Over a real terminal ESC+3 in one read is parsed as one key: still leave, then 3."""
+    with arguments_tab_on_a_pty(write, tmp_path) as master:
         os.write(master, b"\x1b3")
         screen = read_until(master, b"services")
         assert "£".encode() not in screen
-    finally:
-        stop_pty(proc, master)
 
 
 def test_escape_and_a_letter_in_one_write_leave_the_field_then_act(write, tmp_path):
     """ESC+/ in one read (escape then `/` typed fast over ssh) is parsed as alt+/: it leaves
     the field, then `/` opens the search, instead of typing `/` into the field."""
-    path = write("""
-        from launch import LaunchDescription
-        from launch.actions import DeclareLaunchArgument, ExecuteProcess
-        def generate_launch_description():
-            return LaunchDescription([DeclareLaunchArgument('label', default_value='x'),
-                                      ExecuteProcess(name='quiet', cmd=['sleep', '600'])])
-        """)
-    proc, master = start_on_pty(tmp_path, str(path))
-    try:
-        read_until(master, b"1 running")
-        os.write(master, b"2")
-        read_until(master, b"Apply (F5)")
-        read_for(master, 0.3)
+    with arguments_tab_on_a_pty(write, tmp_path) as master:
         os.write(master, b"\t\t")  # into the label field (past Apply, Defaults)
         read_for(master, 0.3)
         os.write(master, b"y\x1bq")  # type y, then escape and q together: leave, then quit
         screen = read_until(master, b"Stop them all and quit?")
         assert b"yq" not in screen  # the q was not typed into the field
-    finally:
-        stop_pty(proc, master)

@@ -154,10 +154,7 @@ class KeyOrder(App[int]):
                 if isinstance(event, TrackedKey):
                     event.finish()
             return
-        if event is not self._key_in_flight and (
-                self._key_in_flight is not None or self._keys_waiting or self._key_holds):
-            self._keys_waiting.append(event)
-            self._watch_stuck()
+        if self._waits_its_turn(event):
             return
         following = after_escape(event)
         if following is not None:
@@ -178,6 +175,16 @@ class KeyOrder(App[int]):
             if not tracked.is_forwarded:  # a priority binding took it, or nothing could
                 tracked.finish()
 
+    def _waits_its_turn(self, event: events.Key | events.Paste) -> bool:
+        """Queues a key or a paste behind the one in flight, or behind those waiting or held:
+        True when it waits."""
+        if event is self._key_in_flight or (
+                self._key_in_flight is None and not self._keys_waiting and not self._key_holds):
+            return False
+        self._keys_waiting.append(event)
+        self._watch_stuck()
+        return True
+
     async def _paste(self, paste: events.Paste) -> None:
         """Pasted text (one event, bracketed paste) takes its turn among the keys: `/` then
         a paste searches for the pasted text. It goes to the widget focused when its turn
@@ -185,10 +192,7 @@ class KeyOrder(App[int]):
         if paste.is_forwarded:
             await super().on_event(paste)
             return
-        if paste is not self._key_in_flight and (
-                self._key_in_flight is not None or self._keys_waiting or self._key_holds):
-            self._keys_waiting.append(paste)
-            self._watch_stuck()
+        if self._waits_its_turn(paste):
             return
         self._key_in_flight = None
         await super().on_event(paste)

@@ -87,9 +87,9 @@ class Navigation(SessionLink):
         """Keyboard first: each tab puts the cursor where work starts, at once, so keys
         typed right after the tab key go there; again once the tab is laid out."""
         if pane == "services":
-            self.query_one(ServicesPanel).refresh_services()
+            self.query_one(ServicesPanel).refresh_listing()
         elif pane == "params":
-            self.query_one(ParamsPanel).refresh_nodes()
+            self.query_one(ParamsPanel).refresh_listing()
         target = self._home(pane)
         self.screen.set_focus(target)
         self.call_after_refresh(self._refocus, pane, target)

@@ -273,17 +273,15 @@ class Resolver:
             self.event_handler(entity, scope, parent)
         elif isinstance(entity, DslOpaque | OpaqueFunction) or is_custom_action(entity):
             self.opaque(entity, scope, parent)
-        elif isinstance(entity, SetEnvironmentVariable):
+        elif isinstance(entity, SetEnvironmentVariable | SetLaunchConfiguration):
             if self._gate(entity, scope)[0]:
                 ctx = scope.context()
-                scope.env[perform(entity.name, ctx)] = perform(entity.value, ctx)
+                into: dict[str, Any] = scope.env if isinstance(entity, SetEnvironmentVariable) \
+                    else scope.configurations
+                into[perform(entity.name, ctx)] = perform(entity.value, ctx)
         elif isinstance(entity, UnsetEnvironmentVariable):
             if self._gate(entity, scope)[0]:
                 scope.env[perform(entity.name, scope.context())] = None
-        elif isinstance(entity, SetLaunchConfiguration):
-            if self._gate(entity, scope)[0]:
-                ctx = scope.context()
-                scope.configurations[perform(entity.name, ctx)] = perform(entity.value, ctx)
         elif isinstance(entity, SetParameter):
             if self._gate(entity, scope)[0]:
                 scope.global_parameters.append((entity.name, entity.value))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TypeVar
+
 from rich.text import Text
 from textual import events, on
 from textual.app import ComposeResult
@@ -41,6 +43,17 @@ def keys_text(ascii_only: bool) -> str:
     return KEYS.replace("UPmem", f"{up}mem").replace("XQOS", f"{cross}qos")
 
 
+ResultT = TypeVar("ResultT")
+
+
+def dialog_css(screen: str, width: int, border: str = "primary", more: str = "") -> str:
+    """A dialog's look: a box of `width` columns (at most the terminal's) in the middle of the
+    screen, framed in the theme's `border` colour; `more`: rules of its own."""
+    return (f"{screen} {{ align: center middle; }}\n"
+            f"{screen} > Vertical {{ width: {width}; max-width: 100%; height: auto; "
+            f"padding: 1 2; border: round ${border}; background: $surface; }}\n{more}\n")
+
+
 class HelpScreen(ModalScreen[None]):
     """The keys, over the screen; scrolls when the terminal is short."""
 
@@ -60,32 +73,41 @@ class HelpScreen(ModalScreen[None]):
             yield Static(keys_text(ascii_terminal()))
 
 
-class ConfirmScreen(ModalScreen[bool]):
+class QuestionScreen(ModalScreen[ResultT]):
+    """A question in a box over the screen (`dialog_css`), the ways to answer it below."""
+
+    def __init__(self, question: str) -> None:
+        super().__init__()
+        self.question = question
+
+    def compose(self) -> ComposeResult:
+        with Vertical():
+            yield Static(Text(self.question))
+            yield from self.answers()
+
+    def answers(self) -> ComposeResult:
+        raise NotImplementedError
+
+
+class ConfirmScreen(QuestionScreen[bool]):
     """A yes/no question with the keys on its buttons."""
 
-    DEFAULT_CSS = """
-    ConfirmScreen { align: center middle; }
-    ConfirmScreen > Vertical { width: 60; max-width: 100%; height: auto; padding: 1 2;
-                               border: round $warning; background: $surface; }
-    ConfirmScreen Horizontal { height: 3; }
-    """
+    DEFAULT_CSS = dialog_css("ConfirmScreen", 60, "warning",
+                             more="ConfirmScreen Horizontal { height: 3; }")
     BINDINGS = [Binding("y", "answer(True)", "Yes"), Binding("n,escape", "answer(False)", "No")]
 
     quit_question: bool = False
     """It asks about quitting: q or ctrl+c again does not ask a second time."""
 
     def __init__(self, question: str, yes: str = "Yes (y)", no: str = "No (n)") -> None:
-        super().__init__()
-        self.question = question
+        super().__init__(question)
         self.yes = yes
         self.no = no
 
-    def compose(self) -> ComposeResult:
-        with Vertical():
-            yield Static(Text(self.question))
-            with Horizontal():
-                yield Button(self.yes, id="yes", variant="error")
-                yield Button(self.no, id="no")
+    def answers(self) -> ComposeResult:
+        with Horizontal():
+            yield Button(self.yes, id="yes", variant="error")
+            yield Button(self.no, id="no")
 
     def action_answer(self, answer: bool) -> None:
         self.dismiss(answer)
@@ -99,12 +121,8 @@ class QuitScreen(ModalScreen[str]):
     """Quit while processes run: stop them all ("stop"), keep running ("keep"), or, for a
     session, leave it running without this window ("detach")."""
 
-    DEFAULT_CSS = """
-    QuitScreen { align: center middle; }
-    QuitScreen > Vertical { width: 64; max-width: 100%; height: auto; padding: 1 2;
-                            border: round $warning; background: $surface; }
-    QuitScreen Horizontal { height: auto; }
-    """
+    DEFAULT_CSS = dialog_css("QuitScreen", 64, "warning",
+                             more="QuitScreen Horizontal { height: auto; }")
     BINDINGS = [Binding("y", "answer('stop')", "Stop and quit"),
                 Binding("n,escape", "answer('keep')", "Keep running"),
                 Binding("d", "answer('detach')", "Detach", show=False)]
@@ -142,27 +160,20 @@ class QuitScreen(ModalScreen[str]):
         self.dismiss(event.button.id or "keep")
 
 
-class ChoiceScreen(ModalScreen[str | None]):
+class ChoiceScreen(QuestionScreen[str | None]):
     """One of a few answers, picked with arrows and enter or with its first letter."""
 
-    DEFAULT_CSS = """
-    ChoiceScreen { align: center middle; }
-    ChoiceScreen > Vertical { width: 60; max-width: 100%; height: auto; padding: 1 2;
-                              border: round $primary; background: $surface; }
-    ChoiceScreen OptionList { height: auto; max-height: 10; }
-    """
+    DEFAULT_CSS = dialog_css("ChoiceScreen", 60,
+                             more="ChoiceScreen OptionList { height: auto; max-height: 10; }")
     BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
 
     def __init__(self, question: str, choices: list[str], current: str | None = None) -> None:
-        super().__init__()
-        self.question = question
+        super().__init__(question)
         self.choices = choices
         self.current = current
 
-    def compose(self) -> ComposeResult:
-        with Vertical():
-            yield Static(Text(self.question))
-            yield OptionList(*(Option(f"{c[0]}  {c}", id=c) for c in self.choices))
+    def answers(self) -> ComposeResult:
+        yield OptionList(*(Option(f"{c[0]}  {c}", id=c) for c in self.choices))
 
     def on_mount(self) -> None:
         options = self.query_one(OptionList)
@@ -182,25 +193,18 @@ class ChoiceScreen(ModalScreen[str | None]):
         self.dismiss(str(event.option.id))
 
 
-class PathScreen(ModalScreen[str | None]):
+class PathScreen(QuestionScreen[str | None]):
     """Asks for a file path, offering one; enter takes it, escape cancels."""
 
-    DEFAULT_CSS = """
-    PathScreen { align: center middle; }
-    PathScreen > Vertical { width: 70; max-width: 100%; height: auto; padding: 1 2;
-                            border: round $primary; background: $surface; }
-    """
+    DEFAULT_CSS = dialog_css("PathScreen", 70)
     BINDINGS = [Binding("escape", "dismiss(None)", "Cancel")]
 
     def __init__(self, question: str, default: str = "") -> None:
-        super().__init__()
-        self.question = question
+        super().__init__(f"{question} (enter: ok, esc: cancel)")
         self.default = default
 
-    def compose(self) -> ComposeResult:
-        with Vertical():
-            yield Static(Text(f"{self.question} (enter: ok, esc: cancel)"))
-            yield PathField(value=self.default, id="path-input")
+    def answers(self) -> ComposeResult:
+        yield PathField(value=self.default, id="path-input")
 
     def on_mount(self) -> None:
         self.query_one(Input).focus()

@@ -14,6 +14,8 @@ from textual.screen import ModalScreen
 from textual.suggester import SuggestFromList
 from textual.widgets import Input, OptionList, Static
 
+from .dialogs import dialog_css
+
 KNOWN_PREFIXES = ("gdb -q -ex run --args", "valgrind --leak-check=full",
                   "python3 -m pdb", "perf record -g --", "rr record")
 """Offered after the operator's own recent prefixes."""
@@ -53,12 +55,8 @@ class PrefixPrompt(ModalScreen[str | None]):
     """Which tool to restart a node under: typed, or one of the recent ones (up/down picks,
     enter runs, esc cancels)."""
 
-    DEFAULT_CSS = """
-    PrefixPrompt { align: center middle; }
-    PrefixPrompt > Vertical { width: 80; max-width: 100%; height: auto; padding: 1 2;
-                              border: round $primary; background: $surface; }
-    PrefixPrompt OptionList { height: auto; max-height: 8; }
-    """
+    DEFAULT_CSS = dialog_css("PrefixPrompt", 80,
+                             more="PrefixPrompt OptionList { height: auto; max-height: 8; }")
     BINDINGS = [Binding("escape", "cancel", "Cancel")]
 
     def __init__(self, process: str, recent: list[str]) -> None:
@@ -92,11 +90,7 @@ class PrefixPrompt(ModalScreen[str | None]):
 class CommandScreen(ModalScreen[None]):
     """A node's command line as it was started, ready to paste into a shell; y copies it."""
 
-    DEFAULT_CSS = """
-    CommandScreen { align: center middle; }
-    CommandScreen > Vertical { width: 100; max-width: 100%; height: auto; padding: 1 2;
-                               border: round $primary; background: $surface; }
-    """
+    DEFAULT_CSS = dialog_css("CommandScreen", 100)
     BINDINGS = [Binding("y", "copy", "Copy"), Binding("escape,q,c", "dismiss", "Close")]
 
     def __init__(self, process: str, line: str) -> None:

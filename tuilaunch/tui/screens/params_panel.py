@@ -3,7 +3,6 @@ node's live parameters written to a params file, or a file loaded into it."""
 
 from __future__ import annotations
 
-import asyncio
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
@@ -21,6 +20,7 @@ from ...engine.plan.model import Plan
 from ...engine.ros.bridge import ParameterInfo
 from .dialogs import PathScreen
 from .fields import Field
+from .graph_listing import GraphListing
 
 
 def show_value(value: Any) -> str:
@@ -57,7 +57,7 @@ def parse_value(type_name: str, text: str) -> Any:
     return [str(v) for v in value]
 
 
-class ParamsPanel(Horizontal):
+class ParamsPanel(GraphListing, Horizontal):
     DEFAULT_CSS = """
     ParamsPanel #prm-left { width: 26; border-right: tall $panel; }
     ParamsPanel #prm-right { width: 1fr; padding: 0 1; }
@@ -74,6 +74,8 @@ class ParamsPanel(Horizontal):
         Binding("o", "open_file", "Load file", tooltip="Set the node's parameters from a "
                 "params file"),
     ]
+
+    listing = "nodes"
 
     def __init__(self, bridge: Callable[[], Any], plan: Callable[[], Plan],
                  timeout: float = 5.0,
@@ -92,7 +94,6 @@ class ParamsPanel(Horizontal):
         self.node: str | None = None
         self.params: dict[str, ParameterInfo] = {}
         self.current: str | None = None
-        self.listed = False  # the nodes were asked for (the tab was shown)
 
     def compose(self) -> ComposeResult:
         with Vertical(id="prm-left"):
@@ -114,34 +115,19 @@ class ParamsPanel(Horizontal):
                            ("type", "type"), ("ro", "ro")):
             table.add_column(title, key=key)
 
-    def on_show(self) -> None:
-        # listed when first shown: rclpy starts in the UI only for someone who looks
-        if not self.listed:
-            self.listed = True
-            self.refresh_nodes()
-
-    @work(group="params-nodes", exclusive=True, exit_on_error=False)
-    async def refresh_nodes(self) -> None:
-        try:
-            bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
-            self.nodes = await bridge.list_nodes()
-        except Exception as exc:  # the panel reports, the app keeps running
-            self.show_result(f"cannot list nodes: {exc}", ok=False)
-            return
+    def show_listing(self, listing: list[str]) -> None:
+        self.nodes = listing
         self._fill_nodes()
         if self.node is not None:
             self.load_node(self.node)
 
+    @on(Input.Changed, "#prm-filter")
     def _fill_nodes(self) -> None:
         term = self.query_one("#prm-filter", Input).value.lower()
         listing = self.query_one("#prm-nodes", OptionList)
         listing.clear_options()
         listing.add_options([Option(Text(n, no_wrap=True, overflow="ellipsis"), id=n)
                              for n in self.nodes if term in n.lower()])
-
-    @on(Input.Changed, "#prm-filter")
-    def _filter(self) -> None:
-        self._fill_nodes()
 
     @on(Input.Submitted, "#prm-filter")
     def _filter_submitted(self) -> None:
@@ -152,7 +138,7 @@ class ParamsPanel(Horizontal):
 
     @on(Button.Pressed, "#prm-refresh")
     def _refresh(self) -> None:
-        self.refresh_nodes()
+        self.refresh_listing()
 
     @on(OptionList.OptionSelected, "#prm-nodes")
     def _picked(self, event: OptionList.OptionSelected) -> None:
@@ -246,6 +232,8 @@ class ParamsPanel(Horizontal):
         result = self.query_one("#prm-result", Static)
         result.update(Text(text))
         result.set_class(not ok, "error")
+
+    report = show_result
 
     # --- params files ------------------------------------------------------------------------
 

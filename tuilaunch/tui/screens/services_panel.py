@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -19,6 +18,7 @@ from ...engine.describe.parameter_files import dotted
 from ...engine.ros.bridge import RosError
 from ...engine.ros.messages import FieldInfo, MessageError, describe_fields, import_type
 from .fields import Field
+from .graph_listing import GraphListing
 
 
 @dataclass
@@ -85,7 +85,7 @@ _STANDARD = ("/describe_parameters", "/get_parameter_types", "/get_parameters",
              "/get_type_description")
 
 
-class ServicesPanel(Horizontal):
+class ServicesPanel(GraphListing, Horizontal):
     DEFAULT_CSS = """
     ServicesPanel #svc-left { width: 36; border-right: tall $panel; }
     ServicesPanel #svc-list { height: 2fr; border-title-align: left; }
@@ -101,6 +101,8 @@ class ServicesPanel(Horizontal):
     ServicesPanel #svc-response.error { color: $error; }
     """
 
+    listing = "services"
+
     def __init__(self, bridge: Callable[[], Any], timeout: float = 5.0, **kwargs: object) -> None:
         super().__init__(**kwargs)  # type: ignore[arg-type]
         self.bridge = bridge
@@ -109,7 +111,6 @@ class ServicesPanel(Horizontal):
         self.selected: tuple[str, str] | None = None
         self.fields: list[tuple[str, FieldInfo]] = []
         self.history: list[CallRecord] = []
-        self.listed = False  # the services were asked for (the tab was shown)
 
     def compose(self) -> ComposeResult:
         with Vertical(id="svc-left"):
@@ -127,22 +128,11 @@ class ServicesPanel(Horizontal):
     def on_mount(self) -> None:
         self.query_one("#svc-history", OptionList).border_title = "history"
 
-    def on_show(self) -> None:
-        # listed when first shown: rclpy starts in the UI only for someone who looks
-        if not self.listed:
-            self.listed = True
-            self.refresh_services()
-
-    @work(group="services-list", exclusive=True, exit_on_error=False)
-    async def refresh_services(self) -> None:
-        try:
-            bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
-            self.services = await bridge.list_services()
-        except Exception as exc:  # a graph query must never take the panel down
-            self.show_response(f"cannot list services: {exc}", ok=False)
-            return
+    def show_listing(self, listing: list[tuple[str, list[str]]]) -> None:
+        self.services = listing
         self._fill_list()
 
+    @on(Input.Changed, "#svc-filter")
     def _fill_list(self) -> None:
         term = self.query_one("#svc-filter", Input).value.lower()
         listing = self.query_one("#svc-list", OptionList)
@@ -158,10 +148,6 @@ class ServicesPanel(Horizontal):
         if listing.option_count:
             keep = highlighted is not None and highlighted < listing.option_count
             listing.highlighted = highlighted if keep else 0
-
-    @on(Input.Changed, "#svc-filter")
-    def _filter(self) -> None:
-        self._fill_list()
 
     @on(Input.Submitted, "#svc-filter")
     def _filter_submitted(self) -> None:
@@ -179,7 +165,7 @@ class ServicesPanel(Horizontal):
 
     @on(Button.Pressed, "#svc-refresh")
     def _refresh(self) -> None:
-        self.refresh_services()
+        self.refresh_listing()
 
     @on(OptionList.OptionSelected, "#svc-list")
     def _picked(self, event: OptionList.OptionSelected) -> None:
@@ -261,4 +247,6 @@ class ServicesPanel(Horizontal):
         response = self.query_one("#svc-response", Static)
         response.update(Text(text))
         response.set_class(not ok, "error")
+
+    report = show_response
 

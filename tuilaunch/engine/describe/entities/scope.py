@@ -74,13 +74,18 @@ class PushRosNamespace(Entity):
 PushROSNamespace = PushRosNamespace
 
 
-class SetParameter(Entity):
-    """A parameter given to every node that follows in the same scope."""
+class NameValue(Entity):
+    """An action that sets one name to one value in its scope (a parameter, an environment
+    variable, a launch configuration)."""
 
     def __init__(self, name: SubValue, value: Any, condition: Condition | None = None) -> None:
         self._init_entity(condition)
         self.name = name
         self.value = value
+
+
+class SetParameter(NameValue):
+    """A parameter given to every node that follows in the same scope."""
 
 
 class SetParametersFromFile(Entity):
@@ -98,12 +103,8 @@ class SetRemap(Entity):
         self.dst = dst
 
 
-class SetEnvironmentVariable(Entity):
-    def __init__(self, name: SubValue, value: SubValue, condition: Condition | None = None)\
-            -> None:
-        self._init_entity(condition)
-        self.name = name
-        self.value = value
+class SetEnvironmentVariable(NameValue):
+    """An environment variable of the processes that follow in the same scope."""
 
 
 class UnsetEnvironmentVariable(Entity):
@@ -112,12 +113,8 @@ class UnsetEnvironmentVariable(Entity):
         self.name = name
 
 
-class SetLaunchConfiguration(Entity):
-    def __init__(self, name: SubValue, value: SubValue, condition: Condition | None = None)\
-            -> None:
-        self._init_entity(condition)
-        self.name = name
-        self.value = value
+class SetLaunchConfiguration(NameValue):
+    """A launch configuration ($(var name)) for what follows in the same scope."""
 
 
 class LaunchDescriptionSource:

@@ -251,20 +251,18 @@ class _StderrTail:
         return explain_failure(_host(target), code, text, what, environ, machine)
 
 
+@dataclass(eq=False, repr=False)  # a link is itself: compared and hashed by identity
 class RemoteLink:
     """A running `ssh HOST tuilaunch __proxy NAME`: `sock` speaks the session protocol.
 
     `hello` is the session's greeting (already read). Close with `close()`: it ends ssh."""
 
-    def __init__(self, host: str, name: str, sock: socket.socket,
-                 process: subprocess.Popen[bytes], hello: dict[str, Any],
-                 stderr: _StderrTail) -> None:
-        self.host = host
-        self.name = name
-        self.sock = sock
-        self.process = process
-        self.hello = hello
-        self.stderr = stderr
+    host: str
+    name: str
+    sock: socket.socket
+    process: subprocess.Popen[bytes]
+    hello: dict[str, Any]
+    stderr: _StderrTail
 
     def lost_reason(self) -> str:
         """Once the link closed: one line saying why, from ssh's last words, else its exit
