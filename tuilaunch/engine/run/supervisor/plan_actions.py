@@ -176,6 +176,12 @@ class PlanActions(SupervisorCore):
                 raise
             # stopped by the shutdown (stop_detached_actions), as simple_launch's
             # call_service node is: it has finished, and its exit handlers run
+        except Exception as exc:
+            # Whatever an action raises (a substitution a handler's LogInfo cannot perform,
+            # a plugin's bug), only this action fails, as in launch: left "running", the
+            # run would wait for it forever and no signal could end the launch.
+            self.log_action(action, failure_line(action, exc), "ERROR")
+            ok = False
         finally:
             if self.detached_tasks.get(action.id) is task:
                 del self.detached_tasks[action.id]
@@ -281,6 +287,19 @@ class PlanActions(SupervisorCore):
                 event = event_for("io", stream, process_name=process_id, pid=pid,
                                   text=(line + "\n").encode(), action=source)
                 self.spawn_task(self.perform_action(action, event))
+
+
+def failure_line(action: ActionPlan, exc: Exception) -> str:
+    """One line: the action, where it is written, what it raised (a LaunchError already
+    names its file and line)."""
+    from ...errors import LaunchError
+
+    if isinstance(exc, LaunchError):
+        text = f"{action.kind} failed: {exc}"
+    else:
+        where = f" ({action.origin})" if action.origin else ""
+        text = f"{action.kind}{where} raised {type(exc).__name__}: {exc}"
+    return "; ".join(part.strip() for part in text.splitlines() if part.strip())
 
 
 def _in_shutdown_handler(action: ActionPlan) -> bool:
