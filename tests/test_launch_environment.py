@@ -221,6 +221,50 @@ def generate_launch_description():
         done.stdout + done.stderr
 
 
+def test_code_run_when_an_event_happens_sees_the_launch_environment_after_the_visit(write):
+    """launch visits the whole description before any event is handled; a scoped group
+    pushed and popped the environment by then (GroupAction's PushEnvironment/
+    PopEnvironment), and a variable set later in the file is already there. Event-time
+    code reads os.environ at that moment; what it writes stays for what follows."""
+    path = write(HEADER + """
+def opaque(context):
+    print('opaque sees', os.environ.get('TL_SCOPED', 'no scoped'),
+          os.environ.get('TL_LATE', 'no late'), flush=True)
+    os.environ['TL_WRITTEN'] = 'by the opaque function'
+    return []
+
+def callback(event, context):
+    print('callback sees', os.environ.get('TL_SCOPED', 'no scoped'),
+          os.environ.get('TL_LATE', 'no late'), flush=True)
+    return []
+
+def generate_launch_description():
+    first = ExecuteProcess(cmd=['true'], name='first')
+    second = ExecuteProcess(cmd=['sh', '-c', 'echo second: ${TL_SCOPED-no scoped}'],
+                            name='second', output='screen')
+    return LaunchDescription([
+        GroupAction([
+            SetEnvironmentVariable('TL_SCOPED', 'inside'),
+            first,
+            RegisterEventHandler(OnProcessExit(target_action=first, on_exit=[
+                OpaqueFunction(function=opaque),
+                LogInfo(msg=['message sees ',
+                             EnvironmentVariable('TL_SCOPED', default_value='no scoped')]),
+                second,
+            ])),
+        ]),
+        RegisterEventHandler(OnProcessExit(target_action=second, on_exit=callback)),
+        SetEnvironmentVariable('TL_LATE', 'late'),
+    ])
+""")
+    done = run_cli(str(path), "--headless")
+    out = done.stdout.splitlines()
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "opaque sees no scoped late" in out, out
+    assert any(line.endswith("message sees no scoped") for line in out), out
+    assert out.count("callback sees no scoped late") == 1, out
+
+
 def test_print_json_shows_each_process_environment_change(write):
     path = write(HEADER + """
 def generate_launch_description():

@@ -219,6 +219,10 @@ class Plan:
     entity_ids: dict[int, str] = field(default_factory=dict, repr=False, compare=False)
     """Which process or action each entity became: event-time entities find their targets."""
     id_counter: int = 0
+    environ: dict[str, str | None] = field(default_factory=dict, repr=False, compare=False)
+    """The launch's environment (changes to tuilaunch's own) as the visit of the whole file
+    left it, scoped groups' changes popped: what launch's os.environ is when events happen,
+    and what the code run then sees (and changes, for what follows)."""
     """The last number given to a process id; ids made at event time continue from it."""
 
     def process(self, process_id: str) -> ProcessPlan:

@@ -12,7 +12,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
-from ...describe.environ import shown_environ
+from ...describe.environ import captured_environ, shown_environ
 from ...describe.python.launch_events import EventInfo, ProcessExited, event_for
 from ...describe.substitutions import PerformContext, perform
 from ...plan.model import ActionPlan, ProcessPlan, Trigger
@@ -223,14 +223,21 @@ class PlanActions(SupervisorCore):
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
         context = PerformContext(action.configurations, None,
                                  event_locals={"event": event or LaunchEvent()})
-        with shown_environ(action.environ):
+        with shown_environ(self._environ_of(action)):
             return perform(value, context)
+
+    def _environ_of(self, action: ActionPlan) -> dict[str, str | None]:
+        """What os.environ is when launch performs the action: its scope's during the
+        visit of the file (no trigger), the launch's when an event (a timer too) runs it."""
+        return action.environ if action.trigger is None else self.plan.environ
 
     def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
         """Launch-file functions called with the event; what they return is carried out."""
         try:
-            with shown_environ(action.environ):
+            with shown_environ(self.plan.environ), captured_environ() as written:
                 produced = self._call_back(action, event)
+            # a callback's writes to os.environ stay for what follows, as in launch
+            self.plan.environ.update(written)
         except Exception as exc:  # a user's callback must never stop the launch
             self.log_action(action, f"event callback ({action.origin}) raised "
                             f"{type(exc).__name__}: {exc}", "ERROR")
