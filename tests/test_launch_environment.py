@@ -221,6 +221,50 @@ def generate_launch_description():
         done.stdout + done.stderr
 
 
+def test_code_run_when_an_event_happens_sees_the_launch_environment_after_the_visit(write):
+    """launch visits the whole description before any event is handled; a scoped group
+    pushed and popped the environment by then (GroupAction's PushEnvironment/
+    PopEnvironment), and a variable set later in the file is already there. Event-time
+    code reads os.environ at that moment; what it writes stays for what follows."""
+    path = write(HEADER + """
+def opaque(context):
+    print('opaque sees', os.environ.get('TL_SCOPED', 'no scoped'),
+          os.environ.get('TL_LATE', 'no late'), flush=True)
+    os.environ['TL_WRITTEN'] = 'by the opaque function'
+    return []
+
+def callback(event, context):
+    print('callback sees', os.environ.get('TL_SCOPED', 'no scoped'),
+          os.environ.get('TL_LATE', 'no late'), flush=True)
+    return []
+
+def generate_launch_description():
+    first = ExecuteProcess(cmd=['true'], name='first')
+    second = ExecuteProcess(cmd=['sh', '-c', 'echo second: ${TL_SCOPED-no scoped}'],
+                            name='second', output='screen')
+    return LaunchDescription([
+        GroupAction([
+            SetEnvironmentVariable('TL_SCOPED', 'inside'),
+            first,
+            RegisterEventHandler(OnProcessExit(target_action=first, on_exit=[
+                OpaqueFunction(function=opaque),
+                LogInfo(msg=['message sees ',
+                             EnvironmentVariable('TL_SCOPED', default_value='no scoped')]),
+                second,
+            ])),
+        ]),
+        RegisterEventHandler(OnProcessExit(target_action=second, on_exit=callback)),
+        SetEnvironmentVariable('TL_LATE', 'late'),
+    ])
+""")
+    done = run_cli(str(path), "--headless")
+    out = done.stdout.splitlines()
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "opaque sees no scoped late" in out, out
+    assert any(line.endswith("message sees no scoped") for line in out), out
+    assert out.count("callback sees no scoped late") == 1, out
+
+
 def test_print_json_shows_each_process_environment_change(write):
     path = write(HEADER + """
 def generate_launch_description():
@@ -252,3 +296,66 @@ def generate_launch_description():
         assert "python3" in changes["PATH"]["why"]
     else:  # not an ament prefix: nothing is changed
         assert "PATH" not in changes
+
+
+UNSET = HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sh', '-c', 'echo before: ${TL_GONE-absent}'], name='before'),
+        GroupAction([
+            UnsetEnvironmentVariable('TL_GONE'),
+            ExecuteProcess(cmd=['sh', '-c', 'echo inside: ${TL_GONE-absent}'], name='inside'),
+            ExecuteProcess(cmd=['sh', '-c', 'echo again: ${TL_GONE-absent}'], name='again',
+                           additional_env={'TL_GONE': 'given'}),
+        ]),
+        ExecuteProcess(cmd=['sh', '-c', 'echo after: ${TL_GONE-absent}'], name='after'),
+    ])
+"""
+
+
+def test_a_process_after_an_unset_does_not_inherit_the_variable(write):
+    """launch's ExecuteLocal starts a child from context.environment (os.environ after the
+    unset), so the process in the unset's scope lacks it; its additional_env may set it
+    again; a process outside the scope keeps it."""
+    path = write(UNSET)
+    done = run_cli(str(path), "--headless", env={"TL_GONE": "inherited"})
+    out = done.stdout.splitlines()
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "[before-1] before: inherited" in out, out
+    assert "[inside-2] inside: absent" in out, out
+    assert "[again-3] again: given" in out, out
+    assert "[after-4] after: inherited" in out, out
+
+
+def test_print_json_and_status_show_the_unset_variable(write, tmp_path):
+    path = write(UNSET)
+    done = run_cli(str(path), "--print", "--json", env={"TL_GONE": "inherited"})
+    processes = {p["name"]: p for p in json.loads(done.stdout)["processes"]}
+    assert processes["inside"]["unset_env"] == ["TL_GONE"]
+    assert processes["again"]["unset_env"] == [] and processes["again"]["env"] == {
+        "TL_GONE": "given"}
+    assert processes["before"]["unset_env"] == []
+
+    sleeper = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        UnsetEnvironmentVariable('TL_GONE'),
+        ExecuteProcess(cmd=['sleep', '60'], name='sleeper'),
+    ])
+""", "sleeper.launch.py")
+    runtime = tmp_path / "run"
+    runtime.mkdir(mode=0o700)
+    env = {"XDG_RUNTIME_DIR": str(runtime), "TL_GONE": "inherited"}
+    run_cli(str(sleeper), "--detach", "--name", "unset", env=env)
+    try:
+        run_cli("wait", "unset", "sleeper-1", "running", "--timeout", "60", env=env)
+        status = json.loads(run_cli("status", "unset", "--json", env=env).stdout)
+        pid = next(p["pid"] for p in status["processes"] if p["id"] == "sleeper-1")
+        with open(f"/proc/{pid}/environ", "rb") as handle:
+            names = [item.split(b"=", 1)[0] for item in handle.read().split(b"\0")]
+        assert b"TL_GONE" not in names
+    finally:
+        run_cli("stop", "unset", env=env)
+    proc = next(p for p in status["processes"] if p["id"] == "sleeper-1")
+    assert proc["unset_env"] == ["TL_GONE"], proc
+    assert proc["command_line"].startswith("env -u TL_GONE -- "), proc["command_line"]

@@ -164,3 +164,39 @@ def test_an_xml_node_with_on_exit_shutdown_ends_the_launch_as_launch_does(write)
     assert "[INFO] [launch]: process[required-2] was required: shutting down launched " \
         "system" in lines, done.stdout
     assert "[INFO] [launch]: shutdown (reason not given)" in lines, done.stdout
+
+
+def test_sigterm_says_what_ros2_launch_says_exits_1_and_leaves_nothing_running(write):
+    """launch_service.py's _on_sigterm (SIGTERM and SIGQUIT) logs `user interrupted with
+    ctrl-\\ (SIGTERM), terminating...` and cancels the run (exit status 1). tuilaunch says
+    the same and exits 1, but stops every process first (its OnShutdown handlers run)."""
+    for sig, marker in ((signal.SIGTERM, "sleep 64.5"), (signal.SIGQUIT, "sleep 65.5")):
+        path = write(HEADER + f"""
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd={marker.split()!r}, name='sleeper'),""" + ON_SHUTDOWN + """
+    ])
+""")
+        proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                start_new_session=True)
+        try:
+            assert proc.stdout is not None
+            seen = ""
+            while "process started" not in seen:
+                line = proc.stdout.readline()
+                assert line, seen
+                seen += line
+            proc.send_signal(sig)
+            seen += proc.communicate(timeout=60)[0]
+        finally:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+        lines = seen.splitlines()
+        assert (f"[ERROR] [launch]: user interrupted with ctrl-\\ ({sig.name}), terminating..."
+                in lines), seen
+        assert f"[INFO] [launch.user]: shutdown because: received {sig.name}" in lines, seen
+        assert proc.returncode == 1, seen
+        wait_for(lambda: not subprocess.run(["pgrep", "-f", marker],  # noqa: B023
+                                            capture_output=True).stdout, what=marker)

@@ -2,6 +2,9 @@
 
 Ctrl+C stops the launch (SIGINT to every process, then SIGTERM and SIGKILL after their
 timeouts, each step announced); a second Ctrl+C sends SIGTERM at once, a third SIGKILL.
+SIGTERM and SIGQUIT print ros2 launch's `user interrupted with ctrl-\\ (SIGTERM),
+terminating...` and end with its exit status 1, but stop every process as Ctrl+C does;
+SIGHUP stops it as Ctrl+C does.
 A closed or dead stdout (`| head`, a dropped ssh link) is said once on stderr and changes
 nothing else: the nodes run on and every line still goes to their log files.
 """
@@ -167,13 +170,21 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
 
     stopping: set[asyncio.Task[None]] = set()  # held so the task is not collected mid-run
     asked = 0
+    terminated = False
 
     def on_signal(sig: signal.Signals) -> None:
-        nonlocal asked
+        nonlocal asked, terminated
         asked += 1
         if asked == 1:
             # ros2 launch's reason for Ctrl+C; it has none for the others (it cancels)
             reason = "ctrl-c (SIGINT)" if sig == signal.SIGINT else f"received {sig.name}"
+            if sig in (signal.SIGTERM, signal.SIGQUIT):
+                # ros2 launch's words (launch_service.py's _on_sigterm), and its exit status
+                # 1 (its run is cancelled); unlike it, tuilaunch still stops every process
+                terminated = True
+                printer(Event("log", "launch", level="ERROR",
+                              reason=f"user interrupted with ctrl-\\ ({sig.name}), "
+                              "terminating..."))
             stopping.add(asyncio.ensure_future(supervisor.shutdown(reason)))
             if sig == signal.SIGINT:
                 # ros2 launch's line, which people grep for
@@ -185,11 +196,12 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
         if sent is not None:
             printer.say(f"received {sig.name} again: sending {sent} now")
 
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT):
         loop.add_signal_handler(sig, on_signal, sig)
     printer(Event("log", "launch", reason=f"All log files can be found below {log_dir}"))
     try:
-        return await supervisor.run()
+        status = await supervisor.run()
+        return (status or 1) if terminated else status
     finally:
         printer.close()
 

@@ -91,8 +91,12 @@ class ProcessPlanner:
         if entity.additional_env:
             env.update({perform(k, ctx): perform(v, ctx) for k, v in entity.additional_env.items()})
         clear_env = entity.env is not None
+        # launch builds the child's environment from os.environ after the unset: the
+        # process does not inherit it (unless its additional_env sets it again)
+        unset_env = sorted(k for k, v in scope.env.items() if v is None and k not in env)
         if entity.env is not None:
             env = {perform(k, ctx): perform(v, ctx) for k, v in entity.env.items()}
+            unset_env = []
         own_prefix = perform(entity.prefix, ctx) if entity.prefix is not None else None
         launch_prefix = scope.configurations.get(LAUNCH_PREFIX) or ""
         prefix_filter = scope.configurations.get(LAUNCH_PREFIX_FILTER) or ""
@@ -106,7 +110,8 @@ class ProcessPlanner:
             if entity.respawn_delay is not None else 0.0
         retries = entity.respawn_max_retries
         common = dict(
-            env=env, clear_env=clear_env, cwd=perform_optional(entity.cwd, ctx),
+            env=env, unset_env=unset_env, clear_env=clear_env,
+            cwd=perform_optional(entity.cwd, ctx),
             respawn=respawn, respawn_delay=respawn_delay,
             respawn_max_retries=DEFAULT_RESPAWN_MAX_RETRIES if retries is None else retries,
             sigterm_timeout=_float_or_none(entity.sigterm_timeout, ctx, "sigterm_timeout",

@@ -123,6 +123,9 @@ class ProcessPlan:
     machine: str | None = None
     """The machine of a machines file that runs it (`--machines`); None: the launching
     side."""
+    unset_env: list[str] = field(default_factory=list)
+    """Variables an UnsetEnvironmentVariable in its scope removed: launch starts the process
+    from os.environ after the unset, so it does not inherit them."""
 
     @property
     def full_name(self) -> str | None:
@@ -140,7 +143,8 @@ class ProcessPlan:
             "namespace": self.namespace, "package": self.package, "executable": self.executable,
             "cmd": self.cmd, "parameters": self.parameters,
             "parameter_files": self.parameter_files, "remappings": self.remappings,
-            "env": self.env, "respawn": self.respawn, "respawn_delay": self.respawn_delay,
+            "env": self.env, "unset_env": self.unset_env, "respawn": self.respawn,
+            "respawn_delay": self.respawn_delay,
             "enabled": self.enabled,
             "skipped_by": self.skipped_by.to_json() if self.skipped_by else None,
             "trigger": self.trigger.to_json() if self.trigger else None,
@@ -215,6 +219,10 @@ class Plan:
     entity_ids: dict[int, str] = field(default_factory=dict, repr=False, compare=False)
     """Which process or action each entity became: event-time entities find their targets."""
     id_counter: int = 0
+    environ: dict[str, str | None] = field(default_factory=dict, repr=False, compare=False)
+    """The launch's environment (changes to tuilaunch's own) as the visit of the whole file
+    left it, scoped groups' changes popped: what launch's os.environ is when events happen,
+    and what the code run then sees (and changes, for what follows)."""
     """The last number given to a process id; ids made at event time continue from it."""
 
     def process(self, process_id: str) -> ProcessPlan:
@@ -249,8 +257,8 @@ def process_signature(proc: ProcessPlan) -> tuple[Any, ...]:
     """What a running process depends on: same signature, no need to restart it."""
     params = tuple((path, repr(sorted(values.items())))
                    for path, values in proc.generated_parameter_files)
-    return (tuple(proc.cmd), tuple(sorted(proc.env.items())), proc.clear_env, proc.cwd, params,
-            proc.respawn, proc.machine)
+    return (tuple(proc.cmd), tuple(sorted(proc.env.items())), tuple(proc.unset_env),
+            proc.clear_env, proc.cwd, params, proc.respawn, proc.machine)
 
 
 @dataclass

@@ -74,7 +74,7 @@ def _process(data: dict[str, Any]) -> ProcessPlan:
         trigger=_trigger(data.get("trigger")), origin=_origin(data.get("origin")),
         error=data.get("error"), components=list(data.get("components") or []),
         lifecycle=bool(data.get("lifecycle")), autostart=bool(data.get("autostart")),
-        machine=data.get("machine"))
+        machine=data.get("machine"), unset_env=list(data.get("unset_env") or []))
 
 
 def _action(data: dict[str, Any]) -> ActionPlan:

@@ -151,6 +151,7 @@ class Resolver:
                     root, self.params_dir, self.warnings)
         plan.entity_ids = self.entity_ids
         plan.id_counter = self._counter
+        plan.environ = dict(scope.env)
         return plan
 
     def link_triggers(self) -> None:

@@ -61,6 +61,8 @@ def start_command(proc: ProcessPlan, base_env: Mapping[str, str], tty: bool,
     if prefix:
         cmd = with_prefix(cmd, prefix)
     env = {} if proc.clear_env else dict(base_env)
+    for name in proc.unset_env:  # an UnsetEnvironmentVariable in its scope, as in launch
+        env.pop(name, None)
     env.update(proc.env)
     env.setdefault("PYTHONUNBUFFERED", "1")
     env.setdefault("RCUTILS_LOGGING_BUFFERED_STREAM", "1")
@@ -70,11 +72,14 @@ def start_command(proc: ProcessPlan, base_env: Mapping[str, str], tty: bool,
 
 def describe_command(start: StartCommand, base_env: Mapping[str, str]) -> dict[str, Any]:
     """`status`'s view of a start: `command` (argv), `command_line` (for a shell: `cd`,
-    `env` changes, the argv quoted) and `env` (what differs from the launcher's)."""
+    `env` changes, the argv quoted), `env` (what differs from the launcher's) and `unset_env`
+    (the launcher's variables it does not get)."""
     changed, removed = env_changes(base_env, start.env)
+    removed = [] if start.clear_env else removed
     line = shell_command(start.cmd, start.env if start.clear_env else changed, start.cwd,
-                         unset=[] if start.clear_env else removed, clear_env=start.clear_env)
-    return {"command": list(start.cmd), "command_line": line, "env": changed}
+                         unset=removed, clear_env=start.clear_env)
+    return {"command": list(start.cmd), "command_line": line, "env": changed,
+            "unset_env": removed}
 
 
 def death_details(pid: int, code: int, requested: bool, cwd: str | None, comm: str,

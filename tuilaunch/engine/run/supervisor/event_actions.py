@@ -38,14 +38,16 @@ def _tree_item(plan: Plan, ref: str) -> TreeItem | None:
 
 
 def scope_of(plan: Plan, action: ActionPlan) -> Scope:
-    """The scope an action was written in: captured for deferred ones, rebuilt otherwise."""
+    """The scope an action was written in: captured for deferred ones, rebuilt otherwise.
+    Its environment is the launch's at this moment (launch's context.environment is
+    os.environ when the event happens), not the one of the scope it was written in."""
     if isinstance(action.source, Deferred):
         scope = action.source.scope.child(False)
     else:
         launch_file = action.origin.file if action.origin else plan.file
         scope = Scope(dict(action.configurations), os.path.abspath(launch_file),
-                      action.namespace, env=dict(action.environ))
-    return replace(scope, trigger=None, enabled=True, skipped_by=None)
+                      action.namespace)
+    return replace(scope, trigger=None, enabled=True, skipped_by=None, env=dict(plan.environ))
 
 
 def perform_entities(plan: Plan, action: ActionPlan, entities: list[Any],
@@ -60,6 +62,7 @@ def perform_entities(plan: Plan, action: ActionPlan, entities: list[Any],
                         counter=plan.id_counter, action_offset=len(plan.actions))
     parent = _tree_item(plan, action.id) or plan.tree
     resolver.walk(entities, scope, parent)
+    plan.environ = dict(scope.env)  # launch's os.environ keeps what they changed
     resolver.link_triggers()
     plan.id_counter = resolver.id_counter
     plan.processes.extend(resolver.processes)

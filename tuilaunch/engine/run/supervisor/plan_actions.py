@@ -12,7 +12,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
-from ...describe.environ import shown_environ
+from ...describe.environ import captured_environ, shown_environ
 from ...describe.python.launch_events import EventInfo, ProcessExited, event_for
 from ...describe.substitutions import PerformContext, perform
 from ...plan.model import ActionPlan, ProcessPlan, Trigger
@@ -176,6 +176,12 @@ class PlanActions(SupervisorCore):
                 raise
             # stopped by the shutdown (stop_detached_actions), as simple_launch's
             # call_service node is: it has finished, and its exit handlers run
+        except Exception as exc:
+            # Whatever an action raises (a substitution a handler's LogInfo cannot perform,
+            # a plugin's bug), only this action fails, as in launch: left "running", the
+            # run would wait for it forever and no signal could end the launch.
+            self.log_action(action, failure_line(action, exc), "ERROR")
+            ok = False
         finally:
             if self.detached_tasks.get(action.id) is task:
                 del self.detached_tasks[action.id]
@@ -217,14 +223,21 @@ class PlanActions(SupervisorCore):
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
         context = PerformContext(action.configurations, None,
                                  event_locals={"event": event or LaunchEvent()})
-        with shown_environ(action.environ):
+        with shown_environ(self._environ_of(action)):
             return perform(value, context)
+
+    def _environ_of(self, action: ActionPlan) -> dict[str, str | None]:
+        """What os.environ is when launch performs the action: its scope's during the
+        visit of the file (no trigger), the launch's when an event (a timer too) runs it."""
+        return action.environ if action.trigger is None else self.plan.environ
 
     def _run_callbacks(self, action: ActionPlan, event: LaunchEvent) -> bool:
         """Launch-file functions called with the event; what they return is carried out."""
         try:
-            with shown_environ(action.environ):
+            with shown_environ(self.plan.environ), captured_environ() as written:
                 produced = self._call_back(action, event)
+            # a callback's writes to os.environ stay for what follows, as in launch
+            self.plan.environ.update(written)
         except Exception as exc:  # a user's callback must never stop the launch
             self.log_action(action, f"event callback ({action.origin}) raised "
                             f"{type(exc).__name__}: {exc}", "ERROR")
@@ -281,6 +294,19 @@ class PlanActions(SupervisorCore):
                 event = event_for("io", stream, process_name=process_id, pid=pid,
                                   text=(line + "\n").encode(), action=source)
                 self.spawn_task(self.perform_action(action, event))
+
+
+def failure_line(action: ActionPlan, exc: Exception) -> str:
+    """One line: the action, where it is written, what it raised (a LaunchError already
+    names its file and line)."""
+    from ...errors import LaunchError
+
+    if isinstance(exc, LaunchError):
+        text = f"{action.kind} failed: {exc}"
+    else:
+        where = f" ({action.origin})" if action.origin else ""
+        text = f"{action.kind}{where} raised {type(exc).__name__}: {exc}"
+    return "; ".join(part.strip() for part in text.splitlines() if part.strip())
 
 
 def _in_shutdown_handler(action: ActionPlan) -> bool:
