@@ -190,6 +190,24 @@ async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_lo
         assert status(name)["arguments"] == {"word": "beta"}
 
 
+async def test_the_args_tab_follows_the_file_saved_while_it_shows(runtime, write):  # noqa: F811
+    """The operator keeps the Args tab open beside an editor: each save is previewed with
+    no key pressed, so the tab never says "no longer loads" about a file fixed since, nor
+    "No change" about one edited since."""
+    path = write(EDITABLE.format(said="word", extra=""))
+    async with session_tui(str(path), wait=("echo-1",)) as (app, pilot, name):
+        await pilot.press("2")
+        path.write_text(EDITABLE.format(said="word", extra="").replace(
+            "return sl.launch_description()", "return sl.launch_description("))
+        await until(pilot, lambda: "no longer loads" in preview_text(app))
+        path.write_text(EDITABLE.format(said="said", extra=""))
+        await until(pilot, lambda: "changed on disk: changes: echo-1" in preview_text(app))
+        assert not app.query_one("#args-preview").has_class("error")
+        path.write_text(EDITABLE.format(said="word", extra=""))
+        await until(pilot, lambda: "changed on disk: no process changes" in preview_text(app))
+        assert status(name)["arguments"] == {}  # nothing was applied meanwhile
+
+
 async def test_the_session_refuses_a_relaunch_of_a_file_that_no_longer_loads(
         runtime, write):  # noqa: F811
     """Another client (or a TUI whose preview came before the edit) asks the server to
