@@ -234,6 +234,24 @@ async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
         assert result.has_class("error")
 
 
+@pytest.mark.parametrize("tab", ["4", "3"])
+async def test_the_first_look_at_params_or_services_lists_the_running_nodes(tmp_path, tab):
+    """That first look starts the UI's ROS connection, and the tab lists once: what it
+    lists is the graph, not the nothing a new participant knows before discovery (the
+    user had to find the Refresh button)."""
+    async with tui(tmp_path, "robot:=tui7", "listener:=false") as (app, pilot):
+        await until(pilot, lambda: any("Publishing" in line
+                                       for line in app.store.text(View("talker-1"))))
+        await until(pilot, lambda: states(app).get("service_server-4") == "running")
+        await pilot.press(tab)
+        if tab == "4":
+            params = app.query_one(ParamsPanel)
+            await until(pilot, lambda: "/tui7/talker" in params.nodes)
+        else:
+            services = app.query_one(ServicesPanel)
+            await until(pilot, lambda: "/tui7/reset" in dict(services.services))
+
+
 async def test_quit_asks_while_nodes_run_and_leaves_no_process(tmp_path):
     async with tui(tmp_path, "robot:=tui5") as (app, pilot):
         await until(pilot, lambda: len(pids(app)) >= 4)
