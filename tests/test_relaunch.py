@@ -384,6 +384,38 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
         owner.close()
 
 
+RESPAWNED = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='crashy', respawn=True, respawn_delay=0.2,
+        cmd=['sh', '-c', 'if [ -e {mark} ]; then echo again; exec sleep 600; fi; '
+                         'touch {mark}; exit 3'], output='screen')])
+"""
+
+
+def test_the_shell_says_which_crash_made_the_exit_status_1(runtime, write, tmp_path):  # noqa: F811
+    """A node that crashed once and was respawned runs fine at the quit, yet the run's
+    exit status is 1 (it crashed): the shell says which process and where its log is, not
+    a bare non-zero status."""
+    from .test_sessions import Terminal
+
+    path = write(RESPAWNED.format(mark=tmp_path / "crashed-once"))
+    owner = Terminal(str(path))
+    try:
+        owner.read_until(b"again")  # died once, runs again
+        os.write(owner.master, b"q")
+        owner.read_until(b"Stop")
+        os.write(owner.master, b"y")
+        assert owner.wait_exit() == 1
+        owner.read_until(b"every log of this launch")
+        text = owner.screen.decode(errors="replace")
+        assert "tuilaunch: crashy-1 died during the run (exit code 3), then ran again; " \
+               "its output: " in text
+    finally:
+        owner.close()
+
+
 MAIN = """
 import os
 from launch import LaunchDescription
