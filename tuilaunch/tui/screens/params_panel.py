@@ -14,6 +14,7 @@ from textual import on, work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
+from textual.timer import Timer
 from textual.widgets import Button, DataTable, Input, OptionList, Static
 from textual.widgets.option_list import Option
 
@@ -21,6 +22,7 @@ from ...engine.plan.model import Plan
 from ...engine.ros.bridge import ParameterInfo
 from .dialogs import PathScreen
 from .fields import Field
+from .services_panel import RELIST_S
 
 
 def show_value(value: Any) -> str:
@@ -93,6 +95,7 @@ class ParamsPanel(Horizontal):
         self.params: dict[str, ParameterInfo] = {}
         self.current: str | None = None
         self.listed = False  # the nodes were asked for (the tab was shown)
+        self.relist: Timer | None = None
 
     def compose(self) -> ComposeResult:
         with Vertical(id="prm-left"):
@@ -119,25 +122,47 @@ class ParamsPanel(Horizontal):
         if not self.listed:
             self.listed = True
             self.refresh_nodes()
+        # asked again while shown: discovery takes seconds on a busy machine, and nodes
+        # come and go (a restart, a relaunch that moves them)
+        if self.relist is None:
+            self.relist = self.set_interval(RELIST_S, self._relist)
+        self.relist.resume()
+
+    def on_hide(self) -> None:
+        if self.relist is not None:
+            self.relist.pause()
+
+    def _relist(self) -> None:
+        self.refresh_nodes(reload=False)
 
     @work(group="params-nodes", exclusive=True, exit_on_error=False)
-    async def refresh_nodes(self) -> None:
+    async def refresh_nodes(self, reload: bool = True) -> None:
+        """The graph's nodes; `reload`: the shown node's parameters are asked again too
+        (Refresh), not when the list is only asked again while the tab shows."""
         try:
             bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
-            self.nodes = await bridge.list_nodes()
+            nodes = await bridge.list_nodes()
         except Exception as exc:  # the panel reports, the app keeps running
             self.show_result(f"cannot list nodes: {exc}", ok=False)
             return
-        self._fill_nodes()
-        if self.node is not None:
+        if nodes != self.nodes or not self.query_one("#prm-nodes", OptionList).option_count:
+            self.nodes = nodes
+            self._fill_nodes()
+        if reload and self.node is not None:
             self.load_node(self.node)
 
     def _fill_nodes(self) -> None:
         term = self.query_one("#prm-filter", Input).value.lower()
         listing = self.query_one("#prm-nodes", OptionList)
+        highlighted = listing.highlighted
+        was = None if highlighted is None or highlighted >= listing.option_count else \
+            listing.get_option_at_index(highlighted).id
         listing.clear_options()
+        shown = [n for n in self.nodes if term in n.lower()]
         listing.add_options([Option(Text(n, no_wrap=True, overflow="ellipsis"), id=n)
-                             for n in self.nodes if term in n.lower()])
+                             for n in shown])
+        if was in shown:  # the row the user was on stays highlighted
+            listing.highlighted = shown.index(was)
 
     @on(Input.Changed, "#prm-filter")
     def _filter(self) -> None:

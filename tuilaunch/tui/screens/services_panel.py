@@ -12,6 +12,7 @@ from rich.text import Text
 from textual import on, work
 from textual.app import ComposeResult
 from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.timer import Timer
 from textual.widgets import Button, Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
@@ -80,6 +81,11 @@ def nest(flat: dict[str, Any]) -> dict[str, Any]:
 
 
 # services every rclpy/rclcpp node offers: listed only when the filter asks for them
+RELIST_S = 2.0
+"""While the Services or Params tab shows, its list is asked of the graph this often (a
+local query, nothing on the network): a new participant discovers the others over seconds
+on a busy machine, and nodes come and go."""
+
 _STANDARD = ("/describe_parameters", "/get_parameter_types", "/get_parameters",
              "/list_parameters", "/set_parameters", "/set_parameters_atomically",
              "/get_type_description")
@@ -110,6 +116,7 @@ class ServicesPanel(Horizontal):
         self.fields: list[tuple[str, FieldInfo]] = []
         self.history: list[CallRecord] = []
         self.listed = False  # the services were asked for (the tab was shown)
+        self.relist: Timer | None = None
 
     def compose(self) -> ComposeResult:
         with Vertical(id="svc-left"):
@@ -132,21 +139,34 @@ class ServicesPanel(Horizontal):
         if not self.listed:
             self.listed = True
             self.refresh_services()
+        # asked again while shown: discovery takes seconds on a busy machine, and nodes
+        # come and go (a restart, a relaunch that moves them)
+        if self.relist is None:
+            self.relist = self.set_interval(RELIST_S, self.refresh_services)
+        self.relist.resume()
+
+    def on_hide(self) -> None:
+        if self.relist is not None:
+            self.relist.pause()
 
     @work(group="services-list", exclusive=True, exit_on_error=False)
     async def refresh_services(self) -> None:
         try:
             bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
-            self.services = await bridge.list_services()
+            services = await bridge.list_services()
         except Exception as exc:  # a graph query must never take the panel down
             self.show_response(f"cannot list services: {exc}", ok=False)
             return
-        self._fill_list()
+        if services != self.services or not self.query_one("#svc-list", OptionList).option_count:
+            self.services = services
+            self._fill_list()
 
     def _fill_list(self) -> None:
         term = self.query_one("#svc-filter", Input).value.lower()
         listing = self.query_one("#svc-list", OptionList)
         highlighted = listing.highlighted
+        was = None if highlighted is None or highlighted >= listing.option_count else \
+            listing.get_option_at_index(highlighted).id
         listing.clear_options()
         shown = [name for name, types in self.services
                  if (term in name.lower() or any(term in t.lower() for t in types))
@@ -156,8 +176,8 @@ class ServicesPanel(Horizontal):
         hidden = "" if term else ", node parameter services hidden: type to search all"
         listing.border_title = f"{len(shown)} services{hidden}"
         if listing.option_count:
-            keep = highlighted is not None and highlighted < listing.option_count
-            listing.highlighted = highlighted if keep else 0
+            # the row the user was on stays highlighted when the list is asked again
+            listing.highlighted = shown.index(was) if was in shown else 0
 
     @on(Input.Changed, "#svc-filter")
     def _filter(self) -> None:
