@@ -258,6 +258,9 @@ async def test_the_first_look_at_params_or_services_lists_the_running_nodes(tmp_
         else:
             services = app.query_one(ServicesPanel)
             await until(pilot, lambda: "/tui7/reset" in dict(services.services))
+            await pilot.press("slash", *"tui7/reset")
+            listing = services.query_one("#svc-list")
+            await until(pilot, lambda: listing.border_title == "1 service")
 
 
 async def test_quit_asks_while_nodes_run_and_leaves_no_process(tmp_path):

@@ -174,7 +174,8 @@ class ServicesPanel(Horizontal):
         listing.add_options([Option(Text(name, no_wrap=True, overflow="ellipsis"), id=name)
                              for name in shown])
         hidden = "" if term else ", node parameter services hidden: type to search all"
-        listing.border_title = f"{len(shown)} services{hidden}"
+        count = f"{len(shown)} service" + ("" if len(shown) == 1 else "s")
+        listing.border_title = f"{count}{hidden}"
         if listing.option_count:
             # the row the user was on stays highlighted when the list is asked again
             listing.highlighted = shown.index(was) if was in shown else 0
