@@ -133,7 +133,9 @@ class ParamsPanel(Horizontal):
             self.relist.pause()
 
     def _relist(self) -> None:
-        self.refresh_nodes(reload=False)
+        # one listing slower than the period (rclpy's start) is let finish, not replaced
+        if not any(w.group == "params-nodes" and not w.is_finished for w in self.workers):
+            self.refresh_nodes(reload=False)
 
     @work(group="params-nodes", exclusive=True, exit_on_error=False)
     async def refresh_nodes(self, reload: bool = True) -> None:

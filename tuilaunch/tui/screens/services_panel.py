@@ -142,12 +142,18 @@ class ServicesPanel(Horizontal):
         # asked again while shown: discovery takes seconds on a busy machine, and nodes
         # come and go (a restart, a relaunch that moves them)
         if self.relist is None:
-            self.relist = self.set_interval(RELIST_S, self.refresh_services)
+            self.relist = self.set_interval(RELIST_S, self._relist)
         self.relist.resume()
 
     def on_hide(self) -> None:
         if self.relist is not None:
             self.relist.pause()
+
+    def _relist(self) -> None:
+        # one listing slower than the period (rclpy's start) is let finish, not replaced
+        if not any(w.group == "services-list" and not w.is_finished
+                   for w in self.workers):
+            self.refresh_services()
 
     @work(group="services-list", exclusive=True, exit_on_error=False)
     async def refresh_services(self) -> None:
