@@ -190,6 +190,24 @@ async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_lo
         assert status(name)["arguments"] == {"word": "beta"}
 
 
+async def test_the_args_tab_follows_the_file_saved_while_it_shows(runtime, write):  # noqa: F811
+    """The operator keeps the Args tab open beside an editor: each save is previewed with
+    no key pressed, so the tab never says "no longer loads" about a file fixed since, nor
+    "No change" about one edited since."""
+    path = write(EDITABLE.format(said="word", extra=""))
+    async with session_tui(str(path), wait=("echo-1",)) as (app, pilot, name):
+        await pilot.press("2")
+        path.write_text(EDITABLE.format(said="word", extra="").replace(
+            "return sl.launch_description()", "return sl.launch_description("))
+        await until(pilot, lambda: "no longer loads" in preview_text(app))
+        path.write_text(EDITABLE.format(said="said", extra=""))
+        await until(pilot, lambda: "changed on disk: changes: echo-1" in preview_text(app))
+        assert not app.query_one("#args-preview").has_class("error")
+        path.write_text(EDITABLE.format(said="word", extra=""))
+        await until(pilot, lambda: "changed on disk: no process changes" in preview_text(app))
+        assert status(name)["arguments"] == {}  # nothing was applied meanwhile
+
+
 async def test_the_session_refuses_a_relaunch_of_a_file_that_no_longer_loads(
         runtime, write):  # noqa: F811
     """Another client (or a TUI whose preview came before the edit) asks the server to
@@ -353,6 +371,38 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
         assert f"tuilaunch: bad-2 failed (exit code 3); its output: {log_dir}/bad-2.log" in text
         assert f"tuilaunch: every log of this launch: {log_dir}" in text
         assert "echo-1 failed" not in text  # stopped by the quit: not a failure
+    finally:
+        owner.close()
+
+
+RESPAWNED = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='crashy', respawn=True, respawn_delay=0.2,
+        cmd=['sh', '-c', 'if [ -e {mark} ]; then echo again; exec sleep 600; fi; '
+                         'touch {mark}; exit 3'], output='screen')])
+"""
+
+
+def test_the_shell_says_which_crash_made_the_exit_status_1(runtime, write, tmp_path):  # noqa: F811
+    """A node that crashed once and was respawned runs fine at the quit, yet the run's
+    exit status is 1 (it crashed): the shell says which process and where its log is, not
+    a bare non-zero status."""
+    from .test_sessions import Terminal
+
+    path = write(RESPAWNED.format(mark=tmp_path / "crashed-once"))
+    owner = Terminal(str(path))
+    try:
+        owner.read_until(b"again")  # died once, runs again
+        os.write(owner.master, b"q")
+        owner.read_until(b"Stop")
+        os.write(owner.master, b"y")
+        assert owner.wait_exit() == 1
+        owner.read_until(b"every log of this launch")
+        text = owner.screen.decode(errors="replace")
+        assert "tuilaunch: crashy-1 died during the run (exit code 3), then ran again; " \
+               "its output: " in text
     finally:
         owner.close()
 

@@ -234,6 +234,35 @@ async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
         assert result.has_class("error")
 
 
+@pytest.mark.parametrize("tab", ["4", "3"])
+async def test_the_first_look_at_params_or_services_lists_the_running_nodes(tmp_path, tab):
+    """That first look starts the UI's ROS connection: what the tab lists is the graph, not
+    the nothing a new participant knows before discovery (the tab listed once, and the
+    user had to find the Refresh button), and it keeps up while it shows."""
+    async with tui(tmp_path, "robot:=tui7", "listener:=false") as (app, pilot):
+        await until(pilot, lambda: any("Publishing" in line
+                                       for line in app.store.text(View("talker-1"))))
+        await until(pilot, lambda: states(app).get("service_server-4") == "running")
+        await pilot.press(tab)
+        if tab == "4":
+            params = app.query_one(ParamsPanel)
+            await until(pilot, lambda: "/tui7/talker" in params.nodes)
+            # and the list keeps up while it shows: the talker stopped leaves it, started
+            # again it comes back, no Refresh pressed
+            await pilot.press("1")
+            app.launch_tree.move_cursor(app.launch_tree.rows["talker-1"])
+            await pilot.press("s", "4")
+            await until(pilot, lambda: "/tui7/talker" not in params.nodes)
+            await pilot.press("1", "t", "4")
+            await until(pilot, lambda: "/tui7/talker" in params.nodes)
+        else:
+            services = app.query_one(ServicesPanel)
+            await until(pilot, lambda: "/tui7/reset" in dict(services.services))
+            await pilot.press("slash", *"tui7/reset")
+            listing = services.query_one("#svc-list")
+            await until(pilot, lambda: listing.border_title == "1 service")
+
+
 async def test_quit_asks_while_nodes_run_and_leaves_no_process(tmp_path):
     async with tui(tmp_path, "robot:=tui5") as (app, pilot):
         await until(pilot, lambda: len(pids(app)) >= 4)

@@ -140,10 +140,16 @@ def report_failures(supervisor: RemoteSupervisor) -> None:
     process with its exit code or signal and its log file, then the launch's log folder."""
     failed = [p for p, state in supervisor.states.items() if state == "failed"]
     for process in failed:
-        reason = supervisor.reasons.get(process) or "failed"
-        print(f"tuilaunch: {process} failed ({reason}); its output: "
+        reason = supervisor.reasons.get(process)
+        print(f"tuilaunch: {process} failed{f' ({reason})' if reason else ''}; its output: "
               f"{supervisor.log_dir / f'{process}.log'}", file=sys.stderr)
-    if failed:
+    # a crash a respawn (or a restart) outlived still makes the exit status 1: say which
+    earlier = [p for p in supervisor.crashed if p not in failed]
+    for process in earlier:
+        print(f"tuilaunch: {process} died during the run ({supervisor.crashed[process]}), "
+              f"then ran again; its output: {supervisor.log_dir / f'{process}.log'}",
+              file=sys.stderr)
+    if failed or earlier:
         print(f"tuilaunch: every log of this launch: {supervisor.log_dir}", file=sys.stderr)
 
 

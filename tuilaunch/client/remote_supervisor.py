@@ -114,6 +114,9 @@ class RemoteSupervisor:
         self.reasons: dict[str, str] = {}
         """How each process last ended or failed to start (`exit code 1`, `killed by
         SIGSEGV`), as the server said it: what the shell is told after a failed run."""
+        self.crashed: dict[str, str] = {}
+        """How each process last died unasked (a crash a respawn outlived too): the exit
+        status counts them, so the shell is told of them after the run."""
         self.shutdown_reason: str | None = None
         """Why the session began to stop, as its server said (`tuilaunch stop`, another
         client's quit, a signal): a client that did not ask says it before leaving."""
@@ -242,6 +245,8 @@ class RemoteSupervisor:
         for event in events:
             if event.kind in ("exited", "failed") and event.process and event.reason:
                 self.reasons[event.process] = event.reason
+            if event.kind == "exited" and event.process:
+                self._note_crash(event)
 
     def _note_recent(self, recent: list[dict[str, Any]]) -> None:
         for data in recent:
@@ -378,6 +383,7 @@ class RemoteSupervisor:
                 self._adopt(dict(item.split(":=", 1) for item in event.lines), True)
             if event.kind == "exited" and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
+                self._note_crash(event)
             if event.kind in ("exited", "failed") and event.process and event.reason:
                 self.reasons[event.process] = event.reason
             if event.kind == "shutdown":
@@ -537,9 +543,16 @@ class RemoteSupervisor:
             event = event_from_dict(data)
             if event.kind == "exited" and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
+                self._note_crash(event)
         # the pane shown may have changed while the link was down: read what it lacks
         await self._switched(self.only, result["offsets"])
         return notes + merged(lines, recent)
+
+    def _note_crash(self, event: Event) -> None:
+        """An exit nobody asked for with a non-zero status: the run's exit status is 1."""
+        assert event.process is not None
+        if event.code and not (event.data or {}).get("requested"):
+            self.crashed[event.process] = event.reason or f"exit code {event.code}"
 
     def _deliver(self, event: Event) -> None:
         for consumer in list(self.consumers):

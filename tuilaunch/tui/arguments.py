@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from textual import on, work
+from textual.timer import Timer
 
 from ..engine.errors import LaunchError
 from ..engine.plan.model import ArgumentInfo, PlanDiff
-from ..engine.plan.session import Preview
+from ..engine.plan.session import Preview, Stamp, file_stamp
 from .screens.args_panel import ArgsPanel, check_plan, check_values
 from .session_link import SessionLink
 
@@ -14,6 +17,16 @@ from .session_link import SessionLink
 class Arguments(SessionLink):
     """The Args tab's edits: previewed against the plan as they are typed, applied (F5) as a
     relaunch."""
+
+    FILE_CHECK_S = 1.0
+    """While the Args tab shows, the launch file's stamp is read this often: an edit saved
+    meanwhile (or a syntax error fixed) is previewed without a key, so the tab never says
+    "No change" or "no longer loads" about a file that is not the one on disk."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.file_timer: Timer | None = None
+        self.file_seen: Stamp = None
 
     @on(ArgsPanel.Edited)
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
@@ -61,7 +74,21 @@ class Arguments(SessionLink):
         super().tab_shown(pane)
         if pane == "args" and self.supervisor is not None:
             # the file may have been edited meanwhile: the preview says so before F5
+            self.file_seen = file_stamp(self.session.path)
             self.preview_values(self.args_panel.values(), shown=True)
+            if self.file_timer is None:
+                self.file_timer = self.set_interval(self.FILE_CHECK_S, self._check_file,
+                                                    pause=True)
+            self.file_timer.resume()
+        elif self.file_timer is not None:
+            self.file_timer.pause()
+
+    def _check_file(self) -> None:
+        """The file changed on disk while the tab shows: the preview says so now."""
+        stamp = file_stamp(self.session.path)
+        if stamp != self.file_seen and self.supervisor is not None:
+            self.file_seen = stamp
+            self.preview_values(self.args_panel.values())
 
     @on(ArgsPanel.ApplyRequested)
     def _apply_requested(self) -> None:

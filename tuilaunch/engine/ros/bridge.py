@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import os
 import threading
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -60,6 +61,12 @@ def python_value(msg: Any) -> Any:
     return None if field is None else to_plain(getattr(msg, field))
 
 
+DISCOVERY_S = 1.0
+"""A graph listing waits until the bridge's participant is this old: a new participant
+knows no other node yet (ros2cli's direct node spins 0.5 s before it lists, for the same
+reason), and the TUI's Params and Services tabs, whose first look starts the bridge, list
+once. Twice ros2cli's wait: the machines this runs on are often busy."""
+
 MAX_DOMAIN_ID = 232
 """The highest domain whose DDS ports fit below 65536 (7400 + 250 x domain + offsets)."""
 
@@ -89,6 +96,7 @@ class RosBridge:
         from rclpy.context import Context
         from rclpy.executors import MultiThreadedExecutor
 
+        self._born = time.monotonic()
         self._context = Context()
         # args=[]: otherwise rclpy reads tuilaunch's own argv, where `name:=value` launch
         # arguments look like (deprecated) remapping rules
@@ -116,12 +124,20 @@ class RosBridge:
 
     # --- graph ---------------------------------------------------------------------------
 
+    async def _discovered(self) -> None:
+        """Returns once discovery has had its time (at once after the first second)."""
+        left = self._born + DISCOVERY_S - time.monotonic()
+        if left > 0:
+            await asyncio.sleep(left)
+
     async def list_nodes(self) -> list[str]:
+        await self._discovered()
         pairs = await asyncio.to_thread(self.node.get_node_names_and_namespaces)
         return sorted((ns.rstrip("/") + "/" + name) for name, ns in pairs
                       if name != self.node.get_name())
 
     async def list_services(self) -> list[tuple[str, list[str]]]:
+        await self._discovered()
         found = await asyncio.to_thread(self.node.get_service_names_and_types)
         return sorted((name, list(types)) for name, types in found)
 

@@ -1,6 +1,8 @@
 """What the panels of the ROS graph (parameters, services) share: they list their part of the
 graph the first time they are shown, so that rclpy starts in the UI only for someone who
-looks, and a failed graph query is a line in the panel, never the panel's end."""
+looks, ask again every few seconds while shown (discovery takes seconds on a busy machine,
+and nodes come and go: a restart, a relaunch that moves them), and a failed graph query is
+a line in the panel, never the panel's end."""
 
 from __future__ import annotations
 
@@ -9,18 +11,27 @@ from collections.abc import Callable
 from typing import Any
 
 from textual import work
+from textual.timer import Timer
+from textual.widget import Widget
+
+RELIST_S = 2.0
+"""While the Services or Params tab shows, its list is asked of the graph this often (a
+local query, nothing on the network): a new participant discovers the others over seconds
+on a busy machine, and nodes come and go."""
 
 
-class GraphListing:
-    """Mixin of a graph panel: `refresh_listing()` runs when the panel is first shown (and on
-    demand); it asks the bridge's `list_<listing>` and hands the answer to `show_listing`, or
-    says why it failed with `report`."""
+class GraphListing(Widget):
+    """Base of a graph panel: `refresh_listing()` runs when the panel is first shown, again
+    every RELIST_S while it shows (and on demand); it asks the bridge's `list_<listing>` and
+    hands the answer to `show_listing`, or says why it failed with `report`."""
 
     bridge: Callable[[], Any]
     listing = ""  # what is listed: "nodes" asks bridge.list_nodes()
     listed = False  # the list was asked for (the tab was shown)
+    relist: Timer | None = None
 
-    def show_listing(self, listing: Any) -> None:
+    def show_listing(self, listing: Any, reload: bool) -> None:
+        """`reload`: asked for by the user (Refresh, first look), not by the timer."""
         raise NotImplementedError
 
     def report(self, text: str, ok: bool) -> None:
@@ -30,13 +41,25 @@ class GraphListing:
         if not self.listed:
             self.listed = True
             self.refresh_listing()
+        if self.relist is None:
+            self.relist = self.set_interval(RELIST_S, self._relist)
+        self.relist.resume()
+
+    def on_hide(self) -> None:
+        if self.relist is not None:
+            self.relist.pause()
+
+    def _relist(self) -> None:
+        # one listing slower than the period (rclpy's first start) is let finish, not replaced
+        if not any(w.group == "graph-listing" and not w.is_finished for w in self.workers):
+            self.refresh_listing(reload=False)
 
     @work(group="graph-listing", exclusive=True, exit_on_error=False)
-    async def refresh_listing(self) -> None:
+    async def refresh_listing(self, reload: bool = True) -> None:
         try:
             bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
             listing = await getattr(bridge, f"list_{self.listing}")()
         except Exception as exc:  # a graph query must never take the panel down
             self.report(f"cannot list {self.listing}: {exc}", ok=False)
             return
-        self.show_listing(listing)
+        self.show_listing(listing, reload)

@@ -115,19 +115,26 @@ class ParamsPanel(GraphListing, Horizontal):
                            ("type", "type"), ("ro", "ro")):
             table.add_column(title, key=key)
 
-    def show_listing(self, listing: list[str]) -> None:
-        self.nodes = listing
-        self._fill_nodes()
-        if self.node is not None:
+    def show_listing(self, listing: list[str], reload: bool) -> None:
+        if listing != self.nodes or not self.query_one("#prm-nodes", OptionList).option_count:
+            self.nodes = listing
+            self._fill_nodes()
+        if reload and self.node is not None:
             self.load_node(self.node)
 
     @on(Input.Changed, "#prm-filter")
     def _fill_nodes(self) -> None:
         term = self.query_one("#prm-filter", Input).value.lower()
         listing = self.query_one("#prm-nodes", OptionList)
+        highlighted = listing.highlighted
+        was = None if highlighted is None or highlighted >= listing.option_count else \
+            listing.get_option_at_index(highlighted).id
         listing.clear_options()
+        shown = [n for n in self.nodes if term in n.lower()]
         listing.add_options([Option(Text(n, no_wrap=True, overflow="ellipsis"), id=n)
-                             for n in self.nodes if term in n.lower()])
+                             for n in shown])
+        if was in shown:  # the row the user was on stays highlighted
+            listing.highlighted = shown.index(was)
 
     @on(Input.Submitted, "#prm-filter")
     def _filter_submitted(self) -> None:

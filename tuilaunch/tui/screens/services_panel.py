@@ -128,15 +128,18 @@ class ServicesPanel(GraphListing, Horizontal):
     def on_mount(self) -> None:
         self.query_one("#svc-history", OptionList).border_title = "history"
 
-    def show_listing(self, listing: list[tuple[str, list[str]]]) -> None:
-        self.services = listing
-        self._fill_list()
+    def show_listing(self, listing: list[tuple[str, list[str]]], reload: bool) -> None:
+        if listing != self.services or not self.query_one("#svc-list", OptionList).option_count:
+            self.services = listing
+            self._fill_list()
 
     @on(Input.Changed, "#svc-filter")
     def _fill_list(self) -> None:
         term = self.query_one("#svc-filter", Input).value.lower()
         listing = self.query_one("#svc-list", OptionList)
         highlighted = listing.highlighted
+        was = None if highlighted is None or highlighted >= listing.option_count else \
+            listing.get_option_at_index(highlighted).id
         listing.clear_options()
         shown = [name for name, types in self.services
                  if (term in name.lower() or any(term in t.lower() for t in types))
@@ -144,10 +147,11 @@ class ServicesPanel(GraphListing, Horizontal):
         listing.add_options([Option(Text(name, no_wrap=True, overflow="ellipsis"), id=name)
                              for name in shown])
         hidden = "" if term else ", node parameter services hidden: type to search all"
-        listing.border_title = f"{len(shown)} services{hidden}"
+        count = f"{len(shown)} service" + ("" if len(shown) == 1 else "s")
+        listing.border_title = f"{count}{hidden}"
         if listing.option_count:
-            keep = highlighted is not None and highlighted < listing.option_count
-            listing.highlighted = highlighted if keep else 0
+            # the row the user was on stays highlighted when the list is asked again
+            listing.highlighted = shown.index(was) if was in shown else 0
 
     @on(Input.Submitted, "#svc-filter")
     def _filter_submitted(self) -> None:
