@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 from textual import work
 from textual.timer import Timer
@@ -20,9 +20,9 @@ local query, nothing on the network): a new participant discovers the others ove
 on a busy machine, and nodes come and go."""
 
 
-class GraphListing(Widget):
-    """Base of a graph panel: `refresh_listing()` runs when the panel is first shown, again
-    every RELIST_S while it shows (and on demand); it asks the bridge's `list_<listing>` and
+class GraphListing:
+    """Mixin of a graph panel (a Widget): `refresh_listing()` runs when the panel is first
+    shown, again every RELIST_S while it shows (and on demand); it asks the bridge's `list_<listing>` and
     hands the answer to `show_listing`, or says why it failed with `report`."""
 
     bridge: Callable[[], Any]
@@ -42,7 +42,7 @@ class GraphListing(Widget):
             self.listed = True
             self.refresh_listing()
         if self.relist is None:
-            self.relist = self.set_interval(RELIST_S, self._relist)
+            self.relist = cast(Widget, self).set_interval(RELIST_S, self._relist)
         self.relist.resume()
 
     def on_hide(self) -> None:
@@ -51,7 +51,8 @@ class GraphListing(Widget):
 
     def _relist(self) -> None:
         # one listing slower than the period (rclpy's first start) is let finish, not replaced
-        if not any(w.group == "graph-listing" and not w.is_finished for w in self.workers):
+        workers = cast(Widget, self).workers
+        if not any(w.group == "graph-listing" and not w.is_finished for w in workers):
             self.refresh_listing(reload=False)
 
     @work(group="graph-listing", exclusive=True, exit_on_error=False)
