@@ -22,8 +22,9 @@ on a busy machine, and nodes come and go."""
 
 class GraphListing:
     """Mixin of a graph panel (a Widget): `refresh_listing()` runs when the panel is first
-    shown, again every RELIST_S while it shows (and on demand); it asks the bridge's `list_<listing>` and
-    hands the answer to `show_listing`, or says why it failed with `report`."""
+    shown, again every RELIST_S while it shows (and on demand); it asks the bridge's
+    `list_<listing>` and hands the answer to `show_listing`, or says why it failed with
+    `report`."""
 
     bridge: Callable[[], Any]
     listing = ""  # what is listed: "nodes" asks bridge.list_nodes()
