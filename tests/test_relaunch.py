@@ -341,6 +341,7 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
     path = write(SHELL)
     name = tl(str(path), "--detach").stdout.strip()
     tl("wait", name, "echo-1", "running", "--timeout", "60")
+    tl("wait", name, "bad-2", "failed", "--timeout", "60")  # before the stop, not raced by it
     attached = Terminal("attach", name)
     try:
         attached.read_until(b"echo-1")
