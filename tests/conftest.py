@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import json
 import os
 import queue
 import signal
 import subprocess
 import sys
+import tempfile
 import textwrap
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -85,6 +88,29 @@ def python_prints(code: str, timeout: float = 120) -> str:
     assert done.returncode == 0, done.stdout + done.stderr
     return done.stdout
 
+
+
+@contextmanager
+def session_folders(log_dir: Path, prefix: Path | None = None) -> Iterator[Path]:
+    """A private session folder (short: socket paths are limited) and log folder for the
+    sessions started inside, with `prefix` first on AMENT_PREFIX_PATH; a session server
+    left running by a failed stop is killed at the end. Yields the session folder."""
+    runtime = Path(tempfile.mkdtemp(prefix="tl"))
+    patch = pytest.MonkeyPatch()
+    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    patch.setenv("ROS_LOG_DIR", str(log_dir))
+    if prefix is not None:
+        patch.setenv("AMENT_PREFIX_PATH", os.pathsep.join(
+            [str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
+    try:
+        yield runtime
+    finally:
+        for info in (runtime / "tuilaunch").glob("*.json"):  # a failed stop leaves none
+            try:
+                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
+            except (ProcessLookupError, ValueError, KeyError):
+                pass
+        patch.undo()
 
 def wait_for(check: Callable[[], object], timeout: float = 60.0, what: str = "") -> None:
     """Polls `check` until it holds. The timeout only guards against a hang (a busy machine

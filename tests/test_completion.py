@@ -7,13 +7,10 @@ its topics are what a Tab press offers after a session command.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
-import signal
 import subprocess
 import sys
-import tempfile
 import textwrap
 import time
 import uuid
@@ -22,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import run_cli
+from .conftest import run_cli, session_folders
 from .inspector_helpers import NODE_SCRIPT
 from .launch_world import make_package
 
@@ -163,26 +160,13 @@ def world(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, object
     (work / "launch").mkdir(parents=True)
     (work / "demo.launch.py").write_text(textwrap.dedent(DEMO))
     (work / "notes.txt").write_text("not a launch file\n")
-    runtime = Path(tempfile.mkdtemp(prefix="tl"))  # short: socket paths are limited
-    patch = pytest.MonkeyPatch()
-    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
-    patch.setenv("ROS_LOG_DIR", str(root / "log"))
-    patch.setenv("AMENT_PREFIX_PATH", os.pathsep.join(
-        [str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
-    try:
+    with session_folders(root / "log", prefix):
         started = run_cli(str(work / "demo.launch.py"), "--detach", "--name", "cmpdemo")
         assert started.returncode == 0, started.stderr
         waited = run_cli("wait", "cmpdemo", "talker-1", "running", "--timeout", "60")
         assert waited.returncode == 0, waited.stderr
         yield {"root": root, "work": work}
         run_cli("stop", "cmpdemo")
-    finally:
-        for info in (runtime / "tuilaunch").glob("*.json"):  # a failed stop leaves none
-            try:
-                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
-            except (ProcessLookupError, ValueError, KeyError):
-                pass
-        patch.undo()
 
 
 @pytest.fixture(scope="module")

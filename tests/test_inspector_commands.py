@@ -10,15 +10,12 @@ from __future__ import annotations
 
 import asyncio
 import json
-import os
 import signal
 import subprocess
 import sys
-import tempfile
 import textwrap
 import time
 from collections.abc import Callable, Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
@@ -28,7 +25,7 @@ from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.ros.graph import full_node_name
 from tuilaunch.engine.run.session.session_dir import SessionError
 
-from .conftest import run_cli
+from .conftest import run_cli, session_folders
 from .inspector_helpers import NODE_SCRIPT
 from .inspector_helpers import eventually as eventually_async
 from .inspector_helpers import run as run_bridge
@@ -94,25 +91,12 @@ def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     make_package(prefix, "insp_nodes", ["inspector_node"],
                  probe=f"#!{sys.executable}\n" + NODE_SCRIPT.read_text())
     (root / "inspect.launch.py").write_text(textwrap.dedent(LAUNCH))
-    runtime = Path(tempfile.mkdtemp(prefix="tl"))  # short: socket paths are limited
-    patch = pytest.MonkeyPatch()
-    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
-    patch.setenv("ROS_LOG_DIR", str(root / "log"))
-    patch.setenv("AMENT_PREFIX_PATH", os.pathsep.join(
-        [str(prefix), os.environ.get("AMENT_PREFIX_PATH", "")]))
-    try:
+    with session_folders(root / "log", prefix):
         name = ok(str(root / "inspect.launch.py"), "--detach", "--name", "insp").strip()
         for process in (FAST, STRICT, BUSY, PLAIN, ANON):
             ok("wait", name, process, "running", "--timeout", "60")
         yield name
         tl("stop", name)
-    finally:
-        for info in (runtime / "tuilaunch").glob("*.json"):  # a failed stop leaves none
-            try:
-                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
-            except (ProcessLookupError, ValueError, KeyError):
-                pass
-        patch.undo()
 
 
 def topics_of(name: str, *extra: str) -> dict[str, dict[str, Any]]:

@@ -9,14 +9,13 @@ import os
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from .conftest import run_cli, wait_for
+from .conftest import run_cli, session_folders, wait_for
 
 LAUNCH = """
 from launch import LaunchDescription
@@ -46,12 +45,8 @@ def tl(*args: str) -> str:
 
 @pytest.fixture
 def session(tmp_path: Path) -> Iterator[str]:
-    runtime = Path(tempfile.mkdtemp(prefix="tl"))  # short: socket paths are limited
-    patch = pytest.MonkeyPatch()
-    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
-    patch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
     (tmp_path / "life.launch.py").write_text(LAUNCH)
-    try:
+    with session_folders(tmp_path / "log"):
         name = tl(str(tmp_path / "life.launch.py"), "--detach", "--name", "life").strip()
         for process, state in (("three-1", "failed"), ("segv-2", "failed"),
                                ("counter-4", "running")):
@@ -60,13 +55,6 @@ def session(tmp_path: Path) -> Iterator[str]:
         wait_for(lambda: "line 50" in tl("logs", name, "counter-4"), what="50 lines")
         yield name
         run_cli("stop", name)
-    finally:
-        for info in (runtime / "tuilaunch").glob("*.json"):  # a failed stop leaves none
-            try:
-                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
-            except (ProcessLookupError, ValueError, KeyError):
-                pass
-        patch.undo()
 
 
 def test_logs_tell_starts_exits_signals_and_respawns(session):
@@ -198,12 +186,8 @@ def generate_launch_description():
 
 
 def test_stop_says_what_it_waits_for_while_a_process_ignores_sigint(tmp_path):
-    runtime = Path(tempfile.mkdtemp(prefix="tl"))
-    patch = pytest.MonkeyPatch()
-    patch.setenv("XDG_RUNTIME_DIR", str(runtime))
-    patch.setenv("ROS_LOG_DIR", str(tmp_path / "log"))
     (tmp_path / "stubborn.launch.py").write_text(STUBBORN)
-    try:
+    with session_folders(tmp_path / "log"):
         name = tl(str(tmp_path / "stubborn.launch.py"), "--detach", "--name", "stub").strip()
         wait_for(lambda: "ready" in tl("logs", name, "stubborn-1"), what="ready")
         stopped = run_cli("stop", name)
@@ -213,10 +197,3 @@ def test_stop_says_what_it_waits_for_while_a_process_ignores_sigint(tmp_path):
         assert "tuilaunch stop: stubborn-1: still running 4 s after SIGINT: sending SIGTERM " \
             "to its process group" in stopped.stderr
         assert "Traceback" not in stopped.stderr
-    finally:
-        for info in (runtime / "tuilaunch").glob("*.json"):
-            try:
-                os.kill(json.loads(info.read_text())["pid"], signal.SIGKILL)
-            except (ProcessLookupError, ValueError, KeyError):
-                pass
-        patch.undo()

@@ -15,9 +15,10 @@ import shutil
 import sys
 import textwrap
 import time
+from collections.abc import Iterator
 from typing import Any
 
-from ..client.link import open_link
+from ..client.link import Link, open_link
 from ..engine.run.session.session_dir import SessionError
 
 SLACK = 30.0
@@ -144,6 +145,22 @@ def hz_block(result: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def streamed(link: Link, kind: str, end: float | None) -> Iterator[dict[str, Any]]:
+    """The data of the session's `kind` events (hz, echo) as they come, until `end` (a
+    monotonic time; None: until Ctrl+C); the session's end is an error."""
+    link.sock.settimeout(None)
+    while True:
+        try:
+            message = link.receive_until(end)
+        except TimeoutError:
+            return
+        if message is None or message.get("type") == "ended":
+            raise SessionError(f"session {link.name} ended")
+        for event in message.get("events") or []:
+            if event.get("kind") == kind:
+                yield event.get("data") or {}
+
+
 def cmd_hz(options: argparse.Namespace) -> int:
     """A block every second until Ctrl+C (then the figures so far), or once after
     `--duration` (`--json`: one object, after 5 s unless told)."""
@@ -161,23 +178,11 @@ def cmd_hz(options: argparse.Namespace) -> int:
         shown = 0  # messages counted at the last block: a block only when new ones came
         last: dict[str, Any] | None = None
         try:
-            link.sock.settimeout(None)
-            while True:
-                try:
-                    message = link.receive_until(end)
-                except TimeoutError:
-                    break
-                if message is None or message.get("type") == "ended":
-                    raise SessionError(f"session {link.name} ended")
-                for event in message.get("events") or []:
-                    if event.get("kind") != "hz":
-                        continue
-                    last = event.get("data") or {}
-                    if end is None and last["rate_hz"] is not None and \
-                            last["messages"] > shown:
-                        shown = last["messages"]
-                        sys.stdout.write(hz_block(last))
-                        sys.stdout.flush()
+            for last in streamed(link, "hz", end):
+                if end is None and last["rate_hz"] is not None and last["messages"] > shown:
+                    shown = last["messages"]
+                    sys.stdout.write(hz_block(last))
+                    sys.stdout.flush()
         except KeyboardInterrupt:
             # Ctrl+C ends a stream: the figures so far, as the last word
             if last is not None and last["rate_hz"] is not None:
@@ -219,23 +224,12 @@ def cmd_echo(options: argparse.Namespace) -> int:
         if options.timeout is not None:
             fields["wait"] = options.timeout
         link.request("echo", **fields)
-        link.sock.settimeout(None)
-        while True:
-            try:
-                message = link.receive_until(end)
-            except TimeoutError:
-                break
-            if message is None or message.get("type") == "ended":
-                raise SessionError(f"session {link.name} ended")
-            for event in message.get("events") or []:
-                data = event.get("data") or {}
-                if event.get("kind") != "echo":
-                    continue
-                sys.stdout.write(data.get("text", ""))
-                sys.stdout.flush()
-                shown += 1
-                if count is not None and shown >= count:
-                    return 0
+        for data in streamed(link, "echo", end):
+            sys.stdout.write(data.get("text", ""))
+            sys.stdout.flush()
+            shown += 1
+            if count is not None and shown >= count:
+                return 0
     finally:
         link.close()
     # the time ran out: enough when no count was asked and something came
