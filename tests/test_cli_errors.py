@@ -280,7 +280,7 @@ def test_print_counts_only_the_processes_that_can_start(write):
 
 def test_a_value_the_args_tab_refuses_is_refused_on_the_command_line_too():
     from tuilaunch.engine import load_file, resolve
-    from tuilaunch.engine.plan.argument_checks import check_values
+    from tuilaunch.engine.plan.arguments import check_values
 
     words = check_values(resolve(load_file(BRINGUP), {}).arguments, {"rate": "abc"})
     result = run_cli(BRINGUP, "rate:=abc", "--print")

@@ -183,7 +183,7 @@ def _main(argv: list[str] | None) -> int:
             if options.show_args:
                 return _show_arguments(loaded, arguments)
             plan = resolve(loaded, arguments)
-            from ..engine.plan.argument_checks import check_values
+            from ..engine.plan.arguments import check_values
 
             refused = check_values(plan.arguments, arguments)  # the Args tab's own words
             if refused is not None:

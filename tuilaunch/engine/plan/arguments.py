@@ -1,11 +1,13 @@
-"""DeclareLaunchArgument, resolved: its value from the command line or its default."""
+"""DeclareLaunchArgument, resolved: its value from the command line or its default; and
+whether a value typed for an argument suits its type (`check_values`: the Args tab checks
+each edit with it, and the command line each name:=value, in the same words)."""
 
 from __future__ import annotations
 
 import os
 
 from ..describe.entities import DeclareLaunchArgument
-from ..describe.substitutions import perform_optional
+from ..describe.substitutions import perform_optional, text_to_bool
 from ..errors import ArgumentError
 from .model import ArgumentInfo
 from .scope import Scope
@@ -52,3 +54,27 @@ def declare_argument(arguments: dict[str, ArgumentInfo], lenient: bool,
             f"argument '{decl.name}' = {value!r} is not one of its choices: "
             f"{', '.join(decl.choices)}", decl.origin,
             hint=f"pass {decl.name}:=<one of {', '.join(decl.choices)}>")
+
+
+def check_values(arguments: list[ArgumentInfo], values: dict[str, str]) -> str | None:
+    """Why a typed value cannot be used for its argument's type, or None."""
+    types = {a.name: a for a in arguments}
+    for name, text in values.items():
+        arg = types.get(name)
+        if arg is None:
+            continue
+        if arg.choices and text not in arg.choices:
+            return f"argument '{name}' must be one of {', '.join(arg.choices)}, got {text!r}"
+        if arg.type == "int":
+            try:
+                int(text.strip())
+            except ValueError:
+                return f"argument '{name}' needs a whole number, got {text!r}"
+        elif arg.type == "float":
+            try:
+                float(text.strip())
+            except ValueError:
+                return f"argument '{name}' needs a number, got {text!r}"
+        elif arg.type == "bool" and text_to_bool(text) is None:
+            return f"argument '{name}' needs true or false, got {text!r}"
+    return None

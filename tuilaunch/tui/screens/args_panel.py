@@ -14,7 +14,7 @@ from textual.widget import Widget
 from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
 from ...engine.describe.substitutions import text_to_bool
-from ...engine.plan.argument_checks import check_values as check_values
+from ...engine.plan.arguments import check_values as check_values
 from ...engine.plan.model import ArgumentInfo, Plan
 from .fields import Field, Toggle
 
