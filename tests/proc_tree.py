@@ -57,6 +57,13 @@ def alive(pid: int) -> bool:
         return False
 
 
+def servers_of(folder: Path) -> list[int]:
+    """The session servers whose command line names `folder` (their log folder is in it):
+    a server whose TUI was killed, or whose info was never written, is found by it."""
+    return [pid for pid in pids() if b"tuilaunch.engine.server_main" in cmdline(pid)
+            and str(folder).encode() in cmdline(pid)]
+
+
 def send(pid: int, sig: int) -> None:
     try:
         os.kill(pid, sig)

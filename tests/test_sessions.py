@@ -33,7 +33,7 @@ from tuilaunch.tui.output_store import LEVELS, View
 
 from .conftest import run_cli, wait_for
 from .proc_tree import alive as _alive
-from .proc_tree import end
+from .proc_tree import end, servers_of
 from .test_tui import until
 
 LAUNCH = """
@@ -64,14 +64,7 @@ def runtime(monkeypatch, tmp_path):
          for info in (folder / "tuilaunch").glob("*.json")])
     # a server whose info was never written (it lost a race, or its test failed early) is
     # found by its log folder, which is this test's
-    for entry in Path("/proc").iterdir():
-        try:
-            argv = (entry / "cmdline").read_bytes().split(b"\0")
-        except OSError:
-            continue
-        if any(b"tuilaunch.engine.server_main" in a for a in argv) and any(
-                str(tmp_path).encode() in a for a in argv):
-            end([int(entry.name)])
+    end(servers_of(tmp_path))
     shutil.rmtree(folder, ignore_errors=True)
 
 

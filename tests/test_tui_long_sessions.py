@@ -26,6 +26,7 @@ from tuilaunch.tui.screens.output_panel import OutputPanel
 from tuilaunch.tui.screens.params_panel import ParamsPanel
 from tuilaunch.tui.screens.tree_panel import LaunchTree
 
+from .proc_tree import end, servers_of
 from .test_tui import pids, row_text, states, tui, until
 
 COUNTER = """
@@ -122,6 +123,10 @@ def generate_launch_description():
 """
 
 
+LOG_DIRS: dict[int, Path] = {}
+"""Each TUI started on a pty, by pid: the folder its launch logs into (ROS_LOG_DIR)."""
+
+
 def start_on_pty(tmp_path: Path, *argv: str, size: tuple[int, int] = (80, 24)) \
         -> tuple[subprocess.Popen[bytes], int]:
     import fcntl
@@ -134,6 +139,7 @@ def start_on_pty(tmp_path: Path, *argv: str, size: tuple[int, int] = (80, 24)) \
     proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", *argv], stdin=slave,
                             stdout=slave, stderr=slave, env=env, start_new_session=True)
     os.close(slave)
+    LOG_DIRS[proc.pid] = tmp_path
     return proc, master
 
 
@@ -173,6 +179,10 @@ def stop_pty(proc: subprocess.Popen[bytes], master: int) -> None:
             os.killpg(proc.pid, 9)
             proc.wait()
         os.close(master)
+        # a TUI killed before it stopped its launch leaves the server (a session of its own)
+        log_dir = LOG_DIRS.pop(proc.pid, None)
+        if log_dir is not None:
+            end(servers_of(log_dir))
 
 
 def test_an_unchanging_screen_sends_almost_nothing_to_the_terminal(write, tmp_path):
