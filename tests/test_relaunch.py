@@ -333,6 +333,18 @@ async def test_an_attached_client_says_when_the_session_is_stopped_elsewhere(
     assert app.ended_elsewhere == "tuilaunch stop"
 
 
+
+def quit_after_a_failure(owner) -> str:
+    """`q` `y` on a TUI whose run failed: it exits 1 and leaves what failed in the shell;
+    returns the terminal's text."""
+    os.write(owner.master, b"q")
+    owner.read_until(b"Stop")
+    os.write(owner.master, b"y")
+    assert owner.wait_exit() == 1
+    owner.read_until(b"every log of this launch")
+    return owner.screen.decode(errors="replace")
+
+
 def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
     """`tuilaunch attach` on a terminal: stopped elsewhere, it leaves a line in the shell;
     `tuilaunch FILE` quit after a process failed leaves what failed and where its log is."""
@@ -363,12 +375,7 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
         names = sessions()
         tl("wait", names[-1], "bad-2", "failed", "--timeout", "60")
         log_dir = status(names[-1])["log_dir"]
-        os.write(owner.master, b"q")
-        owner.read_until(b"Stop")
-        os.write(owner.master, b"y")
-        assert owner.wait_exit() == 1
-        owner.read_until(b"every log of this launch")
-        text = owner.screen.decode(errors="replace")
+        text = quit_after_a_failure(owner)
         assert f"tuilaunch: bad-2 failed (exit code 3); its output: {log_dir}/bad-2.log" in text
         assert f"tuilaunch: every log of this launch: {log_dir}" in text
         assert "echo-1 failed" not in text  # stopped by the quit: not a failure
@@ -396,12 +403,7 @@ def test_the_shell_says_which_crash_made_the_exit_status_1(runtime, write, tmp_p
     owner = Terminal(str(path))
     try:
         owner.read_until(b"again")  # died once, runs again
-        os.write(owner.master, b"q")
-        owner.read_until(b"Stop")
-        os.write(owner.master, b"y")
-        assert owner.wait_exit() == 1
-        owner.read_until(b"every log of this launch")
-        text = owner.screen.decode(errors="replace")
+        text = quit_after_a_failure(owner)
         assert "tuilaunch: crashy-1 died during the run (exit code 3), then ran again; " \
                "its output: " in text
     finally:
