@@ -425,3 +425,57 @@ def generate_launch_description():
     assert any("/slow: configure done (autostart" in line for line in logs), logs
     assert any("/slow: activate done (autostart" in line for line in logs), logs
     assert not any("unknown" in line for line in logs), logs
+
+
+async def test_a_state_handler_reruns_for_a_transition_made_while_it_was_still_running(
+        write, tmp_path):
+    """The node reaches inactive again before the answer to the handler's activate came
+    (a reply late on a busy machine): that second transition still runs the handler again,
+    as launch_ros runs it on each matching transition event."""
+    from tuilaunch.engine.describe.lifecycle import state_keys
+    from tuilaunch.engine.run.plugins import Plugin
+    from tuilaunch.engine.run.supervisor.supervisor import Supervisor
+
+    plan = resolve(load_file(str(write(CONFIGURE_THEN_ACTIVATE))), {}, tmp_path / "params")
+    (talker,) = plan.processes
+    asked: list[list[str]] = []
+    answer = asyncio.Event()
+
+    class LateAnswers(Plugin):  # stands for the lifecycle tracker, with a late reply
+        def actions(self):  # type: ignore[no-untyped-def]
+            return {"lifecycle_transition": self.transition}
+
+        async def transition(self, action):  # type: ignore[no-untyped-def]
+            asked.append(action.data["transitions"])
+            if action.data["transitions"] == ["activate"] and len(asked) == 2:
+                await answer.wait()  # the first activate: answered after the cycle below
+            return True
+
+    supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=3)
+    supervisor.add_plugin(LateAnswers())
+
+    def reached(transition: str, start: str, goal: str) -> None:
+        for key in state_keys(transition, start, goal):
+            supervisor.state_reached(talker.id, "state:" + key)
+            supervisor.state_reached("*", "state:" + key)
+
+    async def until(condition, what: str) -> None:  # type: ignore[no-untyped-def]
+        deadline = asyncio.get_running_loop().time() + 30
+        while not condition():
+            assert asyncio.get_running_loop().time() < deadline, f"{what}: {asked}"
+            await asyncio.sleep(0.02)
+
+    run = asyncio.ensure_future(supervisor.run(keep_alive=True))
+    try:
+        await until(lambda: asked == [["configure"]], "configure was never asked")
+        reached("configure", "unconfigured", "inactive")
+        await until(lambda: len(asked) == 2, "the inactive handler never ran")
+        # while the activate waits for its answer, the node goes active and back
+        reached("activate", "inactive", "active")
+        reached("deactivate", "active", "inactive")
+        answer.set()
+        await until(lambda: len(asked) == 3, "the second inactive was missed")
+        assert asked == [["configure"], ["activate"], ["activate"]]
+    finally:
+        await supervisor.shutdown("test over")
+        await asyncio.wait_for(run, 30)

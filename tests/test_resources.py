@@ -80,7 +80,12 @@ def test_cpu_of_a_tree_counts_its_children(spawn):
         r["burner"].cpu_percent or 0) > 30)
     assert found["burner"].processes == 2
     assert found["idle"].cpu_percent is not None and found["idle"].cpu_percent < 30
-    assert found["burner"].rss_bytes > found["idle"].rss_bytes > 1_000_000
+    # the tree's memory is the shell's plus its child's: more than the child's own, read in
+    # the same sample (against another process, a few pages either way would decide it)
+    (child,) = set(tree_pids(shell.pid)) - {shell.pid}
+    both = sampler.sample({"burner": shell.pid, "child": child})
+    assert both["child"].processes == 1
+    assert both["burner"].rss_bytes > both["child"].rss_bytes > 1_000_000
 
 
 def test_threads_and_a_gone_process(spawn):

@@ -41,8 +41,16 @@ class PlanActions(SupervisorCore):
         trigger = action.trigger
         assert trigger is not None and trigger.target is not None
         key = (trigger.target, flag_name(trigger))
-        await self.when_ready(trigger, self.perform_action, action)
-        seen = self.triggers.transitions(key)
+        seen = 0
+
+        async def first(action: ActionPlan) -> None:
+            # counted before the entities run: a transition made while they still run (an
+            # activate whose reply comes after the node cycled back) runs them again
+            nonlocal seen
+            seen = self.triggers.transitions(key)
+            await self.perform_action(action)
+
+        await self.when_ready(trigger, first, action)
         while not self.shutting_down:
             await self.triggers.next_transition(key, seen)
             seen += 1
