@@ -5,7 +5,11 @@ newline."""
 
 from __future__ import annotations
 
+import os
+import signal
+
 from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.output_panel import OutputPanel
 
 from .terminal_harness import PROGRAMS
@@ -199,6 +203,44 @@ async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path
         # so does tuilaunch's own line in the pane: every part of it is on screen
         await until(pilot, lambda: "failed:" in "".join(rows(app)))
         assert missing in "".join(r.strip() for r in rows(app))
+
+
+STUBBORN = ("import signal, time\n"
+            "signal.signal(signal.SIGINT, signal.SIG_IGN)\n"
+            "print('ready', flush=True)\n"
+            "time.sleep(600)\n")
+
+
+async def test_a_group_being_stopped_says_its_nodes_are_stopping(write, tmp_path):
+    path = write(f"""
+        import sys
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([
+                ExecuteProcess(name=name, cmd=[sys.executable, '-c', {STUBBORN!r}],
+                               sigterm_timeout='600') for name in ('left', 'right')])
+        """)
+    app = make_app(str(path), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        tree = app.launch_tree
+        await until(pilot, lambda: app.supervisor is not None and list(
+            app.supervisor.states.values()) == ["running", "running"])
+        tree.move_cursor(tree.root)
+        detail = app.query_one("#detail")
+        await until(pilot, lambda: "2 of 2 processes running" in str(detail.render()))
+        await pilot.press("s")
+        await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+        await pilot.press("y")
+        # they ignore SIGINT: the stop lasts, and the row says so rather than "0 running"
+        await until(pilot, lambda: "0 of 2 processes running, 2 stopping"
+                    in str(detail.render()))
+        assert app.supervisor is not None
+        for running in list(app.supervisor.running.values()):
+            os.kill(running.process.pid, signal.SIGTERM)  # what the stop's next step sends
+        await until(pilot, lambda: not app.supervisor.running)
+        await until(pilot, lambda: "0 of 2 processes running" in str(detail.render())
+                    and "stopping" not in str(detail.render()))
 
 
 # --- typing into a node --------------------------------------------------------------------

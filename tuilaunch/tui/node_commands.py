@@ -95,6 +95,7 @@ class NodeCommands(SessionLink):
         actions = self._actions_to_rerun(processes) if verb in ("restart", "start") else []
         self.run_worker(self._carry_out(commands, actions), group="commands",
                         exit_on_error=False)
+        self.update_detail()  # the selected row says "stopping" now, not when they exit
         self.refresh_bindings()
 
     async def _carry_out(self, commands: list[Any], actions: list[str]) -> None:

@@ -264,8 +264,13 @@ class LaunchTree(Tree[RowData]):
             return "all nodes: every process's output, with its id"
         if data.kind == "group":
             label = node.label.plain if isinstance(node.label, Text) else str(node.label)
-            running = sum(1 for p in data.processes if self.states.get(p) == "running")
-            return f"{label}: {running} of {len(data.processes)} processes running"
+            states = [self.states.get(p, "pending") for p in data.processes]
+            text = f"{label}: {states.count('running')} of {len(states)} processes running"
+            # what the others are doing: while a stop is under way, "0 of 2 running" alone
+            # reads as if they had died
+            others = [f"{states.count(state)} {STATE_LOOK[state][2]}"
+                      for state in ("stopping", "respawning", "failed") if state in states]
+            return f"{text}, {', '.join(others)}" if others else text
         ref = data.ref or ""
         state = self.states.get(ref, "pending")
         word = STATE_LOOK.get(state, ("", "", state))[2]
