@@ -227,3 +227,33 @@ async def test_params_tab_writes_and_loads_a_params_file(demo, tmp_path, monkeyp
         await until(pilot, lambda: "2 set" in str(result.render()))
         assert "ok label" in str(result.render()) and "ok gains.p" in str(result.render())
         await until(pilot, lambda: panel.params["label"].value == "front_lidar")
+
+
+async def test_an_empty_topic_list_says_discovery_goes_on():
+    """No topic yet (a launch whose nodes are still being discovered): the note says the
+    list is asked again, rather than "0 topics" as if there were none."""
+    from textual.app import App, ComposeResult
+
+    late = {"name": "/late", "types": ["std_msgs/msg/String"], "publishers": [],
+            "subscribers": []}
+    answers: list[list[dict[str, object]]] = [[], [late]]
+
+    async def request(op: str, **fields: object) -> object:
+        if op == "topics":
+            return {"topics": answers.pop(0) if len(answers) > 1 else answers[0]}
+        return {}
+
+    class Host(App[None]):
+        def compose(self) -> ComposeResult:
+            yield TopicsPanel(request)
+
+    app = Host()
+    async with app.run_test(size=(100, 30)) as pilot:
+        panel = app.query_one(TopicsPanel)
+        panel.set_shown(True)
+        note = app.query_one("#tpc-note")
+        await until(pilot, lambda: str(note.render()).startswith(
+            "no topic yet, discovering (asked every 3 s)"))
+        # asked again by the panel itself: the topic that came is listed and counted
+        await until(pilot, lambda: panel.shown == ["/late"])
+        assert str(note.render()).startswith("1 topic;")

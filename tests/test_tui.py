@@ -263,6 +263,26 @@ async def test_the_first_look_at_params_or_services_lists_the_running_nodes(tmp_
             await until(pilot, lambda: listing.border_title == "1 service")
 
 
+async def test_an_empty_graph_reads_as_still_discovering_not_as_nothing_there(write, tmp_path):
+    path = write("""
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([ExecuteProcess(name='plain', cmd=['sleep', '600'])])
+        """)
+    async with tui(tmp_path, path=str(path)) as (app, pilot):
+        await pilot.press("3")
+        services = app.query_one(ServicesPanel)
+        listing = services.query_one("#svc-list")
+        # no node of the launch has a service: the list says discovery goes on
+        await until(pilot, lambda: services.answered)
+        await until(pilot, lambda: str(listing.border_title).startswith(
+            "no service yet, discovering (asked every 2 s)"))
+        # a search that finds nothing says so: the count, not discovery
+        await pilot.press("slash", *"get_parameters")
+        await until(pilot, lambda: listing.border_title == "0 services")
+
+
 async def test_quit_asks_while_nodes_run_and_leaves_no_process(tmp_path):
     async with tui(tmp_path, "robot:=tui5") as (app, pilot):
         await until(pilot, lambda: len(pids(app)) >= 4)

@@ -29,6 +29,7 @@ class GraphListing:
     bridge: Callable[[], Any]
     listing = ""  # what is listed: "nodes" asks bridge.list_nodes()
     listed = False  # the list was asked for (the tab was shown)
+    answered = False  # the graph answered once
     relist: Timer | None = None
 
     def show_listing(self, listing: Any, reload: bool) -> None:
@@ -37,6 +38,16 @@ class GraphListing:
 
     def report(self, text: str, ok: bool) -> None:
         raise NotImplementedError
+
+    def title(self, shown: int, term: str, noun: str, more: str = "") -> str:
+        """A list's title: how many `noun`s it shows; while nothing is seen (no filter), that
+        discovery goes on: a new participant sees the graph over seconds, and an empty list
+        alone reads as "there is none"."""
+        if shown or term:
+            return f"{shown} {noun}{'' if shown == 1 else 's'}{more}"
+        if not self.answered:
+            return f"asking the ROS graph for {noun}s..."
+        return f"no {noun} yet, discovering (asked every {RELIST_S:g} s){more}"
 
     def on_show(self) -> None:
         if not self.listed:
@@ -64,4 +75,5 @@ class GraphListing:
         except Exception as exc:  # a graph query must never take the panel down
             self.report(f"cannot list {self.listing}: {exc}", ok=False)
             return
+        self.answered = True
         self.show_listing(listing, reload)

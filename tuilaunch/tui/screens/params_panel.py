@@ -114,6 +114,7 @@ class ParamsPanel(GraphListing, Horizontal):
         for key, title in (("name", "name"), ("value", "value"), ("launch", "launch file"),
                            ("type", "type"), ("ro", "ro")):
             table.add_column(title, key=key)
+        self.query_one("#prm-nodes", OptionList).border_title = self.title(0, "", "node")
 
     def show_listing(self, listing: list[str], reload: bool) -> None:
         if listing != self.nodes or not self.query_one("#prm-nodes", OptionList).option_count:
@@ -133,6 +134,7 @@ class ParamsPanel(GraphListing, Horizontal):
         shown = [n for n in self.nodes if term in n.lower()]
         listing.add_options([Option(Text(n, no_wrap=True, overflow="ellipsis"), id=n)
                              for n in shown])
+        listing.border_title = self.title(len(shown), term, "node")
         if was in shown:  # the row the user was on stays highlighted
             listing.highlighted = shown.index(was)
 

@@ -127,6 +127,7 @@ class ServicesPanel(GraphListing, Horizontal):
 
     def on_mount(self) -> None:
         self.query_one("#svc-history", OptionList).border_title = "history"
+        self.query_one("#svc-list", OptionList).border_title = self.title(0, "", "service")
 
     def show_listing(self, listing: list[tuple[str, list[str]]], reload: bool) -> None:
         if listing != self.services or not self.query_one("#svc-list", OptionList).option_count:
@@ -147,8 +148,7 @@ class ServicesPanel(GraphListing, Horizontal):
         listing.add_options([Option(Text(name, no_wrap=True, overflow="ellipsis"), id=name)
                              for name in shown])
         hidden = "" if term else ", node parameter services hidden: type to search all"
-        count = f"{len(shown)} service" + ("" if len(shown) == 1 else "s")
-        listing.border_title = f"{count}{hidden}"
+        listing.border_title = self.title(len(shown), term, "service", hidden)
         if listing.option_count:
             # the row the user was on stays highlighted when the list is asked again
             listing.highlighted = shown.index(was) if was in shown else 0

@@ -219,7 +219,10 @@ class TopicsPanel(Vertical):
                 for key, value in self._values(name).items():
                     self._set(name, key, value)
         count = len(self.entries)
-        what = f"{len(names)} of {count} topics" if len(names) != count else f"{count} topics"
+        noun = "topic" if count == 1 else "topics"
+        what = f"{len(names)} of {count} {noun}" if len(names) != count else f"{count} {noun}"
+        if not count:  # an empty graph is often one not discovered yet
+            what = f"no topic yet, discovering (asked every {REFRESH_TICKS} s)"
         self.note(f"{what}; e echo, / filter" + (", x all topics" if self.node else ""))
         self.watch_visible(self.rows_on_screen())
         self.show_detail()
