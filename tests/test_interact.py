@@ -174,6 +174,30 @@ def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
     tl("stop", name)
 
 
+
+def test_a_respawning_node_left_under_a_tool_with_status_0_is_not_brought_back(write):
+    """Quitting gdb ends the debugging session, status 0: a respawn=True node does not come
+    back under gdb again (the file's own run would: launch respawns any end), and says so."""
+    name = tl(str(write("""
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([
+                ExecuteProcess(name='keeps', respawn=True, respawn_delay=0.2,
+                               cmd=['sh', '-c', 'echo keeps up; exec sleep 600'])])
+        """)), "--detach").stdout.strip()
+    tl("wait", name, "keeps-1", "running", "--timeout", "60")
+    # `true` stands for the tool the operator leaves: it ends at once, status 0
+    tl("restart", name, "keeps-1", "--prefix", "true", check=False)
+    wait_for(lambda: "ended under 'true' with status 0: not respawned" in logs(name, "keeps-1"),
+             what="the line saying it is not respawned")
+    assert process(name, "keeps-1")["state"] == "exited"
+    # a plain restart runs it as the file says, and respawns it again as the file says
+    tl("restart", name, "keeps-1", check=False)
+    tl("wait", name, "keeps-1", "running", "--timeout", "60")
+    assert not process(name, "keeps-1")["command"][0] == "true"
+    tl("stop", name)
+
 def test_a_prefix_that_is_not_a_program_changes_nothing(write):
     name = start(write)
     before = process(name, "keys-2")

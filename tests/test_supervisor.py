@@ -185,17 +185,19 @@ def generate_launch_description():
     sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo crash; exit 3'], name='crasher',
                                  respawn=True, respawn_delay=0.1, respawn_max_retries=2))
     sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo done; exit 0'], name='clean',
-                                 respawn=True))
+                                 respawn=True, respawn_delay=0.1, respawn_max_retries=1))
     return sl.launch_description()
 """)
     proc = start_headless(str(path), log_dir=tmp_path)
     kill_leftovers.append(proc)
     out = proc.communicate(timeout=60)[0]
     assert out.count("[crasher-1] crash") == 3  # first run and two respawns
-    assert out.count("respawning") == 2
+    assert out.count("[crasher-1]: respawning") == 2, out
     assert "[ERROR] [crasher-1]: respawn gives up: it failed 3 times (respawn_max_retries=2)" \
         in out
-    assert out.count("[clean-2] done") == 1  # a clean exit is not respawned
+    # a clean exit is respawned too, as launch's ExecuteLocal does whatever the status
+    assert out.count("[clean-2] done") == 2 and out.count("[clean-2]: respawning") == 1
+    assert "[clean-2]: respawn gives up: it ended 2 times (respawn_max_retries=1)" in out
     assert proc.returncode == 1  # the crash is reported in the exit status
 
 

@@ -44,7 +44,7 @@ def test_respawner_backs_off_while_it_dies_at_once_and_starts_over_after_a_lasti
     respawner = Respawner()
     proc = process(respawn=True, respawn_delay=0.5, respawn_max_retries=-1)
     assert respawner.wants(proc, 1, requested=False)
-    assert not respawner.wants(proc, 0, requested=False)  # a finished job is no crash
+    assert respawner.wants(proc, 0, requested=False)  # launch respawns a clean exit too
     assert not respawner.wants(proc, -15, requested=True)  # stopped by someone
     delays = [respawner.next_try(proc, started=100.0, now=100.5)[1] for _ in range(12)]
     assert delays[:4] == [0.5, 1.0, 2.0, 4.0]

@@ -28,9 +28,13 @@ class Respawner:
 
     def wants(self, proc: ProcessPlan, code: int, requested: bool) -> bool:
         """Whether `proc`, which exited with `code`, comes back; `requested`: it was
-        stopped by someone (a stop, the launch's shutdown), which never respawns."""
-        if not proc.respawn or requested or code == 0:
-            return False  # a clean exit is a finished job, not a crash
+        stopped by someone (a stop, the launch's shutdown), which never respawns.
+
+        Any end counts, a clean exit too: launch's ExecuteLocal respawns whatever the
+        return code (its docstring says "abnormally died", its code does not look), and a
+        bringup written for ros2 launch counts on a node that exits 0 coming back."""
+        if not proc.respawn or requested:
+            return False
         limit = proc.respawn_max_retries
         return limit < 0 or self.retries.get(proc.id, 0) < limit
 

@@ -210,13 +210,22 @@ class Starting(PlanActions):
                                               "typed": typed, **death}))
         self.process_event(process_id, "exit", running.process.pid, code)
         self.flag(process_id, "exit").set()
-        if self.should_respawn(running, code):
+        tool = self.run_prefixes.get(process_id)
+        if running.plan.respawn and tool and code == 0 and not requested:
+            # the operator left the tool (gdb's quit): a debugging session that ended, not
+            # a node to bring back under gdb again; a crash under it still respawns
+            self.emit(Event("log", process_id, level="INFO", reason=(
+                f"ended under '{tool}' with status 0: not respawned; a plain restart "
+                "runs it as the file says")))
+        elif self.should_respawn(running, code):
             await self.respawn(running)
-        elif running.plan.respawn and code != 0 and not requested:
+        elif running.plan.respawn and not requested:
             tries = self.respawner.tries(process_id)
-            self.emit(Event("log", process_id, level="ERROR", reason=(
-                f"respawn gives up: it failed {tries + 1} times "
-                f"(respawn_max_retries={running.plan.respawn_max_retries})")))
+            ended = "failed" if code != 0 else "ended"
+            self.emit(Event("log", process_id, level="ERROR" if code != 0 else "INFO",
+                            reason=(f"respawn gives up: it {ended} {tries + 1} times "
+                                    f"(respawn_max_retries="
+                                    f"{running.plan.respawn_max_retries})")))
 
     def should_respawn(self, running: Running, code: int) -> bool:
         return self.respawner.wants(running.plan, code, running.stopping or self.shutting_down)
