@@ -161,6 +161,48 @@ def floor_flood_once(folder: Path, tty: bool) -> float:
     return elapsed
 
 
+def reader_flood_once(folder: Path) -> float:
+    """The same 4 writers through pseudo-terminals set up as tuilaunch's (no output
+    processing), each read by a minimal reader that writes what it reads to a file, nothing
+    else: what the terminals themselves cost, under any launcher that reads them."""
+    import pty
+    import selectors
+    import termios
+
+    chooser = selectors.DefaultSelector()
+    files: dict[int, int] = {}
+    writers = []
+    start = time.perf_counter()
+    for i in range(4):
+        master, slave = pty.openpty()
+        attrs = termios.tcgetattr(slave)
+        attrs[1] &= ~termios.OPOST
+        termios.tcsetattr(slave, termios.TCSANOW, attrs)
+        writers.append(subprocess.Popen(["seq", "1", str(FLOOD_LINES)], stdout=slave,
+                                        start_new_session=True))
+        os.close(slave)
+        os.set_blocking(master, False)
+        files[master] = os.open(folder / f"read{i}.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
+        chooser.register(master, selectors.EVENT_READ)
+    while files:
+        for key, _ in chooser.select():
+            try:
+                chunk = os.read(key.fd, 1 << 16)
+            except BlockingIOError:
+                continue
+            except OSError:  # EIO: the writer is gone
+                chunk = b""
+            if chunk:
+                os.write(files[key.fd], chunk)
+                continue
+            chooser.unregister(key.fd)
+            os.close(key.fd)
+            os.close(files.pop(key.fd))
+    for writer in writers:
+        writer.wait()
+    return time.perf_counter() - start
+
+
 def flood(folder: Path, tty: bool) -> tuple[float, float, float, int]:
     """4 x `seq` through tuilaunch (pseudo-terminals, or pipes) against the floor, best of
     3 each, interleaved: (command to end, flood itself, floor, lines lost in any run)."""
@@ -176,7 +218,13 @@ def flood(folder: Path, tty: bool) -> tuple[float, float, float, int]:
         windows.append(window)
         lost += missing
         floors.append(floor_flood_once(folder, tty))
+        if tty:
+            READERS.append(reader_flood_once(folder))
     return min(wholes), min(windows), min(floors), lost
+
+
+READERS: list[float] = []
+"""The terminal flood's minimal readers, run beside it (reader_flood_once)."""
 
 
 def idle_cpu(folder: Path, seconds: float = 10.0) -> float:
@@ -219,6 +267,11 @@ def main() -> None:
                   f"{whole:.3f} s; the same writers straight to files {floor_how} "
                   f"{floor:.3f} s; ratio {window / floor:.2f}x{target}, command to end "
                   f"{whole / floor:.2f}x; lines lost: {lost}")
+            if tty and READERS:
+                reader = min(READERS)
+                print(f"  the same terminals read by a minimal reader (read, write to a file, "
+                      f"nothing else): {reader:.3f} s, {reader / floor:.2f}x the floor; "
+                      f"tuilaunch's flood is {window / reader:.2f}x that reader")
         print(f"CPU of tuilaunch with 100 quiet processes: {idle_cpu(folder):.2f}% of a core "
               "(target < 1%)")
 

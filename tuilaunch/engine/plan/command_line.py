@@ -82,6 +82,10 @@ class ProcessPlanner:
                  warnings: list[str]) -> None:
         self.next_id = next_id
         self.params_dir = params_dir
+        self._params_folder = str(params_dir)  # joined as text: once per node of the plan
+        self._executables: dict[tuple[str, str], str | PackageError] = {}
+        """`find_executable` per (package, executable) for this plan: a fleet of 1000 nodes
+        names a handful of programs, and each look-up costs two stats."""
         self.warnings = warnings
 
     def plan(self, entity: Node | ExecuteProcess, scope: Scope, enabled: bool,
@@ -159,10 +163,17 @@ class ProcessPlanner:
         error = (name_problem(name) if name else None) or namespace_problem(namespace)
         exe_path = executable
         if package is not None:
-            try:
-                exe_path = str(find_executable(package, executable, entity.origin))
-            except PackageError as exc:
-                error = error or exc.message
+            found = self._executables.get((package, executable))
+            if found is None:
+                try:
+                    found = str(find_executable(package, executable, entity.origin))
+                except PackageError as exc:
+                    found = exc
+                self._executables[(package, executable)] = found
+            if isinstance(found, PackageError):
+                error = error or found.message
+            else:
+                exe_path = found
         elif shutil.which(executable) is None:
             error = error or f"executable '{executable}' not found on PATH"
         merged: dict[str, ParamValue] = {}
@@ -255,7 +266,7 @@ class ProcessPlanner:
     def _params_file(self, proc_id: str, index: int, params: dict[str, Any],
                      params_args: list[str]) -> tuple[str, dict[str, Any]]:
         suffix = "" if index == 0 else f"-{index + 1}"
-        path = str(self.params_dir / f"{proc_id}{suffix}.yaml")
+        path = os.path.join(self._params_folder, f"{proc_id}{suffix}.yaml")
         params_args += ["--params-file", path]
         return path, dict(params)
 
