@@ -243,6 +243,26 @@ async def test_a_group_being_stopped_says_its_nodes_are_stopping(write, tmp_path
                     and "stopping" not in str(detail.render()))
 
 
+async def test_s_on_a_node_waiting_to_respawn_keeps_it_down(write, tmp_path):
+    path = write("""
+        from launch import LaunchDescription
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            return LaunchDescription([
+                ExecuteProcess(name='oneshot', respawn=True, respawn_delay=600.0,
+                               cmd=['sh', '-c', 'echo once; exit 0'])])
+        """)
+    app = make_app(str(path), {}, tmp_path / "log")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await select(app, pilot, "oneshot-1")
+        detail = app.query_one("#detail")
+        await until(pilot, lambda: "respawning (try 1 in 600 s)" in str(detail.render()))
+        await pilot.press("s")
+        await until(pilot, lambda: "oneshot-1 (/oneshot): exited" in str(detail.render()))
+        assert "try 1" not in str(detail.render())
+        assert any("respawn called off" in line for line in rows(app))
+
+
 # --- typing into a node --------------------------------------------------------------------
 
 

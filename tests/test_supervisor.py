@@ -222,6 +222,44 @@ def generate_launch_description():
     assert delays == ["1 in 0.1 s)", "2 in 0.2 s)", "3 in 0.1 s)", "4 in 0.1 s)"], out
 
 
+
+async def test_a_stop_while_it_waits_to_respawn_calls_the_respawn_off(write, tmp_path):
+    """Stopped between two runs (a group stopped while one of its nodes waits out its
+    respawn delay), a process does not come back; the launch then ends as nothing runs."""
+    import asyncio
+
+    from tuilaunch.engine import load_file, resolve
+    from tuilaunch.engine.run.supervisor.supervisor import Event, Supervisor
+
+    path = write(HEADER + """
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo once; exit 0'], name='oneshot',
+                                 respawn=True, respawn_delay=600.0))
+    return sl.launch_description()
+""")
+    plan = resolve(load_file(str(path)), {}, tmp_path / "params")
+    supervisor = Supervisor(plan, tmp_path / "log", sigterm_timeout=3)
+    events: list[Event] = []
+    supervisor.subscribe(events.append)
+    run = asyncio.ensure_future(supervisor.run())
+    try:
+        deadline = asyncio.get_running_loop().time() + 60
+        while supervisor.states.get("oneshot-1") != "respawning":
+            assert asyncio.get_running_loop().time() < deadline, supervisor.states
+            await asyncio.sleep(0.02)
+        await supervisor.stop("oneshot-1")
+        # the run ends: nothing runs, and the 600 s wait no longer holds it
+        assert await asyncio.wait_for(run, 60) == 0
+    finally:
+        if not run.done():
+            await supervisor.shutdown("test over")
+            await asyncio.wait_for(run, 30)
+    assert supervisor.states["oneshot-1"] == "exited"
+    assert [e.kind for e in events if e.process == "oneshot-1"].count("started") == 1
+    assert any(e.kind == "log" and "respawn called off" in (e.reason or "") for e in events)
+
 def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
     splitter = LineSplitter()
     assert splitter.feed(b"hel") == []

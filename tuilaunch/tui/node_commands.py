@@ -44,8 +44,8 @@ class NodeCommands(SessionLink):
             if action == "all_output":
                 return True
             states = [self.supervisor.states.get(p) for p in self.selected()]
-            if action == "stop":
-                return True if "running" in states else None
+            if action == "stop":  # one waiting to respawn can be stopped too: it stays down
+                return True if "running" in states or "respawning" in states else None
             if action == "start":
                 return True if any(s not in ("running", "skipped") for s in states) else None
             return True if states else None
@@ -69,7 +69,8 @@ class NodeCommands(SessionLink):
         everything = node is not None and node.data is not None and (
             node.data.kind == "all" or node is self.launch_tree.root)
         if verb == "stop" and everything and len(processes) > 1:
-            running = [p for p in processes if supervisor.states.get(p) == "running"]
+            running = [p for p in processes
+                       if supervisor.states.get(p) in ("running", "respawning")]
 
             def answered(yes: bool | None) -> None:
                 if yes:

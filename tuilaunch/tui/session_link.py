@@ -276,7 +276,10 @@ class SessionLink(App[int]):
                 fresh += self.store.add(event.process, event.stream or "stdout", event.lines)
             elif event.kind == "log":
                 if event.process and self.supervisor is not None:
-                    tree.set_state(event.process, self.supervisor.states.get(event.process, ""))
+                    state = self.supervisor.states.get(event.process, "")
+                    if tree.states.get(event.process) == "respawning" != state:
+                        tree.details.pop(event.process, None)  # "try 1 in 6 s": called off
+                    tree.set_state(event.process, state)
                 level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
                 fresh += self.store.add_event(event.process or "launch", event.reason or "",
                                               level)

@@ -89,6 +89,9 @@ class SupervisorCore:
         """Failures already said once (a consumer that keeps raising)."""
         self.env_cache: dict[str, str] | None = None
         """The environment the processes start from, built once."""
+        self.respawn_waits: dict[str, asyncio.Event] = {}
+        """Processes waiting out their respawn delay; setting the event calls it off (a stop
+        asked meanwhile: the node is between two runs, and it must not come back)."""
         self.run_prefixes: dict[str, str] = {}
         """An operator's tool (`gdb -q -ex run --args`) a process runs under, from a
         `restart` with a prefix until the next restart without one."""

@@ -236,11 +236,20 @@ class Starting(PlanActions):
         self.states[proc.id] = "respawning"
         self.busy += 1
         self.emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s"))
+        called_off = self.respawn_waits[proc.id] = asyncio.Event()
         try:
-            await asyncio.sleep(delay)
+            await asyncio.wait_for(called_off.wait(), delay)
+        except TimeoutError:
+            pass  # the delay is over: it comes back
         finally:
             self.busy -= 1
-        if not self.shutting_down:
+            self.respawn_waits.pop(proc.id, None)
+        if called_off.is_set():
+            self.states[proc.id] = "exited"
+            self.emit(Event("log", proc.id, reason="respawn called off: stopped while it "
+                            "waited to come back"))
+            self.changed.set()
+        elif not self.shutting_down:
             await self.start(proc.id)
 
     def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:

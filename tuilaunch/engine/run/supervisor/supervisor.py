@@ -201,6 +201,8 @@ class Supervisor(Interacting):
         if running is not None:
             running.stopping = True
             await self.escalate(running)
+        elif process_id in self.respawn_waits:  # between two runs: it does not come back
+            self.respawn_waits[process_id].set()
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         if self.shutting_down:
