@@ -259,8 +259,8 @@ async def test_s_on_a_node_waiting_to_respawn_keeps_it_down(write, tmp_path):
         await until(pilot, lambda: "respawning (try 1 in 600 s)" in str(detail.render()))
         await pilot.press("s")
         await until(pilot, lambda: "oneshot-1 (/oneshot): exited" in str(detail.render()))
+        await until(pilot, lambda: any("respawn called off" in line for line in rows(app)))
         assert "try 1" not in str(detail.render())
-        assert any("respawn called off" in line for line in rows(app))
 
 
 # --- typing into a node --------------------------------------------------------------------

@@ -225,7 +225,8 @@ def generate_launch_description():
 
 async def test_a_stop_while_it_waits_to_respawn_calls_the_respawn_off(write, tmp_path):
     """Stopped between two runs (a group stopped while one of its nodes waits out its
-    respawn delay), a process does not come back; the launch then ends as nothing runs."""
+    respawn delay), a process does not come back, and the launch then ends as nothing runs;
+    restarted between two runs, it runs once, and stays running when the wait ends."""
     import asyncio
 
     from tuilaunch.engine import load_file, resolve
@@ -235,8 +236,9 @@ async def test_a_stop_while_it_waits_to_respawn_calls_the_respawn_off(write, tmp
 from launch.actions import ExecuteProcess
 def generate_launch_description():
     sl = SimpleLauncher()
-    sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo once; exit 0'], name='oneshot',
-                                 respawn=True, respawn_delay=600.0))
+    for name in ('stopped', 'restarted'):
+        sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; read line'], name=name,
+                                     respawn=True, respawn_delay=600.0))
     return sl.launch_description()
 """)
     plan = resolve(load_file(str(path)), {}, tmp_path / "params")
@@ -244,21 +246,37 @@ def generate_launch_description():
     events: list[Event] = []
     supervisor.subscribe(events.append)
     run = asyncio.ensure_future(supervisor.run())
-    try:
+
+    async def until(condition, what: str) -> None:  # type: ignore[no-untyped-def]
         deadline = asyncio.get_running_loop().time() + 60
-        while supervisor.states.get("oneshot-1") != "respawning":
-            assert asyncio.get_running_loop().time() < deadline, supervisor.states
+        while not condition():
+            assert asyncio.get_running_loop().time() < deadline, (what, supervisor.states)
             await asyncio.sleep(0.02)
-        await supervisor.stop("oneshot-1")
-        # the run ends: nothing runs, and the 600 s wait no longer holds it
-        assert await asyncio.wait_for(run, 60) == 0
+
+    def starts(process: str) -> int:
+        return [e.kind for e in events if e.process == process].count("started")
+
+    try:
+        await until(lambda: len(supervisor.running) == 2, "both started")
+        for running in list(supervisor.running.values()):
+            os.kill(running.process.pid, signal.SIGKILL)  # a crash each: both respawn
+        await until(lambda: set(supervisor.states.values()) == {"respawning"}, "respawning")
+        await supervisor.restart("restarted-2")
+        await supervisor.stop("stopped-1")
+        # the restarted one's respawn wait ended, and left it running, started once more
+        await until(lambda: not supervisor.respawn_waits and not supervisor.busy, "settled")
+        assert supervisor.states["restarted-2"] == "running" and starts("restarted-2") == 2
+        assert supervisor.states["stopped-1"] == "exited" and starts("stopped-1") == 1
+        assert any(e.kind == "log" and e.process == "stopped-1"
+                   and "respawn called off" in (e.reason or "") for e in events)
+        await supervisor.stop("restarted-2")
+        # nothing runs and no respawn waits: the run ends, the 600 s no longer hold it (its
+        # status 1 says the crashes)
+        assert await asyncio.wait_for(run, 60) == 1
     finally:
         if not run.done():
             await supervisor.shutdown("test over")
             await asyncio.wait_for(run, 30)
-    assert supervisor.states["oneshot-1"] == "exited"
-    assert [e.kind for e in events if e.process == "oneshot-1"].count("started") == 1
-    assert any(e.kind == "log" and "respawn called off" in (e.reason or "") for e in events)
 
 def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
     splitter = LineSplitter()

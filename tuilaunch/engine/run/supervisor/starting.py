@@ -243,13 +243,11 @@ class Starting(PlanActions):
             pass  # the delay is over: it comes back
         finally:
             self.busy -= 1
-            self.respawn_waits.pop(proc.id, None)
-        if called_off.is_set():
-            self.states[proc.id] = "exited"
-            self.emit(Event("log", proc.id, reason="respawn called off: stopped while it "
-                            "waited to come back"))
-            self.changed.set()
-        elif not self.shutting_down:
+            if self.respawn_waits.get(proc.id) is called_off:
+                del self.respawn_waits[proc.id]
+        # called off: a stop (it stays down) or a start (it runs already) came meanwhile,
+        # and said so itself
+        if not called_off.is_set() and not self.shutting_down:
             await self.start(proc.id)
 
     def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:

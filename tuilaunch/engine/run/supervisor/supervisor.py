@@ -202,7 +202,11 @@ class Supervisor(Interacting):
             running.stopping = True
             await self.escalate(running)
         elif process_id in self.respawn_waits:  # between two runs: it does not come back
-            self.respawn_waits[process_id].set()
+            self.respawn_waits.pop(process_id).set()
+            self.states[process_id] = "exited"
+            self.emit(Event("log", process_id, reason="respawn called off: stopped while it "
+                            "waited to come back"))
+            self.changed.set()
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         if self.shutting_down:
@@ -287,6 +291,9 @@ class Supervisor(Interacting):
     async def start(self, process_id: str) -> None:
         """Starts one process (also a stopped or exited one, from the UI), here or on its
         machine."""
+        waiting = self.respawn_waits.pop(process_id, None)
+        if waiting is not None:
+            waiting.set()  # started now by the operator: the respawn under way is moot
         if self.runs_here(process_id):
             self.start_now(process_id)
         elif self.placing.remote is None:
