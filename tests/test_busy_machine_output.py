@@ -76,3 +76,32 @@ def test_a_slow_reader_sees_every_line_or_is_told_how_many_it_was_not_shown():
     out = b"".join(got).decode()
     skipped = sum(int(n) for n in re.findall(r"(\d+) output lines not shown", out))
     assert skipped > 0 and out.count(line) + skipped == count
+
+
+def test_what_launch_code_prints_at_run_time_is_never_cut_by_the_nodes_lines(write):
+    """With PYTHONUNBUFFERED (usual in ROS containers) `print(a, b, c)` writes each piece
+    apart; an OpaqueFunction printing while a node floods headless stdout must still come
+    out as whole lines, as under ros2 launch, where both are written by one thread."""
+    from .conftest import run_cli
+
+    path = write(f"""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess, OpaqueFunction, RegisterEventHandler
+from launch.event_handlers import OnProcessStart
+def speak(context):
+    for i in range(300):
+        print('opaque', 'line', i, 'in', 'pieces', flush=True)
+    return []
+def generate_launch_description():
+    flood = ExecuteProcess(name='flood', output='screen',
+                           cmd=[{sys.executable!r}, '-c',
+                                'for i in range(20000): print("flood line", i)'])
+    return LaunchDescription([
+        flood, RegisterEventHandler(OnProcessStart(target_action=flood,
+                                                   on_start=[OpaqueFunction(function=speak)]))])
+""")
+    done = run_cli(str(path), "--headless", env={"PYTHONUNBUFFERED": "1"})
+    assert done.returncode == 0, done.stderr
+    said = [line for line in done.stdout.splitlines() if "opaque" in line]
+    assert said == [f"opaque line {i} in pieces" for i in range(300)], [
+        line for line in said if not re.fullmatch(r"opaque line \d+ in pieces", line)][:5]

@@ -17,14 +17,14 @@ import signal
 import sys
 import time
 from pathlib import Path
-from typing import TextIO
+from typing import TextIO, cast
 
 from ..engine.launcher import make_supervisor
 from ..engine.plan.machines import Placement
 from ..engine.plan.model import Plan
 from ..engine.run.process.output import strip_ansi
 from ..engine.run.supervisor.supervisor import Event
-from .stdout_writer import BackgroundWriter
+from .stdout_writer import BackgroundWriter, LineJoiner
 
 
 def run_log_dir() -> Path:
@@ -54,6 +54,7 @@ class Printer:
         except ValueError:
             self.colour = False
         self.writer: BackgroundWriter | None = None
+        self.joined: LineJoiner | None = None
         try:
             fd = out.fileno()
             out.flush()
@@ -61,6 +62,9 @@ class Printer:
             return  # a stream in memory: written directly
         self.writer = BackgroundWriter(fd, getattr(out, "encoding", None) or "utf-8",
                                        self._give_up, self._skipped)
+        if out is sys.stdout:  # what launch code prints goes the writer's way, whole lines
+            self.joined = LineJoiner(self.writer, out)
+            sys.stdout = cast(TextIO, self.joined)
 
     def __call__(self, event: Event) -> None:
         if self.broken is not None:
@@ -79,6 +83,9 @@ class Printer:
 
     def close(self) -> None:
         """Writes what is still queued, as long as the reader keeps taking it."""
+        if self.joined is not None and sys.stdout is self.joined:
+            self.joined.flush()
+            sys.stdout = self.out
         if self.writer is not None:
             self.writer.close()
 
