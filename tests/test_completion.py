@@ -135,8 +135,10 @@ class Shell:
             assert time.monotonic() < end, f"never completed to {result!r}: {self.line()!r}"
 
     def line(self) -> str:
-        """The line being edited (the last prompt's)."""
-        lines = [line for line in self.screen().splitlines() if line.startswith("$ ")]
+        """The line being edited (the last prompt's). On a busy machine bash may redraw it
+        a few columns in (`        $ tuilaunch cmp_nodes #`, seen under two CPU burners)."""
+        lines = [line.lstrip() for line in self.screen().splitlines()
+                 if line.lstrip().startswith("$ ")]
         return lines[-1][2:] if lines else ""
 
     def clear(self) -> None:
