@@ -135,11 +135,12 @@ class Shell:
             assert time.monotonic() < end, f"never completed to {result!r}: {self.line()!r}"
 
     def line(self) -> str:
-        """The line being edited (the last prompt's). On a busy machine bash may redraw it
-        a few columns in (`        $ tuilaunch cmp_nodes #`, seen under two CPU burners)."""
-        lines = [line.lstrip() for line in self.screen().splitlines()
-                 if line.lstrip().startswith("$ ")]
-        return lines[-1][2:] if lines else ""
+        """The line being edited: what follows the last prompt. On a busy machine bash may
+        redraw it a few columns in, or after what was left of the line before it
+        (`tuilaunch wait cmpdemo talker-1 ru$ tuilaunch wait ...`, seen under two CPU
+        burners)."""
+        lines = [line for line in self.screen().splitlines() if "$ " in line]
+        return lines[-1].rsplit("$ ", 1)[1] if lines else ""
 
     def clear(self) -> None:
         self.keys("C-e", "C-u")  # the line typed so far, erased

@@ -199,7 +199,7 @@ async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path
         # the detail line wraps instead of cutting the reason at the screen's edge
         detail = app.query_one("#detail")
         await until(pilot, lambda: missing in str(detail.render()))
-        assert detail.size.height >= 2
+        await until(pilot, lambda: detail.size.height >= 2)  # once the layout follows
         # so does tuilaunch's own line in the pane: every part of it is on screen
         await until(pilot, lambda: "failed:" in "".join(rows(app)))
         assert missing in "".join(r.strip() for r in rows(app))

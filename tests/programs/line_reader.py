@@ -6,8 +6,10 @@ import sys
 if not sys.stdin.isatty():
     print("line_reader: stdin is not a terminal", flush=True)
     sys.exit(3)
-print("ready", flush=True)
 try:
+    # "ready" inside the try: a ctrl+c typed as soon as it shows may land while print()
+    # is still returning (seen under two CPU burners)
+    print("ready", flush=True)
     for line in sys.stdin:
         print("got: " + line.rstrip("\n"), flush=True)
 except KeyboardInterrupt:
