@@ -20,6 +20,11 @@ local query, nothing on the network): a new participant discovers the others ove
 on a busy machine, and nodes come and go."""
 
 
+def discovering(noun: str, every: float) -> str:
+    """What an empty list of the graph says: a graph seen too early looks empty."""
+    return f"no {noun} yet, discovering (asked every {every:g} s)"
+
+
 class GraphListing:
     """Mixin of a graph panel (a Widget): `refresh_listing()` runs when the panel is first
     shown, again every RELIST_S while it shows (and on demand); it asks the bridge's
@@ -47,7 +52,7 @@ class GraphListing:
             return f"{shown} {noun}{'' if shown == 1 else 's'}{more}"
         if not self.answered:
             return f"asking the ROS graph for {noun}s..."
-        return f"no {noun} yet, discovering (asked every {RELIST_S:g} s){more}"
+        return discovering(noun, RELIST_S) + more
 
     def on_show(self) -> None:
         if not self.listed:

@@ -20,6 +20,7 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Input, Static
 
 from .fields import Field
+from .graph_listing import discovering
 from .tree_panel import ascii_terminal
 from .units import bytes_text, rate_text
 
@@ -222,7 +223,7 @@ class TopicsPanel(Vertical):
         noun = "topic" if count == 1 else "topics"
         what = f"{len(names)} of {count} {noun}" if len(names) != count else f"{count} {noun}"
         if not count:  # an empty graph is often one not discovered yet
-            what = f"no topic yet, discovering (asked every {REFRESH_TICKS} s)"
+            what = discovering("topic", REFRESH_TICKS)
         self.note(f"{what}; e echo, / filter" + (", x all topics" if self.node else ""))
         self.watch_visible(self.rows_on_screen())
         self.show_detail()
