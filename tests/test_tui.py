@@ -369,14 +369,26 @@ def test_tui_in_a_terminal_stops_everything_when_the_terminal_hangs_up(tmp_path,
                     if " started " in line for w in line.split() if w.startswith("pid=")]
         assert len(children) == 5
         os.kill(proc.pid, how)
+        after = b""
         end = time.monotonic() + 60
-        while proc.poll() is None and time.monotonic() < end:
+        while time.monotonic() < end:  # to the terminal's end: the shell's last lines too
             if select.select([master], [], [], 0.2)[0]:
                 try:
-                    os.read(master, 65536)
+                    data = os.read(master, 65536)
                 except OSError:
                     break
-        assert proc.wait(timeout=30) is not None
+                if not data:
+                    break
+                after += data
+            elif proc.poll() is not None:
+                break
+        status = proc.wait(timeout=30)
+        if how == signal.SIGTERM:
+            # as ros2 launch: a run stopped by SIGTERM exits 1, and the shell is told why
+            assert status == 1
+            assert b"tuilaunch: received SIGTERM: every process of session" in after
+        else:
+            assert status == 0
         gone = time.monotonic() + 30
         while any(os.path.exists(f"/proc/{p}") for p in children) and time.monotonic() < gone:
             time.sleep(0.1)

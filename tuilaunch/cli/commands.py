@@ -105,6 +105,9 @@ def report_end(app: Any, name: str) -> None:
     """What the command line says after a TUI client closes."""
     if getattr(app, "detached", False):
         print(f"detached; session {name} runs on: tuilaunch attach {name}")
+    elif getattr(app, "signalled", None):
+        print(f"tuilaunch: received {app.signalled}: every process of session {name} was "
+              "stopped", file=sys.stderr)
     elif not isinstance(app.supervisor, RemoteSupervisor):
         print(f"tuilaunch: error: the TUI could not attach to session {name}, which runs on: "
               f"tuilaunch attach {name}, or tuilaunch stop {name}", file=sys.stderr)

@@ -106,6 +106,9 @@ class Quitting(SessionLink):
         if self.session_name is not None and not self.owner:
             self.action_detach()
         else:
+            # as ros2 launch, whose run is cancelled: the exit status says it did not end
+            # on its own, and the shell is told why (report_end)
+            self.signalled = "SIGTERM"
             self.stop_all_and_exit("SIGTERM")
 
     def action_detach(self) -> None:
@@ -123,7 +126,7 @@ class Quitting(SessionLink):
         apart later."""
         if self.supervisor is None:
             self.abandon_start()  # its server, if it is coming up, stops at once
-            self.exit(0)
+            self.exit(1 if self.signalled else 0)
             return
         self.quitting = True
         self.quit_started = time.monotonic()

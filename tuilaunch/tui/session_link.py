@@ -121,6 +121,7 @@ class SessionLink(App[int]):
         self.exit_status = 0
         self.quitting = False
         self.terminal_lost = False
+        self.signalled: str | None = None  # the signal that stopped the launch (SIGTERM)
         self.ended_elsewhere: str | None = None
         """Why the session ended when neither this client nor its terminal asked
         (`tuilaunch stop`, another client's quit): said on screen, then in the shell."""
@@ -151,6 +152,8 @@ class SessionLink(App[int]):
     async def run_supervisor(self) -> None:
         assert self.supervisor is not None
         self.exit_status = await self.engine.run(self.supervisor.run(keep_alive=True))
+        if self.signalled is not None:
+            self.exit_status = self.exit_status or 1
         if self._bridge is not None:
             await asyncio.to_thread(self._bridge.close)
             self._bridge = None
