@@ -93,6 +93,24 @@ async def test_soak_a_small_scrollback_keeps_showing_the_newest_lines(write, tmp
         await app.engine.run(app.supervisor.shutdown("test over"))
 
 
+async def test_a_search_past_the_scrollback_says_where_the_older_lines_are(write, tmp_path):
+    """A search for a line the pane no longer holds does not just say "no line matches":
+    it says how many lines the pane keeps and that the log files have them all."""
+    path = counter_file(write, 300, 0)
+    app = make_app(str(path), {}, tmp_path / "log", scrollback=100)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("down", "down")  # the counter's own pane
+        await until(pilot, lambda: last_number(app) == 299)
+        assert len(panel_of(app).line_view.lines) == 100  # lines 200 to 299
+        panel_of(app).set_search("line 3")  # lines 3 and 30-39: only in the log file now
+        await pilot.pause()
+        said = [n.message for n in app._notifications]
+        assert said[-1].startswith("no line matches 'line 3' in the 100 lines this pane "
+                                   "keeps; every line is in the log files")
+        assert app.supervisor is not None
+        await app.engine.run(app.supervisor.shutdown("test over"))
+
+
 async def test_four_flooders_keep_the_all_nodes_pane_moving(write, tmp_path):
     # a flood that outlasts the test however fast the machine is (stopped at its end)
     path = counter_file(write, 10**8, 0, copies=4)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shlex
 import time
 from pathlib import Path
 
@@ -179,8 +180,27 @@ class OutputPanel(Vertical):
         if term:
             self.action_next_match()
             if not self._lines.matches():
-                self.notify(f"no line matches '{term}'", severity="warning")
+                self.notify(self._not_found(term), severity="warning")
         self.update_status()
+
+    def _not_found(self, term: str) -> str:
+        """What a search that found nothing says: when the pane no longer holds every line
+        (trimmed to its scrollback, or not drawn under a flood), where the others are."""
+        lines = self._lines
+        hidden = self.store.dropped.total if self.view.process is None else \
+            self.store.dropped.per_process.get(self.view.process, 0)
+        full = len(lines.lines) >= (lines.lines.maxlen or 0) or lines.first > 0
+        if not (full or hidden or lines.skipped):
+            return f"no line matches '{term}'"
+        session = getattr(self.app, "session_name", None)
+        host = getattr(self.app, "session_host", None)
+        words = ["tuilaunch", "logs", f"{host}:{session}" if host else str(session)]
+        if self.view.process is not None:
+            words.append(self.view.process)
+        command = " ".join(shlex.quote(w) for w in words) + f" | grep -F -- {shlex.quote(term)}"
+        where = f"; every line is in the log files: {command}" if session else \
+            "; every line is in the log files"
+        return f"no line matches '{term}' in the {len(lines.lines)} lines this pane keeps{where}"
 
     def action_clear_search(self) -> None:
         """Escape: closes an open field, else clears the search and the text filter."""
