@@ -46,6 +46,41 @@ def generate_launch_description():
     assert "[INFO] [launch.user]: hello from the file" in launch_log.read_text()
 
 
+def test_this_launch_file_dir_in_a_log_line_is_where_launch_s_locals_hold_it(write, tmp_path):
+    """LogInfo performs its message when it runs. Launch's locals hold the file while it is
+    visited (a group, an OpaqueFunction's return) and in a TimerAction's actions (it keeps
+    the locals it was executed with), not in what an event handler returns, where
+    ThisLaunchFileDir raises "used outside of a launch file": that action alone fails."""
+    path = write(HEADER + """
+from launch.actions import GroupAction, OpaqueFunction, TimerAction
+from launch.substitutions import ThisLaunchFileDir
+
+def generate_launch_description():
+    done = ExecuteProcess(cmd=['true'], name='done')
+    return LaunchDescription([
+        GroupAction([LogInfo(msg=['group: ', ThisLaunchFileDir()])]),
+        OpaqueFunction(function=lambda context: [
+            LogInfo(msg=['opaque: ', ThisLaunchFileDir()])]),
+        TimerAction(period=0.2, actions=[LogInfo(msg=['timer: ', ThisLaunchFileDir()])]),
+        done,
+        RegisterEventHandler(OnProcessExit(target_action=done, on_exit=[
+            LogInfo(msg=['handler: ', ThisLaunchFileDir()]), LogInfo(msg='handler goes on')])),
+    ])
+""")
+    done = run_cli(str(path), "--headless", env={"ROS_LOG_DIR": str(tmp_path / "logs")})
+    lines = done.stdout.splitlines()
+    folder = str(path.parent)
+    for where in ("group", "opaque", "timer"):
+        assert f"[INFO] [launch.user]: {where}: {folder}" in lines, done.stdout
+    failed = [line for line in lines if "used outside of a launch file" in line]
+    assert len(failed) == 1 and failed[0].startswith("[ERROR] ["), done.stdout
+    line = next(n for n, text in enumerate(path.read_text().splitlines(), 1)
+                if "'handler: '" in text)  # the failed LogInfo's own line
+    assert f"{path.name}:{line}: ThisLaunchFileDir used outside of a launch file" in failed[0]
+    assert "[INFO] [launch.user]: handler goes on" in lines, done.stdout
+    assert done.returncode == 1  # an action failed (ros2 launch stops there, with 1 too)
+
+
 def test_simple_launch_log_info_speaks_as_launch_user(write):
     path = write("""
 from simple_launch import SimpleLauncher

@@ -382,15 +382,23 @@ class FindExecutable(Substitution):
 
 class ThisLaunchFile(Substitution):
     def perform(self, context: PerformContext) -> str:
-        return context.launch_file or ""
+        return _this_launch_file(context, "ThisLaunchFile")
 
     def describe(self) -> str:
         return "$(filename)"
 
 
+def _this_launch_file(context: PerformContext, name: str) -> str:
+    if context.launch_file is None:  # launch's words: its locals hold no file there
+        failure = SubstitutionFailure(f"{name} used outside of a launch file (in a script)")
+        failure.origin = None  # performed by the run, not at a user's line: its action says
+        raise failure
+    return context.launch_file
+
+
 class ThisLaunchFileDir(Substitution):
     def perform(self, context: PerformContext) -> str:
-        return os.path.dirname(context.launch_file or "")
+        return os.path.dirname(_this_launch_file(context, "ThisLaunchFileDir"))
 
     def describe(self) -> str:
         return "$(dirname)"

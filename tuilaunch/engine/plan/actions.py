@@ -82,7 +82,7 @@ class ActionPlanner:
         action_id = self.action_id(kind)
         plan = ActionPlan(action_id, kind, target, data, scope.namespace, verbosity, enabled,
                           skipped, scope.trigger, entity.origin, entity,
-                          dict(scope.configurations), dict(scope.env))
+                          dict(scope.configurations), dict(scope.env), scope.launch_file)
         label = {"log": f"log: {data}", "call_service": f"call {target}",
                  "set_parameters": f"set parameters of {target}",
                  "shutdown": "shutdown", "event_callback": "event callback",

@@ -173,6 +173,8 @@ class ActionPlan:
     # the environment changes in scope (name -> value, None: unset): os.environ shows them
     # while the action's launch-time code runs, as in launch
     environ: dict[str, str | None] = field(default_factory=dict, repr=False, compare=False)
+    launch_file: str | None = field(default=None, repr=False, compare=False)
+    """The file whose visit made it: ThisLaunchFileDir when it is performed at run time."""
 
     def to_json(self) -> dict[str, Any]:
         return {

@@ -214,7 +214,7 @@ class Resolver:
                           enabled, scope.skipped_by, scope.trigger,
                           getattr(entities[0], "origin", None) if entities else None,
                           Deferred(entities, replace(scope, trigger=None), reason),
-                          dict(scope.configurations), dict(scope.env))
+                          dict(scope.configurations), dict(scope.env), scope.launch_file)
         self.actions.append(plan)
         for entity in entities:
             self.entity_ids[id(entity)] = action_id

@@ -203,7 +203,8 @@ class PlanActions(SupervisorCore):
         try:
             message = self._perform(action, action.source.msg, event)
         except LaunchError as exc:  # as launch: this action fails, the launch goes on
-            self.log_action(action, str(exc).replace("\n", " "), "ERROR")
+            where = f"{action.origin}: " if exc.origin is None and action.origin else ""
+            self.log_action(action, where + str(exc).replace("\n", " "), "ERROR")
             return False
         self.log_action(action, message, logger=USER_LOGGER)
         return True
@@ -229,7 +230,7 @@ class PlanActions(SupervisorCore):
         return True
 
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
-        context = PerformContext(action.configurations, None,
+        context = PerformContext(action.configurations, _launch_file_seen(action),
                                  event_locals={"event": event or LaunchEvent()})
         with shown_environ(self._environ_of(action)):
             return perform(value, context)
@@ -324,6 +325,18 @@ def _in_shutdown_handler(action: ActionPlan) -> bool:
             return True
         step = step.after
     return False
+
+
+def _launch_file_seen(action: ActionPlan) -> str | None:
+    """The launch file as launch's locals hold it where the action runs: during the file's
+    visit, and in a TimerAction's actions (it keeps the locals it was executed with); not in
+    what an event handler returns, where ThisLaunchFileDir fails as launch's does."""
+    trigger = action.trigger
+    while trigger is not None:
+        if trigger.on != "timer":
+            return None
+        trigger = trigger.after
+    return action.launch_file
 
 
 def call_handler(callback: Any, event: EventInfo, action: ActionPlan) -> Any:
