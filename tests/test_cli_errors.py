@@ -25,8 +25,10 @@ def test_show_args_lists_every_argument_with_default_description_and_choices():
     for name in ("robot", "rate", "listener", "services", "mode", "topic"):
         assert f"'{name}':" in out
     assert "robot name, used as the namespace of its nodes" in out
-    assert "(default: 'r1', type: str)" in out
-    assert "Valid choices are: ['idle', 'patrol', 'dock']" in out
+    # ros2 launch's lines: the default quoted, the choices said in the description
+    assert "\n        (default: 'r1')\n" in out
+    assert "\n        mode given to the configurable node. Valid choices are: ['idle', " \
+        "'patrol', 'dock']\n" in out
     assert "monitor.launch.py" in out  # an included file's argument says where it comes from
 
 

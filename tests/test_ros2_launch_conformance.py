@@ -307,6 +307,8 @@ def test_show_args_lists_arguments_that_have_no_value_yet(write):
     assert result.returncode == 0, result.stderr
     out = result.stdout
     assert "'world':" in out and "the world to load" in out and "(required)" in out
+    # DeclareLaunchArgument's description of choices without a description of its own
+    assert "    'mode':\n        One of: ['a', 'b']\n        (default: 'a')\n" in out
     assert "'mode':" in out and "'after':" in out and "declared after the include" in out
     assert "some arguments may be missing" in result.stderr and "missing.launch.xml" in \
         result.stderr
@@ -344,3 +346,11 @@ def generate_launch_description():
     assert files("file_with") == [] and by_name["file_with"].parameter_files == [str(yaml_with)]
     assert files("file_without") == [{"use_sim_time": True}]
     assert files("none") == [{"use_sim_time": True}]
+
+
+def test_show_args_of_a_file_without_arguments_says_so_as_ros2_launch(write):
+    path = write("<launch>\n  <executable cmd=\"true\"/>\n</launch>\n", name="none.launch.xml")
+    result = run_cli(str(path), "--show-args")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == "Arguments (pass arguments as '<name>:=<value>'):\n\n" \
+        "  No arguments.\n"

@@ -11,24 +11,35 @@ from ..engine.plan.model import ArgumentInfo, Plan, TreeItem
 
 
 def format_arguments(arguments: list[ArgumentInfo], top_file: str) -> str:
-    if not arguments:
-        return "No arguments.\n"
+    # ros2 launch's words and layout (ros2launch's print_arguments_of_launch_description,
+    # the description as DeclareLaunchArgument builds it); a required argument, and where
+    # an argument of an included file is declared, are tuilaunch's additions
     lines = ["Arguments (pass arguments as '<name>:=<value>'):", ""]
+    if not arguments:
+        return "\n".join([*lines, "  No arguments.", ""])
     for arg in arguments:
         lines.append(f"    '{arg.name}':")
-        lines.append(f"        {arg.description or 'no description given'}")
-        if arg.choices:
-            lines.append(f"        Valid choices are: {arg.choices}")
+        lines.append(f"        {argument_description(arg)}")
         if arg.default is None:
             lines.append("        (required)")
         else:
-            lines.append(f"        (default: '{arg.default}', type: {arg.type})")
+            lines.append(f"        (default: '{arg.default}')")
         if os.path.abspath(arg.file) != os.path.abspath(top_file):
             lines.append(f"        declared in {arg.file}")
         for other in arg.elsewhere:
             lines.append(f"        declared again with {other}")
         lines.append("")
     return "\n".join(lines)
+
+
+def argument_description(arg: ArgumentInfo) -> str:
+    """DeclareLaunchArgument's description: its choices are said in it."""
+    if not arg.description:
+        return f"One of: {arg.choices}" if arg.choices else "no description given"
+    if not arg.choices:
+        return arg.description
+    text = arg.description if arg.description.endswith(".") else arg.description + "."
+    return f"{text} Valid choices are: {arg.choices}"
 
 
 def _annotations(item: TreeItem, plan: Plan) -> str:
