@@ -41,7 +41,8 @@ def headless(path, env, *args, timeout=120):
 
 
 def lines_of(done) -> list[str]:
-    return [line for line in done.stdout.splitlines() if "All log files" not in line]
+    return [line for line in done.stdout.splitlines()
+            if "All log files" not in line and "Default logging verbosity" not in line]
 
 
 def index_of(lines: list[str], needle: str) -> int:

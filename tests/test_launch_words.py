@@ -42,6 +42,10 @@ def generate_launch_description():
     log_root = tmp_path / "logs"
     done = run_cli(str(path), "--headless", env={"ROS_LOG_DIR": str(log_root)})
     assert "[INFO] [launch.user]: hello from the file" in done.stdout.splitlines(), done.stdout
+    # ros2 launch's first two lines, in its order
+    assert done.stdout.splitlines()[:2] == [
+        f"[INFO] [launch]: All log files can be found below {next(log_root.glob('*'))}",
+        "[INFO] [launch]: Default logging verbosity is set to INFO"], done.stdout
     launch_log = next(log_root.glob("*-tuilaunch-*")) / "launch.log"
     assert "[INFO] [launch.user]: hello from the file" in launch_log.read_text()
 

@@ -205,7 +205,10 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
 
     for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT):
         loop.add_signal_handler(sig, on_signal, sig)
+    # ros2 launch's first two lines (launch.logging.log_launch_config); tuilaunch logs at
+    # INFO whatever --debug says (that flag asks for tracebacks)
     printer(Event("log", "launch", reason=f"All log files can be found below {log_dir}"))
+    printer(Event("log", "launch", reason="Default logging verbosity is set to INFO"))
     try:
         status = await supervisor.run()
         return (status or 1) if terminated else status
