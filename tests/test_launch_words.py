@@ -239,3 +239,50 @@ def generate_launch_description():
         assert proc.returncode == 1, seen
         wait_for(lambda: not subprocess.run(["pgrep", "-f", marker],  # noqa: B023
                                             capture_output=True).stdout, what=marker)
+
+
+def test_output_puts_on_screen_what_launch_s_output_loggers_do(write, tmp_path):
+    """launch.logging.get_output_loggers: 'log' prints only stderr on the screen, 'own_log'
+    nothing, a dict per stream; without `output` both are shown (tuilaunch's default).
+    Every line is in the process's log file whatever is printed."""
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sh', '-c', 'echo log out; echo log err >&2'], name='log',
+                       output='log'),
+        ExecuteProcess(cmd=['sh', '-c', 'echo own out; echo own err >&2'], name='own',
+                       output='own_log'),
+        ExecuteProcess(cmd=['sh', '-c', 'echo dict out; echo dict err >&2'], name='dict',
+                       output={'stdout': 'screen', 'stderr': ['log']}),
+        ExecuteProcess(cmd=['sh', '-c', 'echo plain out; echo plain err >&2'], name='plain'),
+    ])
+""")
+    logs = tmp_path / "logs"
+    done = run_cli(str(path), "--headless", env={"ROS_LOG_DIR": str(logs)})
+    assert done.returncode == 0, done.stdout + done.stderr
+    printed = {line for line in done.stdout.splitlines() if not line.startswith("[INFO]")}
+    assert printed == {"[log-1] log err", "[dict-3] dict out", "[plain-4] plain out",
+                       "[plain-4] plain err"}, done.stdout
+    folder = next(logs.glob("*-tuilaunch-*"))
+    for name, number in (("log", 1), ("own", 2), ("dict", 3)):
+        kept = (folder / f"{name}-{number}.log").read_text()
+        assert f"{name} out" in kept and f"{name} err" in kept
+    # ros2 launch's override for every process, as launch_testing and CI set it
+    done = run_cli(str(path), "--headless", env={"ROS_LOG_DIR": str(logs),
+                                                 "OVERRIDE_LAUNCH_PROCESS_OUTPUT": "screen"})
+    printed = {line for line in done.stdout.splitlines() if not line.startswith("[INFO]")}
+    assert len(printed) == 8, done.stdout
+
+
+def test_an_output_launch_does_not_know_is_one_line_naming_where(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(cmd=['true'], output='scren')])
+""")
+    done = run_cli(str(path), "--headless")
+    assert done.returncode == 2
+    line = next(n for n, text in enumerate(path.read_text().splitlines(), 1) if "scren" in text)
+    assert done.stderr.strip().splitlines()[0].endswith(
+        f"{path.name}:{line}: output 'scren' is not one of screen, log, both, own_log, full"), \
+        done.stderr
+    assert "Traceback" not in done.stderr

@@ -48,6 +48,10 @@ class Printer:
         # a process another machine runs is labelled with it: `[talker-1@nuc] ...`
         self.labels = {p.id: f"{p.id}@{p.machine}" for p in plan.processes
                        if p.machine} if plan is not None else {}
+        # the streams a process's `output` keeps off the screen ('log': its stdout), as
+        # ros2 launch prints them; its log file has them
+        self.unshown = {p.id: {"stdout", "stderr"} - set(p.screen) for p in plan.processes
+                        if len(p.screen) < 2} if plan is not None else {}
         self.broken: str | None = None
         try:
             self.colour = out.isatty() and not os.environ.get("NO_COLOR")
@@ -98,6 +102,8 @@ class Printer:
         if event.kind == "output":
             if not event.lines:
                 return ""  # an unfinished line shown by a TUI: printed once it is whole
+            if event.stream in self.unshown.get(event.process or "", ()):
+                return ""
             prefix = f"[{self.label(event)}] "
             text = prefix + ("\n" + prefix).join(event.lines) + "\n"
             return text if self.colour or "\x1b" not in text else strip_ansi(text)

@@ -122,7 +122,7 @@ class ProcessPlanner:
                                            entity.origin),
             sigkill_timeout=_float_or_none(entity.sigkill_timeout, ctx, "sigkill_timeout",
                                            entity.origin),
-            output=str(perform(entity.output, ctx)) if entity.output is not None else "screen",
+            **output_settings(entity, ctx),
             emulate_tty=None if getattr(entity, "emulate_tty", None) is None
             else bool(text_to_bool(perform(entity.emulate_tty, ctx))),
             enabled=enabled, skipped_by=skipped, trigger=scope.trigger, origin=entity.origin,
@@ -285,3 +285,35 @@ class ProcessPlanner:
                            None, enabled, skipped, scope.trigger, entity.origin,
                            error=exc.message if enabled else f"not resolved: {exc.message}")
         return plan
+
+
+_SHOWN = {"screen": ("stdout", "stderr"), "both": ("stdout", "stderr"),
+          "full": ("stdout", "stderr"), "log": ("stderr",), "own_log": ()}
+"""launch.logging's output aliases: the streams each puts on the screen."""
+
+
+def output_settings(entity: ExecuteProcess | Node, ctx: PerformContext) -> dict[str, Any]:
+    """`output` as launch reads it (OVERRIDE_LAUNCH_PROCESS_OUTPUT, when set, for every
+    process), and the streams it shows on the screen (launch.logging's
+    get_output_loggers). Without one, both streams are shown, as with `'screen'`."""
+    given = os.environ.get("OVERRIDE_LAUNCH_PROCESS_OUTPUT", entity.output)
+    if given is None:
+        return {"output": "screen", "screen": _SHOWN["screen"]}
+    if isinstance(given, dict):
+        shown: set[str] = set()
+        for source, destinations in given.items():
+            if source not in ("stdout", "stderr", "both"):
+                raise LaunchError(f"output: {source!r} is not an output source (stdout, "
+                                  "stderr or both)", entity.origin)
+            wanted = {destinations} if isinstance(destinations, str) else set(destinations)
+            for destination in wanted - {"screen", "log", "own_log"}:
+                raise LaunchError(f"output: {destination!r} is not an output destination "
+                                  "(screen, log or own_log)", entity.origin)
+            if "screen" in wanted:
+                shown |= {"stdout", "stderr"} if source == "both" else {source}
+        return {"output": "log", "screen": tuple(s for s in ("stdout", "stderr") if s in shown)}
+    text = str(perform(given, ctx))
+    if text not in _SHOWN:
+        raise LaunchError(f"output '{text}' is not one of screen, log, both, own_log, full",
+                          entity.origin)
+    return {"output": text, "screen": _SHOWN[text]}

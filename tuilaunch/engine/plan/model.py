@@ -116,6 +116,9 @@ class ProcessPlan:
     components: list[dict[str, Any]] = field(default_factory=list)
     output: str = "screen"
     emulate_tty: bool | None = None  # None: a terminal when the output is shown
+    screen: tuple[str, ...] = ("stdout", "stderr")
+    """The streams a headless run prints, as launch's `output` puts them on the screen
+    (`'log'`: stderr only); the log files and the TUI's panes have every line."""
     source: Any = field(default=None, repr=False, compare=False)
     """The Node or ExecuteProcess it came from: what `event.action` is in handlers."""
     lifecycle: bool = False
