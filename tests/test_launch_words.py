@@ -286,3 +286,26 @@ def generate_launch_description():
         f"{path.name}:{line}: output 'scren' is not one of screen, log, both, own_log, full"), \
         done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_log_cmd_and_output_format_print_as_launch_s_execute_local(write, tmp_path):
+    """log_cmd=True says the final command before it starts ("process details: cmd='...',
+    cwd='...', custom_env?=True": launch's env is always a dict now); output_format is
+    `.format(line=..., this=the action)`."""
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=['echo', 'bare', ' '], name='raw', output='screen',
+                       output_format='{line}', log_cmd=True, cwd='/tmp'),
+        ExecuteProcess(cmd=['echo', 'named'], name='fancy', output='screen',
+                       output_format='<{this.process_description.final_name}> {line}'),
+    ])
+""")
+    done = run_cli(str(path), "--headless", env={"ROS_LOG_DIR": str(tmp_path / "logs")})
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = done.stdout.splitlines()
+    details = "[INFO] [raw-1]: process details: cmd='echo bare', cwd='/tmp', custom_env?=True"
+    assert details in lines, done.stdout
+    assert lines.index(details) < lines.index(next(line for line in lines
+                                                   if "[raw-1]: process started" in line))
+    assert "bare  " in lines and "<fancy-2> named" in lines, done.stdout

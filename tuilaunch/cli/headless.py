@@ -34,6 +34,16 @@ def run_log_dir() -> Path:
     return Path(base) / f"{stamp}-tuilaunch-{os.getpid()}"
 
 
+class _FormatSubject:
+    """What `{this...}` reaches in an output_format: the names launch's action has."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.process_description = self
+        self.final_name = name
+        self.process_details = {"name": name}
+
+
 class Printer:
     """Writes events to a stream; strips colour codes unless the stream is a terminal.
 
@@ -52,6 +62,8 @@ class Printer:
         # ros2 launch prints them; its log file has them
         self.unshown = {p.id: {"stdout", "stderr"} - set(p.screen) for p in plan.processes
                         if len(p.screen) < 2} if plan is not None else {}
+        self.formats = {p.id: p.output_format for p in plan.processes
+                        if p.output_format} if plan is not None else {}
         self.broken: str | None = None
         try:
             self.colour = out.isatty() and not os.environ.get("NO_COLOR")
@@ -104,8 +116,12 @@ class Printer:
                 return ""  # an unfinished line shown by a TUI: printed once it is whole
             if event.stream in self.unshown.get(event.process or "", ()):
                 return ""
-            prefix = f"[{self.label(event)}] "
-            text = prefix + ("\n" + prefix).join(event.lines) + "\n"
+            form = self.formats.get(event.process or "")
+            if form is not None:
+                text = self._formatted(form, event)
+            else:
+                prefix = f"[{self.label(event)}] "
+                text = prefix + ("\n" + prefix).join(event.lines) + "\n"
             return text if self.colour or "\x1b" not in text else strip_ansi(text)
         if event.kind in ("started", "finished") and event.pid is None:
             return ""  # an action's progress: its log lines already say what happened
@@ -129,6 +145,17 @@ class Printer:
             who = (event.data or {}).get("logger") or event.process or "launch.user"
             return f"[{event.level}] [{who}]: {event.reason}\n"
         return f"[INFO] [launch]: {event.kind} ({event.reason})\n"
+
+    def _formatted(self, form: str, event: Event) -> str:
+        """launch's `output_format.format(line=..., this=the action)`: `this` answers for
+        the process's name as launch's action does (`this.process_description.final_name`,
+        `this.name`); a format naming anything else falls back to `[name] line`."""
+        this = _FormatSubject(self.label(event) or "")
+        try:
+            return "".join(form.format(line=line, this=this) + "\n" for line in event.lines)
+        except (AttributeError, IndexError, KeyError, ValueError):
+            prefix = f"[{self.label(event)}] "
+            return "".join(f"{prefix}{line}\n" for line in event.lines)
 
     def _exit_line(self, event: Event) -> str:
         """ros2 launch's words, so that what greps its output greps ours."""

@@ -123,6 +123,8 @@ class ProcessPlanner:
             sigkill_timeout=_float_or_none(entity.sigkill_timeout, ctx, "sigkill_timeout",
                                            entity.origin),
             **output_settings(entity, ctx),
+            log_cmd=bool(getattr(entity, "log_cmd", False)),
+            output_format=getattr(entity, "output_format", None),
             emulate_tty=None if getattr(entity, "emulate_tty", None) is None
             else bool(text_to_bool(perform(entity.emulate_tty, ctx))),
             enabled=enabled, skipped_by=skipped, trigger=scope.trigger, origin=entity.origin,

@@ -119,6 +119,10 @@ class ProcessPlan:
     screen: tuple[str, ...] = ("stdout", "stderr")
     """The streams a headless run prints, as launch's `output` puts them on the screen
     (`'log'`: stderr only); the log files and the TUI's panes have every line."""
+    log_cmd: bool = False  # say the final command line before it starts, as launch does
+    output_format: str | None = None
+    """launch's `output_format` for the lines a headless run prints (`{line}`, `{this...}`);
+    None: `[name] line`."""
     source: Any = field(default=None, repr=False, compare=False)
     """The Node or ExecuteProcess it came from: what `event.action` is in handlers."""
     lifecycle: bool = False

@@ -51,8 +51,9 @@ class Node(Entity):
         # /bin/sh (controller_manager's spawner helpers set it); the others only format
         # launch's own output
         self.shell = bool(unknown.pop("shell", False))
-        for formatting in ("log_cmd", "output_format", "cached_output"):
-            unknown.pop(formatting, None)
+        self.log_cmd = bool(unknown.pop("log_cmd", False))
+        self.output_format: str | None = unknown.pop("output_format", None)
+        unknown.pop("cached_output", None)  # only for code reading launch's own buffers
         if unknown:
             names = ", ".join(sorted(unknown))
             raise DslError(
@@ -113,9 +114,13 @@ class ExecuteProcess(Entity):
         sigkill_timeout: Any = None,
         emulate_tty: Any = None,
         on_exit: Any = None,
+        log_cmd: bool = False,
+        output_format: str | None = None,
         **_: Any,
     ) -> None:
         self._init_entity(condition)
+        self.log_cmd = bool(log_cmd)
+        self.output_format = output_format
         self.emulate_tty = emulate_tty
         self.on_exit = on_exit
         self.cmd = cmd

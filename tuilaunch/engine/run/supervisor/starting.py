@@ -77,6 +77,10 @@ class Starting(PlanActions):
             self._fail(process_id, f"cannot open its log file {log_path}: "
                        f"{exc.strerror or exc}")
             return
+        if proc.log_cmd:  # launch's words (ExecuteLocal); its env is always a dict now
+            shown = " ".join(part for part in start.cmd if part.strip())
+            self.emit(Event("log", process_id, reason=f"process details: cmd='{shown}', "
+                            f"cwd='{start.cwd}', custom_env?=True"))
         try:
             # no controlling terminal (vfork: fast) but under a tool, whose job control
             # needs one; the terminal's writer turns ctrl+c into SIGINT otherwise
