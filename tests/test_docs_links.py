@@ -14,10 +14,11 @@ PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 LINK = re.compile(r"(?<!!)\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
 
 
-def prose(text: str) -> str:
-    """The text without fenced code blocks and inline code, where `[x](y)` is no link."""
+def prose(text: str, keep_code: bool = False) -> str:
+    """The text without fenced code blocks and inline code, where `[x](y)` is no link
+    (`keep_code`: inline code stays, as text, as GitHub keeps it in a heading's anchor)."""
     text = re.sub(r"^(```|~~~).*?^\1", "", text, flags=re.M | re.S)
-    return re.sub(r"`[^`\n]*`", "", text)
+    return text if keep_code else re.sub(r"`[^`\n]*`", "", text)
 
 
 def anchors(page: Path) -> set[str]:
@@ -26,7 +27,8 @@ def anchors(page: Path) -> set[str]:
     text = page.read_text()
     found = set(re.findall(r"""\bid=["']([^"']+)["']""", text))
     seen: dict[str, int] = {}
-    for heading in re.findall(r"^#{1,6}\s+(.+?)\s*#*\s*$", prose(text), flags=re.M):
+    for heading in re.findall(r"^#{1,6}\s+(.+?)\s*#*\s*$", prose(text, keep_code=True),
+                              flags=re.M):
         plain = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", heading)  # a link: its text
         slug = re.sub(r"[^\w\- ]", "", plain.lower()).replace(" ", "-")
         count = seen.get(slug, 0)
