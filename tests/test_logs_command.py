@@ -87,9 +87,11 @@ def test_a_restart_is_a_stop_asked_for_then_a_start(session):
     story = [line for line in tl("logs", session, "counter-4").splitlines()
              if not line.startswith("line ")]
     assert story[0].startswith("[INFO] [counter-4]: process started with pid [")
-    assert story[1].startswith("[INFO] [counter-4]: process stopped [pid ")
-    assert "killed by SIGINT" in story[1]
-    assert story[2].startswith("[INFO] [counter-4]: process started with pid [")
+    # launch's words for the signal sent, then the end it caused
+    assert story[1] == "[INFO] [counter-4]: sending signal 'SIGINT' to process[counter-4]"
+    assert story[2].startswith("[INFO] [counter-4]: process stopped [pid ")
+    assert "killed by SIGINT" in story[2]
+    assert story[3].startswith("[INFO] [counter-4]: process started with pid [")
     assert "counter-4" not in tl("logs", session, "--level", "WARN")  # no crash
     # status no longer tells the end before the restart as the process's current story
     counter = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
@@ -158,9 +160,10 @@ def test_lines_with_follow_prints_the_last_n_then_the_new_ones(session):
         while "line 1" not in seen:
             assert time.monotonic() < end, seen
             seen.append(follower.stdout.readline().rstrip("\n"))
-        assert seen[0].startswith("[INFO] [counter-4]: process stopped [pid ")
-        assert seen[1].startswith("[INFO] [counter-4]: process started with pid [")
-        assert seen[2] == "line 1"
+        assert seen[0] == "[INFO] [counter-4]: sending signal 'SIGINT' to process[counter-4]"
+        assert seen[1].startswith("[INFO] [counter-4]: process stopped [pid ")
+        assert seen[2].startswith("[INFO] [counter-4]: process started with pid [")
+        assert seen[3] == "line 1"
         follower.send_signal(signal.SIGINT)
         _, errors = follower.communicate(timeout=30)
         assert follower.returncode == 130
@@ -194,6 +197,6 @@ def test_stop_says_what_it_waits_for_while_a_process_ignores_sigint(tmp_path):
         assert stopped.returncode == 0, stopped.stderr
         assert stopped.stdout == f"session {name} stopped\n"
         assert "tuilaunch stop: waiting for stubborn-1 (" in stopped.stderr
-        assert "tuilaunch stop: stubborn-1: still running 4 s after SIGINT: sending SIGTERM " \
-            "to its process group" in stopped.stderr
+        assert "tuilaunch stop: stubborn-1: process[stubborn-1] failed to terminate '4' " \
+            "seconds after receiving 'SIGINT', escalating to 'SIGTERM'" in stopped.stderr
         assert "Traceback" not in stopped.stderr

@@ -159,8 +159,15 @@ def test_stopper_escalates_a_process_that_ignores_sigint(tmp_path: Path, insist:
         child.wait()
     assert code == -signal.SIGTERM
     reasons = [event.reason or "" for event in said]
-    assert len(reasons) == 1 and reasons[0].endswith("sending SIGTERM to its process group")
-    assert reasons[0].startswith("asked again" if insist else "still running 0.3 s after SIGINT")
+    name = "talker"  # the process's id, as launch names it in these lines
+    assert reasons[0] == f"sending signal 'SIGINT' to process[{name}]"  # no Ctrl+C: said
+    if insist:
+        assert reasons[1:] == [f"asked again: sending signal 'SIGTERM' to process[{name}]"]
+    else:
+        assert reasons[1:] == [
+            f"process[{name}] failed to terminate '0.3' seconds after receiving "
+            "'SIGINT', escalating to 'SIGTERM'",
+            f"sending signal 'SIGTERM' to process[{name}]"]
 
 
 def test_stopper_does_not_count_a_death_by_the_stop_signal_just_before_the_stop():

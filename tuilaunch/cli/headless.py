@@ -23,6 +23,7 @@ from ..engine.launcher import make_supervisor
 from ..engine.plan.machines import Placement
 from ..engine.plan.model import Plan
 from ..engine.run.process.output import strip_ansi
+from ..engine.run.supervisor.stopping import CTRL_C_REASON
 from ..engine.run.supervisor.supervisor import Event
 from .stdout_writer import BackgroundWriter, LineJoiner
 
@@ -217,7 +218,7 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
         asked += 1
         if asked == 1:
             # ros2 launch's reason for Ctrl+C; it has none for the others (it cancels)
-            reason = "ctrl-c (SIGINT)" if sig == signal.SIGINT else f"received {sig.name}"
+            reason = CTRL_C_REASON if sig == signal.SIGINT else f"received {sig.name}"
             if sig in (signal.SIGTERM, signal.SIGQUIT):
                 # ros2 launch's words (launch_service.py's _on_sigterm), and its exit status
                 # 1 (its run is cancelled); unlike it, tuilaunch still stops every process

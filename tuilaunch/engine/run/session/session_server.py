@@ -27,6 +27,7 @@ from ...errors import LaunchError
 from ...plan.session import Session
 from ..events import Event
 from ..plugins import Handler
+from ..supervisor.stopping import CTRL_C_REASON
 from ..supervisor.supervisor import Supervisor
 from . import session_dir
 from .clients import CLIENT_MAX_EVENTS as CLIENT_MAX_EVENTS
@@ -242,7 +243,7 @@ class SessionServer:
         self.supervisor.log(text, level)
 
     def _signalled(self, sig: signal.Signals) -> None:
-        reason = "ctrl-c (SIGINT)" if sig == signal.SIGINT else f"received {sig.name}"
+        reason = CTRL_C_REASON if sig == signal.SIGINT else f"received {sig.name}"
         self.hub.spawn(self.supervisor.shutdown(reason))  # ros2 launch's words for SIGINT
 
     def _snapshot(self) -> dict[str, Any]:

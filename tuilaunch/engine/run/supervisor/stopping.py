@@ -21,6 +21,8 @@ from ..process.readers import Running
 
 STAGES = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+CTRL_C_REASON = "ctrl-c (SIGINT)"
+"""launch's shutdown reason for Ctrl+C (launch_service.py's SIGINT handler)."""
 STOP_RACE = 2.0
 """Seconds before a stop within which a child's death by that stop's signal counts as part
 of the stop (see Stopper.real_crashes)."""
@@ -43,6 +45,9 @@ class Stopper:
         """Set to make the escalations skip to the urgency asked for."""
         self.stop_time: float | None = None
         """When the shutdown began (loop time), for its escalation deadlines."""
+        self.terminal_sigint = False
+        """The shutdown comes from Ctrl+C: as in launch, the SIGINT each process gets then
+        is not announced (a terminal's Ctrl+C is the user's own, and seen)."""
 
     def began(self) -> None:
         """The launch's shutdown begins now."""
@@ -77,9 +82,7 @@ class Stopper:
         while not running.exited.done():
             stage = max(stage, self.urgency if self._in_shutdown() else 0)
             if stage > sent:
-                if stage > 0:
-                    self._say(Event("log", proc.id, level="WARN", reason=(
-                        f"{why}sending {STAGES[stage].name} to its process group")))
+                self._announce(proc.id, stage, why, waits)
                 if not kill_group(running.process.pid, STAGES[stage]):
                     break  # the whole group is gone; the exit arrives through the pidfd
                 sent = stage
@@ -100,11 +103,28 @@ class Stopper:
                     "no longer waiting for it")))
                 return
             if self.urgency > stage and self._in_shutdown():
-                why = "asked again: "
+                why = "asked again"
             else:
-                why = f"still running {waits[stage]:g} s after {STAGES[stage].name}: "
+                why = "timeout"
                 stage += 1
         await asyncio.shield(running.exited)
+
+    def _announce(self, name: str, stage: int, why: str, waits: tuple[float, ...]) -> None:
+        """Each signal in launch's words (ExecuteLocal), which people grep for: the timeout
+        as an ERROR `failed to terminate ... escalating to`, then `sending signal`."""
+        signal_name = STAGES[stage].name
+        if why == "timeout":
+            self._say(Event("log", name, level="ERROR", reason=(
+                f"process[{name}] failed to terminate '{waits[stage - 1]:g}' seconds after "
+                f"receiving '{STAGES[stage - 1].name}', escalating to '{signal_name}'")))
+        elif why:  # the operator insisted (a second Ctrl+C, q, `stop` again)
+            self._say(Event("log", name, level="WARN", reason=(
+                f"asked again: sending signal '{signal_name}' to process[{name}]")))
+            return
+        elif self.terminal_sigint and self._in_shutdown():
+            return
+        self._say(Event("log", name, reason=f"sending signal '{signal_name}' to "
+                        f"process[{name}]"))
 
     def real_crashes(self, crashes: dict[str, int],
                      crash_times: dict[str, float]) -> dict[str, int]:

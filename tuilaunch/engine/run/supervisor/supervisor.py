@@ -31,7 +31,7 @@ from ..events import Consumer, Event, LaunchEvent
 from ..process.readers import Running
 from .interacting import Interacting
 from .placed import ELSEWHERE, RemoteControl
-from .stopping import kill_group
+from .stopping import CTRL_C_REASON, kill_group
 
 __all__ = ["Consumer", "Event", "LaunchEvent", "Supervisor"]
 
@@ -213,6 +213,7 @@ class Supervisor(Interacting):
             return
         self.shutting_down = True
         self.stopper.began()
+        self.stopper.terminal_sigint = reason == CTRL_C_REASON
         try:
             await self.tell_shutdown(reason)
         finally:
