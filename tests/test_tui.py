@@ -148,16 +148,15 @@ async def test_a_bad_argument_value_shows_its_error_and_applies_nothing(tmp_path
         await pilot.press("2")
         field = app.query_one("#arg-copies", Input)
         field.value = "5"
-        await pilot.pause()
         preview = app.query_one("#args-preview")
-        assert preview.has_class("error")
+        # the preview loads the file off the UI's thread: on a busy machine it takes a while
+        await until(pilot, lambda: preview.has_class("error"))
         assert "raised ValueError: at most 3 copies" in str(preview.render())
         await pilot.press("f5")
         await pilot.pause()
         assert app.session.arguments == {} and list(pids(app)) == ["copy0-1"]
         field.value = "2"
-        await pilot.pause()
-        assert "would start: copy1-2" in str(preview.render())
+        await until(pilot, lambda: "would start: copy1-2" in str(preview.render()))
 
 
 async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):

@@ -79,7 +79,10 @@ class Share:
         self.seen: set[tuple[Any, ...]] = set()  # events mirrored (a reconnect repeats them)
         self.logs: dict[str, LogFile] = {}
         self.offsets: dict[str, int] = {}  # its log files' sizes at the last subscription
-        self.last_output: dict[str, float] = {}  # the time of the last line mirrored
+        self.received: dict[str, int] = {}
+        """Lines of each process that came as events since the last subscription: they are
+        in its log file there after `offsets`, and are skipped when the lines the link
+        missed are asked for. A count, not a time: many lines share a millisecond."""
         self.backfill: dict[int, str] = {}  # requests for lines still unanswered
         self.held: list[dict[str, Any]] = []  # events batches waiting for those lines
 
@@ -276,13 +279,14 @@ class MachinesCoordinator(Plugin):
                 continue
             start = share.offsets.get(proc.id, 0)
             share.offsets[proc.id] = end
+            skip = share.received.pop(proc.id, 0)
             if end <= start:
                 continue
             request_id = self._new_id()
             share.backfill[request_id] = proc.id
             share.writer.write(encode({
                 "op": LINES_OP, "id": request_id, "process": proc.id, "start": start,
-                "end": end, "after": share.last_output.get(proc.id)}))
+                "end": end, "skip": skip}))
 
     def _backfilled(self, share: Share, process: str, result: dict[str, Any]) -> None:
         skipped = int(result.get("skipped") or 0)
@@ -292,7 +296,6 @@ class MachinesCoordinator(Plugin):
         for stamp, stream, text in result.get("lines") or []:
             event = Event("output", process, stream=str(stream),
                           lines=[screen_str(str(text))], time=float(stamp))
-            share.last_output[process] = event.time
             self._log_output(share, event)
             self.supervisor.mirror(event)
 
@@ -309,10 +312,15 @@ class MachinesCoordinator(Plugin):
                 continue
             if event.kind == "output":
                 if event.lines:  # not an unfinished line (a prompt), shown until it is whole
-                    share.last_output[event.process] = event.time
+                    share.received[event.process] = \
+                        share.received.get(event.process, 0) + len(event.lines)
                     self._log_output(share, event)
                 self.supervisor.mirror(event)
                 continue
+            if event.kind == "dropped" and isinstance(event.code, int):
+                # lines its queue let go: in the file, said by this event, not sent again
+                share.received[event.process] = share.received.get(event.process, 0) + \
+                    event.code
             key = (event.kind, event.process, event.pid, event.time)
             if key in share.seen:
                 continue

@@ -21,7 +21,8 @@ BACKFILL_LINES = 2000
 """Lines of a process sent at most per request (the newest); older ones stay in the log
 file there, and the launching side says how many."""
 LINES_OP = "share_lines"
-"""The share's request for lines of its log files: {process, start, end, after}."""
+"""The share's request for lines of its log files: {process, start, end, skip}: from byte
+`start` to `end`, less the first `skip` (the lines the launching side already has)."""
 
 
 class ShareSide(Plugin):
@@ -45,11 +46,12 @@ class ShareSide(Plugin):
         async def share_lines(message: dict[str, Any]) -> Any:
             process = find_process(str(message.get("process")))
             start, end = int(message.get("start") or 0), int(message.get("end") or 0)
-            after = message.get("after")
+            skip = int(message.get("skip") or 0)
             kept: collections.deque[LogLine] = collections.deque(maxlen=BACKFILL_LINES)
             count = 0
-            for line in read_lines(self.supervisor.log_dir / f"{process}.log", end, start):
-                if after is None or line.time > float(after):
+            for index, line in enumerate(
+                    read_lines(self.supervisor.log_dir / f"{process}.log", end, start)):
+                if index >= skip:
                     kept.append(line)
                     count += 1
             return {"lines": [[line.time, line.stream, line.text] for line in kept],

@@ -27,7 +27,7 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   out}`; to a
   machine's share of a placed launch (run/machines/machines_share.py): external_event {process, on:
   start|exit, pid, code},
-  share_lines {process, start, end, after}.
+  share_lines {process, start, end, skip}.
   Resources (run/resource_watch.py): `status` gives each process `cpu_percent` (% of one
   core), `rss_bytes` and `threads` over its process tree (None when not running);
   watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a
