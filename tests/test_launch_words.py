@@ -309,3 +309,25 @@ def generate_launch_description():
     assert lines.index(details) < lines.index(next(line for line in lines
                                                    if "[raw-1]: process started" in line))
     assert "bare  " in lines and "<fancy-2> named" in lines, done.stdout
+
+
+def test_a_log_info_of_the_file_is_said_before_any_process_starts(write):
+    """launch performs a LogInfo while it visits the file; a process's `process started`
+    comes once the loop runs: every such line first, whatever their order in the file."""
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(cmd=['true'], name='first'),
+        LogInfo(msg='written after the first process'),
+        ExecuteProcess(cmd=['true'], name='second'),
+        LogInfo(msg='written last'),
+    ])
+""")
+    done = run_cli(str(path), "--headless")
+    lines = [line for line in done.stdout.splitlines() if "[launch]" not in line]
+    assert lines[:4] == [
+        "[INFO] [launch.user]: written after the first process",
+        "[INFO] [launch.user]: written last",
+        lines[2], lines[3]], done.stdout
+    assert lines[2].startswith("[INFO] [first-1]: process started with pid [")
+    assert lines[3].startswith("[INFO] [second-2]: process started with pid [")

@@ -144,12 +144,32 @@ class PlanActions(SupervisorCore):
         on = action.trigger.on if action.trigger is not None else "timer"
         return event_for(on)
 
-    async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
-        if event is None:
-            event = self._event_of(action)
+    def log_now(self, action: ActionPlan) -> None:
+        """An untriggered LogInfo, said before any process starts: launch performs it
+        while it visits the file, and a process's start is only said once the loop runs
+        (`process started with pid` comes after every such line)."""
+        self._action_begins(action)
+        try:
+            ok = self._log(action, self._event_of(action))
+        except Exception as exc:  # as perform_action: this action fails alone
+            self.log_action(action, failure_line(action, exc), "ERROR")
+            ok = False
+        self._action_ends(action, ok)
+
+    def _action_begins(self, action: ActionPlan) -> None:
         self.states[action.id] = "running"
         self.emit(Event("started", action.id))
         self.flag(action.id, "start").set()
+
+    def _action_ends(self, action: ActionPlan, ok: bool) -> None:
+        self.states[action.id] = "done" if ok else "failed"
+        self.emit(Event("finished", action.id, reason=self.states[action.id]))
+        self.flag(action.id, "exit").set()
+
+    async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
+        if event is None:
+            event = self._event_of(action)
+        self._action_begins(action)
         ok = True
         task = asyncio.current_task()
         if action.kind in self.detached_actions and task is not None:
@@ -193,9 +213,7 @@ class PlanActions(SupervisorCore):
         finally:
             if self.detached_tasks.get(action.id) is task:
                 del self.detached_tasks[action.id]
-        self.states[action.id] = "done" if ok else "failed"
-        self.emit(Event("finished", action.id, reason=self.states[action.id]))
-        self.flag(action.id, "exit").set()
+        self._action_ends(action, ok)
 
     def _log(self, action: ActionPlan, event: LaunchEvent | None) -> bool:
         from ...errors import LaunchError

@@ -53,6 +53,11 @@ class Supervisor(Interacting):
                 begun = plugin.run_started()
                 if begun is not None:
                     self.spawn_task(begun)
+            said_now = [a for a in self.plan.actions if a.kind == "log" and a.enabled
+                        and a.trigger is None and self.runs_actions()]
+            for action in said_now:
+                self.log_now(action)
+            said = {action.id for action in said_now}
             for proc in self.plan.processes:
                 if not self.runs_here(proc.id):
                     continue  # its machine's share starts it (placed.py)
@@ -61,7 +66,7 @@ class Supervisor(Interacting):
                 elif proc.enabled:
                     self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
             for action in self.plan.actions:
-                if action.enabled and self.runs_actions():
+                if action.enabled and self.runs_actions() and action.id not in said:
                     self.schedule_action(action)
             while not self._settled():
                 self.changed.clear()
