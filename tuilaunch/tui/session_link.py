@@ -280,9 +280,13 @@ class SessionLink(App[int]):
             elif event.kind == "log":
                 if event.process and self.supervisor is not None:
                     state = self.supervisor.states.get(event.process, "")
-                    if tree.states.get(event.process) == "respawning" != state:
+                    shown = tree.states.get(event.process)
+                    if shown == "respawning" != state:
                         tree.details.pop(event.process, None)  # "try 1 in 6 s": called off
-                    tree.set_state(event.process, state)
+                    # a stop's own lines (`sending signal 'SIGINT'`) come while the server
+                    # still says running: the row keeps saying it is stopping
+                    if not (shown == "stopping" and state == "running"):
+                        tree.set_state(event.process, state)
                 level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
                 fresh += self.store.add_event(event.process or "launch", event.reason or "",
                                               level)
