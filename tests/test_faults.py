@@ -452,6 +452,30 @@ sl.add_action(ExecuteProcess(cmd=['{script}'], name='stubborn', sigterm_timeout=
     assert proc.returncode == 0
 
 
+def test_timeouts_given_as_launch_arguments_apply_to_every_process(write, tmp_path, launches):
+    """launch's defaults are LaunchConfiguration('sigterm_timeout', default=5) and the
+    same for SIGKILL: `sigterm_timeout:=0.3` on the command line sets every process's that
+    does not say its own, and is no undeclared argument."""
+    started, _ = launches
+    script = tmp_path / "stubborn"
+    script.write_text(STUBBORN)
+    script.chmod(0o755)
+    path = launch_file(write, f"sl.add_action(ExecuteProcess(cmd=['{script}'], "
+                              "name='stubborn'))")
+    proc = start_headless(str(path), "sigterm_timeout:=0.3", "sigkill_timeout:=0.4",
+                          log_dir=tmp_path)
+    started.append(proc)
+    early = read_until(proc, "stubborn ready")
+    assert "not declared" not in early
+    os.killpg(proc.pid, signal.SIGINT)
+    out = proc.communicate(timeout=60)[0]
+    assert "failed to terminate '0.3' seconds after receiving 'SIGINT', escalating to " \
+        "'SIGTERM'" in out, out
+    assert "failed to terminate '0.4' seconds after receiving 'SIGTERM', escalating to " \
+        "'SIGKILL'" in out, out
+    assert proc.returncode == 0
+
+
 def test_second_and_third_ctrl_c_escalate_at_once(write, tmp_path, launches):
     started, _ = launches
     script = tmp_path / "stubborn"

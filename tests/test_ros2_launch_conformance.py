@@ -354,3 +354,24 @@ def test_show_args_of_a_file_without_arguments_says_so_as_ros2_launch(write):
     assert result.returncode == 0, result.stderr
     assert result.stdout == "Arguments (pass arguments as '<name>:=<value>'):\n\n" \
         "  No arguments.\n"
+
+
+def test_the_emulate_tty_launch_configuration_overrides_each_process_s(write):
+    """launch: `if 'emulate_tty' in context.launch_configurations`, it decides for every
+    process, whatever the process's own emulate_tty says."""
+    path = write("""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    probe = 'if [ -t 1 ]; then echo terminal; else echo pipe; fi'
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sh', '-c', probe], name='asks', output='screen',
+                       emulate_tty=True),
+        ExecuteProcess(cmd=['sh', '-c', probe], name='plain', output='screen'),
+    ])
+""")
+    shown = run_cli(str(path), "--headless")
+    assert "[asks-1] terminal" in shown.stdout and "[plain-2] terminal" in shown.stdout
+    piped = run_cli(str(path), "--headless", "emulate_tty:=false")
+    assert "[asks-1] pipe" in piped.stdout and "[plain-2] pipe" in piped.stdout, piped.stdout
+    assert "not declared" not in piped.stderr

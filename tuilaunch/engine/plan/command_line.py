@@ -46,6 +46,27 @@ def _float_or_none(value: Any, ctx: PerformContext, what: str, origin: Origin | 
     return None if value is None else _seconds(value, ctx, what, origin)
 
 
+LAUNCH_CONFIGURATIONS = ("sigterm_timeout", "sigkill_timeout", "emulate_tty")
+"""launch's own configurations a process reads when it does not say (ExecuteLocal):
+`sigterm_timeout:=10` on the command line sets every process's."""
+
+
+def _timeout(value: Any, what: str, ctx: PerformContext, scope: Scope,
+             origin: Origin | None) -> float | None:
+    """The process's own, else launch's default `LaunchConfiguration(what, default=5)`."""
+    if value is None:
+        value = scope.configurations.get(what)
+    return _float_or_none(value, ctx, what, origin)
+
+
+def _emulate_tty(entity: ExecuteProcess | Node, ctx: PerformContext, scope: Scope)\
+        -> bool | None:
+    """The `emulate_tty` launch configuration, when set, overrides the process's own, as
+    in launch; None: a terminal when its output is shown (tuilaunch's default)."""
+    given = scope.configurations.get("emulate_tty", getattr(entity, "emulate_tty", None))
+    return None if given is None else bool(text_to_bool(perform(given, ctx)))
+
+
 def _rule_text(value: ParamValue) -> str:
     """A SetParameter value as launch_ros writes it after `-p name:=`: Python's str."""
     return str(value)
@@ -118,15 +139,14 @@ class ProcessPlanner:
             cwd=perform_optional(entity.cwd, ctx),
             respawn=respawn, respawn_delay=respawn_delay,
             respawn_max_retries=DEFAULT_RESPAWN_MAX_RETRIES if retries is None else retries,
-            sigterm_timeout=_float_or_none(entity.sigterm_timeout, ctx, "sigterm_timeout",
-                                           entity.origin),
-            sigkill_timeout=_float_or_none(entity.sigkill_timeout, ctx, "sigkill_timeout",
-                                           entity.origin),
+            sigterm_timeout=_timeout(entity.sigterm_timeout, "sigterm_timeout", ctx, scope,
+                                     entity.origin),
+            sigkill_timeout=_timeout(entity.sigkill_timeout, "sigkill_timeout", ctx, scope,
+                                     entity.origin),
             **output_settings(entity, ctx),
             log_cmd=bool(getattr(entity, "log_cmd", False)),
             output_format=getattr(entity, "output_format", None),
-            emulate_tty=None if getattr(entity, "emulate_tty", None) is None
-            else bool(text_to_bool(perform(entity.emulate_tty, ctx))),
+            emulate_tty=_emulate_tty(entity, ctx, scope),
             enabled=enabled, skipped_by=skipped, trigger=scope.trigger, origin=entity.origin,
         )
         if isinstance(entity, ExecuteProcess):

@@ -78,10 +78,11 @@ from ..errors import (
 from . import lifecycle as lifecycle_plan
 from .actions import ActionPlanner, describe_entity
 from .arguments import declare_argument
-from .command_line import ProcessPlanner
+from .command_line import LAUNCH_CONFIGURATIONS, ProcessPlanner
 from .components import interfaces_warning
 from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .opaque import is_custom_action, perform_opaque
+from .prefix import LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER
 from .scope import (
     Deferred,
     Scope,
@@ -145,7 +146,7 @@ class Resolver:
                   if a.enabled and a.kind == "load_components"))
         declared = set(self.arguments)
         for name in self.cli_arguments:
-            if name not in declared:
+            if name not in declared and name not in LAUNCH_OWN:
                 self.warnings.append(undeclared_warning(name, declared, loaded.path))
         plan = Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
                     root, self.params_dir, self.warnings)
@@ -556,6 +557,11 @@ def resolve(loaded: LoadedFile, arguments: Mapping[str, str] | None = None,
     resolver = Resolver(arguments or {}, params_dir or default_params_dir())
     set_command_line(arguments=dict(arguments or {}))
     return resolver.resolve(loaded)
+
+
+LAUNCH_OWN = frozenset((*LAUNCH_CONFIGURATIONS, LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER))
+"""Configurations launch itself reads (`sigterm_timeout:=10`, `launch-prefix:=...`): given
+on the command line without a file declaring them, they are no mistyped argument."""
 
 
 def undeclared_warning(name: str, declared: set[str], path: str) -> str:
