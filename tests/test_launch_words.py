@@ -272,6 +272,10 @@ def generate_launch_description():
                                                  "OVERRIDE_LAUNCH_PROCESS_OUTPUT": "screen"})
     printed = {line for line in done.stdout.splitlines() if not line.startswith("[INFO]")}
     assert len(printed) == 8, done.stdout
+    # ros2 launch's -a (--show-all-subprocesses-output) sets that override to 'both'
+    done = run_cli(str(path), "--headless", "-a", env={"ROS_LOG_DIR": str(logs)})
+    printed = {line for line in done.stdout.splitlines() if not line.startswith("[INFO]")}
+    assert len(printed) == 8, done.stdout
 
 
 def test_an_output_launch_does_not_know_is_one_line_naming_where(write):

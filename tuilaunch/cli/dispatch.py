@@ -164,6 +164,8 @@ def _main(argv: list[str] | None) -> int:
         positional, arguments = split_items(options.items)
         placement = _placement(options)
         options.placement = placement
+        if options.show_all_subprocesses_output:  # ros2launch's way: its children see it
+            os.environ["OVERRIDE_LAUNCH_PROCESS_OUTPUT"] = "both"
         # after the user's own name:=value, so these win, as in ros2 launch
         for item in prefix_arguments(options.launch_prefix, options.launch_prefix_filter):
             key, value = item.split(":=", 1)

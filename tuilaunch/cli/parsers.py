@@ -85,6 +85,9 @@ def launch_parser() -> argparse.ArgumentParser:
     parser.add_argument("--launch-prefix-filter", metavar="REGEX",
                         help="as ros2 launch: only executables whose name REGEX matches from "
                         "its start get --launch-prefix (launch-prefix-filter:=REGEX)")
+    parser.add_argument("-a", "--show-all-subprocesses-output", action="store_true",
+                        help="as ros2 launch: print every process's output whatever its "
+                        "output= says (OVERRIDE_LAUNCH_PROCESS_OUTPUT=both)")
     parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
     parser.epilog = (parser.epilog or "") + (
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
