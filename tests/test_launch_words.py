@@ -290,6 +290,10 @@ def generate_launch_description():
         f"{path.name}:{line}: output 'scren' is not one of screen, log, both, own_log, full"), \
         done.stderr
     assert "Traceback" not in done.stderr
+    done = run_cli(str(path), "--headless", env={"OVERRIDE_LAUNCH_PROCESS_OUTPUT": "loud"})
+    assert done.returncode == 2
+    assert done.stderr.strip() == "tuilaunch: error: OVERRIDE_LAUNCH_PROCESS_OUTPUT='loud' " \
+        "is not one of screen, log, both, own_log, full", done.stderr
 
 
 def test_log_cmd_and_output_format_print_as_launch_s_execute_local(write, tmp_path):

@@ -336,6 +336,9 @@ def output_settings(entity: ExecuteProcess | Node, ctx: PerformContext) -> dict[
         return {"output": "log", "screen": tuple(s for s in ("stdout", "stderr") if s in shown)}
     text = str(perform(given, ctx))
     if text not in _SHOWN:
+        if given is not entity.output:  # the environment's, not the file's
+            raise LaunchError(f"OVERRIDE_LAUNCH_PROCESS_OUTPUT={text!r} is not one of "
+                              "screen, log, both, own_log, full")
         raise LaunchError(f"output '{text}' is not one of screen, log, both, own_log, full",
                           entity.origin)
     return {"output": text, "screen": _SHOWN[text]}
