@@ -130,9 +130,7 @@ class OutputPanel(Vertical):
             unseen = lines.unseen
             parts.append((f"{plural(unseen, 'new line')} (G: follow)", f"{unseen} new (G)")
                          if unseen else ("paused (G: follow)", "paused (G)"))
-        dropped = self.store.dropped
-        hidden = dropped.total if self.view.process is None else \
-            dropped.per_process.get(self.view.process, 0)
+        hidden = self._not_drawn()
         if hidden:
             parts.append((f"{hidden} not drawn (in log)", f"{hidden} in log"))
         text = "  ".join(full for full, _ in parts)
@@ -143,6 +141,12 @@ class OutputPanel(Vertical):
             self._status_text = text
             # still too long (a long node name): cut where it shows, with an ellipsis
             self._status.update(Text(text, no_wrap=True, overflow="ellipsis"))
+
+    def _not_drawn(self) -> int:
+        """Lines of this pane's view a flood kept off the screen (in the log files)."""
+        dropped = self.store.dropped
+        return dropped.total if self.view.process is None else \
+            dropped.per_process.get(self.view.process, 0)
 
     def on_resize(self) -> None:
         self._status_text = ""  # measured again against the new width
@@ -187,10 +191,8 @@ class OutputPanel(Vertical):
         """What a search that found nothing says: when the pane no longer holds every line
         (trimmed to its scrollback, or not drawn under a flood), where the others are."""
         lines = self._lines
-        hidden = self.store.dropped.total if self.view.process is None else \
-            self.store.dropped.per_process.get(self.view.process, 0)
         full = len(lines.lines) >= (lines.lines.maxlen or 0) or lines.first > 0
-        if not (full or hidden or lines.skipped):
+        if not (full or self._not_drawn() or lines.skipped):
             return f"no line matches '{term}'"
         session = getattr(self.app, "session_name", None)
         host = getattr(self.app, "session_host", None)
