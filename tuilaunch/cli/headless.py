@@ -118,11 +118,7 @@ class Printer:
             if event.stream in self.unshown.get(event.process or "", ()):
                 return ""
             form = self.formats.get(event.process or "")
-            if form is not None:
-                text = self._formatted(form, event)
-            else:
-                prefix = f"[{self.label(event)}] "
-                text = prefix + ("\n" + prefix).join(event.lines) + "\n"
+            text = self._prefixed(event) if form is None else self._formatted(form, event)
             return text if self.colour or "\x1b" not in text else strip_ansi(text)
         if event.kind in ("started", "finished") and event.pid is None:
             return ""  # an action's progress: its log lines already say what happened
@@ -155,8 +151,12 @@ class Printer:
         try:
             return "".join(form.format(line=line, this=this) + "\n" for line in event.lines)
         except (AttributeError, IndexError, KeyError, ValueError):
-            prefix = f"[{self.label(event)}] "
-            return "".join(f"{prefix}{line}\n" for line in event.lines)
+            return self._prefixed(event)
+
+    def _prefixed(self, event: Event) -> str:
+        """`[name] line` for each line: launch's default output_format."""
+        prefix = f"[{self.label(event)}] "
+        return prefix + ("\n" + prefix).join(event.lines) + "\n"
 
     def _exit_line(self, event: Event) -> str:
         """ros2 launch's words, so that what greps its output greps ours."""
