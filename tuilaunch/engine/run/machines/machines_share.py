@@ -19,6 +19,7 @@ says so and connects again, backing off.
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import dataclasses
 import os
@@ -79,7 +80,7 @@ class Share:
         self.seen: set[tuple[Any, ...]] = set()  # events mirrored (a reconnect repeats them)
         self.logs: dict[str, LogFile] = {}
         self.offsets: dict[str, int] = {}  # its log files' sizes at the last subscription
-        self.received: dict[str, int] = {}
+        self.received: collections.Counter[str] = collections.Counter()
         """Lines of each process that came as events since the last subscription: they are
         in its log file there after `offsets`, and are skipped when the lines the link
         missed are asked for. A count, not a time: many lines share a millisecond."""
@@ -312,15 +313,13 @@ class MachinesCoordinator(Plugin):
                 continue
             if event.kind == "output":
                 if event.lines:  # not an unfinished line (a prompt), shown until it is whole
-                    share.received[event.process] = \
-                        share.received.get(event.process, 0) + len(event.lines)
+                    share.received[event.process] += len(event.lines)
                     self._log_output(share, event)
                 self.supervisor.mirror(event)
                 continue
             if event.kind == "dropped" and isinstance(event.code, int):
                 # lines its queue let go: in the file, said by this event, not sent again
-                share.received[event.process] = share.received.get(event.process, 0) + \
-                    event.code
+                share.received[event.process] += event.code
             key = (event.kind, event.process, event.pid, event.time)
             if key in share.seen:
                 continue
