@@ -22,7 +22,15 @@ from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.run.supervisor.supervisor import Event, Supervisor
 
 from .conftest import run_cli
-from .test_supervisor import HEADER, STUBBORN, alive, pids_of, read_until, start_headless, wait_gone
+from .test_supervisor import (
+    HEADER,
+    alive,
+    pids_of,
+    read_until,
+    start_headless,
+    stubborn_script,
+    wait_gone,
+)
 
 PROCESS_HEADER = HEADER + "from launch.actions import ExecuteProcess\n"
 
@@ -236,9 +244,7 @@ sl.add_action(ExecuteProcess(cmd=['sleep', '600'], name='sleeper'))""")
 
 def test_sighup_with_the_terminal_gone_stops_every_node(write, tmp_path, launches):
     started, tag = launches
-    script = tmp_path / "stubborn"
-    script.write_text(STUBBORN)
-    script.chmod(0o755)
+    script = stubborn_script(tmp_path)
     path = launch_file(write, f"""
 sl.add_action(ExecuteProcess(cmd=['{tag}', '600'], name='sleeper'))
 sl.add_action(ExecuteProcess(cmd=['{script}', '{tag}'], name='stubborn',
@@ -422,18 +428,24 @@ def test_parameter_files_are_private_and_never_follow_a_symlink(write, tmp_path)
 # --- what an operator sees and gets back -------------------------------------------------------
 
 
+def start_stubborn(write, tmp_path: Path, launches, keywords: str, *arguments: str)\
+        -> tuple[subprocess.Popen[str], str]:
+    """A headless launch of one process that ignores SIGINT and SIGTERM (ExecuteProcess
+    `keywords` and launch `arguments` added), once it is ready: the run, and what it
+    printed so far."""
+    started, _ = launches
+    script = stubborn_script(tmp_path)
+    path = launch_file(write, f"sl.add_action(ExecuteProcess(cmd=['{script}'], "
+                              f"name='stubborn'{keywords}))")
+    proc = start_headless(str(path), *arguments, log_dir=tmp_path)
+    started.append(proc)
+    return proc, read_until(proc, "stubborn ready")
+
+
 def test_per_process_timeouts_are_honoured_and_each_step_is_announced(write, tmp_path,
                                                                       launches):
-    started, _ = launches
-    script = tmp_path / "stubborn"
-    script.write_text(STUBBORN)
-    script.chmod(0o755)
-    path = launch_file(write, f"""
-sl.add_action(ExecuteProcess(cmd=['{script}'], name='stubborn', sigterm_timeout='0.4',
-                             sigkill_timeout='0.6'))""")
-    proc = start_headless(str(path), log_dir=tmp_path)
-    started.append(proc)
-    read_until(proc, "stubborn ready")
+    proc, _ = start_stubborn(write, tmp_path, launches,
+                             ", sigterm_timeout='0.4', sigkill_timeout='0.6'")
     os.killpg(proc.pid, signal.SIGINT)
     out = proc.communicate(timeout=60)[0]
     # launch's words (ExecuteLocal), which CI scripts grep for; Ctrl+C's own SIGINT is not
@@ -456,16 +468,8 @@ def test_timeouts_given_as_launch_arguments_apply_to_every_process(write, tmp_pa
     """launch's defaults are LaunchConfiguration('sigterm_timeout', default=5) and the
     same for SIGKILL: `sigterm_timeout:=0.3` on the command line sets every process's that
     does not say its own, and is no undeclared argument."""
-    started, _ = launches
-    script = tmp_path / "stubborn"
-    script.write_text(STUBBORN)
-    script.chmod(0o755)
-    path = launch_file(write, f"sl.add_action(ExecuteProcess(cmd=['{script}'], "
-                              "name='stubborn'))")
-    proc = start_headless(str(path), "sigterm_timeout:=0.3", "sigkill_timeout:=0.4",
-                          log_dir=tmp_path)
-    started.append(proc)
-    early = read_until(proc, "stubborn ready")
+    proc, early = start_stubborn(write, tmp_path, launches, "", "sigterm_timeout:=0.3",
+                                 "sigkill_timeout:=0.4")
     assert "not declared" not in early
     os.killpg(proc.pid, signal.SIGINT)
     out = proc.communicate(timeout=60)[0]
@@ -477,15 +481,8 @@ def test_timeouts_given_as_launch_arguments_apply_to_every_process(write, tmp_pa
 
 
 def test_second_and_third_ctrl_c_escalate_at_once(write, tmp_path, launches):
-    started, _ = launches
-    script = tmp_path / "stubborn"
-    script.write_text(STUBBORN)
-    script.chmod(0o755)
-    path = launch_file(write, f"sl.add_action(ExecuteProcess(cmd=['{script}'], "
-                              "name='stubborn', sigterm_timeout='60', sigkill_timeout='60'))")
-    proc = start_headless(str(path), log_dir=tmp_path)
-    started.append(proc)
-    read_until(proc, "stubborn ready")
+    proc, _ = start_stubborn(write, tmp_path, launches,
+                             ", sigterm_timeout='60', sigkill_timeout='60'")
     os.kill(proc.pid, signal.SIGINT)
     read_until(proc, "Ctrl+C again sends SIGTERM now")
     os.kill(proc.pid, signal.SIGINT)

@@ -27,6 +27,14 @@ time.sleep(600)
 """
 
 
+def stubborn_script(folder: Path) -> Path:
+    """STUBBORN as an executable in `folder`: a process that ignores SIGINT and SIGTERM."""
+    script = folder / "stubborn"
+    script.write_text(STUBBORN)
+    script.chmod(0o755)
+    return script
+
+
 def start_headless(*args: str, log_dir: Path) -> subprocess.Popen[str]:
     env = {**os.environ, "ROS_LOG_DIR": str(log_dir)}
     return subprocess.Popen([sys.executable, "-m", "tuilaunch", *args, "--headless"],
@@ -151,9 +159,7 @@ def test_bringup_runs_real_nodes_with_their_namespaces_and_parameters(tmp_path, 
 @pytest.mark.parametrize("how", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP,
                                  signal.SIGKILL])
 def test_no_process_outlives_tuilaunch(write, tmp_path, kill_leftovers, how):
-    script = tmp_path / "stubborn"
-    script.write_text(STUBBORN)
-    script.chmod(0o755)
+    script = stubborn_script(tmp_path)
     path = write(HEADER + f"""
 from launch.actions import ExecuteProcess
 def generate_launch_description():
