@@ -125,6 +125,17 @@ def test_the_launchers_modules_import_no_rclpy(module):
     assert python_prints(code).strip() == "[]"
 
 
+def test_a_launch_on_one_machine_does_not_load_what_it_does_not_use():
+    """A plain launch on this machine starts without the code of `--machines`, of
+    `--print-plan --json`, of AnonName (uuid and platform) or of a mistyped argument's
+    suggestion: each is imported when a launch uses it."""
+    code = ("import sys, tuilaunch.cli.dispatch, tuilaunch.cli.headless\n"
+            "print(sorted(m for m in sys.modules if m in {'json', 'uuid', 'difflib', "
+            "'tempfile', 'tuilaunch.engine.plan.machines', "
+            "'tuilaunch.engine.run.machines.machines_share'}))")
+    assert python_prints(code).strip() == "[]"
+
+
 def test_asyncio_without_tls_still_runs_and_ssl_still_imports():
     """What the launcher leaves out of asyncio is only TLS: the loop runs, and a launch
     file that imports ssl itself gets it."""

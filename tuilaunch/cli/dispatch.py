@@ -5,20 +5,22 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import os
 import subprocess
 import sys
 import traceback
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..engine.describe.python.loader import LoadedFile, load_file, set_command_line
 from ..engine.errors import LaunchError, PackageError
 from ..engine.packages import ensure_environment, find_launch_file_in_share
-from ..engine.plan.machines import Placement, load_placement, placement_from_text
 from ..engine.plan.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
 from ..engine.run.lean_asyncio import asyncio_without_tls
+
+if TYPE_CHECKING:
+    from ..engine.plan.machines import Placement
 
 
 def split_items(items: list[str]) -> tuple[list[str], dict[str, str]]:
@@ -65,14 +67,16 @@ def find_launch_file(positional: list[str]) -> str:
 def _placement(options: argparse.Namespace) -> Placement | None:
     """`--machines FILE` (or, on another machine's share, the text the launching side
     sent, and `--share MACHINE`)."""
+    if options.machines is None and options.machines_text is None:
+        if options.share is not None:
+            raise LaunchError("--share needs --machines")
+        return None  # a launch on this machine alone does not load the machines' code
+    from ..engine.plan.machines import load_placement, placement_from_text
+
     if options.machines_text is not None:
         return placement_from_text(options.machines_text, options.machines or
                                    "the launching side's machines file", options.share)
-    if options.machines is not None:
-        return load_placement(options.machines, options.share)
-    if options.share is not None:
-        raise LaunchError("--share needs --machines")
-    return None
+    return load_placement(options.machines, options.share)
 
 
 def _show_arguments(loaded: LoadedFile, arguments: dict[str, str]) -> int:
@@ -199,6 +203,8 @@ def _main(argv: list[str] | None) -> int:
         return 2
     if options.print_plan:
         if options.json:
+            import json
+
             print(json.dumps(plan.to_json(), indent=2))
         else:
             from .printing import format_placement, format_tree

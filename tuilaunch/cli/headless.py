@@ -17,15 +17,17 @@ import signal
 import sys
 import time
 from pathlib import Path
-from typing import TextIO, cast
+from typing import TYPE_CHECKING, TextIO, cast
 
 from ..engine.launcher import make_supervisor
-from ..engine.plan.machines import Placement
 from ..engine.plan.model import Plan
 from ..engine.run.process.output import strip_ansi
 from ..engine.run.supervisor.stopping import CTRL_C_REASON
 from ..engine.run.supervisor.supervisor import Event
 from .stdout_writer import BackgroundWriter, LineJoiner
+
+if TYPE_CHECKING:
+    from ..engine.plan.machines import Placement
 
 
 def run_log_dir() -> Path:

@@ -10,17 +10,18 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .plan.machines import Placement
 from .plan.model import Plan
 from .ros.actions import RosActions
 from .ros.composition import ComponentLoader
 from .ros.inspector import Inspector
 from .ros.lifecycle import LifecycleTracker
 from .run.events import Event
-from .run.machines.machines_share import placement_plugin
 from .run.supervisor.supervisor import Supervisor
+
+if TYPE_CHECKING:
+    from .plan.machines import Placement
 
 
 class RosSupervisor(Supervisor):
@@ -71,6 +72,10 @@ def make_supervisor(plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
     supervisor = RosSupervisor(plan, log_dir, sigterm_timeout=sigterm_timeout,
                                sigkill_timeout=sigkill_timeout, bridge_factory=bridge_factory,
                                service_timeout=service_timeout)
+    if placement is None:
+        return supervisor  # a launch on this machine alone does not load the machines' code
+    from .run.machines.machines_share import placement_plugin
+
     plugin = placement_plugin(supervisor, placement, command or [plan.file],
                               arguments or {}, session_name)
     if plugin is not None:

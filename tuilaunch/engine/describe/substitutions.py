@@ -11,7 +11,6 @@ import os
 import shlex
 import shutil
 import subprocess
-import uuid
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -437,6 +436,8 @@ class AnonName(Substitution):
     def perform(self, context: PerformContext) -> str:
         base = perform(self.name, context)
         if base not in self._names:
+            import uuid  # platform and all: paid only by a file that uses AnonName
+
             self._names[base] = f"{base}_{uuid.uuid4().hex[:8]}"
         return self._names[base]
 

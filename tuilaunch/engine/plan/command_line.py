@@ -107,7 +107,17 @@ class ProcessPlanner:
         self._executables: dict[tuple[str, str], str | PackageError] = {}
         """`find_executable` per (package, executable) for this plan: a fleet of 1000 nodes
         names a handful of programs, and each look-up costs two stats."""
+        self._on_path: dict[tuple[str, str | None], bool] = {}
+        """Whether a command is found on PATH, per (command, PATH): 100 `sleep`s are one
+        search of PATH, not 100."""
         self.warnings = warnings
+
+    def found_on_path(self, command: str) -> bool:
+        key = (command, os.environ.get("PATH"))
+        found = self._on_path.get(key)
+        if found is None:
+            found = self._on_path[key] = shutil.which(command) is not None
+        return found
 
     def plan(self, entity: Node | ExecuteProcess, scope: Scope, enabled: bool,
                       skipped: ConditionOutcome | None) -> ProcessPlan:
@@ -167,7 +177,7 @@ class ProcessPlanner:
         name = perform_optional(entity.name, ctx)
         base = name or os.path.basename(cmd[0].split()[0])
         error = None
-        if not entity.shell and "/" not in cmd[0] and shutil.which(cmd[0]) is None:
+        if not entity.shell and "/" not in cmd[0] and not self.found_on_path(cmd[0]):
             error = f"command '{cmd[0]}' not found on PATH"
         return ProcessPlan(self.next_id(base), "process", name, scope.namespace, None, cmd[0],
                            started, {}, [], [], [], error=error, **common)
@@ -196,7 +206,7 @@ class ProcessPlanner:
                 error = error or found.message
             else:
                 exe_path = found
-        elif shutil.which(executable) is None:
+        elif not self.found_on_path(executable):
             error = error or f"executable '{executable}' not found on PATH"
         merged: dict[str, ParamValue] = {}
         user_files: list[str] = []

@@ -16,11 +16,9 @@ include / event handler -> walk -> visit); its visits call each other and stay t
 from __future__ import annotations
 
 import atexit
-import difflib
 import os
 import re
 import shutil
-import tempfile
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -523,6 +521,8 @@ def default_params_dir() -> Path:
     global _params_dir
     # made anew when a finished run removed it (a launcher may plan several runs)
     if _params_dir is None or not _params_dir.is_dir():
+        import tempfile  # paid only by a launch that writes parameter files
+
         _params_dir = Path(tempfile.mkdtemp(prefix=f"tuilaunch-{os.getpid()}-params-"))
         atexit.register(shutil.rmtree, _params_dir, True)
     return _params_dir
@@ -566,6 +566,8 @@ on the command line without a file declaring them, they are no mistyped argument
 
 def undeclared_warning(name: str, declared: set[str], path: str) -> str:
     """A mistyped argument (`robto:=r2`): said, with the declared name it most resembles."""
+    import difflib  # paid only when an argument is not declared
+
     close = difflib.get_close_matches(name, sorted(declared), n=1)
     guess = f"; did you mean '{close[0]}'?" if close else ""
     return (f"argument '{name}' is not declared by {os.path.basename(path)} or its "

@@ -13,7 +13,6 @@ import re
 import shlex
 import subprocess
 import sys
-import tempfile
 from typing import TYPE_CHECKING, Any, Protocol
 
 from ...errors import DslError, Origin, caller_origin
@@ -193,6 +192,7 @@ class _BridgeConfigPath(Substitution):
 
     def perform(self, context: PerformContext) -> str:
         import hashlib  # OpenSSL's libcrypto: megabytes of memory, only for the files that ask
+        import tempfile
 
         name = perform(self.name, context)
         digest = hashlib.sha1(
