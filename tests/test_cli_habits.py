@@ -10,7 +10,7 @@ from tuilaunch.client.link import open_link
 from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.run.session import session_dir
 
-from .conftest import wait_for
+from .conftest import run_cli, wait_for
 from .inspector_helpers import eventually, run
 from .test_sessions import Terminal, tl
 from .test_sessions import runtime as runtime  # the private session folder
@@ -84,3 +84,38 @@ def test_a_relaunched_namespace_leaves_no_stale_service_on_the_graph(runtime, wr
 
     run(r1_gone)
     tl("stop", name)
+
+
+SAYS = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.substitutions import LaunchConfiguration
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('word', default_value='hello', description='what it says'),
+        ExecuteProcess(cmd=['echo', LaunchConfiguration('word')], name='says',
+                       output='screen')])
+"""
+
+
+def test_ros2_launchs_own_option_spellings_work(write):
+    """What a ros2 launch user types: `-n` runs without the TUI even in a terminal (ros2
+    launch's non-interactive run), `-d` shows the traceback, `--print-description` and
+    `--show-arguments` are `-p` and `-s`."""
+    path = write(SAYS)
+    terminal = Terminal("-n", str(path), "word:=bonjour")
+    try:
+        terminal.read_until(b"[says-1] bonjour")
+        terminal.read_until(b"process has finished cleanly")
+        assert terminal.wait_exit() == 0
+        assert b"\x1b[?1049h" not in terminal.screen  # the TUI's screen never opened
+    finally:
+        terminal.close()
+    shown = run_cli(str(path), "--print-description", "--json", "word:=salut")
+    assert shown.returncode == 0 and "salut" in shown.stdout, shown.stderr
+    listed = run_cli(str(path), "--show-arguments")
+    assert listed.returncode == 0 and "'word':" in listed.stdout and "what it says" in \
+        listed.stdout, listed.stderr
+    broken = write("def generate_launch_description():\n    raise RuntimeError('boom')\n")
+    debugged = run_cli(str(broken), "-d", "-p")
+    assert debugged.returncode != 0 and "Traceback" in debugged.stderr

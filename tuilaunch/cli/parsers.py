@@ -54,12 +54,15 @@ def launch_parser() -> argparse.ArgumentParser:
                         "then launch arguments")
     parser.add_argument("--version", action=_Version, nargs=0,
                         help="print tuilaunch's version and exit")
-    parser.add_argument("-s", "--show-args", action="store_true",
+    # ros2 launch's spellings too (-d, -n, --print-description, --show-arguments): a ROS
+    # user's fingers type them
+    parser.add_argument("-s", "--show-args", "--show-arguments", action="store_true",
                         help="list the launch arguments and exit")
-    parser.add_argument("-p", "--print", dest="print_plan", action="store_true",
+    parser.add_argument("-p", "--print", "--print-description", dest="print_plan",
+                        action="store_true",
                         help="print what would run with these arguments and exit")
     parser.add_argument("--json", action="store_true", help="with --print: one JSON object")
-    parser.add_argument("--headless", action="store_true",
+    parser.add_argument("--headless", "-n", "--noninteractive", action="store_true",
                         help="run without the TUI, printing each line as [process-id] line "
                         "(the default when not in a terminal)")
     parser.add_argument("--scrollback", type=int, default=5000, metavar="LINES",
@@ -88,7 +91,7 @@ def launch_parser() -> argparse.ArgumentParser:
     parser.add_argument("-a", "--show-all-subprocesses-output", action="store_true",
                         help="as ros2 launch: print every process's output whatever its "
                         "output= says (OVERRIDE_LAUNCH_PROCESS_OUTPUT=both)")
-    parser.add_argument("--debug", action="store_true", help="tracebacks for errors")
+    parser.add_argument("-d", "--debug", action="store_true", help="tracebacks for errors")
     parser.epilog = (parser.epilog or "") + (
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
         "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
