@@ -161,7 +161,8 @@ async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_lo
         path.write_text(EDITABLE.format(said="said", extra=EXTRA))
         await pilot.press("2")
         await until(pilot, lambda: "changed on disk" in preview_text(app))
-        assert "test_launch.py changed on disk: adds: extra-2; changes: echo-1" \
+        # the form shows what runs until F5: the edit's new argument is said
+        assert "test_launch.py changed on disk: declares loud; adds: extra-2; changes: echo-1" \
             in preview_text(app)
         # and changes an argument too, then F5: the edited file runs, with the new value
         app.query_one("#arg-word", Input).focus()
@@ -205,6 +206,10 @@ async def test_the_args_tab_follows_the_file_saved_while_it_shows(runtime, write
         assert not app.query_one("#args-preview").has_class("error")
         path.write_text(EDITABLE.format(said="word", extra=""))
         await until(pilot, lambda: "changed on disk: no process changes" in preview_text(app))
+        # a default edited: the form still shows the running one, the preview says both
+        path.write_text(EDITABLE.format(said="word", extra="").replace("'alpha'", "'gamma'"))
+        await until(pilot, lambda: "changed on disk: word's default alpha -> gamma; "
+                    "changes: echo-1" in preview_text(app))
         assert status(name)["arguments"] == {}  # nothing was applied meanwhile
 
 

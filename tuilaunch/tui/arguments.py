@@ -67,7 +67,8 @@ class Arguments(SessionLink):
                 panel.set_preview_text("No change from what runs now.", error=False)
         else:
             tree.set_preview(self.preview.diff)
-            panel.set_preview_text(_describe_diff(self.preview), error=False)
+            panel.set_preview_text(_describe_diff(self.preview, self.session.plan.arguments),
+                                   error=False)
         self.refresh_bindings()
 
     def tab_shown(self, pane: str) -> None:
@@ -141,19 +142,38 @@ class Arguments(SessionLink):
         self.refresh_bindings()
 
 
-def _describe_diff(preview: Preview) -> str:
+def _describe_diff(preview: Preview, running: list[ArgumentInfo]) -> str:
     assert preview.diff is not None and preview.plan is not None
     text = ""
     edit = preview.file_changes
     if edit is not None:
-        # what the edited file alone changes, with the values that run now
-        alters = _diff_words(edit, "adds", "changes", "removes") or "no process changes"
+        # what the edited file alone changes, with the values that run now; the form shows
+        # the declarations that run until F5, so the edit's own are said here
+        alters = "; ".join(part for part in (
+            _declarations_words(running, preview.plan.arguments),
+            _diff_words(edit, "adds", "changes", "removes")) if part) or "no process changes"
         text = f"{preview.edited or 'the launch file'} changed on disk: {alters}. "
     diff = preview.diff
     if diff.empty:
         return text + "No process changes; F5 applies the new values anyway."
     return text + _diff_words(diff, "would start", "would restart", "would stop") + \
         ".  F5 applies."
+
+
+def _declarations_words(before: list[ArgumentInfo], after: list[ArgumentInfo]) -> str:
+    """An edited file's argument declarations, against the running ones: `rate's default
+    2.0 -> 5.0`, `declares loud`, `no longer declares mode`."""
+    old = {a.name: a for a in before}
+    new = {a.name: a for a in after}
+    parts = [f"{name}'s default {old[name].default or 'none'} -> {new[name].default or 'none'}"
+             for name in new if name in old and new[name].default != old[name].default]
+    added = [name for name in new if name not in old]
+    gone = [name for name in old if name not in new]
+    if added:
+        parts.append(f"declares {', '.join(added)}")
+    if gone:
+        parts.append(f"no longer declares {', '.join(gone)}")
+    return "; ".join(parts)
 
 
 def _diff_words(diff: PlanDiff, start: str, restart: str, stop: str) -> str:
