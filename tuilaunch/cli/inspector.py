@@ -19,6 +19,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from ..client.link import Link, open_link
+from ..engine.run.session.protocol import ProtocolError
 from ..engine.run.session.session_dir import SessionError
 
 SLACK = 30.0
@@ -161,6 +162,16 @@ def streamed(link: Link, kind: str, end: float | None) -> Iterator[dict[str, Any
                 yield event.get("data") or {}
 
 
+def _figures_now(link: Link, topic: str) -> dict[str, Any] | None:
+    """The session's hz figures at this moment; None when it cannot say at once (Ctrl+C
+    leaves without them rather than wait)."""
+    try:
+        figures: dict[str, Any] = link.request("hz_read", short=True, topic=topic)
+    except (SessionError, ProtocolError, OSError, ValueError):
+        return None
+    return figures
+
+
 def cmd_hz(options: argparse.Namespace) -> int:
     """A block every second until Ctrl+C (then the figures so far), or once after
     `--duration` (`--json`: one object, after 5 s unless told)."""
@@ -184,9 +195,11 @@ def cmd_hz(options: argparse.Namespace) -> int:
                     sys.stdout.write(hz_block(last))
                     sys.stdout.flush()
         except KeyboardInterrupt:
-            # Ctrl+C ends a stream: the figures so far, as the last word
-            if last is not None and last["rate_hz"] is not None:
-                sys.stdout.write(hz_block(last))
+            # Ctrl+C ends a stream: the figures as they stand now, as the last word, unless
+            # the block on screen already says them (a block repeated adds nothing)
+            now = _figures_now(link, options.topic)
+            if now is not None and now["rate_hz"] is not None and now["messages"] > shown:
+                sys.stdout.write(hz_block(now))
             return 0
         result = link.request("hz_read", short=True, topic=options.topic)
     finally:
