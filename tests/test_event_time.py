@@ -206,6 +206,58 @@ def generate_launch_description():
     assert done.returncode != 0 or "killed by SIGINT" in done.stdout or "exit code" in done.stdout
 
 
+SIGNALLED = HEADER + """
+import signal
+from launch.events.process import SignalProcess
+
+def generate_launch_description():
+    # the listener answers SIGUSR1 and ends; the stubborn one ignores SIGTERM
+    listener = ExecuteProcess(name='listener', output='screen', cmd=['sh', '-c',
+        'trap "echo got USR1; exit 0" USR1; echo waiting; while :; do sleep 0.1; done'])
+    stubborn = ExecuteProcess(name='stubborn', output='screen', cmd=['sh', '-c',
+        'trap "" TERM; echo holding; while :; do sleep 0.1; done'])
+    driver = ExecuteProcess(name='driver', cmd=['sh', '-c', 'sleep 1'])
+    return LaunchDescription([
+        listener, stubborn, driver,
+        RegisterEventHandler(OnProcessExit(target_action=driver, on_exit=[
+            EmitEvent(event=SignalProcess(signal_number=signal.SIGUSR1,
+                                          process_matcher=matches_action(listener))),
+            EmitEvent(event=SignalProcess(signal_number='SIGKILL',
+                                          process_matcher=matches_action(stubborn)))])),
+    ])
+"""
+
+
+def test_signal_process_event_sends_its_signal_to_its_target_only(write, tmp_path):
+    """launch's SignalProcess: the signal goes to the matched process, said in launch's
+    words; SIGKILL may be given as the string launch takes."""
+    path = write(SIGNALLED)
+    done = headless(path, {}, timeout=120)
+    lines = lines_of(done)
+    driver_done = index_of(lines, "[driver-3]: process has finished cleanly")
+    sent = index_of(lines, "[INFO] [listener-1]: sending signal 'SIGUSR1' to process[listener-1]")
+    assert driver_done < sent < index_of(lines, "[listener-1] got USR1")
+    assert sent < index_of(lines, "[listener-1]: process has finished cleanly")
+    assert driver_done < index_of(
+        lines, "[INFO] [stubborn-2]: sending signal 'SIGKILL' to process[stubborn-2]")
+    assert "[ERROR] [stubborn-2]: process has died" in done.stdout
+    assert "exit code -9" in done.stdout
+
+
+def test_signal_process_with_no_signal_is_one_line_with_its_line(write):
+    path = write(HEADER + """
+from launch.events.process import SignalProcess
+
+def generate_launch_description():
+    p = ExecuteProcess(cmd=['true'])
+    return LaunchDescription([p, EmitEvent(event=SignalProcess(
+        signal_number=10, process_matcher=matches_action(p)))])
+""")
+    done = run_cli(str(path), "--print")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert f"{path}:" in done.stderr and "signal_number must be a signal" in done.stderr
+
+
 def test_a_file_with_only_a_log_line_prints_it(write, tmp_path):
     path = write(HEADER + """
 def generate_launch_description():

@@ -1,5 +1,5 @@
 """What a non-process action does once planned: log, call_service, set_parameters, shutdown,
-stop_process, load_components, lifecycle transitions and event callbacks."""
+stop_process, signal_process, load_components, lifecycle transitions and event callbacks."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from ..describe.entities import (
     LoadComposableNodes,
     LogInfo,
     Node,
+    SendSignal,
     SetParameters,
     Shutdown,
     StopProcess,
@@ -68,6 +69,10 @@ class ActionPlanner:
         elif isinstance(entity, StopProcess):
             kind = "stop_process"
             target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
+        elif isinstance(entity, SendSignal):
+            kind = "signal_process"
+            target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
+            data = entity.signal_name
         elif isinstance(entity, LoadComposableNodes):
             kind = "load_components"
             target, data = self.load_components(entity, scope, enabled)
@@ -87,6 +92,7 @@ class ActionPlanner:
                  "set_parameters": f"set parameters of {target}",
                  "shutdown": "shutdown", "event_callback": "event callback",
                  "stop_process": f"stop {target}",
+                 "signal_process": f"signal {data} to {target}",
                  "load_components": f"load components into {target}",
                  "lifecycle_transition": f"{'+'.join(data['transitions'])} {target}"
                  if kind == "lifecycle_transition" else ""}[kind]

@@ -43,6 +43,7 @@ from ..describe.entities import (
     OpaqueFunction,
     PushRosNamespace,
     RegisterEventHandler,
+    SendSignal,
     SetEnvironmentVariable,
     SetLaunchConfiguration,
     SetParameter,
@@ -264,7 +265,7 @@ class Resolver:
                                                  perform(entity.namespace, scope.context()))
                 scope.namespace_pushed = True
         elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
-                        | LoadComposableNodes | StopProcess | ChangeStateAction
+                        | LoadComposableNodes | StopProcess | SendSignal | ChangeStateAction
                         | LifecycleTransition):
             self.action(entity, scope, parent)
         elif isinstance(entity, TimerAction):

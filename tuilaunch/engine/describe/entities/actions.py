@@ -4,6 +4,7 @@ functions (OpaqueFunction) run with the launch context."""
 
 from __future__ import annotations
 
+import signal
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -108,6 +109,36 @@ class StopProcess(Entity):
 
 EMITTED_EVENTS[ShutdownProcess] = lambda event, condition: StopProcess(
     getattr(event.process_matcher, "target", None), condition)
+
+
+class SignalProcess:
+    """launch.events.process.SignalProcess: one signal to one process (launch's own stop
+    emits it: SIGINT, then SIGTERM and 'SIGKILL' on timers)."""
+
+    def __init__(self, *, signal_number: Any, process_matcher: Any) -> None:
+        # launch takes a signal.Signals, or the string 'SIGKILL'; any signal's name is
+        # taken here too (launch would fail to send 'SIGUSR1' given as text)
+        name = signal_number.name if isinstance(signal_number, signal.Signals) else \
+            signal_number if isinstance(signal_number, str) else None
+        if name is None or not hasattr(signal.Signals, name) or not name.startswith("SIG"):
+            raise DslError(f"SignalProcess: signal_number must be a signal (signal.SIGUSR1, "
+                           f"or 'SIGKILL'), got {signal_number!r}", caller_origin())
+        self.signal_name = name
+        self.process_matcher = process_matcher
+
+
+class SendSignal(Entity):
+    """What EmitEvent(SignalProcess(...)) does: the signal to the matched process."""
+
+    def __init__(self, target: Any, signal_name: str, condition: Condition | None = None)\
+            -> None:
+        self._init_entity(condition)
+        self.target = target
+        self.signal_name = signal_name
+
+
+EMITTED_EVENTS[SignalProcess] = lambda event, condition: SendSignal(
+    getattr(event.process_matcher, "target", None), event.signal_name, condition)
 
 
 class OpaqueFunction(Entity):

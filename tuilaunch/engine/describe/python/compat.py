@@ -166,7 +166,7 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch.events.process.running_process_event", "RunningProcessEvent",
      ev.RunningProcessEvent),
     ("launch.events.process.shutdown_process", "ShutdownProcess", e.ShutdownProcess),
-    ("launch.events.process.signal_process", "SignalProcess", UNSUPPORTED),
+    ("launch.events.process.signal_process", "SignalProcess", e.SignalProcess),
     # launch.launch_description_sources
     ("launch.launch_description_sources.any_launch_description_source",
      "AnyLaunchDescriptionSource", e.AnyLaunchDescriptionSource),

@@ -8,6 +8,9 @@ handlers' callbacks are called with the launch event, and what they return joins
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import os
+import signal
 from collections.abc import Callable
 from typing import Any
 
@@ -196,6 +199,8 @@ class PlanActions(SupervisorCore):
                 ok = self._perform_at_event(action, deferred_entities(action), event)
             elif action.kind == "stop_process":
                 ok = await self._stop_process(action)
+            elif action.kind == "signal_process":
+                ok = self._signal_process(action)
             else:
                 self.log_action(action, f"{action.kind} is not supported yet; skipped", "WARN")
         except asyncio.CancelledError:
@@ -245,6 +250,29 @@ class PlanActions(SupervisorCore):
             self.log_action(action, f"cannot stop {target}: this launch does not run it", "WARN")
             return False
         self.spawn_task(self.stop(target))
+        return True
+
+    def _signal_process(self, action: ActionPlan) -> bool:
+        """EmitEvent(SignalProcess(signal_number=..., process_matcher=matches_action(x))):
+        the signal to the process itself, not its group, in launch's words; one that is
+        not running is left alone, as launch does."""
+        target, name = str(action.target), str(action.data)
+        if target not in self.states:
+            self.log_action(action, f"cannot signal {target}: this launch does not run it",
+                            "WARN")
+            return False
+        running = self.running.get(target)
+        if running is None and self.states.get(target) == "running":
+            self.log_action(action, f"cannot signal {target}: it runs on another machine",
+                            "WARN")
+            return False
+        if running is None or running.reaped or running.exited.done():
+            # launch: "not sent ... because it has closed already" (debug); a reaped pid
+            # may be another process's by now
+            return True
+        self.emit(Event("log", target, reason=f"sending signal '{name}' to process[{target}]"))
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(running.process.pid, getattr(signal, name))
         return True
 
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
