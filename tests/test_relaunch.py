@@ -504,8 +504,8 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
             assert "extra-2" not in app.launch_tree.rows  # not running: not in the tree
             await pilot.press("2")
             await until(pilot, lambda: "changed on disk" in preview_text(app))
-            assert "test_launch.py changed on disk: adds: extra-2; changes: echo-1" \
-                in preview_text(app)
+            assert "test_launch.py changed on disk: declares loud; adds: extra-2; " \
+                "changes: echo-1" in preview_text(app)
             await pilot.press("f5")
             await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
             tl("wait", name, "extra-2", "running", "--timeout", "60")
