@@ -127,12 +127,15 @@ def test_the_launchers_modules_import_no_rclpy(module):
 
 def test_a_launch_on_one_machine_does_not_load_what_it_does_not_use():
     """A plain launch on this machine starts without the code of `--machines`, of
-    `--print-plan --json`, of AnonName (uuid and platform) or of a mistyped argument's
-    suggestion: each is imported when a launch uses it."""
-    code = ("import sys, tuilaunch.cli.dispatch, tuilaunch.cli.headless\n"
+    `--print-plan --json`, of AnonName (uuid and platform), of a mistyped argument's
+    suggestion or of the ROS bridge and its messages: each is imported when a launch uses
+    it."""
+    code = ("import sys, tuilaunch.cli.dispatch, tuilaunch.cli.headless, "
+            "tuilaunch.engine.launcher\n"
             "print(sorted(m for m in sys.modules if m in {'json', 'uuid', 'difflib', "
             "'tempfile', 'tuilaunch.engine.plan.machines', "
-            "'tuilaunch.engine.run.machines.machines_share'}))")
+            "'tuilaunch.engine.run.machines.machines_share', 'tuilaunch.engine.ros.bridge', "
+            "'tuilaunch.engine.ros.calls', 'tuilaunch.engine.ros.messages'}))")
     assert python_prints(code).strip() == "[]"
 
 

@@ -14,7 +14,7 @@ from typing import Any
 from ..plan.model import ActionPlan
 from ..run.events import Event
 from ..run.plugins import ActionRunner, Plugin
-from .messages import MessageError
+from .ros_errors import MessageError, RosError
 
 Emit = Callable[[Event], None]
 
@@ -57,8 +57,6 @@ class RosActions(Plugin):
         return self._bridge
 
     async def call_service(self, action: ActionPlan) -> bool:
-        from .bridge import RosError
-
         name = str(action.target)
         self.log(action, f"waiting for service {name}")
         try:
@@ -76,8 +74,6 @@ class RosActions(Plugin):
         return True
 
     async def set_parameters(self, action: ActionPlan) -> bool:
-        from .bridge import RosError
-
         node = str(action.target)
         self.log(action, f"waiting for node {node}")
         try:

@@ -10,9 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-
-class RosError(Exception):
-    """A ROS operation that did not succeed: timed out, service gone, refused."""
+from .ros_errors import RosError as RosError  # where the helpers and the bridge take it from
 
 
 @dataclass

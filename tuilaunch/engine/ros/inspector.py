@@ -22,7 +22,7 @@ from ..run.events import Event
 from ..run.plugins import Clients, Handler, Plugin
 from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
-from .bridge import RosError
+from .ros_errors import RosError
 
 if TYPE_CHECKING:
     from ..run.supervisor.supervisor import Supervisor

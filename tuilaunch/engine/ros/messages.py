@@ -10,15 +10,11 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import LaunchError
+from .ros_errors import MessageError
 
 _SEQUENCE = re.compile(r"^sequence<([^,>]+)(?:,\s*\d+)?>$")
 _ARRAY = re.compile(r"^(.+)\[(\d*)\]$")
 _BOUNDED_STRING = re.compile(r"^(w?string)<=\d+$")
-
-
-class MessageError(LaunchError):
-    """A request dict that does not fit its message type."""
 
 
 def import_type(type_name: str, kind: str = "srv") -> Any:
