@@ -8,7 +8,7 @@ import os
 import subprocess
 import sys
 
-from .conftest import plan_of, run_cli
+from .conftest import plan_of, run_cli, run_headless
 from .launch_world import make_package, probe_records, world_env
 
 HEADER = """
@@ -256,6 +256,98 @@ def generate_launch_description():
     done = run_cli(str(path), "--print")
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert f"{path}:" in done.stderr and "signal_number must be a signal" in done.stderr
+
+
+COROUTINES = """
+import asyncio
+from pathlib import Path
+from launch import LaunchDescription
+from launch.actions import (DeclareLaunchArgument, ExecuteProcess, OpaqueCoroutine,
+                            RegisterEventHandler)
+from launch.event_handlers import OnExecutionComplete
+from launch.substitutions import LaunchConfiguration
+
+
+async def wait_for_file(context):
+    path = Path(LaunchConfiguration('flag').perform(context))
+    while not path.exists():
+        await asyncio.sleep(0.05)
+    print('the flag is up', flush=True)
+
+
+async def broken(word):
+    await asyncio.sleep(0.1)
+    raise RuntimeError(word)
+
+
+def start_user(event, context):
+    return ExecuteProcess(cmd=['echo', 'user started'], name='user', output='screen')
+
+
+def generate_launch_description():
+    waiting = OpaqueCoroutine(coroutine=wait_for_file)
+    failing = OpaqueCoroutine(coroutine=broken, args=['no socket'], ignore_context=True)
+    return LaunchDescription([
+        DeclareLaunchArgument('flag'),
+        RegisterEventHandler(OnExecutionComplete(target_action=waiting,
+                                                 on_completion=start_user)),
+        ExecuteProcess(name='maker', output='screen', cmd=[
+            'sh', '-c', 'sleep 1; touch "$0"; echo touched', LaunchConfiguration('flag')]),
+        waiting, failing,
+    ])
+"""
+
+
+def test_an_opaque_coroutine_runs_on_the_loop_and_its_completion_is_an_event(write,
+                                                                           tmp_path):
+    """launch's OpaqueCoroutine, as a telegraf bringup uses it: wait on the loop for what a
+    node makes, then start the next program from OnExecutionComplete. One that raises is
+    its own error, with its line; the launch goes on."""
+    path = write(COROUTINES)
+    done = headless(path, {}, f"flag:={tmp_path / 'flag'}", timeout=120)
+    lines = lines_of(done)
+    touched = index_of(lines, "[maker-1] touched")
+    assert touched < index_of(lines, "the flag is up") < index_of(
+        lines, "[user-2]: process started") < index_of(lines, "[user-2] user started")
+    error = lines[index_of(lines, "coroutine broken")]
+    assert "[ERROR]" in error and "raised RuntimeError: no socket" in error
+    assert f"{path}:20" in error, error  # the line that raised
+    assert done.returncode == 1  # an action failed
+
+
+def test_a_shutdown_cancels_a_coroutine_and_a_function_is_refused(write):
+    path = write("""
+import asyncio
+from launch import LaunchDescription
+from launch.actions import OpaqueCoroutine
+
+
+async def forever():
+    print('watching', flush=True)
+    try:
+        await asyncio.sleep(600)
+    except asyncio.CancelledError:
+        print('coroutine cancelled', flush=True)
+        raise
+
+
+def generate_launch_description():
+    return LaunchDescription([OpaqueCoroutine(coroutine=forever, ignore_context=True)])
+""")
+    # nothing else runs: the launch stays up for the coroutine, until Ctrl+C cancels it
+    assert "coroutine cancelled" in run_headless(path, until=("watching",))
+    plain = write("""
+from launch import LaunchDescription
+from launch.actions import OpaqueCoroutine
+def later():
+    pass
+def generate_launch_description():
+    return LaunchDescription([OpaqueCoroutine(coroutine=later)])
+""")
+    refused = run_cli(str(plain), "--print")
+    assert refused.returncode == 2 and "Traceback" not in refused.stderr
+    assert f"{plain}:7" in refused.stderr and "coroutine function (async def)" in \
+        refused.stderr
 
 
 def test_a_file_with_only_a_log_line_prints_it(write, tmp_path):

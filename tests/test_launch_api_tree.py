@@ -74,7 +74,8 @@ def test_every_table_row_is_importable_or_says_it_is_unsupported():
 
 
 @pytest.mark.parametrize(("statement", "missing"), [
-    ("from launch.actions import OpaqueCoroutine", "launch.actions.OpaqueCoroutine"),
+    ("from launch.actions import UnregisterEventHandler",
+     "launch.actions.UnregisterEventHandler"),
     ("from launch_ros.actions import NoSuchThing", "launch_ros.actions.NoSuchThing"),
     ("import launch_ros.no_such_module", "launch_ros.no_such_module"),
     ("import launch.actions\nlaunch.actions.Nope", "launch.actions.Nope"),

@@ -1,5 +1,6 @@
 """What a non-process action does once planned: log, call_service, set_parameters, shutdown,
-stop_process, signal_process, load_components, lifecycle transitions and event callbacks."""
+stop_process, signal_process, coroutine, load_components, lifecycle transitions and event
+callbacks."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from ..describe.entities import (
     LoadComposableNodes,
     LogInfo,
     Node,
+    OpaqueCoroutine,
     SendSignal,
     SetParameters,
     Shutdown,
@@ -69,6 +71,9 @@ class ActionPlanner:
         elif isinstance(entity, StopProcess):
             kind = "stop_process"
             target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
+        elif isinstance(entity, OpaqueCoroutine):
+            kind = "coroutine"
+            data = entity.name
         elif isinstance(entity, SendSignal):
             kind = "signal_process"
             target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
@@ -93,6 +98,7 @@ class ActionPlanner:
                  "shutdown": "shutdown", "event_callback": "event callback",
                  "stop_process": f"stop {target}",
                  "signal_process": f"signal {data} to {target}",
+                 "coroutine": f"coroutine {data}",
                  "load_components": f"load components into {target}",
                  "lifecycle_transition": f"{'+'.join(data['transitions'])} {target}"
                  if kind == "lifecycle_transition" else ""}[kind]

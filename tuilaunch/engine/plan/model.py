@@ -166,7 +166,7 @@ class ProcessPlan:
 class ActionPlan:
     id: str
     kind: str  # call_service | set_parameters | log | event_callback | shutdown | deferred
-    # | stop_process | signal_process | load_components
+    # | stop_process | signal_process | coroutine | load_components
     target: str | None
     data: Any
     namespace: str

@@ -40,6 +40,7 @@ from ..describe.entities import (
     LoadComposableNodes,
     LogInfo,
     Node,
+    OpaqueCoroutine,
     OpaqueFunction,
     PushRosNamespace,
     RegisterEventHandler,
@@ -265,7 +266,8 @@ class Resolver:
                                                  perform(entity.namespace, scope.context()))
                 scope.namespace_pushed = True
         elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
-                        | LoadComposableNodes | StopProcess | SendSignal | ChangeStateAction
+                        | LoadComposableNodes | StopProcess | SendSignal | OpaqueCoroutine
+                        | ChangeStateAction
                         | LifecycleTransition):
             self.action(entity, scope, parent)
         elif isinstance(entity, TimerAction):

@@ -4,6 +4,7 @@ functions (OpaqueFunction) run with the launch context."""
 
 from __future__ import annotations
 
+import inspect
 import signal
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -152,6 +153,28 @@ class OpaqueFunction(Entity):
         self.function = function
         self.args = list(args or [])
         self.kwargs = dict(kwargs or {})
+
+
+class OpaqueCoroutine(Entity):
+    """launch.actions.OpaqueCoroutine: an async function run on the launch's loop while the
+    launch runs (called with the context unless `ignore_context`). The launch stays up until
+    it returns, its completion is an OnExecutionComplete event, and a shutdown cancels it."""
+
+    def __init__(self, *, coroutine: Callable[..., Any], args: Iterable[Any] | None = None,
+                 kwargs: dict[str, Any] | None = None, ignore_context: bool = False,
+                 condition: Condition | None = None) -> None:
+        self._init_entity(condition)
+        if not inspect.iscoroutinefunction(coroutine):
+            raise DslError(f"OpaqueCoroutine expected a coroutine function (async def) for "
+                           f"'coroutine', got {type(coroutine).__name__}", caller_origin())
+        self.coroutine = coroutine
+        self.args = list(args or [])
+        self.kwargs = dict(kwargs or {})
+        self.ignore_context = bool(ignore_context)
+
+    @property
+    def name(self) -> str:
+        return getattr(self.coroutine, "__name__", "coroutine")
 
 
 class DslOpaque(Entity):

@@ -95,7 +95,7 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch.actions.include_launch_description", "IncludeLaunchDescription",
      e.IncludeLaunchDescription),
     ("launch.actions.log_info", "LogInfo", e.LogInfo),
-    ("launch.actions.opaque_coroutine", "OpaqueCoroutine", UNSUPPORTED),
+    ("launch.actions.opaque_coroutine", "OpaqueCoroutine", e.OpaqueCoroutine),
     ("launch.actions.opaque_function", "OpaqueFunction", e.OpaqueFunction),
     ("launch.actions.pop_environment", "PopEnvironment", e.PopEnvironment),
     ("launch.actions.pop_launch_configurations", "PopLaunchConfigurations",

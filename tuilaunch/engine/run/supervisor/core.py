@@ -49,8 +49,9 @@ class SupervisorCore:
         self.plugins: list[SupervisorPlugin] = []
         self.action_runners: dict[str, ActionRunner] = {}
         """The plugins' performers of action kinds `run` does not know, by kind."""
-        self.detached_actions: set[str] = set()
-        """Action kinds performed in the background (a trigger does not wait for them)."""
+        self.detached_actions: set[str] = {"coroutine"}
+        """Action kinds performed in the background (a trigger does not wait for them), and
+        cancelled by a shutdown (launch cancels an OpaqueCoroutine's task on shutdown)."""
         self.log_dir = log_dir
         self.consumers: list[Consumer] = []
         self.states: dict[str, str] = {

@@ -201,6 +201,8 @@ class PlanActions(SupervisorCore):
                 ok = await self._stop_process(action)
             elif action.kind == "signal_process":
                 ok = self._signal_process(action)
+            elif action.kind == "coroutine":
+                ok = await self._run_coroutine(action, event)
             else:
                 self.log_action(action, f"{action.kind} is not supported yet; skipped", "WARN")
         except asyncio.CancelledError:
@@ -273,6 +275,28 @@ class PlanActions(SupervisorCore):
         self.emit(Event("log", target, reason=f"sending signal '{name}' to process[{target}]"))
         with contextlib.suppress(ProcessLookupError):
             os.kill(running.process.pid, getattr(signal, name))
+        return True
+
+    async def _run_coroutine(self, action: ActionPlan, event: LaunchEvent | None) -> bool:
+        """OpaqueCoroutine: the file's async function on this loop until it returns. What it
+        raises is this action's error with the line at fault; launch would end the whole
+        launch, here the others go on (its OnExecutionComplete handlers still run, as the
+        coroutine completed)."""
+        from ...errors import origin_outside_tuilaunch
+
+        source = action.source
+        args = list(source.args)
+        if not source.ignore_context:
+            args.insert(0, PerformContext(action.configurations, _launch_file_seen(action),
+                                          event_locals={"event": event or LaunchEvent()}))
+        try:
+            await source.coroutine(*args, **source.kwargs)
+        except Exception as exc:
+            origin = origin_outside_tuilaunch(exc.__traceback__) or action.origin
+            where = f" ({origin})" if origin else ""
+            self.log_action(action, f"coroutine {source.name}{where} raised "
+                            f"{type(exc).__name__}: {exc}", "ERROR")
+            return False
         return True
 
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
