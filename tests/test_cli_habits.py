@@ -119,3 +119,45 @@ def test_ros2_launchs_own_option_spellings_work(write):
     broken = write("def generate_launch_description():\n    raise RuntimeError('boom')\n")
     debugged = run_cli(str(broken), "-d", "-p")
     assert debugged.returncode != 0 and "Traceback" in debugged.stderr
+
+
+PRINTS = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess, OpaqueFunction, RegisterEventHandler, TimerAction
+from launch.event_handlers import OnProcessStart
+
+def said(event, context):
+    print('robot is', 'up', flush=True)
+
+def later(context):
+    print('timer fired')
+    print('and a second line')
+
+def generate_launch_description():
+    napper = ExecuteProcess(cmd=['sleep', '600'], name='napper')
+    return LaunchDescription([napper,
+        RegisterEventHandler(OnProcessStart(target_action=napper, on_start=said)),
+        TimerAction(period=0.5, actions=[OpaqueFunction(function=later)])])
+"""
+
+
+def test_what_launch_code_prints_in_a_session_is_a_line_every_client_sees(runtime, write):
+    """print() in an event callback or a timer's OpaqueFunction, which ros2 launch shows on
+    its terminal: a session has none, so each line is a launch line, in every client's
+    all-nodes pane (the TUI runs its launch as a session too) and in launch.log."""
+    name = tl(str(write(PRINTS)), "--detach").stdout.strip()
+
+    def said() -> set[str]:
+        link = open_link(name)
+        try:
+            recent = link.request("subscribe", max_lines=1)["recent"]
+        finally:
+            link.close()
+        return {e.get("reason") for e in recent
+                if e.get("kind") == "log" and e.get("process") is None}
+
+    try:
+        wait_for(lambda: {"robot is up", "timer fired", "and a second line"} <= said(),
+                 what="the printed lines among the session's launch lines")
+    finally:
+        tl("stop", name)

@@ -17,6 +17,7 @@ import asyncio
 import collections
 import os
 import signal
+import sys
 import time
 from collections.abc import Mapping
 from pathlib import Path
@@ -36,6 +37,7 @@ from .clients import ClientHub
 from .clients import ClientQueue as ClientQueue
 from .clients import op_name as op_name
 from .keyboard import Keyboard
+from .launch_prints import LaunchPrints
 from .log_reader import LAUNCH_LOG, READ_LOG_LIMIT, read_log
 from .protocol import event_to_dict
 from .resource_watch import ResourceWatch, usage_fields
@@ -230,9 +232,12 @@ class SessionServer:
         # no terminal: a SIGHUP can only come from someone who means it as "keep going"
         loop.add_signal_handler(signal.SIGHUP, lambda: None)
         keeper = asyncio.ensure_future(self.socket.stay_reachable())
+        printed = sys.stdout
+        sys.stdout = LaunchPrints(self.supervisor.log, printed, loop)
         try:
             status = await self.supervisor.run(keep_alive=True)
         finally:
+            sys.stdout = printed
             keeper.cancel()
             self.resources.close()
             self.socket.close()
