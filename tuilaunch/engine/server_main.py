@@ -23,7 +23,6 @@ def main(argv: list[str]) -> int:
     from .errors import LaunchError
     from .launcher import make_supervisor
     from .packages import ensure_environment
-    from .plan.machines import placement_from_text
     from .plan.session import Session
     from .run.session.plan_ops import plan_handlers
     from .run.session.session_server import SessionServer
@@ -36,8 +35,11 @@ def main(argv: list[str]) -> int:
     ensure_environment()
     set_command_line(command, arguments)
     try:
-        placement = placement_from_text(placed["text"], placed["path"], placed.get("share")) \
-            if placed else None
+        placement = None
+        if placed:  # the machines' code, for a placed launch only
+            from .plan.machines import placement_from_text
+
+            placement = placement_from_text(placed["text"], placed["path"], placed.get("share"))
         session = Session(path, arguments, placement=placement)
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)

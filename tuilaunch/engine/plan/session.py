@@ -15,13 +15,15 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..describe.python.loader import LoadedFile, load_file
 from ..errors import LaunchError
-from .machines import Placement
 from .model import Plan, PlanDiff, diff_plans
 from .resolve import default_params_dir, resolve
+
+if TYPE_CHECKING:
+    from .machines import Placement
 
 Stamp = tuple[int, int] | None
 """A file's modification time (ns) and size; None when it cannot be read."""
