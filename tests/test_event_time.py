@@ -211,14 +211,17 @@ import signal
 from launch.events.process import SignalProcess
 
 def generate_launch_description():
-    # the listener answers SIGUSR1 and ends; the stubborn one ignores SIGTERM
+    # the listener answers SIGUSR1 and ends (the driver ends once its trap is set); the
+    # stubborn one ignores SIGTERM
+    ready = LaunchConfiguration('ready')
     listener = ExecuteProcess(name='listener', output='screen', cmd=['sh', '-c',
-        'trap "echo got USR1; exit 0" USR1; echo waiting; while :; do sleep 0.1; done'])
+        'trap "echo got USR1; exit 0" USR1; touch "$0"; while :; do sleep 0.1; done', ready])
     stubborn = ExecuteProcess(name='stubborn', output='screen', cmd=['sh', '-c',
         'trap "" TERM; echo holding; while :; do sleep 0.1; done'])
-    driver = ExecuteProcess(name='driver', cmd=['sh', '-c', 'sleep 1'])
+    driver = ExecuteProcess(name='driver', cmd=['sh', '-c',
+        'while [ ! -e "$0" ]; do sleep 0.05; done', ready])
     return LaunchDescription([
-        listener, stubborn, driver,
+        DeclareLaunchArgument('ready'), listener, stubborn, driver,
         RegisterEventHandler(OnProcessExit(target_action=driver, on_exit=[
             EmitEvent(event=SignalProcess(signal_number=signal.SIGUSR1,
                                           process_matcher=matches_action(listener))),
@@ -232,7 +235,7 @@ def test_signal_process_event_sends_its_signal_to_its_target_only(write, tmp_pat
     """launch's SignalProcess: the signal goes to the matched process, said in launch's
     words; SIGKILL may be given as the string launch takes."""
     path = write(SIGNALLED)
-    done = headless(path, {}, timeout=120)
+    done = headless(path, {}, f"ready:={tmp_path / 'ready'}", timeout=120)
     lines = lines_of(done)
     driver_done = index_of(lines, "[driver-3]: process has finished cleanly")
     sent = index_of(lines, "[INFO] [listener-1]: sending signal 'SIGUSR1' to process[listener-1]")
