@@ -12,6 +12,7 @@ by the transition events the node published.
 from __future__ import annotations
 
 import asyncio
+import time
 from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
@@ -273,11 +274,23 @@ class LifecycleTracker(Plugin):
                          f"tell the outcome", "WARN")
             success = outcome
         if not success:
+            state = await self._settled(proc_id)
             self._report(where, f"{proc.full_name} refused transition '{label}' ({origin}); "
-                         f"it is {self.states.get(proc_id, 'in an unknown state')}", "ERROR")
+                         f"it is {state or 'in an unknown state'}", "ERROR")
             return False
         self._report(where, f"{proc.full_name}: {label} done ({origin})")
         return True
+
+    async def _settled(self, proc_id: str, patience: float = 5.0) -> str | None:
+        """The node's state once a refused transition is over. The refusal's reply can come
+        before the transition event that takes the node back from `configuring` (a busy
+        machine): the state said is the one it is left in, not the one it passed through."""
+        deadline = time.monotonic() + patience
+        while self.states.get(proc_id) not in (None, *PRIMARY) \
+                and self.supervisor.states.get(proc_id) in ALIVE \
+                and not self.supervisor.shutting_down and time.monotonic() < deadline:
+            await asyncio.sleep(0.05)  # its transition event ends the wait
+        return self.states.get(proc_id)
 
     async def _outcome(self, proc_id: str, label: str, before: int) -> bool | None:
         """Whether the node made `label`, from the transition events heard since `before`
