@@ -122,6 +122,8 @@ def test_ros2_launchs_own_option_spellings_work(write):
 
 
 PRINTS = """
+import os
+import sys
 from launch import LaunchDescription
 from launch.actions import ExecuteProcess, OpaqueFunction, RegisterEventHandler, TimerAction
 from launch.event_handlers import OnProcessStart
@@ -132,6 +134,8 @@ def said(event, context):
 def later(context):
     print('timer fired')
     print('and a second line')
+    # code that uses the stream itself, as a subprocess given sys.stdout does
+    print('stdout is', sys.stdout.encoding.lower(), os.fstat(sys.stdout.fileno()).st_mode > 0)
 
 def generate_launch_description():
     napper = ExecuteProcess(cmd=['sleep', '600'], name='napper')
@@ -157,7 +161,8 @@ def test_what_launch_code_prints_in_a_session_is_a_line_every_client_sees(runtim
                 if e.get("kind") == "log" and e.get("process") is None}
 
     try:
-        wait_for(lambda: {"robot is up", "timer fired", "and a second line"} <= said(),
+        wait_for(lambda: {"robot is up", "timer fired", "and a second line",
+                          "stdout is utf-8 True"} <= said(),
                  what="the printed lines among the session's launch lines")
     finally:
         tl("stop", name)

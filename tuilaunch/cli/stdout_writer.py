@@ -12,13 +12,14 @@ notice says how many were skipped once the reader catches up. Lines about proces
 
 from __future__ import annotations
 
-import io
 import os
 import threading
 import time
 from collections import deque
 from collections.abc import Callable
 from typing import TextIO
+
+from ..engine.run.session.launch_prints import PrintedLines
 
 QUEUE_LIMIT = 1 << 20
 """Bytes of output waiting for a slow reader before lines are skipped: a second of a busy
@@ -116,7 +117,7 @@ class BackgroundWriter:
             self.written += done
 
 
-class LineJoiner(io.TextIOBase):
+class LineJoiner(PrintedLines):
     """`sys.stdout` while a BackgroundWriter owns the stream: what launch-file code prints at
     run time (an OpaqueFunction, an event handler's callback) joins the writer's queue a
     whole line at a time. Printed straight to the file descriptor, it could be cut by the
@@ -124,35 +125,14 @@ class LineJoiner(io.TextIOBase):
     writes each piece apart. Queued, it also keeps its place among the launch's lines."""
 
     def __init__(self, writer: BackgroundWriter, original: TextIO) -> None:
+        super().__init__(original)
         self._writer = writer
-        self._original = original
-        self._partial = ""
 
-    def write(self, text: str) -> int:
-        if not isinstance(text, str):
-            raise TypeError(f"write() argument must be str, not {type(text).__name__}")
-        data = self._partial + text
-        end = data.rfind("\n") + 1
-        if end:
-            self._writer.write(data[:end])
-        self._partial = data[end:]
-        return len(text)
+    def _whole(self, block: str) -> None:
+        self._writer.write(block)
 
     def flush(self) -> None:
         # a line left open on purpose (`print(x, end="", flush=True)`) shows now
         if self._partial:
             self._writer.write(self._partial)
             self._partial = ""
-
-    def writable(self) -> bool:
-        return True
-
-    def fileno(self) -> int:
-        return self._original.fileno()
-
-    def isatty(self) -> bool:
-        return self._original.isatty()
-
-    @property
-    def encoding(self) -> str:  # type: ignore[override]
-        return self._original.encoding
