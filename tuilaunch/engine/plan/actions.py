@@ -68,16 +68,14 @@ class ActionPlanner:
         elif isinstance(entity, Shutdown):
             kind = "shutdown"
             data = perform(entity.reason, ctx) if enabled else describe(entity.reason)
-        elif isinstance(entity, StopProcess):
-            kind = "stop_process"
+        elif isinstance(entity, StopProcess | SendSignal):
+            # the process `matches_action(x)` names: its id, once x is in the plan
+            kind = "stop_process" if isinstance(entity, StopProcess) else "signal_process"
             target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
+            data = getattr(entity, "signal_name", None)
         elif isinstance(entity, OpaqueCoroutine):
             kind = "coroutine"
             data = entity.name
-        elif isinstance(entity, SendSignal):
-            kind = "signal_process"
-            target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
-            data = entity.signal_name
         elif isinstance(entity, LoadComposableNodes):
             kind = "load_components"
             target, data = self.load_components(entity, scope, enabled)

@@ -247,21 +247,28 @@ class PlanActions(SupervisorCore):
 
     async def _stop_process(self, action: ActionPlan) -> bool:
         """EmitEvent(ShutdownProcess(process_matcher=matches_action(x)))."""
-        target = str(action.target)
-        if target not in self.states:
-            self.log_action(action, f"cannot stop {target}: this launch does not run it", "WARN")
+        target = self._target_of(action, "stop")
+        if target is None:
             return False
         self.spawn_task(self.stop(target))
         return True
+
+    def _target_of(self, action: ActionPlan, verb: str) -> str | None:
+        """The process an emitted event is about, or None (said) when this launch does not
+        run it."""
+        target = str(action.target)
+        if target not in self.states:
+            self.log_action(action, f"cannot {verb} {target}: this launch does not run it",
+                            "WARN")
+            return None
+        return target
 
     def _signal_process(self, action: ActionPlan) -> bool:
         """EmitEvent(SignalProcess(signal_number=..., process_matcher=matches_action(x))):
         the signal to the process itself, not its group, in launch's words; one that is
         not running is left alone, as launch does."""
-        target, name = str(action.target), str(action.data)
-        if target not in self.states:
-            self.log_action(action, f"cannot signal {target}: this launch does not run it",
-                            "WARN")
+        target, name = self._target_of(action, "signal"), str(action.data)
+        if target is None:
             return False
         running = self.running.get(target)
         if running is None and self.states.get(target) == "running":
@@ -287,8 +294,7 @@ class PlanActions(SupervisorCore):
         source = action.source
         args = list(source.args)
         if not source.ignore_context:
-            args.insert(0, PerformContext(action.configurations, _launch_file_seen(action),
-                                          event_locals={"event": event or LaunchEvent()}))
+            args.insert(0, self._context(action, event))
         try:
             await source.coroutine(*args, **source.kwargs)
         except Exception as exc:
@@ -300,10 +306,13 @@ class PlanActions(SupervisorCore):
         return True
 
     def _perform(self, action: ActionPlan, value: Any, event: LaunchEvent | None) -> str:
-        context = PerformContext(action.configurations, _launch_file_seen(action),
-                                 event_locals={"event": event or LaunchEvent()})
         with shown_environ(self._environ_of(action)):
-            return perform(value, context)
+            return perform(value, self._context(action, event))
+
+    def _context(self, action: ActionPlan, event: LaunchEvent | None) -> PerformContext:
+        """The launch context user code and substitutions see where the action runs."""
+        return PerformContext(action.configurations, _launch_file_seen(action),
+                              event_locals={"event": event or LaunchEvent()})
 
     def _environ_of(self, action: ActionPlan) -> dict[str, str | None]:
         """What os.environ is when launch performs the action: its scope's during the
