@@ -281,28 +281,26 @@ class LifecycleTracker(Plugin):
         self._report(where, f"{proc.full_name}: {label} done ({origin})")
         return True
 
-    async def _settled(self, proc_id: str, patience: float = 5.0) -> str | None:
-        """The node's state once a refused transition is over. The refusal's reply can come
-        before the transition event that takes the node back from `configuring` (a busy
-        machine): the state said is the one it is left in, not the one it passed through."""
-        deadline = time.monotonic() + patience
+    async def _settled(self, proc_id: str, patience: float | None = 5.0) -> str | None:
+        """The node's state once the transition it is in is over (at most `patience`
+        seconds; None: as long as it lives). A refusal's reply can come before the
+        transition event that takes the node back from `configuring` (a busy machine): the
+        state said is the one it is left in, not the one it passed through."""
+        deadline = None if patience is None else time.monotonic() + patience
         while self.states.get(proc_id) not in (None, *PRIMARY) \
                 and self.supervisor.states.get(proc_id) in ALIVE \
-                and not self.supervisor.shutting_down and time.monotonic() < deadline:
+                and not self.supervisor.shutting_down \
+                and (deadline is None or time.monotonic() < deadline):
             await asyncio.sleep(0.05)  # its transition event ends the wait
         return self.states.get(proc_id)
 
     async def _outcome(self, proc_id: str, label: str, before: int) -> bool | None:
         """Whether the node made `label`, from the transition events heard since `before`
         events: None when it never began the transition or is gone before ending it."""
-        while self._events.get(proc_id, 0) > before:
-            if self.states.get(proc_id) in PRIMARY:
-                return self.states.get(proc_id) == GOALS.get(label)
-            if self.supervisor.states.get(proc_id) not in ALIVE \
-                    or self.supervisor.shutting_down:
-                return None
-            await asyncio.sleep(0.1)  # still in the transition: it ends with an event
-        return None
+        if self._events.get(proc_id, 0) <= before:
+            return None
+        state = await self._settled(proc_id, patience=None)
+        return state == GOALS.get(label) if state in PRIMARY else None
 
     async def run_action(self, action: ActionPlan) -> bool:
         """A `ChangeState` / `LifecycleTransition` of the launch file, for each target."""
