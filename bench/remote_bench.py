@@ -7,7 +7,8 @@ Side by side, at 80x24, with the demo (examples/bringup.py) running as a session
 Each idle (the demo alone) and under a flood (the demo and a node printing 2,000 lines a
 second), the latter twice: with the all-nodes pane, and with the talker's pane shown (the
 flood then off screen: only the pane shown is sent; the drawn TUI draws what it shows).
-ros2 launch has no attach over a link: ssh drawing the TUI is the reference here. The bytes are counted on the TCP connection itself (ssh's ProxyCommand is a relay
+ros2 launch has no attach over a link: ssh drawing the TUI is the reference here. The
+bytes are counted on the TCP connection itself (ssh's ProxyCommand is a relay
 that counts), so they are what crosses the link: encrypted, with ssh's own keep-alives.
 Also: the time to attach, from the command's start to the first node line on screen.
 

@@ -131,12 +131,36 @@ def test_a_launch_on_one_machine_does_not_load_what_it_does_not_use():
     suggestion or of the ROS bridge and its messages: each is imported when a launch uses
     it."""
     code = ("import sys, tuilaunch.cli.dispatch, tuilaunch.cli.headless, "
-            "tuilaunch.engine.launcher\n"
+            "tuilaunch.cli.suggest, tuilaunch.engine.launcher\n"
             "print(sorted(m for m in sys.modules if m in {'json', 'uuid', 'difflib', "
             "'tempfile', 'tuilaunch.engine.plan.machines', "
             "'tuilaunch.engine.run.machines.machines_share', 'tuilaunch.engine.ros.bridge', "
             "'tuilaunch.engine.ros.calls', 'tuilaunch.engine.ros.messages'}))")
     assert python_prints(code).strip() == "[]"
+
+
+def test_the_watchdog_process_starts_without_importing_anything():
+    """The watchdog starts beside a launch's first processes, on the same cores: it loads
+    nothing beyond os, sys and time (no subprocess, threading, nor signal's enums),
+    and still does its work: the end of its pipe stops the process group it was told of."""
+    from tuilaunch.engine.run.process import watchdog_process
+
+    def imported(*argv: str, given: bytes = b"") -> set[str]:
+        ran = subprocess.run([sys.executable, "-I", "-S", "-X", "importtime", *argv],
+                             input=given, capture_output=True, timeout=60)
+        return {line.split("|")[-1].strip() for line in ran.stderr.decode().splitlines()
+                if line.startswith("import time:")}
+
+    child = subprocess.Popen(["sleep", "600"], start_new_session=True)
+    try:
+        # beyond what the interpreter's own start imports
+        extra = imported(watchdog_process.__file__, "test-token", "0.5",
+                         given=f"+{child.pid}\n".encode()) - imported("-c", "import os, sys, time")
+        assert extra <= {"_signal"}, extra
+        assert child.wait(timeout=30) == -signal.SIGTERM
+    finally:
+        child.kill()
+        child.wait()
 
 
 def test_asyncio_without_tls_still_runs_and_ssl_still_imports():

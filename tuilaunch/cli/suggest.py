@@ -4,7 +4,6 @@ is no launch file."""
 
 from __future__ import annotations
 
-import difflib
 import os
 import re
 from pathlib import Path
@@ -30,6 +29,8 @@ def check_assignments(positional: list[str]) -> None:
 
 
 def _guess(word: str, choices: list[str]) -> str:
+    import difflib  # paid by a mistyped name alone: every launch imports this module
+
     close = difflib.get_close_matches(word, choices, n=3, cutoff=0.6)
     return f"did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 

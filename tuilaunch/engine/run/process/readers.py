@@ -97,9 +97,7 @@ class ChannelReader:
             return
         self._shown_tail = b""  # the whole lines replace what was shown of the last one
         running = self.running
-        prefix = f"{time.time():.6f}".encode() + self.stamp
-        running.log.write(prefix + block[:-1].replace(b"\n", b"\n" + prefix) + b"\n",
-                          block.count(b"\n"))
+        running.log.write_stamped(f"{time.time():.6f}".encode() + self.stamp, block)
         self.deliver(running, self.channel.name, screen_lines(block))
 
     def _drain(self) -> None:

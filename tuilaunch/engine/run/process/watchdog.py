@@ -1,28 +1,24 @@
-"""Nothing of a launch survives its launcher, however the launcher dies.
+"""Nothing of a launch survives its launcher, however the launcher dies: the launcher's side.
 
-A tiny process, started once per launch in its own session, holds the read end of a pipe
-whose write end only the launcher holds. The launcher tells it each process group it creates
-(`+pgid`) and each one that is gone (`-pgid`). When the pipe ends — a clean exit, a crash,
-SIGKILL, an out-of-memory kill — the watchdog stops every process of the launch: the process
-groups it was told about, and every process carrying the launch's mark in its environment
-(grandchildren in their own groups or sessions: `timeout`, `setsid` daemons, `xterm -e`).
-SIGTERM first, SIGKILL after a short grace.
-
-This file runs as a script (`python -I -S watchdog.py TOKEN GRACE`): standard library only.
+A tiny process (watchdog_process.py), started once per launch in its own session, holds the
+read end of a pipe whose write end only the launcher holds. The launcher tells it each
+process group it creates (`+pgid`) and each one that is gone (`-pgid`). When the pipe ends —
+a clean exit, a crash, SIGKILL, an out-of-memory kill — the watchdog stops every process of
+the launch: the process groups it was told about, and every process carrying the launch's
+mark in its environment (grandchildren in their own groups or sessions: `timeout`, `setsid`
+daemons, `xterm -e`). SIGTERM first, SIGKILL after a short grace.
 """
 
 from __future__ import annotations
 
+import asyncio
 import os
-import signal
 import subprocess
 import sys
 import threading
-import time
 
-MARK = "TUILAUNCH_LAUNCH_ID"
-"""Environment variable every process of a launch inherits: the launch tokens, `:`-joined
-(a launch started by a launch carries both)."""
+from . import watchdog_process
+from .watchdog_process import MARK
 
 
 class Watchdog:
@@ -51,8 +47,8 @@ class Watchdog:
         read_end, write_end = os.pipe()
         try:
             self._process = subprocess.Popen(
-                [sys.executable, "-I", "-S", os.path.abspath(__file__), self.token,
-                 str(self.grace)],
+                [sys.executable, "-I", "-S", os.path.abspath(watchdog_process.__file__),
+                 self.token, str(self.grace)],
                 stdin=read_end, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                 start_new_session=True, cwd="/")
         except OSError as exc:
@@ -80,8 +76,6 @@ class Watchdog:
             self._pending.append(text)
             if len(self._pending) > 1:
                 return  # a flush is already due
-        import asyncio  # the launcher's side only: the watchdog process starts without it
-
         try:
             asyncio.get_running_loop().call_soon(self.flush)
         except RuntimeError:
@@ -120,84 +114,4 @@ class Watchdog:
         return self._process.pid if self._process is not None else None
 
 
-# --- the watchdog process ----------------------------------------------------------------
-
-
-def _launch_processes(token: str, groups: set[int]) -> list[int]:
-    """Live processes in one of the groups or carrying the token in their environment."""
-    found: list[int] = []
-    me = os.getpid()
-    needle = f"{MARK}=".encode()
-    for entry in os.listdir("/proc"):
-        if not entry.isdigit() or int(entry) == me:
-            continue
-        try:
-            with open(f"/proc/{entry}/stat", "rb") as handle:
-                fields = handle.read().rsplit(b")", 1)[1].split()
-            if fields[0] == b"Z":
-                continue
-            if int(fields[2]) in groups:
-                found.append(int(entry))
-                continue
-            with open(f"/proc/{entry}/environ", "rb") as handle:
-                environ = handle.read()
-        except (OSError, IndexError, ValueError):
-            continue  # gone meanwhile, or not ours to read
-        for item in environ.split(b"\0"):
-            if item.startswith(needle) and token.encode() in item[len(needle):].split(b":"):
-                found.append(int(entry))
-                break
-    return found
-
-
-def sweep(token: str, groups: set[int], grace: float) -> None:
-    for sig, wait in ((signal.SIGTERM, grace), (signal.SIGKILL, 2.0)):
-        targets = _launch_processes(token, groups)
-        if not targets:
-            return
-        for pid in targets:
-            try:
-                os.kill(pid, sig)
-            except OSError:
-                pass
-        deadline = time.monotonic() + wait
-        while time.monotonic() < deadline:
-            time.sleep(0.02)
-            remaining = _launch_processes(token, groups)
-            if not remaining:
-                return
-            for pid in remaining:  # late forks of a dying process get the same signal
-                if pid not in targets:
-                    targets.append(pid)
-                    try:
-                        os.kill(pid, sig)
-                    except OSError:
-                        pass
-
-
-def main(argv: list[str]) -> None:
-    token, grace = argv[1], float(argv[2])
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGPIPE):
-        signal.signal(sig, signal.SIG_IGN)  # a terminal's Ctrl+C or hang-up is not for us
-    groups: set[int] = set()
-    pending = b""
-    while True:
-        try:
-            chunk = os.read(0, 4096)
-        except InterruptedError:
-            continue
-        except OSError:
-            break
-        if not chunk:
-            break
-        *lines, pending = (pending + chunk).split(b"\n")
-        for line in lines:
-            if line[:1] == b"+":
-                groups.add(int(line[1:]))
-            elif line[:1] == b"-":
-                groups.discard(int(line[1:]))
-    sweep(token, groups, grace)
-
-
-if __name__ == "__main__":
-    main(sys.argv)
+__all__ = ["MARK", "Watchdog"]
