@@ -332,6 +332,34 @@ def test_a_watching_client_gets_rates_and_resources_until_it_stops(session):
         link.close()
 
 
+def test_a_qos_watcher_is_told_the_problems_when_they_change_and_only_then(session):
+    """`watch_qos`: the server checks the graph where the nodes run and tells a watching
+    client the QoS problems at once, then only when they change: nothing while they stay
+    as they are, and that the problem is gone when one node of the pair stops."""
+
+    def scan_problem(data: dict[str, Any]) -> bool:
+        return any(t["name"] == "/insp/scan" and t["qos_problems"] for t in data["topics"])
+
+    link = Link(session, timeout=60)
+    try:
+        link.request("subscribe", max_lines=1, kinds=["qos"])
+        link.request("watch_qos", on=True)
+        told = events_until(link, "qos", scan_problem)
+        (scan,) = [t for t in told["data"]["topics"] if t["name"] == "/insp/scan"]
+        assert "publisher /insp/fast and subscriber /insp/strict cannot talk" in \
+            scan["qos_problems"][0]
+        # a check runs every 5 s: what did not change is not sent again
+        assert [e for e in events_for(link, 6.0) if e["data"] == told["data"]] == []
+        link.request("stop", process=STRICT)
+        events_until(link, "qos", lambda data: not scan_problem(data))
+        link.request("start", process=STRICT)
+        events_until(link, "qos", scan_problem)
+        link.request("watch_qos", on=False)
+    finally:
+        link.close()
+        ok("wait", session, STRICT, "running", "--timeout", "60")
+
+
 def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):
     link = Link(session, timeout=60)
     try:

@@ -572,7 +572,7 @@ class RemoteSupervisor:
             on = bool(fields.get("topics"))
         elif op in ("echo", "echo_stop"):
             key, on = f"echo {fields.get('topic')}", op == "echo"
-        elif op == "watch_resources":
+        elif op in ("watch_resources", "watch_qos"):
             key, on = op, bool(fields.get("on", True))
         else:
             return

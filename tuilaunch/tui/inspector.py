@@ -7,9 +7,6 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from textual import work
-from textual.timer import Timer
-
 from ..engine.run.process.reported_names import current_node_name
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.supervisor import Event
@@ -18,11 +15,6 @@ from .screens.dialogs import ChoiceScreen, ConfirmScreen
 from .screens.topics_panel import TopicsPanel
 
 LEVELS = ["debug", "info", "warn", "error", "fatal"]
-QOS_CHECK_S = 5.0
-"""While the Nodes tab shows, the graph's QoS problems are asked for this often (the tree
-marks the nodes in one)."""
-QOS_CHECK_LINK_S = 30.0
-"""The same for a session over an ssh link: a few bytes a second less on the link."""
 
 
 class Inspector(Navigation):
@@ -36,7 +28,6 @@ class Inspector(Navigation):
         self.watching_resources = False
         self.log_levels: dict[str, str] = {}
         """The level last set per process (the level dialog starts there)."""
-        self.qos_timer: Timer | None = None
         self.topics_process: str | None = None
         """The process whose node's topics `o` listed: the list follows the node when a
         relaunch or a restart moves it."""
@@ -58,6 +49,12 @@ class Inspector(Navigation):
         elif event.kind == "resources":
             if self.watching_resources:  # one sent before the server heard "off" is stale
                 self.launch_tree.set_usage(data)
+        elif event.kind == "qos":
+            # the server says when the problems change (watch_qos): the tree marks both
+            # nodes of each pair that cannot talk, the line above it says why
+            self.launch_tree.set_qos_problems(self.qos_problems_by_process(
+                data.get("topics") or []))
+            self.update_detail()
 
     def tab_shown(self, pane: str) -> None:
         """Measures what the tab on screen shows, and only that: rates and echo for the
@@ -69,31 +66,10 @@ class Inspector(Navigation):
             self.watching_resources = nodes
             self.run_worker(self._watch_resources(nodes), group="inspector",
                             exit_on_error=False)
-            if self.qos_timer is None:
-                # over an ssh link each check is a round trip for marks that rarely change
-                every = QOS_CHECK_S if getattr(self.supervisor, "host", None) is None \
-                    else QOS_CHECK_LINK_S
-                self.qos_timer = self.set_interval(every, self.check_qos, pause=True)
-            if nodes:
-                self.check_qos()
-                self.qos_timer.resume()
-            else:
-                self.qos_timer.pause()
-
-    @work(group="inspector-qos", exclusive=True, exit_on_error=False)
-    async def check_qos(self) -> None:
-        """Marks in the tree the nodes of a publisher/subscriber pair that cannot talk."""
-        if getattr(self.supervisor, "request", None) is None:
-            return  # no session server: no graph to ask
-        if not any(p.kind in ("node", "container") for p in self.session.plan.processes):
-            return  # a launch of plain processes: the server need not start ROS for us
-        try:
-            result = await self.inspect("topics", problems_only=True)
-        except SessionError:
-            return  # no ROS here, or the server is busy: the marks stay as they were
-        self.launch_tree.set_qos_problems(self.qos_problems_by_process(
-            result.get("topics") or []))
-        self.update_detail()  # the selected node's problem, said in full
+            # the QoS marks: the server checks the graph and says when they change, so
+            # an ssh link carries no request for marks that rarely change
+            self.run_worker(self._watch(nodes, "watch_qos"), group="inspector",
+                            exit_on_error=False)
 
     def qos_problems_by_process(self, topics: list[dict[str, Any]]) -> dict[str, list[str]]:
         """Each launch process's node, and the QoS sentences that name it."""
@@ -116,12 +92,17 @@ class Inspector(Navigation):
         return found
 
     async def _watch_resources(self, on: bool) -> None:
-        try:
-            await self.inspect("watch_resources", on=on)
-        except SessionError:
-            pass  # no CPU column then; the tree works as before
+        await self._watch(on, "watch_resources")  # no CPU column without it
         if not on:
             self.launch_tree.set_usage({})  # figures that no longer move would mislead
+
+    async def _watch(self, on: bool, op: str) -> None:
+        """Starts or stops a stream of the server's (`watch_resources`, `watch_qos`); one
+        the server cannot give leaves the tree as it was."""
+        try:
+            await self.inspect(op, on=on)
+        except SessionError:
+            pass
 
     # --- from the Nodes tab ------------------------------------------------------------------
 

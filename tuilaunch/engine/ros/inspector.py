@@ -7,7 +7,8 @@ be named by its process id.
 
 Streams are per client: `watch_rates` measures the union of what the clients watch and
 stops a topic when nobody watches it; `echo` runs one throttled stream per client and
-topic. A client that disconnects loses its streams (`client_gone`).
+topic; `watch_qos` sends the graph's QoS problems when they change (qos_watch.py). A client
+that disconnects loses its streams (`client_gone`).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from ..run.events import Event
 from ..run.plugins import Clients, Handler, Plugin
 from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
+from .qos_watch import Problems, QosWatch
 from .ros_errors import RosError
 
 if TYPE_CHECKING:
@@ -63,6 +65,7 @@ class Inspector(Plugin):
         self.discovered = False
         self.reported = ReportedNames()
         self.unnamed: tuple[object, set[str]] = (None, set())  # (plan, its unnamed nodes)
+        self.qos = QosWatch(self.qos_problems, self.send)
         supervisor.subscribe(self.learn_names)
 
     def learn_names(self, event: Event) -> None:
@@ -92,9 +95,10 @@ class Inspector(Plugin):
                 "hz_watch": self.hz_watch, "hz_read": self.hz_read,
                 "echo": self.echo, "echo_stop": self.echo_stop,
                 "params_dump": self.params_dump, "params_load": self.params_load,
-                "log_level": self.log_level}
+                "log_level": self.log_level, "watch_qos": self.qos.watch}
 
     def client_gone(self, client: int) -> None:
+        self.qos.client_gone(client)
         for key in [k for k in self.echoes if k[0] == client]:
             self.echoes.pop(key).cancel()
         for key in [k for k in self.hz_streams if k[0] == client]:
@@ -114,6 +118,7 @@ class Inspector(Plugin):
         self.echoes.clear()
         self.hz_streams.clear()
         self.rate_watch.clear()
+        await self.qos.close()
         bridge = self.ros.made
         if bridge is not None:
             await bridge.stop_rates()
@@ -236,6 +241,14 @@ class Inspector(Plugin):
         if message.get("problems_only"):  # the TUI's QoS check: a few bytes, not the graph
             result["topics"] = [t for t in result.get("topics") or [] if t.get("qos_problems")]
         return result
+
+    async def qos_problems(self) -> Problems:
+        """What `watch_qos` checks: the topics with QoS problems; none for a launch without
+        a node, for which ROS is not started."""
+        if not any(p.kind in ("node", "container") for p in self.supervisor.plan.processes):
+            return []
+        topics: Problems = (await self.topics({"problems_only": True})).get("topics") or []
+        return topics
 
     async def hz(self, message: dict[str, Any]) -> dict[str, Any]:
         from .rates import RateMeter

@@ -39,6 +39,9 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   topics {node?, problems_only?: only the topics with QoS problems} -> {"topics": [{name,
   types, publishers: [{node, in_launch, process,
   qos}], subscribers, qos_problems: [sentence]}]};
+  watch_qos {on: bool} -> {}: while any client watches, the server checks the graph every
+  5 s and each watcher gets an event "qos", data {topics: what topics {problems_only}
+  gives}, when they differ from what it was last sent (the first at once);
   hz {topic, window: s} -> {topic, rate_hz, bytes_per_s, messages, window_s} after window s;
   hz_watch {topic, messages?: N (default 10000), every?: s (default 1)} -> {}: events "hz",
   data {topic, rate_hz, min_s, max_s, std_dev_s, window, messages, bytes_per_s, size_mean,
