@@ -376,7 +376,9 @@ class RemoteSupervisor:
             if event.kind == "output" and event.process:
                 self._count(event.process, len(event.lines))
             elif event.kind == "dropped" and event.process:
-                self._count(event.process, event.code or 0)  # in the file, not sent to us
+                # in the file, not sent to us: where, for a display to read them back
+                event.data = self._where(event.process)
+                self._count(event.process, event.code or 0)
             else:
                 self._last_event = max(self._last_event, event.time)
             if event.kind == "relaunched":
@@ -437,7 +439,8 @@ class RemoteSupervisor:
                                         limit=self.scrollback, tail=True)
                 lines[process] = [LogLine(*line) for line in page["lines"]]
                 if page.get("skipped"):
-                    notes.append(Event("dropped", process, code=int(page["skipped"])))
+                    notes.append(Event("dropped", process, code=int(page["skipped"]),
+                                       data={"start": begin, "skip": 0}))
             # everything up to `end` is now here; its events from the stream come after it
             self._from[process], self._received[process] = end, 0
         for event in notes + merged(lines, []):
@@ -445,6 +448,11 @@ class RemoteSupervisor:
 
     def _count(self, process: str, lines: int) -> None:
         self._received[process] = self._received.get(process, 0) + lines
+
+    def _where(self, process: str) -> dict[str, int]:
+        """Where the next lines of `process` are in its log file, as a `dropped` event's
+        data says (`read_log`'s start and skip): after what this client has been sent."""
+        return {"start": self._from.get(process, 0), "skip": self._received.get(process, 0)}
 
     def _fail_replies(self, why: str) -> None:
         for future in self._replies.values():
@@ -534,8 +542,9 @@ class RemoteSupervisor:
             page = await self._call("read_log", process=process, start=begin, skip=skip,
                                     end=end, limit=self.scrollback, tail=True)
             lines[process] = [LogLine(*line) for line in page["lines"]]
-            if page.get("skipped"):
-                notes.append(Event("dropped", process, code=int(page["skipped"])))
+            if page.get("skipped"):  # read back only the last `scrollback` of them
+                notes.append(Event("dropped", process, code=int(page["skipped"]),
+                                   data={"start": begin, "skip": skip}))
         recent = [data for data in result["recent"]
                   if float(data.get("time") or 0.0) > self._last_event]
         self._note_recent(recent)

@@ -28,6 +28,7 @@ from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
 from .arguments import Arguments
+from .gaps import Gaps
 from .inspector import Inspector
 from .key_order import KeyOrder
 from .keyboard import NodeKeyboard
@@ -55,10 +56,10 @@ class LaunchTabs(TabbedContent):
 
 
 class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments, Quitting,
-                   KeyOrder):
+                   Gaps, KeyOrder):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
     concern does lives in its mixin (session_link, node_commands, navigation, arguments,
-    quitting, inspector); key_order hands the keys out one after the other."""
+    quitting, inspector, gaps); key_order hands the keys out one after the other."""
 
     CSS_PATH = "screens/app.tcss"
     TITLE = "tuilaunch"

@@ -11,8 +11,9 @@ import time
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
-from ..engine.run.process.output import expand_tabs, strip_ansi
+from ..engine.run.process.output import expand_tabs, screen_str, strip_ansi
 from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
@@ -23,6 +24,16 @@ _ROS_PREFIX = ROS_LOG_PREFIX
 
 
 @dataclass(frozen=True, slots=True)
+class Gap:
+    """Lines of one process a flood kept off the screen, where its log file has them: the
+    `count` lines after the first `skip` from byte `start` (the session's `read_log`)."""
+
+    start: int
+    skip: int
+    count: int
+
+
+@dataclass(frozen=True, slots=True)
 class Line:
     process: str
     text: str  # as the process printed it, without colour codes, tabs expanded
@@ -30,6 +41,9 @@ class Line:
     stamp: float = 0.0  # the ROS stamp when the line has one, else the arrival time
     body: int = 0  # where the message starts after the `[LEVEL] [stamp] [logger]:` prefix
     event: bool = False  # written by tuilaunch (started, died, respawning), not by the process
+    gap: Gap | None = None
+    """On the line that stands for lines not drawn: where they are, to read them when the
+    user scrolls back to it."""
 
     def formatted(self, prefixed: bool) -> str:
         """The full line, as saved or copied: `[id] ` before it in the all-nodes view."""
@@ -73,6 +87,8 @@ class View:
     text: str = ""
 
     def accepts(self, line: Line) -> bool:
+        if line.gap is not None:  # lines of any level and text may be in it
+            return self.process is None or line.process == self.process
         return ((self.process is None or line.process == self.process)
                 and line.level >= self.min_level
                 and (not self.text or self.text.lower() in line.text.lower()))
@@ -134,6 +150,29 @@ class OutputStore:
         self.dropped.per_process[process] = self.dropped.per_process.get(process, 0) + count
         self.dropped.total += count
 
+    def add_gap(self, process: str, gap: Gap) -> list[Line]:
+        """A line where a flood's lines were not drawn, standing for them until read."""
+        return self._keep(process, [gap_line(process, gap, time.time())])
+
+    def fill_gap(self, marker: Line, rows: list[list[Any]], rest: Gap | None,
+                 rest_first: bool) -> list[Line]:
+        """The gap's lines read from the log file (`read_log`'s `[time, stream, text]`) in
+        place of its marker, with a marker for the `rest` not read yet before them
+        (`rest_first`) or after them; what replaces the marker."""
+        lines = [parse(marker.process, screen_str(str(text)), str(stream), float(at))[0]
+                 for at, stream, text in rows]
+        if rest is not None:
+            left = gap_line(marker.process, rest, marker.stamp)
+            lines = [left, *lines] if rest_first else [*lines, left]
+        for bucket in (self._per_process.get(marker.process), self._all):
+            if bucket is not None:
+                _replace(bucket, marker, lines)
+        drawn = len(rows)
+        self.dropped.per_process[marker.process] = max(
+            self.dropped.per_process.get(marker.process, 0) - drawn, 0)
+        self.dropped.total = max(self.dropped.total - drawn, 0)
+        return lines
+
     def _keep(self, process: str, lines: list[Line]) -> list[Line]:
         bucket = self._per_process.setdefault(process, deque(maxlen=self.scrollback))
         bucket.extend(lines)
@@ -146,3 +185,20 @@ class OutputStore:
 
     def text(self, view: View) -> list[str]:
         return [line.formatted(view.process is None) for line in self.lines(view)]
+
+
+def gap_line(process: str, gap: Gap, stamp: float) -> Line:
+    return Line(process, f"{gap.count} lines not drawn here: scroll to this line to read "
+                "them from the log file", INFO, stamp, 0, True, gap)
+
+
+def _replace(bucket: deque[Line], old: Line, new: list[Line]) -> bool:
+    """`old` (found by identity) replaced by `new`; the bound drops the oldest lines."""
+    items = list(bucket)
+    for index in range(len(items) - 1, -1, -1):
+        if items[index] is old:
+            items[index:index + 1] = new
+            bucket.clear()
+            bucket.extend(items)
+            return True
+    return False

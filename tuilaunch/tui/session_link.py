@@ -32,7 +32,7 @@ from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.supervisor.supervisor import Event
-from .output_store import ERROR, INFO, WARN, Line, OutputStore
+from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
 from .screens.args_panel import ArgsPanel
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree
@@ -314,8 +314,13 @@ class SessionLink(App[int]):
             elif event.kind in INSPECTOR_EVENTS:
                 self.inspector_event(event)
             elif event.kind == "dropped" and event.process:
-                # counted in the pane's status line, not written as lines of their own
+                # counted in the pane's status line; where the session says where they are
+                # in the log file, a line stands for them, read when scrolled back to
                 self.store.count_dropped(event.process, event.code or 0)
+                where = event.data or {}
+                if event.code and "start" in where:
+                    fresh += self.store.add_gap(event.process, Gap(
+                        int(where["start"]), int(where["skip"]), event.code))
             elif event.process and self.supervisor is not None:
                 fresh += self._process_event(event)
         if fresh:

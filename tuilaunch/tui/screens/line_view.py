@@ -105,6 +105,11 @@ class LineView(Widget, can_focus=True):
         self.repaints = 0  # for tests and the benchmark: how often the pane was drawn
         # told when the user moves the view, so the owner's status line says so at once
         self.on_move: Callable[[], None] | None = None
+        self.on_gap: Callable[[Line, bool], None] | None = None
+        """Told of a line standing for lines not drawn (`Line.gap`) when the user scrolls
+        back to it, with whether they were reading upwards; once per gap."""
+        self.reading_up = False  # the last move went up: a gap read holds the lines below
+        self._gaps_told: set[object] = set()
 
     # --- content ---------------------------------------------------------------------
 
@@ -144,6 +149,36 @@ class LineView(Widget, can_focus=True):
         self.lines.extend(lines)
         self.total += len(lines)
         self._dirty = True
+
+    def replace(self, old: Line, new: list[Line]) -> None:
+        """A line (a gap's marker) replaced by `new`, the view holding still: reading
+        upwards, the lines below it keep their rows (the gap's lines show above them as
+        the user goes on up); otherwise those above it do."""
+        for index, line in enumerate(self.newer):
+            if line is old:  # came while scrolled back: not on screen yet
+                waiting = list(self.newer)
+                waiting[index:index + 1] = new
+                self.newer = deque(waiting, maxlen=self.newer.maxlen)
+                return
+        items = list(self.lines)
+        for position in range(len(items) - 1, -1, -1):
+            if items[position] is old:
+                break
+        else:
+            return  # trimmed meanwhile, or another view's
+        at = self.first + position
+        items[position:position + 1] = new
+        grown = len(new) - 1
+        self.lines.clear()
+        self.lines.extend(items)  # the bound drops the oldest lines
+        self.total += grown
+        if self.current_match is not None:
+            self.current_match = None if self.current_match == at else \
+                self.current_match + (grown if self.current_match > at else 0)
+        if not self.following and (self.top > at or (self.reading_up and self.top <= at)):
+            self.top += grown
+        self.top = max(self.top, self.first)
+        self._invalidate(now=True)
 
     def thaw(self, count: int | None = None) -> None:
         """The oldest `count` lines that waited (all when None) join the view, after a line
@@ -265,6 +300,7 @@ class LineView(Widget, can_focus=True):
                 rows += self._rows(index)
                 index += 1
             rows = rows[:height]
+            self._tell_gaps(self.top, index)
         base = self.rich_style
         strips = []
         for text in rows:
@@ -278,6 +314,22 @@ class LineView(Widget, can_focus=True):
         blank = Strip([Segment(" " * width, base)], width)
         strips += [blank] * (height - len(strips))
         return strips
+
+    def _tell_gaps(self, top: int, end: int) -> None:
+        """Scrolled back, the gaps on screen are read (once each). Told after this frame,
+        from this widget's own turn: a message made while the screen composes would come
+        from the screen, and stop there instead of reaching the app."""
+        if self.on_gap is None:
+            return
+        for index in range(top, end):
+            line = self.lines[index - self.first]
+            if line.gap is not None and line.gap not in self._gaps_told:
+                self._gaps_told.add(line.gap)
+                self.call_later(self.on_gap, line, self.reading_up)
+
+    def gap_not_read(self, line: Line) -> None:
+        """A gap whose reading failed: told again when next on screen."""
+        self._gaps_told.discard(line.gap)
 
     def render_line(self, y: int) -> Strip:
         key = (self.size.width, self.size.height)
@@ -301,11 +353,13 @@ class LineView(Widget, can_focus=True):
         height = max(self.size.height, 1)
         self._visible_top()
         self.following = False
+        self.reading_up = False
         self.top = max(min(index - height // 2, self.total - height), self.first)
         self._invalidate(now=True)
 
     def action_scroll(self, step: int) -> None:
         top = self._visible_top()
+        self.reading_up = step < 0
         if self.following and step > 0:
             return  # already at the newest line: stay there, following
         if step > 0 and self._bottom() + step >= self.total:
@@ -319,6 +373,7 @@ class LineView(Widget, can_focus=True):
         self.action_scroll(direction * max(self.size.height - 1, 1))
 
     def action_top(self) -> None:
+        self.reading_up = False  # from the oldest line down
         self.following = False
         self.top = self.first
         self._moved()

@@ -12,6 +12,7 @@ from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
+from textual.message import Message
 from textual.widgets import Static
 
 from ..output_store import LEVELS, Line, OutputStore, View
@@ -24,7 +25,16 @@ def plural(count: int, word: str) -> str:
 
 
 class OutputPanel(Vertical):
-    """Forwards nothing to the engine: the app feeds it lines from the OutputStore."""
+    """Forwards nothing to the engine: the app feeds it lines from the OutputStore, and
+    reads a flood's lines not drawn when the pane asks (GapShown)."""
+
+    class GapShown(Message):
+        """The user scrolled back to a line standing for lines not drawn: read them."""
+
+        def __init__(self, line: Line, reading_up: bool) -> None:
+            super().__init__()
+            self.line = line
+            self.reading_up = reading_up
 
     DEFAULT_CSS = """
     OutputPanel { height: 1fr; }
@@ -47,6 +57,7 @@ class OutputPanel(Vertical):
         self._status_text = ""
         self._lines = LineView(max_lines=max_lines, max_fps=max_fps, id="output-lines")
         self._lines.on_move = self.update_status
+        self._lines.on_gap = self._gap_shown
         self._partials_seen = -1  # the store's partials_changed when last shown
 
     def compose(self) -> ComposeResult:
@@ -99,6 +110,18 @@ class OutputPanel(Vertical):
 
     def append(self, lines: list[Line]) -> None:
         self._lines.append([line for line in lines if self.view.accepts(line)])
+
+    def _gap_shown(self, line: Line, reading_up: bool) -> None:
+        self.post_message(self.GapShown(line, reading_up))
+
+    def fill_gap(self, marker: Line, lines: list[Line]) -> None:
+        """A gap's marker replaced by its lines read from the log file (and a marker for
+        the rest, when it held more than one read brings)."""
+        self._lines.replace(marker, [line for line in lines if self.view.accepts(line)])
+        self.update_status()
+
+    def gap_not_read(self, marker: Line) -> None:
+        self._lines.gap_not_read(marker)
 
     def _show_partials(self) -> None:
         if self._partials_seen != self.store.partials_changed:

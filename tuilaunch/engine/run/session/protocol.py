@@ -74,7 +74,10 @@ Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type
   lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
   keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
   and "core" for a crash; event times are to the millisecond; consecutive output of one
-  process is one event); `{"type": "ended", "status": n}` last.
+  process is one event; an event "dropped" {process, code: a count} comes first in its
+  batch and stands for that process's next `code` lines, which were not sent: a client
+  finds them with read_log {start: the process's offset at its subscription, skip: the
+  lines of it sent and dropped since}); `{"type": "ended", "status": n}` last.
   Without the launch file (engine/run/session/plan_ops.py): plan -> {plan: Plan.to_json(),
   arguments}; preview {arguments, running?} -> {arguments, plan, keep, stop, start,
   error: null} or {arguments, error}: what `apply` with those values would do.

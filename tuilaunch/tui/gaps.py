@@ -1,0 +1,52 @@
+"""Reading back what a flood kept off the screen.
+
+Under a flood a display is sent what it can draw (over an ssh link, a pane's worth of lines
+a second); the session says where each run of lines it did not send is in the process's
+log file, and the pane shows a line standing for it. When the user scrolls back to that
+line, its lines are read from the log file through the session (`read_log`, where the
+nodes run), a thousand at a time, and take its place: scrolled back, nothing is missed,
+and only what the user scrolls back to crosses the link.
+"""
+
+from __future__ import annotations
+
+from textual import on
+
+from ..engine.run.session.session_dir import SessionError
+from .output_store import Gap, Line
+from .screens.output_panel import OutputPanel
+from .session_link import SessionLink
+
+GAP_READ = 1000
+"""Lines of a gap read at a time: a few screens to scroll through, and a small answer over
+a link; the rest of a longer gap is read when the user scrolls on to it."""
+
+
+class Gaps(SessionLink):
+    @on(OutputPanel.GapShown)
+    def _gap_shown(self, message: OutputPanel.GapShown) -> None:
+        self.run_worker(self._read_gap(message.line, message.reading_up), group="gaps",
+                        exit_on_error=False)
+
+    async def _read_gap(self, marker: Line, reading_up: bool) -> None:
+        gap = marker.gap
+        request = getattr(self.supervisor, "request", None)
+        if gap is None or request is None:
+            return
+        take = min(gap.count, GAP_READ)
+        # reading upwards, the gap's newest lines come first: those next to the lines below
+        skip = gap.skip + gap.count - take if reading_up else gap.skip
+        try:
+            page = await self.engine.run(request("read_log", process=marker.process,
+                                                 start=gap.start, skip=skip, limit=take))
+        except SessionError as exc:
+            self.output_panel.gap_not_read(marker)  # asked again when next on screen
+            self.notify(f"{marker.process}: the lines not drawn could not be read: {exc}",
+                        severity="warning")
+            return
+        left = gap.count - take
+        rest = None if left <= 0 else Gap(gap.start, gap.skip, left) if reading_up else \
+            Gap(gap.start, gap.skip + take, left)
+        lines = self.store.fill_gap(marker, list(page.get("lines") or []), rest,
+                                    rest_first=reading_up)
+        self.output_panel.fill_gap(marker, lines)
