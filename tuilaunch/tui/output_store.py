@@ -188,8 +188,9 @@ class OutputStore:
 
 
 def gap_line(process: str, gap: Gap, stamp: float) -> Line:
-    return Line(process, f"{gap.count} lines not drawn here: scroll to this line to read "
-                "them from the log file", INFO, stamp, 0, True, gap)
+    # one row beside the tree at 80 columns: the status line says "in log" already
+    return Line(process, f"{gap.count} lines not drawn: scroll here to read", INFO, stamp, 0,
+                True, gap)
 
 
 def _replace(bucket: deque[Line], old: Line, new: list[Line]) -> bool:
