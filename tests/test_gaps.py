@@ -9,12 +9,16 @@ gets most of the flood as `dropped` notices.
 from __future__ import annotations
 
 import asyncio
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
 from pathlib import Path
+
+from textual.pilot import Pilot
 
 from tuilaunch.client.remote_supervisor import RemoteSupervisor
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.supervisor.supervisor import Event
-from tuilaunch.tui.app import make_app
+from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.output_store import View
 
 from .test_sessions import detached_with, runtime, tl  # noqa: F401  (runtime: a fixture)
@@ -38,6 +42,19 @@ def flood_session(write, tmp_path: Path) -> tuple[str, str, Path, Path]:
     path = str(write(FLOOD.format(go=go, count=COUNT)))
     name, log_dir = detached_with(path, "flood-1")
     return name, path, log_dir, go
+
+
+@asynccontextmanager
+async def few_lines_a_batch(app: TuiLaunchApp) -> AsyncIterator[Pilot]:
+    """The TUI, subscribed to its session for 30 lines a batch (as a display over a link is
+    sent a pane's worth): under the flood the session leaves most lines out. Its own
+    buffer then holds what comes, as it does over a link."""
+    held = app.buffer.max_lines
+    app.buffer.max_lines = 30  # what it subscribes with
+    async with app.run_test(size=(80, 24)) as pilot:
+        await until(pilot, lambda: app.supervisor is not None)
+        app.buffer.max_lines = held
+        yield pilot
 
 
 def test_every_line_kept_from_a_client_is_where_its_gap_says(runtime, write, tmp_path):  # noqa: F811
@@ -88,9 +105,7 @@ def test_a_pane_scrolled_back_reads_the_lines_a_flood_kept_off_it(runtime, write
 
     async def scenario() -> None:
         app = make_app(path, {}, log_dir, session_name=name)
-        app.buffer.max_lines = 30  # the session sends 30 lines a batch: most are not sent
-        async with app.run_test(size=(80, 24)) as pilot:
-            await until(pilot, lambda: app.supervisor is not None)
+        async with few_lines_a_batch(app) as pilot:
             go.touch()
             panel = app.output_panel
             store = app.store
@@ -119,6 +134,35 @@ def test_a_pane_scrolled_back_reads_the_lines_a_flood_kept_off_it(runtime, write
                      and not line.event]
             assert shown == [str(i) for i in range(1, COUNT + 1)]
             assert "not drawn" not in str(panel.query_one("#output-status").render())
+
+    asyncio.run(scenario())
+    tl("stop", name)
+
+
+def test_a_gap_whose_log_file_is_gone_says_so_and_stays(runtime, write, tmp_path):  # noqa: F811
+    """The log file removed meanwhile (a cleaner, a full disk's rescue): scrolled back to
+    the gap, the pane says its lines are no longer there and keeps the line saying how
+    many were not drawn, rather than dropping it without a word."""
+    name, path, log_dir, go = flood_session(write, tmp_path)
+
+    async def scenario() -> None:
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with few_lines_a_batch(app) as pilot:
+            go.touch()
+
+            def gaps() -> list:
+                return [line for line in app.store.lines(View("flood-1")) if line.gap]
+
+            await until(pilot, lambda: any(line.text == str(COUNT)
+                                           for line in app.store.lines(View("flood-1"))))
+            before = gaps()
+            assert before
+            (log_dir / "flood-1.log").unlink()
+            app.output_panel.line_view.focus()
+            await pilot.press("home")
+            await until(pilot, lambda: any("no longer has the lines not drawn" in n.message
+                                           for n in app._notifications))
+            assert gaps()[0] is before[0]
 
     asyncio.run(scenario())
     tl("stop", name)

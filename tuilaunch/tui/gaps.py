@@ -44,9 +44,13 @@ class Gaps(SessionLink):
             self.notify(f"{marker.process}: the lines not drawn could not be read: {exc}",
                         severity="warning")
             return
+        rows = list(page.get("lines") or [])
+        if not rows:  # the file was removed or cut short meanwhile: the line says so
+            self.notify(f"{marker.process}: its log file no longer has the lines not drawn "
+                        "there", severity="warning")
+            return
         left = gap.count - take
         rest = None if left <= 0 else Gap(gap.start, gap.skip, left) if reading_up else \
             Gap(gap.start, gap.skip + take, left)
-        lines = self.store.fill_gap(marker, list(page.get("lines") or []), rest,
-                                    rest_first=reading_up)
+        lines = self.store.fill_gap(marker, rows, rest, rest_first=reading_up)
         self.output_panel.fill_gap(marker, lines)
