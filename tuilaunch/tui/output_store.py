@@ -166,7 +166,7 @@ class OutputStore:
             lines = [left, *lines] if rest_first else [*lines, left]
         for bucket in (self._per_process.get(marker.process), self._all):
             if bucket is not None:
-                _replace(bucket, marker, lines)
+                replace_line(bucket, marker, lines)
         drawn = len(rows)
         self.dropped.per_process[marker.process] = max(
             self.dropped.per_process.get(marker.process, 0) - drawn, 0)
@@ -193,13 +193,14 @@ def gap_line(process: str, gap: Gap, stamp: float) -> Line:
                 True, gap)
 
 
-def _replace(bucket: deque[Line], old: Line, new: list[Line]) -> bool:
-    """`old` (found by identity) replaced by `new`; the bound drops the oldest lines."""
+def replace_line(bucket: deque[Line], old: Line, new: list[Line]) -> int | None:
+    """`old` (found by identity) replaced by `new`, the bound dropping the oldest lines;
+    where `old` was in `bucket`, or None when it is not there."""
     items = list(bucket)
     for index in range(len(items) - 1, -1, -1):
         if items[index] is old:
             items[index:index + 1] = new
             bucket.clear()
             bucket.extend(items)
-            return True
-    return False
+            return index
+    return None

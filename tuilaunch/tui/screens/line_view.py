@@ -26,7 +26,7 @@ from textual.binding import Binding
 from textual.strip import Strip
 from textual.widget import Widget
 
-from ..output_store import Line
+from ..output_store import Gap, Line, replace_line
 
 LEVEL_LETTER = "DIWEF"
 # colour, and the letter says the same with 16 colours or NO_COLOR
@@ -109,7 +109,7 @@ class LineView(Widget, can_focus=True):
         """Told of a line standing for lines not drawn (`Line.gap`) when the user scrolls
         back to it, with whether they were reading upwards; once per gap."""
         self.reading_up = False  # the last move went up: a gap read holds the lines below
-        self._gaps_told: set[object] = set()
+        self._gaps_told: set[Gap] = set()
 
     # --- content ---------------------------------------------------------------------
 
@@ -154,23 +154,14 @@ class LineView(Widget, can_focus=True):
         """A line (a gap's marker) replaced by `new`, the view holding still: reading
         upwards, the lines below it keep their rows (the gap's lines show above them as
         the user goes on up); otherwise those above it do."""
-        for index, line in enumerate(self.newer):
-            if line is old:  # came while scrolled back: not on screen yet
-                waiting = list(self.newer)
-                waiting[index:index + 1] = new
-                self.newer = deque(waiting, maxlen=self.newer.maxlen)
-                return
-        items = list(self.lines)
-        for position in range(len(items) - 1, -1, -1):
-            if items[position] is old:
-                break
-        else:
+        if replace_line(self.newer, old, new) is not None:
+            return  # came while scrolled back: not on screen yet
+        first = self.first
+        position = replace_line(self.lines, old, new)
+        if position is None:
             return  # trimmed meanwhile, or another view's
-        at = self.first + position
-        items[position:position + 1] = new
+        at = first + position
         grown = len(new) - 1
-        self.lines.clear()
-        self.lines.extend(items)  # the bound drops the oldest lines
         self.total += grown
         if self.current_match is not None:
             self.current_match = None if self.current_match == at else \
