@@ -524,7 +524,9 @@ def default_params_dir() -> Path:
     global _params_dir
     # made anew when a finished run removed it (a launcher may plan several runs)
     if _params_dir is None or not _params_dir.is_dir():
-        import tempfile  # paid only by a launch that writes parameter files
+        # on the first plan: every plan has its folder (made before any file is written),
+        # the commands that plan nothing (ls, stop, logs...) do not import tempfile
+        import tempfile
 
         _params_dir = Path(tempfile.mkdtemp(prefix=f"tuilaunch-{os.getpid()}-params-"))
         atexit.register(shutil.rmtree, _params_dir, True)

@@ -16,6 +16,7 @@ MARK = "TUILAUNCH_LAUNCH_ID"
 """Environment variable every process of a launch inherits: the launch tokens, `:`-joined
 (a launch started by a launch carries both)."""
 
+
 def _launch_processes(token: str, groups: set[int]) -> list[int]:
     """Live processes in one of the groups or carrying the token in their environment."""
     found: list[int] = []
