@@ -332,6 +332,31 @@ def test_a_watching_client_gets_rates_and_resources_until_it_stops(session):
         link.close()
 
 
+def test_a_watcher_is_sent_the_figures_of_the_processes_it_shows_only(session):
+    """A TUI whose tree is too narrow for the CPU column shows the selected node's figures
+    only: the others' do not cross the link, their growing-memory mark does; when the
+    selection moves, the new one's figures come at once and the old one's are taken back."""
+    link = Link(session, timeout=60)
+    try:
+        link.request("subscribe", max_lines=1, kinds=["resources"])
+        link.request("watch_resources", on=True, processes=[BUSY])
+        first = events_until(link, "resources", lambda d: BUSY in d)["data"]
+        assert set(first[BUSY]) == {"cpu_percent", "rss_bytes", "threads", "growing"}
+        assert first[FAST] == {"growing": False}
+        for event in [e for e in events_for(link, 2.5) if e["kind"] == "resources"]:
+            assert set(event["data"]) <= {BUSY}, event  # the others' figures stay home
+        link.request("watch_resources", on=True, processes=[FAST])
+        moved = events_until(link, "resources", lambda d: FAST in d)["data"]
+        assert moved[FAST]["rss_bytes"] > 0 and moved[FAST]["threads"] >= 1
+        assert moved[BUSY] == {"cpu_percent": None, "rss_bytes": None, "threads": None}
+        link.request("watch_resources", on=True, processes=None)  # the tree grew wide
+        every = events_until(link, "resources", lambda d: BUSY in d)["data"]
+        assert every[BUSY]["rss_bytes"] > 0 and every[BUSY]["cpu_percent"] is not None
+        link.request("watch_resources", on=False)
+    finally:
+        link.close()
+
+
 def test_a_qos_watcher_is_told_the_problems_when_they_change_and_only_then(session):
     """`watch_qos`: the server checks the graph where the nodes run and tells a watching
     client the QoS problems at once, then only when they change: nothing while they stay

@@ -397,8 +397,10 @@ class RemoteSupervisor:
                 for process, figures in (event.data or {}).items():
                     if isinstance(figures, dict):
                         self._usage[process] = {**self._usage.get(process, {}), **figures}
+                # a stopped process's figures are all None; one whose figures are not
+                # shown (watch_resources `processes`) keeps its growing-memory mark
                 self._usage = {p: f for p, f in self._usage.items()
-                               if f.get("rss_bytes") is not None}
+                               if f.get("rss_bytes") is not None or f.get("growing")}
                 event.data = dict(self._usage)
             self._deliver(event)
 

@@ -7,14 +7,20 @@ from __future__ import annotations
 import re
 from typing import Any
 
+from textual import on
+from textual.timer import Timer
+
 from ..engine.run.process.reported_names import current_node_name
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.supervisor import Event
 from .navigation import Navigation
 from .screens.dialogs import ChoiceScreen, ConfirmScreen
 from .screens.topics_panel import TopicsPanel
+from .screens.tree_panel import LaunchTree
 
 LEVELS = ["debug", "info", "warn", "error", "fatal"]
+FIGURES_SETTLE = 0.3
+"""Seconds the selection rests before the server is told whose CPU and memory to send."""
 
 
 class Inspector(Navigation):
@@ -26,6 +32,9 @@ class Inspector(Navigation):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.watching_resources = False
+        self._figures_asked: list[str] | None = None
+        """The processes the server sends CPU and memory of (None: all), last asked."""
+        self._figures_timer: Timer | None = None
         self.log_levels: dict[str, str] = {}
         """The level last set per process (the level dialog starts there)."""
         self.topics_process: str | None = None
@@ -92,17 +101,38 @@ class Inspector(Navigation):
         return found
 
     async def _watch_resources(self, on: bool) -> None:
-        await self._watch(on, "watch_resources")  # no CPU column without it
+        # no CPU column without it; of the processes whose figures are on screen only
+        self._figures_asked = self.launch_tree.figures_shown()
+        await self._watch(on, "watch_resources", processes=self._figures_asked)
         if not on:
             self.launch_tree.set_usage({})  # figures that no longer move would mislead
 
-    async def _watch(self, on: bool, op: str) -> None:
+    async def _watch(self, on: bool, op: str, **fields: Any) -> None:
         """Starts or stops a stream of the server's (`watch_resources`, `watch_qos`); one
         the server cannot give leaves the tree as it was."""
         try:
-            await self.inspect(op, on=on)
+            await self.inspect(op, on=on, **fields)
         except SessionError:
             pass
+
+    @on(LaunchTree.FiguresShown)
+    def _figures_follow(self) -> None:
+        """The figures on screen are another process's (the selection moved), or every
+        process's (the tree grew wide enough for its column): the server is told once the
+        selection rests, so running down the tree is one request, not one a row."""
+        if not self.watching_resources or self.launch_tree.figures_shown() == \
+                self._figures_asked:
+            return
+        if self._figures_timer is not None:
+            self._figures_timer.stop()
+        self._figures_timer = self.set_timer(FIGURES_SETTLE, self._ask_figures)
+
+    def _ask_figures(self) -> None:
+        self._figures_timer = None
+        if self.watching_resources and self.launch_tree.figures_shown() != \
+                self._figures_asked:
+            self.run_worker(self._watch_resources(True), group="inspector",
+                            exit_on_error=False)
 
     # --- from the Nodes tab ------------------------------------------------------------------
 
@@ -136,6 +166,7 @@ class Inspector(Navigation):
     def update_detail(self) -> None:
         super().update_detail()
         self._follow_topics_node()
+        self._figures_follow()  # the selection may have moved
 
     def _follow_topics_node(self) -> None:
         """After events: the node `o` listed may now be elsewhere (robot:=r1 -> r2)."""

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rich.text import Text
+from textual.message import Message
 from textual.widgets import Tree
 from textual.widgets.tree import TreeNode
 
@@ -87,7 +88,9 @@ class LaunchTree(Tree[RowData]):
         # names processes report in their log lines (OutputStore.reported_names)
         self.reported: dict[str, set[str]] = {}
         self.usage: dict[str, dict[str, Any]] = {}
-        """CPU, memory, threads per running process, while the server samples them."""
+        """CPU, memory, threads per running process, while the server samples them: of the
+        processes it shows them for (figures_shown), and whether memory keeps growing."""
+        self._wide: bool | None = None
         self.qos_problems: dict[str, list[str]] = {}
         """Per process, the QoS problems (sentences) its node is part of."""
 
@@ -202,9 +205,27 @@ class LaunchTree(Tree[RowData]):
             if old.get(ref) != self.qos_problems.get(ref):
                 self.refresh_row(ref)
 
+    class FiguresShown(Message):
+        """The CPU and memory column came or went with the tree's width."""
+
     def on_resize(self) -> None:
         for ref in self.usage:
             self.refresh_row(ref)  # the CPU column comes or goes with the width
+        wide = self.size.width >= USAGE_WIDTH
+        if wide != self._wide:
+            self._wide = wide
+            self.post_message(self.FiguresShown())
+
+    def figures_shown(self) -> list[str] | None:
+        """The processes whose CPU and memory the Nodes tab shows: every one (None) when
+        the tree is wide enough for its column, else the selected row's, on the detail
+        line (no process: none)."""
+        if self.size.width >= USAGE_WIDTH:
+            return None
+        node = self.cursor_node
+        if node is None or node.data is None or node.data.kind != "process":
+            return []
+        return [node.data.ref] if node.data.ref else []
 
     def set_preview(self, diff: PlanDiff | None) -> None:
         old = self.preview
@@ -248,7 +269,7 @@ class LaunchTree(Tree[RowData]):
         lifecycle = self.lifecycle.get(ref)
         if lifecycle:
             label.append(f" · {lifecycle}", LIFECYCLE_LOOK.get(lifecycle, "italic"))
-        if usage and self.size.width >= USAGE_WIDTH:
+        if usage and usage.get("rss_bytes") is not None and self.size.width >= USAGE_WIDTH:
             cpu = usage.get("cpu_percent")
             cpu_text = f"{cpu:.0f}%" if isinstance(cpu, (int, float)) else "-"
             label.append(f" {cpu_text} {short_bytes(usage.get('rss_bytes'))}", "cyan")

@@ -30,11 +30,14 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   share_lines {process, start, end, skip}.
   Resources (run/resource_watch.py): `status` gives each process `cpu_percent` (% of one
   core), `rss_bytes` and `threads` over its process tree (None when not running);
-  watch_resources {on: bool} -> {}: while any client watches, each watcher gets once a
-  second an event of kind "resources", data {process: {cpu_percent, rss_bytes, threads,
-  growing}} (whole percents, memory to 64 KiB: what a display shows), with only the
-  figures that changed since the watcher's last event (all in its first; a process that
-  stopped once, with None figures).
+  watch_resources {on: bool, processes?: [id] | null} -> {}: while any client watches,
+  each watcher gets once a second an event of kind "resources", data {process:
+  {cpu_percent, rss_bytes, threads, growing}} (whole percents, memory to 64 KiB: what a
+  display shows), with only the figures that changed since the watcher's last event (all
+  in its first; a process that stopped once, with None figures). `processes`: the ones
+  whose figures the client shows (null or absent: all); of the others only `growing` is
+  sent, and figures sent before are taken back once (None). Asked again with other
+  `processes`, the watcher is sent the figures it now lacks at once.
   The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
   topics {node?, problems_only?: only the topics with QoS problems} -> {"topics": [{name,
   types, publishers: [{node, in_launch, process,

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from ..events import Event
@@ -33,6 +33,8 @@ def usage_fields(usage: Usage | None) -> dict[str, Any]:
             "threads": usage.threads, "growing": usage.memory_growing}
 
 
+HIDDEN = {"cpu_percent": None, "rss_bytes": None, "threads": None}
+"""The figures of a process whose figures a watcher does not show."""
 RSS_STEP = 64 << 10
 """Watchers get memory to this step: a display shows tenths of a MB at most, and a figure
 that does not move is a repeat the ssh link's compression sends for almost nothing."""
@@ -58,6 +60,8 @@ class ResourceWatch:
         self.sampler = ResourceSampler()
         self.watchers: set[int] = set()
         self.sent: dict[int, dict[str, Any]] = {}  # what each watcher was last told
+        self.shown: dict[int, set[str] | None] = {}  # whose figures each watcher shows
+        self.last_data: dict[str, dict[str, Any]] = {}  # the last tick's figures
         self.last_sample: float | None = None
         self.task: asyncio.Task[None] | None = None
 
@@ -72,10 +76,20 @@ class ResourceWatch:
             await asyncio.sleep(FIRST_INTERVAL)
         return self.sample()
 
-    def watch(self, client: int, on: bool) -> None:
+    def watch(self, client: int, on: bool, shown: Iterable[str] | None = None) -> None:
+        """`shown`: the processes whose figures the client shows (None: all); of the others
+        it is sent only whether their memory keeps growing, the mark every row shows. A
+        watcher that changes its `shown` is sent the figures it now lacks at the next tick,
+        not all of them again."""
         if on:
-            self.watchers.add(client)
-            self.sent[client] = {}  # a new watch is told every figure first
+            shown = None if shown is None else set(shown)
+            changed = client in self.watchers and shown != self.shown.get(client)
+            self.shown[client] = shown
+            if client not in self.watchers:
+                self.watchers.add(client)
+                self.sent[client] = {}  # a new watch is told every figure first
+            if changed and self.last_data:
+                self._tell(client, self.last_data)  # the selected node's figures at once
             if self.task is None:
                 self.task = asyncio.ensure_future(self._loop())
         else:
@@ -84,6 +98,7 @@ class ResourceWatch:
     def forget(self, client: int) -> None:
         self.watchers.discard(client)
         self.sent.pop(client, None)
+        self.shown.pop(client, None)
         if not self.watchers and self.task is not None:
             self.task.cancel()
             self.task = None
@@ -94,16 +109,30 @@ class ResourceWatch:
             await asyncio.sleep(WATCH_PERIOD)
             data = {process: shown_fields(usage_fields(usage))
                     for process, usage in self.sample().items()}
+            self.last_data = data
             for client in list(self.watchers):
-                # only the figures that moved (at the precision shown) cross the link; a
-                # process that stopped is sent once with None figures
-                last = self.sent.get(client, {})
-                changed = {p: {k: v for k, v in f.items() if last.get(p, {}).get(k, v) != v
-                               or p not in last} for p, f in data.items() if last.get(p) != f}
-                changed.update({p: usage_fields(None) for p in last if p not in data})
-                self.sent[client] = data
-                if changed or not last:
-                    self.send(Event("resources", data=changed), client)
+                self._tell(client, data)
+
+    def _tell(self, client: int, data: dict[str, dict[str, Any]]) -> None:
+        """Only the figures that moved (at the precision shown) of the processes it shows
+        cross the link; a process that stopped is sent once with None figures."""
+        shown = self.shown.get(client)
+        view = {p: f if shown is None or p in shown else {**HIDDEN, "growing": f["growing"]}
+                for p, f in data.items()}
+        last = self.sent.get(client, {})
+
+        def moved(process: str, key: str, value: Any) -> bool:
+            before = last.get(process, {})
+            if key in before:
+                return bool(before[key] != value)  # None: no longer shown, said once
+            return value is not None  # nothing to take back of a figure never sent
+
+        changed = {p: {k: v for k, v in f.items() if moved(p, k, v)} for p, f in view.items()}
+        changed = {p: f for p, f in changed.items() if f}
+        changed.update({p: usage_fields(None) for p in last if p not in view})
+        self.sent[client] = view
+        if changed or not last:
+            self.send(Event("resources", data=changed), client)
 
     def close(self) -> None:
         self.watchers.clear()

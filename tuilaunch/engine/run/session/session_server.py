@@ -281,7 +281,9 @@ class SessionServer:
             wanted = message.get("resources", True) is not False
             return self.status(await self.resources.current() if wanted else None)
         if op == "watch_resources":
-            self.resources.watch(int(message["client"]), bool(message.get("on", True)))
+            shown = message.get("processes")
+            self.resources.watch(int(message["client"]), bool(message.get("on", True)),
+                                 None if shown is None else [str(p) for p in shown])
             return {}
         if op in ("start", "stop", "restart"):
             process = self.find_process(str(message.get("process")))
