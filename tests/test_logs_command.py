@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -200,3 +201,72 @@ def test_stop_says_what_it_waits_for_while_a_process_ignores_sigint(tmp_path):
         assert "tuilaunch stop: stubborn-1: process[stubborn-1] failed to terminate '4' " \
             "seconds after receiving 'SIGINT', escalating to 'SIGTERM'" in stopped.stderr
         assert "Traceback" not in stopped.stderr
+
+
+SAYING = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess, LogInfo, RegisterEventHandler
+from launch.event_handlers import OnProcessExit
+
+
+def generate_launch_description():
+    gate = ExecuteProcess(name='gate', output='screen', cmd=[
+        'sh', '-c', 'echo waiting; while [ ! -e {flag} ]; do sleep 0.05; done; echo through'])
+    return LaunchDescription([
+        LogInfo(msg='bringing the gate up'),
+        gate,
+        RegisterEventHandler(OnProcessExit(target_action=gate,
+                                           on_exit=[LogInfo(msg='the gate is through')])),
+    ])
+"""
+
+
+def lines_of(proc: subprocess.Popen[bytes], count: int, limit: float = 60.0) -> list[str]:
+    """The next `count` lines `proc` prints; a failure, not a hang, when they do not come.
+    Read unbuffered, so that select() sees every byte not read yet."""
+    assert proc.stdout is not None
+    fd = proc.stdout.fileno()
+    end = time.monotonic() + limit
+    data = b""
+    while data.count(b"\n") < count:
+        assert select.select([fd], [], [], max(0.0, end - time.monotonic()))[0], \
+            f"only {data!r} within {limit:g} s"
+        chunk = os.read(fd, 1 << 16)
+        assert chunk, f"the output ended after {data!r}"
+        data += chunk
+    assert data.count(b"\n") == count, data  # nothing read past them is lost unseen
+    return data.decode().splitlines(keepends=True)
+
+
+def test_logs_of_a_whole_session_have_the_launch_files_own_lines_as_headless(tmp_path):
+    """`ros2 launch` prints a LogInfo's line among the processes' (`[INFO] [launch.user]:
+    ...`); `logs NAME` of a session is that output read back, so it has them, in time
+    order, and follows them with -f; `logs NAME PROCESS` is that process's alone."""
+    flag = tmp_path / "open"
+    (tmp_path / "saying.launch.py").write_text(SAYING.replace("{flag}", str(flag)))
+    with session_folders(tmp_path / "log"):
+        name = tl(str(tmp_path / "saying.launch.py"), "--detach").strip()
+        try:
+            wait_for(lambda: "waiting" in tl("logs", name, "gate-1"), what="the gate")
+            follow = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", name, "-f"],
+                                      stdout=subprocess.PIPE, bufsize=0)
+            try:
+                first = lines_of(follow, 3)
+                assert first[0] == "[INFO] [launch.user]: bringing the gate up\n"
+                assert first[1].startswith("[INFO] [gate-1]: process started with pid [")
+                assert first[2] == "[gate-1] waiting\n"
+                flag.touch()
+                later = lines_of(follow, 3)
+                assert later[0] == "[gate-1] through\n"
+                assert later[1].startswith("[INFO] [gate-1]: process has finished cleanly")
+                assert later[2] == "[INFO] [launch.user]: the gate is through\n"
+            finally:
+                follow.kill()
+                follow.wait()
+            lines = tl("logs", name).splitlines()
+            assert [lines[0], lines[-1]] == ["[INFO] [launch.user]: bringing the gate up",
+                                             "[INFO] [launch.user]: the gate is through"]
+            assert "launch.user" not in tl("logs", name, "gate-1")
+            assert tl("logs", name, "--level", "WARN") == ""
+        finally:
+            run_cli("stop", name)

@@ -1,6 +1,7 @@
 """`tuilaunch logs [HOST:]NAME [PROCESS] [-f] [-n N] [--since T] [--level L]`: a session's
 output, and its processes' lives (starts, exits with their code or signal, respawns) in the
-words `--headless` prints them, so `--level ERROR` shows a crash.
+words `--headless` prints them, so `--level ERROR` shows a crash; without a PROCESS, the
+launch's own lines too (LogInfo's), as `--headless` prints them among the others.
 
 Read from the log files and launch.log (on another machine, through the server's
 `read_log`), merged in time order; with `-f`, the lines that come after, from the events.
@@ -49,6 +50,7 @@ def cmd_logs(options: argparse.Namespace) -> int:
         status = link.request("status", short=True, resources=False)
         log_dir = Path(status["log_dir"])
         wanted = [p["id"] for p in status["processes"] if p["state"] != "skipped"]
+        processes = {p["id"] for p in status["processes"]}
         if options.process:
             wanted = [link.request("find", short=True, process=options.process)]
         prefixed = len(wanted) > 1 or not options.process
@@ -86,8 +88,16 @@ def cmd_logs(options: argparse.Namespace) -> int:
                 return  # launch.log had it, and the subscription's history too
             told.add(key)
             text = life.format(event).replace(", cmd ''", "").rstrip("\n")
-            if text and event.process:
-                show(event.process, LogLine(event.time, "life", text))
+            if text:
+                show(event.process or "launch", LogLine(event.time, "life", text))
+
+        def ours(event: Event) -> bool:
+            """A process's life, or (with no PROCESS asked for) the launch's own line, such
+            as a LogInfo's, as --headless prints it among the processes' lines."""
+            if event.process in offsets:
+                return True
+            return not options.process and event.kind == "log" and \
+                event.process not in processes
 
         # without a filter, -n N reads only each file's tail
         tail = last if last is not None and since is None and not minimum else None
@@ -100,7 +110,7 @@ def cmd_logs(options: argparse.Namespace) -> int:
                               else remote_lines(link, p, offsets[p])) for p in wanted]
             events = remote_lines(link, LAUNCH_LOG, launch_end)
         lives = [(e.time, e.process or "", e) for e in map(life_event, events)
-                 if e is not None and e.process in offsets]
+                 if e is not None and ours(e)]
         for _, process, item in heapq.merge(*streams, lives, key=lambda item: item[0]):
             if isinstance(item, Event):
                 tell(item)
@@ -124,7 +134,7 @@ def cmd_logs(options: argparse.Namespace) -> int:
                 elif event.kind == "dropped" and event.process in offsets:
                     print(f"tuilaunch logs: {event.code} lines of {event.process} skipped "
                           f"(too slow a reader); they are in {log_dir}", file=sys.stderr)
-                elif event.kind in LIFE_KINDS and event.process in offsets:
+                elif event.kind in LIFE_KINDS and ours(event):
                     tell(event)
             out.flush()
         return 0

@@ -21,6 +21,7 @@ LAUNCH_LOG = "@launch"
 LIFE_KINDS = ("started", "exited", "failed", "respawning", "log", "lifecycle", "component")
 """The events of a process's life that `tuilaunch logs` tells among its lines."""
 _DETAIL = re.compile(r"(pid|code|requested|level)=(\S*)\s*")
+_SAID = re.compile(r"^\[([A-Z]+)\] \[([^\]]+)\]: (.*)$", re.DOTALL)
 
 
 @dataclass(frozen=True)
@@ -88,11 +89,12 @@ def tail_lines(path: Path, end: int, count: int) -> list[LogLine]:
 
 def life_event(line: LogLine) -> Event | None:
     """A launch.log line (read as a LogLine: kind as its stream) as the Event it was, if it
-    tells a process's life."""
+    tells a process's life, or is a line of the launch's own (a `log` of an action, such as
+    LogInfo, or of the launcher: process None)."""
     if line.stream not in LIFE_KINDS:
         return None
     process, _, detail = line.text.partition(" ")
-    if not process:
+    if not process and line.stream != "log":  # a log line may be the launch's own
         return None
     fields: dict[str, str] = {}
     position = 0
@@ -101,14 +103,17 @@ def life_event(line: LogLine) -> Event | None:
         position = match.end()
     rest = detail[position:]
     reason = rest[len("reason="):] if rest.startswith("reason=") else None
+    data: dict[str, object] = {"requested": fields.get("requested") == "1"}
+    said = _SAID.match(rest) if line.stream == "log" and reason is None else None
+    if said is not None:  # a LogInfo line, kept as ros2 launch prints it
+        fields["level"], data["logger"], reason = said.groups()
     try:
         pid = int(fields["pid"]) if "pid" in fields else None
         code = int(fields["code"]) if "code" in fields else None
     except ValueError:
         return None
-    return Event(line.stream, process, pid=pid, code=code, reason=reason,
-                 level=fields.get("level") or "INFO", time=line.time,
-                 data={"requested": fields.get("requested") == "1"})
+    return Event(line.stream, process or None, pid=pid, code=code, reason=reason,
+                 level=fields.get("level") or "INFO", time=line.time, data=data)
 
 
 def log_size(path: Path) -> int:
