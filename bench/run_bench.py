@@ -5,13 +5,16 @@
    tuilaunch's thread count with N children (constant: no thread per child). Target at 100:
    at most 2x the floor.
 2. A flood: 4 processes each printing FLOOD_LINES lines as fast as they can, through
-   pseudo-terminals (the default, where they write line by line), all of it logged with
-   0 lines lost, against the floor of the same 4 writers writing line by line ("unbuffered":
-   `stdbuf -oL`, one write per line as on a terminal) straight to files. Two ratios: the
-   flood itself (first writer started to last line logged, from tuilaunch's own stamps in
-   launch.log and the log files; target at most 1.5x) and command to end (tuilaunch's own
-   start-up included, which the start figure measures). Also through pipes
-   (emulate_tty=False), against the same writers writing 4 KB blocks to files.
+   pseudo-terminals (the default), all of it logged with 0 lines lost, against the floor
+   of the same 4 writers writing the same way straight to files (`stdbuf -oL`, as a
+   terminal makes stdout line-buffered; `seq` writes 8 KB blocks anyway, to a terminal as
+   to a file, as strace shows). Two ratios: the flood itself (first writer started to
+   last line logged, from tuilaunch's own stamps in launch.log and the log files; target
+   at most 1.5x) and command to end (tuilaunch's own start-up included, which the start
+   figure measures). Beside it, a minimal reader of the same terminals (read, write to a
+   file): what the terminals cost under any launcher. Then the same with writers that
+   write each line as it is made (awk with fflush(): one write(2) a line, as a ROS node's
+   logger writes to a terminal), and through pipes (emulate_tty=False) with `seq`.
 3. tuilaunch's own CPU while 100 quiet processes run (target: under 1% of a core).
 
 ros2 launch is not installed on this machine (no ROS apt packages; `launch` is not on PyPI
@@ -134,7 +137,14 @@ def flood_window(log_dir: Path) -> float:
     return last - min(starts)
 
 
-def flood_once(folder: Path, path: Path, name: str, tty: bool) -> tuple[float, float, int]:
+WRITERS = {
+    "seq": ["seq", "1", str(FLOOD_LINES)],
+    # one write(2) a line, as a logger flushing each line to a terminal does
+    "awk": ["awk", f"BEGIN {{ for (i = 1; i <= {FLOOD_LINES}; i++) {{ print i; fflush() }} }}"],
+}
+
+
+def flood_once(folder: Path, path: Path, name: str) -> tuple[float, float, int]:
     """(command to end, the flood itself, lines lost) for one tuilaunch run."""
     log_dir = folder / f"flood_log_{name}"
     shutil.rmtree(log_dir, ignore_errors=True)
@@ -146,22 +156,21 @@ def flood_once(folder: Path, path: Path, name: str, tty: bool) -> tuple[float, f
     return whole, flood_window(log_dir), 4 * FLOOD_LINES - logged
 
 
-def floor_flood_once(folder: Path, tty: bool) -> float:
-    """The same 4 writers straight to files: line by line (as on a terminal), or in blocks."""
+def floor_flood_once(folder: Path, writer: list[str], tty: bool) -> float:
+    """The same 4 writers straight to files, line-buffered as on a terminal, or not."""
     argv = ["stdbuf", "-oL"] if tty else []
     outs = [open(folder / f"direct{i}.txt", "wb") for i in range(4)]
     start = time.perf_counter()
-    writers = [subprocess.Popen([*argv, "seq", "1", str(FLOOD_LINES)], stdout=out)
-               for out in outs]
-    for writer in writers:
-        writer.wait()
+    writers = [subprocess.Popen([*argv, *writer], stdout=out) for out in outs]
+    for process in writers:
+        process.wait()
     elapsed = time.perf_counter() - start
     for out in outs:
         out.close()
     return elapsed
 
 
-def reader_flood_once(folder: Path) -> float:
+def reader_flood_once(folder: Path, writer: list[str]) -> float:
     """The same 4 writers through pseudo-terminals set up as tuilaunch's (no output
     processing), each read by a minimal reader that writes what it reads to a file, nothing
     else: what the terminals themselves cost, under any launcher that reads them."""
@@ -178,8 +187,7 @@ def reader_flood_once(folder: Path) -> float:
         attrs = termios.tcgetattr(slave)
         attrs[1] &= ~termios.OPOST
         termios.tcsetattr(slave, termios.TCSANOW, attrs)
-        writers.append(subprocess.Popen(["seq", "1", str(FLOOD_LINES)], stdout=slave,
-                                        start_new_session=True))
+        writers.append(subprocess.Popen(writer, stdout=slave, start_new_session=True))
         os.close(slave)
         os.set_blocking(master, False)
         files[master] = os.open(folder / f"read{i}.txt", os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
@@ -198,33 +206,32 @@ def reader_flood_once(folder: Path) -> float:
             chooser.unregister(key.fd)
             os.close(key.fd)
             os.close(files.pop(key.fd))
-    for writer in writers:
-        writer.wait()
+    for process in writers:
+        process.wait()
     return time.perf_counter() - start
 
 
-def flood(folder: Path, tty: bool) -> tuple[float, float, float, int]:
-    """4 x `seq` through tuilaunch (pseudo-terminals, or pipes) against the floor, best of
-    3 each, interleaved: (command to end, flood itself, floor, lines lost in any run)."""
+def flood(folder: Path, writer: str, tty: bool) -> tuple[float, float, float, float | None,
+                                                          int]:
+    """4 writers through tuilaunch (pseudo-terminals, or pipes) against the floor and, for
+    terminals, the minimal reader; best of 3 each, interleaved: (command to end, flood
+    itself, floor, minimal reader, lines lost in any run)."""
     emulate = "None" if tty else "False"
-    name = "tty" if tty else "pipe"
+    name = f"{writer}_{'tty' if tty else 'pipe'}"
+    argv = WRITERS[writer]
     path = write_launch(folder, f"flood_{name}.py",
-                        f"[ExecuteProcess(cmd=['seq', '1', '{FLOOD_LINES}'], name=f'f{{i}}', "
+                        f"[ExecuteProcess(cmd={argv!r}, name=f'f{{i}}', "
                         f"emulate_tty={emulate}) for i in range(4)]")
-    wholes, windows, floors, lost = [], [], [], 0
+    wholes, windows, floors, readers, lost = [], [], [], [], 0
     for _ in range(3):
-        whole, window, missing = flood_once(folder, path, name, tty)
+        whole, window, missing = flood_once(folder, path, name)
         wholes.append(whole)
         windows.append(window)
         lost += missing
-        floors.append(floor_flood_once(folder, tty))
+        floors.append(floor_flood_once(folder, argv, tty))
         if tty:
-            READERS.append(reader_flood_once(folder))
-    return min(wholes), min(windows), min(floors), lost
-
-
-READERS: list[float] = []
-"""The terminal flood's minimal readers, run beside it (reader_flood_once)."""
+            readers.append(reader_flood_once(folder, argv))
+    return min(wholes), min(windows), min(floors), min(readers) if readers else None, lost
 
 
 def idle_cpu(folder: Path, seconds: float = 10.0) -> float:
@@ -257,18 +264,18 @@ def main() -> None:
                   f"started, best of {TRIES}), bare Python Popen loop {floor:.3f} s, "
                   f"ratio {ours / floor:.2f}x{' (target <= 2x)' if count == 100 else ''}; "
                   f"tuilaunch threads with {count} children: {threads}")
-        for tty, channel, floor_how in ((True, "pseudo-terminals (the default)",
-                                         "line by line (stdbuf -oL)"),
-                                        (False, "pipes (emulate_tty=False)", "in blocks")):
-            whole, window, floor, lost = flood(folder, tty)
-            target = " (target <= 1.5x)" if tty else ""
-            print(f"flood 4 x {FLOOD_LINES:,} lines through {channel}, all logged: the flood "
+        for writer, tty, what in (
+                ("seq", True, "`seq` through pseudo-terminals (the default)"),
+                ("awk", True, "a line a write (awk, fflush) through pseudo-terminals"),
+                ("seq", False, "`seq` through pipes (emulate_tty=False)")):
+            whole, window, floor, reader, lost = flood(folder, writer, tty)
+            target = " (target <= 1.5x)" if (writer, tty) == ("seq", True) else ""
+            print(f"flood 4 x {FLOOD_LINES:,} lines, {what}, all logged: the flood "
                   f"{window:.3f} s (first start to last line logged), command to end "
-                  f"{whole:.3f} s; the same writers straight to files {floor_how} "
-                  f"{floor:.3f} s; ratio {window / floor:.2f}x{target}, command to end "
-                  f"{whole / floor:.2f}x; lines lost: {lost}")
-            if tty and READERS:
-                reader = min(READERS)
+                  f"{whole:.3f} s; the same writers straight to files {floor:.3f} s; ratio "
+                  f"{window / floor:.2f}x{target}, command to end {whole / floor:.2f}x; "
+                  f"lines lost: {lost}")
+            if reader is not None:
                 print(f"  the same terminals read by a minimal reader (read, write to a file, "
                       f"nothing else): {reader:.3f} s, {reader / floor:.2f}x the floor; "
                       f"tuilaunch's flood is {window / reader:.2f}x that reader")
