@@ -21,6 +21,7 @@ from typing import Any
 import pytest
 
 from tuilaunch.client.link import Link
+from tuilaunch.client.remote_supervisor import merged_usage
 from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.ros.graph import full_node_name
 from tuilaunch.engine.run.session.session_dir import SessionError
@@ -355,6 +356,21 @@ def test_a_watcher_is_sent_the_figures_of_the_processes_it_shows_only(session):
         link.request("watch_resources", on=False)
     finally:
         link.close()
+
+
+def test_the_tui_keeps_the_growing_mark_of_a_process_whose_figures_it_does_not_show():
+    """What the TUI holds of those events: a process no longer shown keeps `↑mem` and
+    loses its figures (none stale on screen), a stopped one is forgotten."""
+    held = {"a": {"cpu_percent": 3.0, "rss_bytes": 1 << 20, "threads": 4, "growing": True},
+            "b": {"cpu_percent": 0.0, "rss_bytes": 1 << 20, "threads": 2, "growing": False},
+            "c": {"cpu_percent": 1.0, "rss_bytes": 1 << 20, "threads": 2, "growing": False}}
+    hidden = {"cpu_percent": None, "rss_bytes": None, "threads": None}
+    stopped = {**hidden, "growing": False}
+    usage = merged_usage(held, {"a": hidden, "b": hidden, "c": stopped,
+                                "d": {"growing": True}})
+    assert usage == {"a": {**hidden, "growing": True}, "d": {"growing": True}}
+    assert merged_usage(usage, {"a": {"cpu_percent": 5.0, "rss_bytes": 2 << 20,
+                                      "threads": 4}})["a"]["rss_bytes"] == 2 << 20
 
 
 def test_a_qos_watcher_is_told_the_problems_when_they_change_and_only_then(session):

@@ -57,6 +57,18 @@ RETRY_MOST = 15.0
 """The longest wait between tries: a robot back on the network is found within this."""
 
 
+def merged_usage(held: dict[str, Any], moved: dict[str, Any]) -> dict[str, Any]:
+    """The figures held, with the ones a `resources` event says moved. A process whose
+    figures are all None has stopped, and is left out; one whose figures are not shown
+    (watch_resources `processes`: None figures) keeps its growing-memory mark."""
+    usage = dict(held)
+    for process, figures in moved.items():
+        if isinstance(figures, dict):
+            usage[process] = {**usage.get(process, {}), **figures}
+    return {p: f for p, f in usage.items() if f.get("rss_bytes") is not None
+            or f.get("growing")}
+
+
 async def _reply_to(reader: asyncio.StreamReader, request_id: int) -> dict[str, Any]:
     """The reply to a request, passing over what the server sends before it."""
     while True:
@@ -393,15 +405,8 @@ class RemoteSupervisor:
             if event.kind == "lifecycle" and event.process:
                 self.lifecycle.follow(event.process, event.reason or "")
             if event.kind == "resources":
-                # the server sends the figures that moved: the consumers get them all
-                for process, figures in (event.data or {}).items():
-                    if isinstance(figures, dict):
-                        self._usage[process] = {**self._usage.get(process, {}), **figures}
-                # a stopped process's figures are all None; one whose figures are not
-                # shown (watch_resources `processes`) keeps its growing-memory mark
-                self._usage = {p: f for p, f in self._usage.items()
-                               if f.get("rss_bytes") is not None or f.get("growing")}
-                event.data = dict(self._usage)
+                self._usage = merged_usage(self._usage, event.data or {})
+                event.data = dict(self._usage)  # the consumers get them all
             self._deliver(event)
 
     # --- the pane shown ------------------------------------------------------------------
