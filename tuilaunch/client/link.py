@@ -226,3 +226,20 @@ def open_link(address: str | None, timeout: float | None = ANSWER_TIMEOUT,
     remote = open_remote_link(where.host, where.name)
     return Link.connected(where.name, remote.sock, remote.hello, where.host, timeout,
                           answer_timeout, on_close=remote.close)
+
+
+def send_once(name: str, request: dict[str, Any]) -> bool:
+    """A request to a session on this machine from a thread without an event loop (the
+    UI's teardown): sent, and the connection closed once the server greets; False when the
+    server is there but does not answer (stopped or stuck)."""
+    try:
+        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+            sock.settimeout(2.0)
+            sock.connect(str(session_dir.socket_path(name)))
+            sock.sendall(encode(request))
+            sock.recv(4096)  # the hello: the request is read before we hang up
+    except TimeoutError:
+        return False
+    except OSError:
+        pass  # the server is gone, and with it what the request was about
+    return True

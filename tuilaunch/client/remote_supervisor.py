@@ -13,7 +13,9 @@ events the server kept, in time order.
 
 Over 500 lines on purpose: reconnecting (`_relink`, `_missed`) swaps this client's own
 connection and rewinds its counters, so it stays inside the class, not in a module that
-would reach into its private state.
+would reach into its private state. What keeps a state of its own lives next door:
+watches.py (the inspector's streams, asked again on a new connection) and
+remote_lifecycle.py; link.py sends the teardown's one request.
 """
 
 from __future__ import annotations
@@ -22,7 +24,6 @@ import asyncio
 import contextlib
 import os
 import signal
-import socket
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -43,8 +44,10 @@ from ..engine.run.session.protocol import (
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.supervisor import Event
 from .history import merged
-from .link import ANSWER_TIMEOUT, not_answering
+from .link import ANSWER_TIMEOUT, not_answering, send_once
+from .remote_lifecycle import RemoteLifecycle
 from .served_session import ServedSession
+from .watches import Watches
 
 Consumer = Callable[[Event], None]
 
@@ -115,9 +118,7 @@ class RemoteSupervisor:
         self._usage: dict[str, Any] = {}  # the figures of `resources`, which sends changes
         self._stamps = Stamps()  # the current batch's output stamps
         self._retry: asyncio.Event | None = None
-        self.watches: dict[str, dict[str, Any]] = {}
-        """The inspector's streams asked for and not ended (rates, echo, resources), as the
-        requests that asked: a new connection asks again, the server's ended with the old."""
+        self.watches = Watches()  # the inspector's streams: a new connection asks again
         self.session = session
         self.info = info
         self.log_dir = Path(info["log_dir"])
@@ -144,7 +145,7 @@ class RemoteSupervisor:
         self._replies: dict[int, asyncio.Future[Any]] = {}
         self._next_id = 0
         self._stopping = False
-        self.lifecycle = RemoteLifecycle(self)
+        self.lifecycle = RemoteLifecycle(self.request)
 
     @classmethod
     async def open(cls, name: str, session: Session, scrollback: int = 5000,
@@ -513,7 +514,8 @@ class RemoteSupervisor:
             start, received = self._from, self._received
             try:
                 missed = await asyncio.wait_for(self._missed(), ANSWER_TIMEOUT * 3)
-                await asyncio.wait_for(self._watch_again(), ANSWER_TIMEOUT * 3)
+                await asyncio.wait_for(self.watches.ask_again(self._call, self._warn),
+                                       ANSWER_TIMEOUT * 3)
             except (TimeoutError, ConnectionError, ProtocolError, SessionError) as exc:
                 # the link dropped again before the gap was read: it is read on the next
                 # one, from the same place; what this one sent meanwhile is in that gap
@@ -574,38 +576,15 @@ class RemoteSupervisor:
         for consumer in list(self.consumers):
             consumer(event)
 
+    def _warn(self, text: str) -> None:
+        self._deliver(Event("log", reason=text, level="WARN"))
+
     async def request(self, op: str, **fields: Any) -> Any:
         """The result of any request of the protocol (engine/run/session/protocol.py): `topics`,
         `watch_rates`, `echo`, ...; SessionError with the server's message when it fails."""
         result = await self._request(op, **fields)
-        self._note_watch(op, fields)
+        self.watches.note(op, fields)
         return result
-
-    def _note_watch(self, op: str, fields: dict[str, Any]) -> None:
-        """Keeps `watches` as the streams now running for this client."""
-        if op == "watch_rates":
-            key = op
-            on = bool(fields.get("topics"))
-        elif op in ("echo", "echo_stop"):
-            key, on = f"echo {fields.get('topic')}", op == "echo"
-        elif op in ("watch_resources", "watch_qos"):
-            key, on = op, bool(fields.get("on", True))
-        else:
-            return
-        if on:
-            self.watches[key] = {"op": op, **fields}
-        else:
-            self.watches.pop(key, None)
-
-    async def _watch_again(self) -> None:
-        """After a reconnection: the streams the old connection carried, asked for again."""
-        for key, asked in list(self.watches.items()):
-            fields = {k: v for k, v in asked.items() if k != "op"}
-            try:
-                await self._call(asked["op"], **fields)
-            except SessionError as exc:  # the topic went away meanwhile, say
-                self.watches.pop(key, None)
-                self._deliver(Event("log", reason=f"not watched again: {exc}", level="WARN"))
 
     async def _request(self, op: str, **fields: Any) -> Any:
         if self.link_lost is not None:
@@ -663,25 +642,10 @@ class RemoteSupervisor:
                 self._writer.write(encode({"id": 1, "op": "kill"}))
             return
         if self._stopping:
-            if not self._send_once({"id": 1, "op": "kill"}):
+            if not send_once(self.name, {"id": 1, "op": "kill"}):
                 self._kill_server()
         elif self.owner and not self.keep_on_hangup and not self.detached:
-            self._send_once({"id": 1, "op": "shutdown", "reason": "the UI ended"})
-
-    def _send_once(self, request: dict[str, Any]) -> bool:
-        """A request from a thread without the engine loop (the UI's teardown); False when
-        the server is there but does not answer (stopped or stuck)."""
-        try:
-            with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
-                sock.settimeout(2.0)
-                sock.connect(str(session_dir.socket_path(self.name)))
-                sock.sendall(encode(request))
-                sock.recv(4096)  # the hello: the request is read before we hang up
-        except TimeoutError:
-            return False
-        except OSError:
-            pass  # the server is gone, and with it what the request was about
-        return True
+            send_once(self.name, {"id": 1, "op": "shutdown", "reason": "the UI ended"})
 
     def _kill_server(self) -> None:
         """"Kill now" and the server does not answer: SIGKILL it; its watchdog then kills
@@ -694,22 +658,3 @@ class RemoteSupervisor:
             except OSError:
                 pass
 
-
-class RemoteLifecycle:
-    """The lifecycle states of the session's nodes, as its server's events report them, and
-    the operator's transitions, asked of the server (which asks the node)."""
-
-    def __init__(self, remote: RemoteSupervisor) -> None:
-        self.remote = remote
-        self.states: dict[str, str] = {}
-
-    def follow(self, process: str, state: str) -> None:
-        if state:
-            self.states[process] = state
-        else:
-            self.states.pop(process, None)  # the node is gone
-
-    async def request(self, process: str, transition: str) -> bool:
-        result = await self.remote.request("transition", process=process,
-                                            transition=transition)
-        return bool(result.get("done"))
