@@ -63,7 +63,7 @@ def cmd_logs(options: argparse.Namespace) -> int:
         out = sys.stdout
         colour = out.isatty() and not os.environ.get("NO_COLOR")
         life = Printer(io.StringIO())
-        told: set[tuple[str, str, int | None, int]] = set()
+        told: set[tuple[str, str, int | None, int, str | None]] = set()
         kept: collections.deque[str] | None = None if last is None else \
             collections.deque(maxlen=last)
 
@@ -83,7 +83,9 @@ def cmd_logs(options: argparse.Namespace) -> int:
 
         def tell(event: Event) -> None:
             """A start, an exit, a respawn ... in the headless printer's words."""
-            key = (event.kind, event.process or "", event.pid, round(event.time * 1000))
+            # its words too: an action may say two things within a millisecond
+            key = (event.kind, event.process or "", event.pid, round(event.time * 1000),
+                   event.reason)
             if key in told:
                 return  # launch.log had it, and the subscription's history too
             told.add(key)
