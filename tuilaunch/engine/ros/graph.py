@@ -18,6 +18,14 @@ def full_node_name(name: str, namespace: str) -> str:
     return namespace.rstrip("/") + "/" + name
 
 
+def topic_of(message: Mapping[str, Any]) -> str:
+    """The topic a request names, absolute as the graph names it."""
+    topic = message.get("topic")
+    if not isinstance(topic, str) or not topic:
+        raise ValueError("a topic name is needed")
+    return topic if topic.startswith("/") else "/" + topic
+
+
 def policy_name(value: Any) -> str:
     """`ReliabilityPolicy.BEST_EFFORT` as `best_effort`, as `ros2 topic info -v` words it."""
     return str(getattr(value, "name", value)).lower()

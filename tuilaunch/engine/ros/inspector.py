@@ -7,8 +7,8 @@ be named by its process id.
 
 Streams are per client: `watch_rates` measures the union of what the clients watch and
 stops a topic when nobody watches it; `echo` runs one throttled stream per client and
-topic; `watch_qos` sends the graph's QoS problems when they change (qos_watch.py). A client
-that disconnects loses its streams (`client_gone`).
+topic (echo_streams.py); `watch_qos` sends the graph's QoS problems when they change
+(qos_watch.py). A client that disconnects loses its streams (`client_gone`).
 """
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ from ..run.events import Event
 from ..run.plugins import Clients, Handler, Plugin
 from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
+from .echo_streams import EchoStreams
+from .graph import topic_of
 from .qos_watch import Problems, QosWatch
 from .ros_errors import RosError
 
@@ -40,10 +42,6 @@ NODE_WAIT = 2.0
 """How long a request for a node waits for it to appear on the graph."""
 SERVICE_TIMEOUT = 5.0
 """How long a node may take to answer a parameter or logger request."""
-ECHO_DEFAULT_PER_S = 5.0
-"""Messages a second an echo stream sends by default: what a screen can show."""
-ECHO_UNTHROTTLED_POLL = 0.05
-"""With no throttle (`max_per_s` 0), how often the kept messages are sent."""
 MAX_WINDOW = 600.0
 
 
@@ -56,7 +54,6 @@ class Inspector(Plugin):
         self.rate_watch: dict[int, set[str]] = {}
         self.unmeasured: dict[str, str] = {}  # watched topics not measured yet: why
         self.rates_task: asyncio.Task[None] | None = None
-        self.echoes: dict[tuple[int, str], asyncio.Task[None]] = {}
         self.hz_streams: dict[tuple[int, str], tuple[asyncio.Task[None], Any]] = {}
         """`tuilaunch hz` clients' measures, by (client, topic): the task sending the
         figures, and the meter."""
@@ -66,6 +63,8 @@ class Inspector(Plugin):
         self.reported = ReportedNames()
         self.unnamed: tuple[object, set[str]] = (None, set())  # (plan, its unnamed nodes)
         self.qos = QosWatch(self.qos_problems, self.send)
+        self.echoes = EchoStreams(self.bridge, self.publisher_problem, self._subscribed,
+                                  self.send, PUBLISHER_WAIT)
         supervisor.subscribe(self.learn_names)
 
     def learn_names(self, event: Event) -> None:
@@ -93,14 +92,13 @@ class Inspector(Plugin):
         self.find_process = find_process
         return {"topics": self.topics, "hz": self.hz, "watch_rates": self.watch_rates,
                 "hz_watch": self.hz_watch, "hz_read": self.hz_read,
-                "echo": self.echo, "echo_stop": self.echo_stop,
+                "echo": self.echoes.echo, "echo_stop": self.echoes.echo_stop,
                 "params_dump": self.params_dump, "params_load": self.params_load,
                 "log_level": self.log_level, "watch_qos": self.qos.watch}
 
     def client_gone(self, client: int) -> None:
         self.qos.client_gone(client)
-        for key in [k for k in self.echoes if k[0] == client]:
-            self.echoes.pop(key).cancel()
+        self.echoes.client_gone(client)
         for key in [k for k in self.hz_streams if k[0] == client]:
             self.hz_streams.pop(key)[0].cancel()
         if self.rate_watch.pop(client, None) is not None:
@@ -109,13 +107,12 @@ class Inspector(Plugin):
             task.add_done_callback(self.pending.discard)
 
     async def close(self) -> None:
-        for task in [*self.echoes.values(), *(t for t, _ in self.hz_streams.values()),
-                     self.rates_task]:
+        for task in [*(t for t, _ in self.hz_streams.values()), self.rates_task]:
             if task is not None:
                 task.cancel()
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await task
-        self.echoes.clear()
+        await self.echoes.close()
         self.hz_streams.clear()
         self.rate_watch.clear()
         await self.qos.close()
@@ -384,57 +381,8 @@ class Inspector(Plugin):
         if self.clients is not None:
             self.clients.send(event, client)
 
-    # --- echo --------------------------------------------------------------------------------
-
-    async def echo(self, message: dict[str, Any]) -> dict[str, Any]:
-        topic = topic_of(message)
-        client = int(message["client"])
-        if self.clients is None or not self.clients.subscribed(client):
-            raise LaunchError("echo sends its messages as events: subscribe first")
-        count = message.get("count")
-        if count is not None and (not isinstance(count, int) or count < 1):
-            raise ValueError(f"count {count!r} is not a positive number")
-        per_s = float(message.get("max_per_s", ECHO_DEFAULT_PER_S) or 0.0)
-        # `echo --timeout 3` waits 3 s for a publisher, not the usual 5
-        wait = min(float(message.get("wait") or PUBLISHER_WAIT), PUBLISHER_WAIT)
-        bridge = await self.bridge()
-        try:
-            stream = await bridge.start_echo(topic, wait=wait)
-        except RosError:
-            raise LaunchError(f"{await self.publisher_problem(bridge, topic)} "
-                              f"(waited {wait:g} s)") from None
-        old = self.echoes.pop((client, topic), None)
-        if old is not None:
-            old.cancel()
-        self.echoes[(client, topic)] = asyncio.ensure_future(
-            self.stream_echo(bridge, stream, client, count, per_s))
-        return {}
-
-    async def stream_echo(self, bridge: Any, stream: Any, client: int, count: int | None,
-                          per_s: float) -> None:
-        topic = stream.topic
-        sent = 0
-        period = 1.0 / per_s if per_s > 0 else ECHO_UNTHROTTLED_POLL
-        try:
-            while count is None or sent < count:
-                await asyncio.sleep(period)
-                texts = await asyncio.to_thread(take_texts, stream, per_s > 0)
-                for text in texts[:None if count is None else count - sent]:
-                    sent += 1
-                    data: dict[str, Any] = {"topic": topic, "text": text}
-                    if sent == count:
-                        data["done"] = True
-                    self.send(Event("echo", data=data), client)
-        finally:
-            await bridge.stop_echo(stream)
-            if self.echoes.get((client, topic)) is asyncio.current_task():
-                del self.echoes[(client, topic)]
-
-    async def echo_stop(self, message: dict[str, Any]) -> dict[str, Any]:
-        task = self.echoes.pop((int(message["client"]), topic_of(message)), None)
-        if task is not None:
-            task.cancel()
-        return {}
+    def _subscribed(self, client: int) -> bool:
+        return self.clients is not None and self.clients.subscribed(client)
 
     # --- parameters and loggers --------------------------------------------------------------
 
@@ -487,24 +435,6 @@ class Inspector(Plugin):
         except RosError as exc:
             raise LaunchError(f"{node}: {exc}") from None
         return {"ok": True}
-
-
-def topic_of(message: dict[str, Any]) -> str:
-    topic = message.get("topic")
-    if not isinstance(topic, str) or not topic:
-        raise ValueError("a topic name is needed")
-    return topic if topic.startswith("/") else "/" + topic
-
-
-def take_texts(stream: Any, newest_only: bool) -> list[str]:
-    """The stream's kept messages as YAML (in a worker thread: deserializing costs); when
-    throttled, only the newest: a screen shows what the topic says now."""
-    from .echo import message_yaml  # loads rclpy: only once a client echoes a topic
-
-    messages = stream.take()
-    if newest_only:
-        messages = messages[-1:]
-    return [message_yaml(m) for m in messages]
 
 
 __all__ = ["Inspector"]
