@@ -270,3 +270,37 @@ def test_logs_of_a_whole_session_have_the_launch_files_own_lines_as_headless(tmp
             assert tl("logs", name, "--level", "WARN") == ""
         finally:
             run_cli("stop", name)
+
+
+TWICE = """
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess, OpaqueFunction, RegisterEventHandler
+from launch.event_handlers import OnProcessStart
+
+
+def say(context):
+    print('first thing said')
+    print('second thing said')
+    return []
+
+
+def generate_launch_description():
+    sleeper = ExecuteProcess(name='sleeper', cmd=['sleep', '600'])
+    return LaunchDescription([sleeper, RegisterEventHandler(OnProcessStart(
+        target_action=sleeper, on_start=[OpaqueFunction(function=say)]))])
+"""
+
+
+def test_two_launch_lines_said_within_a_millisecond_are_both_in_logs(tmp_path):
+    """What launch-time code prints while the launch runs is launch lines; two printed one
+    after the other share their millisecond, and neither is taken for a repeat."""
+    (tmp_path / "twice.launch.py").write_text(TWICE)
+    with session_folders(tmp_path / "log"):
+        name = tl(str(tmp_path / "twice.launch.py"), "--detach").strip()
+        try:
+            wait_for(lambda: "second thing said" in tl("logs", name), what="both lines")
+            said = [line for line in tl("logs", name).splitlines() if "thing said" in line]
+            assert said == ["[INFO] [launch.user]: first thing said",
+                            "[INFO] [launch.user]: second thing said"]
+        finally:
+            run_cli("stop", name)
