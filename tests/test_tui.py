@@ -17,6 +17,7 @@ import pytest
 from textual.pilot import Pilot
 from textual.widgets import Checkbox, DataTable, Input
 
+from tuilaunch.engine.run.events import Event
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.args_panel import ArgsPanel
@@ -410,6 +411,26 @@ def generate_launch_description():
     return LaunchDescription([ExecuteProcess(name='stubborn', cmd=[
         'sh', '-c', 'trap "" INT; echo holding out; sleep 600'])])
 """
+
+
+async def test_an_engine_event_after_the_screens_closed_is_no_error(write, tmp_path):
+    """The engine's events keep coming while the app closes: a lifecycle node's last state
+    came after Textual had closed the screens (seen under load) and ended the TUI in a
+    traceback. One is delivered there now (Textual's `_close_all`, which the exit awaits)."""
+    app = make_app(str(write(STUBBORN_TUI)), {}, tmp_path / "log")
+    delivered = []
+    async with app.run_test(size=(80, 24)):
+        close_all = app._close_all
+
+        async def then_an_event() -> None:
+            await close_all()
+            assert not app.screen_stack
+            app.show_events([Event("lifecycle", "stubborn-1", reason="finalized")])
+            delivered.append(True)
+
+        app._close_all = then_an_event  # type: ignore[method-assign]
+        app.exit()
+    assert delivered and app.return_code == 0
 
 
 async def test_quit_shows_which_processes_are_still_stopping(write, tmp_path):

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from rich.text import Text
 from textual import work
-from textual.app import App
+from textual.app import App, ScreenStackError
 from textual.message import Message
 from textual.timer import Timer
 from textual.widgets import Static, TabbedContent
@@ -233,6 +233,15 @@ class SessionLink(App[int]):
     def wire_supervisor(self) -> None:
         """Connects the panels to the supervisor (the app's on_mount)."""
         raise NotImplementedError
+
+    def refresh_bindings(self) -> None:
+        # the engine's events keep coming while the app closes, and its screens may be gone
+        # by then (a lifecycle node's last state as the launch stops, seen under load): the
+        # footer they would refresh is gone with them
+        try:
+            super().refresh_bindings()
+        except ScreenStackError:
+            pass
 
     def on_unmount(self) -> None:
         self.abandon_start()
