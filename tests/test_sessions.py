@@ -546,21 +546,26 @@ def test_logs_filters_by_time_and_level(runtime, write):
 @pytest.mark.skipif(os.getuid() != 0, reason="needs root to connect as another user")
 def test_the_server_refuses_another_users_connection(runtime, write):
     name = start_detached(write)
-    folder = runtime / "tuilaunch"
-    runtime.chmod(0o711)  # open the folders' and the socket's modes, to reach the uid check
-    folder.chmod(0o711)
-    (folder / f"{name}.sock").chmod(0o666)
-    probe = (
-        "import os, socket, sys\n"
-        "os.setgid(65534); os.setuid(65534)\n"
-        "s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(10)\n"
-        "s.connect(sys.argv[1]); print(repr(s.recv(100)))\n")
-    done = subprocess.run([sys.executable, "-c", probe, str(folder / f"{name}.sock")],
-                          capture_output=True, text=True, timeout=30)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "b''"  # closed at once: no hello, no status, nothing
-    assert status(name)["name"] == name  # its owner is still served
-    tl("stop", name)
+    # the session folder stays 0700 (each session command makes it so again, the server's
+    # too): to reach the uid check, the socket is linked into a folder anyone may enter
+    opened = Path(tempfile.mkdtemp(prefix="tlopen", dir=runtime.parent))
+    try:
+        opened.chmod(0o755)
+        os.link(runtime / "tuilaunch" / f"{name}.sock", opened / "s.sock")
+        (opened / "s.sock").chmod(0o666)
+        probe = (
+            "import os, socket, sys\n"
+            "os.setgid(65534); os.setuid(65534)\n"
+            "s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM); s.settimeout(10)\n"
+            "s.connect(sys.argv[1]); print(repr(s.recv(100)))\n")
+        done = subprocess.run([sys.executable, "-c", probe, str(opened / "s.sock")],
+                              capture_output=True, text=True, timeout=30)
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.strip() == "b''"  # closed at once: no hello, no status, nothing
+        assert status(name)["name"] == name  # its owner is still served
+    finally:
+        shutil.rmtree(opened, ignore_errors=True)
+        tl("stop", name)
 
 
 def test_a_client_queue_is_bounded_and_cuts_loose_a_client_that_reads_nothing():
