@@ -7,6 +7,7 @@ through Textual's pilot, and the command line run as a user types it."""
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -511,5 +512,36 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
             tl("wait", name, "extra-2", "running", "--timeout", "60")
             app.action_detach()
             await until(pilot, lambda: app.detached)
+    finally:
+        tl("stop", name, check=False)
+
+
+# `slow` is deaf to SIGINT: a relaunch stops it with SIGTERM, 5 s later (launch's default)
+SLOW_STOP = EDITABLE.format(said="quick", extra=(
+    "sl.add_action(ExecuteProcess(name='slow', cmd=['sh', '-c', 'trap \"\" INT; "
+    "echo slow \"$0\"; while true; do sleep 0.1; done', sl.arg('word')]))"))
+
+
+def test_wait_running_waits_through_a_relaunch_that_stopped_the_process(
+        runtime, write):  # noqa: F811
+    """A script relaunches, then waits for a node to run again: the node the relaunch
+    stopped to start it with the new values is not an end (seen in CI as `talker-1
+    exited, not running`, when the wait came between the stop and the start)."""
+    name = tl(str(write(SLOW_STOP)), "--detach").stdout.strip()
+    try:
+        for process in ("echo-1", "slow-2"):
+            tl("wait", name, process, "running", "--timeout", "60")
+        old_pid = next(p["pid"] for p in status(name)["processes"] if p["id"] == "echo-1")
+        relaunch = threading.Thread(target=apply_elsewhere, args=(name,),
+                                    kwargs={"word": "beta"})
+        relaunch.start()
+        # echo is stopped; the slow one holds the relaunch for seconds
+        wait_for(lambda: {p["id"]: p["state"] for p in status(name)["processes"]}
+                 == {"echo-1": "exited", "slow-2": "running"}, timeout=60)
+        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        relaunch.join(60)
+        echo = next(p for p in status(name)["processes"] if p["id"] == "echo-1")
+        assert echo["state"] == "running" and echo["pid"] != old_pid
+        assert "quick beta" in tl("logs", name, "echo-1").stdout
     finally:
         tl("stop", name, check=False)

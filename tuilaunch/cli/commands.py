@@ -373,8 +373,10 @@ def cmd_wait(options: argparse.Namespace) -> int:
         result = link.request("subscribe")
         current = result["states"].get(process)
         last: dict[str, Any] = {"events": result.get("recent") or []}
+        # stopped by a restart or a relaunch that starts it again: not an end to give up on
+        again = process in (result.get("coming_back") or ())
         while current != state:
-            if state in ("running", "respawning") and current in ENDED_STATES:
+            if state in ("running", "respawning") and current in ENDED_STATES and not again:
                 # it ended and nothing will start it again on its own: no wait forever
                 print(f"tuilaunch wait: {process} {current}, not {state}"
                       f"{_ended_how(last, process)}: tuilaunch restart {link.label} "
@@ -402,6 +404,10 @@ def cmd_wait(options: argparse.Namespace) -> int:
             if message.get("type") == "events":
                 current = (message.get("states") or {}).get(process, current)
                 last = message
+                for data in message.get("events") or []:
+                    if data.get("process") == process and data.get("kind") in (
+                            "exited", "failed", "started"):
+                        again = bool((data.get("data") or {}).get("again"))
         return 0
     finally:
         link.close()

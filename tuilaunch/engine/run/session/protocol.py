@@ -76,7 +76,9 @@ Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type
   batch; left out when none did)` (a relaunch is an event of kind "relaunched" whose
   lines are the new `name:=value` arguments; an event of kind "typing" says who holds the
   keyboard: process, data {"client": id or null}; an "exited" event's data has "signal"
-  and "core" for a crash; event times are to the millisecond; consecutive output of one
+  and "core" for a crash, and "again": true when a restart or a relaunch stopped it to
+  start it again (the subscribe reply's "coming_back" lists those between their stop and
+  their start); event times are to the millisecond; consecutive output of one
   process is one event; an event "dropped" {process, code: a count} comes first in its
   batch and stands for that process's next `code` lines, which were not sent: a client
   finds them with read_log {start: the process's offset at its subscription, skip: the

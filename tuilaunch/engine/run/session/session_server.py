@@ -262,6 +262,8 @@ class SessionServer:
                        "recent": [event_to_dict(e) for e in [*self.recent,
                                                              *self.partials.values()]],
                        "arguments": self.session.arguments})
+        if self.supervisor.coming_back:  # stopped to start again (a restart, a relaunch)
+            result["coming_back"] = sorted(self.supervisor.coming_back)
         return result
 
     def _log_sizes(self) -> dict[str, int]:

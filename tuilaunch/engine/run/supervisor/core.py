@@ -78,6 +78,10 @@ class SupervisorCore:
         """Output still open after its process exited (a grandchild holds the pipe)."""
         self.busy = 0
         """Triggers sleeping or respawns scheduled: the run is not over while any is."""
+        self.coming_back: set[str] = set()
+        """Processes stopped to be started again (a restart; a relaunch that changed them):
+        their exit is a step, marked `again` in its event, so a `tuilaunch wait ... running`
+        waits on through it instead of taking it for the end."""
         self.tasks: set[asyncio.Task[Any]] = set()
         """The supervisor's background tasks (`spawn_task`), cancelled at the end of a run."""
         self.shutting_down = False

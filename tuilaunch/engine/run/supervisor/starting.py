@@ -209,9 +209,10 @@ class Starting(PlanActions):
             reason += f" (core: {death['core']})"
         # `requested`: a stop asked by anyone (another client, `tuilaunch stop`, a ctrl+c
         # typed into it: `typed`), not a crash
+        again = {"again": True} if process_id in self.coming_back else {}
         self.emit(Event("exited", process_id, pid=running.process.pid, code=code,
                          reason=reason, data={"requested": requested or typed,
-                                              "typed": typed, **death}))
+                                              "typed": typed, **again, **death}))
         self.process_event(process_id, "exit", running.process.pid, code)
         self.flag(process_id, "exit").set()
         tool = self.run_prefixes.get(process_id)

@@ -136,7 +136,9 @@ class Supervisor(Interacting):
         """
         running = {pid for pid in self.running}
         diff = diff_plans(self.plan, plan, running)
+        again = set(diff.stop) & set(diff.start)
         self.busy += 1
+        self.coming_back |= again
         try:
             await asyncio.gather(*(self.stop(pid) for pid in diff.stop if pid in running))
             old_actions = {(a.kind, a.target, repr(a.data)) for a in self.plan.actions
@@ -160,6 +162,7 @@ class Supervisor(Interacting):
                     self.schedule_action(action)
         finally:
             self.busy -= 1
+            self.coming_back -= again  # they are pending now, or running
             self.changed.set()
         self.set_placement(self.placing.machine, self.placing.remote)  # the new plan's
         return diff
@@ -171,11 +174,13 @@ class Supervisor(Interacting):
         `restart_options`: checked before anything stops)."""
         self.restart_options(process_id, prefix, log_level)
         self.busy += 1  # the run must not look finished between the stop and the start
+        self.coming_back.add(process_id)
         try:
             await self.stop(process_id)
             await self.start(process_id)
         finally:
             self.busy -= 1
+            self.coming_back.discard(process_id)
             self.changed.set()
 
     async def run_action(self, action_id: str) -> None:
@@ -323,6 +328,9 @@ class Supervisor(Interacting):
             self.placing.pids_elsewhere[process_id] = event.pid
         if state is not None:
             self.states[process_id] = state
+        if event.kind == "exited" and process_id in self.coming_back:
+            # stopped there by a restart asked here: a step, as a local one is
+            event.data = {**(event.data or {}), "again": True}
         if event.kind == "exited" and event.code is not None:
             self.exit_codes[process_id] = event.code
             requested = bool((event.data or {}).get("requested"))
