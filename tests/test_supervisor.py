@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 
 import pytest
@@ -337,6 +338,17 @@ def generate_launch_description():
     assert out.count("[flood0-1] ") + out.count("[flood1-2] ") + skipped == 2 * count
 
 
+async def loop_until(check: Callable[[], object], said: Callable[[], object],
+                     limit: float = 60) -> None:
+    """On the supervisor's loop: waits until `check` holds; past `limit`, fails with `said`."""
+    import asyncio
+
+    deadline = asyncio.get_running_loop().time() + limit
+    while not check():
+        assert asyncio.get_running_loop().time() < deadline, said()
+        await asyncio.sleep(0.05)
+
+
 def test_stop_restart_and_start_one_process_while_the_others_run(write, tmp_path):
     import asyncio
 
@@ -359,11 +371,8 @@ def generate_launch_description():
         return "".join(line + "\n" for e in events if e.kind == "output" and e.process == process
                        for line in e.lines)
 
-    async def until(check, limit: float = 60) -> None:
-        deadline = asyncio.get_running_loop().time() + limit
-        while not check():
-            assert asyncio.get_running_loop().time() < deadline, [e.kind for e in events]
-            await asyncio.sleep(0.05)
+    def until(check) -> Awaitable[None]:
+        return loop_until(check, lambda: [e.kind for e in events])
 
     async def scenario() -> int:
         run = asyncio.ensure_future(supervisor.run(keep_alive=True))
@@ -389,6 +398,49 @@ def generate_launch_description():
         "mouth-2", "ear-1", "ear-1", "mouth-2"]
     assert output_of("ear-1").count("STARTUP") == 2
     assert status == 0 and not (tmp_path / "params").exists()  # parameter files are removed
+
+
+def test_a_restart_starts_it_again_when_a_child_holds_its_output_past_its_exit(write,
+                                                                            tmp_path):
+    """A program whose SIGINT handler leaves a child holding its terminal for a moment: it
+    is reaped before its output ends. The restart (and a relaunch, which stops the same
+    way) must start it again once its end is told, not find it still running and leave it
+    stopped (seen in CI: `g` in the TUI restarted a node under a tool that then never ran)."""
+    import asyncio
+
+    from tuilaunch.engine import load_file, resolve
+    from tuilaunch.engine.run.supervisor.supervisor import Supervisor
+
+    path = write(HEADER + """from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(name='holder', output='screen', cmd=['sh', '-c',
+        'trap "sleep 0.5 & exit 0" INT; echo ready; while true; do sleep 0.1; done']))
+    return sl.launch_description()
+""")
+    supervisor = Supervisor(resolve(load_file(str(path)), {}), tmp_path / "log")
+    events: list = []
+    supervisor.subscribe(events.append)
+
+    def readies() -> int:
+        return sum(line == "ready" for e in events if e.kind == "output" for line in e.lines)
+
+    def until(check) -> Awaitable[None]:
+        return loop_until(check, lambda: [e.kind for e in events])
+
+    async def scenario() -> int:
+        run = asyncio.ensure_future(supervisor.run(keep_alive=True))
+        await until(lambda: readies() == 1)
+        await supervisor.restart("holder-1")
+        assert supervisor.states["holder-1"] == "running"
+        await until(lambda: readies() == 2)
+        await supervisor.shutdown("test done")
+        return await run
+
+    asyncio.run(scenario())
+    # its end is told before the new start, as a log reader expects
+    assert [e.kind for e in events if e.kind in ("started", "exited")] == [
+        "started", "exited", "started", "exited"]
 
 
 def test_log_file_holds_each_line_while_the_process_still_runs(write, tmp_path, kill_leftovers):

@@ -147,6 +147,9 @@ class Running:
     readers: list[ChannelReader] = field(default_factory=list)
     pidfd: int | None = None
     reaped: bool = False
+    gone: asyncio.Event = field(default_factory=asyncio.Event)
+    """Set once its end is told (state, `exited` event): a stop waits for it, so what
+    starts it again (a restart, a relaunch) finds it no longer running."""
 
     @property
     def terminal(self) -> TerminalInput | None:

@@ -119,6 +119,8 @@ class Starting(PlanActions):
             self._fail(process_id, f"could not be tracked and was killed: "
                        f"{type(exc).__name__}: {exc}")
             return
+        # followed before anything else runs: whatever raises below, its end is told
+        self.spawn_task(self._wait(running))
         self.states[process_id] = "running"
         self.emit(Event("started", process_id, pid=popen.pid))
         self.process_event(process_id, "start", popen.pid)
@@ -127,7 +129,6 @@ class Starting(PlanActions):
             follow_up = plugin.process_started(proc)
             if follow_up is not None:
                 self.spawn_task(follow_up)
-        self.spawn_task(self._wait(running))
 
     def base_env(self) -> dict[str, str]:
         """tuilaunch's environment as it was at the first start: read once, not per child."""
@@ -166,6 +167,14 @@ class Starting(PlanActions):
             running.exited.set_result(code)
 
     async def _wait(self, running: Running) -> None:
+        try:
+            await self._end(running)
+        finally:
+            running.gone.set()
+        await self._after_end(running)
+
+    async def _end(self, running: Running) -> None:
+        """Its exit, told once its output is read: the state, the event, the handlers."""
         code = await running.exited
         running.reaped = True
         pending = [r.done for r in running.readers if not r.done.done()]
@@ -215,6 +224,11 @@ class Starting(PlanActions):
                                               "typed": typed, **again, **death}))
         self.process_event(process_id, "exit", running.process.pid, code)
         self.flag(process_id, "exit").set()
+
+    async def _after_end(self, running: Running) -> None:
+        """What follows an end the launch did not ask for: a respawn, or why not."""
+        process_id, code = running.plan.id, self.exit_codes[running.plan.id]
+        requested = running.stopping or self.shutting_down
         tool = self.run_prefixes.get(process_id)
         if running.plan.respawn and tool and code == 0 and not requested:
             # the operator left the tool (gdb's quit): a debugging session that ended, not

@@ -211,6 +211,9 @@ class Supervisor(Interacting):
         if running is not None:
             running.stopping = True
             await self.escalate(running)
+            # reaped is not ended: its last output is read and its end told first, so a
+            # start that follows (a restart, a relaunch) finds it gone, not still running
+            await running.gone.wait()
         elif process_id in self.respawn_waits:  # between two runs: it does not come back
             self.respawn_waits.pop(process_id).set()
             self.states[process_id] = "exited"
