@@ -416,11 +416,17 @@ def generate_launch_description():
     sl = SimpleLauncher()
     sl.add_action(ExecuteProcess(name='holder', output='screen', cmd=['sh', '-c',
         'trap "sleep 0.5 & exit 0" INT; echo ready; while true; do sleep 0.1; done']))
+    sl.add_action(ExecuteProcess(name='quitter', output='screen', cmd=['sh', '-c',
+        'echo bye; sleep 0.5 & exit 0']))
     return sl.launch_description()
 """)
     supervisor = Supervisor(resolve(load_file(str(path)), {}), tmp_path / "log")
     events: list = []
     supervisor.subscribe(events.append)
+
+    def reaped(process: str) -> bool:
+        running = supervisor.running.get(process)
+        return running is not None and running.exited.done()
 
     def readies() -> int:
         return sum(line == "ready" for e in events if e.kind == "output" for line in e.lines)
@@ -430,17 +436,24 @@ def generate_launch_description():
 
     async def scenario() -> int:
         run = asyncio.ensure_future(supervisor.run(keep_alive=True))
+        # started by the operator while its output is still held after it exited (or, on
+        # a slow machine, once it is over)
+        await until(lambda: reaped("quitter-2") or supervisor.states["quitter-2"] == "exited")
+        await supervisor.start("quitter-2")
         await until(lambda: readies() == 1)
         await supervisor.restart("holder-1")
         assert supervisor.states["holder-1"] == "running"
         await until(lambda: readies() == 2)
+        await until(lambda: sum(e.kind == "started" and e.process == "quitter-2"
+                                for e in events) == 2)
         await supervisor.shutdown("test done")
         return await run
 
     asyncio.run(scenario())
-    # its end is told before the new start, as a log reader expects
-    assert [e.kind for e in events if e.kind in ("started", "exited")] == [
-        "started", "exited", "started", "exited"]
+    # each end is told before the new start, as a log reader expects
+    for process in ("holder-1", "quitter-2"):
+        assert [e.kind for e in events if e.kind in ("started", "exited")
+                and e.process == process] == ["started", "exited", "started", "exited"]
 
 
 def test_log_file_holds_each_line_while_the_process_still_runs(write, tmp_path, kill_leftovers):

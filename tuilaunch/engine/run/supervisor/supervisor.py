@@ -308,6 +308,9 @@ class Supervisor(Interacting):
         waiting = self.respawn_waits.pop(process_id, None)
         if waiting is not None:
             waiting.set()  # started now by the operator: the respawn under way is moot
+        ending = self.running.get(process_id)
+        if ending is not None and ending.exited.done():
+            await ending.gone.wait()  # it exited on its own a moment ago: its end first
         if self.runs_here(process_id):
             self.start_now(process_id)
         elif self.placing.remote is None:
