@@ -237,6 +237,26 @@ def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, 
                         env={"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)})
         states = {p["id"]: p["state"] for p in json.loads(there.stdout)["processes"]}
         assert states == {"far-1": "running", "solo-2": "elsewhere", "near-3": "elsewhere"}
+        # under a tool (`g` in the TUI): robot1 runs it so, and a wait right after the
+        # restart is for the new run, not the end of the old one
+        restarted = run_cli("restart", name, "far-1", "--prefix", "env TL_FAR=1", timeout=90)
+        assert restarted.returncode == 0, restarted.stderr
+        waited = run_cli("wait", name, "far-1", "running", "--timeout", "60", timeout=90)
+        assert waited.returncode == 0, waited.stderr
+        there = run_cli("status", share, "--json",
+                        env={"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)})
+        far = next(p for p in json.loads(there.stdout)["processes"] if p["id"] == "far-1")
+        assert far["command"][:2] == ["env", "TL_FAR=1"] and far["state"] == "running"
+        # a tool robot1 does not have: said, and far-1 runs on as it was
+        refused = run_cli("restart", name, "far-1", "--prefix", "no-such-debugger",
+                          timeout=90)
+        assert refused.returncode != 0
+        assert "r1" in refused.stderr and "no-such-debugger" in refused.stderr, refused.stderr
+        assert "Traceback" not in refused.stderr
+        there = run_cli("status", share, "--json",
+                        env={"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)})
+        again = next(p for p in json.loads(there.stdout)["processes"] if p["id"] == "far-1")
+        assert again["pid"] == far["pid"] and again["state"] == "running"
     finally:
         stopped = run_cli("stop", name, timeout=120)
     assert stopped.returncode == 0, stopped.stderr

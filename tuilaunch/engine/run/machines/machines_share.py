@@ -373,7 +373,7 @@ class MachinesCoordinator(Plugin):
         with contextlib.suppress(LaunchError, ConnectionError, OSError):
             await share.send(message)
 
-    async def forward(self, op: str, process_id: str) -> None:
+    async def forward(self, op: str, process_id: str, **options: str) -> None:
         machine = self.supervisor.plan.process(process_id).machine
         share = self.shares.get(machine or "")
         if share is None or share.writer is None:
@@ -382,7 +382,7 @@ class MachinesCoordinator(Plugin):
         request_id = self._new_id()
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         share.replies[request_id] = future
-        await share.send({"op": op, "process": process_id, "id": request_id})
+        await share.send({"op": op, "process": process_id, "id": request_id, **options})
         result = await future
         state = result.get("state") if isinstance(result, dict) else None
         if isinstance(state, str):

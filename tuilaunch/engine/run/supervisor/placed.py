@@ -28,9 +28,9 @@ ELSEWHERE = "elsewhere"
 class RemoteControl(Protocol):
     """What starts and stops a process on the machine it is placed on."""
 
-    async def forward(self, op: str, process_id: str) -> None:
-        """`op` is start, stop or restart; raises LaunchError when the machine cannot be
-        asked."""
+    async def forward(self, op: str, process_id: str, **options: str) -> None:
+        """`op` is start, stop or restart (`options`: its prefix, log_level); raises
+        LaunchError when the machine cannot be asked."""
         ...
 
 
@@ -70,13 +70,13 @@ class Placing:
         except KeyError:
             return True
 
-    async def forward(self, plan: Plan, op: str, process_id: str) -> None:
+    async def forward(self, plan: Plan, op: str, process_id: str, **options: str) -> None:
         """Asks the process's machine to `op` it; LaunchError from a share (which cannot)."""
         if self.remote is None:
             where = plan.process(process_id).machine or "the launching side"
             raise LaunchError(f"{process_id} runs on {where}: {op} it from the launching "
                               "side")
-        await self.remote.forward(op, process_id)
+        await self.remote.forward(op, process_id, **options)
 
 
 __all__ = ["ELSEWHERE", "Placing", "RemoteControl"]
