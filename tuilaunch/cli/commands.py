@@ -374,7 +374,8 @@ def cmd_wait(options: argparse.Namespace) -> int:
         current = result["states"].get(process)
         last: dict[str, Any] = {"events": result.get("recent") or []}
         # stopped by a restart or a relaunch that starts it again: not an end to give up on
-        again = process in (result.get("coming_back") or ())
+        again = process in (result.get("coming_back") or ()) or \
+            _stopped_to_come_back(last, process, False)
         while current != state:
             if state in ("running", "respawning") and current in ENDED_STATES and not again:
                 # it ended and nothing will start it again on its own: no wait forever
@@ -404,10 +405,7 @@ def cmd_wait(options: argparse.Namespace) -> int:
             if message.get("type") == "events":
                 current = (message.get("states") or {}).get(process, current)
                 last = message
-                for data in message.get("events") or []:
-                    if data.get("process") == process and data.get("kind") in (
-                            "exited", "failed", "started"):
-                        again = bool((data.get("data") or {}).get("again"))
+                again = _stopped_to_come_back(message, process, again)
         return 0
     finally:
         link.close()
@@ -415,6 +413,19 @@ def cmd_wait(options: argparse.Namespace) -> int:
 
 ENDED_STATES = ("exited", "failed", "done", "cancelled", "skipped")
 """States a process leaves only when someone restarts it (a respawn is `respawning`)."""
+
+
+def _stopped_to_come_back(message: dict[str, Any], process: str, before: bool) -> bool:
+    """Whether the process's last end or start in the batch leaves it stopped by a restart
+    or a relaunch (its `exited` event says `again`); `before` when the batch has neither.
+    A process placed on another machine is restarted there: its end says it, though this
+    side's subscription does not list it as coming back."""
+    again = before
+    for data in message.get("events") or []:
+        if data.get("process") == process and data.get("kind") in ("exited", "failed",
+                                                                    "started"):
+            again = bool((data.get("data") or {}).get("again"))
+    return again
 
 
 def _ended_how(message: dict[str, Any], process: str) -> str:

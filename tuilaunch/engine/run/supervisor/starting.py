@@ -168,13 +168,14 @@ class Starting(PlanActions):
 
     async def _wait(self, running: Running) -> None:
         try:
-            await self._end(running)
+            code, requested = await self._end(running)
         finally:
             running.gone.set()
-        await self._after_end(running)
+        await self._after_end(running, code, requested)
 
-    async def _end(self, running: Running) -> None:
-        """Its exit, told once its output is read: the state, the event, the handlers."""
+    async def _end(self, running: Running) -> tuple[int, bool]:
+        """Its exit, told once its output is read: the state, the event, the handlers.
+        Returns its exit code and whether the launch asked for the end."""
         code = await running.exited
         running.reaped = True
         pending = [r.done for r in running.readers if not r.done.done()]
@@ -224,11 +225,11 @@ class Starting(PlanActions):
                                               "typed": typed, **again, **death}))
         self.process_event(process_id, "exit", running.process.pid, code)
         self.flag(process_id, "exit").set()
+        return code, requested
 
-    async def _after_end(self, running: Running) -> None:
+    async def _after_end(self, running: Running, code: int, requested: bool) -> None:
         """What follows an end the launch did not ask for: a respawn, or why not."""
-        process_id, code = running.plan.id, self.exit_codes[running.plan.id]
-        requested = running.stopping or self.shutting_down
+        process_id = running.plan.id
         tool = self.run_prefixes.get(process_id)
         if running.plan.respawn and tool and code == 0 and not requested:
             # the operator left the tool (gdb's quit): a debugging session that ended, not

@@ -172,22 +172,17 @@ class Supervisor(Interacting):
         """Stops and starts one process; `prefix` runs it under a tool (gdb, valgrind) until
         a restart without one, `log_level` sets its ROS log level until changed (see
         `restart_options`: checked before anything stops)."""
-        if not self.runs_here(process_id) and self.placing.remote is not None:
-            # its machine restarts it, in one request: the tool is looked for on its PATH,
-            # and its end there says it comes back, as a restart here does
-            options = {k: v for k, v in (("prefix", prefix), ("log_level", log_level))
-                       if v is not None}
-            self.busy += 1
-            try:
-                await self.placing.forward(self.plan, "restart", process_id, **options)
-            finally:
-                self.busy -= 1
-                self.changed.set()
-            return
-        self.restart_options(process_id, prefix, log_level)
         self.busy += 1  # the run must not look finished between the stop and the start
         self.coming_back.add(process_id)
         try:
+            if not self.runs_here(process_id) and self.placing.remote is not None:
+                # its machine restarts it, in one request: the tool is looked for on its
+                # PATH, and its end there says it comes back (`again`), as one here does
+                options = {k: v for k, v in (("prefix", prefix), ("log_level", log_level))
+                           if v is not None}
+                await self.placing.forward(self.plan, "restart", process_id, **options)
+                return
+            self.restart_options(process_id, prefix, log_level)
             await self.stop(process_id)
             await self.start(process_id)
         finally:
@@ -346,9 +341,6 @@ class Supervisor(Interacting):
             self.placing.pids_elsewhere[process_id] = event.pid
         if state is not None:
             self.states[process_id] = state
-        if event.kind == "exited" and process_id in self.coming_back:
-            # stopped there by a restart asked here: a step, as a local one is
-            event.data = {**(event.data or {}), "again": True}
         if event.kind == "exited" and event.code is not None:
             self.exit_codes[process_id] = event.code
             requested = bool((event.data or {}).get("requested"))
