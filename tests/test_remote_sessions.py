@@ -13,6 +13,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from textual.widgets import Input
@@ -407,3 +408,95 @@ def test_a_display_gets_lines_as_it_shows_them_and_stamps_to_the_millisecond():
     for data in wire["events"]:
         unpacker.unpack(data)
     assert [line for e in wire["events"] for line in e["lines"]] == shown
+
+
+STAMPED = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(name='logger', cmd=['sh', '-c', 'i=0; while true; do '
+        'i=$((i+1)); printf "[INFO] [%d.%03d123456] [far.logger]: line %d\\\\n" '
+        '$((1700000000+i)) $((i%1000)) $i; sleep 0.1; done']))
+    return sl.launch_description()
+"""
+
+
+def printed(number: int) -> str:
+    """The logger's line `number` as the pane's raw format shows it (stamp to the ms)."""
+    return f"[INFO] [{1700000000 + number}.{number % 1000:03d}] [far.logger]: line {number}"
+
+
+def clock(number: int) -> str:
+    """The time column of the logger's line `number`: its ROS stamp, not its arrival."""
+    return time.strftime("%H:%M:%S", time.localtime(1700000000 + number)) + \
+        f".{number % 1000:03d}"
+
+
+def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: Machines,
+                                                                       write):
+    """A TUI over ssh is not sent the ROS stamps its pane does not show: `T` (the time
+    column) reads them for the lines it holds and has the next lines sent with them, `f`
+    (the line as printed) the same, and a saved pane has every line as printed; turned off,
+    the lines come without them again. Every line once, in order, with its own stamp."""
+    robot = machines["robot1"]
+    path = write(STAMPED)
+    assert run_cli(str(path), "--detach", "--name", "stamped", env=there(robot)).returncode == 0
+    assert run_cli("wait", "stamped", "logger-1", "running", "--timeout", "30",
+                   env=there(robot)).returncode == 0
+    status = json.loads(run_cli("status", "robot1:stamped", "--json").stdout)
+
+    def held(app) -> list[tuple[int, str]]:
+        return [(int(line.text.rsplit(" ", 1)[1]), line.text)
+                for line in app.store.lines(View("logger-1")) if "line " in line.text]
+
+    def rows(app) -> list[str]:
+        """The logger's rows on screen (the all-nodes pane: without the process's name)."""
+        return [row.replace("logger-1 ", "", 1)
+                for row in app.output_panel.line_view.visible_text() if "line " in row]
+
+    def numbered(row: str) -> int:
+        return int(row.rsplit(" ", 1)[1])
+
+    async def attached() -> None:
+        app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                       session_name="stamped", session_host="robot1")
+        async with app.run_test(size=(100, 30)) as pilot:
+            # the lines since the attach came without their stamp (the replay, read from
+            # the log file over there, has them)
+            await until(pilot, lambda: sum("[1700" not in t for _, t in held(app)) >= 5)
+            await pilot.press("T")
+            await until(pilot, lambda: len(rows(app)) >= 10 and all(
+                row.startswith(clock(numbered(row)) + " I line ") for row in rows(app)))
+            # from here the lines come with their stamps
+            seen = max(n for n, _ in held(app))
+            await until(pilot, lambda: max(n for n, _ in held(app)) > seen + 10)
+            assert all(text == printed(n) for n, text in held(app) if n > seen)
+            await pilot.press("T", "f")
+            await until(pilot, lambda: rows(app) and all(
+                row == printed(numbered(row)) for row in rows(app)))
+            # both off: the link leaves the stamps out again; a save reads them first
+            await pilot.press("f")
+            seen = max(n for n, _ in held(app))
+            await until(pilot, lambda: sum("[1700" not in t for n, t in held(app)
+                                           if n > seen) >= 5)
+            assert all(row.startswith("I line ") for row in rows(app))
+            await pilot.press("w")
+            saved = Path(status["log_dir"])
+            await until(pilot, lambda: list(saved.glob("*-pane-*.txt")))
+            lines = [line for line in next(saved.glob("*-pane-*.txt")).read_text()
+                     .splitlines() if "line " in line]
+            numbers = [numbered(line) for line in lines]
+            assert numbers == list(range(numbers[0], numbers[0] + len(numbers)))
+            assert numbers[-1] > seen + 4
+            # the lines replayed from the log file on attaching have the nanoseconds
+            assert all(line in (f"[logger-1] {printed(n)}",
+                                f"[logger-1] {printed(n).replace('] [far', '123456] [far')}")
+                       for line, n in zip(lines, numbers, strict=True))
+            await pilot.press("q")
+            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+            await pilot.press("n")
+            await until(pilot, lambda: app.detached)
+
+    asyncio.run(attached())
+    assert run_cli("stop", "robot1:stamped").returncode == 0

@@ -117,6 +117,13 @@ class RemoteSupervisor:
         not sent: read from there when they are shown again."""
         self._usage: dict[str, Any] = {}  # the figures of `resources`, which sends changes
         self._stamps = Stamps()  # the current batch's output stamps
+        self.stamps_shown = False
+        """Whether the screen shows ROS stamps (time column, raw format): over a link,
+        without them the server leaves them out and keeps them (`read_stamps`)."""
+        # output lines received on this connection, and on the ones before it: a line's
+        # number in the stream (its event's data "line"), by which its stamp is read
+        self._lines_here = 0
+        self._lines_before = 0
         self._retry: asyncio.Event | None = None
         self.watches = Watches()  # the inspector's streams: a new connection asks again
         self.session = session
@@ -229,7 +236,10 @@ class RemoteSupervisor:
         # fair: with a screenful a second, a loud node must not hide the others' lines
         result: dict[str, Any] = await self._call(
             "subscribe", max_lines=self.max_lines, interval=self.interval, fair=True,
-            only=self.only, plain=True)  # the TUI shows no colour codes: none are sent
+            only=self.only, plain=True,  # the TUI shows no colour codes: none are sent
+            stamps=self.stamps_shown)
+        self._lines_before += self._lines_here
+        self._lines_here = 0
         self._from = dict(result["offsets"])
         self._received = {}
         self._usage = {}
@@ -388,6 +398,10 @@ class RemoteSupervisor:
             event = event_from_dict(data)
             if event.kind == "output" and event.process:
                 self._count(event.process, len(event.lines))
+                if self.host is not None:  # only a link's stream leaves stamps out
+                    event.data = {**(event.data or {}),
+                                  "line": self._lines_before + self._lines_here}
+                    self._lines_here += len(event.lines)
             elif event.kind == "dropped" and event.process:
                 # in the file, not sent to us: where, for a display to read them back
                 event.data = self._where(event.process)
@@ -578,6 +592,22 @@ class RemoteSupervisor:
 
     def _warn(self, text: str) -> None:
         self._deliver(Event("log", reason=text, level="WARN"))
+
+    async def read_stamps(self, shown: bool, since: int | None,
+                          ) -> tuple[int, int, dict[int, int]]:
+        """The ROS stamps the server kept of the output lines it sent without them, from
+        line `since` on (numbered as in their events' data "line"; None: none wanted), and
+        whether the batches from here carry them (`shown`): (the first line whose stamp
+        could be read, the line after the last, {line: ms}). Lines of an earlier
+        connection are the server's no longer."""
+        self.stamps_shown = shown
+        before = self._lines_before
+        result = await self._request(
+            "stamps", on=shown, since=None if since is None else max(since - before, 0))
+        first = before + int(result.get("first") or 0)
+        stamps = Stamps().decode(list(result.get("stamps") or []))
+        return first, first + len(stamps), {
+            first + index: ms for index, ms in enumerate(stamps) if ms is not None}
 
     async def request(self, op: str, **fields: Any) -> Any:
         """The result of any request of the protocol (engine/run/session/protocol.py): `topics`,

@@ -1,4 +1,5 @@
-"""Reading back what a flood kept off the screen.
+"""Reading back what a link did not send: a flood's lines kept off the screen, and the
+ROS stamps of lines sent while no pane showed them.
 
 Under a flood a display is sent what it can draw (over an ssh link, a pane's worth of lines
 a second); the session says where each run of lines it did not send is in the process's
@@ -6,12 +7,17 @@ log file, and the pane shows a line standing for it. When the user scrolls back 
 line, its lines are read from the log file through the session (`read_log`, where the
 nodes run), a thousand at a time, and take its place: scrolled back, nothing is missed,
 and only what the user scrolls back to crosses the link.
+
+Over a link, the lines also come without their ROS stamp while the pane shows neither the
+time column nor the raw format: the server keeps the stamps, and they are read for the
+lines held here before either is shown or the pane is saved or copied.
 """
 
 from __future__ import annotations
 
 from textual import on
 
+from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.run.session.session_dir import SessionError
 from .output_store import Gap, Line
 from .screens.output_panel import OutputPanel
@@ -54,3 +60,28 @@ class Gaps(SessionLink):
             Gap(gap.start, gap.skip + take, left)
         lines = self.store.fill_gap(marker, rows, rest, rest_first=reading_up)
         self.output_panel.fill_gap(marker, lines)
+
+    @on(OutputPanel.StampsWanted)
+    def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
+        supervisor = self.supervisor
+        if not isinstance(supervisor, RemoteSupervisor) or supervisor.host is None or (
+                message.shown == supervisor.stamps_shown
+                and self.store.unstamped.first() is None):
+            message.then()  # every line here has its stamp, and the link sends them so
+            return
+        self.run_worker(self._read_stamps(supervisor, message), group="stamps",
+                        exit_on_error=False)
+
+    async def _read_stamps(self, supervisor: RemoteSupervisor,
+                           message: OutputPanel.StampsWanted) -> None:
+        try:
+            first, end, stamps = await self.engine.run(
+                supervisor.read_stamps(message.shown, self.store.unstamped.first()))
+        except SessionError as exc:  # the link is down: said, and shown as it is
+            self.notify(f"the lines' ROS stamps could not be read ({exc}): the lines "
+                        "without show when they arrived", severity="warning")
+        else:
+            self.drain()  # the lines sent before the answer, in the store before it
+            if self.store.unstamped.fill(first, end, stamps):
+                self.output_panel.stamps_read()
+        message.then()

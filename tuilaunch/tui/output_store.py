@@ -7,6 +7,7 @@ pane can show a compact form without parsing again on every repaint.
 
 from __future__ import annotations
 
+import re
 import time
 from collections import deque
 from collections.abc import Iterable
@@ -15,12 +16,14 @@ from typing import Any
 
 from ..engine.run.process.output import expand_tabs, screen_str, strip_ansi
 from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames
+from ..engine.run.session.protocol import with_stamp
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 INFO = 1
 WARN = 2
 ERROR = 3
 _ROS_PREFIX = ROS_LOG_PREFIX
+_STAMPED = re.compile(r"\[[A-Z]+\]\s*\[\d")
 
 
 @dataclass(frozen=True, slots=True)
@@ -33,8 +36,11 @@ class Gap:
     count: int
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True, eq=False)
 class Line:
+    """Mutable for one reason: a line that came over a link without its ROS stamp gets it
+    when a pane shows it (`Unstamped`); found by identity, never compared."""
+
     process: str
     text: str  # as the process printed it, without colour codes, tabs expanded
     level: int  # index into LEVELS
@@ -117,14 +123,20 @@ class OutputStore:
         `(gdb) `), by (process, stream): shown below its lines until the whole line comes."""
         self.partials_changed = 0
         """Counts changes to `partials`, so a pane redraws them only when they change."""
+        self.unstamped = Unstamped(all_scrollback)
 
-    def add(self, process: str, stream: str, texts: Iterable[str]) -> list[Line]:
+    def add(self, process: str, stream: str, texts: Iterable[str],
+            first: int | None = None) -> list[Line]:
+        """`first`: the number of the first of these lines in a link's stream that leaves
+        ROS stamps out until a pane shows them (`Unstamped`)."""
         now = time.time()
-        lines = []
+        lines: list[Line] = []
         for raw in texts:
             line, logger = parse(process, raw, stream, now)
             if logger:
                 self.reported.add_logger(process, logger)
+            if first is not None and line.body and not _STAMPED.match(line.text):
+                self.unstamped.add(first + len(lines), line)
             lines.append(line)
         if lines and self.partials.pop((process, stream), None) is not None:
             self.partials_changed += 1  # the whole line replaces what was shown of it
@@ -185,6 +197,44 @@ class OutputStore:
 
     def text(self, view: View) -> list[str]:
         return [line.formatted(view.process is None) for line in self.lines(view)]
+
+
+class Unstamped:
+    """The lines that came over a link without their ROS stamp (left out while no pane
+    shows it: see the session protocol's `stamps`), by their number in the link's stream,
+    oldest first, until they get it. Bounded like the all-nodes scrollback: an older line
+    has left every pane but its own, and keeps its arrival time there."""
+
+    def __init__(self, bound: int) -> None:
+        self.bound = bound
+        self.lines: dict[int, Line] = {}
+
+    def add(self, number: int, line: Line) -> None:
+        self.lines[number] = line
+        if len(self.lines) > self.bound:
+            del self.lines[next(iter(self.lines))]
+
+    def first(self) -> int | None:
+        return next(iter(self.lines), None)
+
+    def fill(self, first: int, end: int, stamps: dict[int, int]) -> int:
+        """The stamps (ms) read for the lines numbered up to `end` (lines from `first` on
+        are the ones still kept where they were sent); the lines before `end` that have
+        none keep their arrival time. How many lines changed."""
+        filled = 0
+        while self.lines:
+            number = next(iter(self.lines))
+            if number >= end:
+                break
+            line = self.lines.pop(number)
+            ms = stamps.get(number) if number >= first else None
+            if ms is None:
+                continue
+            text = with_stamp(line.text, ms)
+            line.body += len(text) - len(line.text)
+            line.text, line.stamp = text, ms / 1000
+            filled += 1
+        return filled
 
 
 def gap_line(process: str, gap: Gap, stamp: float) -> Line:

@@ -285,7 +285,9 @@ class SessionLink(App[int]):
                 if event.data and "partial" in event.data:  # a prompt waiting, unfinished
                     self.store.set_partial(event.process, event.stream or "stdout",
                                            str(event.data["partial"]))
-                fresh += self.store.add(event.process, event.stream or "stdout", event.lines)
+                first = event.data.get("line") if event.data else None
+                fresh += self.store.add(event.process, event.stream or "stdout", event.lines,
+                                        first)
             elif event.kind == "log":
                 if event.process and self.supervisor is not None:
                     state = self.supervisor.states.get(event.process, "")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import shlex
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from rich.cells import cell_len
@@ -36,6 +37,17 @@ class OutputPanel(Vertical):
             self.line = line
             self.reading_up = reading_up
 
+    class StampsWanted(Message):
+        """The pane is about to show or export its lines with their ROS stamps (the time
+        column, the raw format, a save): lines that came over a link without them get
+        them first, then `then` runs. `shown`: whether the pane shows stamps from now on,
+        so the link sends them with the lines (or leaves them out again)."""
+
+        def __init__(self, shown: bool, then: Callable[[], None]) -> None:
+            super().__init__()
+            self.shown = shown
+            self.then = then
+
     DEFAULT_CSS = """
     OutputPanel { height: 1fr; }
     OutputPanel #output-status { height: 1; background: $boost; color: $text-muted; }
@@ -52,6 +64,7 @@ class OutputPanel(Vertical):
         self.search = ""
         self.match_index = -1
         self.max_lines = max_lines
+        self._time = self._raw = False  # as the keys asked: shown once the stamps are here
         # held rather than queried: the app feeds the pane on a timer, even mid-teardown
         self._status = Static(id="output-status")
         self._status_text = ""
@@ -269,10 +282,23 @@ class OutputPanel(Vertical):
         self.update_status()
 
     def action_time(self) -> None:
-        self._lines.set_options(show_time=not self._lines.show_time)
+        self._time = not self._time
+        self._with_stamps(self._show_options)
 
     def action_raw(self) -> None:
-        self._lines.set_options(raw=not self._lines.raw)
+        self._raw = not self._raw
+        self._with_stamps(self._show_options)
+
+    def _show_options(self) -> None:
+        # as asked by the last key (T twice quickly: off again), whenever the stamps come
+        self._lines.set_options(show_time=self._time, raw=self._raw)
+
+    def _with_stamps(self, then: Callable[[], None]) -> None:
+        self.post_message(self.StampsWanted(self._time or self._raw, then))
+
+    def stamps_read(self) -> None:
+        """Lines got their ROS stamps: drawn again if shown."""
+        self._lines.set_options()
 
     # --- export --------------------------------------------------------------------------
 
@@ -285,6 +311,9 @@ class OutputPanel(Vertical):
         return "\n".join(self.pane_lines()) + "\n"
 
     def action_save(self) -> None:
+        self._with_stamps(self._save)
+
+    def _save(self) -> None:
         self.save_dir.mkdir(parents=True, exist_ok=True)
         name = (self.view.process or "all") + time.strftime("-pane-%H%M%S.txt")
         path = self.save_dir / name
@@ -292,6 +321,9 @@ class OutputPanel(Vertical):
         self.notify(f"pane saved to {path}")
 
     def action_copy(self) -> None:
+        self._with_stamps(self._copy)
+
+    def _copy(self) -> None:
         self.app.copy_to_clipboard(self.pane_text())
         self.notify(f"copied {len(self.pane_lines())} lines (OSC 52 clipboard)")
 

@@ -16,6 +16,7 @@ import os
 import re
 import socket
 import struct
+from array import array
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -29,6 +30,8 @@ CLIENT_MAX_LINES = 20_000
 """Output lines queued per client before the oldest are dropped for that client."""
 CLIENT_MAX_EVENTS = 10_000
 """State events queued for a client that reads nothing; past this it is disconnected."""
+KEPT_STAMPS = 50_000
+"""The ROS stamps kept for a display not shown them: more lines than its panes hold."""
 
 
 class ClientQueue:
@@ -37,13 +40,14 @@ class ClientQueue:
     def __init__(self, max_lines: int = CLIENT_MAX_LINES, interval: float = 0.0,
                  on_overflow: Callable[[], None] | None = None,
                  kinds: frozenset[str] | None = None, fair: bool = False,
-                 only: str | None = None, plain: bool = False) -> None:
+                 only: str | None = None, plain: bool = False, stamps: bool = True) -> None:
         self.buffer = EventBuffer(max_lines=max_lines, fair=fair)
         self.kinds = kinds  # only these kinds of events (`tuilaunch echo` wants no output)
         self.only = only
         """The one process whose output this client shows (its focused pane), None for all:
         the others' lines stay in their log files until it asks (`view`)."""
         self.plain = plain  # a display that shows no colour codes is not sent them
+        self.stamps = KeptStamps(stamps)
         self.sent_states: dict[str, str] = {}
         """The states this client was last told: a batch carries only the ones changed."""
         self.on_overflow = on_overflow
@@ -71,6 +75,32 @@ class ClientQueue:
         self.ready.clear()
         self.events = 0
         return self.buffer.drain()
+
+
+class KeptStamps:
+    """A plain display's output lines, counted as sent, and the ROS stamps of the last
+    KEPT_STAMPS of them: sent in the batches while `sending` (its time column or raw format
+    shown), else kept here until it asks for them (op `stamps`). Over a link they are a
+    sixth of a flood's batch, for a column a pane does not show until asked."""
+
+    def __init__(self, sending: bool) -> None:
+        self.sending = sending
+        self.first = 0  # the line whose stamp is kept[0]
+        self.kept = array("q")  # ms; -1 for a line without
+
+    def add(self, stamps: list[int | None]) -> None:
+        self.kept.extend(-1 if ms is None else ms for ms in stamps)
+        if len(self.kept) > 2 * KEPT_STAMPS:  # trimmed now and then, not on every batch
+            cut = len(self.kept) - KEPT_STAMPS
+            del self.kept[:cut]
+            self.first += cut
+
+    def since(self, line: int) -> dict[str, Any]:
+        """The `stamps` op's answer: the kept stamps from `line` on."""
+        first = max(line, self.first)
+        kept = self.kept[first - self.first:]
+        return {"first": first,
+                "stamps": Stamps().encode([None if ms < 0 else ms for ms in kept])}
 
 
 class ClientHub:
@@ -180,7 +210,8 @@ class ClientHub:
                         max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
                         writer.transport.abort,
                         frozenset(map(str, kinds)) if isinstance(kinds, list) else None,
-                        bool(message.get("fair")), _only(message), bool(message.get("plain")))
+                        bool(message.get("fair")), _only(message), bool(message.get("plain")),
+                        message.get("stamps") is not False)
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result = self.snapshot()
@@ -190,6 +221,17 @@ class ClientHub:
                     await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
                                                       "ok": True, "result": result})
                     self.spawn(self._pump(queue, writer, lock))
+                    continue
+                if message.get("op") == "stamps" and queue is not None:
+                    # answered here, between two batches: the batches before it are
+                    # already written (the lock is first come, first served), and the
+                    # ones after it carry their stamps when `on`
+                    since = message.get("since")
+                    result = queue.stamps.since(since) if isinstance(since, int) else \
+                        {"first": 0, "stamps": []}
+                    queue.stamps.sending = bool(message.get("on"))
+                    await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
+                                                      "ok": True, "result": result})
                     continue
                 if message.get("op") == "view" and queue is not None:
                     self._view(queue, _only(message))
@@ -261,7 +303,8 @@ class ClientHub:
             for data in batch["events"]:
                 if data["kind"] == "output":
                     data["lines"] = [shown_line(line) for line in data.get("lines") or []]
-                    stamps.pack(data)
+                    queue.stamps.add(stamps.pack(data) if queue.stamps.sending
+                                     else stamps.take(data))
         if touched:
             batch["states"] = touched
         await send_message(writer, lock, batch)

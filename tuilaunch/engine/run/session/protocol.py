@@ -10,7 +10,13 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   to send (the others' stays in the log files: see view); plain?: for a display, output as
   it shows it (no colour codes, ROS stamps to the millisecond, sent apart as "stamps":
   [ms, or the difference from the batch's stamp before; null for a line without]) and
-  output and dropped events without their time (stamped on arrival)}, view {only: a process id or
+  output and dropped events without their time (stamped on arrival); stamps?: false, for a
+  plain display not showing them (no time column): its lines' ROS stamps are left out and
+  kept for it, the last 50,000, read with the op stamps}, stamps {on: bool, since?: n} ->
+  {first, stamps: [as in a batch]}: the ROS stamps of the output lines this plain client
+  was sent without them, from its line `since` on (lines count from the subscription's
+  first), those still kept (from line `first`); `on`: whether the batches after this reply
+  carry them (they come after every batch whose lines the reply covers), view {only: a process id or
   null for all} changes `only`: an event of kind "view" (process: the new `only`, data
   {offsets: {process: its log file's size}}) then marks in the stream where the switch
   happened, so the client reads from the files what it was not sent, status {resources?: false skips
@@ -154,45 +160,71 @@ class Stamps:
     """A display's batch carries each output line's ROS stamp (already to the millisecond,
     as shown) as a number apart from the line, the difference in ms from the stamp before
     it in the batch: the digits that change from line to line are what a compressing
-    link cannot squeeze. One per batch on each side, in the batch's order."""
+    link cannot squeeze. One per batch on each side, in the batch's order (and one per
+    answer to the op `stamps`)."""
 
     def __init__(self) -> None:
         self.last: int | None = None
 
-    def pack(self, data: dict[str, Any]) -> None:
-        """An output event's dict: its stamped lines lose their stamp to `stamps`."""
+    @staticmethod
+    def take(data: dict[str, Any]) -> list[int | None]:
+        """An output event's dict: its stamped lines lose their stamp, returned (ms, None
+        for a line without) one per line."""
         lines: list[str] = []
         stamps: list[int | None] = []
-        stamped = False
         for line in data.get("lines") or []:
             match = _STAMPED.match(line)
             if match is None:
                 lines.append(line)
                 stamps.append(None)
                 continue
-            ms = int(match.group(2)) * 1000 + int(match.group(3))
-            stamps.append(ms if self.last is None else ms - self.last)
-            self.last, stamped = ms, True
+            stamps.append(int(match.group(2)) * 1000 + int(match.group(3)))
             lines.append(match.group(1) + line[match.end():])
-        if stamped:
-            data["lines"], data["stamps"] = lines, stamps
+        data["lines"] = lines
+        return stamps
+
+    def encode(self, stamps: list[int | None]) -> list[int | None]:
+        steps: list[int | None] = []
+        for ms in stamps:
+            steps.append(None if ms is None else ms if self.last is None else ms - self.last)
+            if ms is not None:
+                self.last = ms
+        return steps
+
+    def decode(self, steps: list[Any]) -> list[int | None]:
+        stamps: list[int | None] = []
+        for step in steps:
+            if not isinstance(step, int):
+                stamps.append(None)
+                continue
+            self.last = step if self.last is None else self.last + step
+            stamps.append(self.last)
+        return stamps
+
+    def pack(self, data: dict[str, Any]) -> list[int | None]:
+        """An output event's dict: its stamped lines lose their stamp to `stamps`; the
+        stamps themselves (ms) returned, one per line."""
+        stamps = self.take(data)
+        if any(ms is not None for ms in stamps):
+            data["stamps"] = self.encode(stamps)
+        return stamps
 
     def unpack(self, data: dict[str, Any]) -> None:
-        stamps = data.pop("stamps", None)
-        if not isinstance(stamps, list):
+        steps = data.pop("stamps", None)
+        if not isinstance(steps, list):
             return
         given = data.get("lines") or []
-        lines = []
-        for line, step in zip(given, stamps + [None] * (len(given) - len(stamps)),
-                              strict=False):  # a line is never lost to a short list
-            if not isinstance(step, int):
-                lines.append(line)
-                continue
-            ms = step if self.last is None else self.last + step
-            self.last = ms
-            level = line.index("] ") + 2
-            lines.append(f"{line[:level]}[{ms // 1000}.{ms % 1000:03d}] {line[level:]}")
-        data["lines"] = lines
+        stamps = self.decode(steps) + [None] * (len(given) - len(steps))
+        # zip(strict=False): a line is never lost to a short list
+        data["lines"] = [line if ms is None else with_stamp(line, ms)
+                         for line, ms in zip(given, stamps, strict=False)]
+
+
+def with_stamp(line: str, ms: int) -> str:
+    """A line sent without its ROS stamp (`[INFO] [logger]: ...`) as it was printed, with
+    the stamp to the millisecond after its level."""
+    level = line.index("] ") + 2
+    return f"{line[:level]}[{ms // 1000}.{ms % 1000:03d}] {line[level:]}"
 
 
 def event_from_dict(data: dict[str, Any]) -> Event:
