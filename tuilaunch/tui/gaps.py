@@ -77,9 +77,9 @@ class Gaps(SessionLink):
         try:
             first, end, stamps = await self.engine.run(
                 supervisor.read_stamps(message.shown, self.store.unstamped.first()))
-        except SessionError as exc:  # the link is down: said, and shown as it is
-            self.notify(f"the lines' ROS stamps could not be read ({exc}): the lines "
-                        "without show when they arrived", severity="warning")
+        except Exception as exc:  # the link is down, or worse: the key still does its part
+            self.notify(f"ROS stamps not read: {exc}. Lines that came without theirs show "
+                        "when they arrived.", severity="warning")
         else:
             self.drain()  # the lines sent before the answer, in the store before it
             if self.store.unstamped.fill(first, end, stamps):
