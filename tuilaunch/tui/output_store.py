@@ -206,27 +206,22 @@ class Unstamped:
     has left every pane but its own, and keeps its arrival time there."""
 
     def __init__(self, bound: int) -> None:
-        self.bound = bound
-        self.lines: dict[int, Line] = {}
+        # (number, line), numbers rising: the stream's order
+        self.lines: deque[tuple[int, Line]] = deque(maxlen=bound)
 
     def add(self, number: int, line: Line) -> None:
-        self.lines[number] = line
-        if len(self.lines) > self.bound:
-            del self.lines[next(iter(self.lines))]
+        self.lines.append((number, line))
 
     def first(self) -> int | None:
-        return next(iter(self.lines), None)
+        return self.lines[0][0] if self.lines else None
 
     def fill(self, first: int, end: int, stamps: dict[int, int]) -> int:
         """The stamps (ms) read for the lines numbered up to `end` (lines from `first` on
         are the ones still kept where they were sent); the lines before `end` that have
         none keep their arrival time. How many lines changed."""
         filled = 0
-        while self.lines:
-            number = next(iter(self.lines))
-            if number >= end:
-                break
-            line = self.lines.pop(number)
+        while self.lines and self.lines[0][0] < end:
+            number, line = self.lines.popleft()
             ms = stamps.get(number) if number >= first else None
             if ms is None:
                 continue
