@@ -16,8 +16,8 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   {first, stamps: [as in a batch]}: the ROS stamps of the output lines this plain client
   was sent without them, from its line `since` on (lines count from the subscription's
   first), those still kept (from line `first`); `on`: whether the batches after this reply
-  carry them (they come after every batch whose lines the reply covers), view {only: a process id or
-  null for all} changes `only`: an event of kind "view" (process: the new `only`, data
+  carry them (the reply comes after every batch whose lines it covers), view {only: a
+  process id or null for all} changes `only`: an event of kind "view" (process: the new `only`, data
   {offsets: {process: its log file's size}}) then marks in the stream where the switch
   happened, so the client reads from the files what it was not sent, status {resources?: false skips
   the CPU/memory sampling}, find {process},
