@@ -63,10 +63,9 @@ class Gaps(SessionLink):
 
     @on(OutputPanel.StampsWanted)
     def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
-        supervisor = self.supervisor
-        if not isinstance(supervisor, RemoteSupervisor) or supervisor.host is None or (
-                message.shown == supervisor.stamps_shown
-                and self.store.unstamped.first() is None):
+        supervisor = self.over_link()
+        if supervisor is None or (message.shown == supervisor.stamps_shown
+                                  and self.store.unstamped.first() is None):
             message.then()  # every line here has its stamp, and the link sends them so
             return
         self.run_worker(self._read_stamps(supervisor, message), group="stamps",

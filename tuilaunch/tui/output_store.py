@@ -7,12 +7,11 @@ pane can show a compact form without parsing again on every repaint.
 
 from __future__ import annotations
 
-import re
 import time
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 from ..engine.run.process.output import expand_tabs, screen_str, strip_ansi
 from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames
@@ -23,7 +22,6 @@ INFO = 1
 WARN = 2
 ERROR = 3
 _ROS_PREFIX = ROS_LOG_PREFIX
-_STAMPED = re.compile(r"\[[A-Z]+\]\s*\[\d")
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,19 +67,26 @@ def level_of(text: str, stream: str) -> int:
     return WARN if stream == "stderr" else INFO
 
 
-def parse(process: str, raw: str, stream: str, now: float) -> tuple[Line, str | None]:
-    """A Line, and the logger name it reports (`r1.talker`), if it has the ROS prefix."""
+class Parsed(NamedTuple):
+    line: Line
+    logger: str | None  # the logger name it reports (`r1.talker`), if it has the ROS prefix
+    unstamped: bool  # the ROS prefix without its stamp (left out over a link: `Unstamped`)
+
+
+def parse(process: str, raw: str, stream: str, now: float) -> Parsed:
+    """A Line, as it arrived `now`, and what its ROS prefix says."""
     # colours are shown by level, never as raw escapes; tabs become spaces once, here, on
     # arrival, after the colour codes (which take no columns) are gone: every repaint,
     # search highlight, pan and wrap then measures the text as drawn
     text = expand_tabs(strip_ansi(raw))
     match = _ROS_PREFIX.match(text)
     if not match:
-        return Line(process, text, WARN if stream == "stderr" else INFO, now), None
+        return Parsed(Line(process, text, WARN if stream == "stderr" else INFO, now), None,
+                      False)
     name = match.group(1)
     stamp = float(match.group(2)) if match.group(2) else now
-    return (Line(process, text, LEVELS.index("WARN" if name == "WARNING" else name), stamp,
-                 match.end()), match.group(3) or None)
+    return Parsed(Line(process, text, LEVELS.index("WARN" if name == "WARNING" else name),
+                       stamp, match.end()), match.group(3) or None, not match.group(2))
 
 
 @dataclass
@@ -132,10 +137,10 @@ class OutputStore:
         now = time.time()
         lines: list[Line] = []
         for raw in texts:
-            line, logger = parse(process, raw, stream, now)
+            line, logger, unstamped = parse(process, raw, stream, now)
             if logger:
                 self.reported.add_logger(process, logger)
-            if first is not None and line.body and not _STAMPED.match(line.text):
+            if first is not None and unstamped:
                 self.unstamped.add(first + len(lines), line)
             lines.append(line)
         if lines and self.partials.pop((process, stream), None) is not None:

@@ -346,12 +346,20 @@ class SessionLink(App[int]):
     def _tell_pane_shown(self) -> None:
         """Over an ssh link the server sends only the output pane's process's lines (all
         for the all-nodes pane); the others' are read from their log files when shown."""
-        supervisor = self.supervisor
-        if not isinstance(supervisor, RemoteSupervisor) or supervisor.host is None:
+        supervisor = self.over_link()
+        if supervisor is None:
             return
         shown = self.output_panel.view.process
         if shown != supervisor.only:  # set on the engine thread: asked again until it is
             self.engine.submit(supervisor.show(shown))
+
+    def over_link(self) -> RemoteSupervisor | None:
+        """The session's supervisor when an ssh link is between (the session is on another
+        machine): what crosses it is then kept to what the screen shows."""
+        supervisor = self.supervisor
+        if isinstance(supervisor, RemoteSupervisor) and supervisor.host is not None:
+            return supervisor
+        return None
 
     def inspector_event(self, event: Event) -> None:
         """A `rates`, `echo` or `resources` event (the Inspector mixin shows them)."""
