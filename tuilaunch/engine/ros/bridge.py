@@ -117,6 +117,9 @@ class RosBridge:
             pass
 
     def close(self) -> None:
+        meter = getattr(self, "inspector_rates", None)
+        if meter is not None:  # its thread lets go of its subscriptions while the node is
+            meter.close()
         self._executor.shutdown(timeout_sec=2)
         self.node.destroy_node()
         self._context.try_shutdown()

@@ -210,6 +210,7 @@ class RateMeter:
         self.lock = threading.Lock()  # guards the two dicts and `changed` with the thread
         # the thread's wake-up when the topics change, None while no thread runs
         self.changed: Any = None
+        self.thread: threading.Thread | None = None
 
     async def start(self, topic: str, window_s: float = 10.0, wait: float = 5.0,
                     messages: int | None = None) -> None:
@@ -245,8 +246,9 @@ class RateMeter:
 
         # made apart from the node: no executor waits on it
         changed = self.changed = GuardCondition(None, None, context=self.node.context)
-        threading.Thread(target=self.take_loop, args=(changed,), daemon=True,
-                         name="rate meter").start()
+        self.thread = threading.Thread(target=self.take_loop, args=(changed,), daemon=True,
+                                       name="rate meter")
+        self.thread.start()
 
     def stop(self, topic: str) -> None:
         """Stops measuring `topic`; its subscription goes as soon as the thread lets go."""
@@ -261,6 +263,14 @@ class RateMeter:
     def stop_all(self) -> None:
         for topic in list(self.subscriptions):
             self.stop(topic)
+
+    def close(self, timeout: float = 5.0) -> None:
+        """Before the node goes: every topic stopped and the thread ended. A thread still
+        holding subscriptions would let go of them (and rclpy destroy them, deferred until
+        then) after their node and context were gone: a segfault in the thread."""
+        self.stop_all()
+        if self.thread is not None:
+            self.thread.join(timeout)
 
     def measured(self) -> list[str]:
         with self.lock:
