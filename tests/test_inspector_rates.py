@@ -87,6 +87,19 @@ def meter_threads() -> list[threading.Thread]:
     return [t for t in threading.enumerate() if t.name == "rate meter"]
 
 
+def test_a_bridge_closed_while_measuring_ends_its_meter_before_the_node():
+    """Closing a bridge that still measures (a TUI quit on the Topics tab) stops the
+    meter's thread before the node and the context go: a thread left serving let go of
+    its subscriptions after them, and their destruction then crashed the process."""
+    async def scenario(bridge: RosBridge) -> dict[str, Any]:
+        await bridge.start_rates([f"{NS}/closing"], window_s=5.0, wait=30)
+        return await reading(bridge, f"{NS}/closing", 5)
+
+    with ros_nodes(["closing", "--namespace", NS, "--pub", "closing", "--rate", "50"]):
+        assert run(scenario)["messages"] >= 5
+        assert meter_threads() == []  # ended by close itself, not some time after it
+
+
 def test_bandwidth_follows_message_size():
     async def scenario(bridge: RosBridge) -> dict[str, Any]:
         await bridge.start_rates([f"{NS}/big"], window_s=5.0, wait=30)
