@@ -5,16 +5,17 @@
    tuilaunch's thread count with N children (constant: no thread per child). Target at 100:
    at most 2x the floor.
 2. A flood: 4 processes each printing FLOOD_LINES lines as fast as they can, through
-   pseudo-terminals (the default), all of it logged with 0 lines lost, against the floor
-   of the same 4 writers writing the same way straight to files (`stdbuf -oL`, as a
-   terminal makes stdout line-buffered; `seq` writes 8 KB blocks anyway, to a terminal as
-   to a file, as strace shows). Two ratios: the flood itself (first writer started to
-   last line logged, from tuilaunch's own stamps in launch.log and the log files; target
-   at most 1.5x) and command to end (tuilaunch's own start-up included, which the start
-   figure measures). Beside it, a minimal reader of the same terminals (read, write to a
-   file): what the terminals cost under any launcher. Then the same with writers that
-   write each line as it is made (awk with fflush(): one write(2) a line, as a ROS node's
-   logger writes to a terminal), and through pipes (emulate_tty=False) with `seq`.
+   pipes (the default, as in launch), all of it logged with 0 lines lost, against the
+   floor of the same 4 writers writing the same way straight to files. The target row's
+   writers write each line unbuffered, as it is made (awk with fflush(): one write(2) a
+   line, as a ROS node's logger writes to stderr); `seq` writes 4 KB blocks to a pipe as
+   to a file. Two ratios: the flood itself (first writer started to last line logged,
+   from tuilaunch's own stamps in launch.log and the log files; target at most 1.5x) and
+   command to end (tuilaunch's own start-up included, which the start figure measures).
+   Then the same through pseudo-terminals (emulate_tty=True; against the writers
+   line-buffered to files, `stdbuf -oL`, as a terminal makes stdout; `seq` writes 8 KB
+   blocks anyway), beside a minimal reader of the same terminals (read, write to a file):
+   what the terminals cost under any launcher.
 3. tuilaunch's own CPU while 100 quiet processes run (target: under 1% of a core).
 
 ros2 launch is not installed on this machine (no ROS apt packages; `launch` is not on PyPI
@@ -170,10 +171,11 @@ def floor_flood_once(folder: Path, writer: list[str], tty: bool) -> float:
     return elapsed
 
 
-def reader_flood_once(folder: Path, writer: list[str]) -> float:
-    """The same 4 writers through pseudo-terminals set up as tuilaunch's (no output
-    processing), each read by a minimal reader that writes what it reads to a file, nothing
-    else: what the terminals themselves cost, under any launcher that reads them."""
+def reader_flood_once(folder: Path, writer: list[str], tty: bool) -> float:
+    """The same 4 writers through pipes, or pseudo-terminals set up as tuilaunch's (no
+    output processing), each read by a minimal reader that writes what it reads to a file,
+    nothing else: what the pipes or terminals themselves cost, under any launcher that
+    reads them."""
     import pty
     import selectors
     import termios
@@ -183,10 +185,11 @@ def reader_flood_once(folder: Path, writer: list[str]) -> float:
     writers = []
     start = time.perf_counter()
     for i in range(4):
-        master, slave = pty.openpty()
-        attrs = termios.tcgetattr(slave)
-        attrs[1] &= ~termios.OPOST
-        termios.tcsetattr(slave, termios.TCSANOW, attrs)
+        master, slave = pty.openpty() if tty else os.pipe()
+        if tty:
+            attrs = termios.tcgetattr(slave)
+            attrs[1] &= ~termios.OPOST
+            termios.tcsetattr(slave, termios.TCSANOW, attrs)
         writers.append(subprocess.Popen(writer, stdout=slave, start_new_session=True))
         os.close(slave)
         os.set_blocking(master, False)
@@ -198,7 +201,7 @@ def reader_flood_once(folder: Path, writer: list[str]) -> float:
                 chunk = os.read(key.fd, 1 << 16)
             except BlockingIOError:
                 continue
-            except OSError:  # EIO: the writer is gone
+            except OSError:  # EIO: the writer of a terminal is gone (a pipe says b"")
                 chunk = b""
             if chunk:
                 os.write(files[key.fd], chunk)
@@ -211,12 +214,11 @@ def reader_flood_once(folder: Path, writer: list[str]) -> float:
     return time.perf_counter() - start
 
 
-def flood(folder: Path, writer: str, tty: bool) -> tuple[float, float, float, float | None,
-                                                          int]:
-    """4 writers through tuilaunch (pseudo-terminals, or pipes) against the floor and, for
-    terminals, the minimal reader; best of 3 each, interleaved: (command to end, flood
-    itself, floor, minimal reader, lines lost in any run)."""
-    emulate = "None" if tty else "False"
+def flood(folder: Path, writer: str, tty: bool) -> tuple[float, float, float, float, int]:
+    """4 writers through tuilaunch (pipes, or pseudo-terminals) against the floor and the
+    minimal reader; best of 3 each, interleaved: (command to end, flood itself, floor,
+    minimal reader, lines lost in any run)."""
+    emulate = "True" if tty else "None"  # None: the default, pipes
     name = f"{writer}_{'tty' if tty else 'pipe'}"
     argv = WRITERS[writer]
     path = write_launch(folder, f"flood_{name}.py",
@@ -229,9 +231,8 @@ def flood(folder: Path, writer: str, tty: bool) -> tuple[float, float, float, fl
         windows.append(window)
         lost += missing
         floors.append(floor_flood_once(folder, argv, tty))
-        if tty:
-            readers.append(reader_flood_once(folder, argv))
-    return min(wholes), min(windows), min(floors), min(readers) if readers else None, lost
+        readers.append(reader_flood_once(folder, argv, tty))
+    return min(wholes), min(windows), min(floors), min(readers), lost
 
 
 def idle_cpu(folder: Path, seconds: float = 10.0) -> float:
@@ -265,20 +266,23 @@ def main() -> None:
                   f"ratio {ours / floor:.2f}x{' (target <= 2x)' if count == 100 else ''}; "
                   f"tuilaunch threads with {count} children: {threads}")
         for writer, tty, what in (
-                ("seq", True, "`seq` through pseudo-terminals (the default)"),
-                ("awk", True, "a line a write (awk, fflush) through pseudo-terminals"),
-                ("seq", False, "`seq` through pipes (emulate_tty=False)")):
+                ("awk", False, "a line a write (awk, fflush) through pipes (the default)"),
+                ("seq", False, "`seq` (4 KB writes) through pipes (the default)"),
+                ("awk", True, "a line a write (awk, fflush) through pseudo-terminals "
+                 "(emulate_tty=True)"),
+                ("seq", True, "`seq` (8 KB writes) through pseudo-terminals "
+                 "(emulate_tty=True)")):
             whole, window, floor, reader, lost = flood(folder, writer, tty)
-            target = " (target <= 1.5x)" if (writer, tty) == ("seq", True) else ""
+            target = " (target <= 1.5x)" if (writer, tty) == ("awk", False) else ""
             print(f"flood 4 x {FLOOD_LINES:,} lines, {what}, all logged: the flood "
                   f"{window:.3f} s (first start to last line logged), command to end "
                   f"{whole:.3f} s; the same writers straight to files {floor:.3f} s; ratio "
                   f"{window / floor:.2f}x{target}, command to end {whole / floor:.2f}x; "
                   f"lines lost: {lost}")
-            if reader is not None:
-                print(f"  the same terminals read by a minimal reader (read, write to a file, "
-                      f"nothing else): {reader:.3f} s, {reader / floor:.2f}x the floor; "
-                      f"tuilaunch's flood is {window / reader:.2f}x that reader")
+            print(f"  the same {'terminals' if tty else 'pipes'} read by a minimal reader "
+                  f"(read, write to a file, nothing else): {reader:.3f} s, "
+                  f"{reader / floor:.2f}x the floor; tuilaunch's flood is "
+                  f"{window / reader:.2f}x that reader")
         print(f"CPU of tuilaunch with 100 quiet processes: {idle_cpu(folder):.2f}% of a core "
               "(target < 1%)")
 

@@ -538,11 +538,13 @@ sl.add_action(ExecuteProcess(name='bytes', cmd=[
     assert logged == [b"10%\r50%\r100%", b"nul\x00byte", b"\x1b[31mred\x1b[0m"]
 
 
-# --- a terminal per node -----------------------------------------------------------------------
+# --- pipes, or a terminal ---------------------------------------------------------------------
 
 
-def test_a_c_program_that_never_flushes_prints_live_through_its_terminal(write, tmp_path,
-                                                                          launches):
+def test_a_c_program_that_never_flushes_prints_live_only_through_a_terminal(write, tmp_path,
+                                                                             launches):
+    """As launch: pipes by default (printf held in its buffer, launch#188), a terminal for
+    each stream with emulate_tty=True (printf live, stderr still apart)."""
     started, _ = launches
     source = tmp_path / "noflush.c"
     source.write_text('#include <stdio.h>\n#include <unistd.h>\n'
@@ -551,8 +553,8 @@ def test_a_c_program_that_never_flushes_prints_live_through_its_terminal(write, 
     binary = tmp_path / "noflush"
     subprocess.run(["gcc", "-o", str(binary), str(source)], check=True)
     path = launch_file(write, f"""
-sl.add_action(ExecuteProcess(cmd=['{binary}'], name='shown'))
-sl.add_action(ExecuteProcess(cmd=['{binary}'], name='piped', emulate_tty=False))
+sl.add_action(ExecuteProcess(cmd=['{binary}'], name='shown', emulate_tty=True))
+sl.add_action(ExecuteProcess(cmd=['{binary}'], name='piped'))
 sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'sleep 1; echo piped checked'], name='later'))""")
     proc = start_headless(str(path), log_dir=tmp_path)
     started.append(proc)

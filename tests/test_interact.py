@@ -36,9 +36,9 @@ PROGRAMS = {str(PROGRAMS)!r}
 def generate_launch_description():
     return LaunchDescription([
         ExecuteProcess(name='lines', cmd=[sys.executable, PROGRAMS + '/line_reader.py'],
-                       output='screen'),
+                       output='screen', emulate_tty=True),
         ExecuteProcess(name='keys', cmd=[sys.executable, PROGRAMS + '/raw_key_reader.py'],
-                       output='screen'),
+                       output='screen', emulate_tty=True),
         ExecuteProcess(name='segv', cmd=[sys.executable, PROGRAMS + '/segv.py'],
                        output='screen', additional_env={{'CRASH_NOTE': 'a b'}}),
     ])
@@ -104,6 +104,51 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(write):
     other.request("input", process="keys-2", data="q")
     tl("wait", name, "keys-2", "exited", "--timeout", "60")
     other.close()
+    tl("stop", name)
+
+
+PIPED = f"""
+import sys
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(name='lines', output='screen',
+                       cmd=[sys.executable, {str(PROGRAMS)!r} + '/line_reader.py']),
+        ExecuteProcess(name='nap', output='screen', cmd=['sleep', '600']),
+    ])
+"""
+
+
+def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_plain_restart(
+        write):
+    """As ros2 launch, a process without emulate_tty gets pipes: a keyboard node refuses
+    them, as teleop_twist_keyboard does, and one that runs cannot be typed into. `restart
+    --terminal` (what the TUI's `i` offers) gives it a terminal; a plain restart takes it
+    back."""
+    name = tl(str(write(PIPED)), "--detach").stdout.strip()
+    tl("wait", name, "lines-1", "failed", "--timeout", "60")
+    assert "stdin is not a terminal" in logs(name, "lines-1")
+    assert process(name, "lines-1")["terminal"] is False
+    tl("wait", name, "nap-2", "running", "--timeout", "60")
+    typist = Link(name)
+    try:
+        with pytest.raises(SessionError, match="nap-2 cannot be typed into: it has no "
+                           "terminal: it was started with pipes"):
+            typist.request("typing", process="nap-2", on=True)
+        assert tl("restart", name, "lines-1", "--terminal").stdout == "lines-1: running\n"
+        assert process(name, "lines-1")["terminal"] is True
+        wait_for(lambda: "ready" in logs(name, "lines-1"), what="the reader ready")
+        typist.request("typing", process="lines-1", on=True)
+        typist.request("input", process="lines-1", data="hello robot\r")
+        wait_for(lambda: "got: hello robot" in logs(name, "lines-1"), what="the typed line")
+        typist.request("typing", process="lines-1", on=False)
+        tl("restart", name, "lines-1", check=False)
+        tl("wait", name, "lines-1", "failed", "--timeout", "60")
+        assert process(name, "lines-1")["terminal"] is False
+        assert logs(name, "lines-1").count("stdin is not a terminal") == 2
+    finally:
+        typist.close()
     tl("stop", name)
 
 

@@ -11,9 +11,10 @@ from textual.widgets import Input
 
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 
-from .test_interact import LAUNCH, logs, process
+from .test_interact import LAUNCH, PIPED, logs, process
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
 
@@ -29,6 +30,15 @@ def pane(app, process_id: str) -> str:
     return "\n".join(line.text for line in app.store.lines(View(process_id)))
 
 
+async def terminal_offered(pilot, app, process_id: str) -> str:
+    """`i` on a node started with pipes: the question it asks."""
+    select(app, process_id)
+    await pilot.pause()
+    await pilot.press("i")
+    await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+    return app.screen.question
+
+
 def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
     path = str(write(LAUNCH))
     name, log_dir = detached_with(path, "keys-2")
@@ -38,14 +48,13 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
         async with app.run_test(size=(120, 32)) as pilot:
             await until(pilot, lambda: "ready" in pane(app, "lines-1"))
             await until(pilot, lambda: "ready" in pane(app, "keys-2"))
-            # `i` on a node that is not running: one line, nothing changes
+            # `i` on a node that ran with pipes offers a terminal; `n` changes nothing
             await until(pilot, lambda: app.supervisor.states.get("segv-3") == "failed")
-            select(app, "segv-3")
-            await pilot.pause()
-            await pilot.press("i")
-            await pilot.pause()
+            assert "segv-3 has no terminal" in await terminal_offered(pilot, app, "segv-3")
+            await pilot.press("n")
+            await until(pilot, lambda: not isinstance(app.screen, ConfirmScreen))
             assert app.typing_to is None
-            assert any("segv-3 is not running" in n.message for n in app._notifications)
+            assert process(name, "segv-3")["state"] == "failed"
 
             select(app, "lines-1")
             await pilot.pause()
@@ -85,6 +94,36 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             assert not app.quitting
             await pilot.press("d")
             await until(pilot, lambda: getattr(app.supervisor, "detached", False))
+
+    asyncio.run(scenario())
+    tl("stop", name)
+
+
+def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into_it(write):
+    """The keyboard node fails with pipes, as teleop_twist_keyboard does under ros2 launch
+    without emulate_tty; `i y` typed in one burst starts it with a terminal and the keys
+    after go to it."""
+    path = str(write(PIPED))
+    name, log_dir = detached_with(path, "nap-2")
+
+    async def scenario() -> None:
+        app = make_app(path, {}, log_dir, session_name=name)
+        async with app.run_test(size=(120, 32)) as pilot:
+            await until(pilot, lambda: app.supervisor.states.get("lines-1") == "failed")
+            await until(pilot, lambda: "stdin is not a terminal" in pane(app, "lines-1"))
+            select(app, "lines-1")
+            await pilot.pause()
+            await pilot.press("i", "y")
+            await until(pilot, lambda: app.typing_to == "lines-1")
+            await until(pilot, lambda: "ready" in pane(app, "lines-1"))
+            await pilot.press(*"hello", "enter")
+            await until(pilot, lambda: "got: hello" in pane(app, "lines-1"))
+            await pilot.press("ctrl+right_square_bracket")
+            assert app.typing_to is None
+            assert process(name, "lines-1")["terminal"] is True
+            # a node that runs with pipes: the question says restart
+            assert "Restart it with a terminal" in await terminal_offered(pilot, app, "nap-2")
+            await pilot.press("escape")
 
     asyncio.run(scenario())
     tl("stop", name)

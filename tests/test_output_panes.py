@@ -24,7 +24,7 @@ PROGRAMS = {str(PROGRAMS)!r}
 def generate_launch_description():
     return LaunchDescription([
         ExecuteProcess(name=name, cmd=[sys.executable, PROGRAMS + '/' + name + '.py', *args],
-                       output='screen')
+                       output='screen', emulate_tty=True)
         for name, args in {{programs}}])
 """
 

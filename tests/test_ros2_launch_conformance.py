@@ -356,9 +356,10 @@ def test_show_args_of_a_file_without_arguments_says_so_as_ros2_launch(write):
         "  No arguments.\n"
 
 
-def test_the_emulate_tty_launch_configuration_overrides_each_process_s(write):
-    """launch: `if 'emulate_tty' in context.launch_configurations`, it decides for every
-    process, whatever the process's own emulate_tty says."""
+def test_a_process_gets_pipes_unless_emulate_tty_and_the_configuration_overrides_it(write):
+    """launch: ExecuteLocal's `emulate_tty: bool = False`, and `if 'emulate_tty' in
+    context.launch_configurations`, it decides for every process, whatever the process's own
+    emulate_tty says."""
     path = write("""
 from launch import LaunchDescription
 from launch.actions import ExecuteProcess
@@ -371,7 +372,11 @@ def generate_launch_description():
     ])
 """)
     shown = run_cli(str(path), "--headless")
-    assert "[asks-1] terminal" in shown.stdout and "[plain-2] terminal" in shown.stdout
+    assert "[asks-1] terminal" in shown.stdout and "[plain-2] pipe" in shown.stdout, \
+        shown.stdout
+    every = run_cli(str(path), "--headless", "emulate_tty:=true")
+    assert "[asks-1] terminal" in every.stdout and "[plain-2] terminal" in every.stdout, \
+        every.stdout
     piped = run_cli(str(path), "--headless", "emulate_tty:=false")
     assert "[asks-1] pipe" in piped.stdout and "[plain-2] pipe" in piped.stdout, piped.stdout
     assert "not declared" not in piped.stderr

@@ -244,7 +244,7 @@ from launch.actions import ExecuteProcess
 def generate_launch_description():
     sl = SimpleLauncher()
     for name in ('stopped', 'restarted'):
-        sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; read line'], name=name,
+        sl.add_action(ExecuteProcess(cmd=['sh', '-c', 'echo up; exec sleep 600'], name=name,
                                      respawn=True, respawn_delay=600.0))
     return sl.launch_description()
 """)

@@ -35,7 +35,7 @@ def generate_launch_description():
     return LaunchDescription([
         DeclareLaunchArgument('robot', default_value='r1', description='the robot'),
         ExecuteProcess(name='lines', cmd=[sys.executable, PROGRAMS + '/line_reader.py'],
-                       output='screen'),
+                       output='screen', emulate_tty=True),
         ExecuteProcess(name='quiet', cmd=['sleep', '600']),
     ])
 """

@@ -347,7 +347,8 @@ def cmd_restart(options: argparse.Namespace) -> int:
     link = open_link(options.name, timeout=None)
     try:
         extra = {key: value for key, value in (("prefix", options.prefix),
-                                               ("log_level", options.log_level))
+                                               ("log_level", options.log_level),
+                                               ("terminal", options.terminal or None))
                  if value is not None}
         result = link.request("restart", process=options.process, **extra)
     finally:

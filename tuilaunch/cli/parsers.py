@@ -137,6 +137,10 @@ def commands_parser() -> argparse.ArgumentParser:
     restart.add_argument("--prefix", metavar="CMD",
                          help="run it under a tool until a restart without one, e.g. "
                          "'gdb -q -ex run --args' (type into it in the TUI with i)")
+    restart.add_argument("--terminal", action="store_true",
+                         help="give it a terminal until a restart without --terminal, to "
+                         "type into it in the TUI with i (as emulate_tty=True; processes "
+                         "get pipes by default, as in ros2 launch)")
     restart.add_argument("--log-level", metavar="LEVEL",
                          help="append --ros-args --log-level LEVEL (debug, info, warn, error, "
                          "fatal; kept across respawns until a restart gives another; '' "

@@ -636,10 +636,11 @@ class RemoteSupervisor:
         await self._request("stop", process=process_id)
 
     async def restart(self, process_id: str, prefix: str | None = None,
-                      log_level: str | None = None) -> None:
-        """As Supervisor.restart: `prefix` runs it under a tool until a plain restart."""
-        extra = {k: v for k, v in (("prefix", prefix), ("log_level", log_level))
-                 if v is not None}
+                      log_level: str | None = None, terminal: bool = False) -> None:
+        """As Supervisor.restart: `prefix` runs it under a tool, `terminal` gives it a
+        terminal, until a plain restart."""
+        extra = {k: v for k, v in (("prefix", prefix), ("log_level", log_level),
+                                   ("terminal", terminal or None)) if v is not None}
         await self._request("restart", process=process_id, **extra)
 
     async def shutdown(self, reason: str = "shutdown") -> None:

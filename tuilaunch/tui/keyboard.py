@@ -1,7 +1,8 @@
-"""The operator's hands on one node from the TUI: `i` types into its terminal until ctrl+],
-`g` restarts it under a tool (gdb, valgrind...), `c` shows the exact command it was started
-with. Through the session server when there is one (one client types at a time), else the
-in-process supervisor."""
+"""The operator's hands on one node from the TUI: `i` types into its terminal until ctrl+]
+(for a node started with pipes, as launch's default is, it offers to restart it with a
+terminal first), `g` restarts it under a tool (gdb, valgrind...), `c` shows the exact
+command it was started with. Through the session server when there is one (one client
+types at a time), else the in-process supervisor."""
 
 from __future__ import annotations
 
@@ -13,9 +14,11 @@ from textual.binding import Binding
 
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
+from ..engine.run.process.readers import NO_TERMINAL
 from ..engine.run.supervisor.supervisor import Event
 from .key_order import hold_keys
 from .keys import edit_line, is_release, key_bytes
+from .screens.dialogs import ConfirmScreen
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TypingLine
 from .session_link import SessionLink
 
@@ -76,17 +79,33 @@ class NodeKeyboard(SessionLink):
         process = self._one_process()
         if process is None or self.supervisor is None:
             return
-        state = self.supervisor.states.get(process)
-        if state != "running":
-            self.notify(f"{process} is not running ({state}): there is nothing to type into",
-                        severity="warning")
-            return
-        # the keys typed right after `i` are for the node: they wait for its typing line
+        # the keys typed right after `i` are for the node (they wait for its typing line),
+        # or answer the question whether to give it a terminal
         release = hold_keys(self)
         self.run_worker(self._take_keyboard(process, release), group="typing",
                         exit_on_error=False)
 
     async def _take_keyboard(self, process: str, release: Callable[[], None]) -> None:
+        assert self.supervisor is not None
+        state = self.supervisor.states.get(process)
+        try:
+            terminal = await self.engine.run(had_terminal(self.supervisor, process)) \
+                if state in RAN else None
+        except LaunchError as exc:
+            release()
+            self.notify(str(exc), severity="error")
+            return
+        if terminal is False:
+            self._offer_terminal(process)
+            release()
+        elif state != "running":
+            release()
+            self.notify(f"{process} is not running ({state}): there is nothing to type into",
+                        severity="warning")
+        else:
+            await self._start_typing(process, release)
+
+    async def _start_typing(self, process: str, release: Callable[[], None]) -> None:
         try:
             await self.engine.run(take_keyboard(self.supervisor, process))
         except LaunchError as exc:
@@ -107,6 +126,36 @@ class NodeKeyboard(SessionLink):
             release()  # the keys typed after `i` go to the line, or on as before
         self._show_typing()
         self.refresh_bindings()
+
+    def _offer_terminal(self, process: str) -> None:
+        def answered(yes: bool | None) -> None:
+            if yes:
+                self.run_worker(self._restart_with_terminal(process), group="typing",
+                                exit_on_error=False)
+
+        assert self.supervisor is not None
+        verb = "Restart" if self.supervisor.states.get(process) == "running" else "Start"
+        self.push_screen(ConfirmScreen(
+            f"{process} has no terminal to type into: its file gives it pipes, as ros2 "
+            f"launch does without emulate_tty=True. {verb} it with a terminal (until its "
+            f"next plain restart)?", f"{verb} it (y)"), answered)
+
+    async def _restart_with_terminal(self, process: str) -> None:
+        if await self._restart_with(process, terminal=True):
+            await self._start_typing(process, lambda: None)  # the session says if it ended
+
+    async def _restart_with(self, process: str, **options: Any) -> bool:
+        """Restarts the node with `options` (a tool, a terminal); False, said, when the
+        restart was refused."""
+        assert self.supervisor is not None
+        self.asked_to_stop.add(process)
+        try:
+            await self.engine.run(self.supervisor.restart(process, **options))
+        except LaunchError as exc:
+            self.asked_to_stop.discard(process)
+            self.notify(str(exc), severity="error")
+            return False
+        return True
 
     def _typed(self, key: str, character: str | None) -> None:
         """A key pressed while typing: to the node, or ctrl+] back to tuilaunch."""
@@ -218,13 +267,7 @@ class NodeKeyboard(SessionLink):
         self.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
 
     async def _restart_under(self, process: str, prefix: str) -> None:
-        assert self.supervisor is not None
-        self.asked_to_stop.add(process)
-        try:
-            await self.engine.run(self.supervisor.restart(process, prefix=prefix))
-        except LaunchError as exc:
-            self.asked_to_stop.discard(process)
-            self.notify(str(exc), severity="error")
+        if not await self._restart_with(process, prefix=prefix):
             return
         self.prefix_history = [prefix, *[p for p in self.prefix_history
                                          if p != prefix]][:RECENT_PREFIXES]
@@ -263,8 +306,22 @@ async def take_keyboard(supervisor: Any, process: str) -> None:
     if running is None:
         raise LaunchError(f"{process} is not running: there is nothing to type into")
     if running.terminal is None:
-        raise LaunchError(f"{process} cannot be typed into: it has no terminal (its output "
-                          "is not shown on screen, or emulate_tty is False)")
+        raise LaunchError(f"{process} cannot be typed into: {NO_TERMINAL}")
+
+
+RAN = ("running", "exited", "failed")
+"""States of a process that was started: whether it had a terminal is known."""
+
+
+async def had_terminal(supervisor: Any, process: str) -> bool | None:
+    """Whether the process's last start gave it a terminal; None when that is not known
+    here (run by another machine: taking its keyboard says what it can)."""
+    if isinstance(supervisor, RemoteSupervisor):
+        status = await supervisor.request("status", resources=False)
+        found = next((p for p in status["processes"] if p["id"] == process), None)
+        return None if found is None else found.get("terminal")
+    start = supervisor.started_with.get(process)
+    return None if start is None else start.tty
 
 
 async def release_keyboard(supervisor: Any, process: str) -> None:

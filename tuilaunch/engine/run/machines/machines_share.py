@@ -373,7 +373,7 @@ class MachinesCoordinator(Plugin):
         with contextlib.suppress(LaunchError, ConnectionError, OSError):
             await share.send(message)
 
-    async def forward(self, op: str, process_id: str, **options: str) -> None:
+    async def forward(self, op: str, process_id: str, **options: Any) -> None:
         machine = self.supervisor.plan.process(process_id).machine
         share = self.shares.get(machine or "")
         if share is None or share.writer is None:

@@ -73,13 +73,13 @@ def start_command(proc: ProcessPlan, base_env: Mapping[str, str], tty: bool,
 def describe_command(start: StartCommand, base_env: Mapping[str, str]) -> dict[str, Any]:
     """`status`'s view of a start: `command` (argv), `command_line` (for a shell: `cd`,
     `env` changes, the argv quoted), `env` (what differs from the launcher's) and `unset_env`
-    (the launcher's variables it does not get)."""
+    (the launcher's variables it does not get), `terminal` (a terminal, or pipes)."""
     changed, removed = env_changes(base_env, start.env)
     removed = [] if start.clear_env else removed
     line = shell_command(start.cmd, start.env if start.clear_env else changed, start.cwd,
                          unset=removed, clear_env=start.clear_env)
     return {"command": list(start.cmd), "command_line": line, "env": changed,
-            "unset_env": removed}
+            "unset_env": removed, "terminal": start.tty}
 
 
 def death_details(pid: int, code: int, requested: bool, cwd: str | None, comm: str,

@@ -37,6 +37,11 @@ PARTIAL_AFTER = 0.05
 that long for sure, while a flood's chunks that end mid-line are never shown half."""
 
 
+NO_TERMINAL = ("it has no terminal: it was started with pipes, as without emulate_tty=True "
+               "in ros2 launch (`i` in the TUI, or `tuilaunch restart --terminal`, restarts "
+               "it with one)")
+"""Why a process cannot be typed into, said the same by every way in."""
+
 class ChannelReader:
     """One output channel of a child, read on the loop until its end."""
 
@@ -174,8 +179,7 @@ class Running:
         if terminal is None:
             if any(reader.input is not None for reader in self.readers):
                 raise InputRefused("its terminal is closed")
-            raise InputRefused("it has no terminal (its output is not shown on screen, "
-                               "or emulate_tty is False)")
+            raise InputRefused(NO_TERMINAL)
         return terminal.write(data)
 
     def reader_closed(self) -> None:

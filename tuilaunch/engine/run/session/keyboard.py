@@ -13,6 +13,7 @@ from typing import Any
 from ...errors import LaunchError
 from ..events import Event
 from ..plugins import Handler
+from ..process.readers import NO_TERMINAL
 from ..supervisor.supervisor import Supervisor
 
 
@@ -52,8 +53,7 @@ class Keyboard:
             raise LaunchError(f"{process} is not running ({state}): there is nothing to "
                               "type into")
         if not self._has_terminal(process):
-            raise LaunchError(f"{process} cannot be typed into: it has no terminal (its "
-                              "output is not shown on screen, or emulate_tty is False)")
+            raise LaunchError(f"{process} cannot be typed into: {NO_TERMINAL}")
         previous = self.process
         self.client, self.process = int(client) if client is not None else None, process
         if previous is not None and previous != process:

@@ -23,7 +23,8 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   the CPU/memory sampling}, find {process},
   start/stop {process}, restart {process, prefix?: a tool run before the command (`gdb -q
   -ex run --args`) until a restart without one, log_level?: `--ros-args --log-level` kept
-  across respawns until a restart changes it ("" drops it)}, run_action {action}, shutdown
+  across respawns until a restart changes it ("" drops it), terminal?: true gives it a
+  terminal until a restart without one}, run_action {action}, shutdown
   {reason}, kill (SIGKILL what is left), apply {arguments}, lifecycle {process}, read_log
   {process, start, end, skip, limit, tail}: a process's log file read by the server, for a
   client on another machine (`logs HOST:NAME`, the TUI's replay and what it missed while its

@@ -293,7 +293,8 @@ class SessionServer:
                 raise LaunchError(f"{process} is an action, not a process: it cannot {op}")
             if op == "restart":
                 await supervisor.restart(process, message.get("prefix") or None,
-                                         message.get("log_level"))
+                                         message.get("log_level"),
+                                         bool(message.get("terminal")))
             else:
                 await getattr(supervisor, op)(process)
             return {"process": process, "state": supervisor.states.get(process)}

@@ -100,6 +100,9 @@ class SupervisorCore:
         self.run_prefixes: dict[str, str] = {}
         """An operator's tool (`gdb -q -ex run --args`) a process runs under, from a
         `restart` with a prefix until the next restart without one."""
+        self.run_terminals: set[str] = set()
+        """Processes an operator restarted with a terminal (to type into one started without,
+        as launch's default is): from that restart until the next plain one."""
         self.log_levels: dict[str, str] = {}
         """`--log-level` given at a restart, kept across respawns until a restart changes it."""
         self.started_with: dict[str, StartCommand] = {}

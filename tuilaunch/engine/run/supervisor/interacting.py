@@ -10,7 +10,7 @@ from ...plan.prefix import with_prefix
 from ..process.process_command import check_log_level, describe_command, start_command
 from ..process.readers import Running
 from ..process.terminal_input import InputRefused
-from .starting import Starting, wants_tty
+from .starting import Starting
 
 
 class Interacting(Starting):
@@ -35,12 +35,13 @@ class Interacting(Starting):
             raise LaunchError(f"{process_id} cannot be typed into: {exc}") from None
 
     def restart_options(self, process_id: str, prefix: str | None = None,
-                        log_level: str | None = None) -> None:
+                        log_level: str | None = None, terminal: bool = False) -> None:
         """Checks and records what the next start of `process_id` runs with, before anything
         is stopped: a bad prefix or level changes nothing.
 
-        `prefix` (a tool and its options) holds for the runs from this restart (respawns
-        included) until a restart without one; `log_level` holds until a restart gives
+        `prefix` (a tool and its options) and `terminal` (a terminal to type into, for a
+        process the file gives pipes) hold for the runs from this restart (respawns
+        included) until a restart without them; `log_level` holds until a restart gives
         another (an empty one goes back to the file's)."""
         proc = self.plan.process(process_id)
         level = None
@@ -54,6 +55,10 @@ class Interacting(Starting):
             self.run_prefixes[process_id] = prefix
         else:
             self.run_prefixes.pop(process_id, None)
+        if terminal:
+            self.run_terminals.add(process_id)
+        else:
+            self.run_terminals.discard(process_id)
         if level:
             self.log_levels[process_id] = level
         elif log_level is not None:
@@ -68,7 +73,7 @@ class Interacting(Starting):
             if not proc.cmd:
                 return {}
             try:
-                start = start_command(proc, self.base_env(), wants_tty(proc),
+                start = start_command(proc, self.base_env(), self.gets_tty(proc),
                                       self.run_prefixes.get(process_id),
                                       self.log_levels.get(process_id))
             except LaunchError:

@@ -16,7 +16,7 @@ tests/test_supervisor_parts.py.
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 from ...errors import LaunchError
 from ...plan.model import Plan
@@ -28,8 +28,8 @@ ELSEWHERE = "elsewhere"
 class RemoteControl(Protocol):
     """What starts and stops a process on the machine it is placed on."""
 
-    async def forward(self, op: str, process_id: str, **options: str) -> None:
-        """`op` is start, stop or restart (`options`: its prefix, log_level); raises
+    async def forward(self, op: str, process_id: str, **options: Any) -> None:
+        """`op` is start, stop or restart (`options`: its prefix, log_level, terminal); raises
         LaunchError when the machine cannot be asked."""
         ...
 
@@ -70,7 +70,7 @@ class Placing:
         except KeyError:
             return True
 
-    async def forward(self, plan: Plan, op: str, process_id: str, **options: str) -> None:
+    async def forward(self, plan: Plan, op: str, process_id: str, **options: Any) -> None:
         """Asks the process's machine to `op` it; LaunchError from a share (which cannot)."""
         if self.remote is None:
             where = plan.process(process_id).machine or "the launching side"

@@ -55,7 +55,7 @@ class Starting(PlanActions):
             self._fail(process_id, f"cannot write its parameter file: {exc}")
             return
         try:
-            start = start_command(proc, self.base_env(), wants_tty(proc),
+            start = start_command(proc, self.base_env(), self.gets_tty(proc),
                                   self.run_prefixes.get(process_id),
                                   self.log_levels.get(process_id))
         except LaunchError as exc:  # the tool left PATH since the restart checked it
@@ -270,17 +270,20 @@ class Starting(PlanActions):
         if not called_off.is_set() and not self.shutting_down:
             await self.start(proc.id)
 
+    def gets_tty(self, proc: ProcessPlan) -> bool:
+        """The file's choice, or a terminal an operator's restart asked for."""
+        return wants_tty(proc) or proc.id in self.run_terminals
+
     def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:
         return lambda _: self.lingering.discard(reader)
 
 
 def wants_tty(proc: ProcessPlan) -> bool:
-    """emulate_tty when the file says; else a terminal for every process whose output is
-    shown, so C/C++ programs print line by line instead of in bursts at exit."""
-    explicit = getattr(proc, "emulate_tty", None)
-    if explicit is not None:
-        return bool(explicit)
-    return getattr(proc, "output", "screen") in ("screen", "both")
+    """A terminal only when the file (or `emulate_tty:=true`) asks, as launch's default is:
+    pipes cost a writer less than half what a terminal does per write, a flood of lines
+    included, and a program sees its output as under ros2 launch (block-buffered stdout,
+    no colours). docs/command-line.md, "Pipes, or a terminal", says what a terminal gives."""
+    return bool(getattr(proc, "emulate_tty", None))
 
 
 def close_quietly(fd: int) -> None:

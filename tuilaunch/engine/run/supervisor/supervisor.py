@@ -24,6 +24,7 @@ import asyncio
 import signal
 import time
 from pathlib import Path
+from typing import Any
 
 from ...errors import LaunchError
 from ...plan.model import Plan, PlanDiff, diff_plans
@@ -168,21 +169,23 @@ class Supervisor(Interacting):
         return diff
 
     async def restart(self, process_id: str, prefix: str | None = None,
-                      log_level: str | None = None) -> None:
-        """Stops and starts one process; `prefix` runs it under a tool (gdb, valgrind) until
-        a restart without one, `log_level` sets its ROS log level until changed (see
-        `restart_options`: checked before anything stops)."""
+                      log_level: str | None = None, terminal: bool = False) -> None:
+        """Stops and starts one process; `prefix` runs it under a tool (gdb, valgrind) and
+        `terminal` gives it a terminal, until a restart without them; `log_level` sets its
+        ROS log level until changed (see `restart_options`: checked before anything
+        stops)."""
         self.busy += 1  # the run must not look finished between the stop and the start
         self.coming_back.add(process_id)
         try:
             if not self.runs_here(process_id) and self.placing.remote is not None:
                 # its machine restarts it, in one request: the tool is looked for on its
                 # PATH, and its end there says it comes back (`again`), as one here does
-                options = {k: v for k, v in (("prefix", prefix), ("log_level", log_level))
-                           if v is not None}
+                options: dict[str, Any] = {
+                    k: v for k, v in (("prefix", prefix), ("log_level", log_level),
+                                      ("terminal", terminal or None)) if v is not None}
                 await self.placing.forward(self.plan, "restart", process_id, **options)
                 return
-            self.restart_options(process_id, prefix, log_level)
+            self.restart_options(process_id, prefix, log_level, terminal)
             await self.stop(process_id)
             await self.start(process_id)
         finally:
