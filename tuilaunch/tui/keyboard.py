@@ -31,7 +31,7 @@ class NodeKeyboard(SessionLink):
 
     BINDINGS = [
         Binding("i", "type_into", "Type", tooltip="Send the keys to the node's terminal "
-                "until ctrl+]"),
+                "until ctrl+] (a node started with pipes is offered a terminal first)"),
         Binding("g", "run_under", "Debug", tooltip="Restart the node under a tool (gdb, "
                 "valgrind...) until its next plain restart"),
         Binding("c", "command_line", "Command", show=False,
