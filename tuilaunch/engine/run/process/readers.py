@@ -42,6 +42,7 @@ NO_TERMINAL = ("it has no terminal: it was started with pipes, as without emulat
                "it with one)")
 """Why a process cannot be typed into, said the same by every way in."""
 
+
 class ChannelReader:
     """One output channel of a child, read on the loop until its end."""
 

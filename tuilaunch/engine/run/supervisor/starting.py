@@ -280,9 +280,10 @@ class Starting(PlanActions):
 
 def wants_tty(proc: ProcessPlan) -> bool:
     """A terminal only when the file (or `emulate_tty:=true`) asks, as launch's default is:
-    pipes cost a writer less than half what a terminal does per write, a flood of lines
-    included, and a program sees its output as under ros2 launch (block-buffered stdout,
-    no colours). docs/command-line.md, "Pipes, or a terminal", says what a terminal gives."""
+    a pipe costs a writer less than half what a terminal does per write (a flood of lines
+    shows it), and a program sees what it sees under ros2 launch (no terminal; C stdio
+    holds stdout in a buffer). docs/command-line.md, "Pipes, or a terminal", says what a
+    terminal gives."""
     return bool(getattr(proc, "emulate_tty", None))
 
 
