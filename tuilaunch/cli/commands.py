@@ -26,6 +26,7 @@ from ..engine.plan.machines import placement_from_text
 from ..engine.run.machines.remote import check_host, list_remote, open_remote_link, parse_address
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.supervisor.interacting import restart_fields
 from . import inspector
 from .logs import cmd_logs as cmd_logs  # found by name in main
 from .parsers import COMMANDS as COMMANDS
@@ -346,11 +347,9 @@ def cmd_status(options: argparse.Namespace) -> int:
 def cmd_restart(options: argparse.Namespace) -> int:
     link = open_link(options.name, timeout=None)
     try:
-        extra = {key: value for key, value in (("prefix", options.prefix),
-                                               ("log_level", options.log_level),
-                                               ("terminal", options.terminal or None))
-                 if value is not None}
-        result = link.request("restart", process=options.process, **extra)
+        result = link.request("restart", process=options.process,
+                              **restart_fields(options.prefix, options.log_level,
+                                               options.terminal))
     finally:
         link.close()
     print(f"{result['process']}: {result['state']}")

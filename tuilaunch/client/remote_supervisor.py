@@ -42,6 +42,7 @@ from ..engine.run.session.protocol import (
     event_from_dict,
 )
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.supervisor.interacting import restart_fields
 from ..engine.run.supervisor.supervisor import Event
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering, send_once
@@ -639,9 +640,8 @@ class RemoteSupervisor:
                       log_level: str | None = None, terminal: bool = False) -> None:
         """As Supervisor.restart: `prefix` runs it under a tool, `terminal` gives it a
         terminal, until a plain restart."""
-        extra = {k: v for k, v in (("prefix", prefix), ("log_level", log_level),
-                                   ("terminal", terminal or None)) if v is not None}
-        await self._request("restart", process=process_id, **extra)
+        await self._request("restart", process=process_id,
+                            **restart_fields(prefix, log_level, terminal))
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         self._stopping = True

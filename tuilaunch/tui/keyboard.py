@@ -317,9 +317,7 @@ async def had_terminal(supervisor: Any, process: str) -> bool | None:
     """Whether the process's last start gave it a terminal; None when that is not known
     here (run by another machine: taking its keyboard says what it can)."""
     if isinstance(supervisor, RemoteSupervisor):
-        status = await supervisor.request("status", resources=False)
-        found = next((p for p in status["processes"] if p["id"] == process), None)
-        return None if found is None else found.get("terminal")
+        return (await command_of(supervisor, process)).get("terminal")
     start = supervisor.started_with.get(process)
     return None if start is None else start.tty
 
@@ -338,6 +336,6 @@ async def type_keys(supervisor: Any, process: str, data: str) -> None:
 
 async def command_of(supervisor: Any, process: str) -> dict[str, Any]:
     if isinstance(supervisor, RemoteSupervisor):
-        status = await supervisor.request("status")
+        status = await supervisor.request("status", resources=False)  # its command alone
         return next((p for p in status["processes"] if p["id"] == process), {})
     return dict(supervisor.command_of(process))

@@ -24,13 +24,12 @@ import asyncio
 import signal
 import time
 from pathlib import Path
-from typing import Any
 
 from ...errors import LaunchError
 from ...plan.model import Plan, PlanDiff, diff_plans
 from ..events import Consumer, Event, LaunchEvent
 from ..process.readers import Running
-from .interacting import Interacting
+from .interacting import Interacting, restart_fields
 from .placed import ELSEWHERE, RemoteControl
 from .stopping import CTRL_C_REASON, kill_group
 
@@ -180,10 +179,8 @@ class Supervisor(Interacting):
             if not self.runs_here(process_id) and self.placing.remote is not None:
                 # its machine restarts it, in one request: the tool is looked for on its
                 # PATH, and its end there says it comes back (`again`), as one here does
-                options: dict[str, Any] = {
-                    k: v for k, v in (("prefix", prefix), ("log_level", log_level),
-                                      ("terminal", terminal or None)) if v is not None}
-                await self.placing.forward(self.plan, "restart", process_id, **options)
+                await self.placing.forward(self.plan, "restart", process_id,
+                                           **restart_fields(prefix, log_level, terminal))
                 return
             self.restart_options(process_id, prefix, log_level, terminal)
             await self.stop(process_id)
