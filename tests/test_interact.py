@@ -116,6 +116,8 @@ def generate_launch_description():
         ExecuteProcess(name='lines', output='screen',
                        cmd=[sys.executable, {str(PROGRAMS)!r} + '/line_reader.py']),
         ExecuteProcess(name='nap', output='screen', cmd=['sleep', '600']),
+        ExecuteProcess(name='slow', output='screen',
+                       cmd=[sys.executable, {str(PROGRAMS)!r} + '/slow_stop_reader.py']),
     ])
 """
 

@@ -17,6 +17,7 @@ from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 from .test_interact import LAUNCH, PIPED, logs, process
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
+from .test_tui_keys import burst
 
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
 
@@ -101,8 +102,8 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
 
 def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into_it(write):
     """The keyboard node fails with pipes, as teleop_twist_keyboard does under ros2 launch
-    without emulate_tty; `i y` typed in one burst starts it with a terminal and the keys
-    after go to it."""
+    without emulate_tty; `i y` starts it with a terminal and the keys go to it. A line typed
+    in the same read as `i y` waits out a slow restart and goes to the node."""
     path = str(write(PIPED))
     name, log_dir = detached_with(path, "nap-2")
 
@@ -115,7 +116,6 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await pilot.pause()
             await pilot.press("i", "y")
             await until(pilot, lambda: app.typing_to == "lines-1")
-            await until(pilot, lambda: "ready" in pane(app, "lines-1"))
             await pilot.press(*"hello", "enter")
             await until(pilot, lambda: "got: hello" in pane(app, "lines-1"))
             await pilot.press("ctrl+right_square_bracket")
@@ -124,6 +124,17 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             # a node that runs with pipes: the question says restart
             assert "Restart it with a terminal" in await terminal_offered(pilot, app, "nap-2")
             await pilot.press("escape")
+            # `i y` and a line in one read, as ssh delivers them, to a node that takes a
+            # second to stop: the keys after `y` wait out the restart, and are the node's,
+            # not tuilaunch's (its `s` would stop the node, its `r` restart it)
+            await until(pilot, lambda: "no terminal: waiting" in pane(app, "slow-3"))
+            select(app, "slow-3")
+            await pilot.pause()
+            burst(app, "i", "y", *"hello rs", "enter")
+            await until(pilot, lambda: "got: hello rs" in pane(app, "slow-3"))
+            assert app.typing_to == "slow-3"
+            assert pane(app, "slow-3").count("stopped slowly") == 1
+            await pilot.press("ctrl+right_square_bracket")
 
     asyncio.run(scenario())
     tl("stop", name)

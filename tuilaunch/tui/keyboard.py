@@ -130,8 +130,12 @@ class NodeKeyboard(SessionLink):
     def _offer_terminal(self, process: str) -> None:
         def answered(yes: bool | None) -> None:
             if yes:
-                self.run_worker(self._restart_with_terminal(process), group="typing",
-                                exit_on_error=False)
+                # the keys typed after `y` are the node's: they wait out the restart (a
+                # node slow to stop takes seconds) for its typing line, where tuilaunch's
+                # own keys (`s` stops a node) would otherwise get them
+                release = hold_keys(self)
+                self.run_worker(self._restart_with_terminal(process, release),
+                                group="typing", exit_on_error=False)
 
         assert self.supervisor is not None
         verb = "Restart" if self.supervisor.states.get(process) == "running" else "Start"
@@ -140,9 +144,12 @@ class NodeKeyboard(SessionLink):
             f"launch does without emulate_tty=True. {verb} it with a terminal (until its "
             f"next plain restart)?", f"{verb} it (y)"), answered)
 
-    async def _restart_with_terminal(self, process: str) -> None:
-        if await self._restart_with(process, terminal=True):
-            await self._start_typing(process, lambda: None)  # the session says if it ended
+    async def _restart_with_terminal(self, process: str, release: Callable[[], None]) -> None:
+        try:
+            if await self._restart_with(process, terminal=True):
+                await self._start_typing(process, release)  # the session says if it ended
+        finally:
+            release()  # refused, or it ended: the keys go on to tuilaunch
 
     async def _restart_with(self, process: str, **options: Any) -> bool:
         """Restarts the node with `options` (a tool, a terminal); False, said, when the
