@@ -18,8 +18,7 @@ from ..engine.run.process.readers import NO_TERMINAL
 from ..engine.run.supervisor.supervisor import Event
 from .key_order import hold_keys
 from .keys import edit_line, is_release, key_bytes
-from .screens.dialogs import ConfirmScreen
-from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TypingLine
+from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
 from .session_link import SessionLink
 
 RECENT_PREFIXES = 10
@@ -49,6 +48,9 @@ class NodeKeyboard(SessionLink):
         self.other_typists: dict[str, int] = {}
         """Processes another client types into, and that client's number."""
         self._keys_out: list[str] = []
+        self._coming_back: set[str] = set()
+        """Processes whose end said `again` (a restart, a relaunch) and that have not started
+        since: over a session the restart's reply can come before its events."""
         self._sending = False
         self._typing_line: TypingLine | None = None
 
@@ -130,19 +132,19 @@ class NodeKeyboard(SessionLink):
     def _offer_terminal(self, process: str) -> None:
         def answered(yes: bool | None) -> None:
             if yes:
-                # the keys typed after `y` are the node's: they wait out the restart (a
-                # node slow to stop takes seconds) for its typing line, where tuilaunch's
-                # own keys (`s` stops a node) would otherwise get them
-                release = hold_keys(self)
-                self.run_worker(self._restart_with_terminal(process, release),
+                # the keys typed after `y` (held since it was answered) are the node's:
+                # they wait out the restart (a node slow to stop takes seconds) for its
+                # typing line, where tuilaunch's own keys would otherwise get them
+                self.run_worker(self._restart_with_terminal(process, question.release),
                                 group="typing", exit_on_error=False)
 
         assert self.supervisor is not None
         verb = "Restart" if self.supervisor.states.get(process) == "running" else "Start"
-        self.push_screen(ConfirmScreen(
+        question = TerminalQuestion(
             f"{process} has no terminal to type into: its file gives it pipes, as ros2 "
             f"launch does without emulate_tty=True. {verb} it with a terminal (until its "
-            f"next plain restart)?", f"{verb} it (y)"), answered)
+            f"next plain restart)?", f"{verb} it (y)")
+        self.push_screen(question, answered)
 
     async def _restart_with_terminal(self, process: str, release: Callable[[], None]) -> None:
         try:
@@ -243,6 +245,11 @@ class NodeKeyboard(SessionLink):
     def show_events(self, events: list[Event]) -> None:
         rest = []
         for event in events:
+            if event.kind in ("exited", "started", "failed") and event.process:
+                if event.kind == "exited" and (event.data or {}).get("again"):
+                    self._coming_back.add(event.process)
+                else:
+                    self._coming_back.discard(event.process)
             if event.kind != "typing":
                 rest.append(event)
                 continue
@@ -253,8 +260,11 @@ class NodeKeyboard(SessionLink):
             else:
                 self.other_typists[process] = int(client)
         super().show_events(rest)
+        # a node stopped to start again keeps the keys: typing began once its restart
+        # with a terminal was answered, and the news of its stop may come only now
         if self.typing_to is not None and self.supervisor is not None and \
-                self.supervisor.states.get(self.typing_to) != "running":
+                self.supervisor.states.get(self.typing_to) != "running" and \
+                self.typing_to not in self._coming_back:
             self.stop_typing(f"{self.typing_to} is no longer running: the keys are back")
         elif any(e.kind == "typing" for e in events):
             self.update_status()

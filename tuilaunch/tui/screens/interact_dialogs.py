@@ -1,9 +1,11 @@
-"""The line that takes the keys while typing into a node, the prompt for a tool to run a node
-under (gdb, valgrind...), and the node's exact command line to copy."""
+"""The line that takes the keys while typing into a node, the question whether to give a node
+a terminal to type into, the prompt for a tool to run a node under (gdb, valgrind...), and
+the node's exact command line to copy."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 from rich.text import Text
 from textual import events, on
@@ -14,11 +16,28 @@ from textual.screen import ModalScreen
 from textual.suggester import SuggestFromList
 from textual.widgets import Input, OptionList, Static
 
-from .dialogs import dialog_css
+from ..key_order import hold_keys
+from .dialogs import ConfirmScreen, dialog_css
 
 KNOWN_PREFIXES = ("gdb -q -ex run --args", "valgrind --leak-check=full",
                   "python3 -m pdb", "perf record -g --", "rr record")
 """Offered after the operator's own recent prefixes."""
+
+
+class TerminalQuestion(ConfirmScreen):
+    """Whether to restart a node with a terminal to type into. A yes holds the keys typed
+    after it (`release`) from the moment it is answered, before the answer's callback runs
+    (later, as the dialog goes): the rest of a burst (`i y hello`) is the node's, and must
+    not reach tuilaunch's own keys (`s` stops a node) while it restarts."""
+
+    def __init__(self, question: str, yes: str) -> None:
+        super().__init__(question, yes)
+        self.release: Callable[[], None] = lambda: None
+
+    def dismiss(self, result: Any = None) -> Any:
+        if result:
+            self.release = hold_keys(self.app)
+        return super().dismiss(result)
 
 
 class TypingLine(Static, can_focus=True):
