@@ -70,6 +70,34 @@ def keep_escape_before_punctuation() -> None:
     XTermParser._sequence_to_key_events = sequence_to_key_events  # type: ignore[method-assign]
 
 
+BURST_GAP = 0.3
+"""Seconds between two keys past which they are no longer one burst: a line typed as ssh
+or tmux delivers it comes at once, a fast typist's keys a tenth of a second apart."""
+
+
+class KeyHold:
+    """The keys typed after an action, held until its field opens (`release`, or calling
+    the hold), or dropped with the rest of their burst when it will not (`drop`). Either
+    once: the first call counts."""
+
+    def __init__(self, let_go: Callable[[bool], None] | None = None) -> None:
+        self._let_go = let_go
+
+    def __call__(self) -> None:
+        self.release()
+
+    def release(self) -> None:
+        self._end(drop=False)
+
+    def drop(self) -> None:
+        self._end(drop=True)
+
+    def _end(self, drop: bool) -> None:
+        let_go, self._let_go = self._let_go, None
+        if let_go is not None:
+            let_go(drop)
+
+
 STUCK_AFTER = 3.0
 """Seconds after which a key whose trip never reported its end no longer holds the others
 back (a widget removed with the key in its queue): the keys go on as Textual sends them."""
@@ -137,6 +165,8 @@ class KeyOrder(App[int]):
         self._key_holds = 0
         self._stuck_timer: Any = None
         self._settling: asyncio.Task[None] | None = None
+        self._dropping_until = 0.0
+        """Until when a key read belongs to a burst being dropped (`_drop_burst`)."""
 
     async def on_event(self, event: events.Event) -> None:
         if not isinstance(event, (events.Key, events.Paste)):
@@ -154,7 +184,7 @@ class KeyOrder(App[int]):
                 if isinstance(event, TrackedKey):
                     event.finish()
             return
-        if self._waits_its_turn(event):
+        if self._dropped(event) or self._waits_its_turn(event):
             return
         following = after_escape(event)
         if following is not None:
@@ -192,7 +222,7 @@ class KeyOrder(App[int]):
         if paste.is_forwarded:
             await super().on_event(paste)
             return
-        if self._waits_its_turn(paste):
+        if self._dropped(paste) or self._waits_its_turn(paste):
             return
         self._key_in_flight = None
         await super().on_event(paste)
@@ -209,20 +239,36 @@ class KeyOrder(App[int]):
         self._keys_waiting.insert(self._first_in_line, key)
         self._first_in_line += 1
 
-    def hold_keys(self) -> Callable[[], None]:
+    def hold_keys(self) -> KeyHold:
         """For an action whose field opens later (after a worker): the keys typed after it
-        wait until the returned callable is called, so they reach that field."""
+        wait until the returned hold is released, so they reach that field; or are dropped
+        (`KeyHold.drop`) when the field will not open, so that keys meant for a node never
+        become tuilaunch's commands."""
         self._key_holds += 1
-        released = False
+        return KeyHold(self._let_go)
 
-        def release() -> None:
-            nonlocal released
-            if not released:
-                released = True
-                self._key_holds -= 1
-                self._next_key()
+    def _let_go(self, drop: bool) -> None:
+        self._key_holds = max(0, self._key_holds - 1)  # 0 already when it was stuck
+        if drop:
+            self._drop_burst()
+        self._next_key()
 
-        return release
+    def _drop_burst(self) -> None:
+        """Drops the keys waiting (those typed after the held action's key), and the keys of
+        the same burst still arriving: until a pause of `BURST_GAP` between two keys."""
+        if self._key_holds:
+            return  # another hold still waits for its field: those keys are its
+        self._keys_waiting.clear()
+        self._first_in_line = 0
+        self._dropping_until = time.monotonic() + BURST_GAP
+
+    def _dropped(self, event: events.Key | events.Paste) -> bool:
+        """A key of a burst being dropped: it goes nowhere, and the burst goes on."""
+        now = time.monotonic()
+        if now >= self._dropping_until:
+            return False
+        self._dropping_until = now + BURST_GAP
+        return True
 
     def _key_done(self, key: TrackedKey) -> None:
         if self._key_in_flight is not key:
@@ -305,8 +351,8 @@ def reroute_key(app: App[Any], key: events.Key) -> None:
         app.post_message(key)
 
 
-def hold_keys(app: App[Any]) -> Callable[[], None]:
-    """The keys typed from now on wait until the returned callable is called."""
+def hold_keys(app: App[Any]) -> KeyHold:
+    """The keys typed from now on wait until the returned hold is released or dropped."""
     if isinstance(app, KeyOrder):
         return app.hold_keys()
-    return lambda: None
+    return KeyHold()

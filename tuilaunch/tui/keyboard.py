@@ -16,7 +16,7 @@ from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.run.process.readers import NO_TERMINAL
 from ..engine.run.supervisor.supervisor import Event
-from .key_order import hold_keys
+from .key_order import KeyHold, hold_keys
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
 from .session_link import SessionLink
@@ -83,39 +83,47 @@ class NodeKeyboard(SessionLink):
             return
         # the keys typed right after `i` are for the node (they wait for its typing line),
         # or answer the question whether to give it a terminal
-        release = hold_keys(self)
-        self.run_worker(self._take_keyboard(process, release), group="typing",
+        hold = hold_keys(self)
+        self.run_worker(self._take_keyboard(process, hold), group="typing",
                         exit_on_error=False)
 
-    async def _take_keyboard(self, process: str, release: Callable[[], None]) -> None:
+    async def _take_keyboard(self, process: str, hold: KeyHold) -> None:
+        """Types into the node, or offers what would let `i` type (a terminal, a start);
+        where nothing can, the keys typed with `i` are dropped: a key typed for a node
+        never becomes one of tuilaunch's commands (`s` stop, `q` quit, `d` detach)."""
         assert self.supervisor is not None
         state = self.supervisor.states.get(process)
         try:
             terminal = await self.engine.run(had_terminal(self.supervisor, process)) \
                 if state in RAN else None
         except LaunchError as exc:
-            release()
-            self.notify(str(exc), severity="error")
+            self._refused(hold, str(exc))
             return
         if terminal is False:
-            self._offer_terminal(process)
-            release()
+            self._offer_terminal(process, "Restart" if state == "running" else "Start",
+                                 piped=True)
+            hold.release()  # the question takes them: its y, its n, nothing else
+        elif state in ("exited", "failed"):
+            self._offer_terminal(process, "Start", piped=False)
+            hold.release()
         elif state != "running":
-            release()
-            self.notify(f"{process} is not running ({state}): there is nothing to type into",
-                        severity="warning")
+            self._refused(hold, f"{process} is not running ({state}): there is nothing to "
+                          "type into")
         else:
-            await self._start_typing(process, release)
+            await self._start_typing(process, hold)
 
-    async def _start_typing(self, process: str, release: Callable[[], None]) -> None:
+    def _refused(self, hold: KeyHold, why: str) -> None:
+        hold.drop()
+        self.notify(f"{why}. The keys typed with i were not sent", severity="warning")
+
+    async def _start_typing(self, process: str, hold: KeyHold) -> None:
         try:
             await self.engine.run(take_keyboard(self.supervisor, process))
         except LaunchError as exc:
-            release()
-            self.notify(str(exc), severity="error")
+            self._refused(hold, str(exc))  # another client types into it, it just ended
             return
         except BaseException:
-            release()
+            hold.drop()
             raise
         try:
             self.typing_to = process
@@ -125,33 +133,39 @@ class NodeKeyboard(SessionLink):
             await self.query_one("#nodes-tab").mount(line, before="#nodes-split")
             self.screen.set_focus(line)
         finally:
-            release()  # the keys typed after `i` go to the line, or on as before
+            hold.release()  # the keys typed after `i` go to the line
         self._show_typing()
         self.refresh_bindings()
 
-    def _offer_terminal(self, process: str) -> None:
+    def _offer_terminal(self, process: str, verb: str, piped: bool) -> None:
+        """Asks to start (or restart) the node with a terminal; `y` does it and types."""
         def answered(yes: bool | None) -> None:
             if yes:
                 # the keys typed after `y` (held since it was answered) are the node's:
                 # they wait out the restart (a node slow to stop takes seconds) for its
                 # typing line, where tuilaunch's own keys would otherwise get them
-                self.run_worker(self._restart_with_terminal(process, question.release),
+                self.run_worker(self._restart_with_terminal(process, question.hold),
                                 group="typing", exit_on_error=False)
+            else:
+                question.hold.drop()  # no: the rest of the burst was for the node too
 
         assert self.supervisor is not None
-        verb = "Restart" if self.supervisor.states.get(process) == "running" else "Start"
+        if piped:
+            why = (f"{process} has no terminal to type into: its file gives it pipes, as "
+                   "ros2 launch does without emulate_tty=True.")
+        else:
+            why = f"{process} is not running ({self.supervisor.states.get(process)})."
         question = TerminalQuestion(
-            f"{process} has no terminal to type into: its file gives it pipes, as ros2 "
-            f"launch does without emulate_tty=True. {verb} it with a terminal (until its "
-            f"next plain restart)?", f"{verb} it (y)")
+            f"{why} {verb} it with a terminal (until its next plain restart) and type "
+            "into it?", f"{verb} it (y)")
         self.push_screen(question, answered)
 
-    async def _restart_with_terminal(self, process: str, release: Callable[[], None]) -> None:
+    async def _restart_with_terminal(self, process: str, hold: KeyHold) -> None:
         try:
             if await self._restart_with(process, terminal=True):
-                await self._start_typing(process, release)  # the session says if it ended
+                await self._start_typing(process, hold)  # the session says if it ended
         finally:
-            release()  # refused, or it ended: the keys go on to tuilaunch
+            hold.drop()  # refused, or it ended at once: the keys were the node's
 
     async def _restart_with(self, process: str, **options: Any) -> bool:
         """Restarts the node with `options` (a tool, a terminal); False, said, when the

@@ -62,23 +62,26 @@ class NodeCommands(SessionLink):
         return True
 
     def _command(self, verb: str) -> None:
+        """Stop, restart or start the selection; a stop or restart of more than one
+        process (the root, all nodes, a group) asks first, from a key as from the palette."""
         assert self.supervisor is not None
         supervisor = self.supervisor
         processes = self.selected()
-        node = self.launch_tree.cursor_node
-        everything = node is not None and node.data is not None and (
-            node.data.kind == "all" or node is self.launch_tree.root)
-        if verb == "stop" and everything and len(processes) > 1:
-            running = [p for p in processes
+        if verb == "stop":
+            touched = [p for p in processes
                        if supervisor.states.get(p) in ("running", "respawning")]
-
+        else:
+            touched = [p for p in processes if supervisor.states.get(p) != "skipped"]
+        if verb in ("stop", "restart") and len(touched) > 1:
             def answered(yes: bool | None) -> None:
                 if yes:
                     self._run_command(verb, processes)
 
+            what = "running processes" if verb == "stop" else "processes"
             self.push_screen(ConfirmScreen(
-                f"Stop all {len(running)} running processes: {', '.join(running[:6])}"
-                f"{' ...' if len(running) > 6 else ''}?", "Stop them (y)"), answered)
+                f"{verb.capitalize()} all {len(touched)} {what}: {', '.join(touched[:6])}"
+                f"{' ...' if len(touched) > 6 else ''}?", f"{verb.capitalize()} them (y)"),
+                answered)
             return
         self._run_command(verb, processes)
 

@@ -33,6 +33,7 @@ from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.supervisor.supervisor import Event
 from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
+from .respawn_countdown import RespawnCountdown
 from .screens.args_panel import ArgsPanel
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree
@@ -105,6 +106,8 @@ class SessionLink(App[int]):
         self.sigkill_timeout = sigkill_timeout
         self.pane_fps = pane_fps
         self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
+        self.respawn_countdown = RespawnCountdown()
+        self._countdown_timer: Timer | None = None
         # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
@@ -374,6 +377,7 @@ class SessionLink(App[int]):
         process = event.process
         tree = self.launch_tree
         state = self.supervisor.states.get(process, event.kind)
+        self.respawn_countdown.end(process)  # a new state: any wait counted is over
         is_process = any(p.id == process for p in self.session.plan.processes)
         if event.kind == "started":
             self.asked_to_stop.discard(process)
@@ -406,10 +410,31 @@ class SessionLink(App[int]):
             tree.set_state(process, state, f"({event.reason})")
             return self.store.add_event(process, f"failed: {event.reason}", ERROR)
         if event.kind == "respawning":
-            tree.set_state(process, state, f"({event.reason})")
+            data = event.data or {}
+            detail = f"({event.reason})"
+            if "delay" in data:  # counted down on the row until it comes back
+                detail = self.respawn_countdown.begin(process, int(data["try"]),
+                                                      float(data["delay"]))
+                if self._countdown_timer is None:
+                    self._countdown_timer = self.set_interval(1.0, self._count_down)
+            tree.set_state(process, state, detail)
             return self.store.add_event(process, f"respawning: {event.reason}", WARN)
         tree.set_state(process, state, _detail(event))
         return []
+
+    def _count_down(self) -> None:
+        """Once a second while a respawn waits: its row says how long is left."""
+        tree = self.launch_tree
+        for process, text in self.respawn_countdown.tick().items():
+            if tree.states.get(process) != "respawning":
+                self.respawn_countdown.end(process)  # called off, or a relaunch's plan
+            elif tree.details.get(process) != text:
+                tree.details[process] = text
+                tree.refresh_row(process)
+        self.update_detail()
+        if not self.respawn_countdown and self._countdown_timer is not None:
+            self._countdown_timer.stop()
+            self._countdown_timer = None
 
     def _relaunched_elsewhere(self, arguments: list[str]) -> None:
         """Another operator applied new values: the form shows them, so an edit here starts

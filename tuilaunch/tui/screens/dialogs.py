@@ -45,6 +45,10 @@ def keys_text(ascii_only: bool) -> str:
 
 ResultT = TypeVar("ResultT")
 
+ANSWER_KEYS = frozenset({"enter", "tab", "shift+tab", "left", "right", "ctrl+c"})
+"""Keys a yes/no question takes besides its own letters: Enter presses the button with the
+focus, the others move it; ctrl+c quits as anywhere."""
+
 
 def dialog_css(screen: str, width: int, border: str = "primary", more: str = "") -> str:
     """A dialog's look: a box of `width` columns (at most the terminal's) in the middle of the
@@ -115,6 +119,14 @@ class ConfirmScreen(QuestionScreen[bool]):
     @on(Button.Pressed)
     def _pressed(self, event: Button.Pressed) -> None:
         self.dismiss(event.button.id == "yes")
+
+    def on_key(self, event: events.Key) -> None:
+        """Only the question's own keys answer it: the others stop here, before the app's
+        bindings (a burst typed for a node, `iquit yes`, must not quit through this dialog,
+        and a space must not press the button that has the focus)."""
+        if event.key not in self._bindings.key_to_bindings and event.key not in ANSWER_KEYS:
+            event.stop()
+            event.prevent_default()
 
 
 class QuitScreen(ModalScreen[str]):

@@ -16,7 +16,7 @@ from textual.screen import ModalScreen
 from textual.suggester import SuggestFromList
 from textual.widgets import Input, OptionList, Static
 
-from ..key_order import hold_keys
+from ..key_order import KeyHold, hold_keys
 from .dialogs import ConfirmScreen, dialog_css
 
 KNOWN_PREFIXES = ("gdb -q -ex run --args", "valgrind --leak-check=full",
@@ -25,18 +25,17 @@ KNOWN_PREFIXES = ("gdb -q -ex run --args", "valgrind --leak-check=full",
 
 
 class TerminalQuestion(ConfirmScreen):
-    """Whether to restart a node with a terminal to type into. A yes holds the keys typed
-    after it (`release`) from the moment it is answered, before the answer's callback runs
+    """Whether to (re)start a node with a terminal to type into. The answer holds the keys
+    typed after it (`hold`) from the moment it is given, before the answer's callback runs
     (later, as the dialog goes): the rest of a burst (`i y hello`) is the node's, and must
-    not reach tuilaunch's own keys (`s` stops a node) while it restarts."""
+    not reach tuilaunch's own keys (`s` stops a node) while it restarts, nor after a no."""
 
     def __init__(self, question: str, yes: str) -> None:
         super().__init__(question, yes)
-        self.release: Callable[[], None] = lambda: None
+        self.hold = KeyHold()
 
     def dismiss(self, result: Any = None) -> Any:
-        if result:
-            self.release = hold_keys(self.app)
+        self.hold = hold_keys(self.app)
         return super().dismiss(result)
 
 

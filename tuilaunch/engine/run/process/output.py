@@ -1,6 +1,7 @@
 """Turning a process's raw bytes into lines: partial lines, `\\r` progress, bad UTF-8, tabs.
 
-Log files keep each line's bytes as the process wrote them (`feed_raw`); what a screen
+Log files keep each line's bytes as the process wrote them (`feed_raw`), but for a line
+rewritten with `\r` (a progress bar), of which they keep the last state; what a screen
 shows is cleaned once, here (`screen_text`, and `expand_tabs` once its colour codes are
 gone).
 """
@@ -102,6 +103,26 @@ def screen_lines(block: bytes) -> list[str]:
     return text.split("\n")
 
 
+REWOUND = re.compile(rb"[^\r\n]*\r(?=[^\r\n])")
+"""What a `\r` followed by more text rewinds over: gone from the line a terminal shows."""
+
+
+def last_states(block: bytes) -> bytes:
+    """Whole lines with what `\r` rewrote taken out (`10%\r20%\r100%` is `100%`); a
+    terminal's `\r\n` endings stay as they are. Counted first: most blocks have none."""
+    if b"\r" not in block or block.count(b"\r") == block.count(b"\r\n"):
+        return block
+    return REWOUND.sub(b"", block)
+
+
+def rewritten(tail: bytes) -> bytes:
+    """An unfinished line as a terminal leaves it: what a `\r` followed by more rewrote is
+    gone. A `\r` at the very end stays (its `\n` may come in the next chunk: a terminal's
+    lines end in `\r\n`)."""
+    rewind = tail.rfind(b"\r", 0, len(tail) - 1)
+    return tail[rewind + 1:] if rewind >= 0 else tail
+
+
 class LineSplitter:
     """Feeds chunks, yields whole lines; keeps the unfinished tail for the next chunk.
 
@@ -118,10 +139,14 @@ class LineSplitter:
 
     def feed_block(self, chunk: bytes) -> bytes:
         """The complete lines this chunk ends, as one block of bytes, each line ending in
-        `\n` (empty when none): a flood is handled a chunk at a time, not a line at a time."""
+        `\n` (empty when none): a flood is handled a chunk at a time, not a line at a time.
+
+        A line rewritten with `\r` (a progress bar, a download) is kept as a terminal shows
+        it: its last state only, so it is never cut at MAX_LINE mid-word however long it
+        keeps rewriting, and the log file gets that last state once the line ends."""
         data = self._tail + chunk if self._tail else chunk
         end = data.rfind(b"\n") + 1
-        block, tail = data[:end], data[end:]
+        block, tail = last_states(data[:end]), rewritten(data[end:])
         if len(tail) > MAX_LINE:
             pieces = []
             while len(tail) > MAX_LINE:

@@ -32,6 +32,10 @@ Partial = Callable[["Running", str, str], None]
 """What a reader calls with an unfinished line the process left waiting: (process, channel
 name, the line so far as a screen shows it)."""
 
+PROGRESS_EVERY = 0.1
+"""Seconds between two showings of a line rewritten with `\r` while it keeps changing: ten
+a second is what the eye reads of a progress bar; the UI repaints at most that often."""
+
 PARTIAL_AFTER = 0.05
 """Seconds a channel must stay quiet before its unfinished line is shown: a prompt waits
 that long for sure, while a flood's chunks that end mid-line are never shown half."""
@@ -53,6 +57,7 @@ class ChannelReader:
         self._shown_tail = b""  # the unfinished line handed on last, not to repeat it
         self._read_since = False  # a chunk came since the quiet timer was set
         self._quiet: asyncio.TimerHandle | None = None
+        self._progress_shown = 0.0  # when a line rewritten with \r was last handed on
         self.running = running
         self.channel = channel
         self.splitter = LineSplitter()
@@ -78,6 +83,11 @@ class ChannelReader:
             return
         self._deliver(self.splitter.feed_block(chunk))
         if self.partial is not None and self.splitter.tail:
+            if b"\r" in chunk and time.monotonic() - self._progress_shown >= PROGRESS_EVERY:
+                # a line rewritten in place (a progress bar) never goes quiet: shown as it
+                # stands now and then, as a terminal would, not once it ends
+                self._progress_shown = time.monotonic()
+                self._show_tail()
             self._read_since = True
             if self._quiet is None:
                 self._quiet = asyncio.get_running_loop().call_later(
@@ -93,6 +103,10 @@ class ChannelReader:
             self._read_since = False
             self._quiet = asyncio.get_running_loop().call_later(PARTIAL_AFTER, self._quiet_now)
             return
+        self._show_tail()
+
+    def _show_tail(self) -> None:
+        tail = self.splitter.tail
         if tail != self._shown_tail and self.partial is not None:
             self._shown_tail = tail
             self.partial(self.running, self.channel.name, screen_text(tail))

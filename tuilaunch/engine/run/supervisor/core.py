@@ -213,7 +213,7 @@ class SupervisorCore:
 
     # Made by the later files; declared here so the earlier ones can call them.
 
-    async def start(self, process_id: str) -> None:
+    async def start(self, process_id: str, respawn: bool = False) -> None:
         raise NotImplementedError  # supervisor.py
 
     async def stop(self, process_id: str) -> None:

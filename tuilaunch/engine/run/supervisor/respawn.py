@@ -52,5 +52,11 @@ class Respawner:
         delay = min(max(proc.respawn_delay, 0.1) * 2 ** min(max(streak - 1, 0), 16), MAX_DELAY)
         return tries, max(delay, proc.respawn_delay)
 
+    def forget(self, process_id: str) -> None:
+        """An operator stopped or started it: its next crash backs off from the file's own
+        delay again, and its respawns are counted from zero."""
+        self.retries.pop(process_id, None)
+        self.quick_failures.pop(process_id, None)
+
     def tries(self, process_id: str) -> int:
         return self.retries.get(process_id, 0)

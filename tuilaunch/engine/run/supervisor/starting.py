@@ -255,7 +255,8 @@ class Starting(PlanActions):
         tries, delay = self.respawner.next_try(proc, running.started)
         self.states[proc.id] = "respawning"
         self.busy += 1
-        self.emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s"))
+        self.emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s",
+                        data={"try": tries, "delay": delay}))
         called_off = self.respawn_waits[proc.id] = asyncio.Event()
         try:
             await asyncio.wait_for(called_off.wait(), delay)
@@ -268,7 +269,7 @@ class Starting(PlanActions):
         # called off: a stop (it stays down) or a start (it runs already) came meanwhile,
         # and said so itself
         if not called_off.is_set() and not self.shutting_down:
-            await self.start(proc.id)
+            await self.start(proc.id, respawn=True)
 
     def gets_tty(self, proc: ProcessPlan) -> bool:
         """The file's choice, or a terminal an operator's restart asked for."""

@@ -211,6 +211,7 @@ class Supervisor(Interacting):
     # --- stopping (the escalation is the Stopper's, stopping.py) ----------------------------
 
     async def stop(self, process_id: str) -> None:
+        self.respawner.forget(process_id)
         if not self.runs_here(process_id):
             await self.placing.forward(self.plan, "stop", process_id)
             return
@@ -309,9 +310,12 @@ class Supervisor(Interacting):
         """Whether this supervisor spawns it (actions always run where the launch runs)."""
         return self.placing.runs_here(self.plan, process_id)
 
-    async def start(self, process_id: str) -> None:
+    async def start(self, process_id: str, respawn: bool = False) -> None:
         """Starts one process (also a stopped or exited one, from the UI), here or on its
-        machine."""
+        machine; `respawn`: it comes back after a crash, counted by the Respawner (an
+        operator's start counts from zero again)."""
+        if not respawn:
+            self.respawner.forget(process_id)
         waiting = self.respawn_waits.pop(process_id, None)
         if waiting is not None:
             waiting.set()  # started now by the operator: the respawn under way is moot
