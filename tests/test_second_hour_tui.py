@@ -11,15 +11,17 @@ import sys
 import time
 
 import pytest
+from textual.widgets import Input
 
 from tuilaunch.client.link import open_link
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
+from tuilaunch.tui.screens.services_panel import ServicesPanel
 
 from .test_interact import LAUNCH, PROGRAMS
 from .test_interact_tui import pane, select
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
-from .test_tui import until
+from .test_tui import states, tui, until
 from .test_tui_keys import burst
 from .test_tui_long_sessions import read_until, start_on_pty, stop_pty
 
@@ -215,6 +217,11 @@ def test_a_progress_line_shows_as_it_stands_while_it_is_rewritten(write, tmp_pat
                                            for line in app.store.partials.values()))
             # no piece of the rewritten line became a line of its own
             assert "downloading" not in pane(app, "fetch-1")
+            # tab into the pane: its status line says it has the keys
+            status_line = app.query_one("#output-status")
+            assert not str(status_line.render()).startswith("▶")
+            app.output_panel.query_one("LineView").focus()
+            await until(pilot, lambda: str(status_line.render()).startswith("▶ fetch-1"))
             await pilot.press("d")
 
     asyncio.run(scenario())
@@ -224,6 +231,18 @@ def test_a_progress_line_shows_as_it_stands_while_it_is_rewritten(write, tmp_pat
     # 64 KB pieces of its past states
     assert log.count(b"downloading") <= 1, log[:300]
     assert all(len(line) < 4000 for line in log.split(b"\n"))
+
+
+async def test_a_service_typed_with_the_tab_key_before_the_list_came_is_picked(tmp_path):
+    """`3/ena` Enter in one read, the first time the tab opens: the Enter waits for the
+    list (discovery takes a moment) and picks the first match, rather than being lost."""
+    async with tui(tmp_path, "robot:=tui6", "listener:=false") as (app, pilot):
+        await until(pilot, lambda: states(app).get("service_server-4") == "running")
+        burst(app, "3", "slash", *"tui6/enable", "enter")
+        panel = app.query_one(ServicesPanel)
+        await until(pilot, lambda: panel.selected is not None, limit=60)
+        assert panel.selected == ("/tui6/enable", "std_srvs/srv/SetBool")
+        await until(pilot, lambda: app.focused is app.query_one("#field-data", Input))
 
 
 if sys.platform != "linux":  # pragma: no cover

@@ -196,6 +196,14 @@ async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
         await until(pilot, lambda: "not available" in str(response.render()), limit=60)
         assert [r.ok for r in panel.history] == [True, False, False]
 
+        # Enter on a row of the list picks the service and moves on to its request
+        listing = app.query_one("#svc-list")
+        listing.focus()
+        await pilot.pause()
+        await pilot.press("enter")
+        await until(pilot, lambda: isinstance(app.focused, Input)
+                    and app.focused.id == "field-data")
+
 
 async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
     async with tui(tmp_path, "robot:=tui4", "listener:=false", "services:=false") as (app, pilot):
@@ -210,13 +218,15 @@ async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
         await until(pilot, lambda: table.row_count > 0 and "mode" in panel.params)
         assert panel.params["mode"].value == "patrol"  # set by the launch file's action
         table.move_cursor(row=list(panel.params).index("mode"))
+        table.focus()
         await pilot.pause()
         assert panel.current == "mode"
         edit = app.query_one("#prm-edit", Input)
         result = app.query_one("#prm-result")
+        await pilot.press("enter")  # Enter on the row: into its value's field
+        assert app.focused is edit
 
         edit.value = "dock"
-        edit.focus()
         await pilot.press("enter")
         await until(pilot, lambda: "now reports dock" in str(result.render()))
         # the node itself logs the change it accepted

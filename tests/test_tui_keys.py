@@ -146,13 +146,20 @@ async def test_the_palette_and_a_field_opened_by_a_tab_key_get_the_burst(write, 
 async def test_a_value_typed_after_the_args_tab_key_in_one_read_goes_into_its_field(
         write, tmp_path):
     async with two_started(write, tmp_path) as (app, pilot, before):
-        # the Args tab, tab past Apply and Defaults into the robot's field, its value
+        # the Args tab, one tab past Apply and Defaults into the robot's field, its value
         # replaced: one read
-        burst(app, "2", "tab", "tab", "ctrl+u", *"r2sq")
+        burst(app, "2", "tab", "ctrl+u", *"r2sq")
         await until(pilot, lambda: field(app, "arg-robot").value == "r2sq")
         assert not app.quitting and pids(app) == before
         await until(pilot, lambda: app.preview is not None
                     and app.preview.arguments.get("robot") == "r2sq")
+        # back to Apply, right to Defaults: a space there resets nothing, Enter does
+        burst(app, "shift+tab", "shift+tab", "right", "space")
+        await until(pilot, lambda: app.focused is app.query_one("#defaults"))
+        await pilot.pause(0.2)
+        assert field(app, "arg-robot").value == "r2sq"
+        burst(app, "enter")
+        await until(pilot, lambda: field(app, "arg-robot").value == "r1")
 
 
 def test_a_search_written_to_a_real_terminal_in_one_write_stops_nothing(write, tmp_path):

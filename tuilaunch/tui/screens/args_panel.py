@@ -8,6 +8,7 @@ import re
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
+from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.message import Message
 from textual.widget import Widget
@@ -36,6 +37,32 @@ def check_plan(plan: Plan) -> str | None:
         if proc.kind == "node" and proc.name and not _NODE_NAME.match(proc.name):
             return f"{proc.id}: node name {proc.name!r} is not a valid ROS name"
     return None
+
+
+class FormButton(Button):
+    """Apply and Defaults: a bar of two buttons above the values. `tab` goes from either
+    straight to the first value (the values are what one edits; Defaults is one `right`
+    away), `left`/`right` move along the bar, and a space presses nothing (only Enter
+    does: a space typed for a value must not reset the whole form)."""
+
+    BINDINGS = [Binding("tab", "to_values", "Values", show=False),
+                Binding("left", "along(-1)", show=False),
+                Binding("right", "along(1)", show=False),
+                Binding("space", "nothing", show=False)]
+
+    def action_to_values(self) -> None:
+        editors = self.screen.query(".arg-editor")
+        if editors:
+            self.screen.set_focus(editors.first())
+        else:
+            self.screen.focus_next()
+
+    def action_along(self, step: int) -> None:
+        buttons = list(self.parent.query(FormButton)) if self.parent else [self]
+        self.screen.set_focus(buttons[(buttons.index(self) + step) % len(buttons)])
+
+    def action_nothing(self) -> None:
+        pass
 
 
 class ArgsPanel(Vertical):
@@ -71,8 +98,8 @@ class ArgsPanel(Vertical):
         yield Static("Edit a value to preview which nodes start or stop; F5 applies.",
                      id="args-preview")
         with Horizontal(id="args-actions"):
-            yield Button("Apply (F5)", id="apply", variant="primary", compact=True)
-            yield Button("Defaults", id="defaults", compact=True)
+            yield FormButton("Apply (F5)", id="apply", variant="primary", compact=True)
+            yield FormButton("Defaults", id="defaults", compact=True)
         # not a tab stop of its own: tab goes from the buttons straight to the values
         with VerticalScroll(id="args-form", can_focus=False):
             for arg in self.arguments:

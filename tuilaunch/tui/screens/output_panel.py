@@ -19,11 +19,15 @@ from textual.widgets import Static
 from ..output_store import LEVELS, Line, OutputStore, View
 from .fields import Field
 from .line_view import LineView
+from .tree_panel import ascii_terminal
 
 
 def plural(count: int, word: str) -> str:
     return f"{count} {word}" if count == 1 else f"{count} {word}s"
 
+
+FOCUS_MARK = "▶"
+"""Starts the pane's status line while the pane has the keys."""
 
 class OutputPanel(Vertical):
     """Forwards nothing to the engine: the app feeds it lines from the OutputStore, and
@@ -169,10 +173,13 @@ class OutputPanel(Vertical):
         hidden = self._not_drawn()
         if hidden:
             parts.append((f"{hidden} not drawn (in log)", f"{hidden} in log"))
-        text = "  ".join(full for full, _ in parts)
+        # the pane has the keys (arrows scroll it): said in words at the line's start, as a
+        # colour alone shows on no 8-colour or NO_COLOR terminal
+        mark = f"{'>' if ascii_terminal() else FOCUS_MARK} " if lines.has_focus else ""
+        text = mark + "  ".join(full for full, _ in parts)
         width = self._status.size.width
         if width and cell_len(text) > width:
-            text = " ".join(short for _, short in parts)
+            text = mark + " ".join(short for _, short in parts)
         if text != self._status_text:  # an unchanged line is not sent to the terminal again
             self._status_text = text
             # still too long (a long node name): cut where it shows, with an ellipsis
@@ -183,6 +190,12 @@ class OutputPanel(Vertical):
         dropped = self.store.dropped
         return dropped.total if self.view.process is None else \
             dropped.per_process.get(self.view.process, 0)
+
+    def on_descendant_focus(self) -> None:
+        self.update_status()
+
+    def on_descendant_blur(self) -> None:
+        self.update_status()
 
     def on_resize(self) -> None:
         self._status_text = ""  # measured again against the new width

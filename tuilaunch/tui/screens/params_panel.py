@@ -202,6 +202,14 @@ class ParamsPanel(GraphListing, Horizontal):
         self.query_one("#prm-about", Static).update(Text(f"{name} [{info.type}]: {about}"))
         self.query_one("#prm-edit", Input).value = show_value(info.value)
 
+    @on(DataTable.RowSelected, "#prm-table")
+    def _row_entered(self, event: DataTable.RowSelected) -> None:
+        """Enter on a parameter: into its value's field, to edit and set it."""
+        if str(event.row_key.value) in self.params:
+            edit = self.query_one("#prm-edit", Input)
+            edit.focus()
+            edit.select_all()
+
     @on(Button.Pressed, "#prm-set")
     @on(Input.Submitted, "#prm-edit")
     def _set(self) -> None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -111,6 +111,11 @@ class ServicesPanel(GraphListing, Horizontal):
         self.selected: tuple[str, str] | None = None
         self.fields: list[tuple[str, FieldInfo]] = []
         self.history: list[CallRecord] = []
+        self._submit_waits = False
+        """Enter was pressed in the filter before the first listing came."""
+        self._form_mounted: list[Awaitable[Any]] = []
+        """The changes to the request's form under way (the last service's fields going,
+        the new ones coming)."""
 
     def compose(self) -> ComposeResult:
         with Vertical(id="svc-left"):
@@ -133,6 +138,9 @@ class ServicesPanel(GraphListing, Horizontal):
         if listing != self.services or not self.query_one("#svc-list", OptionList).option_count:
             self.services = listing
             self._fill_list()
+        if self._submit_waits:  # Enter came while the graph was still being discovered
+            self._submit_waits = False
+            self._filter_submitted()
 
     @on(Input.Changed, "#svc-filter")
     def _fill_list(self) -> None:
@@ -161,9 +169,18 @@ class ServicesPanel(GraphListing, Horizontal):
             name = str(listing.get_option_at_index(listing.highlighted or 0).id)
             self.select_service(name, (dict(self.services).get(name) or ["?"])[0])
             self.call_after_refresh(self._focus_form)
+        elif not self.services:
+            # the first listing is still coming (`3/ena` Enter in one read): the Enter
+            # picks the first match once it is there, rather than being lost
+            self._submit_waits = True
 
-    def _focus_form(self) -> None:
-        """Once the form is mounted: the first field, or Call for an empty request."""
+    async def _focus_form(self) -> None:
+        """Once the form is mounted: the first field, or Call for an empty request (the
+        form of the service picked before is gone first: its fields are not the new
+        ones)."""
+        pending, self._form_mounted = self._form_mounted, []
+        for change in pending:
+            await change
         inputs = self.query("#svc-form Input")
         (inputs.first() if inputs else self.query_one("#svc-call")).focus()
 
@@ -176,12 +193,13 @@ class ServicesPanel(GraphListing, Horizontal):
         name = str(event.option.id)
         types = dict(self.services).get(name) or ["?"]
         self.select_service(name, types[0])
+        self.call_after_refresh(self._focus_form)  # Enter on a row: on to its request
 
     def select_service(self, name: str, type_name: str,
                        values: dict[str, str] | None = None) -> None:
         title = self.query_one("#svc-title", Static)
         form = self.query_one("#svc-form", VerticalScroll)
-        form.remove_children()
+        self._form_mounted.append(form.remove_children())
         try:
             fields = describe_fields(import_type(type_name).Request)
         except MessageError as exc:
@@ -195,9 +213,9 @@ class ServicesPanel(GraphListing, Horizontal):
         title.update(Text(f"{name}  {type_name}" + ("" if self.fields else "  (empty request)")))
         for path, info in self.fields:
             text = (values or {}).get(path, field_text(info))
-            form.mount(Horizontal(Label(path), Field(text, id=f"field-{path.replace('.', '-')}",
-                                                     tooltip=info.type),
-                                  classes="svc-field"))
+            self._form_mounted.append(form.mount(
+                Horizontal(Label(path), Field(text, id=f"field-{path.replace('.', '-')}",
+                                              tooltip=info.type), classes="svc-field")))
         self.query_one("#svc-call", Button).disabled = False
 
     def request(self) -> dict[str, Any]:
