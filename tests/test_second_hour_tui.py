@@ -245,5 +245,35 @@ async def test_a_service_typed_with_the_tab_key_before_the_list_came_is_picked(t
         await until(pilot, lambda: app.focused is app.query_one("#field-data", Input))
 
 
+def test_f_shows_a_programs_own_colours_and_not_a_loggers_level_colour():
+    from tuilaunch.tui.output_store import parse
+    from tuilaunch.tui.screens.line_view import display_text
+
+    mixed = parse("p", "ok \x1b[31mFAIL\x1b[0m done", "stdout", 0.0).line
+    shown = display_text(mixed, False, False, raw=True)
+    assert shown.plain == "ok FAIL done"
+    assert [(span.start, span.end) for span in shown.spans] == [(3, 7)]  # FAIL in red
+    compact = display_text(mixed, False, False, raw=False)
+    assert not compact.spans  # the compact form: colours by level only
+    # a ROS logger's line in its level's one colour keeps no second copy
+    logged = parse("p", "\x1b[32m[INFO] [1.5] [talker]: hi\x1b[0m", "stdout", 0.0).line
+    assert logged.colored is None and logged.message == "hi"
+
+
+async def test_the_quit_dialog_fits_a_40_by_10_terminal(write, tmp_path):
+    app = make_app(str(write(TYPED_TWO)), {}, tmp_path / "log")
+    async with app.run_test(size=(40, 10)) as pilot:
+        await until(pilot, lambda: app.supervisor is not None
+                    and app.supervisor.states.get("quiet-2") == "running")
+        await pilot.press("q")
+        await until(pilot, lambda: type(app.screen).__name__ == "QuitScreen")
+        await pilot.pause()
+        for button in ("#stop", "#keep"):
+            region = app.screen.query_one(button).region
+            assert region.right <= 40 and region.bottom <= 10, (button, region)
+        await pilot.press("y")
+        await until(pilot, lambda: not app.supervisor.running, limit=60)
+
+
 if sys.platform != "linux":  # pragma: no cover
     pytest.skip("ptys and /proc", allow_module_level=True)

@@ -7,6 +7,7 @@ pane can show a compact form without parsing again on every repaint.
 
 from __future__ import annotations
 
+import re
 import time
 from collections import deque
 from collections.abc import Iterable
@@ -48,6 +49,9 @@ class Line:
     gap: Gap | None = None
     """On the line that stands for lines not drawn: where they are, to read them when the
     user scrolls back to it."""
+    colored: str | None = None
+    """The line with the program's own colour codes, shown by `f` (as printed); kept only
+    where they say more than one colour over the whole line, which its level shows."""
 
     def formatted(self, prefixed: bool) -> str:
         """The full line, as saved or copied: `[id] ` before it in the all-nodes view."""
@@ -79,14 +83,20 @@ def parse(process: str, raw: str, stream: str, now: float) -> Parsed:
     # arrival, after the colour codes (which take no columns) are gone: every repaint,
     # search highlight, pan and wrap then measures the text as drawn
     text = expand_tabs(strip_ansi(raw))
+    colored = raw if "\x1b" in raw and not _ONE_COLOUR.fullmatch(raw) else None
     match = _ROS_PREFIX.match(text)
     if not match:
-        return Parsed(Line(process, text, WARN if stream == "stderr" else INFO, now), None,
-                      False)
+        return Parsed(Line(process, text, WARN if stream == "stderr" else INFO, now,
+                           colored=colored), None, False)
     name = match.group(1)
     stamp = float(match.group(2)) if match.group(2) else now
     return Parsed(Line(process, text, LEVELS.index("WARN" if name == "WARNING" else name),
-                       stamp, match.end()), match.group(3) or None, not match.group(2))
+                       stamp, match.end(), colored=colored), match.group(3) or None,
+                  not match.group(2))
+
+
+_ONE_COLOUR = re.compile(r"(\x1b\[[0-9;]*m)?[^\x1b]*(\x1b\[0?m)?")
+"""A line in one colour, or none, as a ROS logger colours each line by its level."""
 
 
 @dataclass

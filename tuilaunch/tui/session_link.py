@@ -481,8 +481,9 @@ class SessionLink(App[int]):
         undeclared = self.session.undeclared()
         args = " ".join(f"{k}:={v}" for k, v in self.session.arguments.items()
                         if k not in undeclared)
-        if undeclared:  # a typo applies nothing: said, never listed with what applies
-            args += f"  not declared: {', '.join(undeclared)}"
+        if undeclared:  # a typo applies nothing: said first (a narrow header cuts the
+            # end), never listed with what applies
+            args = f"not declared: {', '.join(undeclared)}  {args}"
         prefix = ""
         if self.quitting:
             still = self.running()
@@ -498,7 +499,8 @@ class SessionLink(App[int]):
         line = f"{prefix}{name}  {text}  {args}"
         if line != self._status_text:  # an unchanged line is not sent to the terminal again
             self._status_text = line
-            self.status_bar.update(Text(line))
+            # cut with an ellipsis where it does not fit: something is left out, and seen so
+            self.status_bar.update(Text(line, no_wrap=True, overflow="ellipsis"))
 
     def signal_stage(self) -> str:
         """Where the SIGINT -> SIGTERM -> SIGKILL escalation is, from the timeouts."""

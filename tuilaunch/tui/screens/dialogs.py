@@ -134,7 +134,10 @@ class QuitScreen(ModalScreen[str]):
     session, leave it running without this window ("detach")."""
 
     DEFAULT_CSS = dialog_css("QuitScreen", 64, "warning",
-                             more="QuitScreen Horizontal { height: auto; }")
+                             more="QuitScreen Horizontal { height: auto; }\n"
+                                  "QuitScreen > Vertical.-narrow { padding: 0 1; }\n"
+                                  "QuitScreen .-narrow Button { min-width: 0; width: auto; "
+                                  "margin-right: 1; }")
     BINDINGS = [Binding("y", "answer('stop')", "Stop and quit"),
                 Binding("n,escape", "answer('keep')", "Keep running"),
                 Binding("d", "answer('detach')", "Detach", show=False)]
@@ -151,13 +154,18 @@ class QuitScreen(ModalScreen[str]):
         question = f"{len(self.running)} processes still run: {names}\nStop them all and quit?"
         if self.detach:
             question += "\nOr detach: they run on, tuilaunch attach comes back to them."
-        with Vertical():
+        # a narrow terminal (40 columns) gets short, one-line buttons: all three fit, Keep
+        # running among them, where the full ones ran off the screen's edge
+        narrow = self.app.size.width < 66
+        with Vertical(classes="-narrow" if narrow else ""):
             yield Static(Text(question))
             with Horizontal():
-                yield Button("Stop and quit (y)", id="stop", variant="error")
+                yield Button("Stop (y)" if narrow else "Stop and quit (y)", id="stop",
+                             variant="error", compact=narrow)
                 if self.detach:
-                    yield Button("Detach (d)", id="detach", variant="primary")
-                yield Button("Keep running (n)", id="keep")
+                    yield Button("Detach (d)", id="detach", variant="primary", compact=narrow)
+                yield Button("Keep (n)" if narrow else "Keep running (n)", id="keep",
+                             compact=narrow)
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action == "answer" and parameters == ("detach",) and not self.detach:

@@ -51,6 +51,13 @@ def display_text(line: Line, prefixed: bool, show_time: bool, raw: bool = False)
     if line.event:
         parts.append(f"-- {line.text}")
         style = EVENT_STYLE if line.level < 3 else LEVEL_STYLE[line.level]
+    elif raw and line.colored is not None:  # the program's own colours, as printed
+        parts.append("")
+        text = Text(" ".join(parts), LEVEL_STYLE[line.level], no_wrap=True, end="")
+        printed = Text.from_ansi(line.colored, no_wrap=True, end="")
+        printed.expand_tabs(8)
+        text.append_text(printed)
+        return text
     elif raw:
         parts.append(line.text)
         style = LEVEL_STYLE[line.level]

@@ -59,7 +59,8 @@ def parse_value(type_name: str, text: str) -> Any:
 
 class ParamsPanel(GraphListing, Horizontal):
     DEFAULT_CSS = """
-    ParamsPanel #prm-left { width: 26; border-right: tall $panel; }
+    ParamsPanel #prm-left { width: 30%; min-width: 26; max-width: 48;
+                            border-right: tall $panel; }
     ParamsPanel #prm-right { width: 1fr; padding: 0 1; }
     ParamsPanel #prm-table { height: 1fr; }
     ParamsPanel #prm-about { height: 2; color: $text-muted; }

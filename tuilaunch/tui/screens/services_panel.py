@@ -87,7 +87,8 @@ _STANDARD = ("/describe_parameters", "/get_parameter_types", "/get_parameters",
 
 class ServicesPanel(GraphListing, Horizontal):
     DEFAULT_CSS = """
-    ServicesPanel #svc-left { width: 36; border-right: tall $panel; }
+    ServicesPanel #svc-left { width: 45%; min-width: 36; max-width: 64;
+                              border-right: tall $panel; }
     ServicesPanel #svc-list { height: 2fr; border-title-align: left; }
     ServicesPanel #svc-history { height: 1fr; border-top: solid $panel; }
     ServicesPanel #svc-right { width: 1fr; padding: 0 1; }

@@ -169,6 +169,8 @@ class TopicsPanel(Vertical):
     def show_node(self, node: str | None) -> None:
         """Lists only the topics `node` publishes or subscribes (None: all)."""
         self.node = node
+        if node:  # an old filter would hide the node's own topics: `o` shows them all
+            self.query_one("#tpc-filter", Input).value = ""
         self.query_one("#tpc-scope", Static).update(
             Text(f"node {node} (x: all)" if node else "all topics"))
         self.entries = {}
