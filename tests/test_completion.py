@@ -8,7 +8,6 @@ its topics are what a Tab press offers after a session command.
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
 import sys
 import textwrap
