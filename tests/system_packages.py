@@ -1,5 +1,6 @@
-"""System packages some tests need (openssh-server, gdb): installed with apt-get where the
-tests run as root and it is there, as the README says; the tests skip, saying so, otherwise."""
+"""System packages some tests need (openssh-server, gdb, zsh, tmux): installed with apt-get
+where the tests run as root and it is there, as the README says; the tests skip, saying so,
+otherwise."""
 
 from __future__ import annotations
 
@@ -23,3 +24,9 @@ def apt_install(package: str) -> bool:
         return True
     subprocess.run(["apt-get", "update", "-qq"], capture_output=True, timeout=600, env=env)
     return install()
+
+
+def program(name: str, package: str | None = None) -> str | None:
+    """The path of `name`, installing `package` (default: `name`) first where it is missing
+    and we may; None when it is not there after all."""
+    return shutil.which(name) or (apt_install(package or name) and shutil.which(name)) or None

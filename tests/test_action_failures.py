@@ -55,7 +55,7 @@ def generate_launch_description():
     assert failure[0].startswith("[ERROR] [event_callback-1]: event_callback failed: "), out
     assert f"{path}:9" in failure[0], out
     assert "Traceback" not in out, out
-    assert "[INFO] [launch]: shutdown (ctrl-c (SIGINT))" in lines, out
+    assert "[WARNING] [launch]: user interrupted with ctrl-c (SIGINT)" in lines, out
 
 
 def test_an_opaque_function_that_raises_at_event_time_names_its_line(write):
@@ -78,4 +78,4 @@ def generate_launch_description():
     assert len(failure) == 1 and failure[0].startswith("[ERROR] "), out
     assert f"{path}:9" in failure[0], out
     assert "Traceback" not in out, out
-    assert "[INFO] [launch]: shutdown (ctrl-c (SIGINT))" in out.splitlines(), out
+    assert "[WARNING] [launch]: user interrupted with ctrl-c (SIGINT)" in out.splitlines(), out

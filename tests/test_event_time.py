@@ -120,7 +120,8 @@ def generate_launch_description():
     done = headless(path, env)
     lines = lines_of(done)
     stop = index_of(lines, "[INFO] [driver-1]: process stopped")  # a stop, not a crash
-    assert index_of(lines, "shutdown (enough)") < stop < index_of(lines, "driver stopped with")
+    assert index_of(lines, "sending signal 'SIGINT' to process[driver-1]") < stop < \
+        index_of(lines, "driver stopped with")
     assert "driver complete" in done.stdout
 
 

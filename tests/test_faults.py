@@ -111,8 +111,10 @@ def test_a_reader_that_stops_reading_freezes_no_node_and_ctrl_c_still_stops(writ
     reads again the screen says how many lines it was not shown (the log has them all)."""
     started, _ = launches
     count = 300_000
+    half = count // 2  # the second half comes once stdout has stalled: it is skipped
     path = launch_file(write, f"""
-sl.add_action(ExecuteProcess(cmd=['seq', '1', '{count}'], name='flood'))
+sl.add_action(ExecuteProcess(name='flood', cmd=[
+    'sh', '-c', 'seq 1 {half}; sleep 0.5; seq {half + 1} {count}']))
 sl.add_action(ExecuteProcess(cmd=['sleep', '600'], name='idle'))""")
     env = {**os.environ, "ROS_LOG_DIR": str(tmp_path)}
     proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), "--headless"],

@@ -16,6 +16,8 @@ import signal
 import subprocess
 import sys
 
+import pytest
+
 from .conftest import run_cli, run_headless, wait_for
 
 HEADER = """
@@ -202,7 +204,62 @@ def test_an_xml_node_with_on_exit_shutdown_ends_the_launch_as_launch_does(write)
     lines = done.stdout.splitlines()
     assert "[INFO] [launch]: process[required-2] was required: shutting down launched " \
         "system" in lines, done.stdout
-    assert "[INFO] [launch]: shutdown (reason not given)" in lines, done.stdout
+    assert not [line for line in lines if "shutdown (" in line], done.stdout
+
+
+# launch's own texts (launch/actions/shutdown_action.py, launch/launch_service.py,
+# launch/actions/execute_local.py): the only lines it prints when a launch ends
+REQUIRED = "[INFO] [launch]: process[{}] was required: shutting down launched system"
+CTRL_C = "[WARNING] [launch]: user interrupted with ctrl-c (SIGINT)"
+SIGINT_SENT = "[INFO] [sleeper-1]: sending signal 'SIGINT' to process[sleeper-1]"
+
+
+@pytest.mark.parametrize("on_exit, elsewhere, required", [
+    ("Shutdown()", "", True),
+    ("Shutdown(reason='quick is done')", "", True),
+    ("EmitEvent(event=ShutdownEvent())", "", False),
+    ("EmitEvent(event=ShutdownEvent(reason='quick is done'))", "", False),
+    # a TimerAction keeps the locals it was executed with (timer_action.py): the exit's event
+    ("TimerAction(period=0.1, actions=[Shutdown(reason='later')])", "", True),
+    ("LogInfo(msg='quick ended')", "TimerAction(period=0.5, actions=[Shutdown()]),", False),
+])
+def test_each_way_to_shut_down_prints_what_launch_prints(write, on_exit, elsewhere, required):
+    """Only launch's Shutdown action, run by a process's exit, says `process[x] was
+    required`; an emitted Shutdown event says nothing, nor a Shutdown a timer of the file
+    runs (its locals hold no ProcessExited); no reason is printed, whatever it is."""
+    path = write(HEADER + f"""
+from launch.actions import TimerAction
+
+def generate_launch_description():
+    quick = ExecuteProcess(cmd=['true'], name='quick')
+    return LaunchDescription([
+        ExecuteProcess(cmd=['sleep', '60'], name='sleeper'),
+        quick,
+        RegisterEventHandler(OnProcessExit(target_action=quick, on_exit=[{on_exit}])),
+        {elsewhere}
+    ])
+""")
+    done = run_cli(str(path), "--headless")
+    lines = done.stdout.splitlines()
+    assert done.returncode == 0, done.stdout + done.stderr
+    said = [line for line in lines if "[launch]" in line][2:]  # after the two first lines
+    assert said == ([REQUIRED.format("quick-2")] if required else []), done.stdout
+    assert SIGINT_SENT in lines, done.stdout  # not Ctrl+C: launch sends SIGINT and says so
+    assert not [line for line in lines if "reason" in line or "quick is done" in line]
+
+
+def test_ctrl_c_prints_what_launch_prints(write):
+    path = write(HEADER + """
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(cmd=['sleep', '60'], name='sleeper')])
+""")
+    lines = run_headless(path, until=("process started",)).splitlines()
+    said = [line for line in lines if "[launch]" in line][2:]
+    # launch's warning, then tuilaunch's own line on Ctrl+C again (documented); the SIGINT
+    # came from the terminal, so it is not announced; no reason line
+    assert said == [CTRL_C, "[INFO] [launch]: stopping: Ctrl+C again sends SIGTERM now, a "
+                    "third time SIGKILL"], lines
+    assert SIGINT_SENT not in lines and not [line for line in lines if "shutdown (" in line]
 
 
 def test_sigterm_says_what_ros2_launch_says_exits_1_and_leaves_nothing_running(write):

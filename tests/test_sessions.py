@@ -656,6 +656,32 @@ def test_two_sessions_started_with_one_name_at_once_one_wins(runtime, write):
     assert not list((runtime / "tuilaunch").iterdir())
 
 
+def test_two_launches_of_one_file_started_at_once_take_two_names(runtime, write):
+    """A name is reserved from the moment it is picked, not once its server is up: two
+    TUIs (and two --detach) of one file started in the same second both run, under the
+    next free names, where the second failed 'a session named ... is already running'."""
+    path = str(write(LAUNCH))
+    stem = Path(path).name.removesuffix(".py")
+    terminals = [Terminal(path) for _ in range(2)]
+    try:
+        for terminal in terminals:
+            terminal.read_until(b"2 running")
+        names = sorted(s["name"] for s in json.loads(tl("ls", "--json").stdout))
+        assert names == [f"{stem}-1", f"{stem}-2"]
+        starts = [subprocess.Popen([sys.executable, "-m", "tuilaunch", path, "--detach"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                  for _ in range(2)]
+        results = sorted((p.wait(timeout=60), *p.communicate()) for p in starts)
+        assert [(code, out.strip(), err) for code, out, err in results] == [
+            (0, f"{stem}-3", ""), (0, f"{stem}-4", "")]
+        for name in (f"{stem}-3", f"{stem}-4"):
+            tl("wait", name, "echo-3", "running", "--timeout", "60")
+            tl("stop", name)
+    finally:
+        for terminal in terminals:
+            terminal.close()
+
+
 def test_a_session_loads_its_file_with_the_command_line_ros2_launch_would_give(
         runtime, write):
     path = write("""

@@ -21,11 +21,12 @@ async def test_xml_bringup_tree_form_preview_and_apply(tmp_path):
         await pilot.press("2")
         form = app.query_one(ArgsPanel)
         assert isinstance(form.query_one("#arg-mode"), Select)
-        rate = form.query_one("#arg-rate", Input)  # a float argument: checked as a number
+        rate = form.query_one("#arg-rate", Input)  # a float argument: a word is warned of
         typed = rate.value
         rate.value = "fast"
         await pilot.pause()
-        assert "needs a number" in str(app.query_one("#args-preview").render())
+        assert "Warning: argument 'rate' = 'fast' is not a number" in str(
+            app.query_one("#args-preview").render())
         rate.value = typed
         form.query_one("#arg-listener", Checkbox).value = False
         await pilot.pause()

@@ -56,14 +56,25 @@ def main(argv: list[str]) -> int:
 
 # --- starting ------------------------------------------------------------------------------
 
+_RESERVED: dict[str, int] = {}
+"""Names this command picked, and the descriptor of each one's lock, until the server it
+starts takes the lock over."""
+
+
 def session_name_for(path: str, name: str | None) -> str:
-    """The name a new session of `path` takes: `name` as given, else the file's stem and the
-    first free number; a name a live session holds is refused."""
-    name = session_dir.check_name(name) if name else session_dir.new_name(
-        session_dir.launch_stem(path))
-    if session_dir.is_alive(name):
-        raise SessionError(f"a session named {name} is already running",
-                           hint="choose another --name, or tuilaunch attach " + name)
+    """The name a new session of `path` takes, reserved until its server holds it: `name`
+    as given, else the file's stem and the first free number (two launches started in the
+    same second take two names); a name a live or starting session holds is refused."""
+    if name:
+        lock = session_dir.reserve(session_dir.check_name(name))
+        if lock is None or session_dir.is_alive(name):
+            if lock is not None:
+                os.close(lock)
+            raise SessionError(f"a session named {name} is already running",
+                               hint="choose another --name, or tuilaunch attach " + name)
+    else:
+        name, lock = session_dir.new_name(session_dir.launch_stem(path))
+    _RESERVED[name] = lock
     return name
 
 
@@ -75,7 +86,19 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
     `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv;
     `placement` (`--machines`) is {"text", "path", "share"} as engine/server_main.py reads
     it."""
-    name = session_name_for(path, name)
+    if name is None or name not in _RESERVED:
+        name = session_name_for(path, name)
+    lock = _RESERVED.pop(name)
+    try:
+        return name, _start_server(path, arguments, name, log_dir, positional, timeout,
+                                   placement, lock)
+    finally:
+        os.close(lock)  # the server holds the name now (or it failed and lets it go)
+
+
+def _start_server(path: str, arguments: dict[str, str], name: str, log_dir: Path,
+                  positional: list[str] | None, timeout: float,
+                  placement: dict[str, Any] | None, lock: int) -> subprocess.Popen[bytes]:
     log_dir.mkdir(parents=True, exist_ok=True)
     server_log = log_dir / "session.log"
     with open(server_log, "ab") as errors:
@@ -84,7 +107,8 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
              os.path.abspath(path), str(log_dir), json.dumps(arguments),
              json.dumps(positional or [path]),
              *([json.dumps(placement)] if placement else [])],
-            stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True)
+            stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True,
+            pass_fds=(lock,), env={**os.environ, session_dir.LOCK_FD_ENV: str(lock)})
     deadline = time.monotonic() + timeout
     # ours, not another server that took the name at the same instant
     while (session_dir.read_info(name) or {}).get("pid") != server.pid or \
@@ -99,7 +123,7 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
             server.kill()
             raise SessionError(f"session {name} did not answer within {timeout:g} s")
         time.sleep(0.02)
-    return name, server
+    return server
 
 
 def report_end(app: Any, name: str) -> None:

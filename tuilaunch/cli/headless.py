@@ -143,6 +143,11 @@ class Printer:
             # LogInfo speaks as launch.user, as in ros2 launch (people grep for it)
             who = (event.data or {}).get("logger") or event.process or "launch.user"
             return f"[{event.level}] [{who}]: {event.reason}\n"
+        if event.kind == "shutdown" and (event.data or {}).get("launch"):
+            # launch logs no reason for its ways to end (launch_service.py,
+            # shutdown_action.py): its own lines (`user interrupted with ctrl-c (SIGINT)`,
+            # `process[x] was required: ...`) are printed where it prints them
+            return ""
         return f"[INFO] [launch]: {event.kind} ({event.reason})\n"
 
     def _formatted(self, form: str, event: Event) -> str:

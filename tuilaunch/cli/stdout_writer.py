@@ -4,10 +4,12 @@ Writing straight to stdout from the event loop ties every node to its reader: a 
 paused with Ctrl+S, an ssh link slower than the output, or `| less` left open fill the
 pipe, the loop blocks in `write`, the nodes' own pipes are no longer read, and the nodes
 freeze writing their output (Ctrl+C is not even seen). Here the loop only appends to a
-queue; one thread writes it to the file descriptor. Output lines that would make the
-queue exceed its bound are not shown, and counted: the log files hold every line, and a
-notice says how many were skipped once the reader catches up. Lines about processes
-(started, exited, failed) are always queued.
+queue; one thread writes it to the file descriptor. Lines are skipped only when the reader
+does not keep up: a write has waited on it for STALL with QUEUE_LIMIT queued, or
+HARD_LIMIT is queued. A regular file or a pipe whose reader keeps up gets every line, even
+when the writer thread lags behind a flood for want of CPU. Skipped lines are counted: the
+log files hold every line, and a notice says how many were skipped once the reader catches
+up. Lines about processes (started, exited, failed) are always queued.
 """
 
 from __future__ import annotations
@@ -24,6 +26,15 @@ from ..engine.run.session.launch_prints import PrintedLines
 QUEUE_LIMIT = 1 << 20
 """Bytes of output waiting for a slow reader before lines are skipped: a second of a busy
 robot's output, far more than a terminal that keeps up ever has waiting."""
+STALL = 0.1
+"""Seconds a write of one CHUNK may wait on the reader before it counts as one that does
+not keep up (a terminal paused with Ctrl+S, an ssh link slower than the output); a reader
+that keeps up takes a chunk in well under a millisecond."""
+CHUNK = 64 << 10
+"""Bytes per write: a pipe's buffer, so each write's wait says how fast the reader is."""
+HARD_LIMIT = 64 << 20
+"""Bytes queued past which lines are skipped whatever the reader: memory stays bounded
+when a reader takes its output steadily but slower than a flood."""
 
 GATHER = 0.003
 """Seconds the writer lets output gather after it wakes: under a flood it then wakes a few
@@ -51,6 +62,7 @@ class BackgroundWriter:
         self._skipped = 0
         self._closed = False
         self._failed = False
+        self._waiting_since: float | None = None  # when the write in progress began
         self._ready = threading.Condition()
         self._thread = threading.Thread(target=self._run, name="stdout", daemon=True)
         self._thread.start()
@@ -61,12 +73,20 @@ class BackgroundWriter:
         with self._ready:
             if self._failed or self._closed:
                 return
-            if lines and self._queued + len(text) > self.limit:
+            if lines and self._queued + len(text) > self.limit and self._behind():
                 self._skipped += lines
                 return
             self._queue.append(text)
             self._queued += len(text)
             self._ready.notify()
+
+    def _behind(self) -> bool:
+        """The reader does not keep up: a write waits on it, or far too much is queued.
+        A queue that grew while the writer only waited for CPU (a flood into a file) is
+        written whole."""
+        since = self._waiting_since
+        return self._queued > HARD_LIMIT or (
+            since is not None and time.monotonic() - since > STALL)
 
     def close(self, patience: float = EXIT_PATIENCE) -> None:
         """Writes what is queued, waiting as long as the reader takes something at least
@@ -111,10 +131,14 @@ class BackgroundWriter:
 
     def _write_all(self, data: bytes) -> None:
         view = memoryview(data)
-        while view:
-            done = os.write(self.fd, view)  # blocks this thread only
-            view = view[done:]
-            self.written += done
+        try:
+            while view:
+                self._waiting_since = time.monotonic()
+                done = os.write(self.fd, view[:CHUNK])  # blocks this thread only
+                view = view[done:]
+                self.written += done
+        finally:
+            self._waiting_since = None
 
 
 class LineJoiner(PrintedLines):

@@ -10,7 +10,7 @@ from textual.timer import Timer
 from ..engine.errors import LaunchError
 from ..engine.plan.model import ArgumentInfo, PlanDiff
 from ..engine.plan.session import Preview, Stamp, file_stamp
-from .screens.args_panel import ArgsPanel, check_plan, check_values
+from .screens.args_panel import ArgsPanel, check_plan, check_values, type_notes
 from .session_link import SessionLink
 
 
@@ -67,8 +67,13 @@ class Arguments(SessionLink):
                 panel.set_preview_text("No change from what runs now.", error=False)
         else:
             tree.set_preview(self.preview.diff)
-            panel.set_preview_text(_describe_diff(self.preview, self.session.plan.arguments),
-                                   error=False)
+            # a value unlike its default's type is passed as written, as ros2 launch does:
+            # said, as a slip is likely, never refused
+            notes = "".join(f"Warning: {note}; it is passed as written. " for note in
+                            type_notes(self.session.plan.arguments, edits))
+            panel.set_preview_text(
+                notes + _describe_diff(self.preview, self.session.plan.arguments),
+                error=False)
         self.refresh_bindings()
 
     def tab_shown(self, pane: str) -> None:

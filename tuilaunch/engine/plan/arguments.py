@@ -1,6 +1,7 @@
 """DeclareLaunchArgument, resolved: its value from the command line or its default; and
-whether a value typed for an argument suits its type (`check_values`: the Args tab checks
-each edit with it, and the command line each name:=value, in the same words)."""
+whether a value typed in the Args tab can be used (`check_values`: only choices refuse,
+as in launch) or looks unlike its default's type (`type_notes`: a warning, never a
+refusal; the command line takes any value, as ros2 launch does)."""
 
 from __future__ import annotations
 
@@ -57,24 +58,42 @@ def declare_argument(arguments: dict[str, ArgumentInfo], lenient: bool,
 
 
 def check_values(arguments: list[ArgumentInfo], values: dict[str, str]) -> str | None:
-    """Why a typed value cannot be used for its argument's type, or None."""
+    """Why a typed value cannot be used for its argument, or None: only a value outside
+    its choices, which DeclareLaunchArgument refuses too. A value unlike the default's type
+    is no reason: launch arguments are strings (`x:=3.5` for a default of 1 is passed as
+    written by ros2 launch); `type_notes` says so instead."""
     types = {a.name: a for a in arguments}
     for name, text in values.items():
         arg = types.get(name)
-        if arg is None:
-            continue
-        if arg.choices and text not in arg.choices:
+        if arg is not None and arg.choices and text not in arg.choices:
             return f"argument '{name}' must be one of {', '.join(arg.choices)}, got {text!r}"
+    return None
+
+
+def type_notes(arguments: list[ArgumentInfo], values: dict[str, str]) -> list[str]:
+    """Values unlike their default's type (a fraction for a default of 1, a word for a
+    number, neither true nor false for a boolean): the Args tab warns, as a typing slip is
+    likely, and passes them as written, as ros2 launch does."""
+    types = {a.name: a for a in arguments}
+    notes = []
+    for name, text in values.items():
+        arg = types.get(name)
+        if arg is None or arg.choices:
+            continue
+        like = None
         if arg.type == "int":
             try:
                 int(text.strip())
             except ValueError:
-                return f"argument '{name}' needs a whole number, got {text!r}"
+                like = "a whole number"
         elif arg.type == "float":
             try:
                 float(text.strip())
             except ValueError:
-                return f"argument '{name}' needs a number, got {text!r}"
+                like = "a number"
         elif arg.type == "bool" and text_to_bool(text) is None:
-            return f"argument '{name}' needs true or false, got {text!r}"
-    return None
+            like = "true or false"
+        if like is not None:
+            notes.append(f"argument '{name}' = {text!r} is not {like} like its default "
+                         f"{arg.default}")
+    return notes

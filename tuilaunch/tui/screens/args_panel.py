@@ -16,6 +16,7 @@ from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
 from ...engine.describe.substitutions import text_to_bool
 from ...engine.plan.arguments import check_values as check_values
+from ...engine.plan.arguments import type_notes as type_notes
 from ...engine.plan.model import ArgumentInfo, Plan
 from .fields import Field, Toggle
 

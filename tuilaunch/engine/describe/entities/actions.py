@@ -59,6 +59,9 @@ class Shutdown(Entity):
                  = None, **_: Any) -> None:
         self._init_entity(condition)
         self.reason = reason
+        self.emitted = False
+        """EmitEvent(event=Shutdown()): launch's Shutdown action says `process[x] was
+        required` when a process's exit runs it; the bare event says nothing."""
 
 
 EMITTED_EVENTS: dict[type, Callable[[Any, Condition | None], Entity]] = {}
@@ -68,6 +71,7 @@ EMITTED_EVENTS: dict[type, Callable[[Any, Condition | None], Entity]] = {}
 def EmitEvent(*, event: Any, condition: Condition | None = None, **_: Any) -> Entity:
     if isinstance(event, Shutdown):
         event.condition = condition
+        event.emitted = True
         event.origin = caller_origin()
         return event
     for kind, make in EMITTED_EVENTS.items():

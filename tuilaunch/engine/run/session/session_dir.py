@@ -76,18 +76,55 @@ def is_alive(name: str) -> bool:
     return True
 
 
+LOCK_FD_ENV = "TUILAUNCH_SESSION_LOCK_FD"
+"""The descriptor of `<name>.lock` its starter reserved and handed to the server."""
+
+
 def claim(name: str) -> int:
     """Holds `<name>.lock` for the server's lifetime (the returned descriptor): of two
     servers started with one name at the same instant, the second is refused, instead of
-    taking over the first one's socket path."""
+    taking over the first one's socket path. A lock its starter reserved (`reserve`) and
+    handed over is taken as it is."""
+    handed = _handed_over(name)
+    if handed is not None:
+        return handed
+    fd = reserve(name)
+    if fd is None:
+        raise SessionError(f"a session named {name} is already running",
+                           hint="choose another --name")
+    return fd
+
+
+def reserve(name: str) -> int | None:
+    """`<name>.lock` locked (its descriptor), or None when another holds it. The command
+    line reserves the name it picks, and hands the lock to the server it starts: two
+    launches started in the same second pick two names (a name is seen taken from the
+    moment it is picked, not once its server is up)."""
     path = session_root() / f"{check_name(name)}.lock"
     fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o600)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         os.close(fd)
-        raise SessionError(f"a session named {name} is already running",
-                           hint="choose another --name") from None
+        return None
+    return fd
+
+
+def _handed_over(name: str) -> int | None:
+    """The lock the starter reserved for this name, if it handed one over (its children
+    must not inherit it: the variable goes, the descriptor is closed on exec)."""
+    value = os.environ.pop(LOCK_FD_ENV, None)
+    if not value:
+        return None
+    try:
+        fd = int(value)
+        held = os.fstat(fd)
+        path = os.stat(session_root() / f"{check_name(name)}.lock")
+    except (ValueError, OSError):
+        return None
+    if (held.st_dev, held.st_ino) != (path.st_dev, path.st_ino):
+        return None  # not this name's lock: the usual claim decides
+    os.set_inheritable(fd, False)
     return fd
 
 
@@ -144,16 +181,23 @@ def live_sessions(clean: bool = True) -> list[str]:
     return sorted(alive, key=lambda n: (read_info(n) or {}).get("started", 0.0))
 
 
-def new_name(stem: str) -> str:
-    """`stem-N` with the smallest N not taken by a live session."""
+def new_name(stem: str) -> tuple[str, int]:
+    """`stem-N` with the smallest N not taken by a live session, reserved (`reserve`): the
+    name and its lock's descriptor."""
     base = re.sub(r"[^A-Za-z0-9_.-]", "_", stem)[:56] or "launch"
     if not base[0].isalnum():
         base = "l" + base
     taken = set(live_sessions())
     number = 1
-    while f"{base}-{number}" in taken or _claimed(f"{base}-{number}"):
+    while True:
+        name = f"{base}-{number}"
+        if name not in taken:
+            fd = reserve(name)
+            if fd is not None:
+                if not is_alive(name):
+                    return name, fd
+                os.close(fd)
         number += 1
-    return f"{base}-{number}"
 
 
 def launch_stem(path: str) -> str:

@@ -33,7 +33,7 @@ from ..process.readers import ChannelReader, Running
 from ..process.watchdog import Watchdog
 from .placed import Placing
 from .respawn import Respawner
-from .stopping import Stopper
+from .stopping import CTRL_C_REASON, Stopper
 from .triggers import TriggerBook
 
 
@@ -61,6 +61,10 @@ class SupervisorCore:
         """The latest event of each (process, kind), handed to the actions it triggers."""
         self.shutdown_requested = False
         """A Shutdown action or an operator asked the launch to end."""
+        self.launch_reasons: set[str] = {CTRL_C_REASON, "idle"}
+        """Shutdown reasons of launch's own ways to end (Ctrl+C, idle, the file's Shutdown
+        actions and events): ros2 launch logs no such reason, so neither does headless;
+        tuilaunch's own ways (the TUI's quit, `tuilaunch stop`, SIGHUP) say theirs."""
         self.detached_tasks: dict[str, asyncio.Task[Any]] = {}
         """Running call_service / set_parameters actions: the shutdown stops them as it
         stops processes (simple_launch runs them as nodes), and their exit handlers run."""

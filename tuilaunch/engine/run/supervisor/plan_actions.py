@@ -182,9 +182,13 @@ class PlanActions(SupervisorCore):
             if runner is not None:
                 ok = await runner(action)
             elif action.kind == "shutdown":
-                if isinstance(event, ProcessExited):  # launch's Shutdown action says so
+                if isinstance(event, ProcessExited) and not getattr(action.source, "emitted",
+                                                                     False):
+                    # launch's Shutdown action says so (shutdown_action.py); an emitted
+                    # Shutdown event, Ctrl+C, idle say nothing of a reason
                     self.log_action(action, f"process[{event.process_name}] was required: "
                                     "shutting down launched system", logger="launch")
+                self.launch_reasons.add(str(action.data))
                 if self.shutting_down and not _in_shutdown_handler(action):
                     await self.tell_shutdown(str(action.data))  # before the run may end
                 else:

@@ -248,7 +248,8 @@ class Supervisor(Interacting):
         """The Shutdown event: said, and seen by the OnShutdown handlers. A Shutdown action
         performed while the launch already stops calls this again, as launch emits its
         event again (its handlers see both reasons)."""
-        self.emit(Event("shutdown", reason=reason))
+        self.emit(Event("shutdown", reason=reason,
+                        data={"launch": True} if reason in self.launch_reasons else None))
         for action in self.triggers.on_shutdown:
             try:
                 await self.perform_action(action, LaunchEvent(reason=reason))
