@@ -166,3 +166,28 @@ def test_what_launch_code_prints_in_a_session_is_a_line_every_client_sees(runtim
                  what="the printed lines among the session's launch lines")
     finally:
         tl("stop", name)
+
+
+UNNAMED = """
+from launch import LaunchDescription
+from launch_ros.actions import Node
+def generate_launch_description():
+    return LaunchDescription([Node(package='tuilaunch_demos', executable='talker',
+                                   namespace='r2', parameters=[{'rate': 5.0}])])
+"""
+
+
+def test_a_restart_at_debug_level_keeps_the_name_the_node_reports(runtime, write):
+    """At debug level rcl speaks first (`[rcl]: Initializing node ...`): the node a process
+    runs is still known by its own logger's name, not /rcl (issue 36, item 4)."""
+    name = tl(str(write(UNNAMED)), "--detach").stdout.strip()
+    try:
+        tl("wait", name, "talker-1", "running", "--timeout", "60")
+        dumped(name, "talker-1")
+        tl("restart", name, "talker-1", "--log-level", "debug")
+        tl("wait", name, "talker-1", "running", "--timeout", "60")
+        wait_for(lambda: "[rcl]: " in tl("logs", name, "talker-1").stdout,
+                 what="rcl's debug lines, before the node's own")
+        dumped(name, "talker-1")
+    finally:
+        tl("stop", name)

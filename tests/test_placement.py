@@ -27,7 +27,7 @@ import pytest
 
 from .conftest import run_cli, wait_for
 from .proc_tree import cmdline, descendants
-from .sshd import Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
+from .sshd import Machine, Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
 
 LAUNCH = """
 from launch import LaunchDescription
@@ -461,3 +461,91 @@ def test_a_rule_naming_a_node_that_names_itself_says_why_it_places_nothing(tmp_p
     assert "placement rule '/r1/talker' -> nuc places no process: /r1/<talker> names " \
         "itself in its code (the launch file gives no name), so a placement rule cannot " \
         "know it before it runs; match its process id instead: 'talker-*'" in printed.stdout
+
+
+def boot_late(machines: Machines, alias: str) -> Machine:
+    """The sshd of a machine that was off (its ssh config entry names a port where nothing
+    listened) starts now, on a port of its own: the entry is pointed at it."""
+    late = Machine(alias, machines.folder / alias, machines.authorized)
+    machines.machines[alias] = late  # stopped with the others
+    config = machines.ssh_config.read_text()
+    machines.ssh_config.write_text(re.sub(
+        rf"(Host {alias}\n  HostName 127\.0\.0\.1\n  Port )\d+", rf"\g<1>{late.port}", config))
+    return late
+
+
+def test_a_machine_off_at_the_start_is_tried_again_by_a_restart(setup, machines):
+    launch, placement = setup
+    placement.write_text(placement.read_text().replace("machine: r1", "machine: r3"))
+    name = "late"
+    done = run_cli(str(launch), "--machines", str(placement), "--detach", "--name", name)
+    assert done.returncode == 0, done.stderr
+    try:
+        def far() -> dict:
+            status = json.loads(run_cli("status", name, "--json").stdout)
+            return next(p for p in status["processes"] if p["id"] == "far-1")
+
+        wait_for(lambda: far()["state"] == "failed", 90)
+        assert "cannot reach r3 (robot3)" in far()["detail"]
+        # still off: tried again, and said with this attempt's reason
+        refused = run_cli("restart", name, "far-1", timeout=90)
+        assert refused.returncode != 0
+        assert "far-1 runs on r3, tried again: cannot reach r3 (robot3): " in refused.stderr, \
+            refused.stderr
+        assert "Traceback" not in refused.stderr
+        assert far()["state"] == "failed"
+        # the TUI attached: the detail line says why and offers the retry; r tries again
+        asyncio.run(tui_tries_the_machine_again(name, json.loads(
+            run_cli("status", name, "--json").stdout)))
+        # robot3 boots late, as a robot's second computer does: a restart reaches it
+        boot_late(machines, "robot3")
+        restarted = run_cli("restart", name, "far-1", timeout=150)
+        assert restarted.returncode == 0, restarted.stderr
+        assert restarted.stdout == "far-1: running\n"
+        assert len(remote_sessions(machines, "robot3")) == 1
+        wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
+        launch_log = run_cli("logs", name).stdout
+        assert "r3: connecting again... (far-1 runs there)" in launch_log, launch_log
+    finally:
+        stopped = run_cli("stop", name, timeout=120)
+    assert stopped.returncode == 0, stopped.stderr
+    wait_for(lambda: remote_sessions(machines, "robot3") == [])
+
+
+async def tui_tries_the_machine_again(name: str, status: dict) -> None:
+    from tuilaunch.engine.plan.machines import placement_from_text
+    from tuilaunch.tui.app import make_app
+    from tuilaunch.tui.output_store import View
+
+    placed = status["placement"]
+    app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                   session_name=name, placement=placement_from_text(placed["text"],
+                                                                    placed["path"]))
+    async with app.run_test(size=(160, 30)) as pilot:
+        tree = app.launch_tree
+        for _ in range(400):
+            if "far-1" in tree.rows and tree.states.get("far-1") == "failed":
+                break
+            await pilot.pause(0.05)
+        detail = ""
+        for _ in range(200):
+            tree.move_cursor(tree.rows["far-1"])
+            await pilot.pause(0.05)
+            detail = str(app.detail_bar.render())
+            if detail.startswith("far-1"):
+                break
+        assert "cannot reach r3 (robot3)" in detail and "r: try r3 again" in detail, detail
+        await pilot.press("r")
+        said: list[str] = []
+        for _ in range(600):
+            said = [n.message for n in app._notifications]
+            if any("tried again" in text for text in said):
+                break
+            await pilot.pause(0.05)
+        assert any(text.startswith("far-1 runs on r3, tried again: cannot reach r3")
+                   for text in said), said
+        assert "r3: connecting again..." in "\n".join(
+            line.text for line in app.store.lines(View(None)))
+        assert tree.states["far-1"] == "failed"
+        await pilot.press("d")
+        await pilot.pause(0.5)

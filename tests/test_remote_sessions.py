@@ -506,3 +506,91 @@ def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: M
 
     asyncio.run(attached())
     assert run_cli("stop", "robot1:stamped").returncode == 0
+
+
+STREAMED = """
+from simple_launch import SimpleLauncher
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    sl = SimpleLauncher()
+    sl.add_action(ExecuteProcess(name='ticker', cmd=[
+        'sh', '-c', 'i=0; while true; do i=$((i+1)); echo tick $i; sleep 0.2; done']))
+    sl.node('tuilaunch_demos', 'talker', name='talker', parameters=[{'rate': 10.0}])
+    return sl.launch_description()
+"""
+
+
+class Streaming:
+    """A streaming command (`logs -f`, `hz`, `wait`) through the link, read as it comes."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", *args],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     text=True, start_new_session=True)
+
+    def read_until(self, text: str) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            if text in line:
+                return
+        raise AssertionError(f"never printed {text!r}: {self.proc.stderr.read()}")
+
+    def ssh(self) -> list[int]:
+        """Its ssh (this side of the link)."""
+        from .proc_tree import cmdline, descendants
+
+        return [pid for pid in descendants(self.proc.pid) if b"__proxy" in cmdline(pid)]
+
+    def ended(self) -> tuple[int, str]:
+        try:
+            self.proc.wait(timeout=60)
+        finally:
+            if self.proc.poll() is None:
+                os.killpg(self.proc.pid, signal.SIGKILL)
+                self.proc.wait()
+        assert self.proc.stderr is not None
+        return self.proc.returncode, self.proc.stderr.read()
+
+
+def test_a_stream_whose_link_drops_says_so_and_the_session_runs_on(machines: Machines,
+                                                                   write):
+    """`logs -f` and `hz` over ssh: the link's end is not the session's (exit 1 and
+    one line naming the host, not exit 0 or "session ended")."""
+    robot1 = machines["robot1"]
+    done = run_cli(str(write(STREAMED)), "--detach", "--name", "far", env=there(robot1))
+    assert done.returncode == 0, done.stderr
+    wait = run_cli("wait", "far", "talker-2", "running", "--timeout", "60", env=there(robot1))
+    assert wait.returncode == 0, wait.stderr
+    server = int(json.loads(run_cli("status", "far", "--json", env=there(robot1)).stdout)
+                 ["pid"])
+    lost = re.compile(r"^tuilaunch (logs|hz): link to robot1 lost: \S.*\n\Z")
+
+    # the proxy on robot1 dies (the far end of the link)
+    follow = Streaming("logs", "robot1:far", "ticker-1", "-f")
+    follow.read_until("tick")
+    wait_for(lambda: len(proxies_on(robot1)) == 1)
+    for pid in proxies_on(robot1):
+        os.kill(pid, signal.SIGKILL)
+    code, said = follow.ended()
+    assert code == 1 and lost.match(said), (code, said)
+
+    # this side's ssh dies
+    rate = Streaming("hz", "robot1:far", "/chatter")
+    rate.read_until("average rate")
+    for pid in rate.ssh():
+        os.kill(pid, signal.SIGKILL)
+    code, said = rate.ended()
+    assert code == 1 and lost.match(said), (code, said)
+
+    # the session ran on through all of it
+    assert alive(server)
+    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    assert {p["id"]: p["state"] for p in status["processes"]} == {
+        "ticker-1": "running", "talker-2": "running"}
+    # and a session that does end is still told apart: exit 2, "session far ended"
+    rate = Streaming("hz", "robot1:far", "/chatter")
+    rate.read_until("average rate")
+    assert run_cli("stop", "robot1:far").returncode == 0
+    code, said = rate.ended()
+    assert code == 2 and "session far ended" in said, (code, said)
+

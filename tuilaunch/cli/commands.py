@@ -19,7 +19,14 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..client.link import ANSWER_TIMEOUT, Link, open_link, resolve_name
+from ..client.link import (
+    ANSWER_TIMEOUT,
+    LINK_LOST_STATUS,
+    Link,
+    LinkLost,
+    open_link,
+    resolve_name,
+)
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import placement_from_text
@@ -40,6 +47,10 @@ def main(argv: list[str]) -> int:
         function = f"cmd_{options.command.replace('-', '_')}"
         handler = globals().get(function) or getattr(inspector, function)
         return int(handler(options) or 0)
+    except LinkLost as exc:
+        # one line, and a status of its own: the session may well run on there
+        print(f"tuilaunch {options.command}: {exc.message}", file=sys.stderr)
+        return LINK_LOST_STATUS
     except LaunchError as exc:
         print(f"tuilaunch {options.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -326,6 +337,9 @@ def cmd_stop(options: argparse.Namespace) -> int:
                 notice = time.monotonic() + STOP_NOTICE
                 continue
             if message is None:
+                lost = link.lost()
+                if lost is not None:  # not stopped: only the link is gone
+                    raise lost
                 break
             if message.get("type") == "reply" and message.get("id") == asking and \
                     not message.get("ok"):
@@ -422,6 +436,9 @@ def cmd_wait(options: argparse.Namespace) -> int:
                 message = link.receive()
             except TimeoutError:
                 continue
+            lost = link.lost() if message is None else None
+            if lost is not None:  # the ssh link, not the session, ended: it may run on
+                raise lost
             if message is None or message.get("type") == "ended":
                 print(f"tuilaunch wait: the session ended with {process} {current}",
                       file=sys.stderr)

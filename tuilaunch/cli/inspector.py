@@ -155,6 +155,10 @@ def streamed(link: Link, kind: str, end: float | None) -> Iterator[dict[str, Any
             message = link.receive_until(end)
         except TimeoutError:
             return
+        if message is None:
+            lost = link.lost()
+            if lost is not None:  # the ssh link, not the session: exit 1, not 2
+                raise lost
         if message is None or message.get("type") == "ended":
             raise SessionError(f"session {link.name} ended")
         for event in message.get("events") or []:

@@ -55,6 +55,15 @@ def not_answering(name: str, waited: float) -> SessionError:
                         hint=hint)
 
 
+class LinkLost(SessionError):
+    """The ssh link to a session on another machine closed before the session said it
+    ended: the session may well run on there. The streaming commands exit 1 with it (an
+    ended session is another status): docs/command-line.md."""
+
+
+LINK_LOST_STATUS = 1
+
+
 class Link:
     """A blocking connection for one-shot commands (status, stop, restart, wait, logs).
 
@@ -82,6 +91,8 @@ class Link:
         self._file = self.sock.makefile("rb")
         self._next_id = 0
         self.pending: list[dict[str, Any]] = []  # event batches that came before a reply
+        self.ended = False  # the session said it ended (its last message)
+        self._why_lost: Callable[[], str] | None = None
         try:
             hello = self.receive()
         except TimeoutError:
@@ -97,11 +108,15 @@ class Link:
     def connected(cls, name: str, sock: socket.socket, hello: dict[str, Any], host: str,
                   timeout: float | None = ANSWER_TIMEOUT,
                   answer_timeout: float = ANSWER_TIMEOUT,
-                  on_close: Callable[[], None] | None = None) -> Link:
+                  on_close: Callable[[], None] | None = None,
+                  why_lost: Callable[[], str] | None = None) -> Link:
         """A Link on a socket already connected and greeted: the ssh link to `host`'s
-        session (engine/run/machines/remote.py). `on_close` ends what carries it (ssh)."""
+        session (engine/run/machines/remote.py). `on_close` ends what carries it (ssh);
+        `why_lost` says why it closed (ssh's last words)."""
         self = cls.__new__(cls)
         self.name = name
+        self.ended = False
+        self._why_lost = why_lost
         self.answer_timeout = answer_timeout
         self.sock = sock
         self._file = sock.makefile("rb")
@@ -121,7 +136,24 @@ class Link:
             return None
         if not line:
             return None
-        return decode(line)
+        message = decode(line)
+        if message.get("type") == "ended":
+            self.ended = True
+        return message
+
+    def lost(self) -> LinkLost | None:
+        """Once the connection closed: LinkLost when it was the ssh link to a session that
+        had not said it ended (the session may run on there); None when the session ended
+        (or is on this machine, where no link is between)."""
+        if self.host is None or self.ended:
+            return None
+        reason = "closed"
+        if self._why_lost is not None:
+            try:
+                reason = self._why_lost()
+            except OSError:
+                pass
+        return LinkLost(f"link to {self.host} lost: {reason}")
 
     def send(self, op: str, **fields: Any) -> int:
         """Asks without waiting for the reply (it comes among the messages, with this id):
@@ -176,7 +208,8 @@ class Link:
         while True:
             message = self.receive()
             if message is None:
-                raise SessionError(f"session {self.name} closed the connection during {op}")
+                raise self.lost() or SessionError(
+                    f"session {self.name} closed the connection during {op}")
             if message.get("type") == "reply" and message.get("id") == request_id:
                 if not message.get("ok"):
                     raise SessionError(f"session {self.name}: {message.get('error')}")
@@ -191,6 +224,9 @@ class Link:
         while True:
             message = self.receive()
             if message is None:
+                lost = self.lost()
+                if lost is not None:
+                    raise lost  # not the session's end: never read as one
                 return
             yield message
 
@@ -225,7 +261,7 @@ def open_link(address: str | None, timeout: float | None = ANSWER_TIMEOUT,
         return Link(resolve_name(where.name), timeout, answer_timeout)
     remote = open_remote_link(where.host, where.name)
     return Link.connected(where.name, remote.sock, remote.hello, where.host, timeout,
-                          answer_timeout, on_close=remote.close)
+                          answer_timeout, on_close=remote.close, why_lost=remote.why_lost)
 
 
 def send_once(name: str, request: dict[str, Any]) -> bool:

@@ -106,7 +106,12 @@ class NodeCommands(SessionLink):
         """The commands together; then the group's actions (set_parameters, call_service)
         again, so a restarted node gets what the launch file gave it after its start."""
         assert self.supervisor is not None
-        await asyncio.gather(*(self.engine.run(c) for c in commands))
+        results = await asyncio.gather(*(self.engine.run(c) for c in commands),
+                                       return_exceptions=True)
+        for result in results:
+            if isinstance(result, Exception):  # e.g. its machine could not be reached
+                self.notify(str(result).split(": ", 1)[-1] if str(result).startswith(
+                    "session ") else str(result), severity="error", timeout=8)
         for action in actions:
             self.run_worker(self.engine.run(self.supervisor.run_action(action)),
                             group="commands", exit_on_error=False)

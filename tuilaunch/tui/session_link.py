@@ -300,7 +300,9 @@ class SessionLink(App[int]):
                     # a stop's own lines (`sending signal 'SIGINT'`) come while the server
                     # still says running: the row keeps saying it is stopping
                     if not (shown == "stopping" and state == "running"):
-                        tree.set_state(event.process, state)
+                        # a detail it comes with: its machine being reached again
+                        detail = (event.data or {}).get("detail")
+                        tree.set_state(event.process, state, str(detail or ""))
                 level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
                 fresh += self.store.add_event(event.process or "launch", event.reason or "",
                                               level)

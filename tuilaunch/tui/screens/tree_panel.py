@@ -315,6 +315,10 @@ class LaunchTree(Tree[RowData]):
         if problems:
             more = f" (+{len(problems) - 1} more, Topics tab)" if len(problems) > 1 else ""
             detail += f" · QoS: {problems[0]}{more}"
+        machine = self.plan.process(ref).machine if data.kind == "process" else None
+        if machine and state == "failed":
+            # it may be its machine that failed: r (or t) tries that machine again
+            detail += f" · r: try {machine} again"
         return f"{text} {detail}".rstrip()
 
 

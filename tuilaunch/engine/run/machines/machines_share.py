@@ -13,7 +13,10 @@ shutdown stops every share and waits until each has ended.
 A machine that cannot be reached, refuses the login, or lacks tuilaunch or the launch
 file: every process placed there fails with one line naming the machine and why; the rest
 runs. A link that drops leaves the share running (it is a session there): the coordinator
-says so and connects again, backing off.
+says so and connects again, backing off. A start or restart of a process placed on a machine
+not reached now tries again at once: a machine that failed (off when the launch began, or
+its share gone) has its share started anew, a link being made again is tried now, and the
+request waits for that attempt (`MachinesCoordinator.reach`).
 """
 
 from __future__ import annotations
@@ -86,6 +89,18 @@ class Share:
         missed are asked for. A count, not a time: many lines share a millisecond."""
         self.backfill: dict[int, str] = {}  # requests for lines still unanswered
         self.held: list[dict[str, Any]] = []  # events batches waiting for those lines
+        self.following = False  # a task starts, follows or reconnects it now
+        self.wake = asyncio.Event()  # cuts short the wait before the next attempt
+        self.waiters: list[asyncio.Future[str | None]] = []
+        """Requests waiting for the next attempt to reach it: told None once connected,
+        else why not."""
+
+    def tell(self, outcome: str | None) -> None:
+        """The outcome of an attempt to reach it, to the requests waiting for one."""
+        waiters, self.waiters = self.waiters, []
+        for waiter in waiters:
+            if not waiter.done():
+                waiter.set_result(outcome)
 
     async def send(self, message: dict[str, Any]) -> None:
         if self.writer is None:
@@ -139,17 +154,26 @@ class MachinesCoordinator(Plugin):
         task.add_done_callback(self._tasks.discard)
 
     async def _follow(self, share: Share) -> None:
+        share.following = True
+        try:
+            await self._follow_share(share)
+        finally:
+            share.following = False
+            share.tell(share.failure or f"{share.machine.name}: not connected")
+
+    async def _follow_share(self, share: Share) -> None:
         try:
             await self._start(share)
         except RemoteError as exc:
-            self._fail_share(share, str(exc))
-            return
+            if "already running" not in str(exc):  # else: it runs there, from before
+                self._fail_share(share, str(exc))
+                return
         delays = iter(RECONNECT_DELAYS)
         while not share.ended.is_set():
             try:
                 await self._connect(share)
                 delays = iter(RECONNECT_DELAYS)
-                reason = await self._read(share)
+                reason = await self._read(share)  # told once subscribed (_answered)
             except (LaunchError, OSError) as exc:
                 reason = str(exc)
                 if "no running session named" in reason:
@@ -160,12 +184,52 @@ class MachinesCoordinator(Plugin):
                     self._fail_share(share, f"{share.machine.name}: its share (session "
                                      f"{share.session}) ended without being asked")
                     return
+            share.tell(reason)
             if share.ended.is_set():
                 return
             delay = next(delays, RECONNECT_DELAYS[-1])
             self.supervisor.log(f"{share.machine.name}: {reason}; its share runs on there; "
                                 f"connecting again in {delay:g} s", "WARN")
-            await asyncio.sleep(delay)
+            share.wake.clear()
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(share.wake.wait(), delay)
+
+    async def reach(self, share: Share, process_id: str) -> bool:
+        """A start or restart of `process_id` while its machine is not reached: tries it
+        again now, said in the launch pane and on each of its processes. True when its
+        share was started anew (its processes start with it); LaunchError saying why it
+        could not be reached."""
+        if self._closing or self.supervisor.shutting_down:
+            raise LaunchError(f"{process_id} runs on {share.machine.name}: the launch is "
+                              "stopping")
+        name = share.machine.name
+        fresh = not share.following
+        waiter: asyncio.Future[str | None] = asyncio.get_running_loop().create_future()
+        share.waiters.append(waiter)
+        self.supervisor.log(f"{name}: connecting again... ({process_id} runs there)", "WARN")
+        for proc in self.supervisor.plan.processes:
+            if proc.machine == name and proc.enabled and \
+                    self.supervisor.states.get(proc.id) in ("failed", "pending"):
+                # failed again with the new reason if this attempt fails too
+                self.supervisor.mirror(Event(
+                    "log", proc.id, reason=f"{name}: connecting again...", level="WARN",
+                    data={"detail": f"(connecting to {name} again...)"}), "pending")
+        if fresh:
+            share.failure = None
+            share.ended = asyncio.Event()
+            self._spawn(self._follow(share))
+        else:
+            share.wake.set()  # the next attempt now, not after its back-off
+        outcome = await waiter
+        if outcome is not None:
+            raise LaunchError(f"{process_id} runs on {name}, tried again: {outcome}")
+        if fresh and self.supervisor.plan.process(process_id).trigger is None:
+            # its new share starts it: the answer says how that went, not "pending"
+            for _ in range(int(START_TIMEOUT * 10)):
+                if self.supervisor.states.get(process_id) != "pending" or share.ended.is_set():
+                    break
+                await asyncio.sleep(0.1)
+        return fresh
 
     async def _start(self, share: Share) -> None:
         args = share_arguments(self.command, self.arguments, share.session, self.placement,
@@ -179,6 +243,7 @@ class MachinesCoordinator(Plugin):
     def _fail_share(self, share: Share, reason: str) -> None:
         share.failure = reason
         share.ended.set()
+        share.tell(reason)
         for proc in self.supervisor.plan.processes:
             if proc.machine == share.machine.name and proc.enabled and \
                     self.supervisor.states.get(proc.id) in ("pending", "running"):
@@ -251,6 +316,7 @@ class MachinesCoordinator(Plugin):
             # the subscription: what happened there before (or while the link was down)
             self._mirror(share, result.get("recent") or [], {}, result.get("states") or {})
             self._ask_lines(share, result.get("offsets") or {})
+            share.tell(None)  # reached, and its processes' states known here
         request_id = int(message.get("id") or 0)
         if request_id in share.backfill:
             process = share.backfill.pop(request_id)
@@ -376,6 +442,11 @@ class MachinesCoordinator(Plugin):
     async def forward(self, op: str, process_id: str, **options: Any) -> None:
         machine = self.supervisor.plan.process(process_id).machine
         share = self.shares.get(machine or "")
+        if share is not None and share.writer is None and op in ("start", "restart"):
+            # its machine may be up by now (a computer that boots late): tried again
+            fresh = await self.reach(share, process_id)
+            if fresh and not options:
+                return  # its share was started anew, and this process with it
         if share is None or share.writer is None:
             why = share.failure if share is not None and share.failure else "not connected"
             raise LaunchError(f"{process_id} runs on {machine}: {why}")

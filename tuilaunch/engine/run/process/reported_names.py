@@ -7,6 +7,12 @@ dots. The TUI and the session server both map such processes to graph nodes this
 both forget a process's names when it starts again (`forget` at its `started` event): a
 relaunch, a restart or a respawn may run it under another namespace (robot:=r1 -> r2), and
 only the lines of its current run say where it is now.
+
+Not every logger in a node's lines is the node's: at `--log-level debug` its libraries
+speak first (`[rcl]: Initializing node ...`, `[rcl.logging_rosout]`, `[rclpy]`,
+`[rmw_fastrtps_cpp]`, `[class_loader.impl]`), and a name taken from them (`/rcl`) is no
+node on the graph. Those loggers are the ROS client libraries' and middleware's own
+(`LIBRARY_LOGGER`), never a node's: they are not read as names.
 """
 
 from __future__ import annotations
@@ -20,6 +26,14 @@ ROS_LOG_PREFIX = re.compile(
     r"^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]\s*(?:\[(\d+(?:\.\d+)?)\]\s*)?"
     r"(?:\[([^\]\s]*)\]:?\s?)?")
 """rcutils' default console format: level, optional stamp, optional logger name."""
+
+LIBRARY_LOGGER = re.compile(
+    r"^(rcl|rclpy|rclcpp|rcutils|rmw|rosidl|tracetools|class_loader|pluginlib|ament_index|"
+    r"rcpputils|rosbag2|rcl_logging|message_filters|image_transport)(_[A-Za-z0-9_]+)?"
+    r"(\.|$)")
+"""Loggers of the ROS client libraries, the middleware and the plugin loaders (`rcl`,
+`rcl.logging_rosout`, `rclcpp_lifecycle`, `rmw_cyclonedds_cpp`, ...): their lines are in
+a node's output, but their names are not the node's."""
 
 MAX_NAMES = 8
 """Names kept per process: a node's sub-loggers add a few; more is a process printing
@@ -47,10 +61,14 @@ class ReportedNames:
     def __init__(self) -> None:
         self.names: dict[str, set[str]] = {}
 
-    def add_logger(self, process: str, logger: str) -> None:
+    def add_logger(self, process: str, logger: str) -> bool:
+        """Whether `logger` is a node's name (a library's is left out)."""
+        if LIBRARY_LOGGER.match(logger):
+            return False
         names = self.names.setdefault(process, set())
         if len(names) < MAX_NAMES:
             names.add(node_of_logger(logger))
+        return True
 
     def add_lines(self, process: str, lines: Iterable[str]) -> None:
         for raw in lines:
