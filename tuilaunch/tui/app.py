@@ -116,9 +116,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 yield ArgsPanel(self.session.plan.arguments, self.session.plan.file,
                                 id="args-panel")
             with TabPane("3 Services", id="services"):
-                yield ServicesPanel(self.bridge, id="services-panel")
+                yield ServicesPanel(self.graph, id="services-panel")
             with TabPane("4 Params", id="params"):
-                yield ParamsPanel(self.bridge, lambda: self.session.plan,
+                yield ParamsPanel(self.graph, lambda: self.session.plan,
                                   reported=lambda: self.store.reported_names,
                                   request=self.inspect, id="params-panel")
             with TabPane("5 Topics", id="topics"):

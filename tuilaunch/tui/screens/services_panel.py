@@ -14,9 +14,11 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
+from ...client.session_graph import GraphCalls
 from ...engine.describe.parameter_files import dotted
-from ...engine.ros.bridge import RosError
-from ...engine.ros.messages import FieldInfo, MessageError, describe_fields, import_type
+from ...engine.errors import LaunchError
+from ...engine.ros.messages import FieldInfo
+from ...engine.ros.ros_errors import MessageError, RosError
 from .fields import Field
 from .graph_listing import GraphListing
 
@@ -103,9 +105,11 @@ class ServicesPanel(GraphListing, Horizontal):
 
     listing = "services"
 
-    def __init__(self, bridge: Callable[[], Any], timeout: float = 5.0, **kwargs: object) -> None:
+    def __init__(self, graph: Callable[[], GraphCalls], timeout: float = 5.0,
+                 **kwargs: object) -> None:
+        """`graph()`: where the services are listed, described and called (the session's)."""
         super().__init__(**kwargs)  # type: ignore[arg-type]
-        self.bridge = bridge
+        self.graph = graph
         self.timeout = timeout
         self.services: list[tuple[str, list[str]]] = []
         self.selected: tuple[str, str] | None = None
@@ -159,8 +163,8 @@ class ServicesPanel(GraphListing, Horizontal):
         listing = self.query_one("#svc-list", OptionList)
         if listing.option_count:
             name = str(listing.get_option_at_index(listing.highlighted or 0).id)
-            self.select_service(name, (dict(self.services).get(name) or ["?"])[0])
-            self.call_after_refresh(self._focus_form)
+            self.select_service(name, (dict(self.services).get(name) or ["?"])[0],
+                                then=lambda: self.call_after_refresh(self._focus_form))
 
     def _focus_form(self) -> None:
         """Once the form is mounted: the first field, or Call for an empty request."""
@@ -178,27 +182,40 @@ class ServicesPanel(GraphListing, Horizontal):
         self.select_service(name, types[0])
 
     def select_service(self, name: str, type_name: str,
-                       values: dict[str, str] | None = None) -> None:
+                       values: dict[str, str] | None = None, then: Callable[[], Any] | None = None,
+                       ) -> None:
+        """Shows the service's request form, once its fields are known (asked of the
+        session: the message package need not be installed here); `then` runs after."""
+        self.selected = (name, type_name)
+        self.query_one("#svc-call", Button).disabled = True  # until its form is there
+        self.show_form(name, type_name, values, then)
+
+    @work(group="services-form", exclusive=True, exit_on_error=False)
+    async def show_form(self, name: str, type_name: str, values: dict[str, str] | None,
+                        then: Callable[[], Any] | None) -> None:
         title = self.query_one("#svc-title", Static)
         form = self.query_one("#svc-form", VerticalScroll)
-        form.remove_children()
         try:
-            fields = describe_fields(import_type(type_name).Request)
-        except MessageError as exc:
+            fields = await self.graph().service_fields(type_name)
+        except Exception as exc:  # not installed there, the session gone: said, not raised
             self.selected = None
+            await form.remove_children()
             title.update(Text(f"{name}  {type_name}"))
             self.show_response(str(exc), ok=False)
-            self.query_one("#svc-call", Button).disabled = True
             return
-        self.selected = (name, type_name)
+        if self.selected != (name, type_name):
+            return  # another service was picked meanwhile
+        await form.remove_children()
         self.fields = leaf_fields(fields)
         title.update(Text(f"{name}  {type_name}" + ("" if self.fields else "  (empty request)")))
         for path, info in self.fields:
             text = (values or {}).get(path, field_text(info))
-            form.mount(Horizontal(Label(path), Field(text, id=f"field-{path.replace('.', '-')}",
-                                                     tooltip=info.type),
-                                  classes="svc-field"))
+            await form.mount(Horizontal(Label(path),
+                                        Field(text, id=f"field-{path.replace('.', '-')}",
+                                              tooltip=info.type), classes="svc-field"))
         self.query_one("#svc-call", Button).disabled = False
+        if then is not None:
+            then()
 
     def request(self) -> dict[str, Any]:
         flat = {}
@@ -220,9 +237,9 @@ class ServicesPanel(GraphListing, Horizontal):
         try:
             request = self.request()
             self.show_response(f"calling {name} ...", ok=True)
-            _, response = await self.bridge().call_service(
+            _, response = await self.graph().call_service(
                 name, request, timeout=self.timeout, service_type=type_name)
-        except (MessageError, RosError) as exc:
+        except (MessageError, LaunchError, RosError) as exc:  # a session's refusal is one
             self._record(CallRecord(name, type_name, {}, str(exc), False))
             return
         except Exception as exc:  # anything else is shown, never raised into the app

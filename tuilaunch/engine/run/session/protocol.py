@@ -93,7 +93,7 @@ Server to client: `{"type": "hello", "info": {...}}` unasked on connect (its inf
   lines of it sent and dropped since}); `{"type": "ended", "status": n}` last.
   The Services and Params tabs (engine/ros/graph_requests.py): nodes, services,
   service_fields {type}, call_service {service, type, request, timeout?}, params_describe
-  {node}, params_set {node, values}.
+  {node}, params_set {node, values}, params_get {node, names}.
   Without the launch file (engine/run/session/plan_ops.py): plan -> {plan: Plan.to_json(),
   arguments}; preview {arguments, running?} -> {arguments, plan, keep, stop, start,
   error: null} or {arguments, error}: what `apply` with those values would do.
