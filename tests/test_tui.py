@@ -172,7 +172,8 @@ async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
         await pilot.press("slash", *"tui3/enable")  # the tab shows the list; / filters it
         await pilot.press("enter")  # picks the first match and moves to the form
         assert panel.selected == ("/tui3/enable", "std_srvs/srv/SetBool")
-        await pilot.pause()
+        # the form comes once its fields are known (a session is asked for them)
+        await until(pilot, lambda: app.focused is not None and app.focused.id == "field-data")
         field = app.query_one("#field-data", Input)
         assert app.focused is field  # straight into the form
         assert field.value == "false"  # pre-filled with the type's default

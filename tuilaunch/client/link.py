@@ -12,7 +12,7 @@ from typing import Any
 
 from ..engine.run.machines.remote import open_remote_link, parse_address
 from ..engine.run.session import session_dir
-from ..engine.run.session.protocol import MAX_MESSAGE, decode, encode
+from ..engine.run.session.protocol import MAX_MESSAGE, check_hello, decode, encode
 from ..engine.run.session.session_dir import SessionError
 
 
@@ -98,10 +98,12 @@ class Link:
         except TimeoutError:
             self.close()
             raise not_answering(name, answer_timeout) from None
-        if hello is None or hello.get("type") != "hello":
+        try:
+            # a server of another protocol version says so here, before any request
+            self.info: dict[str, Any] = check_hello(hello or {}, name)
+        except SessionError:
             self.close()
-            raise SessionError(f"session {name} did not greet")
-        self.info: dict[str, Any] = hello["info"]
+            raise
         self.sock.settimeout(timeout)
 
     @classmethod

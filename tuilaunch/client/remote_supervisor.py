@@ -37,6 +37,8 @@ from ..engine.run.session.protocol import (
     MAX_MESSAGE,
     ProtocolError,
     Stamps,
+    VersionMismatch,
+    check_hello,
     decode,
     encode,
     event_from_dict,
@@ -168,7 +170,12 @@ class RemoteSupervisor:
                 from None
         try:
             hello = decode(await asyncio.wait_for(reader.readline(), ANSWER_TIMEOUT))
-            self = cls(name, session, reader, writer, hello["info"])
+            try:
+                info = check_hello(hello, name)
+            except SessionError:
+                writer.close()
+                raise
+            self = cls(name, session, reader, writer, info)
             writer.write(encode({"id": 0, "op": "subscribe", "max_lines": max_lines,
                                  "interval": interval}))
             await asyncio.wait_for(writer.drain(), ANSWER_TIMEOUT)
@@ -512,6 +519,11 @@ class RemoteSupervisor:
             try:
                 link, self._reader, self._writer = await open_remote_streams(
                     self.host, self.name)
+            except VersionMismatch as exc:
+                # another session of that name, of another tuilaunch: not ours to speak to
+                self.link_lost = None
+                self._deliver(Event("log", reason=str(exc), level="ERROR"))
+                return False
             except RemoteError as exc:
                 if "no running session" in str(exc):
                     self.lost = not self._stopping  # unless it was asked to stop

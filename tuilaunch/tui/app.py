@@ -116,9 +116,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 yield ArgsPanel(self.session.plan.arguments, self.session.plan.file,
                                 id="args-panel")
             with TabPane("3 Services", id="services"):
-                yield ServicesPanel(self.bridge, id="services-panel")
+                yield ServicesPanel(self.graph, id="services-panel")
             with TabPane("4 Params", id="params"):
-                yield ParamsPanel(self.bridge, lambda: self.session.plan,
+                yield ParamsPanel(self.graph, lambda: self.session.plan,
                                   reported=lambda: self.store.reported_names,
                                   request=self.inspect, id="params-panel")
             with TabPane("5 Topics", id="topics"):
@@ -177,9 +177,17 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 self.exit(2, return_code=2, message=f"tuilaunch attach: error: {exc}")
                 return
         elif self.session_name is not None:
-            remote = self.engine.submit(RemoteSupervisor.open(
-                self.session_name, self.session, self.scrollback,
-                max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)
+            try:
+                remote = self.engine.submit(RemoteSupervisor.open(
+                    self.session_name, self.session, self.scrollback,
+                    max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)
+            except LaunchError as exc:  # a server of another protocol version, one gone
+                self.engine.stop()
+                if self.server_process is not None:  # ours: what it started stops with it
+                    self.server_process.terminate()
+                self.start_error = str(exc)
+                self.exit(2, return_code=2)
+                return
             remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
             self.supervisor = remote
         else:

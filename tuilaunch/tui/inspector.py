@@ -10,6 +10,7 @@ from typing import Any
 from textual import on
 from textual.timer import Timer
 
+from ..client.session_graph import GraphCalls, SessionGraph
 from ..engine.run.process.reported_names import current_node_name
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.supervisor import Event
@@ -37,6 +38,7 @@ class Inspector(Navigation):
         self._figures_timer: Timer | None = None
         self.log_levels: dict[str, str] = {}
         """The level last set per process (the level dialog starts there)."""
+        self.session_graph = SessionGraph(self.inspect)
         self.topics_process: str | None = None
         """The process whose node's topics `o` listed: the list follows the node when a
         relaunch or a restart moves it."""
@@ -48,6 +50,13 @@ class Inspector(Navigation):
             raise SessionError("the inspector needs a session server (tuilaunch FILE starts "
                                "one)")
         return await self.engine.run(request(op, **fields))
+
+    def graph(self) -> GraphCalls:
+        """The Services and Params tabs' graph: the session's, where the nodes run (this
+        process never loads rclpy); the bridge of the tests' in-process launch without one."""
+        if self.session_name is None:
+            return self.bridge()
+        return self.session_graph
 
     def inspector_event(self, event: Event) -> None:
         data = event.data or {}

@@ -9,7 +9,8 @@ field. Here a key's trip is tracked, and the keys that arrive meanwhile wait; th
 goes out once the trip is over and what it set in motion (a focus change, a dialog being
 pushed, a field being mounted) has been processed, so it is sent to the widget that has
 the focus then. An action that opens its field later (after a worker) holds the keys
-until then (`hold_keys`).
+until then (`hold_keys`). The private Textual names this needs are reached through
+textual_compat.py, which lists them and why.
 """
 
 from __future__ import annotations
@@ -21,11 +22,19 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from textual import events
-from textual._context import active_message_pump
 from textual.app import App
-from textual.keys import _character_to_key
 from textual.message_pump import MessagePump
 from textual.widget import Widget
+
+from .textual_compat import (
+    TripKey,
+    active_message_pump,
+    character_to_key,
+    has_messages,
+    is_closing,
+    send_as_app,
+    xterm_parser,
+)
 
 # Textual reads ESC and a digit arriving in one read (esc then 3, typed fast over ssh or sent
 # by tmux) as the character macOS's option key gives: in a field that is "leave, then 3"
@@ -42,7 +51,7 @@ def after_escape(event: events.Key) -> events.Key | None:
         digit = ESC_DIGITS[character]
         return events.Key(digit, digit)
     if event.key.startswith("alt+") and len(character) == 1 and character.isprintable():
-        return events.Key(_character_to_key(character), character)
+        return events.Key(character_to_key(character), character)
     return None
 
 
@@ -51,13 +60,12 @@ def keep_escape_before_punctuation() -> None:
     ESC and `/`, `:`, `\\` ... as the character alone: the escape is lost, and `esc /`
     typed fast in the search field types `/` into it. Here those come as `alt+slash` ...
     too, which the app splits into the two keys (after_escape)."""
-    from textual._xterm_parser import XTermParser
-
-    original = XTermParser._sequence_to_key_events
+    parser = xterm_parser()
+    original = parser._sequence_to_key_events
     if getattr(original, "keeps_escape", False):
         return
 
-    def sequence_to_key_events(self: XTermParser, sequence: str, alt: bool = False)\
+    def sequence_to_key_events(self: Any, sequence: str, alt: bool = False)\
             -> Iterable[events.Key]:
         for key in original(self, sequence, alt):
             if alt and len(sequence) == 1 and key.character == sequence and \
@@ -67,7 +75,7 @@ def keep_escape_before_punctuation() -> None:
                 yield key
 
     sequence_to_key_events.keeps_escape = True  # type: ignore[attr-defined]
-    XTermParser._sequence_to_key_events = sequence_to_key_events  # type: ignore[method-assign]
+    parser._sequence_to_key_events = sequence_to_key_events
 
 
 BURST_GAP = 0.3
@@ -103,7 +111,7 @@ STUCK_AFTER = 3.0
 back (a widget removed with the key in its queue): the keys go on as Textual sends them."""
 
 
-class TrackedKey(events.Key):
+class TrackedKey(TripKey):
     """A key on its trip through the widgets; tells the app when the trip is over."""
 
     def __init__(self, key: str, character: str | None, done: Callable[[TrackedKey], None])\
@@ -129,12 +137,10 @@ class TrackedKey(events.Key):
                 pump.call_next(self.finish)
         return self
 
-    def _bubble_to(self, widget: MessagePump) -> None:
+    def went_to(self, widget: MessagePump) -> None:
         self.holder = widget
-        super()._bubble_to(widget)
 
-    def _set_forwarded(self) -> None:
-        super()._set_forwarded()
+    def forwarded(self) -> None:
         if self.holder is None:
             self.holder = forward_target(self)
 
@@ -195,7 +201,7 @@ class KeyOrder(App[int]):
         tracked = TrackedKey(event.key, event.character, self._key_done)
         # no sender: a key sent by the app would stop at the screen, its trip ending
         # there before the app's bindings ran
-        tracked._sender = None
+        send_as_app(tracked)
         self._key_in_flight = tracked
         self._key_started = time.monotonic()
         self._first_in_line = 0
@@ -315,7 +321,7 @@ def lost(key: events.Event) -> bool:
     holder = key.holder if isinstance(key, TrackedKey) else None
     if holder is None:
         return False
-    if holder._closing or holder._closed:
+    if is_closing(holder):
         return True
     return isinstance(holder, Widget) and not holder.is_attached
 
@@ -331,7 +337,7 @@ async def settle(app: App[Any]) -> None:
     if app.focused is not None:
         pumps.append(app.focused)
     pumps.extend(w for w in screen.walk_children(with_self=False)
-                 if isinstance(w, MessagePump) and not w._message_queue.empty()
+                 if isinstance(w, MessagePump) and has_messages(w)
                  and w not in pumps)
     loop = asyncio.get_running_loop()
     waiting = []

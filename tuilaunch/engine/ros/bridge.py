@@ -15,7 +15,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from .calls import ParameterInfo, RosError, SetResult
-from .messages import MessageError, fill, import_type, to_plain
+from .messages import FieldInfo, MessageError, describe_fields, fill, import_type, to_plain
 
 if TYPE_CHECKING:
     from ..plan.model import Plan
@@ -214,6 +214,10 @@ class RosBridge:
         message = fill(service_class.Request(), request)
         response = await self.call_typed(name, service_class, message, timeout)
         return to_plain(message), to_plain(response)
+
+    async def service_fields(self, type_name: str) -> list[FieldInfo]:
+        """A service's request fields, for a form (MessageError: the type is not here)."""
+        return describe_fields(import_type(type_name).Request)
 
     # --- parameters ----------------------------------------------------------------------
 

@@ -25,6 +25,7 @@ from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
 from .echo_streams import EchoStreams
 from .graph import topic_of
+from .graph_requests import GraphRequests
 from .qos_watch import Problems, QosWatch
 from .ros_errors import RosError
 
@@ -67,6 +68,8 @@ class Inspector(Plugin):
         self.qos = QosWatch(self.qos_problems, self.send)
         self.echoes = EchoStreams(self.bridge, self.publisher_problem, self._subscribed,
                                   self.send, PUBLISHER_WAIT)
+        # the Services and Params tabs' requests
+        self.graph = GraphRequests(self.bridge, self.current_name, SERVICE_TIMEOUT)
         supervisor.subscribe(self.learn_names)
 
     def learn_names(self, event: Event) -> None:
@@ -96,7 +99,8 @@ class Inspector(Plugin):
                 "hz_watch": self.hz_watch, "hz_read": self.hz_read,
                 "echo": self.echoes.echo, "echo_stop": self.echoes.echo_stop,
                 "params_dump": self.params_dump, "params_load": self.params_load,
-                "log_level": self.log_level, "watch_qos": self.qos.watch}
+                "log_level": self.log_level, "watch_qos": self.qos.watch,
+                **self.graph.handlers()}
 
     def client_gone(self, client: int) -> None:
         self.qos.client_gone(client)

@@ -16,10 +16,10 @@ import unicodedata
 from typing import Any
 
 from textual import events
-from textual.keys import _get_unicode_name_from_key
 from textual.widgets import Checkbox, Input
 
 from ..key_order import reroute_key
+from ..textual_compat import own_bindings, unicode_name_of_key
 
 
 class Field(Input):
@@ -42,7 +42,7 @@ class Field(Input):
             character = {"slash": "/", "backslash": "\\"}.get(key)
         if character is None:
             try:
-                character = unicodedata.lookup(_get_unicode_name_from_key(key))
+                character = unicodedata.lookup(unicode_name_of_key(key))
             except KeyError:
                 pass
         return super().check_consume_key(key, character)
@@ -67,7 +67,7 @@ class Field(Input):
         if event.is_printable:
             await super()._on_key(event)
             return
-        for binding in self._bindings.key_to_bindings.get(event.key, ()):
+        for binding in own_bindings(self, event.key):
             if self.check_action(binding.action, ()) is False:
                 continue
             event.stop()

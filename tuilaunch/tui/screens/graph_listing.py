@@ -1,8 +1,9 @@
 """What the panels of the ROS graph (parameters, services) share: they list their part of the
-graph the first time they are shown, so that rclpy starts in the UI only for someone who
-looks, ask again every few seconds while shown (discovery takes seconds on a busy machine,
-and nodes come and go: a restart, a relaunch that moves them), and a failed graph query is
-a line in the panel, never the panel's end."""
+graph the first time they are shown (asked of the session, where the nodes run: the TUI
+never loads rclpy; the in-process launch of some tests starts its bridge then), ask again
+every few seconds while shown (discovery takes seconds on a busy machine, and nodes come
+and go: a restart, a relaunch that moves them), and a failed graph query is a line in the
+panel, never the panel's end."""
 
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ from typing import Any, cast
 from textual import work
 from textual.timer import Timer
 from textual.widget import Widget
+
+from ...client.session_graph import GraphCalls
 
 RELIST_S = 2.0
 """While the Services or Params tab shows, its list is asked of the graph this often (a
@@ -27,12 +30,12 @@ def discovering(noun: str, every: float) -> str:
 
 class GraphListing:
     """Mixin of a graph panel (a Widget): `refresh_listing()` runs when the panel is first
-    shown, again every RELIST_S while it shows (and on demand); it asks the bridge's
-    `list_<listing>` and hands the answer to `show_listing`, or says why it failed with
-    `report`."""
+    shown, again every RELIST_S while it shows (and on demand); it asks `graph()`
+    (client/session_graph.py's GraphCalls) for `list_<listing>` and hands the answer to
+    `show_listing`, or says why it failed with `report`."""
 
-    bridge: Callable[[], Any]
-    listing = ""  # what is listed: "nodes" asks bridge.list_nodes()
+    graph: Callable[[], GraphCalls]
+    listing = ""  # what is listed: "nodes" asks graph().list_nodes()
     listed = False  # the list was asked for (the tab was shown)
     answered = False  # the graph answered once
     relist: Timer | None = None
@@ -75,8 +78,8 @@ class GraphListing:
     @work(group="graph-listing", exclusive=True, exit_on_error=False)
     async def refresh_listing(self, reload: bool = True) -> None:
         try:
-            bridge = await asyncio.to_thread(self.bridge)  # rclpy's start: off the UI loop
-            listing = await getattr(bridge, f"list_{self.listing}")()
+            graph = await asyncio.to_thread(self.graph)  # a bridge's start: off the UI loop
+            listing = await getattr(graph, f"list_{self.listing}")()
         except Exception as exc:  # a graph query must never take the panel down
             self.report(f"cannot list {self.listing}: {exc}", ok=False)
             return

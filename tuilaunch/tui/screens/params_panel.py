@@ -16,8 +16,9 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Button, DataTable, Input, OptionList, Static
 from textual.widgets.option_list import Option
 
+from ...client.session_graph import GraphCalls
 from ...engine.plan.model import Plan
-from ...engine.ros.bridge import ParameterInfo
+from ...engine.ros.calls import ParameterInfo
 from .dialogs import PathScreen
 from .fields import Field
 from .graph_listing import GraphListing
@@ -78,15 +79,16 @@ class ParamsPanel(GraphListing, Horizontal):
 
     listing = "nodes"
 
-    def __init__(self, bridge: Callable[[], Any], plan: Callable[[], Plan],
+    def __init__(self, graph: Callable[[], GraphCalls], plan: Callable[[], Plan],
                  timeout: float = 5.0,
                  reported: Callable[[], dict[str, set[str]]] | None = None,
                  request: Callable[..., Awaitable[Any]] | None = None,
                  **kwargs: object) -> None:
-        """`request(op, **fields)`: a session request (params_dump, params_load), made
-        where the nodes run."""
+        """`graph()`: where the nodes' parameters are read and set (the session's);
+        `request(op, **fields)`: a session request (params_dump, params_load), made where
+        the nodes run."""
         super().__init__(**kwargs)  # type: ignore[arg-type]
-        self.bridge = bridge
+        self.graph = graph
         self.request = request
         self.plan = plan
         self.reported = reported or dict
@@ -173,7 +175,7 @@ class ParamsPanel(GraphListing, Horizontal):
     async def load_node(self, node: str, announce: bool = True) -> None:
         self.node = node
         try:
-            described = await self.bridge().describe_parameters(node, timeout=self.timeout)
+            described = await self.graph().describe_parameters(node, timeout=self.timeout)
         except Exception as exc:  # timeouts, vanished nodes: shown, never raised
             self.show_result(f"{node}: {exc}", ok=False)
             return
@@ -229,9 +231,9 @@ class ParamsPanel(GraphListing, Horizontal):
             self.show_result(f"{name} ({info.type}) {exc}", ok=False)
             return
         try:
-            (result,) = await self.bridge().set_parameters(node, {name: value},
-                                                           timeout=self.timeout)
-            now = await self.bridge().get_parameters(node, [name], timeout=self.timeout)
+            (result,) = await self.graph().set_parameters(node, {name: value},
+                                                          timeout=self.timeout)
+            now = await self.graph().get_parameters(node, [name], timeout=self.timeout)
         except Exception as exc:  # timeouts and vanished nodes are shown in the panel
             self.show_result(f"{node} {name}: {exc}", ok=False)
             return

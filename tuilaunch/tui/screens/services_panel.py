@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -14,9 +14,11 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
+from ...client.session_graph import GraphCalls
 from ...engine.describe.parameter_files import dotted
-from ...engine.ros.bridge import RosError
-from ...engine.ros.messages import FieldInfo, MessageError, describe_fields, import_type
+from ...engine.errors import LaunchError
+from ...engine.ros.messages import FieldInfo
+from ...engine.ros.ros_errors import MessageError, RosError
 from .fields import Field
 from .graph_listing import GraphListing
 
@@ -104,9 +106,11 @@ class ServicesPanel(GraphListing, Horizontal):
 
     listing = "services"
 
-    def __init__(self, bridge: Callable[[], Any], timeout: float = 5.0, **kwargs: object) -> None:
+    def __init__(self, graph: Callable[[], GraphCalls], timeout: float = 5.0,
+                 **kwargs: object) -> None:
+        """`graph()`: where the services are listed, described and called (the session's)."""
         super().__init__(**kwargs)  # type: ignore[arg-type]
-        self.bridge = bridge
+        self.graph = graph
         self.timeout = timeout
         self.services: list[tuple[str, list[str]]] = []
         self.selected: tuple[str, str] | None = None
@@ -114,9 +118,6 @@ class ServicesPanel(GraphListing, Horizontal):
         self.history: list[CallRecord] = []
         self._submit_waits = False
         """Enter was pressed in the filter before the first listing came."""
-        self._form_mounted: list[Awaitable[Any]] = []
-        """The changes to the request's form under way (the last service's fields going,
-        the new ones coming)."""
 
     def compose(self) -> ComposeResult:
         with Vertical(id="svc-left"):
@@ -168,20 +169,15 @@ class ServicesPanel(GraphListing, Horizontal):
         listing = self.query_one("#svc-list", OptionList)
         if listing.option_count:
             name = str(listing.get_option_at_index(listing.highlighted or 0).id)
-            self.select_service(name, (dict(self.services).get(name) or ["?"])[0])
-            self.call_after_refresh(self._focus_form)
+            self.select_service(name, (dict(self.services).get(name) or ["?"])[0],
+                                then=lambda: self.call_after_refresh(self._focus_form))
         elif not self.services:
             # the first listing is still coming (`3/ena` Enter in one read): the Enter
             # picks the first match once it is there, rather than being lost
             self._submit_waits = True
 
-    async def _focus_form(self) -> None:
-        """Once the form is mounted: the first field, or Call for an empty request (the
-        form of the service picked before is gone first: its fields are not the new
-        ones)."""
-        pending, self._form_mounted = self._form_mounted, []
-        for change in pending:
-            await change
+    def _focus_form(self) -> None:
+        """Once the form is mounted: the first field, or Call for an empty request."""
         inputs = self.query("#svc-form Input")
         (inputs.first() if inputs else self.query_one("#svc-call")).focus()
 
@@ -193,31 +189,45 @@ class ServicesPanel(GraphListing, Horizontal):
     def _picked(self, event: OptionList.OptionSelected) -> None:
         name = str(event.option.id)
         types = dict(self.services).get(name) or ["?"]
-        self.select_service(name, types[0])
-        self.call_after_refresh(self._focus_form)  # Enter on a row: on to its request
+        # Enter on a row: on to its request's first field
+        self.select_service(name, types[0],
+                            then=lambda: self.call_after_refresh(self._focus_form))
 
     def select_service(self, name: str, type_name: str,
-                       values: dict[str, str] | None = None) -> None:
+                       values: dict[str, str] | None = None, then: Callable[[], Any] | None = None,
+                       ) -> None:
+        """Shows the service's request form, once its fields are known (asked of the
+        session: the message package need not be installed here); `then` runs after."""
+        self.selected = (name, type_name)
+        self.query_one("#svc-call", Button).disabled = True  # until its form is there
+        self.show_form(name, type_name, values, then)
+
+    @work(group="services-form", exclusive=True, exit_on_error=False)
+    async def show_form(self, name: str, type_name: str, values: dict[str, str] | None,
+                        then: Callable[[], Any] | None) -> None:
         title = self.query_one("#svc-title", Static)
         form = self.query_one("#svc-form", VerticalScroll)
-        self._form_mounted.append(form.remove_children())
         try:
-            fields = describe_fields(import_type(type_name).Request)
-        except MessageError as exc:
+            fields = await self.graph().service_fields(type_name)
+        except Exception as exc:  # not installed there, the session gone: said, not raised
             self.selected = None
+            await form.remove_children()
             title.update(Text(f"{name}  {type_name}"))
             self.show_response(str(exc), ok=False)
-            self.query_one("#svc-call", Button).disabled = True
             return
-        self.selected = (name, type_name)
+        if self.selected != (name, type_name):
+            return  # another service was picked meanwhile
+        await form.remove_children()
         self.fields = leaf_fields(fields)
         title.update(Text(f"{name}  {type_name}" + ("" if self.fields else "  (empty request)")))
         for path, info in self.fields:
             text = (values or {}).get(path, field_text(info))
-            self._form_mounted.append(form.mount(
-                Horizontal(Label(path), Field(text, id=f"field-{path.replace('.', '-')}",
-                                              tooltip=info.type), classes="svc-field")))
+            await form.mount(Horizontal(Label(path),
+                                        Field(text, id=f"field-{path.replace('.', '-')}",
+                                              tooltip=info.type), classes="svc-field"))
         self.query_one("#svc-call", Button).disabled = False
+        if then is not None:
+            then()
 
     def request(self) -> dict[str, Any]:
         flat = {}
@@ -239,9 +249,9 @@ class ServicesPanel(GraphListing, Horizontal):
         try:
             request = self.request()
             self.show_response(f"calling {name} ...", ok=True)
-            _, response = await self.bridge().call_service(
+            _, response = await self.graph().call_service(
                 name, request, timeout=self.timeout, service_type=type_name)
-        except (MessageError, RosError) as exc:
+        except (MessageError, LaunchError, RosError) as exc:  # a session's refusal is one
             self._record(CallRecord(name, type_name, {}, str(exc), False))
             return
         except Exception as exc:  # anything else is shown, never raised into the app

@@ -22,7 +22,7 @@ from typing import Any
 
 from ...errors import LaunchError
 from ..session import session_dir
-from ..session.protocol import MAX_MESSAGE, decode, encode
+from ..session.protocol import MAX_MESSAGE, check_hello, decode, encode
 from ..session.session_dir import SessionError
 
 CHUNK = 1 << 16
@@ -121,6 +121,7 @@ def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> dict[str, A
         hello = reader.readline(MAX_MESSAGE)
         if not hello:
             raise SessionError(f"session {name} closed the connection")
+        check_hello(decode(hello), name)  # another version's status may mean other things
         sock.sendall(encode({"id": 1, "op": "status", "resources": False}))  # a listing
         while True:
             line = reader.readline(MAX_MESSAGE)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...plan.machines import Machine
-from ..session.protocol import MAX_MESSAGE, ProtocolError, decode
+from ..session.protocol import MAX_MESSAGE, ProtocolError, VersionMismatch, check_hello, decode
 from ..session.session_dir import SessionError, check_name
 
 PROXY_COMMAND = "__proxy"
@@ -363,11 +363,18 @@ def open_remote_link(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
         raise RemoteError(f"{host}: the remote tuilaunch did not speak the session "
                           f"protocol ({exc})", hint="is TUILAUNCH_REMOTE a tuilaunch?")\
             from None
-    if hello.get("type") != "hello":
+    try:
+        check_hello(hello, f"{host}:{name}")
+    except VersionMismatch:
         sock.close()
         process.kill()
         process.wait()
-        raise RemoteError(f"{host}: session {name} did not greet")
+        raise
+    except SessionError:
+        sock.close()
+        process.kill()
+        process.wait()
+        raise RemoteError(f"{host}: session {name} did not greet") from None
     sock.settimeout(None)
     return RemoteLink(host, name, sock, process, hello, stderr)
 

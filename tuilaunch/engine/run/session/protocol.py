@@ -77,7 +77,8 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   changes, argv quoted), `env` (changes to the launcher's environment), and for a death by a
   signal nobody asked for (state "failed") `signal` ("SIGSEGV") and `core` when one was
   kept; `typing` {client, process} or null.
-Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type": "reply",
+Server to client: `{"type": "hello", "info": {...}}` unasked on connect (its info has
+  "protocol", PROTOCOL_VERSION, and "tuilaunch", the version: see check_hello); `{"type": "reply",
   "id": n, "ok": bool, "result"|"error": ...}`; after subscribe, `{"type": "events", "events":
   [...], "states": {process: state}} (the states that changed since this client's last
   batch; left out when none did)` (a relaunch is an event of kind "relaunched" whose
@@ -90,6 +91,9 @@ Server to client: `{"type": "hello", "info": {...}}` unasked on connect; `{"type
   batch and stands for that process's next `code` lines, which were not sent: a client
   finds them with read_log {start: the process's offset at its subscription, skip: the
   lines of it sent and dropped since}); `{"type": "ended", "status": n}` last.
+  The Services and Params tabs (engine/ros/graph_requests.py): nodes, services,
+  service_fields {type}, call_service {service, type, request, timeout?}, params_describe
+  {node}, params_set {node, values}, params_get {node, names}.
   Without the launch file (engine/run/session/plan_ops.py): plan -> {plan: Plan.to_json(),
   arguments}; preview {arguments, running?} -> {arguments, plan, keep, stop, start,
   error: null} or {arguments, error}: what `apply` with those values would do.
@@ -99,18 +103,66 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import re
 from typing import Any
 
+from .... import __version__
 from ..events import Event
+from .session_dir import SessionError
 
 MAX_MESSAGE = 64 << 20
+
+PROTOCOL_VERSION = 2
+"""The session protocol's version, in every hello and `status` (`version_fields`). Raise
+it when a message changes meaning: a detached session outlives an upgrade, and `HOST:NAME`
+runs whatever tuilaunch the other machine has, so client and server must speak the same.
+1 is the protocol before versions: a hello without "protocol" (tuilaunch 0.1.0's first
+releases) counts as 1, a server of those days as too old, never as a match."""
+
+UNVERSIONED = 1
+"""What a hello without a "protocol" field speaks: the protocol before it had versions."""
+
+TEST_PROTOCOL_ENV = "TUILAUNCH_TEST_PROTOCOL"
+"""For the tests only: a session server started with this set advertises that protocol
+version instead of its own ("none": no version at all, as a server from before versions
+did), so a real server of another version can be had without another tuilaunch."""
 
 _EVENT_FIELDS = {f.name for f in dataclasses.fields(Event)}
 
 
 class ProtocolError(Exception):
     """A peer sent something that is not a message of this protocol."""
+
+
+class VersionMismatch(SessionError):
+    """A client and a session server of different protocol versions: one line naming both."""
+
+
+def version_fields() -> dict[str, Any]:
+    """What a server says of its version, in its hello's info and its status."""
+    advertised = os.environ.get(TEST_PROTOCOL_ENV)
+    if advertised == "none":
+        return {}
+    return {"protocol": PROTOCOL_VERSION if advertised is None else int(advertised),
+            "tuilaunch": __version__}
+
+
+def check_hello(hello: dict[str, Any], session: str) -> dict[str, Any]:
+    """A server's greeting, checked: its info when it speaks this client's protocol, else
+    VersionMismatch saying both versions. `session` names it as the user wrote it (NAME or
+    HOST:NAME)."""
+    if hello.get("type") != "hello" or not isinstance(hello.get("info"), dict):
+        raise SessionError(f"session {session} did not greet")
+    info: dict[str, Any] = hello["info"]
+    theirs = info.get("protocol", UNVERSIONED)
+    if theirs != PROTOCOL_VERSION:
+        release = info.get("tuilaunch")
+        what = f"tuilaunch {release}" if release else "a tuilaunch from before protocol versions"
+        raise VersionMismatch(
+            f"session {session} speaks protocol {theirs} ({what}), this tuilaunch speaks "
+            f"{PROTOCOL_VERSION} ({__version__}): use the same tuilaunch on both sides")
+    return info
 
 
 def encode(message: dict[str, Any]) -> bytes:

@@ -39,7 +39,7 @@ from .clients import op_name as op_name
 from .keyboard import Keyboard
 from .launch_prints import LaunchPrints
 from .log_reader import LAUNCH_LOG, READ_LOG_LIMIT, read_log
-from .protocol import event_to_dict
+from .protocol import event_to_dict, version_fields
 from .resource_watch import ResourceWatch, usage_fields
 from .resources import Usage
 from .session_socket import REACHABLE_CHECK as REACHABLE_CHECK
@@ -183,7 +183,8 @@ class SessionServer:
                 # the launch file as the plan that runs was read from it (a client that
                 # finds it edited since draws the server's plan, not the file's)
                 "file_stamp": getattr(self.session, "stamp", None),
-                **self._placement_info()}
+                # the protocol spoken: a client of another one says so and stops
+                **version_fields(), **self._placement_info()}
 
     def _placement_info(self) -> dict[str, Any]:
         """`--machines` as the launch was given it, so a client resolves the same plan."""

@@ -6,7 +6,7 @@ import pytest
 
 from tuilaunch.engine import ArgumentError, LaunchError
 
-from .conftest import plan_of, sl_file
+from ..conftest import plan_of, sl_file
 
 HEADER = "from simple_launch import SimpleLauncher\n"
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .conftest import plan_of
+from ..conftest import plan_of
 
 PLAIN = """
 from launch import LaunchDescription

@@ -6,7 +6,7 @@ import os
 
 from tuilaunch.engine.packages import package_share
 
-from .conftest import plan_of
+from ..conftest import plan_of
 
 
 def test_plus_and_slash_between_substitutions_and_strings(write):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-from .conftest import plan_of
+from ..conftest import plan_of
 
 EXPECTED = {
     "text": "abc",

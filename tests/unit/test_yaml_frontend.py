@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .conftest import EXAMPLES, plan_of
+from ..conftest import EXAMPLES, plan_of
 
 LAUNCH = EXAMPLES / "launch"
 

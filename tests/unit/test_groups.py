@@ -6,7 +6,7 @@ import pytest
 
 from tuilaunch.engine import DslError
 
-from .conftest import enabled_names, plan_of, sl_file
+from ..conftest import enabled_names, plan_of, sl_file
 
 HEADER = """
 from simple_launch import SimpleLauncher

@@ -1,0 +1,72 @@
+"""The session protocol's messages alone (engine/run/session/protocol.py): a greeting's
+version checked, events through their wire form and back. The same with a real server,
+the command line and ssh: tests/test_protocol_version.py."""
+
+from __future__ import annotations
+
+import pytest
+
+from tuilaunch import __version__
+from tuilaunch.engine.run.events import Event
+from tuilaunch.engine.run.session.protocol import (
+    PROTOCOL_VERSION,
+    Stamps,
+    VersionMismatch,
+    check_hello,
+    decode,
+    encode,
+    event_from_dict,
+    event_to_dict,
+)
+from tuilaunch.engine.run.session.session_dir import SessionError
+
+
+def hello(**info: object) -> dict:
+    return decode(encode({"type": "hello", "info": {"name": "demo", **info}}))
+
+
+def test_a_greeting_of_this_version_gives_its_info():
+    assert check_hello(hello(protocol=PROTOCOL_VERSION, tuilaunch=__version__), "demo")[
+        "name"] == "demo"
+
+
+def test_another_version_is_one_line_naming_both():
+    with pytest.raises(VersionMismatch) as raised:
+        check_hello(hello(protocol=PROTOCOL_VERSION + 1, tuilaunch="9.9.9"), "robot1:demo")
+    assert str(raised.value) == (
+        f"session robot1:demo speaks protocol {PROTOCOL_VERSION + 1} (tuilaunch 9.9.9), this "
+        f"tuilaunch speaks {PROTOCOL_VERSION} ({__version__}): use the same tuilaunch on "
+        "both sides")
+    assert "\n" not in str(raised.value)
+
+
+def test_a_greeting_without_a_version_is_protocol_1():
+    with pytest.raises(VersionMismatch, match="speaks protocol 1 \\(a tuilaunch from before"):
+        check_hello(hello(), "demo")
+
+
+def test_something_else_than_a_greeting_is_refused():
+    with pytest.raises(SessionError, match="session demo did not greet"):
+        check_hello({"type": "reply"}, "demo")
+
+
+@pytest.mark.parametrize("event", [
+    Event("started", "talker-1", pid=42),
+    Event("output", "talker-1", lines=["a", "b"], stream="stderr"),
+    Event("exited", "talker-1", pid=42, code=-11, level="ERROR", reason="crashed",
+          data={"signal": "SIGSEGV"}),
+    Event("state", "talker-1", data={"state": "active"}),
+])
+def test_events_come_back_as_they_went(event: Event):
+    back = event_from_dict(decode(encode(event_to_dict(event))))
+    assert back == Event(**{**event.__dict__, "time": round(event.time, 3)})
+
+
+def test_stamps_go_apart_and_come_back():
+    data = {"lines": ["[INFO] [12.345] [n]: a", "plain", "[WARN] [12.400] [n]: b"]}
+    sender, receiver = Stamps(), Stamps()
+    sent = dict(data)
+    assert sender.pack(sent) == [12345, None, 12400]
+    assert sent["lines"] == ["[INFO] [n]: a", "plain", "[WARN] [n]: b"]
+    receiver.unpack(sent)
+    assert sent["lines"] == data["lines"]
