@@ -38,7 +38,8 @@ def main(argv: list[str]) -> int:
     try:
         # cmd_NAME here (ls ... wait, logs, completion), or in inspector.py
         function = f"cmd_{options.command.replace('-', '_')}"
-        handler = globals().get(function) or getattr(inspector, function)
+        handler = globals().get(function) or getattr(inspector, function, None) or \
+            _plot_command(function)
         return int(handler(options) or 0)
     except LaunchError as exc:
         print(f"tuilaunch {options.command}: error: {exc}", file=sys.stderr)
@@ -52,6 +53,12 @@ def main(argv: list[str]) -> int:
         # echo say what they had first)
         print("tuilaunch: interrupted", file=sys.stderr)
         return 130
+
+
+def _plot_command(function: str) -> Any:
+    from . import plot  # its screen's imports only when a plot is asked for
+
+    return getattr(plot, function)
 
 
 # --- starting ------------------------------------------------------------------------------

@@ -7,7 +7,8 @@ be named by its process id.
 
 Streams are per client: `watch_rates` measures the union of what the clients watch and
 stops a topic when nobody watches it; `echo` runs one throttled stream per client and
-topic (echo_streams.py); `watch_qos` sends the graph's QoS problems when they change
+topic (echo_streams.py); `plot` one stream of decimated points per client and topic
+(plots.py); `watch_qos` sends the graph's QoS problems when they change
 (qos_watch.py). A client that disconnects loses its streams (`client_gone`).
 """
 
@@ -25,6 +26,7 @@ from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
 from .echo_streams import EchoStreams
 from .graph import topic_of
+from .plots import PlotStreams
 from .qos_watch import Problems, QosWatch
 from .ros_errors import RosError
 
@@ -67,6 +69,8 @@ class Inspector(Plugin):
         self.qos = QosWatch(self.qos_problems, self.send)
         self.echoes = EchoStreams(self.bridge, self.publisher_problem, self._subscribed,
                                   self.send, PUBLISHER_WAIT)
+        self.plots = PlotStreams(self.bridge, self.publisher_problem, self._subscribed,
+                                 self.send, PUBLISHER_WAIT)
         supervisor.subscribe(self.learn_names)
 
     def learn_names(self, event: Event) -> None:
@@ -96,11 +100,14 @@ class Inspector(Plugin):
                 "hz_watch": self.hz_watch, "hz_read": self.hz_read,
                 "echo": self.echoes.echo, "echo_stop": self.echoes.echo_stop,
                 "params_dump": self.params_dump, "params_load": self.params_load,
-                "log_level": self.log_level, "watch_qos": self.qos.watch}
+                "log_level": self.log_level, "watch_qos": self.qos.watch,
+                "plot": self.plots.plot, "plot_stop": self.plots.plot_stop,
+                "plot_fields": self.plots.plot_fields}
 
     def client_gone(self, client: int) -> None:
         self.qos.client_gone(client)
         self.echoes.client_gone(client)
+        self.plots.client_gone(client)
         for key in [k for k in self.hz_streams if k[0] == client]:
             self.hz_streams.pop(key)[0].cancel()
         if self.rate_watch.pop(client, None) is not None:
@@ -115,6 +122,7 @@ class Inspector(Plugin):
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await task
         await self.echoes.close()
+        await self.plots.close()
         self.hz_streams.clear()
         self.rate_watch.clear()
         await self.qos.close()
