@@ -37,13 +37,14 @@ def csv_cell(value: Any) -> str:
 
 
 def _csv(options: argparse.Namespace) -> int:
-    end = None if options.duration is None else time.monotonic() + options.duration
     link = open_link(options.name, timeout=SLACK)
     dropped = 0
     try:
         link.request("subscribe", max_lines=1, kinds=["plot"])  # no output lines wanted
         answer = link.request("plot", topic=options.topic, fields=options.fields, raw=True,
                               tag="csv")
+        # the duration is the plot's, from its start: not the wait for the session's answer
+        end = None if options.duration is None else time.monotonic() + options.duration
         out = sys.stdout
         out.write("time," + ",".join(answer["fields"]) + "\n")
         out.flush()

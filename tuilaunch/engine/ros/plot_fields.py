@@ -18,6 +18,8 @@ from typing import Any
 NUMERIC = frozenset({"float", "double", "long double", "int8", "uint8", "int16", "uint16",
                      "int32", "uint32", "int64", "uint64", "boolean"})
 """rosidl's basic types a plot can draw (a boolean as 0 and 1); `char`, `octet` are bytes."""
+INTEGERS = NUMERIC - {"float", "double", "long double"}
+"""Printed without a decimal point by `tuilaunch plot --csv` (a boolean as 0 or 1)."""
 LISTED_ELEMENTS = 64
 """Elements of a fixed-size array listed one by one (a covariance's 36 are)."""
 SHOWN_IN_ERROR = 24
@@ -95,6 +97,24 @@ def _leaf_fields(kind: Any, path: str, depth: int) -> list[str]:
     if hasattr(kind, "namespaces"):
         return numeric_fields(_nested_class(kind), path + ".", depth + 1)
     return []  # strings
+
+
+def small(cls: Any, depth: int = 0) -> bool:
+    """Whether every message of the type is small: no sequence without a bound (a point
+    cloud's data, a scan's ranges), strings aside (a frame id is short). A sampler may
+    keep many of them waiting (plots.py)."""
+    if depth > 16:
+        return False
+    for _, kind in _slots(cls):
+        element = getattr(kind, "value_type", None)
+        if element is not None:
+            if not isinstance(getattr(kind, "size", None), int) and \
+                    not isinstance(getattr(kind, "maximum_size", None), int):
+                return False
+            kind = element
+        if hasattr(kind, "namespaces") and not small(_nested_class(kind), depth + 1):
+            return False
+    return True
 
 
 def compile_path(cls: Any, path: str, topic: str = "") -> FieldPath:

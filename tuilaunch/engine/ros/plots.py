@@ -30,6 +30,10 @@ SEND_PERIOD = 0.25
 faster."""
 RAW_SEND_PERIOD = 0.1
 """Seconds between a raw stream's events (every message of them)."""
+DEPTH_SMALL, DEPTH_LARGE = 1000, 50
+"""Messages the subscription keeps waiting for the sampler's thread: a second of a 1 kHz
+topic of small messages (a busy machine's thread may wake late and
+`--csv` misses none), a few of large or unbounded ones (a point cloud's)."""
 
 
 @dataclass
@@ -124,12 +128,14 @@ class PlotStreams:
     async def _sampler(self, topic: str, cls: Any, infos: list[Any]) -> Any:
         sampler = self.samplers.get(topic)
         if sampler is None:
+            from .plot_fields import small
             from .plot_sampler import PlotSampler
             from .rates import matching_qos
 
             bridge = await self._bridge()
-            sampler = PlotSampler(bridge.node, topic, cls,
-                                  matching_qos([i.qos_profile for i in infos]))
+            qos = matching_qos([i.qos_profile for i in infos])
+            qos.depth = DEPTH_SMALL if small(cls) else DEPTH_LARGE
+            sampler = PlotSampler(bridge.node, topic, cls, qos)
             self.samplers[topic] = sampler
         return sampler
 
@@ -234,11 +240,15 @@ class PlotStreams:
                 "dropped": dropped}
 
 
-def _exact(basic: str, value: float | None) -> float | None:
-    """A value as published: a 32-bit float as its shortest decimal (0.1, not
-    0.10000000149011612), any other as it is."""
-    if basic != "float" or value is None:
+def _exact(basic: str, value: float | None) -> float | int | None:
+    """A value as published: an integer as one, a 32-bit float as its shortest decimal
+    (0.1, not 0.10000000149011612), a double as it is."""
+    from .plot_fields import INTEGERS
+
+    if value is None or basic in ("double", "long double"):
         return value
+    if basic in INTEGERS:
+        return int(value)
     import numpy
 
     return float(str(numpy.float32(value)))
