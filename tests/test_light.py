@@ -125,6 +125,15 @@ def test_the_launchers_modules_import_no_rclpy(module):
     assert python_prints(code).strip() == "[]"
 
 
+def test_the_plotting_library_is_loaded_only_with_the_first_plot():
+    """The TUI, the session commands and the session server run without plotext (its
+    import costs time and memory a launch that plots nothing would pay)."""
+    code = ("import sys, tuilaunch.tui.app, tuilaunch.cli.commands, tuilaunch.engine.launcher\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "{'plotext', 'textual_plotext', 'numpy'} or 'plot_screen' in m))")
+    assert python_prints(code).strip() == "[]"
+
+
 def test_a_launch_on_one_machine_does_not_load_what_it_does_not_use():
     """A plain launch on this machine starts without the code of `--machines`, of
     `--print-plan --json`, of AnonName (uuid and platform), of a mistyped argument's

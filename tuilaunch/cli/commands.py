@@ -45,7 +45,8 @@ def main(argv: list[str]) -> int:
     try:
         # cmd_NAME here (ls ... wait, logs, completion), or in inspector.py
         function = f"cmd_{options.command.replace('-', '_')}"
-        handler = globals().get(function) or getattr(inspector, function)
+        handler = globals().get(function) or getattr(inspector, function, None) or \
+            _plot_command(function)
         return int(handler(options) or 0)
     except LinkLost as exc:
         # one line, and a status of its own: the session may well run on there
@@ -63,6 +64,12 @@ def main(argv: list[str]) -> int:
         # echo say what they had first)
         print("tuilaunch: interrupted", file=sys.stderr)
         return 130
+
+
+def _plot_command(function: str) -> Any:
+    from . import plot  # its screen's imports only when a plot is asked for
+
+    return getattr(plot, function)
 
 
 # --- starting ------------------------------------------------------------------------------

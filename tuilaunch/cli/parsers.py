@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 
 COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait", "topics", "hz", "echo",
-            "params", "log-level", "completion")
+            "plot", "params", "log-level", "completion")
 PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
                   "cancelled")
 LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
@@ -95,7 +95,8 @@ def launch_parser() -> argparse.ArgumentParser:
     parser.epilog = (parser.epilog or "") + (
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
         "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
-        "hz NAME TOPIC | echo NAME TOPIC | params NAME NODE --dump/--load FILE | log-level "
+        "hz NAME TOPIC | echo NAME TOPIC | plot NAME TOPIC FIELD | params NAME NODE "
+        "--dump/--load FILE | log-level "
         "NAME NODE LEVEL (tuilaunch COMMAND -h). On another machine: ls HOST, and HOST:NAME "
         "for NAME (over ssh). Tab completion: eval \"$(tuilaunch completion bash)\" (or zsh).")
     return parser
@@ -196,6 +197,17 @@ def _inspector_commands(commands: argparse._SubParsersAction[argparse.ArgumentPa
     echo.add_argument("--timeout", type=float, metavar="S",
                       help="stop after S seconds, the wait for a publisher included (exit "
                       "status 1 when fewer than --count, or no message, came)")
+    plot = commands.add_parser("plot", help="a live plot of a topic's numeric fields, or "
+                               "--csv: one line per message")
+    plot.add_argument("name", metavar="[HOST:]NAME")
+    plot.add_argument("topic")
+    plot.add_argument("fields", nargs="+", metavar="FIELD",
+                      help="a numeric field by dotted path: data, pose.pose.position.x, "
+                      "ranges[0]")
+    plot.add_argument("--csv", action="store_true",
+                      help="print time,FIELD,... then one line per message (time in seconds "
+                      "since the first, as received) instead of plotting")
+    plot.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
     params = commands.add_parser("params", help="a node's live parameters as a params file, "
                                  "or such a file loaded into it")
     params.add_argument("name", metavar="[HOST:]NAME")
@@ -208,4 +220,4 @@ def _inspector_commands(commands: argparse._SubParsersAction[argparse.ArgumentPa
     level.add_argument("name", metavar="[HOST:]NAME")
     level.add_argument("node", help="full node name or process id")
     level.add_argument("level", help=", ".join(NODE_LEVELS))
-    return [topics, hz, echo, params, level]
+    return [topics, hz, echo, plot, params, level]

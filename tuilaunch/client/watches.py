@@ -1,5 +1,5 @@
-"""The inspector's streams a client asked a session server for (rates, echo, CPU and
-memory, QoS marks), as the requests that asked: a stream ends with the connection that
+"""The inspector's streams a client asked a session server for (rates, echo, plots, CPU
+and memory, QoS marks), as the requests that asked: a stream ends with the connection that
 carried it, so a client's new connection (a dropped ssh link, reconnected) asks again."""
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ class Watches:
             on = bool(fields.get("topics"))
         elif op in ("echo", "echo_stop"):
             key, on = f"echo {fields.get('topic')}", op == "echo"
+        elif op in ("plot", "plot_stop"):
+            key, on = f"plot {fields.get('topic')}", op == "plot"
         elif op in ("watch_resources", "watch_qos"):
             key, on = op, bool(fields.get("on", True))
         else:

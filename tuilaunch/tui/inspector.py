@@ -39,6 +39,8 @@ class Inspector(Navigation):
         self.log_levels: dict[str, str] = {}
         """The level last set per process (the level dialog starts there)."""
         self.session_graph = SessionGraph(self.inspect)
+        self.plot_screen: Any = None
+        """The plot on screen (screens/plot_screen.py, imported with the first plot)."""
         self.topics_process: str | None = None
         """The process whose node's topics `o` listed: the list follows the node when a
         relaunch or a restart moves it."""
@@ -64,6 +66,9 @@ class Inspector(Navigation):
             self.topics_panel.show_rates(data)
         elif event.kind == "echo":
             self.topics_panel.show_echo(data)
+        elif event.kind == "plot":
+            if self.plot_screen is not None:
+                self.plot_screen.add(data)
         elif event.kind == "resources":
             if self.watching_resources:  # one sent before the server heard "off" is stale
                 self.launch_tree.set_usage(data)
@@ -142,6 +147,53 @@ class Inspector(Navigation):
                 self._figures_asked:
             self.run_worker(self._watch_resources(True), group="inspector",
                             exit_on_error=False)
+
+    # --- plots ------------------------------------------------------------------------------
+
+    @on(TopicsPanel.PlotAsked)
+    def _plot_asked(self, message: TopicsPanel.PlotAsked) -> None:
+        self.run_worker(self._open_plot(message.topic), group="inspector",
+                        exit_on_error=False)
+
+    async def _open_plot(self, topic: str) -> None:
+        """The plot of `topic`, its first numeric field chosen (`f` picks others)."""
+        try:
+            info = await self.inspect("plot_fields", topic=topic)
+        except SessionError as exc:
+            self.notify(str(exc).split(": ", 1)[-1], severity="error", title="plot")
+            return
+        numeric = list(info.get("fields") or [])
+        if not numeric:
+            self.notify(f"{topic} ({info.get('type')}) has no numeric field to plot",
+                        severity="warning", title="plot")
+            return
+        from .screens.plot_screen import PlotScreen  # plotext: only once a plot is shown
+
+        def ask(fields: list[str], tag: int) -> None:
+            self.run_worker(self._ask_plot(topic, fields, tag), group="inspector",
+                            exit_on_error=False)
+
+        def leave() -> None:
+            self.plot_screen = None
+            self.pop_screen()
+            self.run_worker(self._stop_plot(topic), group="inspector", exit_on_error=False)
+
+        self.plot_screen = PlotScreen(topic, str(info.get("type")), numeric, numeric[:1],
+                                      ask, leave)
+        self.push_screen(self.plot_screen)
+        ask(numeric[:1], 1)
+
+    async def _ask_plot(self, topic: str, fields: list[str], tag: int) -> None:
+        try:
+            await self.inspect("plot", topic=topic, fields=fields, tag=tag)
+        except SessionError as exc:
+            self.notify(str(exc).split(": ", 1)[-1], severity="error", title="plot")
+
+    async def _stop_plot(self, topic: str) -> None:
+        try:
+            await self.inspect("plot_stop", topic=topic)
+        except SessionError:
+            pass  # the session or its link went: the stream went with it
 
     # --- from the Nodes tab ------------------------------------------------------------------
 

@@ -7,7 +7,8 @@ be named by its process id.
 
 Streams are per client: `watch_rates` measures the union of what the clients watch and
 stops a topic when nobody watches it; `echo` runs one throttled stream per client and
-topic (echo_streams.py); `watch_qos` sends the graph's QoS problems when they change
+topic (echo_streams.py); `plot` one stream of decimated points per client and topic
+(plots.py); `watch_qos` sends the graph's QoS problems when they change
 (qos_watch.py). A client that disconnects loses its streams (`client_gone`).
 """
 
@@ -26,6 +27,7 @@ from .actions import RosActions
 from .echo_streams import EchoStreams
 from .graph import topic_of
 from .graph_requests import GraphRequests
+from .plots import PlotStreams
 from .qos_watch import Problems, QosWatch
 from .ros_errors import RosError
 
@@ -70,6 +72,8 @@ class Inspector(Plugin):
                                   self.send, PUBLISHER_WAIT)
         # the Services and Params tabs' requests
         self.graph = GraphRequests(self.bridge, self.current_name, SERVICE_TIMEOUT)
+        self.plots = PlotStreams(self.bridge, self.publisher_problem, self._subscribed,
+                                 self.send, PUBLISHER_WAIT)
         supervisor.subscribe(self.learn_names)
 
     def learn_names(self, event: Event) -> None:
@@ -100,11 +104,13 @@ class Inspector(Plugin):
                 "echo": self.echoes.echo, "echo_stop": self.echoes.echo_stop,
                 "params_dump": self.params_dump, "params_load": self.params_load,
                 "log_level": self.log_level, "watch_qos": self.qos.watch,
-                **self.graph.handlers()}
+                "plot": self.plots.plot, "plot_stop": self.plots.plot_stop,
+                "plot_fields": self.plots.plot_fields, **self.graph.handlers()}
 
     def client_gone(self, client: int) -> None:
         self.qos.client_gone(client)
         self.echoes.client_gone(client)
+        self.plots.client_gone(client)
         for key in [k for k in self.hz_streams if k[0] == client]:
             self.hz_streams.pop(key)[0].cancel()
         if self.rate_watch.pop(client, None) is not None:
@@ -119,6 +125,7 @@ class Inspector(Plugin):
                 with contextlib.suppress(asyncio.CancelledError, Exception):
                     await task
         await self.echoes.close()
+        await self.plots.close()
         self.hz_streams.clear()
         self.rate_watch.clear()
         await self.qos.close()

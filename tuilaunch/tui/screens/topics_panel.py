@@ -17,6 +17,7 @@ from textual import on, work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
+from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
 from .fields import Field
@@ -79,6 +80,13 @@ def endpoint_line(endpoint: Mapping[str, Any]) -> str:
 
 
 class TopicsPanel(Vertical):
+    class PlotAsked(Message):
+        """`p` on a topic: the app opens its plot (tui/inspector.py)."""
+
+        def __init__(self, topic: str) -> None:
+            super().__init__()
+            self.topic = topic
+
     DEFAULT_CSS = """
     TopicsPanel #tpc-bar { height: 1; }
     TopicsPanel #tpc-filter { width: 1fr; }
@@ -92,6 +100,7 @@ class TopicsPanel(Vertical):
     BINDINGS = [
         Binding("e", "echo", "Echo", tooltip="Show the selected topic's messages (e again "
                 "stops)"),
+        Binding("p", "plot", "Plot", tooltip="Plot the selected topic's numeric fields"),
         Binding("slash", "filter", "Filter", tooltip="Filter topics by name or type"),
         Binding("x", "all_topics", "All topics", tooltip="Back from one node's topics to all"),
         Binding("u", "update", "Update", show=False, tooltip="Ask for the topic list now"),
@@ -226,7 +235,7 @@ class TopicsPanel(Vertical):
         what = f"{len(names)} of {count} {noun}" if len(names) != count else f"{count} {noun}"
         if not count:  # an empty graph is often one not discovered yet
             what = discovering("topic", REFRESH_TICKS)
-        self.note(f"{what}; e echo, / filter" + (", x all topics" if self.node else ""))
+        self.note(f"{what}; e echo, p plot, / filter" + (", x all topics" if self.node else ""))
         self.watch_visible(self.rows_on_screen())
         self.show_detail()
 
@@ -354,6 +363,10 @@ class TopicsPanel(Vertical):
         # each message's YAML ends with its `---`; they are joined with one again
         self.echoed.append(str(data.get("text") or "").rstrip().removesuffix("---").rstrip())
         self.show_detail()
+
+    def action_plot(self) -> None:
+        if self.selected is not None:
+            self.post_message(self.PlotAsked(self.selected))
 
     # --- the selected topic ------------------------------------------------------------------
 

@@ -1,0 +1,254 @@
+"""`plot`, `plot_stop`, `plot_fields`: live plots of topic fields, one stream per client and
+topic, fed by one sampler per topic (plot_sampler.py) whatever the number of clients.
+
+A stream is sent, every SEND_PERIOD, the buckets (plot_buckets.py: min, max, last of each
+1/20 s) closed since its last event, at most POINTS_PER_S a second per field whatever the
+topic's rate; a new stream is first sent the buckets the sampler kept (up to 5 minutes, when
+another client was plotting the topic already). A `raw` stream (`tuilaunch plot --csv`)
+is sent every message's values instead: as many as the link carries (RAW_KEEP rows wait
+for it, then the oldest are dropped and counted).
+
+Streams end with `plot_stop`, their client (`client_gone`) or the session; the sampler of
+a topic ends with its last stream.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import LaunchError
+from ..run.events import Event
+from .graph import topic_of
+from .ros_errors import RosError
+
+SEND_PERIOD = 0.25
+"""Seconds between a stream's events: four small events a second, a plot repaints no
+faster."""
+RAW_SEND_PERIOD = 0.1
+"""Seconds between a raw stream's events (every message of them)."""
+DEPTH_SMALL, DEPTH_LARGE = 1000, 50
+"""Messages the subscription keeps waiting for the sampler's thread: a second of a 1 kHz
+topic of small messages (a busy machine's thread may wake late and
+`--csv` misses none), a few of large or unbounded ones (a point cloud's)."""
+
+
+@dataclass
+class PlotStream:
+    """What one client plots of one topic, and what it was sent."""
+
+    fields: list[Any]  # FieldPath
+    raw: bool
+    tag: Any = None
+    """The client's mark for this stream, in each of its events: events of the stream it
+    replaced, still on their way, are told apart."""
+    sent: dict[str, int] = field(default_factory=dict)
+    """By field: the index of the last bucket sent."""
+
+
+class PlotStreams:
+    """The running plot streams by (client, topic), and the samplers by topic."""
+
+    def __init__(self, bridge: Callable[[], Awaitable[Any]],
+                 problem: Callable[[Any, str], Awaitable[str]],
+                 subscribed: Callable[[int], bool], send: Callable[[Event, int], None],
+                 publisher_wait: float) -> None:
+        """As EchoStreams: `bridge()`, `problem(bridge, topic)`: why a topic has no
+        publisher, `subscribed(client)`, `send(event, client)`, `publisher_wait`."""
+        self._bridge = bridge
+        self._problem = problem
+        self._subscribed = subscribed
+        self._send = send
+        self._publisher_wait = publisher_wait
+        self.streams: dict[tuple[int, str], PlotStream] = {}
+        self.samplers: dict[str, Any] = {}  # PlotSampler by topic
+        self.task: asyncio.Task[None] | None = None
+        self.lock = asyncio.Lock()  # one start or stop at a time: samplers are shared
+
+    async def _topic_type(self, topic: str, wait: float) -> tuple[Any, list[Any]]:
+        """The topic's message class and its publishers' infos, once one publishes."""
+        from .rates import message_class, wait_for_publishers
+
+        bridge = await self._bridge()
+        try:
+            infos = await wait_for_publishers(bridge.node, topic, wait)
+        except RosError:
+            raise LaunchError(f"{await self._problem(bridge, topic)} "
+                              f"(waited {wait:g} s)") from None
+        return message_class(infos[0].topic_type), infos
+
+    async def plot_fields(self, message: dict[str, Any]) -> dict[str, Any]:
+        """`{"type", "fields"}`: the topic's numeric fields by dotted path (the picker)."""
+        from .plot_fields import numeric_fields, type_name
+
+        cls, _ = await self._topic_type(topic_of(message), self._wait(message))
+        return {"type": type_name(cls), "fields": numeric_fields(cls)}
+
+    def _wait(self, message: dict[str, Any]) -> float:
+        return min(float(message.get("wait") or self._publisher_wait), self._publisher_wait)
+
+    async def plot(self, message: dict[str, Any]) -> dict[str, Any]:
+        from .plot_buckets import POINTS_PER_S
+        from .plot_fields import FieldError, compile_path, numeric_fields, type_name
+
+        topic = topic_of(message)
+        client = int(message["client"])
+        if not self._subscribed(client):
+            raise LaunchError("plot sends its points as events: subscribe first")
+        paths = message.get("fields")
+        if not isinstance(paths, list) or not paths or \
+                not all(isinstance(p, str) for p in paths):
+            raise ValueError("plot needs fields: a list of dotted paths (pose.position.x)")
+        cls, infos = await self._topic_type(topic, self._wait(message))
+        try:
+            fields = [compile_path(cls, path, topic) for path in dict.fromkeys(paths)]
+        except FieldError as exc:
+            raise LaunchError(str(exc)) from None
+        async with self.lock:
+            stream = PlotStream(fields, bool(message.get("raw")), message.get("tag"))
+            self.streams[(client, topic)] = stream
+            sampler = await self._sampler(topic, cls, infos)
+            self._update(topic)
+            if stream.raw:
+                from .plot_sampler import RawRows
+
+                with sampler.lock:
+                    sampler.raw[client] = RawRows(fields)
+            elif client in sampler.raw:
+                with sampler.lock:
+                    del sampler.raw[client]
+        if self.task is None:
+            self.task = asyncio.ensure_future(self._tick())
+        return {"topic": topic, "type": type_name(cls), "fields": [f.path for f in fields],
+                "numeric": numeric_fields(cls), "points_per_s": POINTS_PER_S}
+
+    async def _sampler(self, topic: str, cls: Any, infos: list[Any]) -> Any:
+        sampler = self.samplers.get(topic)
+        if sampler is None:
+            from .plot_fields import small
+            from .plot_sampler import PlotSampler
+            from .rates import matching_qos
+
+            bridge = await self._bridge()
+            qos = matching_qos([i.qos_profile for i in infos])
+            qos.depth = DEPTH_SMALL if small(cls) else DEPTH_LARGE
+            sampler = PlotSampler(bridge.node, topic, cls, qos)
+            self.samplers[topic] = sampler
+        return sampler
+
+    def _update(self, topic: str) -> None:
+        """The sampler follows the union of the topic's streams' fields."""
+        fields = {f.path: f for (_, t), s in self.streams.items() if t == topic
+                  for f in s.fields}
+        self.samplers[topic].set_fields(list(fields.values()))
+
+    async def plot_stop(self, message: dict[str, Any]) -> dict[str, Any]:
+        await self._end(int(message["client"]), topic_of(message))
+        return {}
+
+    async def _end(self, client: int, topic: str) -> None:
+        async with self.lock:
+            if self.streams.pop((client, topic), None) is None:
+                return
+            sampler = self.samplers[topic]
+            with sampler.lock:
+                sampler.raw.pop(client, None)
+            if any(t == topic for _, t in self.streams):
+                self._update(topic)
+                return
+            del self.samplers[topic]
+        await asyncio.to_thread(sampler.close)
+
+    def client_gone(self, client: int) -> None:
+        for key in [k for k in self.streams if k[0] == client]:
+            task = asyncio.ensure_future(self._end(*key))
+            task.add_done_callback(lambda t: t.cancelled() or t.exception())
+
+    async def close(self) -> None:
+        if self.task is not None:
+            self.task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self.task
+            self.task = None
+        self.streams.clear()
+        samplers, self.samplers = list(self.samplers.values()), {}
+        for sampler in samplers:
+            await asyncio.to_thread(sampler.close)
+
+    # --- sending -----------------------------------------------------------------------------
+
+    async def _tick(self) -> None:
+        """Every RAW_SEND_PERIOD: raw streams their rows; every SEND_PERIOD the others
+        their new buckets. Runs while any stream does."""
+        loop = asyncio.get_running_loop()
+        next_buckets = loop.time()
+        try:
+            while self.streams:
+                await asyncio.sleep(RAW_SEND_PERIOD)
+                buckets_now = loop.time() >= next_buckets
+                if buckets_now:
+                    next_buckets = loop.time() + SEND_PERIOD
+                for (client, topic), stream in list(self.streams.items()):
+                    sampler = self.samplers.get(topic)
+                    if sampler is None:
+                        continue
+                    if stream.raw:
+                        data = self._rows(sampler, client, stream)
+                    elif buckets_now:
+                        data = self._points(sampler, stream)
+                    else:
+                        continue
+                    if data is not None:
+                        self._send(Event("plot", data=data), client)
+        finally:
+            self.task = None
+
+    def _points(self, sampler: Any, stream: PlotStream) -> dict[str, Any] | None:
+        import time
+
+        now = time.time()
+        points: dict[str, list[list[float]]] = {}
+        with sampler.lock:
+            for field_path in stream.fields:
+                buckets = sampler.buckets.get(field_path.path)
+                if buckets is None:
+                    continue
+                buckets.close_until(now)
+                fresh = buckets.since(stream.sent.get(field_path.path, -1))
+                if fresh:
+                    stream.sent[field_path.path] = fresh[-1].index
+                    points[field_path.path] = [b.point() for b in fresh]
+        if not points:
+            return None
+        return {"topic": sampler.topic, "tag": stream.tag, "points": points}
+
+    def _rows(self, sampler: Any, client: int, stream: PlotStream) -> dict[str, Any] | None:
+        with sampler.lock:
+            rows = sampler.raw.get(client)
+            if rows is None or not rows.rows:
+                return None
+            taken, rows.rows = list(rows.rows), type(rows.rows)(maxlen=rows.rows.maxlen)
+            dropped, rows.dropped = rows.dropped, 0
+        return {"topic": sampler.topic, "tag": stream.tag,
+                "fields": [f.path for f in stream.fields],
+                "rows": [[t, *(_exact(f.basic, v) for f, v in zip(stream.fields, values,
+                                                                   strict=True))]
+                         for t, values in taken],
+                "dropped": dropped}
+
+
+def _exact(basic: str, value: float | None) -> float | int | None:
+    """A value as published: an integer as one, a 32-bit float as its shortest decimal
+    (0.1, not 0.10000000149011612), a double as it is."""
+    from .plot_fields import INTEGERS
+
+    if value is None or basic in ("double", "long double"):
+        return value
+    if basic in INTEGERS:
+        return int(value)
+    import numpy
+
+    return float(str(numpy.float32(value)))
