@@ -15,7 +15,7 @@ import os
 import subprocess
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -25,12 +25,13 @@ from ..client.link import (
     Link,
     LinkLost,
     open_link,
+    parse_session,
     resolve_name,
 )
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import placement_from_text
-from ..engine.run.machines.remote import check_host, list_remote, open_remote_link, parse_address
+from ..engine.run.machines.remote import open_remote_link
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.interacting import restart_fields
@@ -41,12 +42,18 @@ from .parsers import LIFECYCLE_STATES, PROCESS_STATES, commands_parser
 
 
 def main(argv: list[str]) -> int:
-    options = commands_parser().parse_args(argv)
+    return run(commands_parser().parse_args(argv))
+
+
+def run(options: argparse.Namespace, handler: Callable[[argparse.Namespace], int] | None = None,
+        ) -> int:
+    """Runs `handler` (by default the command's cmd_NAME) with the command line's errors
+    said in one line each (fleet.py passes the forms over several sessions)."""
     try:
         # cmd_NAME here (ls ... wait, logs, completion), or in inspector.py
         function = f"cmd_{options.command.replace('-', '_')}"
-        handler = globals().get(function) or getattr(inspector, function, None) or \
-            _plot_command(function)
+        handler = handler or globals().get(function) or getattr(inspector, function, None) \
+            or _plot_command(function)
         return int(handler(options) or 0)
     except LinkLost as exc:
         # one line, and a status of its own: the session may well run on there
@@ -208,7 +215,7 @@ def argument_line(arguments: dict[str, str]) -> str:
 LS_ANSWER_TIMEOUT = 3.0  # `ls` asks every session in turn: a stopped one costs this, once
 
 
-def _status(name: str | None, answer_timeout: float = ANSWER_TIMEOUT,
+def session_status(name: str | None, answer_timeout: float = ANSWER_TIMEOUT,
             resources: bool = True) -> dict[str, Any]:
     """`resources`: with each process's CPU, memory and threads (0.3 s more)."""
     link = open_link(name, answer_timeout=answer_timeout)
@@ -232,38 +239,44 @@ def _silent_session(name: str, error: SessionError) -> dict[str, Any] | None:
 
 
 def cmd_ls(options: argparse.Namespace) -> int:
-    if options.host is not None:
-        # the remote tuilaunch lists its own sessions (`__ls`), with ls --json's keys
-        sessions: list[dict[str, Any]] = list_remote(check_host(options.host))
-        return _print_sessions(sessions, options.json)
-    sessions = []
+    """The sessions here (`ls HOST ...` is fleet.py's)."""
+    return print_sessions(local_sessions(), options.json)
+
+
+def local_sessions() -> list[dict[str, Any]]:
+    """`ls`'s rows for this computer: each session's short status, asked in turn."""
+    sessions: list[dict[str, Any]] = []
     for name in session_dir.live_sessions():
         try:
-            sessions.append({**_status(name, LS_ANSWER_TIMEOUT, resources=False),
+            sessions.append({**session_status(name, LS_ANSWER_TIMEOUT, resources=False),
                              "answering": True})
         except SessionError as exc:
             # a stopped or stuck server is listed as such; one that ended meanwhile is not
             silent = _silent_session(name, exc)
             if silent is not None:
                 sessions.append(silent)
-    return _print_sessions(sessions, options.json)
+    return sessions
 
 
-def _print_sessions(sessions: list[dict[str, Any]], as_json: bool) -> int:
+def print_sessions(sessions: list[dict[str, Any]], as_json: bool,
+                    hosts: bool = False) -> int:
+    """The table (or JSON list) of `ls`; `hosts`: each row has a `host` (`ls HOST ...`),
+    shown first."""
     if as_json:
         keys = ("name", "file", "arguments", "pid", "started", "log_dir", "counts",
-                "answering")
+                "answering") + (("host",) if hosts else ())
         print(json.dumps([{k: s[k] for k in keys} for s in sessions], indent=2))
         return 0
     if not sessions:
         print("no running sessions")
         return 0
-    rows = [("NAME", "PID", "STARTED", "RUNNING", "FILE", "ARGUMENTS")]
+    rows = [("HOST",) * hosts + ("NAME", "PID", "STARTED", "RUNNING", "FILE", "ARGUMENTS")]
     for s in sessions:
         total = sum(n for state, n in s["counts"].items() if state != "skipped")
         running = f"{s['counts'].get('running', 0)}/{total}" if s["answering"] else "?"
-        rows.append((s["name"], str(s["pid"]), _clock(s["started"]), running, s["file"],
-                     argument_line(s["arguments"])))
+        rows.append(((s["host"],) if hosts else ()) + (
+            s["name"], str(s["pid"]), _clock(s["started"]), running, s["file"],
+            argument_line(s["arguments"])))
     _table(rows)
     for s in sessions:
         if not s["answering"]:
@@ -273,7 +286,7 @@ def _print_sessions(sessions: list[dict[str, Any]], as_json: bool) -> int:
 
 
 def cmd_attach(options: argparse.Namespace) -> int:
-    where = None if options.name is None else parse_address(options.name)
+    where = None if options.name is None else parse_session(options.name)
     host = None if where is None else where.host
     if where is None or where.host is None:
         # here, the session is found first; there, by connecting to it
@@ -295,7 +308,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
             raise
         link.release()
     else:
-        info = _status(label, resources=False)
+        info = session_status(label, resources=False)
     from ..engine.describe.python.loader import set_command_line
     from ..tui.app import make_app
 
@@ -321,7 +334,14 @@ STOP_NOTICE = 3.0
 
 
 def cmd_stop(options: argparse.Namespace) -> int:
-    link = open_link(options.name, timeout=None)
+    stop_session(options.name)
+    return 0
+
+
+def stop_session(address: str | None, said: str = "tuilaunch stop: ") -> str:
+    """Stops the session at `address` and waits for its end; says on stderr (after `said`)
+    what it waits for. Its label once stopped; a SessionError when it cannot be."""
+    link = open_link(address, timeout=None)
     name = link.label
     pid = int(link.info["pid"]) if link.host is None else 0  # a pid there is not ours
     try:
@@ -339,7 +359,7 @@ def cmd_stop(options: argparse.Namespace) -> int:
                 message = link.receive_until(notice)
             except TimeoutError:
                 if waiting:
-                    print(f"tuilaunch stop: waiting for {', '.join(sorted(waiting))} "
+                    print(f"{said}waiting for {', '.join(sorted(waiting))} "
                           f"({time.monotonic() - asked:.0f} s)", file=sys.stderr)
                 notice = time.monotonic() + STOP_NOTICE
                 continue
@@ -357,7 +377,7 @@ def cmd_stop(options: argparse.Namespace) -> int:
                     waiting.discard(process)
                 elif event.get("kind") == "log" and process in waiting and \
                         event.get("level") in ("WARN", "ERROR"):
-                    print(f"tuilaunch stop: {process}: {event.get('reason')}",
+                    print(f"{said}{process}: {event.get('reason')}",
                           file=sys.stderr)
     finally:
         link.close()
@@ -365,15 +385,23 @@ def cmd_stop(options: argparse.Namespace) -> int:
     while session_dir.pid_alive(pid) and time.monotonic() < deadline:
         time.sleep(0.02)
     print(f"session {name} stopped")
-    return 0
+    return name
 
 
 def cmd_status(options: argparse.Namespace) -> int:
-    status = _status(options.name)
+    status = session_status(options.name)
     if options.json:
         print(json.dumps(status, indent=2))
         return 0
-    print(f"session {status['name']}  pid {status['pid']}  since {_clock(status['started'])}")
+    print_status(status)
+    return 0
+
+
+def print_status(status: dict[str, Any], label: str | None = None) -> None:
+    """`status`'s text: the session (named `label` when given: HOST:NAME), then a row per
+    process."""
+    print(f"session {label or status['name']}  pid {status['pid']}  since "
+          f"{_clock(status['started'])}")
     print(f"  {status['file']} {argument_line(status['arguments'])}")
     print(f"  logs: {status['log_dir']}")
     rows = [("PROCESS", "STATE", "PID", "CPU%", "RSS", "THREADS", "NODE", "")]
@@ -386,7 +414,6 @@ def cmd_status(options: argparse.Namespace) -> int:
                      "" if threads is None else str(threads), p["name"] or "",
                      p["detail"] if p["state"] != "running" and p["detail"] else ""))
     _table(rows, indent="  ")
-    return 0
 
 
 def cmd_restart(options: argparse.Namespace) -> int:

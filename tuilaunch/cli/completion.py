@@ -8,8 +8,8 @@ it here before anything heavy is imported. What is completed:
 - after a package, its launch files (`*.launch.py`, `*_launch.xml`, ... in its share, as
   `ros2 launch PKG <TAB>`); after a file (or PACKAGE FILE), its arguments as `name:=`, and
   after `name:=`, the argument's choices (the file is loaded as `--show-args` loads it);
-- session names for every session command, local ones and, after `HOST:`, that host's (one
-  ssh round trip, time-limited);
+- session names for every session command, local ones and `HOST:` for each host of the
+  ssh config, and after `HOST:`, that host's sessions (one ssh round trip, time-limited);
 - process ids and node names (logs, restart, wait), topics (hz, echo), nodes (params,
   log-level), states (wait), log levels, shells.
 
@@ -220,7 +220,7 @@ def _attach_command_completers(parser: argparse.ArgumentParser) -> None:
     by_dest: dict[str, Callable[..., Iterable[str]]] = {
         "name": session_names, "process": processes, "node": nodes, "topic": topics,
         "state": lambda prefix, **_: _starting(PROCESS_STATES + LIFECYCLE_STATES, prefix),
-        "host": lambda **_: [],
+        "host": lambda prefix, **_: _starting(["local", *ssh_hosts()], prefix),
     }
     for action in parser._actions:
         if not isinstance(action, argparse._SubParsersAction):
@@ -228,6 +228,8 @@ def _attach_command_completers(parser: argparse.ArgumentParser) -> None:
         for command, sub in action.choices.items():
             for sub_action in sub._actions:
                 completer = by_dest.get(sub_action.dest)
+                if command == "logs" and sub_action.dest == "name":
+                    completer = sessions_or_processes  # the last word may be a process
                 if command == "log-level" and sub_action.dest == "level":
                     completer = _choice(NODE_LEVELS)
                 elif sub_action.dest == "log_level":
@@ -263,7 +265,8 @@ def _files(prefix: str, **_: Any) -> list[str]:
 
 
 def session_names(prefix: str, **_: Any) -> list[str]:
-    """The sessions here; after `HOST:`, that host's (its tuilaunch lists them over ssh)."""
+    """The sessions here and `HOST:` for each host of the ssh config; after `HOST:`, that
+    host's sessions (its tuilaunch lists them over ssh)."""
     if ":" in prefix:
         host = prefix.rsplit(":", 1)[0]
         from ..engine.run.machines.remote import check_host, list_remote
@@ -273,7 +276,53 @@ def session_names(prefix: str, **_: Any) -> list[str]:
                 if f"{host}:{s['name']}".startswith(prefix)]
     from ..engine.run.session import session_dir
 
-    return [n for n in session_dir.live_sessions(clean=False) if n.startswith(prefix)]
+    here = [n for n in session_dir.live_sessions(clean=False) if n.startswith(prefix)]
+    return here + [f"{h}:" for h in ssh_hosts() if h.startswith(prefix)]
+
+
+def sessions_or_processes(prefix: str, parsed_args: argparse.Namespace,
+                          **kwargs: Any) -> list[str]:
+    """`logs`: sessions, and once one is given, its processes (the last word may be one);
+    nothing after a word that names no session (only the last word may be a process)."""
+    from ..engine.run.session import session_dir
+
+    given = list(getattr(parsed_args, "name", None) or [])
+    here = session_dir.live_sessions(clean=False)
+    if any(":" not in word and word not in here for word in given):
+        return []
+    found = session_names(prefix)
+    if given:
+        try:
+            found += processes(prefix, parsed_args)
+        except Exception:
+            pass  # not a session after all, or gone: the sessions alone
+    return found
+
+
+def ssh_hosts() -> list[str]:
+    """The hosts named in the ssh config (its `Host` lines, without patterns): the one in
+    TUILAUNCH_SSH_COMMAND's `-F FILE`, else ~/.ssh/config."""
+    from ..engine.run.machines.remote import ssh_command
+
+    words = ssh_command()
+    config = "~/.ssh/config"
+    for i, word in enumerate(words):
+        if word == "-F" and i + 1 < len(words):
+            config = words[i + 1]
+        elif word.startswith("-F") and len(word) > 2:
+            config = word[2:]
+    try:
+        with open(os.path.expanduser(config), errors="replace") as file:
+            lines = file.read().splitlines()
+    except OSError:
+        return []
+    hosts: list[str] = []
+    for line in lines:
+        key, _, value = line.strip().replace("=", " ", 1).partition(" ")
+        if key.lower() != "host":
+            continue
+        hosts += [h for h in value.split() if not any(c in h for c in "*?!")]
+    return list(dict.fromkeys(hosts))
 
 
 def _ask(parsed_args: argparse.Namespace, op: str, wait: float | None = None,
@@ -282,6 +331,8 @@ def _ask(parsed_args: argparse.Namespace, op: str, wait: float | None = None,
     from ..client.link import open_link
 
     address = getattr(parsed_args, "name", None)
+    if isinstance(address, list):  # stop, status, logs take several: the first one's
+        address = address[0] if address else None
     remote = address is not None and ":" in address
     wait = wait or (REMOTE_TIMEOUT if remote else SESSION_TIMEOUT)
     link = open_link(address, timeout=wait, answer_timeout=wait)

@@ -151,7 +151,7 @@ def _main(argv: list[str] | None) -> int:
 
         return proxy.main(argv)
     if is_command(argv):
-        from .commands import main as command_main
+        from .fleet import main as command_main
 
         ensure_environment()
         return command_main(argv)

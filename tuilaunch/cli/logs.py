@@ -20,6 +20,7 @@ import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Protocol
 
 from ..client.link import Link, open_link
 from ..engine.run.events import Event
@@ -39,13 +40,31 @@ from ..tui.output_store import LEVELS, level_of
 from .headless import Printer
 
 
+class Lines(Protocol):
+    """Where the lines go: stdout, or one shared by several sessions' threads."""
+
+    def write(self, text: str, /) -> int: ...
+
+    def flush(self) -> None: ...
+
+
 def cmd_logs(options: argparse.Namespace) -> int:
+    show_logs(options, options.name)
+    return 0
+
+
+def show_logs(options: argparse.Namespace, address: str | None, out: Lines | None = None,
+              tag: str = "") -> str | None:
+    """The logs of the session at `address` as `options` ask, written to `out` (stdout),
+    each line after `tag` (`logs -f` of several sessions: `HOST:NAME `). Following, it
+    returns once the session closes the connection: None when it ended, else why not
+    (a link lost)."""
     since = parse_since(options.since) if options.since else None
     minimum = LEVELS.index(options.level) if options.level else 0
     last = options.lines
     if last is not None and last < 0:
         raise SessionError(f"--lines {last} is not a number of lines", hint="0 or more")
-    link = open_link(options.name, timeout=None)
+    link = open_link(address, timeout=None)
     try:
         status = link.request("status", short=True, resources=False)
         log_dir = Path(status["log_dir"])
@@ -60,8 +79,8 @@ def cmd_logs(options: argparse.Namespace) -> int:
             offsets = {p: subscribed["offsets"].get(p, 0) for p in wanted}
         # launch.log's size after the subscription: its events come after, as events
         launch_end = _launch_log_size(link, log_dir)
-        out = sys.stdout
-        colour = out.isatty() and not os.environ.get("NO_COLOR")
+        out = out or sys.stdout
+        colour = sys.stdout.isatty() and not os.environ.get("NO_COLOR")
         life = Printer(io.StringIO())
         told: set[tuple[str, str, int | None, int, str | None]] = set()
         kept: collections.deque[str] | None = None if last is None else \
@@ -74,8 +93,8 @@ def cmd_logs(options: argparse.Namespace) -> int:
             if minimum and level_of(text, line.stream) < minimum:
                 return
             # a life line names its process already, as --headless prints it
-            text = f"[{process}] {text}\n" if prefixed and line.stream != "life" else \
-                text + "\n"
+            text = f"{tag}[{process}] {text}\n" if prefixed and line.stream != "life" \
+                else f"{tag}{text}\n"
             if kept is not None:
                 kept.append(text)
             else:
@@ -123,8 +142,10 @@ def cmd_logs(options: argparse.Namespace) -> int:
             kept = None  # followed lines are printed as they come
         out.flush()
         if not options.follow:
-            return 0
+            return None
+        ended = False
         for message in link.messages():
+            ended = ended or message.get("type") == "ended"
             if message.get("type") != "events":
                 continue
             for data in message.get("events") or []:
@@ -134,12 +155,15 @@ def cmd_logs(options: argparse.Namespace) -> int:
                         show(event.process, LogLine(event.time, event.stream or "stdout",
                                                     text))
                 elif event.kind == "dropped" and event.process in offsets:
-                    print(f"tuilaunch logs: {event.code} lines of {event.process} skipped "
+                    print(f"tuilaunch logs: {tag}{event.code} lines of {event.process} skipped "
                           f"(too slow a reader); they are in {log_dir}", file=sys.stderr)
                 elif event.kind in LIFE_KINDS and ours(event):
                     tell(event)
             out.flush()
-        return 0
+        if ended:
+            return None
+        lost = link.lost()
+        return "the connection closed" if lost is None else lost.message
     finally:
         link.close()
 

@@ -102,6 +102,11 @@ def launch_parser() -> argparse.ArgumentParser:
     return parser
 
 
+SESSIONS = "[HOST:]NAME ..."
+SESSIONS_HELP = ("sessions: NAME (here), HOST:NAME, or HOST: for every session there "
+                 "(local: is this computer); default: the only one here")
+
+
 def commands_parser() -> argparse.ArgumentParser:
     """The session commands; each sub-parser's positionals are named `name` (the session),
     `process`, `node`, `topic`, `state`, `level`: completion.py completes them by name."""
@@ -109,20 +114,24 @@ def commands_parser() -> argparse.ArgumentParser:
         prog="tuilaunch", description="Control launches running as sessions.")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     ls = commands.add_parser("ls", help="running sessions")
-    ls.add_argument("host", nargs="?", help="the sessions on this machine (as ssh names it)")
+    ls.add_argument("host", nargs="*", metavar="HOST",
+                    help="the sessions on these machines (as ssh names them; local: this "
+                    "one), asked in parallel, in one table with a HOST column")
     ls.add_argument("--json", action="store_true", help="one JSON list")
     attach = commands.add_parser("attach", help="the TUI on a running session")
     attach.add_argument("name", nargs="?", metavar="[HOST:]NAME",
                         help="the session (default: the only one here)")
     attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
     stop = commands.add_parser("stop", help="stop every process of a session, then exit")
-    stop.add_argument("name", nargs="?", metavar="[HOST:]NAME")
+    stop.add_argument("name", nargs="*", metavar=SESSIONS, help=SESSIONS_HELP)
     status = commands.add_parser("status", help="each process's state")
-    status.add_argument("name", nargs="?", metavar="[HOST:]NAME")
+    status.add_argument("name", nargs="*", metavar=SESSIONS, help=SESSIONS_HELP)
     status.add_argument("--json", action="store_true", help="one JSON object")
     logs = commands.add_parser("logs", help="the output of a session's processes")
-    logs.add_argument("name", nargs="?", metavar="[HOST:]NAME")
-    logs.add_argument("process", nargs="?", help="a process id or node name (default: all)")
+    # the last word is the PROCESS unless it names a session (HOST:NAME, HOST:, or a
+    # session here): `logs far talker`, `logs nuc:base arm:base -f`
+    logs.add_argument("name", nargs="*", metavar=SESSIONS + " [PROCESS]",
+                      help=SESSIONS_HELP + "; then a process id or node name (default: all)")
     logs.add_argument("-f", "--follow", action="store_true", help="keep printing new lines")
     logs.add_argument("-n", "--lines", type=int, metavar="N",
                       help="only the last N lines (as tail -n); with -f, the last N and then "

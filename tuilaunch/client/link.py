@@ -10,7 +10,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-from ..engine.run.machines.remote import open_remote_link, parse_address
+from ..engine.run.machines.remote import Address, open_remote_link, parse_address
 from ..engine.run.session import session_dir
 from ..engine.run.session.protocol import MAX_MESSAGE, check_hello, decode, encode
 from ..engine.run.session.session_dir import SessionError
@@ -253,12 +253,23 @@ class Link:
         return self.name if self.host is None else f"{self.host}:{self.name}"
 
 
+LOCAL = "local"
+"""The host name that means this computer (`local:NAME`, `ls local`, `stop local:`), as
+the fleet's TUI labels its sessions."""
+
+
+def parse_session(text: str) -> Address:
+    """`[HOST:]NAME` as parse_address reads it, with `local:NAME` meaning NAME here."""
+    where = parse_address(text)
+    return Address(None, where.name) if where.host == LOCAL else where
+
+
 def open_link(address: str | None, timeout: float | None = ANSWER_TIMEOUT,
               answer_timeout: float = ANSWER_TIMEOUT) -> Link:
     """A Link to `[HOST:]NAME` (None: the only session here); over ssh for a HOST."""
     if address is None:
         return Link(resolve_name(None), timeout, answer_timeout)
-    where = parse_address(address)
+    where = parse_session(address)
     if where.host is None:
         return Link(resolve_name(where.name), timeout, answer_timeout)
     remote = open_remote_link(where.host, where.name)
