@@ -118,8 +118,8 @@ def commands_parser() -> argparse.ArgumentParser:
                     "one), asked in parallel, in one table with a HOST column")
     ls.add_argument("--json", action="store_true", help="one JSON list")
     attach = commands.add_parser("attach", help="the TUI on a running session")
-    attach.add_argument("name", nargs="?", metavar="[HOST:]NAME",
-                        help="the session (default: the only one here)")
+    attach.add_argument("name", nargs="*", metavar=SESSIONS,
+                        help=SESSIONS_HELP + "; several: one TUI over all of them")
     attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
     stop = commands.add_parser("stop", help="stop every process of a session, then exit")
     stop.add_argument("name", nargs="*", metavar=SESSIONS, help=SESSIONS_HELP)
