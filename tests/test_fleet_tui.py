@@ -129,10 +129,16 @@ def test_a_robot_unreachable_at_start_is_a_retrying_root_and_the_others_open(
             await select(pilot, second, "ticker-1")
             await pilot.press("r")
             await until(pilot, lambda: starts(second, "ticker-1") == 2)
+            # robot2's session stopped from a shell: its root says it ended; the TUI
+            # stays for the robot it still waits for
+            stopped = run_cli("stop", "robot2:arm")
+            assert stopped.returncode == 0, stopped.stderr
+            await until(pilot, lambda: "ended" in str(second.tree.root.label))
+            assert "2 exited" in str(second.tree.root.label) or second.ended
+            assert app.is_running and "retrying" in str(gone.tree.root.label)
             await pilot.press("q")
 
     asyncio.run(watched())
-    assert run_cli("stop", "robot2:arm").returncode == 0
 
 
 def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):

@@ -196,7 +196,10 @@ class FleetApp(App[int]):
     def _tell_pane_shown(self, member: Member) -> None:
         """The session sends only the lines of its pane's node (all for all nodes)."""
         supervisor = member.supervisor
-        if supervisor is None or member.ended or supervisor.link_lost is not None:
+        # as the single TUI: only over a link (a session here sends its lines to a screen
+        # at its drain rate, which costs no link)
+        if supervisor is None or supervisor.host is None or member.ended or \
+                supervisor.link_lost is not None:
             return
         shown = member.pane.view.process
         if shown != supervisor.only:
@@ -259,7 +262,8 @@ class FleetApp(App[int]):
         member = self.current
         why = member.unavailable()
         if why is not None or member.supervisor is None:
-            self.notify(f"{member.label}: {why}; its nodes take no keys until it is back",
+            self.notify(f"{member.label}: the session ended" if member.ended else
+                        f"{member.label}: {why}; its nodes take no keys until it is back",
                         severity="warning")
             return
         processes = self.selected()

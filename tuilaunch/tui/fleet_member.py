@@ -73,8 +73,12 @@ class Member:
         while it cannot be reached."""
         label = Text(self.label, style="bold")  # its file is in the header: room for counts
         why = self.unavailable()
-        if why is not None:
-            label.append(f" {why}" + ("" if self.ended else "; reconnecting (R: now)"),
+        if self.ended:
+            label.append(f" {why}  {self.counts_text()}", "italic")
+            label.stylize("dim")
+        elif why is not None:
+            # a link that dropped reconnects by itself; one never made says it retries
+            label.append(f" {why}" + ("; reconnecting (R: now)" if self.supervisor else ""),
                          "italic")
             label.stylize("dim")
         else:
