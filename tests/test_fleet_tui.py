@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import re
 import signal
 
 from tuilaunch.client import remote_supervisor
@@ -98,6 +99,11 @@ def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Mach
             await until(pilot, lambda: first.supervisor.link_lost is None and
                         ticks(first) > before + 3)
             assert "2 running" in str(first.tree.root.label)
+            # T: the time column of robot1's pane, its ROS stamps read over its link
+            await pilot.press("T")
+            await until(pilot, lambda: any(
+                re.match(r"\d\d:\d\d:\d\d\.\d{3} .*tick \d+$", row)
+                for row in first.pane.line_view.visible_text()))
             # q leaves both sessions running
             await pilot.press("q")
             await until(pilot, lambda: app.detached)
@@ -144,6 +150,14 @@ def test_a_robot_unreachable_at_start_is_a_retrying_root_and_the_others_open(
 def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
     start(machines["robot1"], write, "base", 0)
     start(machines["robot2"], write, "arm", 1)
+    # what a fleet's 2 opens: the selected session's own TUI on its Args tab
+    single = Terminal("attach", "robot1:base", "--tab", "args")
+    try:
+        single.read_until(b"F5 applies")
+        os.write(single.master, b"d")
+        assert single.wait_exit() == 0
+    finally:
+        single.close()
     terminal = Terminal("attach", "robot1:base", "robot2:")
     try:
         for marker in (b"robot1:base", b"robot2:arm", b"tick"):

@@ -9,9 +9,10 @@ link lost to one robot greys its root, says why and that it reconnects (RemoteSu
 retries by itself), and its rows refuse keys with one line while the others stay live. A
 robot unreachable at start is a root that says why and retries.
 
-The Args, Services, Params and Topics tabs are the single-session TUI's: `o` opens it on
-the selected session (this screen suspended meanwhile; `d` there comes back here), so
-those tabs follow the session of the selected row without a second copy of them here.
+The Args, Services, Params and Topics tabs are the single-session TUI's: `2`-`5` (and
+`o`, its Nodes tab) open it on the selected session at that tab (this screen suspended
+meanwhile; `d` there comes back here), so those tabs, and every key of one session, follow
+the session of the selected row without a second copy of them here.
 A fleet TUI never stops a session by leaving: `q` detaches from all of them.
 """
 
@@ -79,12 +80,24 @@ class FleetApp(App[int]):
         Binding("o", "open_session", "Open",
                 tooltip="The selected session in its own TUI: Args, Services, Params, "
                 "Topics (d there comes back)"),
+        Binding("2", "open_session('args')", "Args", show=False,
+                tooltip="The selected session's arguments, in its own TUI"),
+        Binding("3", "open_session('services')", "Services", show=False),
+        Binding("4", "open_session('params')", "Params", show=False),
+        Binding("5", "open_session('topics')", "Topics", show=False),
         Binding("R", "reconnect", "Reconnect", show=False,
                 tooltip="Try the selected session's link again now"),
         Binding("slash", "pane('search')", "Search", show=False),
         Binding("l", "pane('cycle_level')", "Level", show=False),
         Binding("G", "pane('follow')", "Follow", show=False),
         Binding("T", "pane('time')", "Time", show=False),
+        Binding("backslash", "pane('filter')", "Filter", show=False),
+        Binding("n", "pane('next_match')", "Next", show=False),
+        Binding("N", "pane('previous_match')", "Prev", show=False),
+        Binding("z", "pane('wrap')", "Wrap", show=False),
+        Binding("f", "pane('raw')", "Format", show=False),
+        Binding("w", "pane('save')", "Save", show=False),
+        Binding("escape", "pane('clear_search')", "Clear", show=False),
         Binding("q", "quit_fleet", "Quit (detach)"),
         Binding("ctrl+c", "quit_fleet", "Quit", show=False, priority=True),
     ]
@@ -306,6 +319,34 @@ class FleetApp(App[int]):
             if isinstance(result, Exception):
                 self.notify(f"{member.label}: {verb}: {result}", severity="error")
 
+    @on(OutputPanel.StampsWanted)
+    def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
+        """T, f: the ROS stamps of the lines a link sent without them, read first (as
+        gaps.py does for the single-session TUI)."""
+        member = self.current  # the keys reach the selected session's pane alone
+        supervisor = member.supervisor
+        if supervisor is None or supervisor.host is None or (
+                message.shown == supervisor.stamps_shown and
+                member.store.unstamped.first() is None):
+            message.then()
+            return
+        self._read_stamps(member, supervisor, message)
+
+    @work(group="stamps", exit_on_error=False)
+    async def _read_stamps(self, member: Member, supervisor: RemoteSupervisor,
+                           message: OutputPanel.StampsWanted) -> None:
+        try:
+            first, end, stamps = await self.engine.run(
+                supervisor.read_stamps(message.shown, member.store.unstamped.first()))
+        except Exception as exc:  # the link is down: the key still does its part
+            self.notify(f"{member.label}: ROS stamps not read: {exc}. Lines that came "
+                        "without theirs show when they arrived.", severity="warning")
+        else:
+            member.show_events(member.buffer.drain())  # the lines sent before the answer
+            if member.store.unstamped.fill(first, end, stamps):
+                member.pane.stamps_read()
+        message.then()
+
     def action_all_output(self) -> None:
         self.current.pane.show_view(None)
 
@@ -317,15 +358,16 @@ class FleetApp(App[int]):
         if supervisor is not None:
             self.engine.call(supervisor.retry_now)
 
-    def action_open_session(self) -> None:
-        """The selected session in the single-session TUI (all its tabs), this screen
-        suspended meanwhile; `d` (or `q`) there comes back."""
+    def action_open_session(self, tab: str = "nodes") -> None:
+        """The selected session in the single-session TUI (all its tabs), on `tab`, this
+        screen suspended meanwhile; `d` (or `q`) there comes back."""
         member = self.current
         if member.unavailable() is not None:
             self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
             return
         with self.suspend():
-            subprocess.run([sys.executable, "-m", "tuilaunch", "attach", member.address])
+            subprocess.run([sys.executable, "-m", "tuilaunch", "attach", member.address,
+                            "--tab", tab])
         self.refresh()
 
     def action_quit_fleet(self) -> None:
