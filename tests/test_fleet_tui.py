@@ -12,8 +12,10 @@ import os
 import re
 import signal
 
+from textual.widgets import Static
+
 from tuilaunch.client import remote_supervisor
-from tuilaunch.tui.fleet_app import FleetApp
+from tuilaunch.tui.fleet_app import FleetApp, FleetHelp
 from tuilaunch.tui.fleet_member import Member
 from tuilaunch.tui.output_store import View
 
@@ -132,6 +134,11 @@ def test_a_robot_unreachable_at_start_is_a_retrying_root_and_the_others_open(
                         "cannot reach gone" in str(gone.tree.root.label))
             assert "retrying" in str(gone.tree.root.label)
             assert gone.supervisor is None
+            await pilot.press("question_mark")  # the keys, as the fleet binds them
+            await until(pilot, lambda: isinstance(app.screen, FleetHelp))
+            assert "Restart the selected node" in str(app.screen.query_one(Static).render())
+            await pilot.press("escape")
+            await until(pilot, lambda: not isinstance(app.screen, FleetHelp))
             await select(pilot, second, "ticker-1")
             await pilot.press("r")
             await until(pilot, lambda: starts(second, "ticker-1") == 2)

@@ -19,6 +19,7 @@ A fleet TUI never stops a session by leaving: `q` detaches from all of them.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import subprocess
 import sys
 from pathlib import Path
@@ -35,7 +36,7 @@ from ..engine.errors import LaunchError
 from ..engine.run.engine_thread import EngineThread
 from .fleet_member import Member
 from .output_store import OutputStore
-from .screens.dialogs import ConfirmScreen
+from .screens.dialogs import ConfirmScreen, HelpScreen
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree, RowData
 from .session_link import DRAIN_HZ, PANE_CHROME
@@ -60,6 +61,22 @@ class FleetTree(LaunchTree):
             super().action_cursor_up()
 
 
+class FleetHelp(HelpScreen):
+    """The fleet's keys (its bindings, with what each does), over the screen."""
+
+    def compose(self) -> ComposeResult:
+        rows = ["One TUI over several sessions: a tree per session; the keys act on the",
+                "session of the selected row. up/down cross from one session's tree to the",
+                "next.", ""]
+        for binding in FleetApp.BINDINGS:
+            assert isinstance(binding, Binding)
+            keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
+                "question_mark", "?").replace(",", ", ")
+            rows.append(f"  {keys:<9} {binding.tooltip or binding.description}")
+        with VerticalScroll():
+            yield Static("\n".join(rows))
+
+
 class FleetApp(App[int]):
     """One TUI over several sessions (see the module's docstring)."""
 
@@ -82,23 +99,34 @@ class FleetApp(App[int]):
                 "Topics (d there comes back)"),
         Binding("2", "open_session('args')", "Args", show=False,
                 tooltip="The selected session's arguments, in its own TUI"),
-        Binding("3", "open_session('services')", "Services", show=False),
-        Binding("4", "open_session('params')", "Params", show=False),
-        Binding("5", "open_session('topics')", "Topics", show=False),
+        Binding("3", "open_session('services')", "Services", show=False,
+                tooltip="Its services, in its own TUI"),
+        Binding("4", "open_session('params')", "Params", show=False,
+                tooltip="Its nodes' parameters, in its own TUI"),
+        Binding("5", "open_session('topics')", "Topics", show=False,
+                tooltip="Its topics, rates and QoS, in its own TUI"),
         Binding("R", "reconnect", "Reconnect", show=False,
                 tooltip="Try the selected session's link again now"),
-        Binding("slash", "pane('search')", "Search", show=False),
-        Binding("l", "pane('cycle_level')", "Level", show=False),
-        Binding("G", "pane('follow')", "Follow", show=False),
-        Binding("T", "pane('time')", "Time", show=False),
-        Binding("backslash", "pane('filter')", "Filter", show=False),
+        # the pane's keys, as the single-session TUI's NodesView binds them
+        Binding("slash", "pane('search')", "Search", show=False,
+                tooltip="Highlight a text in the pane; n / N jump"),
+        Binding("l", "pane('cycle_level')", "Level", show=False,
+                tooltip="Show only lines from this ROS level up"),
+        Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
+        Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
+        Binding("backslash", "pane('filter')", "Filter", show=False,
+                tooltip="Show only lines containing a text"),
         Binding("n", "pane('next_match')", "Next", show=False),
         Binding("N", "pane('previous_match')", "Prev", show=False),
-        Binding("z", "pane('wrap')", "Wrap", show=False),
-        Binding("f", "pane('raw')", "Format", show=False),
-        Binding("w", "pane('save')", "Save", show=False),
-        Binding("escape", "pane('clear_search')", "Clear", show=False),
-        Binding("q", "quit_fleet", "Quit (detach)"),
+        Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
+        Binding("f", "pane('raw')", "Format", show=False,
+                tooltip="Lines as printed, or compact"),
+        Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
+        Binding("escape", "pane('clear_search')", "Clear", show=False,
+                tooltip="Clear the search"),
+        Binding("question_mark,f1", "help", "Help", tooltip="These keys"),
+        Binding("q", "quit_fleet", "Quit (detach)",
+                tooltip="Leave: every session runs on (tuilaunch stop stops them)"),
         Binding("ctrl+c", "quit_fleet", "Quit", show=False, priority=True),
     ]
 
@@ -157,10 +185,12 @@ class FleetApp(App[int]):
             try:
                 member.supervisor = await self.engine.run(self._open(member))
             except LaunchError as exc:
-                member.problem = f"{exc.message}; retrying"
+                member.problem = f"{exc.message}; retrying (R: now)"
                 member.refresh_root()
                 self.update_status()
-                await asyncio.sleep(wait)
+                member.wake = asyncio.Event()
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(member.wake.wait(), wait)
                 wait = min(wait * 2, RETRY_MOST)
         supervisor = member.supervisor
         if supervisor is None:
@@ -347,6 +377,9 @@ class FleetApp(App[int]):
                 member.pane.stamps_read()
         message.then()
 
+    def action_help(self) -> None:
+        self.push_screen(FleetHelp())
+
     def action_all_output(self) -> None:
         self.current.pane.show_view(None)
 
@@ -354,9 +387,12 @@ class FleetApp(App[int]):
         getattr(self.current.pane, f"action_{name}")()
 
     def action_reconnect(self) -> None:
+        """Now, rather than at the next try: a dropped link, or a session never reached."""
         supervisor = self.current.supervisor
         if supervisor is not None:
             self.engine.call(supervisor.retry_now)
+        elif self.current.wake is not None:
+            self.current.wake.set()
 
     def action_open_session(self, tab: str = "nodes") -> None:
         """The selected session in the single-session TUI (all its tabs), on `tab`, this

@@ -9,6 +9,7 @@ relaunch, a stop or a lost link of one touches nothing of another.
 
 from __future__ import annotations
 
+import asyncio
 from dataclasses import dataclass, field
 
 from rich.text import Text
@@ -40,6 +41,8 @@ class Member:
     problem: str | None = None
     """Why the member is not followed now: cannot be reached (retrying), or ended."""
     ended: bool = False
+    wake: asyncio.Event | None = None
+    """Set by R: the next try to reach a session never reached, now."""
     asked_to_stop: set[str] = field(default_factory=set)
 
     @property
