@@ -70,6 +70,14 @@ def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Mach
             await pilot.press("r")
             await until(pilot, lambda: starts(first, "ticker-1") == 2 and
                         first.supervisor.states["ticker-1"] == "running")
+            # s, then t, on robot1's quiet: stopped and started there
+            await select(pilot, first, "quiet-2")
+            await pilot.press("s")
+            await until(pilot, lambda: first.supervisor.states["quiet-2"] == "exited")
+            assert second.supervisor.states["quiet-2"] == "running"
+            await pilot.press("t")
+            await until(pilot, lambda: first.supervisor.states["quiet-2"] == "running" and
+                        starts(first, "quiet-2") == 2)
             # s on robot2's quiet stops it there, and nothing on robot1
             await select(pilot, second, "quiet-2")
             assert "[robot2:arm]" in str(app.status_bar.render())  # the header follows
