@@ -321,6 +321,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
                        scrollback=options.scrollback, session_name=info["name"],
                        session_host=host, remote_link=remote, placement=placement,
                        served=host is None and edited_since(info))
+        app.first_tab = options.tab
         status = app.run() or 0
     finally:
         if remote is not None:

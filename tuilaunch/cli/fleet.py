@@ -46,7 +46,7 @@ def route(options: argparse.Namespace) -> Callable[[argparse.Namespace], int] | 
     command = options.command
     if command == "ls":
         return ls_hosts if options.host else None
-    if command not in ("stop", "status", "logs"):
+    if command not in ("stop", "status", "logs", "attach"):
         return None
     words: list[str] = list(options.name)
     if command == "logs":
@@ -55,7 +55,8 @@ def route(options: argparse.Namespace) -> Callable[[argparse.Namespace], int] | 
             options.process = words.pop()
     if len(words) > 1 or any(w.endswith(":") for w in words):
         options.name = words
-        return {"stop": stop_many, "status": status_many, "logs": logs_many}[command]
+        return {"stop": stop_many, "status": status_many, "logs": logs_many,
+                "attach": attach_many}[command]
     options.name = str(parse_session(words[0])) if words else None
     return None
 
@@ -251,3 +252,22 @@ def logs_many(options: argparse.Namespace) -> int:
     failed = failed or any(isinstance(r, LaunchError | str) for r in results)
     return FAILED if failed else 0
 
+
+# --- attach --------------------------------------------------------------------------------
+
+def attach_many(options: argparse.Namespace) -> int:
+    """One TUI over several sessions (tui/fleet_app.py). A `HOST:` that cannot be listed
+    is a line here; a session whose machine cannot be reached is a root that retries."""
+    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+        raise SessionError("attach needs a terminal",
+                           hint=f"tuilaunch logs {' '.join(options.name)} -f")
+    addresses, failed = expand("attach", options.name)
+    if not addresses:
+        return FAILED
+    from ..tui.fleet_app import FleetApp
+
+    where = [parse_session(a) for a in addresses]
+    app = FleetApp([(w.host, w.name) for w in where], scrollback=options.scrollback)
+    status = app.run() or 0
+    print(f"detached; the sessions run on: tuilaunch attach {' '.join(addresses)}")
+    return FAILED if failed else int(status)

@@ -18,6 +18,8 @@ LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 NODE_LEVELS = ("debug", "info", "warn", "error", "fatal", "unset")
 """What `log-level` sets a node's logger to."""
 SHELLS = ("bash", "zsh")
+TABS = ("nodes", "args", "services", "params", "topics")
+"""The TUI's tabs, as keys 1-5 show them."""
 HZ_WINDOW = 10000
 """`hz -w`'s default, as ros2 topic hz's: the rate is taken over the last N messages."""
 
@@ -119,9 +121,11 @@ def commands_parser() -> argparse.ArgumentParser:
                     "one), asked in parallel, in one table with a HOST column")
     ls.add_argument("--json", action="store_true", help="one JSON list")
     attach = commands.add_parser("attach", help="the TUI on a running session")
-    attach.add_argument("name", nargs="?", metavar="[HOST:]NAME",
-                        help="the session (default: the only one here)")
+    attach.add_argument("name", nargs="*", metavar=SESSIONS,
+                        help=SESSIONS_HELP + "; several: one TUI over all of them")
     attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
+    attach.add_argument("--tab", choices=TABS, default="nodes",
+                        help="the tab shown first (one session)")
     stop = commands.add_parser("stop", help="stop every process of a session, then exit")
     stop.add_argument("name", nargs="*", metavar=SESSIONS, help=SESSIONS_HELP)
     status = commands.add_parser("status", help="each process's state")

@@ -63,6 +63,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
 
     CSS_PATH = "screens/app.tcss"
     TITLE = "tuilaunch"
+    first_tab = "nodes"
+    """The tab shown once the session is followed (`attach --tab`)."""
 
     BINDINGS = [
         Binding("1", "tab('nodes')", "Nodes", tooltip="The group tree and node output"),
@@ -216,6 +218,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         self.say_plan_warnings()
         tree.focus()
         self.tab_shown("nodes")
+        if self.first_tab != "nodes":  # opened from a fleet TUI's 2-5 (fleet_app.py)
+            self.call_after_refresh(self.action_tab, self.first_tab)
 
     # --- command palette ---------------------------------------------------------------------
 

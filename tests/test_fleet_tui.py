@@ -1,0 +1,186 @@
+"""One TUI over two robots (`tuilaunch attach robot1:base robot2:arm`), through real sshd
+"machines" on 127.0.0.1, each robot's launch on a ROS domain of its own: a root per
+session, keys that act on the selected session alone, and a lost link to one robot that
+leaves the other live.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import re
+import signal
+
+from textual.widgets import Static
+
+from tuilaunch.client import remote_supervisor
+from tuilaunch.tui.fleet_app import FleetApp, FleetHelp
+from tuilaunch.tui.fleet_member import Member
+from tuilaunch.tui.output_store import View
+
+from .conftest import run_cli, wait_for
+from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
+from .test_fleet_cli import start, with_gone_host
+from .test_sessions import Terminal
+from .test_tui import until
+
+
+def starts(member: Member, process: str) -> int:
+    """How many times the member's pane says `process` started."""
+    return sum("process started with pid" in line.text
+               for line in member.store.lines(View(process)))
+
+
+def ticks(member: Member) -> int:
+    return sum(line.text.startswith("tick") for line in member.store.lines(View("ticker-1")))
+
+
+async def select(pilot, member: Member, process: str) -> None:
+    """The row of `process` in the member's tree, selected as the arrows would."""
+    member.tree.focus()
+    member.tree.move_cursor(member.tree.rows[process])
+    await pilot.pause()
+
+
+def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Machines,
+                                                                  write, monkeypatch):
+    base = start(machines["robot1"], write, "base", 0)
+    arm = start(machines["robot2"], write, "arm", 1)
+    # robot1's link comes back only when asked (R), so what follows surely happens while
+    # it is down
+    monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)
+
+    async def watched() -> None:
+        app = FleetApp([("robot1", "base"), ("robot2", "arm")])
+        said: list[str] = []
+        notify = app.notify
+        app.notify = lambda message, **kw: (said.append(str(message)),  # type: ignore
+                                            notify(message, **kw))
+        async with app.run_test(size=(100, 30)) as pilot:
+            first, second = app.members
+            await until(pilot, lambda: ticks(first) >= 3 and ticks(second) >= 3)
+            for member, label in ((first, "robot1:base"), (second, "robot2:arm")):
+                root = str(member.tree.root.label)
+                assert root.startswith(label) and "2 running" in root, root
+
+            # r on robot1's ticker restarts it there, and nothing on robot2
+            await select(pilot, first, "ticker-1")
+            assert "[robot1:base]" in str(app.status_bar.render())
+            await pilot.press("r")
+            await until(pilot, lambda: starts(first, "ticker-1") == 2 and
+                        first.supervisor.states["ticker-1"] == "running")
+            # s, then t, on robot1's quiet: stopped and started there
+            await select(pilot, first, "quiet-2")
+            await pilot.press("s")
+            await until(pilot, lambda: first.supervisor.states["quiet-2"] == "exited")
+            assert second.supervisor.states["quiet-2"] == "running"
+            await pilot.press("t")
+            await until(pilot, lambda: first.supervisor.states["quiet-2"] == "running" and
+                        starts(first, "quiet-2") == 2)
+            # s on robot2's quiet stops it there, and nothing on robot1
+            await select(pilot, second, "quiet-2")
+            assert "[robot2:arm]" in str(app.status_bar.render())  # the header follows
+            await pilot.press("s")
+            await until(pilot, lambda: "1 running  1 exited" in str(second.tree.root.label))
+            assert second.supervisor.states["quiet-2"] == "exited"
+            assert first.supervisor.states == {"ticker-1": "running", "quiet-2": "running"}
+            assert starts(second, "ticker-1") == 1
+
+            # robot1's link cut: its root greyed with why; its keys refused in one line
+            for pid in proxies_on(machines["robot1"]):
+                os.kill(pid, signal.SIGKILL)
+            await until(pilot, lambda: "link to robot1 lost" in str(first.tree.root.label))
+            assert "reconnecting" in str(first.tree.root.label)
+            await select(pilot, first, "quiet-2")
+            await pilot.press("s")
+            await until(pilot, lambda: any(s.startswith("robot1:base: link to robot1 lost")
+                                           for s in said))
+            # robot2 is live all along: its quiet starts again with t
+            await select(pilot, second, "quiet-2")
+            await pilot.press("t")
+            await until(pilot, lambda: second.supervisor.states["quiet-2"] == "running" and
+                        starts(second, "quiet-2") == 2)
+            assert "link to robot1 lost" in str(first.tree.root.label)  # still down
+            # R brings robot1 back, with what it printed meanwhile
+            before = ticks(first)
+            await select(pilot, first, "ticker-1")
+            await pilot.press("R")
+            await until(pilot, lambda: first.supervisor.link_lost is None and
+                        ticks(first) > before + 3)
+            assert "2 running" in str(first.tree.root.label)
+            # T: the time column of robot1's pane, its ROS stamps read over its link
+            await pilot.press("T")
+            await until(pilot, lambda: any(
+                re.match(r"\d\d:\d\d:\d\d\.\d{3} .*tick \d+$", row)
+                for row in first.pane.line_view.visible_text()))
+            # q leaves both sessions running
+            await pilot.press("q")
+            await until(pilot, lambda: app.detached)
+
+    asyncio.run(watched())
+    states = {}
+    for address in ("robot1:base", "robot2:arm"):
+        status = json.loads(run_cli("status", address, "--json").stdout)
+        states[address] = {p["id"]: p["state"] for p in status["processes"]}
+    assert states == {"robot1:base": {"ticker-1": "running", "quiet-2": "running"},
+                      "robot2:arm": {"ticker-1": "running", "quiet-2": "running"}}
+    assert run_cli("stop", "robot1:base", "robot2:arm").returncode == 0
+    wait_for(lambda: not alive(base) and not alive(arm))
+
+
+def test_a_robot_unreachable_at_start_is_a_retrying_root_and_the_others_open(
+        machines: Machines, write):
+    start(machines["robot2"], write, "arm", 1)
+    with_gone_host(machines)
+
+    async def watched() -> None:
+        app = FleetApp([("gone", "base"), ("robot2", "arm")])
+        async with app.run_test(size=(100, 30)) as pilot:
+            gone, second = app.members
+            await until(pilot, lambda: ticks(second) >= 3 and
+                        "cannot reach gone" in str(gone.tree.root.label))
+            assert "retrying" in str(gone.tree.root.label)
+            assert gone.supervisor is None
+            await pilot.press("question_mark")  # the keys, as the fleet binds them
+            await until(pilot, lambda: isinstance(app.screen, FleetHelp))
+            assert "Restart the selected node" in str(app.screen.query_one(Static).render())
+            await pilot.press("escape")
+            await until(pilot, lambda: not isinstance(app.screen, FleetHelp))
+            await select(pilot, second, "ticker-1")
+            await pilot.press("r")
+            await until(pilot, lambda: starts(second, "ticker-1") == 2)
+            # robot2's session stopped from a shell: its root says it ended; the TUI
+            # stays for the robot it still waits for
+            stopped = run_cli("stop", "robot2:arm")
+            assert stopped.returncode == 0, stopped.stderr
+            await until(pilot, lambda: "ended" in str(second.tree.root.label))
+            assert "2 exited" in str(second.tree.root.label) or second.ended
+            assert app.is_running and "retrying" in str(gone.tree.root.label)
+            await pilot.press("q")
+
+    asyncio.run(watched())
+
+
+def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
+    start(machines["robot1"], write, "base", 0)
+    start(machines["robot2"], write, "arm", 1)
+    # what a fleet's 2 opens: the selected session's own TUI on its Args tab
+    single = Terminal("attach", "robot1:base", "--tab", "args")
+    try:
+        single.read_until(b"F5 applies")
+        os.write(single.master, b"d")
+        assert single.wait_exit() == 0
+    finally:
+        single.close()
+    terminal = Terminal("attach", "robot1:base", "robot2:")
+    try:
+        for marker in (b"robot1:base", b"robot2:arm", b"tick"):
+            terminal.read_until(marker)
+        os.write(terminal.master, b"q")
+        assert terminal.wait_exit() == 0
+        assert b"detached; the sessions run on: tuilaunch attach robot1:base robot2:arm" \
+            in terminal.screen
+    finally:
+        terminal.close()
+    assert run_cli("stop", "robot1:", "robot2:").returncode == 0

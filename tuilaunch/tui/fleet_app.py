@@ -1,0 +1,451 @@
+"""The fleet TUI: several sessions, on several machines, in one screen
+(`tuilaunch attach nuc:base arm:base local:sim`, or `arm:` for every session there).
+
+The Nodes view has one tree per session, its root the session (`HOST:NAME`, `local:NAME`
+here) with its live counts; the output pane and the header follow the session of the
+selected row, and every key acts on that session alone. Each session is a `Member`
+(fleet_member.py) with its own RemoteSupervisor and ssh link on the one engine thread: a
+link lost to one robot greys its root, says why and that it reconnects (RemoteSupervisor
+retries by itself), and its rows refuse keys with one line while the others stay live. A
+robot unreachable at start is a root that says why and retries.
+
+The Args, Services, Params and Topics tabs are the single-session TUI's: `2`-`5` (and
+`o`, its Nodes tab) open it on the selected session at that tab (this screen suspended
+meanwhile; `d` there comes back here), so those tabs, and every key of one session, follow
+the session of the selected row without a second copy of them here.
+A fleet TUI never stops a session by leaving: `q` detaches from all of them.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import subprocess
+import sys
+from pathlib import Path
+
+from rich.text import Text
+from textual import events, on, work
+from textual.app import App, ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, VerticalScroll
+from textual.widgets import ContentSwitcher, Footer, Static, Tree
+
+from ..client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
+from ..engine.errors import LaunchError
+from ..engine.run.engine_thread import EngineThread
+from .fleet_member import Member
+from .output_store import OutputStore
+from .screens.dialogs import ConfirmScreen, HelpScreen
+from .screens.output_panel import OutputPanel
+from .screens.tree_panel import LaunchTree, RowData
+from .session_link import DRAIN_HZ, PANE_CHROME
+
+FIRST_RETRY = 1.0
+"""Seconds before a session that could not be opened is tried again (then doubling)."""
+
+
+class FleetTree(LaunchTree):
+    """A session's tree; the cursor moves on to the next session's tree past its end."""
+
+    def action_cursor_down(self) -> None:
+        if self.cursor_line >= self.last_line and isinstance(self.app, FleetApp):
+            self.app.step_tree(self, 1)
+        else:
+            super().action_cursor_down()
+
+    def action_cursor_up(self) -> None:
+        if self.cursor_line <= 0 and isinstance(self.app, FleetApp):
+            self.app.step_tree(self, -1)
+        else:
+            super().action_cursor_up()
+
+
+class FleetHelp(HelpScreen):
+    """The fleet's keys (its bindings, with what each does), over the screen."""
+
+    def compose(self) -> ComposeResult:
+        rows = ["One TUI over several sessions: a tree per session; the keys act on the",
+                "session of the selected row. up/down cross from one session's tree to the",
+                "next.", ""]
+        for binding in FleetApp.BINDINGS:
+            assert isinstance(binding, Binding)
+            keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
+                "question_mark", "?").replace(",", ", ")
+            rows.append(f"  {keys:<9} {binding.tooltip or binding.description}")
+        with VerticalScroll():
+            yield Static("\n".join(rows))
+
+
+class FleetApp(App[int]):
+    """One TUI over several sessions (see the module's docstring)."""
+
+    CSS_PATH = "screens/app.tcss"
+    TITLE = "tuilaunch"
+    CSS = """
+    #fleet-trees { width: 36; border-right: tall $panel; }
+    #fleet-trees FleetTree { width: 100%; height: auto; border-right: none; }
+    #fleet-split { height: 1fr; }
+    #fleet-panes { width: 1fr; }
+    """
+    BINDINGS = [
+        Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
+        Binding("r", "command('restart')", "Restart",
+                tooltip="Restart the selected node or group"),
+        Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+        Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
+        Binding("o", "open_session", "Open",
+                tooltip="The selected session in its own TUI: Args, Services, Params, "
+                "Topics (d there comes back)"),
+        Binding("2", "open_session('args')", "Args", show=False,
+                tooltip="The selected session's arguments, in its own TUI"),
+        Binding("3", "open_session('services')", "Services", show=False,
+                tooltip="Its services, in its own TUI"),
+        Binding("4", "open_session('params')", "Params", show=False,
+                tooltip="Its nodes' parameters, in its own TUI"),
+        Binding("5", "open_session('topics')", "Topics", show=False,
+                tooltip="Its topics, rates and QoS, in its own TUI"),
+        Binding("R", "reconnect", "Reconnect", show=False,
+                tooltip="Try the selected session's link again now"),
+        # the pane's keys, as the single-session TUI's NodesView binds them
+        Binding("slash", "pane('search')", "Search", show=False,
+                tooltip="Highlight a text in the pane; n / N jump"),
+        Binding("l", "pane('cycle_level')", "Level", show=False,
+                tooltip="Show only lines from this ROS level up"),
+        Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
+        Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
+        Binding("backslash", "pane('filter')", "Filter", show=False,
+                tooltip="Show only lines containing a text"),
+        Binding("n", "pane('next_match')", "Next", show=False),
+        Binding("N", "pane('previous_match')", "Prev", show=False),
+        Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
+        Binding("f", "pane('raw')", "Format", show=False,
+                tooltip="Lines as printed, or compact"),
+        Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
+        Binding("escape", "pane('clear_search')", "Clear", show=False,
+                tooltip="Clear the search"),
+        Binding("question_mark,f1", "help", "Help", tooltip="These keys"),
+        Binding("q", "quit_fleet", "Quit (detach)",
+                tooltip="Leave: every session runs on (tuilaunch stop stops them)"),
+        Binding("ctrl+c", "quit_fleet", "Quit", show=False, priority=True),
+    ]
+
+    def __init__(self, addresses: list[tuple[str | None, str]], scrollback: int = 5000,
+                 ) -> None:
+        """`addresses`: (host or None for here, session name), in the order shown."""
+        super().__init__()
+        self.animation_level = "none"  # every frame is bytes over ssh
+        self.scrollback = scrollback
+        self.members: list[Member] = []
+        for i, (host, name) in enumerate(addresses):
+            store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
+            label = f"{host or 'local'}:{name}"
+            tree = FleetTree(id=f"fleet-tree-{i}")
+            tree.root.set_label(Text(f"{label} connecting...", style="dim"))
+            pane = OutputPanel(store, Path.cwd(), max_lines=scrollback, id=f"fleet-pane-{i}")
+            self.members.append(Member(label, host, name, tree, pane, store))
+        self.current = self.members[0]
+        self._status_text = ""
+        self._detail_text = ""
+        self.detached = False
+
+    # --- layout ------------------------------------------------------------------------
+
+    def compose(self) -> ComposeResult:
+        yield Static("", id="status")
+        yield Static("", id="detail")
+        with Horizontal(id="fleet-split"):
+            with VerticalScroll(id="fleet-trees"):
+                for member in self.members:
+                    yield member.tree
+            with ContentSwitcher(id="fleet-panes", initial=self.members[0].pane.id):
+                for member in self.members:
+                    yield member.pane
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.status_bar = self.query_one("#status", Static)
+        self.detail_bar = self.query_one("#detail", Static)
+        self.switcher = self.query_one(ContentSwitcher)
+        self.engine = EngineThread()
+        for member in self.members:
+            self.follow(member)
+        self.set_interval(1 / DRAIN_HZ, self.drain)
+        self.members[0].tree.focus()
+        self.update_status()
+
+    # --- the members' links ------------------------------------------------------------
+
+    @work(exit_on_error=False)
+    async def follow(self, member: Member) -> None:
+        """Opens the member's session (again and again, with backoff, while it cannot be
+        reached), then follows it until it ends or the fleet detaches."""
+        wait = FIRST_RETRY
+        while member.supervisor is None and not self.detached:
+            try:
+                member.supervisor = await self.engine.run(self._open(member))
+            except LaunchError as exc:
+                member.problem = f"{exc.message}; retrying (R: now)"
+                member.refresh_root()
+                self.update_status()
+                member.wake = asyncio.Event()
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(member.wake.wait(), wait)
+                wait = min(wait * 2, RETRY_MOST)
+        supervisor = member.supervisor
+        if supervisor is None:
+            return
+        member.problem = None
+        supervisor.subscribe(member.buffer)
+        member.show_plan()
+        member.show_events(supervisor.history)
+        self.update_status()
+        await self.engine.run(supervisor.run(keep_alive=True))
+        if self.detached:
+            return
+        member.ended = True
+        member.problem = "ended" if not supervisor.lost else "the session's server is gone"
+        member.show_events(member.buffer.drain())
+        member.refresh_root()
+        self.update_status()
+        if all(m.ended for m in self.members):
+            self.exit(0)
+
+    async def _open(self, member: Member) -> RemoteSupervisor:
+        """On the engine thread: the member's RemoteSupervisor, subscribed; the plan drawn
+        is the one its server runs (the file may be on the robot only)."""
+        lines = max(12, self.size.height - PANE_CHROME)
+        if member.host is None:
+            return await RemoteSupervisor.open(member.name, member.session, self.scrollback,
+                                               max_lines=lines, interval=1 / DRAIN_HZ)
+        return await RemoteSupervisor.open_remote(
+            member.host, member.name, member.session, self.scrollback, max_lines=lines,
+            interval=LINK_INTERVAL)
+
+    def drain(self) -> None:
+        for member in self.members:
+            if member.supervisor is None:
+                continue
+            lost = member.supervisor.link_lost
+            member.show_events(member.buffer.drain())
+            if lost != getattr(member, "_shown_lost", None):
+                member._shown_lost = lost  # type: ignore[attr-defined]
+                member.refresh_root()
+                self.update_status()
+            self._tell_pane_shown(member)
+        self.update_status()
+        self.update_detail()
+
+    def _tell_pane_shown(self, member: Member) -> None:
+        """The session sends only the lines of its pane's node (all for all nodes)."""
+        supervisor = member.supervisor
+        # as the single TUI: only over a link (a session here sends its lines to a screen
+        # at its drain rate, which costs no link)
+        if supervisor is None or supervisor.host is None or member.ended or \
+                supervisor.link_lost is not None:
+            return
+        shown = member.pane.view.process
+        if shown != supervisor.only:
+            self.engine.submit(supervisor.show(shown))
+
+    # --- the selection -------------------------------------------------------------------
+
+    def member_of(self, tree: object) -> Member | None:
+        return next((m for m in self.members if m.tree is tree), None)
+
+    def on_descendant_focus(self, event: events.DescendantFocus) -> None:
+        """The session of the tree with the focus is the selected one."""
+        member = self.member_of(event.widget)
+        if member is not None:
+            self.select(member)
+            self.update_detail()
+
+    @on(Tree.NodeHighlighted)
+    def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
+        member = self.member_of(event.control)
+        if member is None:
+            return
+        data = event.node.data
+        if data is not None and data.kind == "process":
+            member.pane.show_view(data.ref)
+        elif data is not None and data.kind == "all":
+            member.pane.show_view(None)
+        self.update_detail()
+
+    def select(self, member: Member) -> None:
+        if member is not self.current:
+            self.current = member
+            self.switcher.current = member.pane.id
+            self.update_status()
+
+    def step_tree(self, tree: FleetTree, step: int) -> None:
+        """Up from a tree's first row, down from its last: the neighbouring session's."""
+        member = self.member_of(tree)
+        if member is None:
+            return
+        index = (self.members.index(member) + step) % len(self.members)
+        target = self.members[index].tree
+        target.focus()
+        target.cursor_line = 0 if step > 0 else target.last_line
+        target.scroll_to_node(target.cursor_node or target.root)
+
+    def selected(self) -> list[str]:
+        tree = self.current.tree
+        node = tree.cursor_node
+        if node is None or node.data is None:
+            return []
+        if node.data.kind == "all":
+            return [p.id for p in self.current.session.plan.enabled_processes()]
+        return list(node.data.processes)
+
+    # --- keys ------------------------------------------------------------------------------
+
+    def action_command(self, verb: str) -> None:
+        """s, r, t on the selected rows of the selected session, and nothing else."""
+        member = self.current
+        why = member.unavailable()
+        if why is not None or member.supervisor is None:
+            self.notify(f"{member.label}: the session ended" if member.ended else
+                        f"{member.label}: {why}; its nodes take no keys until it is back",
+                        severity="warning")
+            return
+        processes = self.selected()
+        node = member.tree.cursor_node
+        running = [p for p in processes
+                   if member.supervisor.states.get(p) in ("running", "respawning")]
+        if verb == "stop" and len(running) > 1 and node is not None and node.data is not None \
+                and (node is member.tree.root or node.data.kind == "all"):
+
+            def answered(yes: bool | None) -> None:
+                if yes:
+                    self._command(member, verb, processes)
+
+            self.push_screen(ConfirmScreen(
+                f"Stop all {len(running)} running processes of {member.label}: "
+                f"{', '.join(running[:6])}{' ...' if len(running) > 6 else ''}?",
+                "Stop them (y)"), answered)
+            return
+        self._command(member, verb, processes)
+
+    def _command(self, member: Member, verb: str, processes: list[str]) -> None:
+        supervisor = member.supervisor
+        if supervisor is None or not processes:
+            return
+        commands = []
+        for process in processes:
+            if verb in ("stop", "restart"):
+                member.asked_to_stop.add(process)
+                if supervisor.states.get(process) == "running":
+                    member.tree.set_state(process, "stopping")
+            commands.append(getattr(supervisor, verb)(process))
+        self._carry_out(member, verb, commands)
+        self.update_detail()
+
+    @work(group="commands", exit_on_error=False)
+    async def _carry_out(self, member: Member, verb: str, commands: list[object]) -> None:
+        results = await asyncio.gather(*(self.engine.run(c) for c in commands),  # type: ignore[arg-type]
+                                       return_exceptions=True)
+        for result in results:
+            if isinstance(result, Exception):
+                self.notify(f"{member.label}: {verb}: {result}", severity="error")
+
+    @on(OutputPanel.StampsWanted)
+    def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
+        """T, f: the ROS stamps of the lines a link sent without them, read first (as
+        gaps.py does for the single-session TUI)."""
+        member = self.current  # the keys reach the selected session's pane alone
+        supervisor = member.supervisor
+        if supervisor is None or supervisor.host is None or (
+                message.shown == supervisor.stamps_shown and
+                member.store.unstamped.first() is None):
+            message.then()
+            return
+        self._read_stamps(member, supervisor, message)
+
+    @work(group="stamps", exit_on_error=False)
+    async def _read_stamps(self, member: Member, supervisor: RemoteSupervisor,
+                           message: OutputPanel.StampsWanted) -> None:
+        try:
+            first, end, stamps = await self.engine.run(
+                supervisor.read_stamps(message.shown, member.store.unstamped.first()))
+        except Exception as exc:  # the link is down: the key still does its part
+            self.notify(f"{member.label}: ROS stamps not read: {exc}. Lines that came "
+                        "without theirs show when they arrived.", severity="warning")
+        else:
+            member.show_events(member.buffer.drain())  # the lines sent before the answer
+            if member.store.unstamped.fill(first, end, stamps):
+                member.pane.stamps_read()
+        message.then()
+
+    def action_help(self) -> None:
+        self.push_screen(FleetHelp())
+
+    def action_all_output(self) -> None:
+        self.current.pane.show_view(None)
+
+    def action_pane(self, name: str) -> None:
+        getattr(self.current.pane, f"action_{name}")()
+
+    def action_reconnect(self) -> None:
+        """Now, rather than at the next try: a dropped link, or a session never reached."""
+        supervisor = self.current.supervisor
+        if supervisor is not None:
+            self.engine.call(supervisor.retry_now)
+        elif self.current.wake is not None:
+            self.current.wake.set()
+
+    def action_open_session(self, tab: str = "nodes") -> None:
+        """The selected session in the single-session TUI (all its tabs), on `tab`, this
+        screen suspended meanwhile; `d` (or `q`) there comes back."""
+        member = self.current
+        if member.unavailable() is not None:
+            self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
+            return
+        with self.suspend():
+            subprocess.run([sys.executable, "-m", "tuilaunch", "attach", member.address,
+                            "--tab", tab])
+        self.refresh()
+
+    def action_quit_fleet(self) -> None:
+        """Leaves every session running: a fleet view is a watcher, each robot's launch its
+        own (`tuilaunch stop HOST:NAME ...` stops them)."""
+        self.detached = True
+        for member in self.members:
+            if member.supervisor is not None and not member.ended:
+                self.engine.submit(member.supervisor.detach())
+        self.exit(0)
+
+    def on_unmount(self) -> None:
+        self.detached = True
+        for member in self.members:
+            if member.supervisor is not None:
+                try:
+                    self.engine.call(member.supervisor.kill_all)
+                except Exception:
+                    pass  # its loop ended already
+        self.engine.stop()
+
+    # --- the header ---------------------------------------------------------------------------
+
+    def update_status(self) -> None:
+        member = self.current
+        others = len(self.members) - 1
+        why = member.unavailable()
+        what = why if why is not None else member.counts_text()
+        file = Path(member.session.plan.file).name if member.supervisor else ""
+        line = f"[{member.label}] {file}  {what}  ({others + 1} sessions; o: this one in full)"
+        if line != self._status_text:
+            self._status_text = line
+            self.status_bar.update(Text(line))
+
+    def update_detail(self) -> None:
+        """The selected row in full; on a session's root, the session as the root says."""
+        tree = self.current.tree
+        node = tree.cursor_node
+        if node is None or node is tree.root:
+            text = self.current.root_label().plain
+        else:
+            text = tree.describe(node)
+        if text != self._detail_text:
+            self._detail_text = text
+            self.detail_bar.update(Text(text))
