@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from tuilaunch import __version__
-from tuilaunch.engine.run.events import Event
+from tuilaunch.engine.run.events import Event, ExitCause, ProcessExited
 from tuilaunch.engine.run.session.protocol import (
     PROTOCOL_VERSION,
     Stamps,
@@ -53,8 +53,6 @@ def test_something_else_than_a_greeting_is_refused():
 @pytest.mark.parametrize("event", [
     Event("started", "talker-1", pid=42),
     Event("output", "talker-1", lines=["a", "b"], stream="stderr"),
-    Event("exited", "talker-1", pid=42, code=-11, level="ERROR", reason="crashed",
-          data={"signal": "SIGSEGV"}),
     Event("state", "talker-1", data={"state": "active"}),
 ])
 def test_events_come_back_as_they_went(event: Event):
@@ -70,3 +68,23 @@ def test_stamps_go_apart_and_come_back():
     assert sent["lines"] == ["[INFO] [n]: a", "plain", "[WARN] [n]: b"]
     receiver.unpack(sent)
     assert sent["lines"] == data["lines"]
+
+
+@pytest.mark.parametrize(("code", "data", "cause"), [
+    (0, {"requested": False, "typed": False}, ExitCause.CLEAN),
+    (-11, {"requested": False, "typed": False, "signal": "SIGSEGV"}, ExitCause.CRASHED),
+    (3, {"requested": False, "typed": False}, ExitCause.CRASHED),
+    (-2, {"requested": True, "typed": False}, ExitCause.ASKED),
+    (0, {"requested": True, "typed": False}, ExitCause.ASKED),
+    (-2, {"requested": True, "typed": True}, ExitCause.TYPED),
+])
+def test_an_end_keeps_its_cause_through_the_wire(code, data, cause):
+    """The cause is decided where the process ended; a client reads the same one."""
+    sent = ProcessExited(process="talker-1", pid=42, code=code, reason="r", data=data,
+                         cause=ExitCause.of(code, data["requested"], data["typed"]))
+    assert sent.cause is cause
+    back = event_from_dict(decode(encode(event_to_dict(sent))))
+    assert isinstance(back, ProcessExited) and back.kind == "exited"
+    assert back.cause is cause
+    assert back.crashed == (cause is ExitCause.CRASHED)
+    assert back.asked == (cause in (ExitCause.ASKED, ExitCause.TYPED))

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, TextIO, cast
 
 from ..engine.launcher import make_supervisor
 from ..engine.plan.model import Plan
+from ..engine.run.events import ProcessExited
 from ..engine.run.process.output import strip_ansi
 from ..engine.run.supervisor.stopping import CTRL_C_REASON
 from ..engine.run.supervisor.supervisor import Event
@@ -126,7 +127,7 @@ class Printer:
             return ""  # an action's progress: its log lines already say what happened
         if event.kind == "started":
             return f"[INFO] [{self.label(event)}]: process started with pid [{event.pid}]\n"
-        if event.kind == "exited":
+        if isinstance(event, ProcessExited):
             return self._exit_line(event)
         if event.kind == "failed":
             return f"[ERROR] [{self.label(event)}]: failed to start: {event.reason}\n"
@@ -165,12 +166,12 @@ class Printer:
         prefix = f"[{self.label(event)}] "
         return prefix + ("\n" + prefix).join(event.lines) + "\n"
 
-    def _exit_line(self, event: Event) -> str:
+    def _exit_line(self, event: ProcessExited) -> str:
         """ros2 launch's words, so that what greps its output greps ours."""
         if event.code == 0:
             return f"[INFO] [{self.label(event)}]: process has finished cleanly " \
                 f"[pid {event.pid}]\n"
-        if (event.data or {}).get("requested"):
+        if event.asked:
             # the stop asked for (Ctrl+C, `tuilaunch stop`): its end is no error to report
             return f"[INFO] [{self.label(event)}]: process stopped [pid {event.pid}, " \
                 f"{event.reason}]\n"

@@ -30,6 +30,7 @@ from typing import Any
 
 from ..engine.plan.model import Plan, PlanDiff
 from ..engine.plan.session import Session
+from ..engine.run.events import ProcessExited
 from ..engine.run.machines.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
 from ..engine.run.session import session_dir
 from ..engine.run.session.log_reader import LogLine, tail_lines
@@ -276,7 +277,7 @@ class RemoteSupervisor:
         for event in events:
             if event.kind in ("exited", "failed") and event.process and event.reason:
                 self.reasons[event.process] = event.reason
-            if event.kind == "exited" and event.process:
+            if isinstance(event, ProcessExited) and event.process:
                 self._note_crash(event)
 
     def _note_recent(self, recent: list[dict[str, Any]]) -> None:
@@ -418,7 +419,7 @@ class RemoteSupervisor:
                 self._last_event = max(self._last_event, event.time)
             if event.kind == "relaunched":
                 self._adopt(dict(item.split(":=", 1) for item in event.lines), True)
-            if event.kind == "exited" and event.process and event.code is not None:
+            if isinstance(event, ProcessExited) and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
                 self._note_crash(event)
             if event.kind in ("exited", "failed") and event.process and event.reason:
@@ -586,17 +587,17 @@ class RemoteSupervisor:
         self._note_recent(recent)
         for data in recent:
             event = event_from_dict(data)
-            if event.kind == "exited" and event.process and event.code is not None:
+            if isinstance(event, ProcessExited) and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
                 self._note_crash(event)
         # the pane shown may have changed while the link was down: read what it lacks
         await self._switched(self.only, result["offsets"])
         return notes + merged(lines, recent)
 
-    def _note_crash(self, event: Event) -> None:
+    def _note_crash(self, event: ProcessExited) -> None:
         """An exit nobody asked for with a non-zero status: the run's exit status is 1."""
         assert event.process is not None
-        if event.code and not (event.data or {}).get("requested"):
+        if event.crashed:
             self.crashed[event.process] = event.reason or f"exit code {event.code}"
 
     def _deliver(self, event: Event) -> None:

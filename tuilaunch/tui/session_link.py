@@ -30,6 +30,7 @@ from ..engine.plan.session import Preview, Session
 from ..engine.ros.bridge import RosBridge, in_plan
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
+from ..engine.run.events import ExitCause, ProcessExited
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.supervisor.supervisor import Event
 from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
@@ -389,18 +390,18 @@ class SessionLink(App[int]):
             if is_process:
                 return self.store.add_event(process, f"process started with pid [{event.pid}]")
             return []
-        if event.kind == "exited":
+        if isinstance(event, ProcessExited):
             code = event.code if event.code is not None else 0
-            # the server says whether anyone asked for the stop (another client, a
-            # `tuilaunch stop`, a stop begun before this client attached)
-            asked = process in self.asked_to_stop or self.quitting or bool(
-                event.data and event.data.get("requested"))
-            if code != 0 and not asked and state == "exited":
+            # the cause came with it, decided where it ended: whether anyone asked for the
+            # stop (another client, a `tuilaunch stop`, a stop begun before this client
+            # attached); this client's own asking counts too
+            asked = process in self.asked_to_stop or self.quitting or event.asked
+            if event.crashed and not asked and state == "exited":
                 state = "failed"  # a crash, not the operator's stop
             tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
             if code == 0:
                 text, level = f"process has finished cleanly [pid {event.pid}]", INFO
-            elif event.data and event.data.get("typed"):
+            elif event.cause is ExitCause.TYPED:
                 text, level = (f"process stopped by a key typed into it [pid {event.pid}, "
                                f"{event.reason}]"), INFO
             elif asked:

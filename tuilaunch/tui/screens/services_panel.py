@@ -114,6 +114,7 @@ class ServicesPanel(GraphListing, Horizontal):
         self.timeout = timeout
         self.services: list[tuple[str, list[str]]] = []
         self.selected: tuple[str, str] | None = None
+        self.form_of: tuple[str, str] | None = None  # the service whose form is shown
         self.fields: list[tuple[str, FieldInfo]] = []
         self.history: list[CallRecord] = []
         self._submit_waits = False
@@ -219,6 +220,7 @@ class ServicesPanel(GraphListing, Horizontal):
             return  # another service was picked meanwhile
         await form.remove_children()
         self.fields = leaf_fields(fields)
+        self.form_of = (name, type_name)
         title.update(Text(f"{name}  {type_name}" + ("" if self.fields else "  (empty request)")))
         for path, info in self.fields:
             text = (values or {}).get(path, field_text(info))
@@ -243,8 +245,8 @@ class ServicesPanel(GraphListing, Horizontal):
 
     @work(group="services-call", exclusive=True, exit_on_error=False)
     async def call_selected(self) -> None:
-        if self.selected is None:
-            return
+        if self.selected is None or self.form_of != self.selected:
+            return  # its form is not there yet: the fields on screen are another's
         name, type_name = self.selected
         try:
             request = self.request()

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..events import Event
+from ..events import Event, ExitCause, ProcessExited
 
 LAUNCH_LOG = "@launch"
 """What `read_log` takes, instead of a process id, for launch.log: every event but output,
@@ -112,6 +112,10 @@ def life_event(line: LogLine) -> Event | None:
         code = int(fields["code"]) if "code" in fields else None
     except ValueError:
         return None
+    if line.stream == "exited":  # launch.log keeps "requested" (asked or typed) only
+        return ProcessExited(process=process or None, pid=pid, code=code, reason=reason,
+                             level=fields.get("level") or "INFO", time=line.time, data=data,
+                             cause=ExitCause.of(code or 0, bool(data["requested"])))
     return Event(line.stream, process or None, pid=pid, code=code, reason=reason,
                  level=fields.get("level") or "INFO", time=line.time, data=data)
 

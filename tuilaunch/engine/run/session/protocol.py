@@ -108,7 +108,7 @@ import re
 from typing import Any
 
 from .... import __version__
-from ..events import Event
+from ..events import Event, ExitCause, ProcessExited
 from .session_dir import SessionError
 
 MAX_MESSAGE = 64 << 20
@@ -281,7 +281,14 @@ def with_stamp(line: str, ms: int) -> str:
 
 
 def event_from_dict(data: dict[str, Any]) -> Event:
+    """An event back from its dict: a process's end as a ProcessExited, its cause read from
+    its data ("requested", "typed") as it was decided where the process ended."""
     fields = {k: v for k, v in data.items() if k in _EVENT_FIELDS}
     if not isinstance(fields.get("kind"), str):
         raise ProtocolError(f"an event without a kind: {data!r}")
+    if fields["kind"] == "exited":
+        said = fields.get("data") or {}
+        cause = ExitCause.of(int(fields.get("code") or 0), bool(said.get("requested")),
+                             bool(said.get("typed")))
+        return ProcessExited(**fields, cause=cause)
     return Event(**fields)

@@ -25,7 +25,7 @@ from typing import Any
 
 from ...describe.python.launch_events import EventInfo
 from ...plan.model import ActionPlan, Plan
-from ..events import Consumer, Event
+from ..events import Consumer, Event, ProcessExited
 from ..plugins import ActionRunner, SupervisorPlugin
 from ..process.logfiles import LogFile
 from ..process.process_command import StartCommand
@@ -152,7 +152,7 @@ class SupervisorCore:
         if event.kind != "output":
             # `tuilaunch logs` tells a process's life from these lines (log_reader.life_events):
             # a stop asked for is no crash, and a log line keeps its level; reason comes last
-            requested = 1 if (event.data or {}).get("requested") else None
+            requested = 1 if isinstance(event, ProcessExited) and event.asked else None
             level = event.level if event.level != "INFO" else None
             detail = " ".join(f"{k}={v}" for k, v in (("pid", event.pid), ("code", event.code),
                                                        ("requested", requested),

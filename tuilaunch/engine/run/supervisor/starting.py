@@ -16,7 +16,7 @@ from pathlib import Path
 from ...errors import LaunchError
 from ...plan.model import ProcessPlan
 from ...plan.params import write_parameter_file
-from ..events import Event
+from ..events import Event, ExitCause, ProcessExited
 from ..process.logfiles import LogFile
 from ..process.process_command import death_details, start_command
 from ..process.readers import ChannelReader, Running
@@ -197,7 +197,8 @@ class Starting(PlanActions):
         typed = code < 0 and -code in running.typed_signals
         if code > 0 and running.typed_signals & _ENDING_KEYS:
             typed = True  # a program that turns a typed ctrl+c into an exit status (130)
-        crashed = code != 0 and not requested and not typed
+        cause = ExitCause.of(code, requested, typed)  # decided here, once
+        crashed = cause is ExitCause.CRASHED
         if crashed:
             self.crashes[process_id] = code
             self.crash_times[process_id] = time.monotonic()
@@ -220,9 +221,10 @@ class Starting(PlanActions):
         # `requested`: a stop asked by anyone (another client, `tuilaunch stop`, a ctrl+c
         # typed into it: `typed`), not a crash
         again = {"again": True} if process_id in self.coming_back else {}
-        self.emit(Event("exited", process_id, pid=running.process.pid, code=code,
-                         reason=reason, data={"requested": requested or typed,
-                                              "typed": typed, **again, **death}))
+        self.emit(ProcessExited(process=process_id, pid=running.process.pid, code=code,
+                                reason=reason, cause=cause,
+                                data={"requested": requested or typed, "typed": typed,
+                                      **again, **death}))
         self.process_event(process_id, "exit", running.process.pid, code)
         self.flag(process_id, "exit").set()
         return code, requested

@@ -27,7 +27,7 @@ from pathlib import Path
 
 from ...errors import LaunchError
 from ...plan.model import Plan, PlanDiff, diff_plans
-from ..events import Consumer, Event, LaunchEvent
+from ..events import Consumer, Event, LaunchEvent, ProcessExited
 from ..process.readers import Running
 from .interacting import Interacting, restart_fields
 from .placed import ELSEWHERE, RemoteControl
@@ -346,16 +346,15 @@ class Supervisor(Interacting):
             self.placing.pids_elsewhere[process_id] = event.pid
         if state is not None:
             self.states[process_id] = state
-        if event.kind == "exited" and event.code is not None:
+        if isinstance(event, ProcessExited) and event.code is not None:
             self.exit_codes[process_id] = event.code
-            requested = bool((event.data or {}).get("requested"))
-            if event.code != 0 and not requested and not self.shutting_down:
+            if event.crashed and not self.shutting_down:  # as its machine decided
                 self.crashes[process_id] = event.code
                 self.crash_times[process_id] = time.monotonic()
         self.emit(event)
         if event.kind == "started":
             self.external_event(process_id, "start", event.pid)
-        elif event.kind == "exited":
+        elif isinstance(event, ProcessExited):
             self.external_event(process_id, "exit", event.pid, event.code)
 
     def external_event(self, process_id: str, on: str, pid: int | None = None,
