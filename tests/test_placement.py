@@ -549,3 +549,38 @@ async def tui_tries_the_machine_again(name: str, status: dict) -> None:
         assert tree.states["far-1"] == "failed"
         await pilot.press("d")
         await pilot.pause(0.5)
+
+
+SELF_NAMED = """
+from launch import LaunchDescription
+from launch_ros.actions import Node, PushRosNamespace
+from launch.actions import GroupAction
+
+
+def generate_launch_description():
+    return LaunchDescription([GroupAction([
+        PushRosNamespace('r2'),
+        Node(package='tuilaunch_demos', executable='talker', name='talker'),
+        Node(package='tuilaunch_demos', executable='listener'),
+    ])])
+"""
+
+
+def test_a_rule_that_places_others_says_which_self_named_node_it_leaves_here(setup, write):
+    """`match: /r2/**` places /r2/talker; /r2/<listener> names itself, stays here, and
+    that is said once, naming the node and the rule, in --print and at the start."""
+    _, placement = setup
+    launch = write(SELF_NAMED, "self_named.py")
+    placement.write_text(placement.read_text().replace("match: far-*, machine: r1",
+                                                       "match: /r2/**, machine: r3"))
+    says = ("placement rule '/r2/**' -> r3 leaves listener-2 here: /r2/<listener> names "
+            "itself in its code (the launch file gives no name), so a placement rule cannot "
+            "know it before it runs; match its process id instead: 'listener-*'")
+    printed = run_cli(str(launch), "--machines", str(placement), "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert printed.stdout.count(says) == 1, printed.stdout
+    assert "[talker-1] @r3" in printed.stdout
+    with Headless(str(launch), "--machines", str(placement)) as run:
+        run.wait_for(r"\[ERROR\] \[talker-1@r3\]: failed to start")  # robot3 is off
+        run.stop()
+    assert run.text.count(says) == 1, run.text
