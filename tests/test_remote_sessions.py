@@ -721,3 +721,31 @@ def test_a_remote_command_that_is_no_tuilaunch_is_named_with_its_host(machines: 
         "tuilaunch status: error: robot1: the remote command '/bin/true' exited without "
         "speaking the session protocol (exit status 0)\n"), done.stderr
     assert "hint: is /bin/true a tuilaunch? (TUILAUNCH_REMOTE names it)" in done.stderr
+
+
+UNNAMED = """
+from launch import LaunchDescription
+from launch_ros.actions import Node
+def generate_launch_description():
+    return LaunchDescription([Node(package='tuilaunch_demos', executable='talker',
+                                   namespace='r2', parameters=[{'rate': 5.0}])])
+"""
+
+
+def test_a_restart_at_debug_level_over_ssh_keeps_the_node_name(machines: Machines, write):
+    """Over ssh as here: after `restart --log-level debug` rcl's lines come first, and the
+    node is still known by its own name (issue 36, item 4)."""
+    robot = machines["robot1"]
+    done = run_cli(str(write(UNNAMED)), "--detach", "--name", "far", env=there(robot))
+    assert done.returncode == 0, done.stderr
+    try:
+        def dumped() -> bool:
+            return "rate:" in run_cli("params", "robot1:far", "talker-1", "--dump").stdout
+
+        wait_for(dumped)
+        restarted = run_cli("restart", "robot1:far", "talker-1", "--log-level", "debug")
+        assert restarted.returncode == 0, restarted.stderr
+        wait_for(lambda: "[rcl]: " in run_cli("logs", "robot1:far", "talker-1").stdout)
+        wait_for(dumped)
+    finally:
+        assert run_cli("stop", "robot1:far").returncode == 0
