@@ -490,6 +490,9 @@ def test_a_machine_off_at_the_start_is_tried_again_by_a_restart(setup, machines)
         # still off: tried again, and said with this attempt's reason
         refused = run_cli("restart", name, "far-1", timeout=90)
         assert refused.returncode != 0
+        # said as it happens, then the result
+        assert refused.stderr.startswith("r3: connecting again... (far-1 runs there)\n"), \
+            refused.stderr
         assert "far-1 runs on r3, tried again: cannot reach r3 (robot3): " in refused.stderr, \
             refused.stderr
         assert "Traceback" not in refused.stderr
@@ -502,6 +505,8 @@ def test_a_machine_off_at_the_start_is_tried_again_by_a_restart(setup, machines)
         restarted = run_cli("restart", name, "far-1", timeout=150)
         assert restarted.returncode == 0, restarted.stderr
         assert restarted.stdout == "far-1: running\n"
+        assert restarted.stderr.startswith("r3: connecting again... (far-1 runs there)\n")
+        assert "r3: following session " in restarted.stderr, restarted.stderr
         assert len(remote_sessions(machines, "robot3")) == 1
         wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
         launch_log = run_cli("logs", name).stdout
