@@ -3,6 +3,7 @@ a user tries it: real launches, the command run as a shell runs it."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 
@@ -122,6 +123,7 @@ def test_ros2_launchs_own_option_spellings_work(write):
 
 
 PRINTS = """
+import json
 import os
 import sys
 from launch import LaunchDescription
@@ -191,3 +193,28 @@ def test_a_restart_at_debug_level_keeps_the_name_the_node_reports(runtime, write
         dumped(name, "talker-1")
     finally:
         tl("stop", name)
+
+
+def test_the_parameter_folder_of_a_killed_server_is_removed_by_the_next_start(
+        runtime, write, tmp_path, monkeypatch):
+    """`kill -9` of a session server leaves its folder in $TMPDIR (no atexit runs): the
+    next tuilaunch that plans removes it (issue 36, item 15)."""
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    monkeypatch.setenv("TMPDIR", str(tmp))
+    launch = str(write(TALKER))
+    name = tl(launch, "--detach").stdout.strip()
+    tl("wait", name, "talker-1", "running", "--timeout", "60")
+    pid = json.loads(tl("status", name, "--json").stdout)["pid"]
+    left = list(tmp.glob(f"tuilaunch-{pid}-params-*"))
+    assert len(left) == 1
+    os.kill(pid, signal.SIGKILL)
+    wait_for(lambda: not session_dir.pid_alive(pid) or
+             open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0] == "Z",
+             what="the server killed")
+    assert left[0].is_dir()  # nothing ran its cleanup
+    again = tl(launch, "--detach").stdout.strip()
+    try:
+        assert not left[0].exists()
+    finally:
+        tl("stop", again)

@@ -490,6 +490,9 @@ def test_a_machine_off_at_the_start_is_tried_again_by_a_restart(setup, machines)
         # still off: tried again, and said with this attempt's reason
         refused = run_cli("restart", name, "far-1", timeout=90)
         assert refused.returncode != 0
+        # said as it happens, then the result
+        assert refused.stderr.startswith("r3: connecting again... (far-1 runs there)\n"), \
+            refused.stderr
         assert "far-1 runs on r3, tried again: cannot reach r3 (robot3): " in refused.stderr, \
             refused.stderr
         assert "Traceback" not in refused.stderr
@@ -502,6 +505,8 @@ def test_a_machine_off_at_the_start_is_tried_again_by_a_restart(setup, machines)
         restarted = run_cli("restart", name, "far-1", timeout=150)
         assert restarted.returncode == 0, restarted.stderr
         assert restarted.stdout == "far-1: running\n"
+        assert restarted.stderr.startswith("r3: connecting again... (far-1 runs there)\n")
+        assert "r3: following session " in restarted.stderr, restarted.stderr
         assert len(remote_sessions(machines, "robot3")) == 1
         wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
         launch_log = run_cli("logs", name).stdout
@@ -549,3 +554,38 @@ async def tui_tries_the_machine_again(name: str, status: dict) -> None:
         assert tree.states["far-1"] == "failed"
         await pilot.press("d")
         await pilot.pause(0.5)
+
+
+SELF_NAMED = """
+from launch import LaunchDescription
+from launch_ros.actions import Node, PushRosNamespace
+from launch.actions import GroupAction
+
+
+def generate_launch_description():
+    return LaunchDescription([GroupAction([
+        PushRosNamespace('r2'),
+        Node(package='tuilaunch_demos', executable='talker', name='talker'),
+        Node(package='tuilaunch_demos', executable='listener'),
+    ])])
+"""
+
+
+def test_a_rule_that_places_others_says_which_self_named_node_it_leaves_here(setup, write):
+    """`match: /r2/**` places /r2/talker; /r2/<listener> names itself, stays here, and
+    that is said once, naming the node and the rule, in --print and at the start."""
+    _, placement = setup
+    launch = write(SELF_NAMED, "self_named.py")
+    placement.write_text(placement.read_text().replace("match: far-*, machine: r1",
+                                                       "match: /r2/**, machine: r3"))
+    says = ("placement rule '/r2/**' -> r3 leaves listener-2 here: /r2/<listener> names "
+            "itself in its code (the launch file gives no name), so a placement rule cannot "
+            "know it before it runs; match its process id instead: 'listener-*'")
+    printed = run_cli(str(launch), "--machines", str(placement), "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert printed.stdout.count(says) == 1, printed.stdout
+    assert "[talker-1] @r3" in printed.stdout
+    with Headless(str(launch), "--machines", str(placement)) as run:
+        run.wait_for(r"\[ERROR\] \[talker-1@r3\]: failed to start")  # robot3 is off
+        run.stop()
+    assert run.text.count(says) == 1, run.text

@@ -27,7 +27,7 @@ from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 
 from .conftest import run_cli, wait_for
-from .sshd import Machine, Machines, alive, machines_fixture, proxies_on  # noqa: F401
+from .sshd import Machine, Machines, alive, free_port, machines_fixture, proxies_on  # noqa: F401
 from .test_sessions import Terminal
 from .test_tui import until
 
@@ -488,7 +488,7 @@ def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: M
                                            if n > seen) >= 5)
             assert all(row.startswith("I line ") for row in rows(app))
             await pilot.press("w")
-            saved = Path(status["log_dir"])
+            saved = app.pane_save_dir()  # on this computer (the log folder is over there)
             await until(pilot, lambda: list(saved.glob("*-pane-*.txt")))
             lines = [line for line in next(saved.glob("*-pane-*.txt")).read_text()
                      .splitlines() if "line " in line]
@@ -594,3 +594,158 @@ def test_a_stream_whose_link_drops_says_so_and_the_session_runs_on(machines: Mac
     code, said = rate.ended()
     assert code == 2 and "session far ended" in said, (code, said)
 
+
+def status_row(app) -> str:
+    """The status line as the terminal shows it (cut at the screen's width)."""
+    return app.status_bar.render_line(0).text
+
+
+def test_a_lost_link_fits_80_columns_says_each_attempt_and_a_hung_link_its_silence(
+        machines: Machines, write, monkeypatch):
+    """At 80x24: "link to robot1 lost · reconnecting · far" whole; the reason is the latest
+    attempt's; a link that hangs (no bytes, no error) shows how long it has been silent."""
+    robot = machines["robot1"]
+    start_on(robot, write, "far")
+    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)  # only R reconnects
+    config = machines.ssh_config.read_text()
+
+    async def attached() -> None:
+        app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                       session_name="far", session_host="robot1")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await until(pilot, lambda: "[robot1:far]" in status_row(app))
+            for pid in proxies_on(robot):
+                os.kill(pid, signal.SIGKILL)
+            await until(pilot, lambda: "link to robot1 lost" in status_row(app))
+            assert status_row(app).startswith("link to robot1 lost · reconnecting · far · "
+                                              "R: now · "), status_row(app)
+            # robot1 off the network now: the next attempt's reason replaces the first
+            machines.ssh_config.write_text(config.replace(
+                f"Port {robot.port}\n", f"Port {free_port()}\n"))
+            await pilot.press("R")
+            await until(pilot, lambda: "Connection refused" in str(app.status_bar.render()))
+            assert str(app.status_bar.render()).startswith(
+                "link to robot1 lost · reconnecting · far · R: now · cannot reach robot1")
+            machines.ssh_config.write_text(config)
+            await pilot.press("R")
+            await until(pilot, lambda: "[robot1:far]" in status_row(app))
+            # a hung link: the proxy there stopped, ssh sees no error for 15 s
+            await until(pilot, lambda: len(proxies_on(robot)) == 1)
+            hung = proxies_on(robot)[0]
+            os.kill(hung, signal.SIGSTOP)
+            try:
+                await until(pilot, lambda: re.match(r"no word from robot1 for \d+ s · ",
+                                                    status_row(app)) is not None)
+            finally:
+                os.kill(hung, signal.SIGCONT)
+            await until(pilot, lambda: "no word" not in status_row(app))
+            await pilot.press("d")
+            await until(pilot, lambda: app.detached)
+
+    asyncio.run(attached())
+    assert run_cli("stop", "robot1:far").returncode == 0
+
+
+def test_a_pane_saved_over_ssh_is_written_where_the_notice_says(machines: Machines, write,
+                                                                tmp_path, monkeypatch):
+    """`w` in a TUI attached over ssh writes on this computer: the notice names a folder
+    of this computer, not the log folder over there."""
+    robot = machines["robot1"]
+    start_on(robot, write, "far")
+    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "here"))
+    said: list[str] = []
+
+    async def attached() -> None:
+        app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                       session_name="far", session_host="robot1")
+        async with app.run_test(size=(100, 30)) as pilot:
+            tree = app.launch_tree
+            await until(pilot, lambda: "ticker-1" in tree.rows)
+            tree.move_cursor(tree.rows["ticker-1"])
+            await until(pilot, lambda: any(line.text == "tick 3" for line in
+                                           app.store.lines(View("ticker-1"))))
+            await pilot.press("w")
+            await until(pilot, lambda: any("pane saved to" in n.message
+                                           for n in app._notifications))
+            said.extend(n.message for n in app._notifications if "pane saved" in n.message)
+            await pilot.press("d")
+            await until(pilot, lambda: app.detached)
+
+    asyncio.run(attached())
+    path = Path(said[0].split("pane saved to ", 1)[1])
+    assert path.is_relative_to(tmp_path / "here" / "tuilaunch-robot1-far"), path
+    assert "tick 3" in path.read_text()
+    assert not str(path).startswith(status["log_dir"])
+    assert run_cli("stop", "robot1:far").returncode == 0
+
+
+def test_a_server_killed_there_is_its_end_not_a_lost_link(machines: Machines, write):
+    """`kill -9` of the session's server on robot1, the link up all along: said as the
+    session's end (no "while the link was down", no reconnecting), by `logs -f` too."""
+    robot = machines["robot1"]
+    server = start_on(robot, write, "far")
+    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    follow = Streaming("logs", "robot1:far", "ticker-1", "-f")
+    follow.read_until("tick")
+    said: list[str] = []
+
+    async def attached() -> None:
+        app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                       session_name="far", session_host="robot1")
+        async with app.run_test(size=(100, 30)) as pilot:
+            await until(pilot, lambda: any(line.text.startswith("tick") for line in
+                                           app.store.lines(View("ticker-1"))))
+            assert app.supervisor is not None
+            app.supervisor.subscribe(lambda e: said.append(e.reason or "")
+                                     if e.kind == "log" else None)
+            os.kill(server, signal.SIGKILL)
+            await until(pilot, lambda: any("ended without a word" in s for s in said))
+            assert "link to robot1 lost" not in str(app.status_bar.render())
+
+    asyncio.run(attached())
+    gone = f"robot1: session far ended without a word: its server (pid {server}) is gone"
+    assert gone in said, said
+    assert not any("while the link was down" in s or "reconnecting" in s for s in said), said
+    code, stderr = follow.ended()
+    assert code == 2 and f"tuilaunch logs: error: {gone}" in stderr, (code, stderr)
+
+
+def test_a_remote_command_that_is_no_tuilaunch_is_named_with_its_host(machines: Machines):
+    """`TUILAUNCH_REMOTE=/bin/true`: it exits 0 without a word of the protocol; said so,
+    naming the command and the host, not "failed: exit status 0"."""
+    done = run_cli("status", "robot1:far", env={"TUILAUNCH_REMOTE": "/bin/true"})
+    assert done.returncode == 2
+    assert done.stderr.startswith(
+        "tuilaunch status: error: robot1: the remote command '/bin/true' exited without "
+        "speaking the session protocol (exit status 0)\n"), done.stderr
+    assert "hint: is /bin/true a tuilaunch? (TUILAUNCH_REMOTE names it)" in done.stderr
+
+
+UNNAMED = """
+from launch import LaunchDescription
+from launch_ros.actions import Node
+def generate_launch_description():
+    return LaunchDescription([Node(package='tuilaunch_demos', executable='talker',
+                                   namespace='r2', parameters=[{'rate': 5.0}])])
+"""
+
+
+def test_a_restart_at_debug_level_over_ssh_keeps_the_node_name(machines: Machines, write):
+    """Over ssh as here: after `restart --log-level debug` rcl's lines come first, and the
+    node is still known by its own name (issue 36, item 4)."""
+    robot = machines["robot1"]
+    done = run_cli(str(write(UNNAMED)), "--detach", "--name", "far", env=there(robot))
+    assert done.returncode == 0, done.stderr
+    try:
+        def dumped() -> bool:
+            return "rate:" in run_cli("params", "robot1:far", "talker-1", "--dump").stdout
+
+        wait_for(dumped)
+        restarted = run_cli("restart", "robot1:far", "talker-1", "--log-level", "debug")
+        assert restarted.returncode == 0, restarted.stderr
+        wait_for(lambda: "[rcl]: " in run_cli("logs", "robot1:far", "talker-1").stdout)
+        wait_for(dumped)
+    finally:
+        assert run_cli("stop", "robot1:far").returncode == 0

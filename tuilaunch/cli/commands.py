@@ -419,14 +419,48 @@ def print_status(status: dict[str, Any], label: str | None = None) -> None:
 
 def cmd_restart(options: argparse.Namespace) -> int:
     link = open_link(options.name, timeout=None)
+    fields = restart_fields(options.prefix, options.log_level, options.terminal)
     try:
-        result = link.request("restart", process=options.process,
-                              **restart_fields(options.prefix, options.log_level,
-                                               options.terminal))
+        status = link.request("status", short=True, resources=False)
+        process = link.request("find", short=True, process=options.process)
+        machine = next((p.get("machine") for p in status["processes"] if p["id"] == process),
+                       None)
+        if machine:
+            result = _restart_placed(link, process, machine, fields)
+        else:
+            result = link.request("restart", process=process, **fields)
     finally:
         link.close()
     print(f"{result['process']}: {result['state']}")
     return 0 if result["state"] == "running" else 1
+
+
+def _restart_placed(link: Link, process: str, machine: str,
+                    fields: dict[str, Any]) -> dict[str, Any]:
+    """A restart of a process another machine runs: what the launch says of reaching that
+    machine meanwhile ("nuc: connecting again...") is printed as it comes, then the
+    result."""
+    link.request("subscribe", max_lines=1, kinds=["log"])
+    asking = link.send("restart", process=process, **fields)
+    reaching = False
+    while True:
+        message = link.receive()
+        if message is None:
+            raise link.lost() or SessionError(
+                f"session {link.label} closed the connection during restart")
+        if message.get("type") == "reply" and message.get("id") == asking:
+            if not message.get("ok"):
+                raise SessionError(f"session {link.label}: {message.get('error')}")
+            result: dict[str, Any] = message["result"]
+            return result
+        for event in message.get("events") or []:
+            reason = str(event.get("reason") or "")
+            if event.get("kind") != "log" or event.get("process") is not None or \
+                    not reason.startswith(f"{machine}: "):
+                continue
+            reaching = reaching or "connecting again" in reason
+            if reaching:  # the lines of this attempt, not the machine's older news
+                print(reason, file=sys.stderr, flush=True)
 
 
 def cmd_wait(options: argparse.Namespace) -> int:

@@ -10,6 +10,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import Address, open_remote_link, parse_address
 from ..engine.run.session import session_dir
 from ..engine.run.session.protocol import MAX_MESSAGE, check_hello, decode, encode
@@ -143,10 +144,11 @@ class Link:
             self.ended = True
         return message
 
-    def lost(self) -> LinkLost | None:
+    def lost(self) -> SessionError | None:
         """Once the connection closed: LinkLost when it was the ssh link to a session that
-        had not said it ended (the session may run on there); None when the session ended
-        (or is on this machine, where no link is between)."""
+        had not said it ended (the session may run on there); a SessionError when the
+        proxy there saw its server die; None when the session ended (or is on this
+        machine, where no link is between)."""
         if self.host is None or self.ended:
             return None
         reason = "closed"
@@ -155,6 +157,8 @@ class Link:
                 reason = self._why_lost()
             except OSError:
                 pass
+        if SERVER_GONE_WORDS in reason:  # the link was up; the session is what ended
+            return SessionError(f"{self.host}: {reason.split('error: ', 1)[-1]}")
         return LinkLost(f"link to {self.host} lost: {reason}")
 
     def send(self, op: str, **fields: Any) -> int:

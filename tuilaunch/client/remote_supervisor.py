@@ -24,6 +24,7 @@ import asyncio
 import contextlib
 import os
 import signal
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -31,9 +32,10 @@ from typing import Any
 from ..engine.plan.model import Plan, PlanDiff
 from ..engine.plan.session import Session
 from ..engine.run.events import ProcessExited
+from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
 from ..engine.run.session import session_dir
-from ..engine.run.session.log_reader import LogLine, tail_lines
+from ..engine.run.session.log_reader import LAUNCH_LOG, LogLine, tail_lines
 from ..engine.run.session.protocol import (
     MAX_MESSAGE,
     ProtocolError,
@@ -62,6 +64,10 @@ LINK_INTERVAL = 1.0
 once a second anyway (tui PANE_FPS), and every batch costs the link a packet."""
 RETRY_MOST = 15.0
 """The longest wait between tries: a robot back on the network is found within this."""
+PROBE_AFTER = 2.0
+"""Seconds without a word over a link after which the other side is asked something that
+is answered at once (a quiet session sends nothing): a link that hangs (no bytes, no
+error; ssh says so only after 15 s) shows as silence within a few seconds."""
 
 
 def merged_usage(held: dict[str, Any], moved: dict[str, Any]) -> dict[str, Any]:
@@ -103,6 +109,11 @@ class RemoteSupervisor:
         self.link = link
         self.link_lost: str | None = None
         """While the link to `host` is down: why ("link to HOST lost (reason)")."""
+        self.lost_reason: str | None = None
+        """While it is down: why, the latest attempt's reason (the first is the drop's)."""
+        self.last_heard = time.monotonic()
+        """When the other side last sent anything (a link's silence is shown from it)."""
+        self._probed = 0.0  # when the last probe was sent
         self.scrollback = 5000
         self.max_lines = 0
         self.interval = 0.0
@@ -320,6 +331,7 @@ class RemoteSupervisor:
         a dropped ssh link is reconnected meanwhile (see the module's docstring)."""
         status = 1
         self._retry = asyncio.Event()
+        probe = asyncio.ensure_future(self._probe()) if self.host is not None else None
         try:
             while True:
                 ended = await self._follow()
@@ -338,6 +350,8 @@ class RemoteSupervisor:
                         status = 0  # the stop asked for finished while the link was down
                     break
         finally:
+            if probe is not None:
+                probe.cancel()
             self._fail_replies(f"session {self.name} is gone")
             self._writer.close()
             if self.link is not None:
@@ -356,6 +370,7 @@ class RemoteSupervisor:
                     line = b""
                 if not line:
                     return None
+                self.last_heard = time.monotonic()
                 try:
                     message = decode(line)
                 except ProtocolError:
@@ -493,6 +508,28 @@ class RemoteSupervisor:
 
     # --- a dropped link ----------------------------------------------------------------------
 
+    def silent_for(self) -> float:
+        """Seconds since the other side of the link last said anything (0 with no link,
+        or while it is down: then `link_lost` says more)."""
+        if self.host is None or self.link_lost is not None:
+            return 0.0
+        return max(0.0, time.monotonic() - self.last_heard)
+
+    async def _probe(self) -> None:
+        """Over a link: after PROBE_AFTER s of silence, asks what is answered at once (a
+        log file's size), so a quiet session answers and a hung link stays silent."""
+        while True:
+            await asyncio.sleep(PROBE_AFTER / 2)
+            now = time.monotonic()
+            if self.link_lost is not None or self._writer.is_closing() or \
+                    now - self.last_heard < PROBE_AFTER or self._probed > self.last_heard:
+                continue  # heard lately, or the last probe is still unanswered
+            self._probed = now
+            self._next_id += 1  # its reply is read and passed over like any other
+            with contextlib.suppress(ConnectionError, OSError):
+                self._writer.write(encode({"id": self._next_id, "op": "read_log",
+                                           "process": LAUNCH_LOG, "limit": 0}))
+
     def retry_now(self) -> None:
         """Reconnect at once instead of at the next try (on the loop's thread)."""
         if self._retry is not None:
@@ -505,7 +542,14 @@ class RemoteSupervisor:
         loop = asyncio.get_running_loop()
         self._writer.close()
         why = await loop.run_in_executor(None, self.link.why_lost)
+        if SERVER_GONE_WORDS in why:
+            # the link was up: the proxy there saw the session's server die (kill -9)
+            self.lost = not self._stopping
+            self._deliver(Event("log", reason=f"{self.host}: {why.split('error: ', 1)[-1]}",
+                                level="ERROR"))
+            return False
         self.link_lost = f"link to {self.host} lost ({why})"
+        self.lost_reason = why
         self._fail_replies(self.link_lost)
         self._deliver(Event("log", reason=f"{self.link_lost}; session {self.name} runs on "
                             "there; reconnecting", level="ERROR"))
@@ -532,6 +576,7 @@ class RemoteSupervisor:
                     self._deliver(Event("log", reason=f"session {self.name} ended on "
                                         f"{self.host} while the link was down", level="ERROR"))
                     return False
+                self.lost_reason = str(exc)  # the outage's reason now, not its first
                 if str(exc) != said:  # each new reason once, not every try
                     said = str(exc)
                     self._deliver(Event("log", reason=f"reconnecting: {exc}", level="WARN"))
@@ -552,7 +597,8 @@ class RemoteSupervisor:
                 self._writer.close()
                 self._deliver(Event("log", reason=f"reconnecting: {exc}", level="WARN"))
                 continue
-            self.link_lost = None
+            self.link_lost = self.lost_reason = None
+            self.last_heard = time.monotonic()
             self._deliver(Event("log", reason=f"link to {self.host} back: what happened "
                                 "meanwhile follows"))
             for event in missed:

@@ -112,8 +112,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 yield Static("", id="detail")
                 with NodesView(id="nodes-split"):
                     yield LaunchTree(id="tree")
-                    yield OutputPanel(self.store, self.log_dir, max_lines=self.scrollback,
-                                      max_fps=self.pane_fps, id="output")
+                    yield OutputPanel(self.store, self.pane_save_dir(),
+                                      max_lines=self.scrollback, max_fps=self.pane_fps,
+                                      id="output")
             with TabPane("2 Args", id="args"):
                 yield ArgsPanel(self.session.plan.arguments, self.session.plan.file,
                                 id="args-panel")

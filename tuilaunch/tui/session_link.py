@@ -51,6 +51,9 @@ PANE_CHROME = 6
 """Rows of the screen that are not the output pane (status, tabs, detail, the pane's own
 status line, footer): a display over a link is sent a pane's worth of lines a second, as
 the pane repaints once a second and shows no more."""
+SILENCE_SHOWN = 5.0
+"""Seconds without a word from the other side of a link (probed meanwhile) after which the
+status line says how long: a hung link says nothing else for ssh's 15 s."""
 ENDED_ELSEWHERE_PAUSE = 3.0
 """Seconds a client shows that its session was stopped elsewhere before it leaves."""
 WARNINGS_SHOWN = 3
@@ -346,8 +349,8 @@ class SessionLink(App[int]):
         if events:
             self.update_status()
             self.update_detail()
-        elif self.quit_started is not None:
-            self.update_status()  # the signal stage moves on with time
+        elif self.quit_started is not None or self.over_link() is not None:
+            self.update_status()  # the signal stage, a link's silence: move on with time
 
     def _tell_pane_shown(self) -> None:
         """Over an ssh link the server sends only the output pane's process's lines (all
@@ -358,6 +361,16 @@ class SessionLink(App[int]):
         shown = self.output_panel.view.process
         if shown != supervisor.only:  # set on the engine thread: asked again until it is
             self.engine.submit(supervisor.show(shown))
+
+    def pane_save_dir(self) -> Path:
+        """Where `w` writes a pane: the launch's log folder, which is on this computer,
+        unless the session runs on another machine (its log folder is there; a pane is
+        saved here, in a folder named after that machine and session)."""
+        if self.session_host is None:
+            return self.log_dir
+        base = os.environ.get("ROS_LOG_DIR") or os.path.join(
+            os.environ.get("ROS_HOME") or os.path.expanduser("~/.ros"), "log")
+        return Path(base) / f"tuilaunch-{self.session_host}-{self.session_name}"
 
     def over_link(self) -> RemoteSupervisor | None:
         """The session's supervisor when an ssh link is between (the session is on another
@@ -496,9 +509,15 @@ class SessionLink(App[int]):
         if self.session_name is not None:
             where = f"{self.session_host}:" if self.session_host else ""
             name = f"[{where}{self.session_name}] {name}"
-        lost = getattr(self.supervisor, "link_lost", None)
-        if lost:  # what is shown is as it was when the link dropped
-            prefix = f"{lost}; reconnecting (R: now)  {prefix}"
+        link = self.over_link()
+        if link is not None and link.link_lost:
+            # what is shown is as it was when the link dropped; the short form first, so
+            # 80 columns show it whole: the reason (the latest attempt's) may be cut
+            prefix = f"link to {link.host} lost · reconnecting · {self.session_name} · " \
+                     f"R: now · {link.lost_reason}  {prefix}"
+            name = Path(self.session.plan.file).name
+        elif link is not None and link.silent_for() >= SILENCE_SHOWN:
+            prefix = f"no word from {link.host} for {link.silent_for():.0f} s · {prefix}"
         line = f"{prefix}{name}  {text}  {args}"
         if line != self._status_text:  # an unchanged line is not sent to the terminal again
             self._status_text = line

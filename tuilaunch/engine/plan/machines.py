@@ -28,7 +28,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:  # pyyaml is imported where a machines file is read, not by every launch
     import yaml
@@ -102,10 +102,25 @@ class Placement:
         placed = place(plan.processes, self.machines)
         for proc in plan.processes:
             proc.machine = placed[proc.id]
-        for rule in unused_rules(plan.processes, self.machines):
+        unused = unused_rules(plan.processes, self.machines)
+        for rule in unused:
             where = f"{rule.origin}: " if rule.origin else ""
             plan.warnings.append(f"{where}placement rule {rule.match!r} -> {rule.machine} "
                                  f"places no process{self_named(rule, plan.processes)}")
+        told: set[str] = set()
+        for rule in self.machines.rules:
+            if rule in unused:
+                continue
+            # a rule that places others, and would take these by the names they show:
+            # they stay here, which is said once per process (the first such rule)
+            left = [p for p in _self_named_matching(rule, plan.processes)
+                    if p.machine is None and p.id not in told]
+            told.update(p.id for p in left)
+            if left:
+                where = f"{rule.origin}: " if rule.origin else ""
+                plan.warnings.append(
+                    f"{where}placement rule {rule.match!r} -> {rule.machine} leaves "
+                    f"{', '.join(p.id for p in left)} here: {_naming(left)}")
         return plan
 
     def used(self, plan: Plan) -> list[Machine]:
@@ -145,16 +160,27 @@ def self_named(rule: Rule, processes: Iterable[Placeable]) -> str:
     """Why a node-name rule matches nothing when it names nodes that choose their own name
     (shown `/r1/<talker>`: the launch file gives none, so it is known only once the node
     runs), and the process ids that would match them."""
-    if not rule.match.startswith("/"):
-        return ""
-    named = [p for p in processes if p.full_name is None and
-             _glob(rule.match).fullmatch(str(getattr(p, "label", "")).replace("<", "")
-                                         .replace(">", "")) is not None]
+    named = _self_named_matching(rule, processes)
     if not named:
         return ""
+    return f": {_naming(named)}"
+
+
+def _self_named_matching(rule: Rule, processes: Iterable[Placeable]) -> list[Any]:
+    """The processes whose node names itself (no full name in the plan) and whose shown
+    name (`/r1/<talker>`, brackets taken off) the node-name rule would match."""
+    if not rule.match.startswith("/"):
+        return []
+    return [p for p in processes if p.full_name is None and
+            _glob(rule.match).fullmatch(str(getattr(p, "label", "")).replace("<", "")
+                                        .replace(">", "")) is not None]
+
+
+def _naming(named: list[Any]) -> str:
+    """Why a node-name rule cannot place these, and what to match instead."""
     labels = ", ".join(str(getattr(p, "label", p.id)) for p in named)
     ids = sorted({re.sub(r"-\d+$", "-*", p.id) for p in named})
-    return (f": {labels} name{'s' if len(named) == 1 else ''} itself in its code (the launch "
+    return (f"{labels} name{'s' if len(named) == 1 else ''} itself in its code (the launch "
             f"file gives no name), so a placement rule cannot know it before it runs; match "
             f"its process id instead: {', '.join(repr(i) for i in ids)}")
 

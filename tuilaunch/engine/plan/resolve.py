@@ -530,7 +530,36 @@ def default_params_dir() -> Path:
 
         _params_dir = Path(tempfile.mkdtemp(prefix=f"tuilaunch-{os.getpid()}-params-"))
         atexit.register(shutil.rmtree, _params_dir, True)
+        remove_stale_params_dirs(_params_dir.parent)
     return _params_dir
+
+
+_PARAMS_DIR_NAME = re.compile(r"^tuilaunch-(\d+)-params-")
+
+
+def remove_stale_params_dirs(folder: Path) -> None:
+    """The folders of tuilaunch processes that died without their atexit (a session
+    server killed with SIGKILL) are removed by the next one that plans: ours, named after
+    a pid that no longer runs."""
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return
+    for entry in entries:
+        match = _PARAMS_DIR_NAME.match(entry.name)
+        if match is None or not entry.is_dir(follow_symlinks=False):
+            continue
+        try:
+            if entry.stat(follow_symlinks=False).st_uid != os.getuid():
+                continue
+            with open(f"/proc/{int(match.group(1))}/stat", "rb") as stat:
+                state = stat.read().rsplit(b")", 1)[1].split()[0]
+        except FileNotFoundError:
+            state = b"X"  # no such process
+        except (OSError, IndexError):
+            continue
+        if state in (b"X", b"Z"):  # gone, or a zombie nobody reaped yet
+            shutil.rmtree(entry.path, True)
 
 
 def remove_default_params_dir() -> None:

@@ -22,7 +22,6 @@ request waits for that attempt (`MachinesCoordinator.reach`).
 from __future__ import annotations
 
 import asyncio
-import collections
 import contextlib
 import dataclasses
 import os
@@ -30,7 +29,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from ...errors import LaunchError
-from ...plan.machines import Machine, Placement
+from ...plan.machines import Placement
 from ..events import Event
 from ..plugins import Plugin
 from ..process.logfiles import LogFile
@@ -38,7 +37,8 @@ from ..process.output import screen_str
 from ..session.protocol import ProtocolError, decode, encode, event_from_dict
 from ..session.session_dir import launch_stem
 from ..supervisor.supervisor import Supervisor
-from .remote import RemoteError, RemoteLink, open_remote_streams, run_remote
+from .remote import RemoteError, open_remote_streams, run_remote
+from .share_link import Share
 from .share_side import LINES_OP, ShareSide
 
 SHARE_OPTION = "--share"
@@ -66,47 +66,6 @@ def share_arguments(command: list[str], arguments: Mapping[str, str], name: str,
     files = [os.path.abspath(command[0])] if len(command) == 1 else list(command)
     return ["--", *files, *(f"{k}:={v}" for k, v in arguments.items()), "--detach",
             "--name", name, SHARE_OPTION, machine, MACHINES_TEXT_OPTION, placement.text]
-
-
-class Share:
-    """One other machine's share: its session there and the link to it."""
-
-    def __init__(self, machine: Machine, session: str) -> None:
-        self.machine = machine
-        self.session = session
-        self.writer: asyncio.StreamWriter | None = None
-        self.reader: asyncio.StreamReader | None = None
-        self.link: RemoteLink | None = None
-        self.ended = asyncio.Event()
-        self.failure: str | None = None
-        self.replies: dict[int, asyncio.Future[Any]] = {}
-        self.seen: set[tuple[Any, ...]] = set()  # events mirrored (a reconnect repeats them)
-        self.logs: dict[str, LogFile] = {}
-        self.offsets: dict[str, int] = {}  # its log files' sizes at the last subscription
-        self.received: collections.Counter[str] = collections.Counter()
-        """Lines of each process that came as events since the last subscription: they are
-        in its log file there after `offsets`, and are skipped when the lines the link
-        missed are asked for. A count, not a time: many lines share a millisecond."""
-        self.backfill: dict[int, str] = {}  # requests for lines still unanswered
-        self.held: list[dict[str, Any]] = []  # events batches waiting for those lines
-        self.following = False  # a task starts, follows or reconnects it now
-        self.wake = asyncio.Event()  # cuts short the wait before the next attempt
-        self.waiters: list[asyncio.Future[str | None]] = []
-        """Requests waiting for the next attempt to reach it: told None once connected,
-        else why not."""
-
-    def tell(self, outcome: str | None) -> None:
-        """The outcome of an attempt to reach it, to the requests waiting for one."""
-        waiters, self.waiters = self.waiters, []
-        for waiter in waiters:
-            if not waiter.done():
-                waiter.set_result(outcome)
-
-    async def send(self, message: dict[str, Any]) -> None:
-        if self.writer is None:
-            raise LaunchError(f"{self.machine.name} is not connected")
-        self.writer.write(encode(message))
-        await self.writer.drain()
 
 
 class MachinesCoordinator(Plugin):

@@ -18,6 +18,8 @@ import os
 import selectors
 import socket
 import sys
+import time
+from pathlib import Path
 from typing import Any
 
 from ...errors import LaunchError
@@ -28,6 +30,14 @@ from ..session.session_dir import SessionError
 CHUNK = 1 << 16
 LS_ANSWER_TIMEOUT = 3.0  # as `tuilaunch ls`: a stopped server costs this, once
 USAGE = "usage: tuilaunch __proxy NAME | tuilaunch __ls"
+SERVER_GONE = 3
+"""The proxy's status when the session closed the link without ending (its server was
+killed): its last line says so, which the client reads as the session's end, not a lost
+link (client/link.py, client/remote_supervisor.py)."""
+SERVER_GONE_WORDS = "ended without a word"
+ENDED = b'{"type":"ended"'
+"""The session's last message when it ends as it should (protocol.py's encoding)."""
+TAIL = 64
 
 
 def connect(name: str) -> socket.socket:
@@ -48,8 +58,9 @@ def connect(name: str) -> socket.socket:
     return sock
 
 
-def relay(sock: socket.socket, stdin: int, stdout: int) -> None:
-    """Copies stdin -> sock and sock -> stdout until the session closes, or stdout fails.
+def relay(sock: socket.socket, stdin: int, stdout: int) -> bytes | None:
+    """Copies stdin -> sock and sock -> stdout until the session closes (then the last
+    bytes it sent: did it say it ended?), or stdout fails (None).
 
     Blocking writes on purpose: when ssh's side stops reading, the proxy stops reading the
     session, and the server's bounded per-client queue takes over (it drops output for this
@@ -57,6 +68,7 @@ def relay(sock: socket.socket, stdin: int, stdout: int) -> None:
     its sending side) the socket's sending side is shut, and the session's answers still
     come back until it closes."""
     selector = selectors.DefaultSelector()
+    tail = b""
     selector.register(stdin, selectors.EVENT_READ, "in")
     selector.register(sock, selectors.EVENT_READ, "out")
     try:
@@ -69,24 +81,42 @@ def relay(sock: socket.socket, stdin: int, stdout: int) -> None:
                         try:
                             sock.shutdown(socket.SHUT_WR)
                         except OSError:
-                            return
+                            return tail
                         continue
                     try:
                         sock.sendall(data)
                     except OSError:
-                        return  # the session is gone
+                        return tail  # the session is gone
                 else:
                     try:
                         data = sock.recv(CHUNK)
                     except OSError:
                         data = b""
                     if not data:
-                        return
+                        return tail
                     _write_all(stdout, data)
+                    tail = (tail + data)[-TAIL:]
     except BrokenPipeError:
-        return  # ssh's channel closed: the client is gone
+        return None  # ssh's channel closed: the client is gone
     finally:
         selector.close()
+    return None
+
+
+def _gone(pid: int, wait: float = 2.0) -> bool:
+    """Whether the session's server is dead (or dying: a zombie), within `wait` seconds:
+    a server that ends as asked closes its sockets a moment before it exits."""
+    deadline = time.monotonic() + wait
+    while True:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except (OSError, IndexError):
+            state = "" if session_dir.pid_alive(pid) else "gone"
+        if state in ("gone", "Z", "X"):
+            return True
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.05)
 
 
 def _read(fd: int) -> bytes:
@@ -170,10 +200,17 @@ def main(argv: list[str]) -> int:
             return 0
         if argv[:1] == ["__proxy"] and len(argv) == 2:
             sock = connect(argv[1])
+            pid = int((session_dir.read_info(argv[1]) or {}).get("pid") or 0)
             try:
-                relay(sock, sys.stdin.fileno(), sys.stdout.fileno())
+                tail = relay(sock, sys.stdin.fileno(), sys.stdout.fileno())
             finally:
                 sock.close()
+            if tail is not None and ENDED not in tail and pid and _gone(pid):
+                # the server died (kill -9, a crash): its last words, for the client, which
+                # would otherwise take the closed link for a network's fault
+                print(f"tuilaunch: error: session {argv[1]} {SERVER_GONE_WORDS}: its "
+                      f"server (pid {pid}) is gone", file=sys.stderr)
+                return SERVER_GONE
             return 0
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)

@@ -201,6 +201,13 @@ def explain_failure(host: str, code: int, stderr: str, what: str,
                            hint="fix the machine's 'setup:' in the machines file")
     tuilaunch = (machine.tuilaunch if machine else None) or \
         environ.get("TUILAUNCH_REMOTE") or "tuilaunch"
+    if code == 0 and not lines:
+        # it ran and ended well, without a word of the protocol: not a tuilaunch
+        variable = "the machine's 'tuilaunch:'" if machine is not None and machine.tuilaunch \
+            else "TUILAUNCH_REMOTE" if environ.get("TUILAUNCH_REMOTE") else "PATH there"
+        return RemoteError(f"{label}: the remote command {tuilaunch!r} exited without "
+                           "speaking the session protocol (exit status 0)",
+                           hint=f"is {tuilaunch} a tuilaunch? ({variable} names it)")
     if code in (NOT_FOUND, NOT_EXECUTABLE) or "command not found" in text or \
             "No such file or directory" in text:
         return RemoteError(f"{label}: tuilaunch not found there ({tuilaunch}: {last})",
