@@ -69,7 +69,7 @@ class Arguments(SessionLink):
             tree.set_preview(self.preview.diff)
             # a value unlike its default's type is passed as written, as ros2 launch does:
             # said, as a slip is likely, never refused
-            notes = "".join(f"Warning: {note}; it is passed as written. " for note in
+            notes = "".join(f"Warning: {note} (passed as written); " for note in
                             type_notes(self.session.plan.arguments, edits))
             panel.set_preview_text(
                 notes + _describe_diff(self.preview, self.session.plan.arguments),
