@@ -255,6 +255,24 @@ def test_mistyped_files_and_packages_get_a_did_you_mean(tmp_path):
     assert "its launch files: fancy.launch.py, sim_launch.xml" in missing
 
 
+def test_a_missing_file_is_guessed_only_from_the_folder_it_names(tmp_path):
+    """A file of the current folder is no guess for a package's name, nor for a file of
+    another folder."""
+    (tmp_path / "count.py").write_text("x = 1\n")
+    (tmp_path / "sub").mkdir()
+
+    def error(*args: str) -> str:
+        done = subprocess.run([sys.executable, "-m", "tuilaunch", *args, "--print"],
+                              capture_output=True, text=True, timeout=120, cwd=tmp_path)
+        return one_error(done)
+
+    assert "hint: did you mean 'count.py'?" in error("cont.py")  # this folder's file
+    assert "count.py" not in error("cont")  # a word: a package, not this folder's file
+    assert "count.py" not in error("sub/cont.py")  # sub holds no count.py
+    assert "count.py" not in error("tuilaunch_demo")
+    assert "did you mean the package 'tuilaunch_demos'?" in error("tuilaunch_demo")
+
+
 def test_an_argument_without_its_colon_and_a_file_that_is_no_launch_file(tmp_path):
     error = one_error(run_cli(BRINGUP, "robot=r2", "--print"))
     assert "'robot=r2' is not a launch argument: ros2 launch arguments are written with " \

@@ -207,6 +207,9 @@ async def test_the_args_tab_follows_the_file_saved_while_it_shows(runtime, write
         assert not app.query_one("#args-preview").has_class("error")
         path.write_text(EDITABLE.format(said="word", extra=""))
         await until(pilot, lambda: "changed on disk: no process changes" in preview_text(app))
+        # said once (it read "no process changes. No process changes; F5 applies ...")
+        assert preview_text(app) == f"{path.name} changed on disk: no process changes; F5 " \
+            "applies it anyway."
         # a default edited: the form still shows the running one, the preview says both
         path.write_text(EDITABLE.format(said="word", extra="").replace("'alpha'", "'gamma'"))
         await until(pilot, lambda: "changed on disk: word's default alpha -> gamma; "
@@ -325,6 +328,12 @@ async def test_an_attached_client_says_when_the_session_is_stopped_elsewhere(
             apply_elsewhere(name, word="gamma")
             await until(pilot, lambda: any("relaunched by another client: word:=gamma"
                                            in n.message for n in app._notifications))
+            # a relaunch for an edited file says so, not only the values (or "defaults")
+            path.write_text(SHELL.replace("echo word", "echo words"))
+            apply_elsewhere(name, word="gamma")
+            said_edit = f"relaunched by another client: {path.name} changed; word:=gamma"
+            await until(pilot, lambda: any(said_edit == n.message
+                                           for n in app._notifications))
             # `tuilaunch stop` elsewhere: said here before the TUI leaves
             stopping = run_cli("stop", name)
             assert stopping.returncode == 0, stopping.stderr

@@ -30,6 +30,25 @@ def generate_launch_description():
     assert "[INFO] [launch.user]: the call is over" in out.splitlines(), out
 
 
+def test_a_call_service_alone_stopped_by_ctrl_c_still_fires_its_exit_handlers(write):
+    """With no process still stopping to keep the run going, the handlers ran only by
+    chance: the run ended before the cancelled call had finished."""
+    path = write("""
+from simple_launch import SimpleLauncher
+from simple_launch.events import When, OnProcessExit
+
+def generate_launch_description():
+    sl = SimpleLauncher()
+    call = sl.call_service('/nobody/answers')
+    with sl.group(when=When(call, OnProcessExit)):
+        sl.log_info('the call is over')
+    return sl.launch_description()
+""")
+    for _ in range(3):  # it lost the race most of the time, not always
+        out = run_headless(path, until=("waiting for service /nobody/answers",))
+        assert "[INFO] [launch.user]: the call is over" in out.splitlines(), out
+
+
 GREEN, YELLOW, END = "\x1b[92m", "\x1b[93m", "\x1b[0m"
 
 

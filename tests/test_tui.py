@@ -130,6 +130,23 @@ async def test_editing_an_argument_previews_then_relaunches_only_what_changes(tm
             app.query_one("#args-preview").render()))
 
 
+async def test_a_checked_box_keeps_the_spelling_the_command_line_used(tmp_path):
+    """bringup.py's default is simple_launch's True ("True"); started with listener:=false,
+    checking the box applied listener:=True: a value written two ways at once."""
+    async with tui(tmp_path, "robot:=tui8", "services:=false", "listener:=false") as (
+            app, pilot):
+        await until(pilot, lambda: states(app).get("talker-1") == "running")
+        await pilot.press("2")
+        box = app.query_one("#arg-listener", Checkbox)
+        assert str(box.label) == "false"
+        box.value = True
+        await pilot.pause()
+        assert str(box.label) == "true"
+        await pilot.press("f5")
+        await until(pilot, lambda: app.session.arguments.get("listener") == "true")
+        await until(pilot, lambda: states(app).get("listener-2") == "running")
+
+
 ERRORING = """
 from simple_launch import SimpleLauncher
 sl = SimpleLauncher()

@@ -50,11 +50,17 @@ def missing_file(path: str) -> PackageError:
         listed = ", ".join(files) if files else "none in its share"
         return PackageError(f"{path} is a package: give one of its launch files too "
                             f"({listed})", hint=f"tuilaunch {path} FILE")
+    # suggested only from the folder the path names (this one for a bare file name), and
+    # only files a launch could be; a bare word without an extension names a package to a
+    # ros2 launch user: the files around them are no guess for it
     folder = Path(path).parent
-    try:
-        names = [e.name for e in os.scandir(folder) if e.is_file() or e.is_dir()]
-    except OSError:
-        names = []
+    names = []
+    if "/" in path or path.endswith(LAUNCH_EXTENSIONS):
+        try:
+            names = [e.name for e in os.scandir(folder)
+                     if e.name.endswith(LAUNCH_EXTENSIONS) and e.is_file()]
+        except OSError:
+            pass
     guess = _guess(Path(path).name, names)
     if not guess and "/" not in path:
         guess = _guess(path, list(known_packages()))

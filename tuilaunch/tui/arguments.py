@@ -69,7 +69,7 @@ class Arguments(SessionLink):
             tree.set_preview(self.preview.diff)
             # a value unlike its default's type is passed as written, as ros2 launch does:
             # said, as a slip is likely, never refused
-            notes = "".join(f"Warning: {note}; it is passed as written. " for note in
+            notes = "".join(f"Warning: {note} (passed as written); " for note in
                             type_notes(self.session.plan.arguments, edits))
             panel.set_preview_text(
                 notes + _describe_diff(self.preview, self.session.plan.arguments),
@@ -156,8 +156,11 @@ def _describe_diff(preview: Preview, running: list[ArgumentInfo]) -> str:
         # the declarations that run until F5, so the edit's own are said here
         alters = "; ".join(part for part in (
             _declarations_words(running, preview.plan.arguments),
-            _diff_words(edit, "adds", "changes", "removes")) if part) or "no process changes"
-        text = f"{preview.edited or 'the launch file'} changed on disk: {alters}. "
+            _diff_words(edit, "adds", "changes", "removes")) if part)
+        changed = f"{preview.edited or 'the launch file'} changed on disk"
+        if not alters and preview.diff.empty:  # said once, not "no process changes" twice
+            return f"{changed}: no process changes; F5 applies it anyway."
+        text = f"{changed}: {alters or 'no process changes'}. "
     diff = preview.diff
     if diff.empty:
         return text + "No process changes; F5 applies the new values anyway."

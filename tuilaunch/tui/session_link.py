@@ -329,7 +329,7 @@ class SessionLink(App[int]):
                     self._bridge.drop_clients(in_plan(self.session.plan))
                 self.describe_waiting()
                 if event.lines != self.own_relaunch:
-                    self._relaunched_elsewhere(event.lines)
+                    self._relaunched_elsewhere(event.lines, (event.data or {}).get("edited"))
                 self.own_relaunch = None
             elif event.kind in INSPECTOR_EVENTS:
                 self.inspector_event(event)
@@ -452,15 +452,18 @@ class SessionLink(App[int]):
             self._countdown_timer.stop()
             self._countdown_timer = None
 
-    def _relaunched_elsewhere(self, arguments: list[str]) -> None:
-        """Another operator applied new values: the form shows them, so an edit here starts
-        from what runs, never silently reverts theirs."""
+    def _relaunched_elsewhere(self, arguments: list[str], edited: str | None = None) -> None:
+        """Another operator applied new values, or an edited file (`edited`: which one):
+        the form shows them, so an edit here starts from what runs, never silently reverts
+        theirs."""
         self.preview = None
         self.launch_tree.set_preview(None)
         self.args_panel.arguments = self.session.plan.arguments
         self.args_panel.refresh(recompose=True)
         if not self.replaying:  # a relaunch before this client came is no news to it
-            self.notify(f"relaunched by another client: {' '.join(arguments) or 'defaults'}")
+            what = [f"{edited} changed"] if edited else []
+            what += [" ".join(arguments)] if arguments else [] if edited else ["defaults"]
+            self.notify(f"relaunched by another client: {'; '.join(what)}")
         self.refresh_bindings()
 
     def say_plan_warnings(self) -> None:

@@ -66,6 +66,27 @@ class FormButton(Button):
         pass
 
 
+def bool_text(arg: ArgumentInfo, state: bool) -> str:
+    """A boolean argument's value as the box gives it, never mixing spellings: the running
+    value when the box shows its state; a value given on the command line spells the other
+    state alike (`listener:=false` checked gives `true`, not the default's `True`); else the
+    default's own text for its state, and `true`/`false` as ros2 launch users write them."""
+    given = arg.value if arg.value and text_to_bool(arg.value) is not None else None
+    if given is not None and text_to_bool(given) == state:
+        return given
+    default = (arg.default or "").strip()
+    if text_to_bool(default) == state and (given is None or given == arg.default):
+        return default
+    text = "true" if state else "false"
+    if given is not None and given != arg.default:
+        if given.isdigit():
+            return "1" if state else "0"
+        if given.isupper():
+            return text.upper()
+        return text.capitalize() if given[:1].isupper() else text
+    return text
+
+
 class ArgsPanel(Vertical):
     DEFAULT_CSS = """
     ArgsPanel #args-preview { height: auto; max-height: 4; padding: 0 1; background: $boost; }
@@ -130,8 +151,8 @@ class ArgsPanel(Vertical):
                           classes="arg-editor", compact=True)
         if arg.type == "bool" and text_to_bool(value) is not None:
             state = bool(text_to_bool(value))
-            return Toggle("true" if state else "false", value=state, id=name,
-                            classes="arg-editor", compact=True)
+            return Toggle(bool_text(arg, state), value=state, id=name,
+                          classes="arg-editor", compact=True)
         # typed as text and checked as a whole by the preview: Input's number types drop
         # a refused character silently (1.5 in an int field became 15)
         return Field(value, id=name, classes="arg-editor", compact=True)
@@ -141,10 +162,7 @@ class ArgsPanel(Vertical):
         for arg in self.arguments:
             editor = self.query_one(f"#arg-{arg.name}")
             if isinstance(editor, Checkbox):
-                # keep the default's spelling when it is unchanged ("True" stays "True")
-                same = text_to_bool(arg.default or "") == editor.value
-                out[arg.name] = arg.default if same and arg.default else str(
-                    editor.value).lower()
+                out[arg.name] = bool_text(arg, editor.value)
             elif isinstance(editor, Select):
                 out[arg.name] = str(editor.value)
             elif isinstance(editor, Input):
@@ -171,7 +189,11 @@ class ArgsPanel(Vertical):
     @on(Select.Changed)
     def _changed(self, event: Input.Changed | Checkbox.Changed | Select.Changed) -> None:
         if isinstance(event, Checkbox.Changed):
-            event.checkbox.label = "true" if event.value else "false"
+            arg = next((a for a in self.arguments if f"arg-{a.name}" == event.checkbox.id),
+                       None)
+            # the value it gives, as it will be applied and shown (`listener:=false`)
+            event.checkbox.label = bool_text(arg, event.value) if arg else \
+                ("true" if event.value else "false")
         if self.is_mounted:
             self._edited()
 

@@ -367,12 +367,14 @@ class SessionServer:
             plan = self.session.accept(preview)
             diff = await self.supervisor.replace_plan(plan)
             session_dir.write_info(self.name, self.info())
-            self._emit_plan()
+            self._emit_plan(preview.edited)
             return {"stop": diff.stop, "start": diff.start}
 
-    def _emit_plan(self) -> None:
+    def _emit_plan(self, edited: str | None = None) -> None:
         # an event like the others, so it reaches every client in order with their states,
-        # and the plugins (the machines' shares are relaunched with the same values)
+        # and the plugins (the machines' shares are relaunched with the same values);
+        # `edited`: the file that changed on disk, for the other clients to be told
         self.supervisor.emit(Event("relaunched", reason=None, lines=[
-            f"{k}:={v}" for k, v in self.session.arguments.items()]))
+            f"{k}:={v}" for k, v in self.session.arguments.items()],
+            data={"edited": edited} if edited else None))
 

@@ -68,6 +68,10 @@ class SupervisorCore:
         self.detached_tasks: dict[str, asyncio.Task[Any]] = {}
         """Running call_service / set_parameters actions: the shutdown stops them as it
         stops processes (simple_launch runs them as nodes), and their exit handlers run."""
+        self.actions_stopping: list[asyncio.Task[Any]] = []
+        """The detached actions the shutdown cancelled, until they have ended: the run
+        waits for them (and so for their exit handlers), whether or not a process is still
+        stopping meanwhile."""
         self.failed_parts: set[str] = set()
         """What failed inside a process (a component its container could not load), by id:
         the launch then ends non-zero, as the action that loads it would."""

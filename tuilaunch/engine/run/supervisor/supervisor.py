@@ -33,6 +33,11 @@ from .interacting import Interacting, restart_fields
 from .placed import ELSEWHERE, RemoteControl
 from .stopping import CTRL_C_REASON, kill_group
 
+ACTION_STOP_S = 5.0
+"""How long the shutdown waits for a cancelled action (a call_service waiting for its
+service) to end: a well-behaved one ends at once; one that ignores the cancellation must
+not hold the launch forever."""
+
 __all__ = ["Consumer", "Event", "LaunchEvent", "Supervisor"]
 
 
@@ -113,9 +118,11 @@ class Supervisor(Interacting):
     def _settled(self) -> bool:
         if self.shutting_down:
             # waiting actions, timers and respawns are cancelled when the run drains;
-            # exit handlers of the processes being stopped still run, as in launch
-            return not self.running and not self.triggers.due_in_shutdown(
-                self.plan.actions, self.states, self.detached_actions)
+            # exit handlers of the processes being stopped still run, as in launch, and
+            # those of the actions stopped as simple_launch stops their nodes
+            return not self.running and not self.actions_stopping and \
+                not self.triggers.due_in_shutdown(
+                    self.plan.actions, self.states, self.detached_actions)
         if self.keep_alive or self.running or self.busy or self.shutdown_requested:
             return False
         if any(state == "running" for state in self.states.values()):
@@ -238,11 +245,20 @@ class Supervisor(Interacting):
         try:
             await self.tell_shutdown(reason)
         finally:
-            for task in list(self.detached_tasks.values()):
+            self.actions_stopping = list(self.detached_tasks.values())
+            for task in self.actions_stopping:
                 task.cancel()
             await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
-                                 return_exceptions=True)
+                                 self._actions_stopped(), return_exceptions=True)
             self.changed.set()
+
+    async def _actions_stopped(self) -> None:
+        """The cancelled actions have ended (their end, as a node's, fires their exit
+        handlers); one that ignores its cancellation holds the run for ACTION_STOP_S."""
+        if self.actions_stopping:
+            await asyncio.wait(self.actions_stopping, timeout=ACTION_STOP_S)
+        self.actions_stopping = []
+        self.changed.set()
 
     async def tell_shutdown(self, reason: str) -> None:
         """The Shutdown event: said, and seen by the OnShutdown handlers. A Shutdown action
