@@ -747,8 +747,9 @@ def test_an_attached_client_follows_lifecycle_states_and_asks_for_transitions(
 
 
 def test_attach_shows_progress_bars_and_bad_bytes_as_the_live_pane_does(runtime, write):
-    """The lines printed before attaching come from the log files, which keep the raw bytes;
-    the pane shows them as a terminal would: a `\\r` progress bar as its last state."""
+    """The lines printed before attaching come from the log files, which keep the raw bytes
+    but for a line rewritten with `\\r`, of which they keep the last state; the pane shows
+    them as a terminal would."""
     path = write("""
 from launch import LaunchDescription
 from launch.actions import ExecuteProcess
@@ -759,7 +760,8 @@ def generate_launch_description():
     name = tl(str(path), "--detach").stdout.strip()
     tl("wait", name, "bar-1", "exited", "--timeout", "60")
     log_dir = Path(status(name)["log_dir"])
-    assert b"load 10%\rload 50%\rload 100%" in (log_dir / "bar-1.log").read_bytes()
+    logged = (log_dir / "bar-1.log").read_bytes()
+    assert b" load 100%\n" in logged and b"load 10%" not in logged
 
     async def attach() -> None:
         app = make_app(str(path), {}, log_dir, session_name=name)

@@ -480,9 +480,15 @@ def test_line_splitter_blocks_keep_bytes_and_cut_endless_lines():
 
     splitter = LineSplitter()
     assert splitter.feed_block(b"par") == b""
-    assert splitter.feed_block(b"tial\nnext\r50%\r100%\nx") == b"partial\nnext\r50%\r100%\n"
+    # a line rewritten with \r is kept in its last state; a terminal's \r\n stays
+    assert splitter.feed_block(b"tial\nnext\r50%\r100%\nx") == b"partial\n100%\n"
     assert screen_lines(b"partial\nnext\r50%\r100%\n") == ["partial", "100%"]
     assert screen_lines(b"a\x00b\n\xff\n") == ["ab", "\ufffd"]
     block = splitter.feed_block(b"y" * (2 * MAX_LINE + 5))
     assert block == b"x" + b"y" * (MAX_LINE - 1) + b"\n" + b"y" * MAX_LINE + b"\n"
     assert splitter.flush_block() == b"y" * 6 + b"\n" and splitter.flush_block() == b""
+    assert splitter.feed_block(b"x\r\nok\r") == b"x\r\n" and splitter.tail == b"ok\r"
+    assert splitter.feed_block(b"\n") == b"ok\r\n"
+    # an endless progress line is kept in its last state, never cut into pieces
+    assert splitter.feed_block(b"\r".join(b"%d%%" % i for i in range(50000))) == b""
+    assert splitter.tail == b"49999%"

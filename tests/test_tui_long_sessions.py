@@ -270,8 +270,9 @@ def test_keys_written_to_a_real_terminal_in_one_write_keep_their_order(write, tm
         os.write(master, b"2")
         read_until(master, b"how many")
         read_for(master, 0.3)
-        # into the field (past Apply, Defaults), erase it, type 42, erase one, type 3
-        os.write(master, b"\t\t" + b"\x15" + b"42" + b"\x7f" + b"3")
+        # into the field (one tab past Apply and Defaults), erase it, type 42, erase one,
+        # type 3
+        os.write(master, b"\t" + b"\x15" + b"42" + b"\x7f" + b"3")
         screen = read_until(master, b"F5 applies")
         assert b"count:=" not in screen
         os.write(master, b"\x1b[15~")  # F5
@@ -751,7 +752,7 @@ def test_escape_and_a_letter_in_one_write_leave_the_field_then_act(write, tmp_pa
     """ESC+/ in one read (escape then `/` typed fast over ssh) is parsed as alt+/: it leaves
     the field, then `/` opens the search, instead of typing `/` into the field."""
     with arguments_tab_on_a_pty(write, tmp_path) as master:
-        os.write(master, b"\t\t")  # into the label field (past Apply, Defaults)
+        os.write(master, b"\t")  # into the label field (one tab past Apply, Defaults)
         read_for(master, 0.3)
         os.write(master, b"y\x1bq")  # type y, then escape and q together: leave, then quit
         screen = read_until(master, b"Stop them all and quit?")
