@@ -17,7 +17,7 @@ import threading
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any, TextIO, TypeVar
 
-from ..client.link import LOCAL, parse_session
+from ..client.link import LOCAL, LinkLost, parse_session
 from ..engine.errors import LaunchError
 from ..engine.run.machines.proxy import list_sessions
 from ..engine.run.machines.remote import check_host, list_remote
@@ -235,6 +235,8 @@ def logs_many(options: argparse.Namespace) -> int:
     def follow(address: str) -> str | None:
         try:
             why = show_logs(options, address, out, tag=f"{address} ")
+        except LinkLost as exc:  # the others go on; it failed
+            why = exc.message
         except LaunchError as exc:
             say("logs", exc)  # at once: the others go on
             raise
