@@ -210,20 +210,24 @@ class PlotStreams:
         import time
 
         now = time.time()
-        points: dict[str, list[list[float]]] = {}
+        fresh: dict[str, list[Any]] = {}
         with sampler.lock:
             for field_path in stream.fields:
                 buckets = sampler.buckets.get(field_path.path)
                 if buckets is None:
                     continue
                 buckets.close_until(now)
-                fresh = buckets.since(stream.sent.get(field_path.path, -1))
-                if fresh:
-                    stream.sent[field_path.path] = fresh[-1].index
-                    points[field_path.path] = [b.point() for b in fresh]
-        if not points:
+                closed = buckets.since(stream.sent.get(field_path.path, -1))
+                if closed:
+                    stream.sent[field_path.path] = closed[-1].index
+                    fresh[field_path.path] = closed
+        if not fresh:
             return None
-        return {"topic": sampler.topic, "tag": stream.tag, "points": points}
+        # times as ms after a whole second: "t0" once, not a 14-digit time in each point
+        since = int(min(closed[0].time for closed in fresh.values()))
+        return {"topic": sampler.topic, "tag": stream.tag, "t0": since,
+                "points": {path: [b.point(since) for b in closed]
+                           for path, closed in fresh.items()}}
 
     def _rows(self, sampler: Any, client: int, stream: PlotStream) -> dict[str, Any] | None:
         with sampler.lock:
