@@ -67,6 +67,7 @@ class PlotStreams:
         self.samplers: dict[str, Any] = {}  # PlotSampler by topic
         self.task: asyncio.Task[None] | None = None
         self.lock = asyncio.Lock()  # one start or stop at a time: samplers are shared
+        self.pending: set[asyncio.Task[None]] = set()
 
     async def _topic_type(self, topic: str, wait: float) -> tuple[Any, list[Any]]:
         """The topic's message class and its publishers' infos, once one publishes."""
@@ -165,7 +166,8 @@ class PlotStreams:
     def client_gone(self, client: int) -> None:
         for key in [k for k in self.streams if k[0] == client]:
             task = asyncio.ensure_future(self._end(*key))
-            task.add_done_callback(lambda t: t.cancelled() or t.exception())
+            self.pending.add(task)  # kept until done: a bare task may be collected
+            task.add_done_callback(self.pending.discard)
 
     async def close(self) -> None:
         if self.task is not None:

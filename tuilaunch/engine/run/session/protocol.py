@@ -44,7 +44,11 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   in its first; a process that stopped once, with None figures). `processes`: the ones
   whose figures the client shows (null or absent: all); of the others only `growing` is
   sent, and figures sent before are taken back once (None). Asked again with other
-  `processes`, the watcher is sent the figures it now lacks at once.
+  `processes`, the watcher is sent the figures it now lacks at once. trend?: [id]: the
+  processes whose last minutes the client draws -> {history: {process: [[cpu_percent,
+  rss_bytes], ...]: a sample a second, oldest first, 5 minutes at most, kept while some
+  client watches}}, then an event "trend", data {process: [cpu_percent, rss_bytes]} each
+  second.
   The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
   topics {node?, problems_only?: only the topics with QoS problems} -> {"topics": [{name,
   types, publishers: [{node, in_launch, process,
