@@ -164,7 +164,7 @@ def collect(name: str, topic: str, fields: list[str], seconds: float,
         for data in streamed(link, "plot", time.monotonic() + seconds):
             assert data["tag"] == "t"
             for field, sent in data["points"].items():
-                points[field] += sent
+                points[field] += [[data["t0"] + ms / 1000, *rest] for ms, *rest in sent]
     finally:
         link.close()
     return points
@@ -200,18 +200,98 @@ def test_a_second_client_sees_the_same_points(session):
         second = collect(session, WAVE, ["x"], 4.0)
     finally:
         thread.join(90)
-    a = {p[0]: p for p in first["x"]}
-    b = {p[0]: p for p in second["x"]}
+    a = {round(p[0], 3): p for p in first["x"]}
+    b = {round(p[0], 3): p for p in second["x"]}
     common = sorted(set(a) & set(b))
     assert len(common) > 50
-    assert all(a[t] == b[t] for t in common)
+    assert all(a[t][1:] == b[t][1:] for t in common)  # min, max, last
     assert min(b) <= min(a) + 0.1  # the points from before the second client came
+
+
+def test_a_client_that_starts_watching_a_rate_is_sent_the_minutes_before(session):
+    watcher = open_link(session, timeout=60)
+    try:
+        watcher.request("subscribe", max_lines=1, kinds=["rates"])
+        watcher.request("watch_rates", topics=[WAVE])
+        rates = [data[WAVE]["rate_hz"] for data in streamed(watcher, "rates",
+                                                             time.monotonic() + 6)]
+        assert len(rates) >= 3
+        later = open_link(session, timeout=60)
+        try:
+            later.request("subscribe", max_lines=1, kinds=["rates"])
+            history = later.request("watch_rates", topics=[WAVE])["history"][WAVE]
+        finally:
+            later.close()
+    finally:
+        watcher.close()
+    # a rate a second while the first client watched: the figures it was sent, in order
+    assert any(history[i:i + len(rates)] == rates
+               for i in range(len(history) - len(rates) + 1)), (history, rates)
+    assert 40 < history[-1] < 60
+
+
+def test_a_client_that_draws_a_node_trend_is_sent_the_minutes_before(session):
+    watcher = open_link(session, timeout=60)
+    try:
+        watcher.request("subscribe", max_lines=1, kinds=["trend"])
+        watcher.request("watch_resources", on=True, processes=["wave-1"], trend=["wave-1"])
+        samples = [data["wave-1"] for data in streamed(watcher, "trend",
+                                                        time.monotonic() + 6)]
+        assert len(samples) >= 3
+        assert all(cpu is not None and rss > 10 << 20 for cpu, rss in samples)
+        later = open_link(session, timeout=60)
+        try:
+            later.request("subscribe", max_lines=1, kinds=["trend"])
+            kept = later.request("watch_resources", on=True, processes=["fast-2"],
+                                 trend=["wave-1", "fast-2"])["history"]
+        finally:
+            later.close()
+    finally:
+        watcher.close()
+    # a sample a second while the first client watched, each as it was sent to it
+    assert set(kept) == {"wave-1", "fast-2"}
+    history = kept["wave-1"]
+    assert any(history[i:i + len(samples)] == samples
+               for i in range(len(history) - len(samples) + 1)), (history, samples)
+
+
+async def test_the_selected_node_detail_line_draws_its_cpu_and_memory_trend(session):
+    from rich.console import Console
+
+    from tuilaunch.tui.app import make_app
+
+    from .test_sessions import status
+    from .test_tui import until
+
+    info = status(session)
+    app = make_app(info["file"], {}, Path(info["log_dir"]), session_name=session)
+
+    def line() -> str:
+        console = Console(width=app.detail_bar.size.width, file=io.StringIO(),
+                          color_system=None)
+        console.print(app.detail_bar.content)
+        return console.file.getvalue()  # type: ignore[attr-defined]
+
+    async with app.run_test(size=(140, 30)) as pilot:
+        await until(pilot, lambda: "wave-1" in app.launch_tree.rows)
+        while app.selected_process() != "wave-1":
+            await pilot.press("down")
+        await until(pilot, lambda: len(app.trends.get("wave-1", ())) >= 3)
+        await until(pilot, lambda: " cpu " in line() and " mem " in line())
+        drawn = line()
+        assert drawn.startswith("wave-1 (/wave): running")
+        cpu, memory = drawn.rstrip().rsplit(" cpu ", 1)[1].split(" mem ")
+        for bars in (cpu, memory):  # a bar a column, from the last minutes
+            assert len(bars.strip()) == 10 and set(bars.strip()) <= set("▁▂▃▄▅▆▇█"), drawn
+        await pilot.press("down")  # another node: its own trend, its minutes before too
+        await until(pilot, lambda: line().startswith("fast-2 (/fast)") and " cpu " in line())
+        assert len(app.trends["fast-2"]) >= 3
 
 
 # --- on screen -------------------------------------------------------------------------------
 
 async def test_p_in_the_topics_tab_plots_the_topic_with_its_figures(session):
-    from textual.widgets import DataTable
+    from textual.widgets import DataTable, Sparkline
     from textual_plotext import PlotextPlot
 
     from tuilaunch.tui.app import make_app
@@ -230,6 +310,11 @@ async def test_p_in_the_topics_tab_plots_the_topic_with_its_figures(session):
         table = panel.query_one(DataTable)
         table.move_cursor(row=panel.shown.index(WAVE))
         await until(pilot, lambda: panel.selected == WAVE)
+        # the selected topic's rate over the last minutes, as a sparkline above its detail
+        spark = panel.query_one("#tpc-spark", Sparkline)
+        await until(pilot, lambda: len(spark.data or []) >= 3)
+        assert panel.query_one("#tpc-trend").has_class("shown")
+        assert 40 < spark.data[-1] < 60  # type: ignore[index]
         await pilot.press("p")
         await until(pilot, lambda: isinstance(app.screen, PlotScreen))
         screen = app.screen

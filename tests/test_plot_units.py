@@ -88,18 +88,18 @@ def test_a_slow_topic_bucket_closes_when_its_time_is_over():
     buckets.close_until(100.02)
     assert buckets.since(-1) == []  # still open
     buckets.close_until(100.06)
-    assert [b.point() for b in buckets.since(-1)] == [[100.01, 1.0, 1.0, 1.0]]
+    assert [b.point(100) for b in buckets.since(-1)] == [[10, 1.0, 1.0, 1.0]]
 
 
 def test_the_plot_keeps_its_own_stream_points_once_and_rebins_them_keeping_the_spike():
     series = PlotSeries(["x"], tag=2)
-    points = [[t / 20, -1.0, 1.0 if t != 50 else 9.0, 0.5] for t in range(200)]
-    assert not series.add({"tag": 1, "points": {"x": points}})  # the stream it replaced
-    assert series.add({"tag": 2, "points": {"x": points[:100]}})
-    assert series.add({"tag": 2, "points": {"x": points[90:]}})  # sent again: kept once
+    points = [[t * 50, -1.0, 1.0 if t != 50 else 9.0, 0.5] for t in range(200)]  # ms
+    assert not series.add({"tag": 1, "t0": 7, "points": {"x": points}})  # the one replaced
+    assert series.add({"tag": 2, "t0": 7, "points": {"x": points[:100]}})
+    assert series.add({"tag": 2, "t0": 7, "points": {"x": points[90:]}})  # again: kept once
     assert len(series.points["x"]) == 200
     end = series.newest()
-    assert end == pytest.approx(199 / 20)
+    assert end == pytest.approx(7 + 199 / 20)
     stats = series.stats("x", 10.0, end)
     assert (stats.last, stats.low, stats.high) == (0.5, -1.0, 9.0)
     xs, ys = rebinned(series.shown("x", 10.0, end), end - 10.0, end, 40)

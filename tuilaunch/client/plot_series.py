@@ -1,5 +1,5 @@
 """A plot's points as a client keeps them: the buckets the session server sends (`plot`
-events: [time, min, max, last] per bucket and field, engine/ros/plots.py), the last five
+events: [ms after t0, min, max, last] per bucket and field, engine/ros/plots.py), the last five
 minutes of each field, and what a window of them shows (rebinned to the plot's width,
 each bin still keeping its min and max, and each field's last, min and max).
 
@@ -45,11 +45,13 @@ class PlotSeries:
         or the one it replaced, still on its way)."""
         if data.get("tag") != self.tag:
             return False
+        since = float(data.get("t0") or 0)  # each point's time is in ms after it
         for path, points in (data.get("points") or {}).items():
             kept = self.points.get(path)
             if kept is None:
                 continue
-            for t, low, high, last in points:
+            for ms, low, high, last in points:
+                t = since + ms / 1000
                 if kept and t <= kept[-1][0]:
                     continue  # sent again (a reconnection, a backfill): kept once
                 kept.append((float(t), float(low), float(high), float(last)))

@@ -5,9 +5,12 @@ sampling asked for only while its tab is on screen."""
 from __future__ import annotations
 
 import re
+from collections import deque
 from typing import Any
 
+from rich.text import Text
 from textual import on
+from textual.renderables.sparkline import Sparkline
 from textual.timer import Timer
 
 from ..client.session_graph import GraphCalls, SessionGraph
@@ -22,6 +25,10 @@ from .screens.tree_panel import LaunchTree
 LEVELS = ["debug", "info", "warn", "error", "fatal"]
 FIGURES_SETTLE = 0.3
 """Seconds the selection rests before the server is told whose CPU and memory to send."""
+TREND_KEEP = 300
+"""CPU and memory samples kept for the selected node's sparklines: one a second, 5 min."""
+TREND_WIDTH = 10
+"""Columns of each sparkline on the detail line (CPU, memory): shown when the line has room."""
 
 
 class Inspector(Navigation):
@@ -39,6 +46,10 @@ class Inspector(Navigation):
         self.log_levels: dict[str, str] = {}
         """The level last set per process (the level dialog starts there)."""
         self.session_graph = SessionGraph(self.inspect)
+        self.trends: dict[str, deque[tuple[float, float]]] = {}
+        """The selected process's (CPU%, RSS) a second, the server's last minutes first."""
+        self._trend_asked: str | None = None
+        self._trend_drawn: tuple[Any, ...] | None = None
         self.plot_screen: Any = None
         """The plot on screen (screens/plot_screen.py, imported with the first plot)."""
         self.topics_process: str | None = None
@@ -72,6 +83,11 @@ class Inspector(Navigation):
         elif event.kind == "resources":
             if self.watching_resources:  # one sent before the server heard "off" is stale
                 self.launch_tree.set_usage(data)
+        elif event.kind == "trend":
+            if self.watching_resources:
+                for process, (cpu, rss) in data.items():
+                    self.trends.setdefault(process, deque(maxlen=TREND_KEEP)).append(
+                        (float(cpu or 0.0), float(rss or 0)))
         elif event.kind == "qos":
             # the server says when the problems change (watch_qos): the tree marks both
             # nodes of each pair that cannot talk, the line above it says why
@@ -115,11 +131,25 @@ class Inspector(Navigation):
         return found
 
     async def _watch_resources(self, on: bool) -> None:
-        # no CPU column without it; of the processes whose figures are on screen only
+        # no CPU column without it; of the processes whose figures are on screen only; and
+        # the selected one's last minutes, for the sparklines of the detail line
         self._figures_asked = self.launch_tree.figures_shown()
-        await self._watch(on, "watch_resources", processes=self._figures_asked)
-        if not on:
+        selected = self.selected_process() if on else None
+        self._trend_asked = selected
+        try:
+            result = await self.inspect("watch_resources", on=on,
+                                        processes=self._figures_asked,
+                                        trend=[selected] if selected else [])
+        except SessionError:
+            return
+        if on:
+            kept = (result or {}).get("history") or {}
+            self.trends = {p: deque(((float(c or 0.0), float(r or 0)) for c, r in samples),
+                                    maxlen=TREND_KEEP) for p, samples in kept.items()}
+        else:
+            self.trends = {}
             self.launch_tree.set_usage({})  # figures that no longer move would mislead
+        self.update_detail()
 
     async def _watch(self, on: bool, op: str, **fields: Any) -> None:
         """Starts or stops a stream of the server's (`watch_resources`, `watch_qos`); one
@@ -134,8 +164,9 @@ class Inspector(Navigation):
         """The figures on screen are another process's (the selection moved), or every
         process's (the tree grew wide enough for its column): the server is told once the
         selection rests, so running down the tree is one request, not one a row."""
-        if not self.watching_resources or self.launch_tree.figures_shown() == \
-                self._figures_asked:
+        if not self.watching_resources or (self.launch_tree.figures_shown() ==
+                                           self._figures_asked and
+                                           self.selected_process() == self._trend_asked):
             return
         if self._figures_timer is not None:
             self._figures_timer.stop()
@@ -143,10 +174,18 @@ class Inspector(Navigation):
 
     def _ask_figures(self) -> None:
         self._figures_timer = None
-        if self.watching_resources and self.launch_tree.figures_shown() != \
-                self._figures_asked:
+        if self.watching_resources and (self.launch_tree.figures_shown() !=
+                                        self._figures_asked or
+                                        self.selected_process() != self._trend_asked):
             self.run_worker(self._watch_resources(True), group="inspector",
                             exit_on_error=False)
+
+    def _sparkline(self, data: list[float]) -> Text:
+        """Textual's Sparkline of `data`, TREND_WIDTH columns, as text for the detail
+        line (a line of text, as the rest of it: read back by the tests, cut alike)."""
+        options = self.console.options.update_width(TREND_WIDTH)
+        segments = self.console.render(Sparkline(data, width=TREND_WIDTH), options)
+        return Text.assemble(*((s.text, s.style or "") for s in segments if s.text != "\n"))
 
     # --- plots ------------------------------------------------------------------------------
 
@@ -226,8 +265,36 @@ class Inspector(Navigation):
 
     def update_detail(self) -> None:
         super().update_detail()
+        self._show_trend()
         self._follow_topics_node()
         self._figures_follow()  # the selection may have moved
+
+    def _show_trend(self) -> None:
+        """The selected node's CPU and memory over the last minutes, as two sparklines
+        (Textual's) at the end of the detail line, when it has room for them."""
+        process = self.selected_process()
+        trend = self.trends.get(process or "") if self.watching_resources else None
+        text = self._detail_text
+        # a column to spare: a line one cell too long would wrap
+        room = self.detail_bar.size.width - len(text) - 2 * (TREND_WIDTH + 5) - 1
+        if trend is None or len(trend) < 2 or room < 0:
+            if self._trend_drawn is not None:  # the plain line again
+                self._trend_drawn = None
+                self._detail_text = ""
+                super().update_detail()
+            return
+        drawn = (text, process, tuple(trend))
+        if drawn == self._trend_drawn:
+            return  # the same picture is not sent to the terminal again
+        self._trend_drawn = drawn
+        cpu = [c for c, _ in trend]
+        memory = [r for _, r in trend]
+        line = Text(text, style="bold red" if ": failed" in text else "")
+        line.append(" " * room)
+        for label, data in ((" cpu ", cpu), (" mem ", memory)):
+            line.append(label, style="dim")
+            line.append_text(self._sparkline(data))
+        self.detail_bar.update(line)
 
     def _follow_topics_node(self) -> None:
         """After events: the node `o` listed may now be elsewhere (robot:=r1 -> r2)."""

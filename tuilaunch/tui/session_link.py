@@ -58,7 +58,7 @@ ENDED_ELSEWHERE_PAUSE = 3.0
 """Seconds a client shows that its session was stopped elsewhere before it leaves."""
 WARNINGS_SHOWN = 3
 """The plan's warnings shown as toasts when the TUI opens; all are in the all nodes pane."""
-INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources", "qos", "plot"})
+INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources", "qos", "plot", "trend"})
 """What the session server measures for a client that asks (tui/inspector.py shows it)."""
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+from collections import deque
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -48,6 +49,8 @@ for an rclpy talker, with the test suite on both cores)."""
 SERVICE_TIMEOUT = 5.0
 """How long a node may take to answer a parameter or logger request."""
 MAX_WINDOW = 600.0
+RATE_HISTORY = 300
+"""Rates kept per watched topic, one a second: the Topics tab's last five minutes."""
 
 
 class Inspector(Plugin):
@@ -58,6 +61,9 @@ class Inspector(Plugin):
         self.find_process: Callable[[str], str] | None = None
         self.rate_watch: dict[int, set[str]] = {}
         self.unmeasured: dict[str, str] = {}  # watched topics not measured yet: why
+        self.rate_history: dict[str, deque[float | None]] = {}
+        """A rate a second of each topic some client watches, for as long as one does: a
+        client that starts watching it is sent the minutes before (`watch_rates`)."""
         self.rates_task: asyncio.Task[None] | None = None
         self.hz_streams: dict[tuple[int, str], tuple[asyncio.Task[None], Any]] = {}
         """`tuilaunch hz` clients' measures, by (client, topic): the task sending the
@@ -339,7 +345,9 @@ class Inspector(Plugin):
         else:
             self.rate_watch.pop(client, None)
         await self.update_rates()
-        return {"unmeasured": {t: self.unmeasured[t] for t in topics if t in self.unmeasured}}
+        return {"unmeasured": {t: self.unmeasured[t] for t in topics if t in self.unmeasured},
+                "history": {t: list(self.rate_history[t]) for t in topics
+                            if t in self.rate_history}}
 
     async def update_rates(self) -> None:
         """Measures the union of the watched topics, no more; the ticker runs while any
@@ -350,6 +358,7 @@ class Inspector(Plugin):
                 self.rates_task.cancel()
                 self.rates_task = None
             self.unmeasured.clear()
+            self.rate_history.clear()
             if self.ros.made is not None:
                 await self.ros.made.stop_rates()
             return
@@ -359,6 +368,9 @@ class Inspector(Plugin):
         for topic in list(self.unmeasured):
             if topic not in wanted:
                 del self.unmeasured[topic]
+        for topic in list(self.rate_history):
+            if topic not in wanted:
+                del self.rate_history[topic]
         await self.start_missing(bridge, wanted - measured)
         if self.rates_task is None:
             self.rates_task = asyncio.ensure_future(self.tick_rates())
@@ -384,6 +396,9 @@ class Inspector(Plugin):
             if self.unmeasured:  # a publisher may have come since
                 await self.start_missing(bridge, set(self.unmeasured))
             rates = await bridge.read_rates()
+            for topic in set().union(*self.rate_watch.values()):
+                self.rate_history.setdefault(topic, deque(maxlen=RATE_HISTORY)).append(
+                    rates.get(topic, {}).get("rate_hz"))
             for client, topics in list(self.rate_watch.items()):
                 data = {t: {"rate_hz": rates.get(t, {}).get("rate_hz"),
                             "bytes_per_s": rates.get(t, {}).get("bytes_per_s")}

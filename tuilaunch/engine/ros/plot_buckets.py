@@ -31,10 +31,12 @@ class Bucket:
     last: float
     count: int
 
-    def point(self) -> list[float]:
-        """As sent to a client: [time (ms), min, max, last], six significant digits (a
-        plot's resolution is far coarser; the CSV gets every value exact instead)."""
-        return [round(self.time, 3), _short(self.low), _short(self.high), _short(self.last)]
+    def point(self, since: int = 0) -> list[float]:
+        """As sent to a client: [time in ms after the second `since`, min, max, last], six
+        significant digits (a plot's resolution is far coarser; the CSV gets every value
+        exact instead). An offset in ms is 3 to 6 digits where the time is 14."""
+        return [round((self.time - since) * 1000), _short(self.low), _short(self.high),
+                _short(self.last)]
 
 
 def _short(value: float) -> float:

@@ -67,6 +67,7 @@ class PlotStreams:
         self.samplers: dict[str, Any] = {}  # PlotSampler by topic
         self.task: asyncio.Task[None] | None = None
         self.lock = asyncio.Lock()  # one start or stop at a time: samplers are shared
+        self.pending: set[asyncio.Task[None]] = set()
 
     async def _topic_type(self, topic: str, wait: float) -> tuple[Any, list[Any]]:
         """The topic's message class and its publishers' infos, once one publishes."""
@@ -165,7 +166,8 @@ class PlotStreams:
     def client_gone(self, client: int) -> None:
         for key in [k for k in self.streams if k[0] == client]:
             task = asyncio.ensure_future(self._end(*key))
-            task.add_done_callback(lambda t: t.cancelled() or t.exception())
+            self.pending.add(task)  # kept until done: a bare task may be collected
+            task.add_done_callback(self.pending.discard)
 
     async def close(self) -> None:
         if self.task is not None:
@@ -210,20 +212,24 @@ class PlotStreams:
         import time
 
         now = time.time()
-        points: dict[str, list[list[float]]] = {}
+        fresh: dict[str, list[Any]] = {}
         with sampler.lock:
             for field_path in stream.fields:
                 buckets = sampler.buckets.get(field_path.path)
                 if buckets is None:
                     continue
                 buckets.close_until(now)
-                fresh = buckets.since(stream.sent.get(field_path.path, -1))
-                if fresh:
-                    stream.sent[field_path.path] = fresh[-1].index
-                    points[field_path.path] = [b.point() for b in fresh]
-        if not points:
+                closed = buckets.since(stream.sent.get(field_path.path, -1))
+                if closed:
+                    stream.sent[field_path.path] = closed[-1].index
+                    fresh[field_path.path] = closed
+        if not fresh:
             return None
-        return {"topic": sampler.topic, "tag": stream.tag, "points": points}
+        # times as ms after a whole second: "t0" once, not a 14-digit time in each point
+        since = int(min(closed[0].time for closed in fresh.values()))
+        return {"topic": sampler.topic, "tag": stream.tag, "t0": since,
+                "points": {path: [b.point(since) for b in closed]
+                           for path, closed in fresh.items()}}
 
     def _rows(self, sampler: Any, client: int, stream: PlotStream) -> dict[str, Any] | None:
         with sampler.lock:

@@ -32,6 +32,7 @@ KEYS = """\
   rows: CPU% and memory (wide tree); UPmem memory keeps growing;
         XQOS: a publisher/subscriber pair whose QoS cannot talk
 [b]Topics[/b]  / filter  e echo (again: stop)  x all topics (after o)  u update
+  p      plot the topic's fields: w window  space pause  f fields  q back
 [b]Services, Params[/b]  / filter the list; enter: call, set
 [b]Params[/b]  w o  write the node's parameters to a file / load a file
 """

@@ -18,7 +18,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import DataTable, Input, Static
+from textual.widgets import DataTable, Input, Sparkline, Static
 
 from .fields import Field
 from .graph_listing import discovering
@@ -34,6 +34,8 @@ ECHO_KEEP = 5
 """Echoed messages kept on screen: the newest, as many as fit."""
 ECHO_PER_S = 2.0
 """Echoed messages sent per second at most: readable, and cheap over ssh."""
+RATE_HISTORY = 300
+"""Rates kept per watched topic, one a second (the server sends the minutes before)."""
 
 # (key, title, fixed width or None for the content's)
 COLUMNS = (("topic", "topic", None), ("pubs", "pub", 3), ("subs", "sub", 3),
@@ -95,6 +97,10 @@ class TopicsPanel(Vertical):
     TopicsPanel #tpc-table { height: 1fr; overflow-x: hidden; }
     TopicsPanel #tpc-note { height: 1; color: $text-muted; }
     TopicsPanel #tpc-note.error { color: $error; }
+    TopicsPanel #tpc-trend { height: 1; display: none; }
+    TopicsPanel #tpc-trend.shown { display: block; }
+    TopicsPanel #tpc-trend-label { width: auto; padding: 0 1; color: $text-muted; }
+    TopicsPanel #tpc-spark { width: 1fr; height: 1; }
     TopicsPanel #tpc-detail { height: 1fr; padding: 0 1; border-top: tall $panel; }
     """
     BINDINGS = [
@@ -116,6 +122,9 @@ class TopicsPanel(Vertical):
         self.cells: dict[tuple[str, str], str] = {}
         """The text of every cell, so an unchanged one is not sent to the terminal again."""
         self.rates: dict[str, dict[str, Any]] = {}
+        self.rate_history: dict[str, deque[float]] = {}
+        """A rate a second of each watched topic, oldest first (the selected one's is the
+        sparkline above the detail)."""
         self.unmeasured: dict[str, str] = {}
         """Watched topics the server cannot measure, and why."""
         self.watched: list[str] = []
@@ -138,6 +147,9 @@ class TopicsPanel(Vertical):
             yield Static("all topics", id="tpc-scope")
         yield QuietTable(id="tpc-table", cursor_type="row", zebra_stripes=False)
         yield Static("", id="tpc-note")
+        with Horizontal(id="tpc-trend"):
+            yield Static("rate, last minutes", id="tpc-trend-label")
+            yield Sparkline([], id="tpc-spark")
         yield Static("", id="tpc-detail")
 
     def on_mount(self) -> None:
@@ -303,6 +315,13 @@ class TopicsPanel(Vertical):
             return
         # why a topic has no rate (nobody publishes it, its type is not installed)
         self.unmeasured = dict((result or {}).get("unmeasured") or {})
+        # the minutes the server kept of each (another client watching it, or we before)
+        for topic, kept in ((result or {}).get("history") or {}).items():
+            if topic in self.watched and len(kept) > len(self.rate_history.get(topic, ())):
+                self.rate_history[topic] = deque((r or 0.0 for r in kept),
+                                                 maxlen=RATE_HISTORY)
+        for topic in [t for t in self.rate_history if t not in self.watched]:
+            del self.rate_history[topic]
         self.show_detail()
 
     def show_rates(self, rates: Mapping[str, Any]) -> None:
@@ -311,6 +330,8 @@ class TopicsPanel(Vertical):
             if not isinstance(values, Mapping) or topic not in self.watched:
                 continue  # a figure sent before we stopped watching that row
             self.rates[topic] = dict(values)
+            self.rate_history.setdefault(topic, deque(maxlen=RATE_HISTORY)).append(
+                float(values.get("rate_hz") or 0.0))
             if topic in self.shown:
                 self._set(topic, "rate", rate_text(values.get("rate_hz")))
                 self._set(topic, "bw", bytes_text(values.get("bytes_per_s"), "/s"))
@@ -412,6 +433,23 @@ class TopicsPanel(Vertical):
         if text.plain != self._detail_text:  # an unchanged detail is not sent again
             self._detail_text = text.plain
             detail.update(text)
+        self._show_trend()
+
+    def _show_trend(self) -> None:
+        """The selected topic's rate over the last minutes, as a sparkline (Textual's)."""
+        history = self.rate_history.get(self.selected or "")
+        trend = self.query_one("#tpc-trend")
+        shown = history is not None and len(history) >= 2
+        trend.set_class(shown, "shown")
+        if shown and history is not None:
+            spark = self.query_one("#tpc-spark", Sparkline)
+            data = list(history)
+            if data != spark.data:
+                spark.data = data
+                high = max(data)
+                self.query_one("#tpc-trend-label", Static).update(
+                    f"rate, last {len(data) // 60 or len(data)} "
+                    f"{'min' if len(data) >= 60 else 's'} (max {rate_text(high)})")
 
     def note(self, text: str, ok: bool = True) -> None:
         if (text, ok) != self._note:

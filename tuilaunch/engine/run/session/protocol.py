@@ -44,7 +44,11 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   in its first; a process that stopped once, with None figures). `processes`: the ones
   whose figures the client shows (null or absent: all); of the others only `growing` is
   sent, and figures sent before are taken back once (None). Asked again with other
-  `processes`, the watcher is sent the figures it now lacks at once.
+  `processes`, the watcher is sent the figures it now lacks at once. trend?: [id]: the
+  processes whose last minutes the client draws -> {history: {process: [[cpu_percent,
+  rss_bytes], ...]: a sample a second, oldest first, 5 minutes at most, kept while some
+  client watches}}, then an event "trend", data {process: [cpu_percent, rss_bytes]} each
+  second.
   The ROS inspector (engine/ros/inspector.py; a node is a full name or a process id):
   topics {node?, problems_only?: only the topics with QoS problems} -> {"topics": [{name,
   types, publishers: [{node, in_launch, process,
@@ -57,13 +61,24 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   data {topic, rate_hz, min_s, max_s, std_dev_s, window, messages, bytes_per_s, size_mean,
   size_min, size_max, elapsed_s} (ros2 topic hz and bw's figures over the last N messages),
   to this subscribed client every `every` s until it leaves; hz_read {topic} -> that data now;
-  watch_rates {topics: [...]} -> {unmeasured: {topic: why}}: this client's topics ([]: none);
+  watch_rates {topics: [...]} -> {unmeasured: {topic: why}, history: {topic: [rate_hz or
+  null, one a second, oldest first: the last 5 minutes some client watched it]}}: this
+  client's topics ([]: none);
   the union over clients is measured, and each watcher gets about once a second an event
   "rates", data {topic: {rate_hz, bytes_per_s}} (None until measured);
   echo {topic, count?, max_per_s? (default 5; 0: every message), wait? (s for a publisher,
   at most 5)} -> {}: events "echo", data
   {topic, text: one message's YAML ending in "---"}, to this client until echo_stop {topic}
   or `count` messages (the last has data "done": true); a subscribed client only;
+  plot_fields {topic} -> {type, fields: [numeric fields by dotted path]}; plot {topic,
+  fields: [dotted paths], raw?: bool, tag?: any, wait?: s} -> {topic, type, fields,
+  numeric, points_per_s}: events "plot" to this subscribed client until plot_stop {topic}:
+  data {topic, tag, t0, points: {field: [[ms, min, max, last], ...]}} (buckets of
+  1/points_per_s s; a bucket's time, its last sample's as received, is t0 + ms/1000 in
+  seconds of the server's clock), four a second,
+  a new stream first sent what the server kept of the topic (5 min at most); with raw,
+  data {topic, tag, fields, rows: [[time, value, ...]: every message], dropped: rows left
+  out for a link too slow}, ten a second (engine/ros/plots.py);
   params_dump {node} -> {yaml}; params_load {node, yaml, source?: its file name for
   messages} -> {results: [{name, ok, reason}]};
   log_level {node, level} -> {ok: true}, or an error saying the node has no logger service

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import time
+from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
@@ -35,6 +36,9 @@ def usage_fields(usage: Usage | None) -> dict[str, Any]:
 
 HIDDEN = {"cpu_percent": None, "rss_bytes": None, "threads": None}
 """The figures of a process whose figures a watcher does not show."""
+HISTORY = 300
+"""Samples kept per process, one a second while a client watches: the last five minutes
+the selected node's detail line draws (its "trend")."""
 RSS_STEP = 64 << 10
 """Watchers get memory to this step: a display shows tenths of a MB at most, and a figure
 that does not move is a repeat the ssh link's compression sends for almost nothing."""
@@ -64,6 +68,11 @@ class ResourceWatch:
         self.last_data: dict[str, dict[str, Any]] = {}  # the last tick's figures
         self.last_sample: float | None = None
         self.task: asyncio.Task[None] | None = None
+        self.history: dict[str, deque[tuple[Any, Any]]] = {}
+        """(CPU%, RSS) a second of each process, kept while some client watches, so a
+        client that asks for a process's trend gets the minutes before."""
+        self.trend: dict[int, set[str]] = {}
+        """The processes whose history each watcher draws: sent a sample a second."""
 
     def sample(self) -> dict[str, Usage]:
         self.last_sample = time.monotonic()
@@ -75,6 +84,17 @@ class ResourceWatch:
             self.sample()
             await asyncio.sleep(FIRST_INTERVAL)
         return self.sample()
+
+    def watch_trend(self, client: int, processes: Iterable[str]) -> dict[str, list[Any]]:
+        """From now on `client` is sent each tick's (CPU%, RSS) of these processes (an
+        event "trend"); returned: what is kept of them, oldest first."""
+        wanted = set(processes)
+        if wanted:
+            self.trend[client] = wanted
+        else:
+            self.trend.pop(client, None)
+        return {p: [list(sample) for sample in self.history[p]] for p in sorted(wanted)
+                if p in self.history}
 
     def watch(self, client: int, on: bool, shown: Iterable[str] | None = None) -> None:
         """`shown`: the processes whose figures the client shows (None: all); of the others
@@ -99,6 +119,9 @@ class ResourceWatch:
         self.watchers.discard(client)
         self.sent.pop(client, None)
         self.shown.pop(client, None)
+        self.trend.pop(client, None)
+        if not self.watchers:
+            self.history.clear()  # kept while some client watches, not for nobody
         if not self.watchers and self.task is not None:
             self.task.cancel()
             self.task = None
@@ -110,8 +133,15 @@ class ResourceWatch:
             data = {process: shown_fields(usage_fields(usage))
                     for process, usage in self.sample().items()}
             self.last_data = data
+            for process, fields in data.items():
+                self.history.setdefault(process, deque(maxlen=HISTORY)).append(
+                    (fields["cpu_percent"], fields["rss_bytes"]))
             for client in list(self.watchers):
                 self._tell(client, data)
+                trend = {p: [data[p]["cpu_percent"], data[p]["rss_bytes"]]
+                         for p in sorted(self.trend.get(client, ())) if p in data}
+                if trend:
+                    self.send(Event("trend", data=trend), client)
 
     def _tell(self, client: int, data: dict[str, dict[str, Any]]) -> None:
         """Only the figures that moved (at the precision shown) of the processes it shows
@@ -136,6 +166,7 @@ class ResourceWatch:
 
     def close(self) -> None:
         self.watchers.clear()
+        self.history.clear()
         if self.task is not None:
             self.task.cancel()
             self.task = None

@@ -285,9 +285,13 @@ class SessionServer:
             return self.status(await self.resources.current() if wanted else None)
         if op == "watch_resources":
             shown = message.get("processes")
-            self.resources.watch(int(message["client"]), bool(message.get("on", True)),
+            client, on = int(message["client"]), bool(message.get("on", True))
+            self.resources.watch(client, on,
                                  None if shown is None else [str(p) for p in shown])
-            return {}
+            trend = message.get("trend")  # the processes whose last minutes it draws
+            if trend is None or not on:
+                return {}
+            return {"history": self.resources.watch_trend(client, [str(p) for p in trend])}
         if op in ("start", "stop", "restart"):
             process = self.find_process(str(message.get("process")))
             if process not in {p.id for p in self.session.plan.processes}:
