@@ -13,8 +13,8 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Bool, String
 
 from tuilaunch.client.plot_series import PlotSeries, rebinned
-from tuilaunch.engine.ros.plot_buckets import FieldBuckets
-from tuilaunch.engine.ros.plot_fields import FieldError, compile_path, numeric_fields
+from tuilaunch.engine.ros.plot.buckets import FieldBuckets
+from tuilaunch.engine.ros.plot.fields import FieldError, compile_path, numeric_fields
 
 
 def test_numeric_fields_are_listed_by_dotted_path_nested_and_indexed():

@@ -2,7 +2,7 @@
 fields, full screen (`q` leaves), or with `--csv` one line per message for scripts and
 spreadsheets (as `ros2 topic echo --csv`, with a header), until Ctrl+C or `--duration`.
 
-The session server subscribes where the nodes run (engine/ros/plots.py): the plot is sent
+The session server subscribes where the nodes run (engine/ros/plot/streams.py): the plot is sent
 at most 20 points a second per field; `--csv` every message, as fast as the link carries.
 """
 

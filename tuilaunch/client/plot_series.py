@@ -1,6 +1,6 @@
 """A plot's points as a client keeps them: the buckets the session server sends (`plot`
-events: [ms after t0, min, max, last] per bucket and field, engine/ros/plots.py), the last five
-minutes of each field, and what a window of them shows (rebinned to the plot's width,
+events: [ms after t0, min, max, last] per bucket and field, engine/ros/plot/streams.py),
+the last five minutes of each field, and what a window of them shows (rebinned to the plot's width,
 each bin still keeping its min and max, and each field's last, min and max).
 
 No Textual here: the TUI's plot screen and `tuilaunch plot` draw from it, tests read it.

@@ -8,7 +8,7 @@ be named by its process id.
 Streams are per client: `watch_rates` measures the union of what the clients watch and
 stops a topic when nobody watches it; `echo` runs one throttled stream per client and
 topic (echo_streams.py); `plot` one stream of decimated points per client and topic
-(plots.py); `watch_qos` sends the graph's QoS problems when they change
+(plot/streams.py); `watch_qos` sends the graph's QoS problems when they change
 (qos_watch.py). A client that disconnects loses its streams (`client_gone`).
 """
 
@@ -28,7 +28,7 @@ from .actions import RosActions
 from .echo_streams import EchoStreams
 from .graph import topic_of
 from .graph_requests import GraphRequests
-from .plots import PlotStreams
+from .plot.streams import PlotStreams
 from .qos_watch import Problems, QosWatch
 from .ros_errors import RosError
 

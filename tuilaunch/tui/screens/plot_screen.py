@@ -6,7 +6,7 @@ it, the y range following the data. `space` pauses (the points keep coming, the 
 stays), `f` picks the fields among the topic's numeric ones. Imported only when a plot
 is first shown: plotext costs 20 ms and memory nobody else needs.
 
-The points come from the session server's `plot` events (engine/ros/plots.py), already
+The points come from the session server's `plot` events (engine/ros/plot/streams.py), already
 decimated; the screen repaints at most REPAINT_HZ a second, and only when they changed.
 """
 

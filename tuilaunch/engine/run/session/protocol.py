@@ -78,7 +78,7 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   seconds of the server's clock), four a second,
   a new stream first sent what the server kept of the topic (5 min at most); with raw,
   data {topic, tag, fields, rows: [[time, value, ...]: every message], dropped: rows left
-  out for a link too slow}, ten a second (engine/ros/plots.py);
+  out for a link too slow}, ten a second (engine/ros/plot/streams.py);
   params_dump {node} -> {yaml}; params_load {node, yaml, source?: its file name for
   messages} -> {results: [{name, ok, reason}]};
   log_level {node, level} -> {ok: true}, or an error saying the node has no logger service

@@ -1,10 +1,10 @@
 """One topic's numeric fields, sampled as its messages are received, for the plots of every
-client that plots it (plots.py).
+client that plots it (streams.py).
 
-As RateMeter (rates.py) does, the subscription belongs to the bridge's node but no
+As RateMeter (../rates.py) does, the subscription belongs to the bridge's node but no
 executor runs it: a thread of its own waits on a wait set and takes every message waiting
 (an executor callback costs a whole core at 1 kHz). Each message is deserialized by rclpy's
-C code, its fields read, and its values folded into each field's buckets (plot_buckets.py)
+C code, its fields read, and its values folded into each field's buckets (buckets.py)
 and appended to the rows of the clients that want every message (`tuilaunch plot --csv`).
 """
 
@@ -16,9 +16,9 @@ from collections import deque
 from contextlib import ExitStack
 from typing import Any
 
-from .plot_buckets import FieldBuckets
-from .plot_fields import FieldPath
-from .rates import IDLE_WAIT_NS, NotByExecutor
+from ..rates import IDLE_WAIT_NS, NotByExecutor
+from .buckets import FieldBuckets
+from .fields import FieldPath
 
 RAW_KEEP = 200_000
 """Rows kept for a client that wants every message and has not been sent them yet: at

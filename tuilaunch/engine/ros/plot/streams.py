@@ -1,7 +1,7 @@
 """`plot`, `plot_stop`, `plot_fields`: live plots of topic fields, one stream per client and
-topic, fed by one sampler per topic (plot_sampler.py) whatever the number of clients.
+topic, fed by one sampler per topic (sampler.py) whatever the number of clients.
 
-A stream is sent, every SEND_PERIOD, the buckets (plot_buckets.py: min, max, last of each
+A stream is sent, every SEND_PERIOD, the buckets (buckets.py: min, max, last of each
 1/20 s) closed since its last event, at most POINTS_PER_S a second per field whatever the
 topic's rate; a new stream is first sent the buckets the sampler kept (up to 5 minutes, when
 another client was plotting the topic already). A `raw` stream (`tuilaunch plot --csv`)
@@ -20,10 +20,10 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import LaunchError
-from ..run.events import Event
-from .graph import topic_of
-from .ros_errors import RosError
+from ...errors import LaunchError
+from ...run.events import Event
+from ..graph import topic_of
+from ..ros_errors import RosError
 
 SEND_PERIOD = 0.25
 """Seconds between a stream's events: four small events a second, a plot repaints no
@@ -71,7 +71,7 @@ class PlotStreams:
 
     async def _topic_type(self, topic: str, wait: float) -> tuple[Any, list[Any]]:
         """The topic's message class and its publishers' infos, once one publishes."""
-        from .rates import message_class, wait_for_publishers
+        from ..rates import message_class, wait_for_publishers
 
         bridge = await self._bridge()
         try:
@@ -83,7 +83,7 @@ class PlotStreams:
 
     async def plot_fields(self, message: dict[str, Any]) -> dict[str, Any]:
         """`{"type", "fields"}`: the topic's numeric fields by dotted path (the picker)."""
-        from .plot_fields import numeric_fields, type_name
+        from .fields import numeric_fields, type_name
 
         cls, _ = await self._topic_type(topic_of(message), self._wait(message))
         return {"type": type_name(cls), "fields": numeric_fields(cls)}
@@ -92,8 +92,8 @@ class PlotStreams:
         return min(float(message.get("wait") or self._publisher_wait), self._publisher_wait)
 
     async def plot(self, message: dict[str, Any]) -> dict[str, Any]:
-        from .plot_buckets import POINTS_PER_S
-        from .plot_fields import FieldError, compile_path, numeric_fields, type_name
+        from .buckets import POINTS_PER_S
+        from .fields import FieldError, compile_path, numeric_fields, type_name
 
         topic = topic_of(message)
         client = int(message["client"])
@@ -114,7 +114,7 @@ class PlotStreams:
             sampler = await self._sampler(topic, cls, infos)
             self._update(topic)
             if stream.raw:
-                from .plot_sampler import RawRows
+                from .sampler import RawRows
 
                 with sampler.lock:
                     sampler.raw[client] = RawRows(fields)
@@ -129,9 +129,9 @@ class PlotStreams:
     async def _sampler(self, topic: str, cls: Any, infos: list[Any]) -> Any:
         sampler = self.samplers.get(topic)
         if sampler is None:
-            from .plot_fields import small
-            from .plot_sampler import PlotSampler
-            from .rates import matching_qos
+            from ..rates import matching_qos
+            from .fields import small
+            from .sampler import PlotSampler
 
             bridge = await self._bridge()
             qos = matching_qos([i.qos_profile for i in infos])
@@ -249,7 +249,7 @@ class PlotStreams:
 def _exact(basic: str, value: float | None) -> float | int | None:
     """A value as published: an integer as one, a 32-bit float as its shortest decimal
     (0.1, not 0.10000000149011612), a double as it is."""
-    from .plot_fields import INTEGERS
+    from .fields import INTEGERS
 
     if value is None or basic in ("double", "long double"):
         return value

@@ -102,7 +102,7 @@ def _leaf_fields(kind: Any, path: str, depth: int) -> list[str]:
 def small(cls: Any, depth: int = 0) -> bool:
     """Whether every message of the type is small: no sequence without a bound (a point
     cloud's data, a scan's ranges), strings aside (a frame id is short). A sampler may
-    keep many of them waiting (plots.py)."""
+    keep many of them waiting (streams.py)."""
     if depth > 16:
         return False
     for _, kind in _slots(cls):
