@@ -61,7 +61,7 @@ def screen(session: str) -> str:
                           text=True).stdout
 
 
-FLEET = "from tuilaunch.tui.fleet_app import FleetApp; FleetApp({members!r}).run()"
+FLEET = "from tuilaunch.tui.fleet.app import FleetApp; FleetApp({members!r}).run()"
 """The fleet TUI over `members`, as `tuilaunch attach a b ...` runs it (a fleet of one
 too, which the command line opens as the single-session TUI)."""
 

@@ -15,8 +15,8 @@ import signal
 from textual.widgets import Static
 
 from tuilaunch.client import remote_supervisor
-from tuilaunch.tui.fleet_app import FleetApp, FleetHelp
-from tuilaunch.tui.fleet_member import Member
+from tuilaunch.tui.fleet.app import FleetApp, FleetHelp
+from tuilaunch.tui.fleet.member import Member
 from tuilaunch.tui.output_store import View
 
 from .conftest import run_cli, wait_for

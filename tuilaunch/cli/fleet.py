@@ -258,7 +258,7 @@ def logs_many(options: argparse.Namespace) -> int:
 # --- attach --------------------------------------------------------------------------------
 
 def attach_many(options: argparse.Namespace) -> int:
-    """One TUI over several sessions (tui/fleet_app.py). A `HOST:` that cannot be listed
+    """One TUI over several sessions (tui/fleet/app.py). A `HOST:` that cannot be listed
     is a line here; a session whose machine cannot be reached is a root that retries."""
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
@@ -266,7 +266,7 @@ def attach_many(options: argparse.Namespace) -> int:
     addresses, failed = expand("attach", options.name)
     if not addresses:
         return FAILED
-    from ..tui.fleet_app import FleetApp
+    from ..tui.fleet.app import FleetApp
 
     where = [parse_session(a) for a in addresses]
     app = FleetApp([(w.host, w.name) for w in where], scrollback=options.scrollback)

@@ -219,7 +219,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         self.say_plan_warnings()
         tree.focus()
         self.tab_shown("nodes")
-        if self.first_tab != "nodes":  # opened from a fleet TUI's 2-5 (fleet_app.py)
+        if self.first_tab != "nodes":  # opened from a fleet TUI's 2-5 (fleet/app.py)
             self.call_after_refresh(self.action_tab, self.first_tab)
 
     # --- command palette ---------------------------------------------------------------------

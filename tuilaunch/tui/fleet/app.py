@@ -4,7 +4,7 @@
 The Nodes view has one tree per session, its root the session (`HOST:NAME`, `local:NAME`
 here) with its live counts; the output pane and the header follow the session of the
 selected row, and every key acts on that session alone. Each session is a `Member`
-(fleet_member.py) with its own RemoteSupervisor and ssh link on the one engine thread: a
+(member.py) with its own RemoteSupervisor and ssh link on the one engine thread: a
 link lost to one robot greys its root, says why and that it reconnects (RemoteSupervisor
 retries by itself), and its rows refuse keys with one line while the others stay live. A
 robot unreachable at start is a root that says why and retries.
@@ -31,15 +31,15 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import ContentSwitcher, Footer, Static, Tree
 
-from ..client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
-from ..engine.errors import LaunchError
-from ..engine.run.engine_thread import EngineThread
-from .fleet_member import Member
-from .output_store import OutputStore
-from .screens.dialogs import ConfirmScreen, HelpScreen
-from .screens.output_panel import OutputPanel
-from .screens.tree_panel import LaunchTree, RowData
-from .session_link import DRAIN_HZ, PANE_CHROME
+from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
+from ...engine.errors import LaunchError
+from ...engine.run.engine_thread import EngineThread
+from ..output_store import OutputStore
+from ..screens.dialogs import ConfirmScreen, HelpScreen
+from ..screens.output_panel import OutputPanel
+from ..screens.tree_panel import LaunchTree, RowData
+from ..session_link import DRAIN_HZ, PANE_CHROME
+from .member import Member
 
 FIRST_RETRY = 1.0
 """Seconds before a session that could not be opened is tried again (then doubling)."""

@@ -14,13 +14,13 @@ from dataclasses import dataclass, field
 
 from rich.text import Text
 
-from ..client.remote_supervisor import RemoteSupervisor
-from ..client.served_session import ServedSession
-from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.supervisor.supervisor import Event
-from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
-from .screens.output_panel import OutputPanel
-from .screens.tree_panel import LaunchTree
+from ...client.remote_supervisor import RemoteSupervisor
+from ...client.served_session import ServedSession
+from ...engine.run.event_buffer import EventBuffer
+from ...engine.run.supervisor.supervisor import Event
+from ..output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
+from ..screens.output_panel import OutputPanel
+from ..screens.tree_panel import LaunchTree
 
 COUNTED = ("running", "pending", "stopping", "exited", "failed", "respawning")
 
