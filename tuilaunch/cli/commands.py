@@ -194,6 +194,11 @@ def cmd_ls(options: argparse.Namespace) -> int:
         # the remote tuilaunch lists its own sessions (`__ls`), with ls --json's keys
         sessions: list[dict[str, Any]] = list_remote(check_host(options.host))
         return _print_sessions(sessions, options.json)
+    return _print_sessions(local_sessions(), options.json)
+
+
+def local_sessions() -> list[dict[str, Any]]:
+    """This machine's sessions as `ls` lists them (`serve`'s page lists them too)."""
     sessions = []
     for name in session_dir.live_sessions():
         try:
@@ -204,7 +209,7 @@ def cmd_ls(options: argparse.Namespace) -> int:
             silent = _silent_session(name, exc)
             if silent is not None:
                 sessions.append(silent)
-    return _print_sessions(sessions, options.json)
+    return sessions
 
 
 def _print_sessions(sessions: list[dict[str, Any]], as_json: bool) -> int:
@@ -238,7 +243,8 @@ def cmd_attach(options: argparse.Namespace) -> int:
         label = resolve_name(None if where is None else where.name)
     else:
         label = str(where)
-    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+    web = in_browser()
+    if not web and not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {label} -f, or tuilaunch status {label}")
     remote = None
@@ -265,13 +271,26 @@ def cmd_attach(options: argparse.Namespace) -> int:
         app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
                        scrollback=options.scrollback, session_name=info["name"],
                        session_host=host, remote_link=remote, placement=placement,
-                       served=host is None and edited_since(info))
+                       served=host is None and edited_since(info),
+                       read_only=options.read_only)
         status = app.run() or 0
     finally:
         if remote is not None:
             remote.close()  # done already unless the TUI never took it
-    report_end(app, label)
+    if not web:  # a browser tab has no shell to tell: its stdout is the page's stream
+        report_end(app, label)
     return status
+
+
+WEB_DRIVER = "textual.drivers.web_driver:WebDriver"
+"""The driver textual-serve (`tuilaunch serve`) runs each browser tab's TUI with: its
+terminal is the page, reached through the pipes of the tab's process."""
+
+
+def in_browser() -> bool:
+    """This TUI is drawn in a browser tab by textual-serve (it names the driver in the
+    environment): no terminal, and none needed."""
+    return os.environ.get("TEXTUAL_DRIVER") == WEB_DRIVER
 
 
 STOP_NOTICE = 3.0
@@ -472,6 +491,12 @@ def _table(rows: Sequence[tuple[str, ...]], indent: str = "") -> None:
     for row in rows:
         cells = [cell.ljust(width) for cell, width in zip(row, widths, strict=True)]
         print((indent + "  ".join(cells)).rstrip())
+
+
+def cmd_serve(options: argparse.Namespace) -> int:
+    from .serve import serve  # its web side is loaded only here
+
+    return serve(options, local_sessions)
 
 
 def cmd_completion(options: argparse.Namespace) -> int:

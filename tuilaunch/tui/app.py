@@ -176,11 +176,14 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 self.engine.stop()
                 self.exit(2, return_code=2, message=f"tuilaunch attach: error: {exc}")
                 return
+            if isinstance(self.supervisor, RemoteSupervisor):
+                self.supervisor.read_only = self.read_only
         elif self.session_name is not None:
             remote = self.engine.submit(RemoteSupervisor.open(
                 self.session_name, self.session, self.scrollback,
                 max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)
             remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
+            remote.read_only = self.read_only
             self.supervisor = remote
         else:
             from ..engine.launcher import make_supervisor  # in-process: the tests' launch
