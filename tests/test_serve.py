@@ -179,3 +179,111 @@ def generate_launch_description():
         assert states("web")["sleeper-1"] == "running"
     finally:
         serving.close()
+
+
+class PrefixProxy:
+    """A reverse proxy, as nginx's `location /tl/ { proxy_pass http://127.0.0.1:PORT/; }`
+    with `proxy_set_header Host $host` and the websocket upgrade: requests under /tl/ go
+    to serve without the prefix. On a loop of its own thread (the browser test is sync)."""
+
+    def __init__(self, upstream: int) -> None:
+        import asyncio
+        import threading
+
+        self.upstream = upstream
+        self.port = free_port()
+        self.loop = asyncio.new_event_loop()
+        self.ready = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+        assert self.ready.wait(30)
+
+    def _run(self) -> None:
+        import asyncio
+
+        from aiohttp import web
+
+        asyncio.set_event_loop(self.loop)
+        app = web.Application()
+        app.router.add_route("GET", "/tl/{rest:.*}", self._forward)
+        self.runner = web.AppRunner(app, access_log=None)
+        self.loop.run_until_complete(self.runner.setup())
+        self.loop.run_until_complete(web.TCPSite(self.runner, "127.0.0.1", self.port).start())
+        self.ready.set()
+        self.loop.run_forever()
+
+    async def _forward(self, request):
+        import asyncio
+
+        import aiohttp
+        from aiohttp import web
+
+        target = f"http://127.0.0.1:{self.upstream}/{request.match_info['rest']}"
+        if request.query_string:
+            target += "?" + request.query_string
+        headers = {"Host": request.host}
+        for name in ("Cookie", "Origin"):
+            if name in request.headers:
+                headers[name] = request.headers[name]
+        async with aiohttp.ClientSession(auto_decompress=False) as client:
+            if request.headers.get("Upgrade", "").lower() == "websocket":
+                async with client.ws_connect(target, headers=headers) as upstream:
+                    page = web.WebSocketResponse()
+                    await page.prepare(request)
+
+                    async def down():
+                        async for message in upstream:
+                            if message.type == aiohttp.WSMsgType.BINARY:
+                                await page.send_bytes(message.data)
+                            elif message.type == aiohttp.WSMsgType.TEXT:
+                                await page.send_str(message.data)
+                        await page.close()
+
+                    async def up():
+                        async for message in page:
+                            if message.type == aiohttp.WSMsgType.TEXT:
+                                await upstream.send_str(message.data)
+                        await upstream.close()
+
+                    await asyncio.gather(down(), up())
+                    return page
+            async with client.get(target, headers=headers, allow_redirects=False) as answer:
+                response = web.Response(status=answer.status, body=await answer.read())
+                for name in ("Content-Type", "Location", "Content-Encoding"):
+                    if name in answer.headers:
+                        response.headers[name] = answer.headers[name]
+                for cookie in answer.headers.getall("Set-Cookie", []):
+                    response.headers.add("Set-Cookie", cookie)
+                return response
+
+    def close(self) -> None:
+        import asyncio
+
+        asyncio.run_coroutine_threadsafe(self.runner.cleanup(), self.loop).result(30)
+        self.loop.call_soon_threadsafe(self.loop.stop)
+        self.thread.join(30)
+
+
+def test_behind_a_reverse_proxy_with_a_path_and_a_token(runtime, write, tmp_path):  # noqa: F811
+    name = start_detached(write)
+    token = tmp_path / "token"
+    token.write_text("proxy-token-0123456789abcdef\n")
+    upstream = free_port()
+    proxy = PrefixProxy(upstream)
+    public = f"http://127.0.0.1:{proxy.port}/tl/"
+    serving = Serving(name, "--port", str(upstream), "--public-url", public,
+                      "--token-file", str(token))
+    try:
+        assert serving.url == public + "?token=proxy-token-0123456789abcdef"
+        with page() as browser:
+            browser.open(serving.url)  # redirected within /tl/, the cookie kept for /tl
+            browser.wait_screen(tree_shown, "the session's tree through the proxy")
+            assert browser.driver.current_url == public
+            browser.type(Keys.ARROW_DOWN, Keys.ARROW_DOWN)
+            browser.wait_screen(lambda t: selected(t, "ticker-1"), "ticker-1 selected")
+            browser.type("s")
+            wait_for(lambda: states(name)["ticker-1"] == "exited", what="ticker-1 stopped")
+    finally:
+        serving.close()
+        proxy.close()
+    wait_for(lambda: not tab_processes(runtime), what="no tab's TUI left")

@@ -130,6 +130,9 @@ class ServeApp:
 
     async def index(self, request: web.Request) -> web.Response:
         if self.session is not None:
+            if ":" not in self.session and not session_dir.is_alive(self.session):
+                raise web.HTTPNotFound(text=f"tuilaunch serve: session {self.session} is not "
+                                       "running (any more)\n")
             return self._tui_page(request, self.session, "static/")
         sessions = await asyncio.get_running_loop().run_in_executor(None, self.list_sessions)
         return web.Response(text=sessions_page(sessions, self.read_only),
@@ -263,7 +266,8 @@ def tui_page(name: str, static: str, font_size: int, read_only: bool) -> str:
             + f"<script src='{static}js/textual.js'></script></head><body>"
             + f"<div id='terminal' class='textual-terminal' data-font-size='{font_size}'>"
             + "</div>" + script
-            + f"<div class='closed'><p>Left session {html.escape(name)}: it runs on.</p>"
+            + f"<div class='closed'><p>This tab left session {html.escape(name)} (the "
+            + "launch runs on, unless it was stopped).</p>"
             + "<p><a href=''>Open it again</a></p></div></body></html>")
 
 
