@@ -20,7 +20,8 @@ from .browser import Serving, free_port, page, tab_processes
 from .conftest import wait_for
 from .test_sessions import Terminal, runtime, start_detached, status  # noqa: F401
 
-pytestmark = pytest.mark.timeout(600)
+# the first test may install chromium (apt-get, a few minutes on a slow mirror)
+pytestmark = pytest.mark.timeout(900)
 
 
 class TerminalClient(Terminal):
@@ -136,18 +137,19 @@ def test_a_page_and_a_terminal_client_see_each_others_changes(served):
     terminal = TerminalClient("attach", name)
     try:
         terminal.read_until(b"echo-3")
+        terminal.write(b"\x1b[B\x1b[B")  # down, down: ticker-1 selected in the terminal
+        terminal.read_until(b"ticker-1 (/ticker): running")  # its detail line
         with page() as browser:
             browser.open(serving.url)
             browser.wait_screen(tree_shown, "the session's tree")
             # the page stops ticker-1: the terminal shows it
+            before = len(terminal.screen)
             browser.type(Keys.ARROW_DOWN, Keys.ARROW_DOWN)
             browser.wait_screen(lambda t: selected(t, "ticker-1"), "ticker-1 selected")
             browser.type("s")
-            terminal.read_until(b"exited")
+            wait_for(lambda: states(name)["ticker-1"] == "exited", what="ticker-1 stopped")
+            terminal.read_since(before, b"ticker-1 (/ticker): exited")
             # the terminal starts it again: the page shows it running
-            before = len(terminal.screen)
-            terminal.write(b"\x1b[B\x1b[B")  # down, down: ticker-1 selected there too
-            terminal.read_since(before, b"ticker-1 (")
             terminal.write(b"t")
             wait_for(lambda: states(name)["ticker-1"] == "running", what="ticker-1 again")
             browser.wait_screen(lambda t: "[ticker-1] running" in t, "ticker-1 running again")

@@ -96,8 +96,9 @@ def launch_parser() -> argparse.ArgumentParser:
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
         "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
         "hz NAME TOPIC | echo NAME TOPIC | params NAME NODE --dump/--load FILE | log-level "
-        "NAME NODE LEVEL (tuilaunch COMMAND -h). On another machine: ls HOST, and HOST:NAME "
-        "for NAME (over ssh). Tab completion: eval \"$(tuilaunch completion bash)\" (or zsh).")
+        "NAME NODE LEVEL (tuilaunch COMMAND -h); in a web browser: serve [NAME | FILE]. On "
+        "another machine: ls HOST, and HOST:NAME for NAME (over ssh). Tab completion: eval "
+        "\"$(tuilaunch completion bash)\" (or zsh).")
     return parser
 
 
