@@ -289,3 +289,21 @@ def test_behind_a_reverse_proxy_with_a_path_and_a_token(runtime, write, tmp_path
         serving.close()
         proxy.close()
     wait_for(lambda: not tab_processes(runtime), what="no tab's TUI left")
+
+
+def test_a_resized_window_lays_the_app_out_again(served):
+    def tree_width(text: str) -> int:
+        """Where the tree's pane ends, on its first row (a share of the width)."""
+        row = next((r for r in text.splitlines() if r.startswith("▼ test_launch.py")), "")
+        return row.find("▎")
+
+    name, serving = served()
+    with page() as browser:
+        browser.open(serving.url)
+        wide = tree_width(browser.wait_screen(
+            lambda t: tree_shown(t) and tree_width(t) > 0, "the session's tree"))
+        browser.driver.set_window_size(640, 480)
+        narrow = browser.wait_screen(
+            lambda t: tree_shown(t) and 0 < tree_width(t) < wide * 0.8,
+            "the app laid out for the narrower window")
+        assert f"[{name}] test_launch.py" in narrow
