@@ -215,6 +215,7 @@ def test_bash_completes_sessions_processes_topics_and_levels(bash):
     bash.tab("tuilaunch logs cmpdemo --level ", ["DEBUG", "WARN", "ERROR"])
     bash.completes("tuilaunch hz cmpdemo /cmp/ch", "tuilaunch hz cmpdemo /cmp/chatter ")
     bash.tab("tuilaunch completion ", ["bash", "zsh"])
+    bash.tab("tuilaunch serve ", ["cmpdemo", "demo.launch.py"])  # a session, or a file
 
 
 def test_bad_input_completes_to_nothing_and_never_hangs_the_shell(bash):

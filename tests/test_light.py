@@ -134,6 +134,21 @@ def test_the_plotting_library_is_loaded_only_with_the_first_plot():
     assert python_prints(code).strip() == "[]"
 
 
+def test_only_serve_imports_its_web_server():
+    """aiohttp and textual-serve (`tuilaunch serve`) are loaded by serve alone: neither the
+    command line, its --help, the session commands, the launch nor the TUI loads them."""
+    code = ("import contextlib, io, sys\n"
+            "from tuilaunch.cli import dispatch, commands, headless\n"
+            "import tuilaunch.tui.app, tuilaunch.engine.launcher\n"
+            "for argv in (['--help'], ['serve', '--help'], ['ls', '--help']):\n"
+            "    with contextlib.redirect_stdout(io.StringIO()), "
+            "contextlib.suppress(SystemExit):\n"
+            "        dispatch.main(argv)\n"
+            "print(sorted({m.split('.')[0] for m in sys.modules} & "
+            "{'aiohttp', 'textual_serve', 'jinja2', 'selenium'}))")
+    assert python_prints(code).strip() == "[]"
+
+
 def test_a_launch_on_one_machine_does_not_load_what_it_does_not_use():
     """A plain launch on this machine starts without the code of `--machines`, of
     `--print-plan --json`, of AnonName (uuid and platform), of a mistyped argument's

@@ -293,7 +293,8 @@ def cmd_attach(options: argparse.Namespace) -> int:
         label = resolve_name(None if where is None else where.name)
     else:
         label = str(where)
-    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+    web = in_browser()
+    if not web and not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {label} -f, or tuilaunch status {label}")
     remote = None
@@ -320,14 +321,27 @@ def cmd_attach(options: argparse.Namespace) -> int:
         app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
                        scrollback=options.scrollback, session_name=info["name"],
                        session_host=host, remote_link=remote, placement=placement,
-                       served=host is None and edited_since(info))
+                       served=host is None and edited_since(info),
+                       read_only=options.read_only)
         app.first_tab = options.tab
         status = app.run() or 0
     finally:
         if remote is not None:
             remote.close()  # done already unless the TUI never took it
-    report_end(app, label)
+    if not web:  # a browser tab has no shell to tell: its stdout is the page's stream
+        report_end(app, label)
     return status
+
+
+WEB_DRIVER = "textual.drivers.web_driver:WebDriver"
+"""The driver textual-serve (`tuilaunch serve`) runs each browser tab's TUI with: its
+terminal is the page, reached through the pipes of the tab's process."""
+
+
+def in_browser() -> bool:
+    """This TUI is drawn in a browser tab by textual-serve (it names the driver in the
+    environment): no terminal, and none needed."""
+    return os.environ.get("TEXTUAL_DRIVER") == WEB_DRIVER
 
 
 STOP_NOTICE = 3.0
@@ -582,6 +596,12 @@ def _table(rows: Sequence[tuple[str, ...]], indent: str = "") -> None:
     for row in rows:
         cells = [cell.ljust(width) for cell, width in zip(row, widths, strict=True)]
         print((indent + "  ".join(cells)).rstrip())
+
+
+def cmd_serve(options: argparse.Namespace) -> int:
+    from .serve import serve  # its web side is loaded only here
+
+    return serve(options, local_sessions)
 
 
 def cmd_completion(options: argparse.Namespace) -> int:

@@ -234,14 +234,21 @@ def _attach_command_completers(parser: argparse.ArgumentParser) -> None:
                     completer = _choice(NODE_LEVELS)
                 elif sub_action.dest == "log_level":
                     completer = _choice(tuple(level.lower() for level in LEVELS))
-                elif sub_action.dest == "load":
+                elif sub_action.dest in ("load", "token_file"):
                     completer = _files
+                elif command == "serve" and sub_action.dest == "items":
+                    completer = _serve_items
                 elif sub_action.option_strings and completer is not None:
                     completer = None  # an option's value named like a positional (--node)
                     if sub_action.dest == "node":
                         completer = nodes
                 if completer is not None:
                     sub_action.completer = _guarded(completer)
+
+
+def _serve_items(prefix: str, **_: Any) -> list[str]:
+    """`serve`'s word: a session, or a launch file to start and serve."""
+    return session_names(prefix) + path_candidates(prefix)
 
 
 def _choice(values: Iterable[str]) -> Callable[..., list[str]]:

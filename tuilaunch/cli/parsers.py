@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 
 COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait", "topics", "hz", "echo",
-            "plot", "params", "log-level", "completion")
+            "plot", "params", "log-level", "completion", "serve")
 PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
                   "cancelled")
 LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
@@ -98,9 +98,9 @@ def launch_parser() -> argparse.ArgumentParser:
         "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
         "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
         "hz NAME TOPIC | echo NAME TOPIC | plot NAME TOPIC FIELD | params NAME NODE "
-        "--dump/--load FILE | log-level "
-        "NAME NODE LEVEL (tuilaunch COMMAND -h). On another machine: ls HOST, and HOST:NAME "
-        "for NAME (over ssh). Tab completion: eval \"$(tuilaunch completion bash)\" (or zsh).")
+        "--dump/--load FILE | log-level NAME NODE LEVEL (tuilaunch COMMAND -h); in a web "
+        "browser: serve [NAME | FILE]. On another machine: ls HOST, and HOST:NAME for NAME "
+        "(over ssh). Tab completion: eval \"$(tuilaunch completion bash)\" (or zsh).")
     return parser
 
 
@@ -126,6 +126,10 @@ def commands_parser() -> argparse.ArgumentParser:
     attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
     attach.add_argument("--tab", choices=TABS, default="nodes",
                         help="the tab shown first (one session)")
+    attach.add_argument("--read-only", action="store_true",
+                        help="a view that changes nothing: stop, start, restart, relaunch, "
+                        "typing into a node, parameters, services and log levels are "
+                        "refused (q leaves, the launch runs on)")
     stop = commands.add_parser("stop", help="stop every process of a session, then exit")
     stop.add_argument("name", nargs="*", metavar=SESSIONS, help=SESSIONS_HELP)
     status = commands.add_parser("status", help="each process's state")
@@ -174,9 +178,44 @@ def commands_parser() -> argparse.ArgumentParser:
         "eval \"$(tuilaunch completion bash)\" in ~/.bashrc (or zsh in ~/.zshrc)")
     completion.add_argument("shell", choices=SHELLS)
     subs.append(completion)
+    subs.append(_serve_command(commands))
     for sub in subs:
         sub.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
     return parser
+
+
+SERVE_PORT = 8000
+
+
+def _serve_command(commands: argparse._SubParsersAction[argparse.ArgumentParser])\
+        -> argparse.ArgumentParser:
+    """`serve` (serve.py runs it)."""
+    serve = commands.add_parser(
+        "serve", help="the TUI in a web browser: a session's, a launch file's (started as a "
+        "detached session), or a page listing the sessions",
+        description="Serve the TUI at a URL (printed first): each browser tab is a client "
+        "of the session, as attach is; closing it or stopping serve stops nothing.")
+    serve.add_argument("items", nargs="*", metavar="[HOST:]NAME | FILE [name:=value ...]",
+                       help="a session; or a launch file (or PACKAGE FILE) and its "
+                       "arguments, started as a detached session first; none: a page of "
+                       "the sessions here")
+    serve.add_argument("--host", default="127.0.0.1",
+                       help="the address to listen on (default 127.0.0.1: this machine "
+                       "only; any other needs the token printed in the URL)")
+    serve.add_argument("--port", type=int, default=SERVE_PORT,
+                       help=f"the port (default {SERVE_PORT})")
+    serve.add_argument("--public-url", metavar="URL",
+                       help="the URL the browser uses, behind a reverse proxy "
+                       "(https://robot.example/tuilaunch)")
+    serve.add_argument("--token-file", metavar="FILE",
+                       help="the token to ask for, read from FILE (default: a random one, "
+                       "made at start, when --host is not loopback)")
+    serve.add_argument("--read-only", action="store_true",
+                       help="a view that changes nothing (a screen on the wall): every "
+                       "key that would stop, start, set or type is refused")
+    serve.add_argument("--name", metavar="NAME",
+                       help="with FILE: the new session's name")
+    return serve
 
 
 def _inspector_commands(commands: argparse._SubParsersAction[argparse.ArgumentParser])\

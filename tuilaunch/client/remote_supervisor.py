@@ -51,6 +51,7 @@ from ..engine.run.supervisor.interacting import restart_fields
 from ..engine.run.supervisor.supervisor import Event
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering, send_once
+from .read_only import check_request
 from .remote_lifecycle import RemoteLifecycle
 from .served_session import ServedSession
 from .watches import Watches
@@ -162,6 +163,9 @@ class RemoteSupervisor:
         self.killed_server = False  # "kill now" found it not answering, and SIGKILLed it
         self.owner = False  # started this session in the foreground
         self.keep_on_hangup = False
+        self.read_only = False
+        """A view that changes nothing: every request that would is refused here, with
+        one line (client/read_only.py), before it is sent."""
         self._reader = reader
         self._writer = writer
         self._replies: dict[int, asyncio.Future[Any]] = {}
@@ -677,6 +681,8 @@ class RemoteSupervisor:
         return result
 
     async def _request(self, op: str, **fields: Any) -> Any:
+        if self.read_only:
+            check_request(op)
         if self.link_lost is not None:
             raise SessionError(f"{self.link_lost}: not sent ({op}); reconnecting")
         self._next_id += 1
@@ -726,6 +732,8 @@ class RemoteSupervisor:
         """While a shutdown runs: SIGKILL what is left, now. Otherwise the UI is being torn
         down without a shutdown: a session it started in the foreground (and not told to
         outlive a hang-up) is stopped by its server; others run on."""
+        if self.read_only:
+            return  # it asked for no shutdown and owns nothing: nothing is its to kill
         if self.host is not None:
             # over there: only the link reaches it, and only "kill now" is ours to send
             if self._stopping and self.link_lost is None and not self._writer.is_closing():

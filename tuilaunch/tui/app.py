@@ -179,6 +179,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 self.engine.stop()
                 self.exit(2, return_code=2, message=f"tuilaunch attach: error: {exc}")
                 return
+            if isinstance(self.supervisor, RemoteSupervisor):
+                self.supervisor.read_only = self.read_only
         elif self.session_name is not None:
             try:
                 remote = self.engine.submit(RemoteSupervisor.open(
@@ -192,6 +194,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 self.exit(2, return_code=2)
                 return
             remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
+            remote.read_only = self.read_only
             self.supervisor = remote
         else:
             from ..engine.launcher import make_supervisor  # in-process: the tests' launch

@@ -28,6 +28,12 @@ class Quitting(SessionLink):
         if self._asking_to_quit():
             return  # q or ctrl+c again while the question is shown: one question
         running = self.running()
+        if self.session_name is not None and (self.is_web or self.read_only) and \
+                not self.quitting:
+            # a browser tab (tuilaunch serve) or a read-only view: q leaves, the launch
+            # runs on, as closing the tab does
+            self.action_detach()
+            return
         if self.session_host is not None and not self.quitting:
             self._quit_remote(running)
             return

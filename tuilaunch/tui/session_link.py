@@ -14,7 +14,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from rich.text import Text
 from textual import work
@@ -22,7 +22,9 @@ from textual.app import App, ScreenStackError
 from textual.message import Message
 from textual.timer import Timer
 from textual.widgets import Static, TabbedContent
+from textual.worker import Worker, WorkerState
 
+from ..client.read_only import ReadOnlyBridge, ReadOnlyError
 from ..client.remote_supervisor import RemoteSupervisor
 from ..engine.errors import LaunchError
 from ..engine.plan.resolve import remove_default_params_dir
@@ -95,7 +97,8 @@ class SessionLink(App[int]):
                  owner: bool = False, keep_on_hangup: bool = False,
                  session_host: str | None = None,
                  remote_link: RemoteLink | None = None,
-                 start_server: Callable[[], subprocess.Popen[bytes]] | None = None) -> None:
+                 start_server: Callable[[], subprocess.Popen[bytes]] | None = None,
+                 read_only: bool = False) -> None:
         no_color = os.environ.get("NO_COLOR")
         super().__init__()
         # no animated tab underlines or scrolling: every frame is bytes over ssh
@@ -122,6 +125,9 @@ class SessionLink(App[int]):
         self.remote_link = remote_link  # an ssh link to it already open (attach made it)
         self.owner = owner
         self.keep_on_hangup = keep_on_hangup
+        self.read_only = read_only
+        """A view of a session that changes nothing (`--read-only`): its client refuses
+        every change (client/read_only.py), and the refusal is shown as one line."""
         self.detached = False
         self.own_relaunch: list[str] | None = None
         self.preview: Preview | None = None
@@ -153,7 +159,16 @@ class SessionLink(App[int]):
         with self._bridge_lock:  # the engine thread and the UI may both ask first
             if self._bridge is None:
                 self._bridge = RosBridge()
+            if self.read_only:  # the Params and Services tabs set and call nothing
+                return cast(RosBridge, ReadOnlyBridge(self._bridge))
             return self._bridge
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        """A command a read-only client refused: said in one line (the commands' workers
+        keep other failures to themselves, as the panels and the tree show them)."""
+        error = event.worker.error
+        if event.state == WorkerState.ERROR and isinstance(error, ReadOnlyError):
+            self.notify(str(error), severity="warning")
 
     @work(group="supervisor", exit_on_error=False)
     async def run_supervisor(self) -> None:
@@ -511,7 +526,8 @@ class SessionLink(App[int]):
         name = Path(self.session.plan.file).name
         if self.session_name is not None:
             where = f"{self.session_host}:" if self.session_host else ""
-            name = f"[{where}{self.session_name}] {name}"
+            name = f"[{where}{self.session_name}{' read-only' if self.read_only else ''}] "\
+                f"{name}"
         link = self.over_link()
         if link is not None and link.link_lost:
             # what is shown is as it was when the link dropped; the short form first, so

@@ -1,0 +1,323 @@
+"""The web side of `tuilaunch serve`: aiohttp pages and one TUI process per browser tab.
+
+Imported only by `tuilaunch serve` (aiohttp and textual-serve are not light): the launcher,
+the TUI and the other commands never load it (tests/test_light.py).
+
+Each tab's websocket runs `tuilaunch attach NAME` under Textual's web driver through
+textual-serve's `AppService` (its process, the packets of its pipes, resizes); the page is
+our own (no font or script from another site: a robot's network may have no internet,
+and its page must not call out), using textual-serve's xterm.js client and font. Every
+request passes serve_guard.py's rules first.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import html
+import json
+import logging
+import os
+import shlex
+import signal
+import sys
+from collections.abc import Awaitable, Callable
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlencode
+
+import textual_serve
+from aiohttp import WSMsgType, web
+from textual_serve.app_service import AppService
+from textual_serve.download_manager import DownloadManager
+
+from ..engine.run.session import session_dir
+from .serve_guard import Guard
+
+STATIC = Path(textual_serve.__file__).parent / "static"
+STOP_GRACE = 5.0
+"""Seconds a tab's TUI has to leave once asked (serve stopping), before it is killed."""
+
+log = logging.getLogger("tuilaunch.serve")
+
+
+class TabService(AppService):
+    """One browser tab's TUI process (textual-serve's AppService). When the TUI leaves (`q`,
+    or it could not start), the page is told by closing its websocket: it then says the
+    session runs on, and offers to open it again."""
+
+    async def run(self) -> None:
+        try:
+            await super().run()
+        finally:
+            await self.remote_close()
+
+    @property
+    def pid(self) -> int | None:
+        # textual-serve keeps the process to itself; serve kills a stuck one at its end
+        process = getattr(self, "_process", None)
+        return None if process is None or process.returncode is not None else process.pid
+
+
+def tab_command(session: str, read_only: bool) -> str:
+    """The shell command textual-serve runs for a tab: attach, under the web driver."""
+    return shlex.join([sys.executable, "-m", "tuilaunch", "attach", session,
+                       *(["--read-only"] if read_only else [])])
+
+
+class ServeApp:
+    """The pages and websockets of one `tuilaunch serve`: a session's TUI at `/` (`session`
+    given), or a page listing this machine's sessions at `/`, each one's TUI at
+    `/s/NAME/`."""
+
+    def __init__(self, guard: Guard, session: str | None, read_only: bool,
+                 list_sessions: Callable[[], list[dict[str, Any]]]) -> None:
+        self.guard = guard
+        self.session = session
+        self.read_only = read_only
+        self.list_sessions = list_sessions
+        self.tabs: set[TabService] = set()
+        self.sockets: set[web.WebSocketResponse] = set()
+        self.downloads = DownloadManager()
+
+    def make(self) -> web.Application:
+        app = web.Application(middlewares=[self._guard])
+        app.add_routes([
+            web.get("/", self.index),
+            web.get("/ws", self.websocket),
+            web.get("/s/{name}/", self.session_page),
+            web.get("/s/{name}/ws", self.websocket),
+            web.static("/static", STATIC),
+        ])
+        app.on_shutdown.append(self._close_tabs)
+        return app
+
+    # --- the rules, on every request -------------------------------------------------------
+
+    @web.middleware
+    async def _guard(self, request: web.Request,
+                     handler: Callable[[web.Request], Awaitable[web.StreamResponse]],
+                     ) -> web.StreamResponse:
+        query = request.rel_url.query
+        kept = [(k, v) for k, v in query.items() if k != "token"]
+        # relative to where the browser is: right behind a proxy's prefix too
+        location = "./" + request.rel_url.path.rsplit("/", 1)[-1] + \
+            (f"?{urlencode(kept)}" if kept else "")
+        verdict = self.guard.check(
+            scheme=request.scheme, host_header=request.host,
+            origin=request.headers.get("Origin"),
+            websocket=request.headers.get("Upgrade", "").lower() == "websocket",
+            query_token=query.get("token"),
+            cookie_token=request.cookies.get(self.guard.cookie_name),
+            path_without_token=location)
+        if verdict.status == 303:
+            response: web.StreamResponse = web.HTTPSeeOther(location)
+            response.set_cookie(self.guard.cookie_name, self.guard.token or "", httponly=True,
+                                samesite="Strict", path=self.guard.cookie_path,
+                                secure=self.guard.cookie_secure)
+        elif verdict.status:
+            response = web.Response(status=verdict.status, text=verdict.text + "\n")
+        else:
+            response = await handler(request)
+        # a page that drives a robot: never inside another site's frame, never cached, and
+        # its address (a token in it) never sent on as a referrer
+        response.headers["X-Frame-Options"] = "DENY"
+        response.headers["Content-Security-Policy"] = "frame-ancestors 'none'"
+        response.headers["Referrer-Policy"] = "no-referrer"
+        response.headers.setdefault("Cache-Control", "no-store")
+        return response
+
+    # --- pages -----------------------------------------------------------------------------
+
+    async def index(self, request: web.Request) -> web.Response:
+        if self.session is not None:
+            if ":" not in self.session and not session_dir.is_alive(self.session):
+                raise web.HTTPNotFound(text=f"tuilaunch serve: session {self.session} is not "
+                                       "running (any more)\n")
+            return self._tui_page(request, self.session, "static/")
+        sessions = await asyncio.get_running_loop().run_in_executor(None, self.list_sessions)
+        return web.Response(text=sessions_page(sessions, self.read_only),
+                            content_type="text/html")
+
+    async def session_page(self, request: web.Request) -> web.Response:
+        name = self._listed(request)
+        return self._tui_page(request, name, "../../static/")
+
+    def _listed(self, request: web.Request) -> str:
+        """`/s/NAME/`: a session of this machine, on the page that lists them."""
+        name = request.match_info["name"]
+        if self.session is not None or not session_dir.is_alive(name):
+            raise web.HTTPNotFound(text=f"tuilaunch serve: no session {name} here\n")
+        return name
+
+    def _tui_page(self, request: web.Request, name: str, static: str) -> web.Response:
+        font = request.rel_url.query.get("fontsize", "16")
+        size = int(font) if font.isdigit() and 6 <= int(font) <= 64 else 16
+        return web.Response(text=tui_page(name, static, size, self.read_only),
+                            content_type="text/html")
+
+    # --- a tab ------------------------------------------------------------------------------
+
+    async def websocket(self, request: web.Request) -> web.WebSocketResponse:
+        name = self.session if "name" not in request.match_info else self._listed(request)
+        assert name is not None
+        websocket = web.WebSocketResponse(heartbeat=15)
+        await websocket.prepare(request)
+        self.sockets.add(websocket)
+        width = _number(request.rel_url.query.get("width"), 80)
+        height = _number(request.rel_url.query.get("height"), 24)
+
+        async def close() -> None:
+            await websocket.close()
+
+        tab = TabService(tab_command(name, self.read_only), write_bytes=websocket.send_bytes,
+                         write_str=websocket.send_str, close=close,
+                         download_manager=self.downloads)
+        self.tabs.add(tab)
+        try:
+            await tab.start(width, height)
+            await self._relay(websocket, tab)
+        finally:
+            # the tab closed, or serve stops: the TUI leaves (the launch runs on)
+            await self._stop_tab(tab)
+            self.tabs.discard(tab)
+            self.sockets.discard(websocket)
+        return websocket
+
+    async def _relay(self, websocket: web.WebSocketResponse, tab: TabService) -> None:
+        """The page's keys, sizes and focus to the tab's TUI (textual-serve's envelope)."""
+        async for message in websocket:
+            if message.type != WSMsgType.TEXT:
+                continue
+            try:
+                kind, data = json.loads(message.data)
+            except (ValueError, TypeError):
+                continue  # not the page's: ignored, as textual-serve's own server would
+            if kind == "stdin" and isinstance(data, str):
+                await tab.send_bytes(data.encode("utf-8"))
+            elif kind == "resize" and isinstance(data, dict):
+                await tab.set_terminal_size(_number(data.get("width"), 80),
+                                            _number(data.get("height"), 24))
+            elif kind == "ping":
+                await websocket.send_json(["pong", data])
+            elif kind == "blur":
+                await tab.blur()
+            elif kind == "focus":
+                await tab.focus()
+
+    async def _stop_tab(self, tab: TabService) -> None:
+        try:
+            await asyncio.wait_for(tab.stop(), STOP_GRACE)
+        except (TimeoutError, ConnectionError, RuntimeError):
+            pass
+        pid = tab.pid
+        if pid is not None:  # asked to quit and still there: it goes, the session stays
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:
+                pass
+
+    async def _close_tabs(self, app: web.Application) -> None:
+        """serve stops: each tab's page is told (its websocket closes), each TUI leaves."""
+        for websocket in list(self.sockets):
+            await websocket.close(code=1001, message=b"tuilaunch serve stopped")
+
+
+def _number(value: Any, default: int) -> int:
+    try:
+        return max(1, min(int(value), 1000))
+    except (TypeError, ValueError):
+        return default
+
+
+PAGE_STYLE = """
+@font-face { font-family: 'Roboto Mono';
+             src: url('{static}fonts/RobotoMono-VariableFont_wght.ttf'); }
+body { background: #0c181f; color: #e0e0e0; margin: 0; font-family: 'Roboto Mono', monospace; }
+.textual-terminal { opacity: 0; }
+body.-first-byte .textual-terminal { opacity: 1; }
+.closed { display: none; position: absolute; inset: 0; align-items: center;
+          justify-content: center; flex-direction: column; background: #0c181f; }
+body.-closed .closed { display: flex; }
+.closed a, table a { color: #8ab4f8; }
+table { border-collapse: collapse; margin: 2em; }
+td, th { padding: 0.3em 1em; text-align: left; border-bottom: 1px solid #234; }
+h1 { font-size: 1.2em; margin: 2em 2em 0; }
+"""
+
+
+def _head(title: str, static: str) -> str:
+    style = PAGE_STYLE.replace("{static}", static)
+    return (f"<!DOCTYPE html><html><head><meta charset='utf-8'>"
+            f"<meta name='viewport' content='width=device-width, initial-scale=1'>"
+            f"<title>{html.escape(title)}</title><style>{style}</style>")
+
+
+def tui_page(name: str, static: str, font_size: int, read_only: bool) -> str:
+    """A session's TUI in the page: textual-serve's client reads the websocket's address
+    from the terminal element. The static files and the websocket (`ws` beside the page)
+    are addressed relative to the page, so a reverse proxy's prefix carries over."""
+    title = f"{name}{' (read-only)' if read_only else ''} - tuilaunch"
+    script = ("<script>(function(){var u=new URL('ws', location.href);"
+              "u.protocol=location.protocol==='https:'?'wss:':'ws:';u.search='';u.hash='';"
+              "document.getElementById('terminal').dataset.sessionWebsocketUrl=u.href;})();"
+              "</script>")
+    return (_head(title, static)
+            + f"<link rel='stylesheet' href='{static}css/xterm.css'>"
+            + f"<script src='{static}js/textual.js'></script></head><body>"
+            + f"<div id='terminal' class='textual-terminal' data-font-size='{font_size}'>"
+            + "</div>" + script
+            + f"<div class='closed'><p>This tab left session {html.escape(name)} (the "
+            + "launch runs on, unless it was stopped).</p>"
+            + "<p><a href=''>Open it again</a></p></div></body></html>")
+
+
+def sessions_page(sessions: list[dict[str, Any]], read_only: bool) -> str:
+    """`tuilaunch serve` alone: the sessions as `ls` lists them, each a link to its TUI."""
+    rows = []
+    for s in sessions:
+        counts = s.get("counts") or {}
+        total = sum(n for state, n in counts.items() if state != "skipped")
+        running = f"{counts.get('running', 0)}/{total}" if s.get("answering") else "?"
+        arguments = " ".join(f"{k}:={v}" for k, v in (s.get("arguments") or {}).items())
+        name = html.escape(str(s["name"]))
+        link = f"<a href='s/{name}/'>{name}</a>" if s.get("answering") else name
+        rows.append(f"<tr><td>{link}</td><td>{running}</td>"
+                    f"<td>{html.escape(str(s.get('file', '')))}</td>"
+                    f"<td>{html.escape(arguments)}</td></tr>")
+    body = ("<table><tr><th>session</th><th>running</th><th>file</th><th>arguments</th></tr>"
+            + "".join(rows) + "</table>") if rows else \
+        "<p style='margin: 2em'>no running sessions (tuilaunch FILE --detach starts one; " \
+        "reload this page then)</p>"
+    title = f"tuilaunch sessions{' (read-only)' if read_only else ''}"
+    return (_head(title, "static/") + "</head><body>"
+            + f"<h1>{html.escape(title)}</h1>{body}</body></html>")
+
+
+async def serve_until_stopped(app: ServeApp, host: str, port: int,
+                              ready: Callable[[], Awaitable[None]]) -> None:
+    """Listens (OSError when the port is taken, before anything else happens), awaits
+    `ready` (a session started, the URL printed), then serves until SIGINT or SIGTERM;
+    then every tab's TUI leaves."""
+    runner = web.AppRunner(app.make(), access_log=None, handle_signals=False,
+                           shutdown_timeout=STOP_GRACE)
+    await runner.setup()
+    try:
+        site = web.TCPSite(runner, host, port)
+        await site.start()
+        await ready()
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for number in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            loop.add_signal_handler(number, stop.set)
+        await stop.wait()
+    finally:
+        await runner.cleanup()
+        for tab in list(app.tabs):  # a TUI that did not leave in time
+            if tab.pid is not None:
+                try:
+                    os.kill(tab.pid, signal.SIGKILL)
+                except OSError:
+                    pass
+
+
+__all__ = ["ServeApp", "serve_until_stopped", "sessions_page", "tab_command", "tui_page"]
