@@ -37,6 +37,9 @@ from pathlib import Path
 
 from tuilaunch.client.link import Link
 
+sys.path.insert(0, str(Path(__file__).parent))
+from inspector_bench import cpu_ticks, tl  # the session commands, /proc ticks
+
 MEASURE_S = 10.0
 ROOT = Path(__file__).resolve().parent.parent
 SIGNAL_NODE = ROOT / "tests" / "nodes" / "signal_node.py"
@@ -62,18 +65,6 @@ ECHO_STANDIN = textwrap.dedent("""
     node.create_subscription(Point, sys.argv[1], show, 10)
     rclpy.spin(node)
 """)
-
-
-def tl(*args: str) -> str:
-    done = subprocess.run([sys.executable, "-m", "tuilaunch", *args], capture_output=True,
-                          text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    return done.stdout
-
-
-def cpu_ticks(pid: int) -> int:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return int(fields[11]) + int(fields[12])
 
 
 def cpu_over(pids: list[int], seconds: float) -> list[float]:
