@@ -80,7 +80,7 @@ class FleetHelp(HelpScreen):
 class FleetApp(App[int]):
     """One TUI over several sessions (see the module's docstring)."""
 
-    CSS_PATH = "screens/app.tcss"
+    CSS_PATH = "../screens/app.tcss"  # the single-session TUI's look
     TITLE = "tuilaunch"
     CSS = """
     #fleet-trees { width: 36; border-right: tall $panel; }
