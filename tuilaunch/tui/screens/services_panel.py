@@ -19,6 +19,7 @@ from ...engine.describe.parameter_files import dotted
 from ...engine.errors import LaunchError
 from ...engine.ros.messages import FieldInfo
 from ...engine.ros.ros_errors import MessageError, RosError
+from ..key_order import KeyHold, hold_keys
 from .fields import Field
 from .graph_listing import GraphListing
 
@@ -169,18 +170,25 @@ class ServicesPanel(GraphListing, Horizontal):
         """Enter in the filter picks the first match: type a few letters, enter, call."""
         listing = self.query_one("#svc-list", OptionList)
         if listing.option_count:
-            name = str(listing.get_option_at_index(listing.highlighted or 0).id)
-            self.select_service(name, (dict(self.services).get(name) or ["?"])[0],
-                                then=lambda: self.call_after_refresh(self._focus_form))
+            self._open_form(str(listing.get_option_at_index(listing.highlighted or 0).id))
         elif not self.services:
             # the first listing is still coming (`3/ena` Enter in one read): the Enter
             # picks the first match once it is there, rather than being lost
             self._submit_waits = True
 
-    def _focus_form(self) -> None:
+    def _open_form(self, name: str) -> None:
+        """Picks the service and moves on to its request's first field. The keys typed
+        meanwhile (its value, typed in the same read as Enter: `/ena` Enter `true` Enter)
+        wait for that field, where they would otherwise reach the list or the filter."""
+        hold = hold_keys(self.app)
+        self.select_service(name, (dict(self.services).get(name) or ["?"])[0],
+                            then=lambda: self.call_after_refresh(self._focus_form, hold))
+
+    def _focus_form(self, hold: KeyHold) -> None:
         """Once the form is mounted: the first field, or Call for an empty request."""
         inputs = self.query("#svc-form Input")
         (inputs.first() if inputs else self.query_one("#svc-call")).focus()
+        hold.release()
 
     @on(Button.Pressed, "#svc-refresh")
     def _refresh(self) -> None:
@@ -188,17 +196,14 @@ class ServicesPanel(GraphListing, Horizontal):
 
     @on(OptionList.OptionSelected, "#svc-list")
     def _picked(self, event: OptionList.OptionSelected) -> None:
-        name = str(event.option.id)
-        types = dict(self.services).get(name) or ["?"]
-        # Enter on a row: on to its request's first field
-        self.select_service(name, types[0],
-                            then=lambda: self.call_after_refresh(self._focus_form))
+        self._open_form(str(event.option.id))  # Enter on a row: on to its request
 
     def select_service(self, name: str, type_name: str,
                        values: dict[str, str] | None = None, then: Callable[[], Any] | None = None,
                        ) -> None:
         """Shows the service's request form, once its fields are known (asked of the
-        session: the message package need not be installed here); `then` runs after."""
+        session: the message package need not be installed here); `then` runs after,
+        whether the form came or not (refused, or another service picked meanwhile)."""
         self.selected = (name, type_name)
         self.query_one("#svc-call", Button).disabled = True  # until its form is there
         self.show_form(name, type_name, values, then)
@@ -206,6 +211,14 @@ class ServicesPanel(GraphListing, Horizontal):
     @work(group="services-form", exclusive=True, exit_on_error=False)
     async def show_form(self, name: str, type_name: str, values: dict[str, str] | None,
                         then: Callable[[], Any] | None) -> None:
+        try:
+            await self._show_form(name, type_name, values)
+        finally:
+            if then is not None:
+                then()
+
+    async def _show_form(self, name: str, type_name: str,
+                         values: dict[str, str] | None) -> None:
         title = self.query_one("#svc-title", Static)
         form = self.query_one("#svc-form", VerticalScroll)
         try:
@@ -228,8 +241,6 @@ class ServicesPanel(GraphListing, Horizontal):
                                         Field(text, id=f"field-{path.replace('.', '-')}",
                                               tooltip=info.type), classes="svc-field"))
         self.query_one("#svc-call", Button).disabled = False
-        if then is not None:
-            then()
 
     def request(self) -> dict[str, Any]:
         flat = {}
