@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import asyncio
 import os
-import sys
 import time
 
 import pytest
@@ -18,7 +17,7 @@ from tuilaunch.tui.app import make_app
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.services_panel import ServicesPanel
 
-from .test_interact import LAUNCH, PROGRAMS
+from .test_interact import LAUNCH, PROGRAMS, process
 from .test_interact_tui import pane, select
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import states, tui, until
@@ -26,10 +25,6 @@ from .test_tui_keys import burst
 from .test_tui_long_sessions import read_until, start_on_pty, stop_pty
 
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
-
-
-def state(name: str, process_id: str) -> str:
-    return next(p for p in status(name)["processes"] if p["id"] == process_id)["state"]
 
 
 TYPED_TWO = f"""
@@ -97,7 +92,7 @@ def test_keys_typed_with_i_are_dropped_while_another_client_types(write):
                 await pilot.press("d")
 
         asyncio.run(scenario())
-        assert state(name, "lines-1") == "running"
+        assert process(name, "lines-1")["state"] == "running"
     finally:
         other.close()
         tl("stop", name)
@@ -273,7 +268,3 @@ async def test_the_quit_dialog_fits_a_40_by_10_terminal(write, tmp_path):
             assert region.right <= 40 and region.bottom <= 10, (button, region)
         await pilot.press("y")
         await until(pilot, lambda: not app.supervisor.running, limit=60)
-
-
-if sys.platform != "linux":  # pragma: no cover
-    pytest.skip("ptys and /proc", allow_module_level=True)
