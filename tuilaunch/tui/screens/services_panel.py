@@ -119,7 +119,8 @@ class ServicesPanel(GraphListing, Horizontal):
         self.fields: list[tuple[str, FieldInfo]] = []
         self.history: list[CallRecord] = []
         self._submit_waits = False
-        """Enter was pressed in the filter before the first listing came."""
+        """Enter was pressed in the filter while nothing matched: discovery may not have
+        seen the service yet. The next listing with a match picks it; typing cancels."""
 
     def compose(self) -> ComposeResult:
         with Vertical(id="svc-left"):
@@ -142,11 +143,16 @@ class ServicesPanel(GraphListing, Horizontal):
         if listing != self.services or not self.query_one("#svc-list", OptionList).option_count:
             self.services = listing
             self._fill_list()
-        if self._submit_waits:  # Enter came while the graph was still being discovered
+        if self._submit_waits and self.query_one("#svc-list", OptionList).option_count:
+            # Enter came while the graph was still being discovered: now it has a match
             self._submit_waits = False
             self._filter_submitted()
 
     @on(Input.Changed, "#svc-filter")
+    def _typed(self) -> None:
+        self._submit_waits = False  # a new term: the Enter was for the old one
+        self._fill_list()
+
     def _fill_list(self) -> None:
         term = self.query_one("#svc-filter", Input).value.lower()
         listing = self.query_one("#svc-list", OptionList)
@@ -171,9 +177,10 @@ class ServicesPanel(GraphListing, Horizontal):
         listing = self.query_one("#svc-list", OptionList)
         if listing.option_count:
             self._open_form(str(listing.get_option_at_index(listing.highlighted or 0).id))
-        elif not self.services:
-            # the first listing is still coming (`3/ena` Enter in one read): the Enter
-            # picks the first match once it is there, rather than being lost
+        else:
+            # nothing matches yet (`3/ena` Enter in one read, while discovery still runs,
+            # or the graph has other services but not yet this one): the Enter picks the
+            # first match once a listing has it, rather than being lost
             self._submit_waits = True
 
     def _open_form(self, name: str) -> None:
