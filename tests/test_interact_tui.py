@@ -16,7 +16,7 @@ from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 
 from .test_interact import LAUNCH, PIPED, logs, process
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
-from .test_tui import until
+from .test_tui import launched, until
 from .test_tui_keys import burst
 
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
@@ -189,10 +189,9 @@ def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
     tl("stop", name)
 
 
-async def test_i_types_into_a_node_of_an_in_process_launch(tmp_path, write):
-    # the TUI without a session server (as the tests' factory makes it): the same keys
-    app = make_app(str(write(LAUNCH)), {}, tmp_path / "log")
-    async with app.run_test(size=(120, 32)) as pilot:
+async def test_i_types_into_a_node_of_the_tuis_own_launch(tmp_path, write):
+    # `tuilaunch FILE`: the TUI that started the session (its owner), the same keys
+    async with launched(str(write(LAUNCH)), {}, tmp_path, (120, 32)) as (app, pilot):
         await until(pilot, lambda: "ready" in pane(app, "lines-1"))
         select(app, "lines-1")
         await pilot.pause()

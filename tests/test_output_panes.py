@@ -15,7 +15,7 @@ from tuilaunch.tui.screens.output_panel import OutputPanel
 
 from .terminal_harness import PROGRAMS
 from .test_sessions import detached_with, runtime, tl  # noqa: F401  (runtime: a fixture)
-from .test_tui import until
+from .test_tui import launched, until
 
 LAUNCH = f"""
 import sys
@@ -57,8 +57,8 @@ async def select(app: TuiLaunchApp, pilot, process: str) -> None:
 
 
 async def test_tabs_line_up_at_8_columns_as_in_a_terminal(write, tmp_path):
-    app = make_app(launch(write, ("tab_printer", [])), {}, tmp_path / "log")
-    async with app.run_test(size=(120, 24)) as pilot:
+    path = launch(write, ("tab_printer", []))
+    async with launched(path, {}, tmp_path, (120, 24)) as (app, pilot):
         await select(app, pilot, "tab_printer-1")
         await until(pilot, lambda: any("end" in r for r in rows(app)))
         shown = [r.split(" ", 1)[1] for r in rows(app) if r.startswith("I ")]
@@ -73,8 +73,6 @@ async def test_tabs_line_up_at_8_columns_as_in_a_terminal(write, tmp_path):
         # the log file keeps the line as it was printed
         log = next((tmp_path / "log").rglob("tab_printer-1*.log")).read_text()
         assert "120\t../sysdeps/" in log
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 def test_a_wide_character_takes_two_columns_before_a_tab():
@@ -93,9 +91,8 @@ def number_of(row: str) -> int:
 
 async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp_path):
     # ~2,000 lines a second into a 500-line scrollback: trimmed several times a second
-    app = make_app(launch(write, ("flooder", ["2000"])), {}, tmp_path / "log",
-                   scrollback=500)
-    async with app.run_test(size=(80, 24)) as pilot:
+    path = launch(write, ("flooder", ["2000"]))
+    async with launched(path, {}, tmp_path, (80, 24), scrollback=500) as (app, pilot):
         await select(app, pilot, "flooder-1")
         panel = panel_of(app)
         view = panel.line_view
@@ -152,16 +149,14 @@ async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp
         await pilot.press("down", "down")
         assert view.following
         await until(pilot, lambda: number_of(rows(app)[-1]) > newest)
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 # --- the pane's habits ---------------------------------------------------------------------
 
 
 async def test_an_empty_filter_says_so_and_esc_shows_all_again(write, tmp_path):
-    app = make_app(launch(write, ("tab_printer", [])), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    path = launch(write, ("tab_printer", []))
+    async with launched(path, {}, tmp_path, (80, 24)) as (app, pilot):
         await select(app, pilot, "tab_printer-1")
         await until(pilot, lambda: any("end" in r for r in rows(app)))
         panel = panel_of(app)
@@ -180,8 +175,6 @@ async def test_an_empty_filter_says_so_and_esc_shows_all_again(write, tmp_path):
         await until(pilot, lambda: "/qqq no line matches" in str(panel._status.render()))
         assert any("no line matches 'qqq'" in n.message for n in app._notifications)
         assert any("PID" in r for r in rows(app))  # a search hides nothing
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path):
@@ -192,8 +185,7 @@ async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path
         def generate_launch_description():
             return LaunchDescription([ExecuteProcess(name='absent', cmd=[{missing!r}])])
         """)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         await select(app, pilot, "absent-1")
         await until(pilot, lambda: app.supervisor is not None
                     and app.supervisor.states.get("absent-1") == "failed")
@@ -222,8 +214,7 @@ async def test_a_group_being_stopped_says_its_nodes_are_stopping(write, tmp_path
                 ExecuteProcess(name=name, cmd=[sys.executable, '-c', {STUBBORN!r}],
                                sigterm_timeout='600') for name in ('left', 'right')])
         """)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         tree = app.launch_tree
         await until(pilot, lambda: app.supervisor is not None and list(
             app.supervisor.states.values()) == ["running", "running"])
@@ -237,9 +228,9 @@ async def test_a_group_being_stopped_says_its_nodes_are_stopping(write, tmp_path
         await until(pilot, lambda: "0 of 2 processes running, 2 stopping"
                     in str(detail.render()))
         assert app.supervisor is not None
-        for running in list(app.supervisor.running.values()):
-            os.kill(running.process.pid, signal.SIGTERM)  # what the stop's next step sends
-        await until(pilot, lambda: not app.supervisor.running)
+        for pid in list(app.supervisor.pids.values()):
+            os.kill(pid, signal.SIGTERM)  # what the stop's next step sends
+        await until(pilot, lambda: not app.supervisor.pids)
         await until(pilot, lambda: "0 of 2 processes running" in str(detail.render())
                     and "stopping" not in str(detail.render()))
 
@@ -253,8 +244,7 @@ async def test_s_on_a_node_waiting_to_respawn_keeps_it_down(write, tmp_path):
                 ExecuteProcess(name='oneshot', respawn=True, respawn_delay=600.0,
                                cmd=['sh', '-c', 'echo once; exit 0'])])
         """)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         await select(app, pilot, "oneshot-1")
         detail = app.query_one("#detail")
         # counted down from 600 s
@@ -276,8 +266,8 @@ def footer_keys(app: TuiLaunchApp) -> list[str]:
 
 
 async def test_typing_into_a_prompt_without_a_newline(write, tmp_path):
-    app = make_app(launch(write, ("prompt_reader", [])), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    path = launch(write, ("prompt_reader", []))
+    async with launched(path, {}, tmp_path, (80, 24)) as (app, pilot):
         await select(app, pilot, "prompt_reader-1")
         # gdb's `(gdb) ` waits without a newline: shown as it stands, before any Enter
         await until(pilot, lambda: rows(app)[-2:] == ["I ready", "I (gdb)"])

@@ -20,7 +20,7 @@ from tuilaunch.tui.screens.services_panel import ServicesPanel
 from .test_interact import LAUNCH, PROGRAMS, process
 from .test_interact_tui import pane, select
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
-from .test_tui import states, tui, until
+from .test_tui import launched, states, tui, until
 from .test_tui_keys import burst
 from .test_tui_long_sessions import read_until, start_on_pty, stop_pty
 
@@ -256,8 +256,7 @@ def test_f_shows_a_programs_own_colours_and_not_a_loggers_level_colour():
 
 
 async def test_the_quit_dialog_fits_a_40_by_10_terminal(write, tmp_path):
-    app = make_app(str(write(TYPED_TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(40, 10)) as pilot:
+    async with launched(str(write(TYPED_TWO)), {}, tmp_path, (40, 10)) as (app, pilot):
         await until(pilot, lambda: app.supervisor is not None
                     and app.supervisor.states.get("quiet-2") == "running")
         await pilot.press("q")
@@ -267,4 +266,4 @@ async def test_the_quit_dialog_fits_a_40_by_10_terminal(write, tmp_path):
             region = app.screen.query_one(button).region
             assert region.right <= 40 and region.bottom <= 10, (button, region)
         await pilot.press("y")
-        await until(pilot, lambda: not app.supervisor.running, limit=60)
+        await until(pilot, lambda: not app.supervisor.pids, limit=60)

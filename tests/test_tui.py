@@ -9,16 +9,20 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import AsyncIterator, Callable
-from contextlib import asynccontextmanager
+from collections.abc import AsyncIterator, Callable, Iterator
+from contextlib import asynccontextmanager, contextmanager
 from pathlib import Path
+from typing import Any, cast
 
 import pytest
 from textual.pilot import Pilot
 from textual.widgets import Checkbox, DataTable, Input
 
+from tuilaunch.client.link import send_once
+from tuilaunch.client.session_start import start_session
+from tuilaunch.engine.errors import LaunchError
 from tuilaunch.engine.run.events import Event
-from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.app import TuiLaunchApp, launch_app, make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.args_panel import ArgsPanel
 from tuilaunch.tui.screens.dialogs import QuitScreen
@@ -27,7 +31,8 @@ from tuilaunch.tui.screens.params_panel import ParamsPanel
 from tuilaunch.tui.screens.services_panel import ServicesPanel
 from tuilaunch.tui.screens.tree_panel import LaunchTree
 
-from .conftest import EXAMPLES
+from .conftest import EXAMPLES, session_folders
+from .proc_tree import end, servers_of
 
 BRINGUP = str(EXAMPLES / "bringup.py")
 
@@ -46,21 +51,68 @@ async def until(pilot: Pilot, check: Callable[[], object], limit: float = 60.0,
 
 
 @asynccontextmanager
-async def tui(tmp_path: Path, *args: str, path: str = BRINGUP, size: tuple[int, int] = (100, 32))\
+async def launched(path: str, arguments: dict[str, str], tmp_path: Path,
+                   size: tuple[int, int] = (100, 32),
+                   prepare: Callable[[TuiLaunchApp], None] | None = None, **options: Any)\
         -> AsyncIterator[tuple[TuiLaunchApp, Pilot]]:
-    arguments = dict(a.split(":=", 1) for a in args)
-    app = make_app(path, arguments, tmp_path / "log")
-    async with app.run_test(size=size) as pilot:
+    """The TUI as `tuilaunch FILE` runs it (launch_app): the launch's session server starts
+    once the tree shows, and this TUI is its owning client; in a private session folder.
+    When the test is over the session is stopped, and nothing it started is left.
+    `prepare(app)`: before it runs."""
+    with session_folders(tmp_path / "log"):
+        app = launch_app(path, arguments, tmp_path / "log", **options)
+        if prepare is not None:
+            prepare(app)
         try:
-            yield app, pilot
+            async with app.run_test(size=size) as pilot:
+                try:
+                    yield app, pilot
+                finally:
+                    if app.supervisor is not None and app.is_running and not app.quitting:
+                        try:
+                            await app.engine.run(app.supervisor.shutdown("test over"))
+                        except (LaunchError, ConnectionError):
+                            pass  # it ended meanwhile (the test stopped it)
         finally:
-            if app.supervisor is not None:
-                await app.engine.run(app.supervisor.shutdown("test over"))
+            server = app.server_process
+            if server is not None:
+                try:
+                    server.wait(timeout=60)  # it stops every process it started first
+                except subprocess.TimeoutExpired:
+                    end([server.pid])
+            end(servers_of(tmp_path))
+
+
+@contextmanager
+def attached(path: str, arguments: dict[str, str], tmp_path: Path) -> Iterator[str]:
+    """A session of `path` started as `tuilaunch PATH --detach` does, in a private session
+    folder, for a TUI made with make_app(..., session_name=NAME) to attach to; stopped, and
+    nothing it started left, at the end. Yields its name."""
+    with session_folders(tmp_path / "log"):
+        name, server = start_session(path, arguments, None, tmp_path / "log")
+        try:
+            yield name
+        finally:
+            send_once(name, {"id": 1, "op": "shutdown", "reason": "test over"})
+            try:
+                server.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                end([server.pid])
+            end(servers_of(tmp_path))
+
+
+@asynccontextmanager
+async def tui(tmp_path: Path, *args: str, path: str = BRINGUP, size: tuple[int, int] = (100, 32),
+              **options: Any) -> AsyncIterator[tuple[TuiLaunchApp, Pilot]]:
+    """`tuilaunch PATH name:=value ...` in a terminal of `size`."""
+    arguments = dict(a.split(":=", 1) for a in args)
+    async with launched(path, arguments, tmp_path, size, **options) as opened:
+        yield opened
 
 
 def states(app: TuiLaunchApp) -> dict[str, str]:
-    assert app.supervisor is not None
-    return app.supervisor.states
+    """The processes' states as the session reports them ({} until the TUI follows it)."""
+    return {} if app.supervisor is None else app.supervisor.states
 
 
 def row_text(app: TuiLaunchApp, ref: str) -> str:
@@ -68,8 +120,7 @@ def row_text(app: TuiLaunchApp, ref: str) -> str:
 
 
 def pids(app: TuiLaunchApp) -> dict[str, int]:
-    assert app.supervisor is not None
-    return {pid: r.process.pid for pid, r in app.supervisor.running.items()}
+    return {} if app.supervisor is None else app.supervisor.pids
 
 
 async def test_select_a_node_see_its_output_stop_restart_and_search(tmp_path):
@@ -207,7 +258,7 @@ async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
         assert response.has_class("error")
 
         assert app.supervisor is not None
-        await app.engine.run(app.supervisor.stop("service_server-4"))
+        await app.engine.run(app.supervisor.command("stop", "service_server-4"))
         field.value = "true"
         field.focus()
         await pilot.press("enter")
@@ -345,15 +396,26 @@ def generate_launch_description():
 """
 
 
+async def followed(pilot: Pilot) -> None:
+    """Until the TUI follows its session (the tree drawn with the session's states)."""
+    app = cast(TuiLaunchApp, pilot.app)
+    await until(pilot, lambda: app.supervisor is not None)
+    await pilot.pause()
+
+
 @pytest.mark.parametrize("size", [(80, 24), (120, 40)])
 def test_layout_snapshot_nodes_tab(snap_compare, write, tmp_path, size):
-    app = make_app(str(write(WAITING, "layout.py")), {}, tmp_path / "log")
-    assert snap_compare(app, terminal_size=size)
+    path = str(write(WAITING, "layout.py"))
+    with attached(path, {}, tmp_path) as name:
+        app = make_app(path, {}, tmp_path / "log", session_name=name)
+        assert snap_compare(app, terminal_size=size, run_before=followed)
 
 
 def test_layout_snapshot_args_tab(snap_compare, write, tmp_path):
-    app = make_app(str(write(WAITING, "layout.py")), {}, tmp_path / "log")
-    assert snap_compare(app, terminal_size=(80, 24), press=["2"])
+    path = str(write(WAITING, "layout.py"))
+    with attached(path, {}, tmp_path) as name:
+        app = make_app(path, {}, tmp_path / "log", session_name=name)
+        assert snap_compare(app, terminal_size=(80, 24), press=["2"], run_before=followed)
 
 
 def test_args_form_editors_follow_argument_types(write, tmp_path):
@@ -362,8 +424,9 @@ def test_args_form_editors_follow_argument_types(write, tmp_path):
     from textual.widgets import Select
 
     async def scenario() -> None:
-        app = make_app(str(write(WAITING, "layout.py")), {"sim": "true"}, tmp_path / "log")
-        async with app.run_test(size=(80, 24)):
+        async with launched(str(write(WAITING, "layout.py")), {"sim": "true"}, tmp_path,
+                            (80, 24)) as (app, pilot):
+            await followed(pilot)
             form = app.query_one(ArgsPanel)
             assert isinstance(form.query_one("#arg-sim"), Checkbox)
             assert form.query_one("#arg-sim", Checkbox).value is True
@@ -371,8 +434,6 @@ def test_args_form_editors_follow_argument_types(write, tmp_path):
             assert isinstance(form.query_one("#arg-robot"), Input)
             assert form.query_one("#row-sim").has_class("changed")
             assert not form.query_one("#row-robot").has_class("changed")
-            if app.supervisor is not None:
-                await app.engine.run(app.supervisor.shutdown("test over"))
 
     asyncio.run(scenario())
 
@@ -445,9 +506,9 @@ async def test_an_engine_event_after_the_screens_closed_is_no_error(write, tmp_p
     """The engine's events keep coming while the app closes: a lifecycle node's last state
     came after Textual had closed the screens (seen under load) and ended the TUI in a
     traceback. One is delivered there now (Textual's `_close_all`, which the exit awaits)."""
-    app = make_app(str(write(STUBBORN_TUI)), {}, tmp_path / "log")
     delivered = []
-    async with app.run_test(size=(80, 24)):
+    async with launched(str(write(STUBBORN_TUI)), {}, tmp_path, (80, 24)) as (app, pilot):
+        await followed(pilot)
         close_all = app._close_all
 
         async def then_an_event() -> None:
@@ -462,8 +523,9 @@ async def test_an_engine_event_after_the_screens_closed_is_no_error(write, tmp_p
 
 
 async def test_quit_shows_which_processes_are_still_stopping(write, tmp_path):
-    app = make_app(str(write(STUBBORN_TUI)), {}, tmp_path / "log", sigterm_timeout=15.0)
-    async with app.run_test(size=(80, 24)) as pilot:
+    # SIGTERM after 4 s, as `sigterm_timeout:=4` on the command line says
+    async with launched(str(write(STUBBORN_TUI)), {"sigterm_timeout": "4"}, tmp_path,
+                        (80, 24)) as (app, pilot):
         await until(pilot, lambda: any("holding out" in line
                                        for line in app.store.text(View("stubborn-1"))))
         await pilot.press("q", "y")

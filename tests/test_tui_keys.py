@@ -17,13 +17,13 @@ import pytest
 from textual import events
 from textual.widgets import Input
 
-from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.app import TuiLaunchApp
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.fields import Field
 
 from .test_interact import PROGRAMS
 from .test_sessions import runtime  # noqa: F401  (a fixture: a private session folder)
-from .test_tui import pids, until
+from .test_tui import launched, pids, until
 from .test_tui_long_sessions import read_for, read_until, start_on_pty, stop_pty
 
 TWO = f"""
@@ -72,22 +72,12 @@ async def started(app: TuiLaunchApp, pilot) -> dict[str, int]:
     return pids(app)
 
 
-async def shutdown(app: TuiLaunchApp) -> None:
-    if app.supervisor is not None:
-        await app.engine.run(app.supervisor.shutdown("test over"))
-
-
 @asynccontextmanager
 async def two_started(write, tmp_path) -> AsyncIterator[tuple[TuiLaunchApp, Any, dict[str, int]]]:
     """The TUI of TWO at 80x24, both processes started and quiet-2 selected: the app, its
     pilot and the processes' pids; the launch is shut down afterwards."""
-    app = make_app(str(write(TWO)), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
-        before = await started(app, pilot)
-        try:
-            yield app, pilot, before
-        finally:
-            await shutdown(app)
+    async with launched(str(write(TWO)), {}, tmp_path, (80, 24)) as (app, pilot):
+        yield app, pilot, await started(app, pilot)
 
 
 async def test_a_search_typed_in_one_burst_is_searched_and_never_stops_the_node(write,

@@ -18,7 +18,7 @@ from pathlib import Path
 from textual import events
 from textual.widgets import DataTable
 
-from tuilaunch.tui.app import TuiLaunchApp, make_app
+from tuilaunch.tui.app import TuiLaunchApp
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.fields import Field
@@ -27,7 +27,7 @@ from tuilaunch.tui.screens.params_panel import ParamsPanel
 from tuilaunch.tui.screens.tree_panel import LaunchTree
 
 from .proc_tree import end, servers_of
-from .test_tui import pids, row_text, states, tui, until
+from .test_tui import launched, pids, row_text, states, tui, until
 
 COUNTER = """
 from launch import LaunchDescription
@@ -75,8 +75,7 @@ async def test_soak_a_small_scrollback_keeps_showing_the_newest_lines(write, tmp
     # 7.5 s of output: the pane repaints about once a second while lines pour in, so even
     # on a loaded machine it is seen to move several times after it is full
     path = counter_file(write, 1500, 0.005)
-    app = make_app(str(path), {}, tmp_path / "log", scrollback=100)
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24), scrollback=100) as (app, pilot):
         await pilot.press("down", "down")  # the counter's own pane
         assert panel_of(app).view.process == "counter0-1"
         seen = []
@@ -89,16 +88,13 @@ async def test_soak_a_small_scrollback_keeps_showing_the_newest_lines(write, tmp
         assert max(seen) == 1499 and len({n for n in seen if n > 100}) >= 3
         assert len(panel_of(app).line_view.lines) == 100
         assert panel_of(app).line_view.following
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 async def test_a_search_past_the_scrollback_says_where_the_older_lines_are(write, tmp_path):
     """A search for a line the pane no longer holds does not just say "no line matches":
     it says how many lines the pane keeps and that the log files have them all."""
     path = counter_file(write, 300, 0)
-    app = make_app(str(path), {}, tmp_path / "log", scrollback=100)
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24), scrollback=100) as (app, pilot):
         await pilot.press("down", "down")  # the counter's own pane
         await until(pilot, lambda: last_number(app) == 299)
         assert len(panel_of(app).line_view.lines) == 100  # lines 200 to 299
@@ -107,15 +103,12 @@ async def test_a_search_past_the_scrollback_says_where_the_older_lines_are(write
         said = [n.message for n in app._notifications]
         assert said[-1].startswith("no line matches 'line 3' in the 100 lines this pane "
                                    "keeps; every line is in the log files")
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 async def test_four_flooders_keep_the_all_nodes_pane_moving(write, tmp_path):
     # a flood that outlasts the test however fast the machine is (stopped at its end)
     path = counter_file(write, 10**8, 0, copies=4)
-    app = make_app(str(path), {}, tmp_path / "log", scrollback=200)
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24), scrollback=200) as (app, pilot):
         assert panel_of(app).view.process is None
         await until(pilot, lambda: last_number(app) > 0)
         samples = [tuple(panel_of(app).line_view.visible_text())]
@@ -126,8 +119,6 @@ async def test_four_flooders_keep_the_all_nodes_pane_moving(write, tmp_path):
                         != samples[-1])
             samples.append(tuple(panel_of(app).line_view.visible_text()))
         assert len(set(samples)) == 5  # every look shows new lines
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 # --- 2. quiet on the wire ----------------------------------------------------------------
@@ -217,16 +208,13 @@ def test_an_unchanging_screen_sends_almost_nothing_to_the_terminal(write, tmp_pa
 
 async def test_the_pane_repaints_only_when_its_lines_change(write, tmp_path):
     path = counter_file(write, 3, 0.01)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         await until(pilot, lambda: last_number(app) == 2)
         await pilot.pause(1.5)
         view = panel_of(app).line_view
         before = view.repaints
         await pilot.pause(2.0)
         assert view.repaints == before  # nothing new: nothing drawn
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 # --- 3. keys that arrive together --------------------------------------------------------
@@ -314,8 +302,7 @@ async def test_an_int_field_warns_of_a_fraction_and_applies_it_as_ros2_launch_wo
             sl.node('tuilaunch_demos', 'talker', name='t')
             return sl.launch_description()
         """)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         await pilot.press("2")
         field = app.query_one("#arg-copies", Field)
         field.focus()
@@ -327,8 +314,6 @@ async def test_an_int_field_warns_of_a_fraction_and_applies_it_as_ros2_launch_wo
         assert not preview.has_class("error")
         await pilot.press("f5")  # launch arguments are strings: ros2 launch takes copies:=1.5
         await until(pilot, lambda: app.session.arguments.get("copies") == "1.5")
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 async def test_a_node_that_exits_1_after_a_relaunch_shows_failed_with_its_code(write, tmp_path):
@@ -342,8 +327,7 @@ async def test_a_node_that_exits_1_after_a_relaunch_shows_failed_with_its_code(w
                 ExecuteProcess(name='job', cmd=['sh', '-c', 'sleep 0.3; exit $0',
                                                 LaunchConfiguration('code')])])
         """)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         await until(pilot, lambda: "exited" in row_text(app, "job-1"))
         await pilot.press("2")
         app.query_one("#arg-code", Field).value = "1"
@@ -352,8 +336,6 @@ async def test_a_node_that_exits_1_after_a_relaunch_shows_failed_with_its_code(w
         await until(pilot, lambda: "failed" in row_text(app, "job-1"))
         assert "exit code 1" in row_text(app, "job-1")
         assert "1 failed" in str(app.query_one("#status").render())
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 # --- 5. readable at 80x24 ------------------------------------------------------------------
@@ -384,12 +366,9 @@ async def test_at_80x24_the_message_is_on_screen_and_the_split_adapts(tmp_path):
 
 
 async def test_the_split_is_wider_on_a_wider_terminal(write, tmp_path):
-    app = make_app(str(write(QUIET)), {}, tmp_path / "log")
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with launched(str(write(QUIET)), {}, tmp_path, (120, 40)) as (app, pilot):
         await pilot.pause()
         assert app.query_one(LaunchTree).outer_size.width == 42
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 async def test_wrap_shows_a_long_line_whole(write, tmp_path):
@@ -400,8 +379,7 @@ async def test_wrap_shows_a_long_line_whole(write, tmp_path):
             return LaunchDescription([ExecuteProcess(name='long', cmd=[
                 'sh', '-c', 'echo start-' + 'x' * 150 + '-end; sleep 600'])])
         """)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         await pilot.press("down", "down")
         view = panel_of(app).line_view
         await until(pilot, lambda: any("start-" in r for r in view.visible_text()))
@@ -410,8 +388,6 @@ async def test_wrap_shows_a_long_line_whole(write, tmp_path):
         rows = view.visible_text()
         assert any("-end" in r for r in rows) and "wrap" in str(
             app.query_one("#output-status").render())
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 # --- 6. process events in the panes ---------------------------------------------------------
@@ -428,8 +404,7 @@ async def test_a_failed_nodes_pane_says_how_it_died_and_its_reason_is_on_screen(
                 ExecuteProcess(name='absent', cmd=['no-such-command-tui']),
                 ExecuteProcess(name='fine', cmd=['sleep', '600'])])
         """)
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         await until(pilot, lambda: "failed" in row_text(app, "crash-1"))
         crash = app.store.text(View("crash-1"))
         assert any(re.search(r"process started with pid \[\d+\]", line) for line in crash)
@@ -451,8 +426,6 @@ async def test_a_failed_nodes_pane_says_how_it_died_and_its_reason_is_on_screen(
                                        for line in app.store.text(View("fine-3"))))
         assert not any("process has died" in line for line in app.store.text(View("fine-3")))
         assert "failed" not in row_text(app, "fine-3")
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 async def test_action_rows_never_read_pid_none(tmp_path):
@@ -603,16 +576,16 @@ async def test_params_launch_column_matches_a_node_by_the_name_it_reports(tmp_pa
 async def test_lines_not_drawn_are_counted_in_the_status_not_written_as_warnings(write,
                                                                                tmp_path):
     path = counter_file(write, 20000, 0)
-    app = make_app(str(path), {}, tmp_path / "log")
-    app.buffer.max_lines = 50  # a tiny per-tick budget, so the flood overflows it
-    async with app.run_test(size=(80, 24)) as pilot:
+
+    def tiny_budget(app: TuiLaunchApp) -> None:
+        app.buffer.max_lines = 50  # a tiny per-tick budget, so the flood overflows it
+
+    async with launched(str(path), {}, tmp_path, (80, 24), prepare=tiny_budget) as (app, pilot):
         await until(pilot, lambda: app.store.dropped.total > 0)
         await until(pilot, lambda: "not drawn (in log)"
                     in str(app.query_one("#output-status").render()))
         assert not any("not shown" in line.text or line.level >= 2
                        for line in app.store.lines(View()))
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
     # the log file has every line the process printed
     log = next((tmp_path / "log").glob("counter0-1.log")).read_text()
     assert "line 0\n" in log
@@ -646,8 +619,8 @@ async def test_a_second_q_while_a_stubborn_process_stops_offers_to_kill_it(write
             return LaunchDescription([ExecuteProcess(name='stubborn', cmd=[
                 'sh', '-c', 'trap "" INT TERM; echo holding out; sleep 600'])])
         """)
-    app = make_app(str(path), {}, tmp_path / "log", sigterm_timeout=30.0, sigkill_timeout=30.0)
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {"sigterm_timeout": "30", "sigkill_timeout": "30"}, tmp_path,
+                        (80, 24)) as (app, pilot):
         await until(pilot, lambda: any("holding out" in line
                                        for line in app.store.text(View("stubborn-1"))))
         await pilot.press("q", "y")
@@ -665,13 +638,10 @@ def test_a_linux_console_gets_ascii_state_icons(monkeypatch, write, tmp_path):
     monkeypatch.setenv("TERM", "linux")
 
     async def scenario() -> None:
-        app = make_app(str(write(QUIET)), {}, tmp_path / "log")
-        async with app.run_test(size=(80, 24)) as pilot:
+        async with launched(str(write(QUIET)), {}, tmp_path, (80, 24)) as (app, pilot):
             await until(pilot, lambda: "running" in row_text(app, "quiet-1"))
             label = row_text(app, "quiet-1")
             assert label.startswith("* ") and "●" not in label
-            assert app.supervisor is not None
-            await app.engine.run(app.supervisor.shutdown("test over"))
 
     asyncio.run(scenario())
 
@@ -695,8 +665,7 @@ async def test_focus_shows_in_reverse_video_and_one_new_line_is_singular(write, 
     # the next line comes when the test says so: what the status counts is never a race
     gate = tmp_path / "more"
     path = write(GATED.format(gate=str(gate), python=sys.executable), "gated.py")
-    app = make_app(str(path), {}, tmp_path / "log")
-    async with app.run_test(size=(80, 24)) as pilot:
+    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
         tree = app.query_one(LaunchTree)
         await pilot.pause()
         # the focused tree's cursor row is drawn in reverse video: visible with 8 colours
@@ -712,8 +681,6 @@ async def test_focus_shows_in_reverse_video_and_one_new_line_is_singular(write, 
         assert "1 new line (G: follow)" in str(status.render())
         gate.touch()  # one more arrives below
         await until(pilot, lambda: "2 new lines (G: follow)" in str(status.render()))
-        assert app.supervisor is not None
-        await app.engine.run(app.supervisor.shutdown("test over"))
 
 
 ONE_ARGUMENT = """

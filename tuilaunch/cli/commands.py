@@ -12,12 +12,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..client.link import (
     ANSWER_TIMEOUT,
@@ -28,7 +27,9 @@ from ..client.link import (
     parse_session,
     resolve_name,
 )
-from ..client.remote_supervisor import RemoteSupervisor
+from ..client.port import LaunchPort
+from ..client.session_start import session_name_for as session_name_for
+from ..client.session_start import start_session as start_session
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import placement_from_text
 from ..engine.run.machines.remote import open_remote_link
@@ -39,6 +40,9 @@ from . import inspector
 from .logs import cmd_logs as cmd_logs  # found by name in main
 from .parsers import COMMANDS as COMMANDS
 from .parsers import LIFECYCLE_STATES, PROCESS_STATES, commands_parser
+
+if TYPE_CHECKING:
+    from ..tui.app import TuiLaunchApp
 
 
 def main(argv: list[str]) -> int:
@@ -79,102 +83,33 @@ def _plot_command(function: str) -> Any:
     return getattr(plot, function)
 
 
-# --- starting ------------------------------------------------------------------------------
+# --- the end of a TUI client ------------------------------------------------------------
 
-_RESERVED: dict[str, int] = {}
-"""Names this command picked, and the descriptor of each one's lock, until the server it
-starts takes the lock over."""
-
-
-def session_name_for(path: str, name: str | None) -> str:
-    """The name a new session of `path` takes, reserved until its server holds it: `name`
-    as given, else the file's stem and the first free number (two launches started in the
-    same second take two names); a name a live or starting session holds is refused."""
-    if name:
-        lock = session_dir.reserve(session_dir.check_name(name))
-        if lock is None or session_dir.is_alive(name):
-            if lock is not None:
-                os.close(lock)
-            raise SessionError(f"a session named {name} is already running",
-                               hint="choose another --name, or tuilaunch attach " + name)
-    else:
-        name, lock = session_dir.new_name(session_dir.launch_stem(path))
-    _RESERVED[name] = lock
-    return name
-
-
-def start_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
-                  positional: list[str] | None = None,
-                  timeout: float = 60.0, placement: dict[str, Any] | None = None,
-                  ) -> tuple[str, subprocess.Popen[bytes]]:
-    """Starts a session server in its own session (no terminal) and waits until it answers.
-    `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv;
-    `placement` (`--machines`) is {"text", "path", "share"} as engine/server_main.py reads
-    it."""
-    if name is None or name not in _RESERVED:
-        name = session_name_for(path, name)
-    lock = _RESERVED.pop(name)
-    try:
-        return name, _start_server(path, arguments, name, log_dir, positional, timeout,
-                                   placement, lock)
-    finally:
-        os.close(lock)  # the server holds the name now (or it failed and lets it go)
-
-
-def _start_server(path: str, arguments: dict[str, str], name: str, log_dir: Path,
-                  positional: list[str] | None, timeout: float,
-                  placement: dict[str, Any] | None, lock: int) -> subprocess.Popen[bytes]:
-    log_dir.mkdir(parents=True, exist_ok=True)
-    server_log = log_dir / "session.log"
-    with open(server_log, "ab") as errors:
-        server = subprocess.Popen(
-            [sys.executable, "-m", "tuilaunch.engine.server_main", name,
-             os.path.abspath(path), str(log_dir), json.dumps(arguments),
-             json.dumps(positional or [path]),
-             *([json.dumps(placement)] if placement else [])],
-            stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True,
-            pass_fds=(lock,), env={**os.environ, session_dir.LOCK_FD_ENV: str(lock)})
-    deadline = time.monotonic() + timeout
-    # ours, not another server that took the name at the same instant
-    while (session_dir.read_info(name) or {}).get("pid") != server.pid or \
-            not session_dir.is_alive(name):
-        if server.poll() is not None:
-            text = server_log.read_text(errors="replace").strip()
-            # the server's own one-line error (and its hint), else its last words
-            reason = text.rsplit("tuilaunch: error: ", 1)[-1] if "tuilaunch: error: " in \
-                text else (text.splitlines() or ["no message"])[-1]
-            raise SessionError(f"session {name} did not start: {reason}")
-        if time.monotonic() > deadline:
-            server.kill()
-            raise SessionError(f"session {name} did not answer within {timeout:g} s")
-        time.sleep(0.02)
-    return server
-
-
-def report_end(app: Any, name: str) -> None:
+def report_end(app: TuiLaunchApp, name: str) -> None:
     """What the command line says after a TUI client closes."""
-    if getattr(app, "detached", False):
+    supervisor = app.supervisor
+    if app.detached:
         print(f"detached; session {name} runs on: tuilaunch attach {name}")
-    elif getattr(app, "signalled", None):
+    elif app.signalled:
         print(f"tuilaunch: received {app.signalled}: every process of session {name} was "
               "stopped", file=sys.stderr)
-    elif not isinstance(app.supervisor, RemoteSupervisor):
+    elif supervisor is None:
         print(f"tuilaunch: error: the TUI could not attach to session {name}, which runs on: "
               f"tuilaunch attach {name}, or tuilaunch stop {name}", file=sys.stderr)
-    elif getattr(app.supervisor, "killed_server", False):
+    elif supervisor.killed_server:
         print(f"session {name} did not answer: its server was killed, and its watchdog "
               "killed every process of the launch", file=sys.stderr)
-    elif getattr(app.supervisor, "lost", False) and getattr(app, "session_host", None):
+    elif supervisor.lost and app.session_host:
         print(f"tuilaunch: error: session {name} ended while the link was down (its "
-              f"messages: session.log in {app.supervisor.log_dir} there)", file=sys.stderr)
-    elif getattr(app.supervisor, "lost", False):
-        log = Path(app.supervisor.log_dir) / "session.log"
+              f"messages: session.log in {supervisor.log_dir} there)", file=sys.stderr)
+    elif supervisor.lost:
+        log = Path(supervisor.log_dir) / "session.log"
         print(f"tuilaunch: error: the server of session {name} ended unexpectedly (its "
               f"messages: {log})", file=sys.stderr)
-    elif getattr(app, "ended_elsewhere", None):
+    elif app.ended_elsewhere:
         print(f"session {name} was stopped elsewhere ({app.ended_elsewhere})", file=sys.stderr)
-    if not getattr(app, "detached", False) and isinstance(app.supervisor, RemoteSupervisor):
-        report_failures(app.supervisor)
+    if not app.detached and supervisor is not None:
+        report_failures(supervisor)
 
 
 def edited_since(info: dict[str, Any]) -> bool:
@@ -188,7 +123,7 @@ def edited_since(info: dict[str, Any]) -> bool:
     return read is not None and (now is None or list(now) != list(read))
 
 
-def report_failures(supervisor: RemoteSupervisor) -> None:
+def report_failures(supervisor: LaunchPort) -> None:
     """What failed, left in the shell's scrollback as ros2 launch leaves it: each failed
     process with its exit code or signal and its log file, then the launch's log folder."""
     failed = [p for p, state in supervisor.states.items() if state == "failed"]

@@ -267,26 +267,16 @@ def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
              log_dir: Path, positional: list[str]) -> int:
     """The launch runs in a session server; this TUI is its first client. The server, and
     so every process of the launch, starts once the TUI shows the tree (`start_server`)."""
-    from ..tui.app import make_app
-    from .commands import report_end, session_name_for
+    from ..tui.app import launch_app
+    from .commands import report_end
 
     try:
-        name = session_name_for(path, options.name)
-    except LaunchError as exc:
+        app = launch_app(path, arguments, log_dir, options.name, positional, options.placement,
+                         scrollback=options.scrollback, keep_on_hangup=options.keep_on_hangup)
+    except LaunchError as exc:  # the name is taken
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
-
-    def start_server() -> subprocess.Popen[bytes]:
-        from .commands import start_session
-
-        placement: Placement | None = options.placement
-        placed = None if placement is None else {
-            "text": placement.text, "path": placement.machines.path, "share": placement.share}
-        return start_session(path, arguments, name, log_dir, positional, placement=placed)[1]
-
-    app = make_app(path, arguments, log_dir, scrollback=options.scrollback, session_name=name,
-                   owner=True, keep_on_hangup=options.keep_on_hangup,
-                   placement=options.placement, start_server=start_server)
+    name = app.session_name
     status = app.run()
     if app.start_error is not None:
         print(f"tuilaunch: error: {app.start_error}", file=sys.stderr)

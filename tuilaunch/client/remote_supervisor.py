@@ -51,6 +51,7 @@ from ..engine.run.supervisor.interacting import restart_fields
 from ..engine.run.supervisor.supervisor import Event
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering, send_once
+from .port import Verb
 from .read_only import check_request
 from .remote_lifecycle import RemoteLifecycle
 from .served_session import ServedSession
@@ -146,6 +147,7 @@ class RemoteSupervisor:
         self.info = info
         self.log_dir = Path(info["log_dir"])
         self.states: dict[str, str] = {}
+        self.pids: dict[str, int] = {}  # from the started events, those replayed too
         self.exit_codes: dict[str, int] = {}
         self.reasons: dict[str, str] = {}
         """How each process last ended or failed to start (`exit code 1`, `killed by
@@ -290,6 +292,7 @@ class RemoteSupervisor:
     def _note_ends(self, events: list[Event]) -> None:
         """How processes ended before this client came (the server's recent events)."""
         for event in events:
+            self._note_pid(event)
             if event.kind in ("exited", "failed") and event.process and event.reason:
                 self.reasons[event.process] = event.reason
             if isinstance(event, ProcessExited) and event.process:
@@ -438,6 +441,7 @@ class RemoteSupervisor:
                 self._last_event = max(self._last_event, event.time)
             if event.kind == "relaunched":
                 self._adopt(dict(item.split(":=", 1) for item in event.lines), True)
+            self._note_pid(event)
             if isinstance(event, ProcessExited) and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
                 self._note_crash(event)
@@ -644,6 +648,14 @@ class RemoteSupervisor:
         await self._switched(self.only, result["offsets"])
         return notes + merged(lines, recent)
 
+    def _note_pid(self, event: Event) -> None:
+        if event.process is None:
+            return
+        if event.kind == "started" and event.pid is not None:
+            self.pids[event.process] = event.pid
+        elif isinstance(event, ProcessExited) or event.kind == "failed":
+            self.pids.pop(event.process, None)
+
     def _note_crash(self, event: ProcessExited) -> None:
         """An exit nobody asked for with a non-zero status: the run's exit status is 1."""
         assert event.process is not None
@@ -694,6 +706,10 @@ class RemoteSupervisor:
         if not reply.get("ok"):
             raise SessionError(f"session {self.name}: {reply.get('error')}")
         return reply.get("result")
+
+    async def command(self, verb: Verb, process: str) -> None:
+        """s, r, t (`tuilaunch stop|restart|start`): one request to the server."""
+        await self._request(verb, process=process)
 
     async def start(self, process_id: str) -> None:
         await self._request("start", process=process_id)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
+import subprocess
 import sys
 from collections.abc import Iterable
 from pathlib import Path
@@ -23,7 +24,9 @@ from textual.widgets import Footer, Static, TabbedContent, TabPane
 
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
 from ..client.served_session import ServedSession
+from ..client.session_start import session_name_for, start_session
 from ..engine.errors import LaunchError
+from ..engine.plan.machines import Placement
 from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
@@ -163,7 +166,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
             self.start_launch()
 
     def wire_supervisor(self) -> None:
-        """Follows the launch: the supervisor (a session's, or in-process) wired to the
+        """Follows the launch: the session's server, through its client, wired to the
         panels; on mount, or once the session's server is up."""
         # built on the engine thread, whose loop its asyncio objects belong to
         if self.session_host is not None:
@@ -171,17 +174,15 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
             # sent what the output pane can show each second; what it cannot is
             # counted, and is in the log files over there
             try:
-                self.supervisor = self.engine.submit(RemoteSupervisor.open_remote(
-                    self.session_host, str(self.session_name), self.session,
+                remote = self.engine.submit(RemoteSupervisor.open_remote(
+                    self.session_host, self.session_name, self.session,
                     self.scrollback, max_lines=max(12, self.size.height - PANE_CHROME),
                     interval=LINK_INTERVAL, link=self.remote_link)).result(timeout=120)
             except LaunchError as exc:  # the link failed between `attach` and here
                 self.engine.stop()
                 self.exit(2, return_code=2, message=f"tuilaunch attach: error: {exc}")
                 return
-            if isinstance(self.supervisor, RemoteSupervisor):
-                self.supervisor.read_only = self.read_only
-        elif self.session_name is not None:
+        else:
             try:
                 remote = self.engine.submit(RemoteSupervisor.open(
                     self.session_name, self.session, self.scrollback,
@@ -194,34 +195,29 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                 self.exit(2, return_code=2)
                 return
             remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
-            remote.read_only = self.read_only
-            self.supervisor = remote
-        else:
-            from ..engine.launcher import make_supervisor  # in-process: the tests' launch
-
-            self.supervisor = self.engine.call(lambda: make_supervisor(
-                self.session.plan, self.log_dir, sigterm_timeout=self.sigterm_timeout,
-                sigkill_timeout=self.sigkill_timeout, bridge_factory=self.bridge))
-        assert self.supervisor is not None
-        self.supervisor.subscribe(self.buffer)
+        remote.read_only = self.read_only
+        self.supervisor = remote  # from here on, only its port (client/port.py)
+        remote.subscribe(self.buffer)
         if isinstance(self.session, ServedSession):  # the form from the server's plan
             self.args_panel.arguments = self.session.plan.arguments
             self.args_panel.refresh(recompose=True)
         tree = self.launch_tree
         tree.show_plan(self.session.plan, self.supervisor.states)
         self.describe_waiting()
-        if isinstance(self.supervisor, RemoteSupervisor):
-            self.replaying = True  # what was printed before we came: shown, not news
-            self.show_events(self.supervisor.history)
-            self.replaying = False
-            for process, state in self.supervisor.lifecycle.states.items():
-                tree.set_lifecycle(process, state)  # states reached before we came
+        self.replaying = True  # what was printed before we came: shown, not news
+        self.show_events(self.supervisor.history)
+        self.replaying = False
+        for process, state in self.supervisor.lifecycle.states.items():
+            tree.set_lifecycle(process, state)  # states reached before we came
         self.run_supervisor()
         self.drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         self.update_status()
         self.say_plan_warnings()
-        tree.focus()
-        self.tab_shown("nodes")
+        # a tab picked while the server came up (3 pressed at once) stays on screen: the
+        # tree takes the focus only where it shows (a focus in a hidden tab switches to it)
+        if self.tabs.active == "nodes":
+            tree.focus()
+        self.tab_shown(self.tabs.active or "nodes")
         if self.first_tab != "nodes":  # opened from a fleet TUI's 2-5 (fleet/app.py)
             self.call_after_refresh(self.action_tab, self.first_tab)
 
@@ -239,9 +235,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                             self.action_start)
         yield SystemCommand("Apply arguments", "Relaunch with the edited arguments",
                             self.action_apply)
-        if self.session_name is not None:
-            yield SystemCommand("Detach", "Leave the launch running (tuilaunch attach)",
-                                self.action_detach)
+        yield SystemCommand("Detach", "Leave the launch running (tuilaunch attach)",
+                            self.action_detach)
         selected = self.selected() if self.supervisor is not None else []
         if len(selected) == 1 and self.supervisor is not None:
             process = selected[0]
@@ -262,9 +257,29 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                                 lambda tab=tab: self.action_tab(tab))
 
 
+def launch_app(path: str, arguments: dict[str, str], log_dir: Path, name: str | None = None,
+               positional: list[str] | None = None, placement: Placement | None = None,
+               **options: Any) -> TuiLaunchApp:
+    """`tuilaunch FILE`: the launch runs in a session server, started once the TUI shows the
+    tree (`start_server`), and this TUI is its first client, the owner (its quit stops the
+    launch). `name`: `--name`, else the file's stem and a free number (LaunchError when
+    taken). The tests open a launch's TUI through here too: the path users run."""
+    session_name = session_name_for(path, name)
+    placed = None if placement is None else {
+        "text": placement.text, "path": placement.machines.path, "share": placement.share}
+
+    def start_server() -> subprocess.Popen[bytes]:
+        return start_session(path, arguments, session_name, log_dir, positional,
+                             placement=placed)[1]
+
+    return make_app(path, arguments, log_dir, session_name=session_name, owner=True,
+                    placement=placement, start_server=start_server, **options)
+
+
 def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any)\
         -> TuiLaunchApp:
-    """The one factory for the CLI and the tests, so tests run the real wiring.
+    """The one factory of the TUI, a client of session `session_name` (`launch_app` starts
+    one; `attach` follows one that runs).
     `placement` (`--machines`): the tree labels each process with its machine. A session on
     another machine (`session_host`) is drawn from the plan its server sends: the launch file
     need not be readable here (`path` only names it)."""

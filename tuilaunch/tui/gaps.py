@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from textual import on
 
-from ..client.remote_supervisor import RemoteSupervisor
+from ..client.port import LaunchPort
 from ..engine.run.session.session_dir import SessionError
 from .output_store import Gap, Line
 from .screens.output_panel import OutputPanel
@@ -36,14 +36,13 @@ class Gaps(SessionLink):
 
     async def _read_gap(self, marker: Line, reading_up: bool) -> None:
         gap = marker.gap
-        request = getattr(self.supervisor, "request", None)
-        if gap is None or request is None:
+        if gap is None or self.supervisor is None:
             return
         take = min(gap.count, GAP_READ)
         # reading upwards, the gap's newest lines come first: those next to the lines below
         skip = gap.skip + gap.count - take if reading_up else gap.skip
         try:
-            page = await self.engine.run(request("read_log", process=marker.process,
+            page = await self.engine.run(self.supervisor.request("read_log", process=marker.process,
                                                  start=gap.start, skip=skip, limit=take))
         except SessionError as exc:
             self.output_panel.gap_not_read(marker)  # asked again when next on screen
@@ -71,7 +70,7 @@ class Gaps(SessionLink):
         self.run_worker(self._read_stamps(supervisor, message), group="stamps",
                         exit_on_error=False)
 
-    async def _read_stamps(self, supervisor: RemoteSupervisor,
+    async def _read_stamps(self, supervisor: LaunchPort,
                            message: OutputPanel.StampsWanted) -> None:
         try:
             first, end, stamps = await self.engine.run(

@@ -58,17 +58,11 @@ class Inspector(Navigation):
 
     async def inspect(self, op: str, **fields: Any) -> Any:
         """A session request's result; raises SessionError with the server's message."""
-        request = getattr(self.supervisor, "request", None)
-        if request is None:
-            raise SessionError("the inspector needs a session server (tuilaunch FILE starts "
-                               "one)")
-        return await self.engine.run(request(op, **fields))
+        return await self.engine.run(self.client().request(op, **fields))
 
     def graph(self) -> GraphCalls:
         """The Services and Params tabs' graph: the session's, where the nodes run (this
-        process never loads rclpy); the bridge of the tests' in-process launch without one."""
-        if self.session_name is None:
-            return self.bridge()
+        process never loads rclpy)."""
         return self.session_graph
 
     def inspector_event(self, event: Event) -> None:

@@ -12,9 +12,8 @@ from typing import Any
 from rich.text import Text
 from textual.binding import Binding
 
-from ..client.remote_supervisor import RemoteSupervisor
+from ..client.port import LaunchPort
 from ..engine.errors import LaunchError
-from ..engine.run.process.readers import NO_TERMINAL
 from ..engine.run.supervisor.supervisor import Event
 from .key_order import KeyHold, hold_keys
 from .keys import edit_line, is_release, key_bytes
@@ -118,7 +117,7 @@ class NodeKeyboard(SessionLink):
 
     async def _start_typing(self, process: str, hold: KeyHold) -> None:
         try:
-            await self.engine.run(take_keyboard(self.supervisor, process))
+            await self.engine.run(take_keyboard(self.client(), process))
         except LaunchError as exc:
             self._refused(hold, str(exc))  # another client types into it, it just ended
             return
@@ -204,7 +203,7 @@ class NodeKeyboard(SessionLink):
             while self._keys_out:
                 data = "".join(self._keys_out)
                 self._keys_out.clear()
-                await self.engine.run(type_keys(self.supervisor, process, data))
+                await self.engine.run(type_keys(self.client(), process, data))
         except LaunchError as exc:
             self._keys_out.clear()
             self.notify(str(exc), severity="error")
@@ -231,7 +230,7 @@ class NodeKeyboard(SessionLink):
 
     async def _release(self, process: str) -> None:
         try:
-            await self.engine.run(release_keyboard(self.supervisor, process))
+            await self.engine.run(release_keyboard(self.client(), process))
         except LaunchError:
             pass  # the session is gone, and with it the keyboard
 
@@ -314,7 +313,7 @@ class NodeKeyboard(SessionLink):
 
     async def _show_command(self, process: str, release: Callable[[], None]) -> None:
         try:
-            command = await self.engine.run(command_of(self.supervisor, process))
+            command = await self.engine.run(command_of(self.client(), process))
             line = command.get("command_line")
             if not line:
                 self.notify(f"{process} has no command line (it could not be resolved)",
@@ -327,46 +326,30 @@ class NodeKeyboard(SessionLink):
             release()
 
 
-# --- the same calls on a session's server or an in-process supervisor --------------------
+# --- the calls on the session's server ----------------------------------------------------
 
-async def take_keyboard(supervisor: Any, process: str) -> None:
-    if isinstance(supervisor, RemoteSupervisor):
-        await supervisor.request("typing", process=process, on=True)
-        return
-    running = supervisor.running_process(process)
-    if running is None:
-        raise LaunchError(f"{process} is not running: there is nothing to type into")
-    if running.terminal is None:
-        raise LaunchError(f"{process} cannot be typed into: {NO_TERMINAL}")
+async def take_keyboard(supervisor: LaunchPort, process: str) -> None:
+    await supervisor.request("typing", process=process, on=True)
 
 
 RAN = ("running", "exited", "failed")
 """States of a process that was started: whether it had a terminal is known."""
 
 
-async def had_terminal(supervisor: Any, process: str) -> bool | None:
+async def had_terminal(supervisor: LaunchPort, process: str) -> bool | None:
     """Whether the process's last start gave it a terminal; None when that is not known
     here (run by another machine: taking its keyboard says what it can)."""
-    if isinstance(supervisor, RemoteSupervisor):
-        return (await command_of(supervisor, process)).get("terminal")
-    start = supervisor.started_with.get(process)
-    return None if start is None else start.tty
+    return (await command_of(supervisor, process)).get("terminal")
 
 
-async def release_keyboard(supervisor: Any, process: str) -> None:
-    if isinstance(supervisor, RemoteSupervisor):
-        await supervisor.request("typing", process=process, on=False)
+async def release_keyboard(supervisor: LaunchPort, process: str) -> None:
+    await supervisor.request("typing", process=process, on=False)
 
 
-async def type_keys(supervisor: Any, process: str, data: str) -> None:
-    if isinstance(supervisor, RemoteSupervisor):
-        await supervisor.request("input", process=process, data=data)
-    else:
-        supervisor.write_input(process, data.encode())
+async def type_keys(supervisor: LaunchPort, process: str, data: str) -> None:
+    await supervisor.request("input", process=process, data=data)
 
 
-async def command_of(supervisor: Any, process: str) -> dict[str, Any]:
-    if isinstance(supervisor, RemoteSupervisor):
-        status = await supervisor.request("status", resources=False)  # its command alone
-        return next((p for p in status["processes"] if p["id"] == process), {})
-    return dict(supervisor.command_of(process))
+async def command_of(supervisor: LaunchPort, process: str) -> dict[str, Any]:
+    status = await supervisor.request("status", resources=False)  # its command alone
+    return next((p for p in status["processes"] if p["id"] == process), {})

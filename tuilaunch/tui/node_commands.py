@@ -8,6 +8,7 @@ from typing import Any
 from textual import on
 from textual.widgets import Tree
 
+from ..client.port import Verb
 from .screens.dialogs import ConfirmScreen
 from .screens.tree_panel import RowData
 from .session_link import SessionLink
@@ -50,7 +51,7 @@ class NodeCommands(SessionLink):
                 return True if any(s not in ("running", "skipped") for s in states) else None
             return True if states else None
         if action == "detach":
-            return self.session_name is not None
+            return True
         if action == "lifecycle":
             if self.supervisor is None or self.tabs.active != "nodes":
                 return False
@@ -61,7 +62,7 @@ class NodeCommands(SessionLink):
             return True if self._lifecycle_step(str(parameters[0])) else None
         return True
 
-    def _command(self, verb: str) -> None:
+    def _command(self, verb: Verb) -> None:
         """Stop, restart or start the selection; a stop or restart of more than one
         process (the root, all nodes, a group) asks first, from a key as from the palette."""
         assert self.supervisor is not None
@@ -85,7 +86,7 @@ class NodeCommands(SessionLink):
             return
         self._run_command(verb, processes)
 
-    def _run_command(self, verb: str, processes: list[str]) -> None:
+    def _run_command(self, verb: Verb, processes: list[str]) -> None:
         assert self.supervisor is not None
         supervisor = self.supervisor
         tree = self.launch_tree
@@ -95,7 +96,7 @@ class NodeCommands(SessionLink):
                 self.asked_to_stop.add(process)
                 if supervisor.states.get(process) == "running":
                     tree.set_state(process, "stopping")
-            commands.append(getattr(supervisor, verb)(process))
+            commands.append(supervisor.command(verb, process))
         actions = self._actions_to_rerun(processes) if verb in ("restart", "start") else []
         self.run_worker(self._carry_out(commands, actions), group="commands",
                         exit_on_error=False)

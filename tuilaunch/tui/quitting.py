@@ -6,7 +6,6 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..client.remote_supervisor import RemoteSupervisor
 from .screens.dialogs import ConfirmScreen, QuitScreen
 from .session_link import SessionLink
 
@@ -18,7 +17,7 @@ class Quitting(SessionLink):
     def action_reconnect(self) -> None:
         """R: try the dropped link to the session's machine now, not at the next try."""
         supervisor = self.supervisor
-        if isinstance(supervisor, RemoteSupervisor) and supervisor.link_lost is not None:
+        if supervisor is not None and supervisor.link_lost is not None:
             self.engine.call(supervisor.retry_now)
             self.notify(f"reconnecting to {supervisor.host}")
         else:
@@ -28,8 +27,7 @@ class Quitting(SessionLink):
         if self._asking_to_quit():
             return  # q or ctrl+c again while the question is shown: one question
         running = self.running()
-        if self.session_name is not None and (self.is_web or self.read_only) and \
-                not self.quitting:
+        if (self.is_web or self.read_only) and not self.quitting:
             # a browser tab (tuilaunch serve) or a read-only view: q leaves, the launch
             # runs on, as closing the tab does
             self.action_detach()
@@ -52,7 +50,7 @@ class Quitting(SessionLink):
                 self.action_detach()
 
         # a session runs on without this window: detaching is one of the answers
-        self._ask_quit(QuitScreen(running, detach=self.session_name is not None), answered)
+        self._ask_quit(QuitScreen(running, detach=True), answered)
 
     def _asking_to_quit(self) -> bool:
         return any(getattr(screen, "quit_question", False) for screen in self.screen_stack)
@@ -67,8 +65,7 @@ class Quitting(SessionLink):
         says to stop it: a robot's launch is not stopped by closing a laptop's TUI. With
         the link down nothing can be asked of it, so it is left as it is."""
         supervisor = self.supervisor
-        if not running or (isinstance(supervisor, RemoteSupervisor)
-                           and supervisor.link_lost is not None):
+        if not running or (supervisor is not None and supervisor.link_lost is not None):
             self.action_detach()
             return
 
@@ -102,14 +99,14 @@ class Quitting(SessionLink):
         with --keep-on-hangup, runs on; otherwise everything stops, then the app leaves. The
         server does the stopping, so the launch is never left half-stopped."""
         self.terminal_lost = True
-        if self.session_name is not None and (self.keep_on_hangup or not self.owner):
+        if self.keep_on_hangup or not self.owner:
             self.action_detach()
         else:
             self.stop_all_and_exit("the terminal hung up (SIGHUP)")
 
     def terminated(self) -> None:
         """SIGTERM stops what this app started; a client that only attached just leaves."""
-        if self.session_name is not None and not self.owner:
+        if not self.owner:
             self.action_detach()
         else:
             # as ros2 launch, whose run is cancelled: the exit status says it did not end
@@ -119,8 +116,7 @@ class Quitting(SessionLink):
 
     def action_detach(self) -> None:
         """Leaves the session running; the supervisor worker then exits the app."""
-        if not isinstance(self.supervisor, RemoteSupervisor):
-            self.notify("only a session can be detached from", severity="warning")
+        if self.supervisor is None:  # not following the session yet: nothing to leave
             return
         self.detached = True
         self.run_worker(self.engine.run(self.supervisor.detach()), group="shutdown",

@@ -14,7 +14,6 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
 
 from rich.text import Text
 from textual import work
@@ -24,12 +23,11 @@ from textual.timer import Timer
 from textual.widgets import Static, TabbedContent
 from textual.worker import Worker, WorkerState
 
-from ..client.read_only import ReadOnlyBridge, ReadOnlyError
-from ..client.remote_supervisor import RemoteSupervisor
+from ..client.port import LaunchPort
+from ..client.read_only import ReadOnlyError
 from ..engine.errors import LaunchError
 from ..engine.plan.resolve import remove_default_params_dir
 from ..engine.plan.session import Preview, Session
-from ..engine.ros.bridge import RosBridge, in_plan
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.events import ExitCause, ProcessExited
@@ -40,9 +38,6 @@ from .respawn_countdown import RespawnCountdown
 from .screens.args_panel import ArgsPanel
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree
-
-if TYPE_CHECKING:
-    from ..engine.launcher import RosSupervisor
 
 # the UI's tick: events are taken from the engine this often; the output pane repaints at
 # most PANE_FPS times a second and only when what it shows changed, so a terminal over ssh
@@ -93,7 +88,7 @@ class SessionLink(App[int]):
 
     def __init__(self, session: Session, log_dir: Path, scrollback: int = 5000,
                  sigterm_timeout: float = 5.0, sigkill_timeout: float = 5.0,
-                 pane_fps: float = PANE_FPS, session_name: str | None = None,
+                 pane_fps: float = PANE_FPS, session_name: str = "",
                  owner: bool = False, keep_on_hangup: bool = False,
                  session_host: str | None = None,
                  remote_link: RemoteLink | None = None,
@@ -109,6 +104,7 @@ class SessionLink(App[int]):
         self.session = session
         self.log_dir = log_dir
         self.scrollback = scrollback
+        # launch's defaults, for the processes whose file sets no timeout of their own
         self.sigterm_timeout = sigterm_timeout
         self.sigkill_timeout = sigkill_timeout
         self.pane_fps = pane_fps
@@ -118,7 +114,7 @@ class SessionLink(App[int]):
         # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
-        self.supervisor: RosSupervisor | RemoteSupervisor | None = None
+        self.supervisor: LaunchPort | None = None
         # with a session name the launch runs in a session server and this app is a client
         self.session_name = session_name
         self.session_host = session_host  # the session runs there, reached over ssh
@@ -139,8 +135,6 @@ class SessionLink(App[int]):
         """Why the session ended when neither this client nor its terminal asked
         (`tuilaunch stop`, another client's quit): said on screen, then in the shell."""
         self.replaying = False  # showing what happened before this client came
-        self._bridge: RosBridge | None = None
-        self._bridge_lock = threading.Lock()
         # stops the operator asked for: their non-zero exit is not a failure
         self.asked_to_stop: set[str] = set()
         self.quit_started: float | None = None
@@ -153,15 +147,6 @@ class SessionLink(App[int]):
         self._start_lock = threading.Lock()  # the server comes up while the app may leave
         self._start_thread: threading.Thread | None = None
         self.quit_before_start = False  # left before following the launch: it is stopped
-
-    def bridge(self) -> RosBridge:
-        """The one rclpy context, shared by the supervisor's actions and the panels."""
-        with self._bridge_lock:  # the engine thread and the UI may both ask first
-            if self._bridge is None:
-                self._bridge = RosBridge()
-            if self.read_only:  # the Params and Services tabs set and call nothing
-                return cast(RosBridge, ReadOnlyBridge(self._bridge))
-            return self._bridge
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         """A command a read-only client refused: said in one line (the commands' workers
@@ -176,13 +161,10 @@ class SessionLink(App[int]):
         self.exit_status = await self.engine.run(self.supervisor.run(keep_alive=True))
         if self.signalled is not None:
             self.exit_status = self.exit_status or 1
-        if self._bridge is not None:
-            await asyncio.to_thread(self._bridge.close)
-            self._bridge = None
         self.drain()  # the last states and lines, then no more ticks during teardown
         self.drain_timer.stop()
         supervisor = self.supervisor
-        if isinstance(supervisor, RemoteSupervisor) and not (
+        if not (
                 self.quitting or self.detached or supervisor.detached or supervisor.lost
                 or supervisor.killed_server or self.terminal_lost):
             # the session ended and nobody here asked: say so before the screen goes
@@ -271,9 +253,6 @@ class SessionLink(App[int]):
         if self.supervisor is not None:
             self.kill_all()
             self.engine.stop()
-        if self._bridge is not None:
-            self._bridge.close()
-            self._bridge = None
 
     def kill_all(self) -> None:
         """SIGKILL what is left, on the engine's thread: the supervisor (its process table,
@@ -286,6 +265,13 @@ class SessionLink(App[int]):
             except Exception:
                 pass  # the loop ended meanwhile: nothing runs there any more
         self.supervisor.kill_all()
+
+    def client(self) -> LaunchPort:
+        """The session's client; LaunchError before the session is followed (a key pressed
+        while its server still comes up)."""
+        if self.supervisor is None:
+            raise LaunchError(f"session {self.session_name} is not followed yet")
+        return self.supervisor
 
     def running(self) -> list[str]:
         if self.supervisor is None:
@@ -340,8 +326,6 @@ class SessionLink(App[int]):
             elif event.kind == "relaunched" and self.supervisor is not None:
                 # any client's relaunch: the session already holds the new plan
                 tree.show_plan(self.session.plan, self.supervisor.states)
-                if self._bridge is not None:  # the Services and Params tabs' clients
-                    self._bridge.drop_clients(in_plan(self.session.plan))
                 self.describe_waiting()
                 if event.lines != self.own_relaunch:
                     self._relaunched_elsewhere(event.lines, (event.data or {}).get("edited"))
@@ -387,13 +371,11 @@ class SessionLink(App[int]):
             os.environ.get("ROS_HOME") or os.path.expanduser("~/.ros"), "log")
         return Path(base) / f"tuilaunch-{self.session_host}-{self.session_name}"
 
-    def over_link(self) -> RemoteSupervisor | None:
+    def over_link(self) -> LaunchPort | None:
         """The session's supervisor when an ssh link is between (the session is on another
         machine): what crosses it is then kept to what the screen shows."""
         supervisor = self.supervisor
-        if isinstance(supervisor, RemoteSupervisor) and supervisor.host is not None:
-            return supervisor
-        return None
+        return supervisor if supervisor is not None and supervisor.host is not None else None
 
     def inspector_event(self, event: Event) -> None:
         """A `rates`, `echo` or `resources` event (the Inspector mixin shows them)."""
@@ -491,7 +473,7 @@ class SessionLink(App[int]):
         # to the operator who gave the values (an attached client finds them in the all
         # nodes pane, as `launch` lines);
         # a few at most: a column of toasts would hide the screen
-        if self.session_name is None or self.owner:
+        if self.owner:
             for warning in warnings[:WARNINGS_SHOWN]:
                 self.notify(warning, title="warning", severity="warning", timeout=20)
             if len(warnings) > WARNINGS_SHOWN:
@@ -524,10 +506,8 @@ class SessionLink(App[int]):
             prefix = f"stopping {', '.join(still)} ({self.signal_stage()})... " if still \
                 else "stopped. "
         name = Path(self.session.plan.file).name
-        if self.session_name is not None:
-            where = f"{self.session_host}:" if self.session_host else ""
-            name = f"[{where}{self.session_name}{' read-only' if self.read_only else ''}] "\
-                f"{name}"
+        where = f"{self.session_host}:" if self.session_host else ""
+        name = f"[{where}{self.session_name}{' read-only' if self.read_only else ''}] {name}"
         link = self.over_link()
         if link is not None and link.link_lost:
             # what is shown is as it was when the link dropped; the short form first, so
@@ -544,17 +524,27 @@ class SessionLink(App[int]):
             self.status_bar.update(Text(line, no_wrap=True, overflow="ellipsis"))
 
     def signal_stage(self) -> str:
-        """Where the SIGINT -> SIGTERM -> SIGKILL escalation is, from the timeouts."""
+        """Where the SIGINT -> SIGTERM -> SIGKILL escalation is, from the timeouts of the
+        processes still running (the file's or `sigterm_timeout:=`, else launch's 5 s: the
+        server waits as long)."""
         if self.quit_started is None:
             return "SIGINT sent"
+        sigterm, sigkill = self._escalation()
         elapsed = time.monotonic() - self.quit_started
-        if elapsed < self.sigterm_timeout:
-            return f"SIGINT sent, SIGTERM in {self.sigterm_timeout - elapsed:.0f} s; q: kill now"
-        elapsed -= self.sigterm_timeout
-        if elapsed < self.sigkill_timeout:
-            return f"SIGTERM sent, SIGKILL in {self.sigkill_timeout - elapsed:.0f} s; " \
-                   "q: kill now"
+        if elapsed < sigterm:
+            return f"SIGINT sent, SIGTERM in {sigterm - elapsed:.0f} s; q: kill now"
+        elapsed -= sigterm
+        if elapsed < sigkill:
+            return f"SIGTERM sent, SIGKILL in {sigkill - elapsed:.0f} s; q: kill now"
         return "SIGKILL sent"
+
+    def _escalation(self) -> tuple[float, float]:
+        still = set(self.running())
+        waits = [(self.sigterm_timeout if p.sigterm_timeout is None else p.sigterm_timeout,
+                  self.sigkill_timeout if p.sigkill_timeout is None else p.sigkill_timeout)
+                 for p in self.session.plan.processes if p.id in still]
+        return (max(w[0] for w in waits), max(w[1] for w in waits)) if waits else \
+            (self.sigterm_timeout, self.sigkill_timeout)
 
     def update_detail(self) -> None:
         """The selected row in full, above the tree and the pane: state, pid, exit code,

@@ -31,6 +31,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import ContentSwitcher, Footer, Static, Tree
 
+from ...client.port import LaunchPort, Verb
 from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
@@ -300,7 +301,7 @@ class FleetApp(App[int]):
 
     # --- keys ------------------------------------------------------------------------------
 
-    def action_command(self, verb: str) -> None:
+    def action_command(self, verb: Verb) -> None:
         """s, r, t on the selected rows of the selected session, and nothing else."""
         member = self.current
         why = member.unavailable()
@@ -327,7 +328,7 @@ class FleetApp(App[int]):
             return
         self._command(member, verb, processes)
 
-    def _command(self, member: Member, verb: str, processes: list[str]) -> None:
+    def _command(self, member: Member, verb: Verb, processes: list[str]) -> None:
         supervisor = member.supervisor
         if supervisor is None or not processes:
             return
@@ -337,7 +338,7 @@ class FleetApp(App[int]):
                 member.asked_to_stop.add(process)
                 if supervisor.states.get(process) == "running":
                     member.tree.set_state(process, "stopping")
-            commands.append(getattr(supervisor, verb)(process))
+            commands.append(supervisor.command(verb, process))
         self._carry_out(member, verb, commands)
         self.update_detail()
 
@@ -363,7 +364,7 @@ class FleetApp(App[int]):
         self._read_stamps(member, supervisor, message)
 
     @work(group="stamps", exit_on_error=False)
-    async def _read_stamps(self, member: Member, supervisor: RemoteSupervisor,
+    async def _read_stamps(self, member: Member, supervisor: LaunchPort,
                            message: OutputPanel.StampsWanted) -> None:
         try:
             first, end, stamps = await self.engine.run(

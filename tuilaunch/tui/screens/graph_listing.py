@@ -38,6 +38,7 @@ class GraphListing:
     listing = ""  # what is listed: "nodes" asks graph().list_nodes()
     listed = False  # the list was asked for (the tab was shown)
     answered = False  # the graph answered once
+    failed = False  # the last listing failed, and the panel says why
     relist: Timer | None = None
 
     def show_listing(self, listing: Any, reload: bool) -> None:
@@ -82,6 +83,10 @@ class GraphListing:
             listing = await getattr(graph, f"list_{self.listing}")()
         except Exception as exc:  # a graph query must never take the panel down
             self.report(f"cannot list {self.listing}: {exc}", ok=False)
+            self.failed = True
             return
         self.answered = True
+        if self.failed:  # why the last one failed is no longer true
+            self.failed = False
+            self.report("", ok=True)
         self.show_listing(listing, reload)

@@ -291,10 +291,11 @@ class ClientHub:
         events = queue.take()
         if not events:
             return
-        states = self.states()
-        touched = {e.process: states[e.process] for e in events
-                   if e.process is not None and e.process in states
-                   and queue.sent_states.get(e.process) != states[e.process]}
+        # every state that changed since this client's last batch, not only those of the
+        # events' processes: a relaunch that disables a node makes it "skipped" with an
+        # event of the launch's, not of the node's
+        touched = {process: state for process, state in self.states().items()
+                   if queue.sent_states.get(process) != state}
         queue.sent_states.update(touched)  # a flood's batches do not repeat "running"
         batch: dict[str, Any] = {"type": "events",
                                  "events": [event_to_dict(e, queue.plain) for e in events]}

@@ -1,0 +1,86 @@
+"""Starting a session: its name reserved, its server started in a session of its own (no
+terminal), and waited for until it answers. The command line (`tuilaunch FILE`, `--detach`,
+`serve FILE`) and the TUI's first start go through here, so a TUI is always a client of a
+session server, as a user runs it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from ..engine.run.session import session_dir
+from ..engine.run.session.session_dir import SessionError
+
+_RESERVED: dict[str, int] = {}
+"""Names this command picked, and the descriptor of each one's lock, until the server it
+starts takes the lock over."""
+
+
+def session_name_for(path: str, name: str | None) -> str:
+    """The name a new session of `path` takes, reserved until its server holds it: `name`
+    as given, else the file's stem and the first free number (two launches started in the
+    same second take two names); a name a live or starting session holds is refused."""
+    if name:
+        lock = session_dir.reserve(session_dir.check_name(name))
+        if lock is None or session_dir.is_alive(name):
+            if lock is not None:
+                os.close(lock)
+            raise SessionError(f"a session named {name} is already running",
+                               hint="choose another --name, or tuilaunch attach " + name)
+    else:
+        name, lock = session_dir.new_name(session_dir.launch_stem(path))
+    _RESERVED[name] = lock
+    return name
+
+
+def start_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
+                  positional: list[str] | None = None,
+                  timeout: float = 60.0, placement: dict[str, Any] | None = None,
+                  ) -> tuple[str, subprocess.Popen[bytes]]:
+    """Starts a session server in its own session (no terminal) and waits until it answers.
+    `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv;
+    `placement` (`--machines`) is {"text", "path", "share"} as engine/server_main.py reads
+    it."""
+    if name is None or name not in _RESERVED:
+        name = session_name_for(path, name)
+    lock = _RESERVED.pop(name)
+    try:
+        return name, _start_server(path, arguments, name, log_dir, positional, timeout,
+                                   placement, lock)
+    finally:
+        os.close(lock)  # the server holds the name now (or it failed and lets it go)
+
+
+def _start_server(path: str, arguments: dict[str, str], name: str, log_dir: Path,
+                  positional: list[str] | None, timeout: float,
+                  placement: dict[str, Any] | None, lock: int) -> subprocess.Popen[bytes]:
+    log_dir.mkdir(parents=True, exist_ok=True)
+    server_log = log_dir / "session.log"
+    with open(server_log, "ab") as errors:
+        server = subprocess.Popen(
+            [sys.executable, "-m", "tuilaunch.engine.server_main", name,
+             os.path.abspath(path), str(log_dir), json.dumps(arguments),
+             json.dumps(positional or [path]),
+             *([json.dumps(placement)] if placement else [])],
+            stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True,
+            pass_fds=(lock,), env={**os.environ, session_dir.LOCK_FD_ENV: str(lock)})
+    deadline = time.monotonic() + timeout
+    # ours, not another server that took the name at the same instant
+    while (session_dir.read_info(name) or {}).get("pid") != server.pid or \
+            not session_dir.is_alive(name):
+        if server.poll() is not None:
+            text = server_log.read_text(errors="replace").strip()
+            # the server's own one-line error (and its hint), else its last words
+            reason = text.rsplit("tuilaunch: error: ", 1)[-1] if "tuilaunch: error: " in \
+                text else (text.splitlines() or ["no message"])[-1]
+            raise SessionError(f"session {name} did not start: {reason}")
+        if time.monotonic() > deadline:
+            server.kill()
+            raise SessionError(f"session {name} did not answer within {timeout:g} s")
+        time.sleep(0.02)
+    return server
