@@ -157,14 +157,13 @@ class NodeCommands(SessionLink):
         self._command("start")
 
     def _lifecycle_step(self, direction: str) -> tuple[str, str] | None:
-        """(process, transition) that `]` (up) or `[` (down) asks of the selected node."""
+        """(process, transition) that `]` (up) or `[` (down) asks of the selected node:
+        from the state it will be in once the steps asked before are done."""
         selected = self.selected()
         if self.supervisor is None or len(selected) != 1:
             return None
-        state = self.supervisor.lifecycle.states.get(selected[0])
-        steps = {"up": {"unconfigured": "configure", "inactive": "activate"},
-                 "down": {"active": "deactivate", "inactive": "cleanup"}}[direction]
-        transition = steps.get(state or "")
+        transition = self.lifecycle_steps.step(
+            selected[0], self.supervisor.lifecycle.states.get(selected[0]), direction)
         return (selected[0], transition) if transition else None
 
     def action_lifecycle(self, direction: str) -> None:
@@ -173,10 +172,13 @@ class NodeCommands(SessionLink):
             self.lifecycle_transition(*step)
 
     def lifecycle_transition(self, process: str, transition: str) -> None:
-        """Asks a lifecycle node for a transition; the result arrives as events."""
-        assert self.supervisor is not None
-        coroutine = self.supervisor.lifecycle.request(process, transition)
-        self.run_worker(self.engine.run(coroutine), group="commands", exit_on_error=False)
+        """Asks a lifecycle node for a transition, after those asked before; the result
+        arrives as events."""
+        supervisor = self.supervisor
+        assert supervisor is not None
+        self.run_worker(self.lifecycle_steps.take(process, transition, lambda: self.engine.run(
+            supervisor.lifecycle.request(process, transition))), group="commands",
+            exit_on_error=False)
 
     def action_all_output(self) -> None:
         tree = self.launch_tree

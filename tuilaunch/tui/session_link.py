@@ -33,6 +33,7 @@ from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.events import ExitCause, ProcessExited
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.supervisor.supervisor import Event
+from .lifecycle_steps import LifecycleSteps
 from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
 from .respawn_countdown import RespawnCountdown
 from .screens.args_panel import ArgsPanel
@@ -110,6 +111,7 @@ class SessionLink(App[int]):
         self.pane_fps = pane_fps
         self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
         self.respawn_countdown = RespawnCountdown()
+        self.lifecycle_steps = LifecycleSteps()
         self._countdown_timer: Timer | None = None
         # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
