@@ -20,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -210,15 +211,18 @@ def test_a_stopped_server_makes_no_command_hang(runtime, write):
     os.kill(server, signal.SIGSTOP)
     try:
         started = time.monotonic()
-        listed = run_cli("ls")
+        # the three asked at once: each waits out its own answer timeout, not the sum
+        with ThreadPoolExecutor() as pool:
+            listed, listed_json, asked = pool.map(lambda args: run_cli(*args), [
+                ("ls",), ("ls", "--json"), ("status", name)])
         assert listed.returncode == 0
         row = next(line.split() for line in listed.stdout.splitlines() if line.startswith(name))
         assert row[1] == str(server) and row[4] == "?"
         assert f"session {name} did not answer within 3 s: its server (pid {server}) is " \
             "stopped" in listed.stderr
         assert f"kill -CONT {server}" in listed.stderr
-        assert json.loads(tl("ls", "--json").stdout)[0]["answering"] is False
-        asked = run_cli("status", name)
+        assert listed_json.returncode == 0, listed_json.stderr
+        assert json.loads(listed_json.stdout)[0]["answering"] is False
         assert asked.returncode == 2 and "Traceback" not in asked.stderr
         assert asked.stderr.startswith(f"tuilaunch status: error: session {name} did not "
                                        "answer within 10 s")
