@@ -846,7 +846,9 @@ def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, 
     name = start_detached(write)
     before = pids(name)
     shutil.rmtree(runtime)
-    time.sleep(2.5)  # the server looks while the folder is away, too
+    # the server looks while the folder is away, too: it listens in the fallback meanwhile
+    wait_for(lambda: (ros_home / "tuilaunch" / f"{name}.sock").exists(),
+             what="the socket put back in the fallback folder")
     runtime.mkdir(mode=0o700)  # the next login
     wait_for(lambda: run_cli("status", name).returncode == 0)
     assert pids(name) == before
