@@ -22,6 +22,7 @@ from textual.widgets import Input
 from tuilaunch.client import remote_supervisor
 from tuilaunch.engine.run.event_buffer import EventBuffer
 from tuilaunch.engine.run.events import Event
+from tuilaunch.tui import session_link
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
@@ -608,6 +609,9 @@ def test_a_lost_link_fits_80_columns_says_each_attempt_and_a_hung_link_its_silen
     start_on(robot, write, "far")
     status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
     monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)  # only R reconnects
+    # the silence said after 2.5 s, not 5: still past the probe (remote_supervisor's
+    # PROBE_AFTER), which a hung link leaves unanswered
+    monkeypatch.setattr(session_link, "SILENCE_SHOWN", remote_supervisor.PROBE_AFTER + 0.5)
     config = machines.ssh_config.read_text()
 
     async def attached() -> None:
