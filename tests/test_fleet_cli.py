@@ -54,7 +54,7 @@ def started(machine: Machine, path: Path, name: str, offset: int) -> int:
     assert done.returncode == 0, done.stderr
     assert run_cli("wait", name, "ticker-1", "running", "--timeout", "30",
                    env=env).returncode == 0
-    return int(json.loads(run_cli("status", name, "--json", env=env).stdout)["pid"])
+    return machine.server_pid(name)
 
 
 def with_gone_host(machines: Machines) -> None:

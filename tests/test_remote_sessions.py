@@ -57,8 +57,7 @@ def start_on(machine: Machine, write, name: str) -> int:
     assert done.returncode == 0, done.stderr
     wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=there(machine))
     assert wait.returncode == 0, wait.stderr
-    status = json.loads(run_cli("status", name, "--json", env=there(machine)).stdout)
-    return int(status["pid"])
+    return machine.server_pid(name)
 
 
 def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
