@@ -11,7 +11,6 @@ import json
 import os
 import re
 import signal
-from concurrent.futures import ThreadPoolExecutor
 
 from textual.widgets import Static
 
@@ -23,7 +22,7 @@ from tuilaunch.tui.output_store import View
 from .conftest import run_cli, wait_for
 from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
 from .test_fleet_cli import start, start_all, with_gone_host
-from .test_sessions import Terminal
+from .test_sessions import Terminal, run_cli_together
 from .test_tui import until
 
 
@@ -120,8 +119,7 @@ def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Mach
 
     asyncio.run(watched())
     addresses = ("robot1:base", "robot2:arm")
-    with ThreadPoolExecutor() as pool:  # each one's own status, asked at once
-        answers = pool.map(lambda address: run_cli("status", address, "--json"), addresses)
+    answers = run_cli_together(*(("status", address, "--json") for address in addresses))
     states = {address: {p["id"]: p["state"] for p in json.loads(done.stdout)["processes"]}
               for address, done in zip(addresses, answers, strict=True)}
     assert states == {"robot1:base": {"ticker-1": "running", "quiet-2": "running"},

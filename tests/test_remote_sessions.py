@@ -29,7 +29,7 @@ from tuilaunch.tui.screens.dialogs import ConfirmScreen
 
 from .conftest import run_cli, wait_for
 from .sshd import Machine, Machines, alive, free_port, machines_fixture, proxies_on  # noqa: F401
-from .test_sessions import Terminal
+from .test_sessions import Terminal, run_cli_together
 from .test_tui import until
 
 LAUNCH = """
@@ -62,19 +62,20 @@ def start_on(machine: Machine, write, name: str) -> int:
 
 def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
     server = start_on(machines["robot1"], write, "far")
-    listed = run_cli("ls", "robot1", "--json")
+    # asked at once: none changes what the others see
+    listed, here, status, topics = run_cli_together(
+        ("ls", "robot1", "--json"), ("ls",), ("status", "robot1:far", "--json"),
+        ("topics", "robot1:far", "--json"))
     assert listed.returncode == 0, listed.stderr
     assert [s["name"] for s in json.loads(listed.stdout)] == ["far"]
     # not listed here: the session is robot1's
-    assert "far" not in run_cli("ls").stdout
+    assert "far" not in here.stdout
 
-    status = run_cli("status", "robot1:far", "--json")
     assert status.returncode == 0, status.stderr
     states = {p["id"]: p["state"] for p in json.loads(status.stdout)["processes"]}
     assert states == {"ticker-1": "running", "quiet-2": "running"}
 
     # the ROS inspector's commands too (no ROS node runs here: no topic of ours)
-    topics = run_cli("topics", "robot1:far", "--json")
     assert topics.returncode == 0, topics.stderr
     assert isinstance(json.loads(topics.stdout), list | dict)
 

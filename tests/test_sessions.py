@@ -76,6 +76,13 @@ def tl(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
     return done
 
 
+def run_cli_together(*commands: tuple[str, ...]) -> list[subprocess.CompletedProcess[str]]:
+    """Each command line run as run_cli runs it, all at once (they must not depend on one
+    another): what each did, in order."""
+    with ThreadPoolExecutor() as pool:
+        return list(pool.map(lambda args: run_cli(*args), commands))
+
+
 def status(name: str) -> dict:
     return json.loads(tl("status", name, "--json").stdout)
 
@@ -212,9 +219,8 @@ def test_a_stopped_server_makes_no_command_hang(runtime, write):
     try:
         started = time.monotonic()
         # the three asked at once: each waits out its own answer timeout, not the sum
-        with ThreadPoolExecutor() as pool:
-            listed, listed_json, asked = pool.map(lambda args: run_cli(*args), [
-                ("ls",), ("ls", "--json"), ("status", name)])
+        listed, listed_json, asked = run_cli_together(("ls",), ("ls", "--json"),
+                                                      ("status", name))
         assert listed.returncode == 0
         row = next(line.split() for line in listed.stdout.splitlines() if line.startswith(name))
         assert row[1] == str(server) and row[4] == "?"
