@@ -16,6 +16,7 @@ Use: `from .sshd import machines_fixture  # noqa: F401` in a test module, then t
 
 from __future__ import annotations
 
+import json
 import os
 import shlex
 import shutil
@@ -121,6 +122,12 @@ class Machine:
                 return True
         except OSError:
             return False
+
+    def server_pid(self, name: str) -> int:
+        """The pid of the server of session `name` here, as the info it wrote says (what
+        `tuilaunch status NAME` there says, without a command to run)."""
+        info = self.runtime / "tuilaunch" / f"{name}.json"
+        return int(json.loads(info.read_text())["pid"])
 
     def stop(self) -> None:
         """Ends what runs under this machine (sessions first, which stop their nodes), then

@@ -16,6 +16,8 @@ import signal
 import subprocess
 import sys
 import threading
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import pytest
 
@@ -34,12 +36,25 @@ def domain(offset: int) -> str:
 def start(machine: Machine, write, name: str, offset: int) -> int:
     """A session started on `machine` (as a user logged in there would), on a ROS domain of
     its own; its server's pid."""
+    return started(machine, write(LAUNCH), name, offset)
+
+
+def start_all(write, *sessions: tuple[Machine, str, int]) -> list[int]:
+    """Sessions started as `start` starts one (machine, name, domain offset), all at once:
+    their servers' pids, in order."""
+    path = write(LAUNCH)
+    with ThreadPoolExecutor() as pool:
+        return list(pool.map(lambda session: started(session[0], path, *session[1:]),
+                             sessions))
+
+
+def started(machine: Machine, path: Path, name: str, offset: int) -> int:
     env = {**there(machine), "ROS_DOMAIN_ID": domain(offset)}
-    done = run_cli(str(write(LAUNCH)), "--detach", "--name", name, env=env)
+    done = run_cli(str(path), "--detach", "--name", name, env=env)
     assert done.returncode == 0, done.stderr
     assert run_cli("wait", name, "ticker-1", "running", "--timeout", "30",
                    env=env).returncode == 0
-    return int(json.loads(run_cli("status", name, "--json", env=env).stdout)["pid"])
+    return machine.server_pid(name)
 
 
 def with_gone_host(machines: Machines) -> None:
@@ -50,8 +65,7 @@ def with_gone_host(machines: Machines) -> None:
 
 @pytest.mark.usefixtures("runtime")  # this computer's sessions: the test's own
 def test_ls_lists_every_host_in_one_table_and_says_the_one_it_cannot_reach(machines, write):
-    start(machines["robot1"], write, "base", 0)
-    start(machines["robot2"], write, "arm", 1)
+    start_all(write, (machines["robot1"], "base", 0), (machines["robot2"], "arm", 1))
     with_gone_host(machines)
 
     listed = run_cli("ls", "robot1", "gone", "robot2")
@@ -79,9 +93,9 @@ def test_ls_lists_every_host_in_one_table_and_says_the_one_it_cannot_reach(machi
 
 
 def test_status_and_stop_of_several_sessions_in_one_command(machines, write):
-    first = start(machines["robot1"], write, "base", 0)
-    second = start(machines["robot2"], write, "arm", 1)
-    third = start(machines["robot1"], write, "lidar", 0)
+    first, second, third = start_all(write, (machines["robot1"], "base", 0),
+                                     (machines["robot2"], "arm", 1),
+                                     (machines["robot1"], "lidar", 0))
 
     status = run_cli("status", "robot1:base", "robot2:arm", "--json")
     assert status.returncode == 0, status.stderr
@@ -117,8 +131,7 @@ def test_status_and_stop_of_several_sessions_in_one_command(machines, write):
 
 
 def test_logs_follow_of_two_sessions_prefixes_each_line_and_says_each_end(machines, write):
-    start(machines["robot1"], write, "base", 0)
-    start(machines["robot2"], write, "arm", 1)
+    start_all(write, (machines["robot1"], "base", 0), (machines["robot2"], "arm", 1))
     follow = subprocess.Popen(
         [sys.executable, "-m", "tuilaunch", "logs", "robot1:base", "robot2:arm", "ticker-1",
          "-f"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,

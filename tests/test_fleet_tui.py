@@ -21,8 +21,8 @@ from tuilaunch.tui.output_store import View
 
 from .conftest import run_cli, wait_for
 from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
-from .test_fleet_cli import start, with_gone_host
-from .test_sessions import Terminal
+from .test_fleet_cli import start, start_all, with_gone_host
+from .test_sessions import Terminal, run_cli_together
 from .test_tui import until
 
 
@@ -45,8 +45,7 @@ async def select(pilot, member: Member, process: str) -> None:
 
 def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Machines,
                                                                   write, monkeypatch):
-    base = start(machines["robot1"], write, "base", 0)
-    arm = start(machines["robot2"], write, "arm", 1)
+    base, arm = start_all(write, (machines["robot1"], "base", 0), (machines["robot2"], "arm", 1))
     # robot1's link comes back only when asked (R), so what follows surely happens while
     # it is down
     monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)
@@ -119,10 +118,10 @@ def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Mach
             await until(pilot, lambda: app.detached)
 
     asyncio.run(watched())
-    states = {}
-    for address in ("robot1:base", "robot2:arm"):
-        status = json.loads(run_cli("status", address, "--json").stdout)
-        states[address] = {p["id"]: p["state"] for p in status["processes"]}
+    addresses = ("robot1:base", "robot2:arm")
+    answers = run_cli_together(*(("status", address, "--json") for address in addresses))
+    states = {address: {p["id"]: p["state"] for p in json.loads(done.stdout)["processes"]}
+              for address, done in zip(addresses, answers, strict=True)}
     assert states == {"robot1:base": {"ticker-1": "running", "quiet-2": "running"},
                       "robot2:arm": {"ticker-1": "running", "quiet-2": "running"}}
     assert run_cli("stop", "robot1:base", "robot2:arm").returncode == 0
@@ -163,8 +162,7 @@ def test_a_robot_unreachable_at_start_is_a_retrying_root_and_the_others_open(
 
 
 def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
-    start(machines["robot1"], write, "base", 0)
-    start(machines["robot2"], write, "arm", 1)
+    start_all(write, (machines["robot1"], "base", 0), (machines["robot2"], "arm", 1))
     # what a fleet's 2 opens: the selected session's own TUI on its Args tab
     single = Terminal("attach", "robot1:base", "--tab", "args")
     try:

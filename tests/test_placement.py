@@ -28,6 +28,7 @@ import pytest
 from .conftest import run_cli, wait_for
 from .proc_tree import cmdline, descendants
 from .sshd import Machine, Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
+from .test_tui import until
 
 LAUNCH = """
 from launch import LaunchDescription
@@ -285,7 +286,7 @@ async def attached_tree_shows_machine(name: str, status: dict) -> None:
         assert "@" not in str(app.launch_tree.rows["solo-2"].label)
         assert len(ticks) > 2
         await pilot.press("d")  # detach: the launch runs on
-        await pilot.pause(0.5)
+        await until(pilot, lambda: app.detached)
     assert app.detached
 
 
@@ -553,7 +554,7 @@ async def tui_tries_the_machine_again(name: str, status: dict) -> None:
             line.text for line in app.store.lines(View(None)))
         assert tree.states["far-1"] == "failed"
         await pilot.press("d")
-        await pilot.pause(0.5)
+        await until(pilot, lambda: app.detached)
 
 
 SELF_NAMED = """

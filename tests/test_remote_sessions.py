@@ -22,13 +22,14 @@ from textual.widgets import Input
 from tuilaunch.client import remote_supervisor
 from tuilaunch.engine.run.event_buffer import EventBuffer
 from tuilaunch.engine.run.events import Event
+from tuilaunch.tui import session_link
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 
 from .conftest import run_cli, wait_for
 from .sshd import Machine, Machines, alive, free_port, machines_fixture, proxies_on  # noqa: F401
-from .test_sessions import Terminal
+from .test_sessions import Terminal, run_cli_together
 from .test_tui import until
 
 LAUNCH = """
@@ -56,25 +57,25 @@ def start_on(machine: Machine, write, name: str) -> int:
     assert done.returncode == 0, done.stderr
     wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=there(machine))
     assert wait.returncode == 0, wait.stderr
-    status = json.loads(run_cli("status", name, "--json", env=there(machine)).stdout)
-    return int(status["pid"])
+    return machine.server_pid(name)
 
 
 def test_session_commands_work_through_the_ssh_link(machines: Machines, write):
     server = start_on(machines["robot1"], write, "far")
-    listed = run_cli("ls", "robot1", "--json")
+    # asked at once: none changes what the others see
+    listed, here, status, topics = run_cli_together(
+        ("ls", "robot1", "--json"), ("ls",), ("status", "robot1:far", "--json"),
+        ("topics", "robot1:far", "--json"))
     assert listed.returncode == 0, listed.stderr
     assert [s["name"] for s in json.loads(listed.stdout)] == ["far"]
     # not listed here: the session is robot1's
-    assert "far" not in run_cli("ls").stdout
+    assert "far" not in here.stdout
 
-    status = run_cli("status", "robot1:far", "--json")
     assert status.returncode == 0, status.stderr
     states = {p["id"]: p["state"] for p in json.loads(status.stdout)["processes"]}
     assert states == {"ticker-1": "running", "quiet-2": "running"}
 
     # the ROS inspector's commands too (no ROS node runs here: no topic of ours)
-    topics = run_cli("topics", "robot1:far", "--json")
     assert topics.returncode == 0, topics.stderr
     assert isinstance(json.loads(topics.stdout), list | dict)
 
@@ -608,6 +609,9 @@ def test_a_lost_link_fits_80_columns_says_each_attempt_and_a_hung_link_its_silen
     start_on(robot, write, "far")
     status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
     monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)  # only R reconnects
+    # the silence said after 2.5 s, not 5: still past the probe (remote_supervisor's
+    # PROBE_AFTER), which a hung link leaves unanswered
+    monkeypatch.setattr(session_link, "SILENCE_SHOWN", remote_supervisor.PROBE_AFTER + 0.5)
     config = machines.ssh_config.read_text()
 
     async def attached() -> None:

@@ -20,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -73,6 +74,13 @@ def tl(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
     if check:
         assert done.returncode == 0, done.stderr
     return done
+
+
+def run_cli_together(*commands: tuple[str, ...]) -> list[subprocess.CompletedProcess[str]]:
+    """Each command line run as run_cli runs it, all at once (they must not depend on one
+    another): what each did, in order."""
+    with ThreadPoolExecutor() as pool:
+        return list(pool.map(lambda args: run_cli(*args), commands))
 
 
 def status(name: str) -> dict:
@@ -210,15 +218,17 @@ def test_a_stopped_server_makes_no_command_hang(runtime, write):
     os.kill(server, signal.SIGSTOP)
     try:
         started = time.monotonic()
-        listed = run_cli("ls")
+        # the three asked at once: each waits out its own answer timeout, not the sum
+        listed, listed_json, asked = run_cli_together(("ls",), ("ls", "--json"),
+                                                      ("status", name))
         assert listed.returncode == 0
         row = next(line.split() for line in listed.stdout.splitlines() if line.startswith(name))
         assert row[1] == str(server) and row[4] == "?"
         assert f"session {name} did not answer within 3 s: its server (pid {server}) is " \
             "stopped" in listed.stderr
         assert f"kill -CONT {server}" in listed.stderr
-        assert json.loads(tl("ls", "--json").stdout)[0]["answering"] is False
-        asked = run_cli("status", name)
+        assert listed_json.returncode == 0, listed_json.stderr
+        assert json.loads(listed_json.stdout)[0]["answering"] is False
         assert asked.returncode == 2 and "Traceback" not in asked.stderr
         assert asked.stderr.startswith(f"tuilaunch status: error: session {name} did not "
                                        "answer within 10 s")
@@ -842,7 +852,9 @@ def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, 
     name = start_detached(write)
     before = pids(name)
     shutil.rmtree(runtime)
-    time.sleep(2.5)  # the server looks while the folder is away, too
+    # the server looks while the folder is away, too: it listens in the fallback meanwhile
+    wait_for(lambda: (ros_home / "tuilaunch" / f"{name}.sock").exists(),
+             what="the socket put back in the fallback folder")
     runtime.mkdir(mode=0o700)  # the next login
     wait_for(lambda: run_cli("status", name).returncode == 0)
     assert pids(name) == before

@@ -60,7 +60,8 @@ def connect(name: str) -> socket.socket:
 
 def relay(sock: socket.socket, stdin: int, stdout: int) -> bytes | None:
     """Copies stdin -> sock and sock -> stdout until the session closes (then the last
-    bytes it sent: did it say it ended?), or stdout fails (None).
+    bytes it sent: did it say it ended?), or stdout fails or the client hung up first
+    (None: the session closing then is its answer to that, no death to explain).
 
     Blocking writes on purpose: when ssh's side stops reading, the proxy stops reading the
     session, and the server's bounded per-client queue takes over (it drops output for this
@@ -69,6 +70,7 @@ def relay(sock: socket.socket, stdin: int, stdout: int) -> bytes | None:
     come back until it closes."""
     selector = selectors.DefaultSelector()
     tail = b""
+    hung_up = False  # the client closed its sending side
     selector.register(stdin, selectors.EVENT_READ, "in")
     selector.register(sock, selectors.EVENT_READ, "out")
     try:
@@ -77,6 +79,7 @@ def relay(sock: socket.socket, stdin: int, stdout: int) -> bytes | None:
                 if key.data == "in":
                     data = _read(stdin)
                     if not data:
+                        hung_up = True
                         selector.unregister(stdin)
                         try:
                             sock.shutdown(socket.SHUT_WR)
@@ -93,7 +96,7 @@ def relay(sock: socket.socket, stdin: int, stdout: int) -> bytes | None:
                     except OSError:
                         data = b""
                     if not data:
-                        return tail
+                        return None if hung_up else tail
                     _write_all(stdout, data)
                     tail = (tail + data)[-TAIL:]
     except BrokenPipeError:

@@ -167,7 +167,12 @@ class ClientHub:
         if self.tasks:  # a client that stopped reading must not keep the server alive
             await asyncio.wait([*self.tasks], timeout=5.0)
         for writer in list(self.writers):
-            writer.close()
+            transport = writer.transport
+            if transport.get_write_buffer_size() > transport.get_write_buffer_limits()[1]:
+                # still full: a client that stopped reading, whose close would wait for it
+                transport.abort()
+            else:
+                writer.close()
         # each connection now reads its end and returns: wait for that, so none is left
         # for the loop's close to cancel
         if self.connections:

@@ -211,7 +211,9 @@ def launch_stem(path: str) -> str:
 
 
 def pid_alive(pid: int) -> bool:
-    """Whether a process (a session server) lives; our own unreaped child counts as gone."""
+    """Whether a process (a session server) lives; a zombie counts as gone: our own
+    unreaped child, or an orphan that PID 1 reaps late (a container's init may take a
+    second, or never)."""
     if pid <= 0:
         return False  # 0 and -1 would ask about a whole process group
     try:
@@ -221,6 +223,12 @@ def pid_alive(pid: int) -> bool:
     except PermissionError:
         return True
     try:  # our own child (the foreground case) is a zombie until reaped
-        return os.waitpid(pid, os.WNOHANG) == (0, 0)
+        if os.waitpid(pid, os.WNOHANG) != (0, 0):
+            return False
     except ChildProcessError:
-        return True
+        pass
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] \
+            not in ("Z", "X")
+    except (OSError, IndexError):
+        return True  # no /proc: what kill said
