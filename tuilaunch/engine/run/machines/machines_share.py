@@ -166,10 +166,12 @@ class MachinesCoordinator(Plugin):
         waiter: asyncio.Future[str | None] = asyncio.get_running_loop().create_future()
         share.waiters.append(waiter)
         self.supervisor.log(f"{name}: connecting again... ({process_id} runs there)", "WARN")
+        waiting = []  # the failed ones: failed again, with the new reason, if this fails too
         for proc in self.supervisor.plan.processes:
             if proc.machine == name and proc.enabled and \
                     self.supervisor.states.get(proc.id) in ("failed", "pending"):
-                # failed again with the new reason if this attempt fails too
+                if self.supervisor.states.get(proc.id) == "failed":
+                    waiting.append(proc.id)
                 self.supervisor.mirror(Event(
                     "log", proc.id, reason=f"{name}: connecting again...", level="WARN",
                     data={"detail": f"(connecting to {name} again...)"}), "pending")
@@ -181,6 +183,12 @@ class MachinesCoordinator(Plugin):
             share.wake.set()  # the next attempt now, not after its back-off
         outcome = await waiter
         if outcome is not None:
+            # this attempt's end, whichever way it came (the share's start failed, or a
+            # link that was up retries on its own): what it set waiting is failed again
+            # before the answer, so a status asked next agrees with it
+            for waited in waiting:
+                if self.supervisor.states.get(waited) == "pending":
+                    self.supervisor.mirror(Event("failed", waited, reason=outcome), "failed")
             raise LaunchError(f"{process_id} runs on {name}, tried again: {outcome}")
         if fresh and self.supervisor.plan.process(process_id).trigger is None:
             # its new share starts it: the answer says how that went, not "pending"
