@@ -211,7 +211,10 @@ def launch_stem(path: str) -> str:
 
 
 def pid_alive(pid: int) -> bool:
-    """Whether a process (a session server) lives; our own unreaped child counts as gone."""
+    """Whether a process (a session server) lives; a zombie counts as gone: our own child
+    (the foreground case) until we reap it, a detached server until its new parent does
+    (an init that reaps every second or two, as in some containers, held `tuilaunch stop`
+    that long)."""
     if pid <= 0:
         return False  # 0 and -1 would ask about a whole process group
     try:
@@ -220,7 +223,12 @@ def pid_alive(pid: int) -> bool:
         return False
     except PermissionError:
         return True
-    try:  # our own child (the foreground case) is a zombie until reaped
+    try:
         return os.waitpid(pid, os.WNOHANG) == (0, 0)
     except ChildProcessError:
+        pass
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            return stat.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except (OSError, IndexError):  # no /proc: kill() said it lives
         return True
