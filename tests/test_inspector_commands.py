@@ -16,6 +16,8 @@ import sys
 import textwrap
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -59,6 +61,12 @@ FAST, STRICT, BUSY, PLAIN, ANON = "fast-1", "strict-2", "busy-3", "plain-4", "in
 def tl(*args: str, timeout: float = 120, env: dict[str, str] | None = None)\
         -> subprocess.CompletedProcess[str]:
     return run_cli(*args, timeout=timeout, env=env)
+
+
+def together(*commands: tuple[str, ...]) -> list[subprocess.CompletedProcess[str]]:
+    """The commands run at the same time (their waits overlap): their results, in order."""
+    with ThreadPoolExecutor(len(commands)) as pool:
+        return list(pool.map(lambda args: tl(*args), commands))
 
 
 def ok(*args: str) -> str:
@@ -150,7 +158,19 @@ def test_topics_map_endpoints_to_processes_and_say_qos_problems(session):
 
 
 def test_hz_measures_a_known_rate_and_refuses_a_topic_nobody_publishes(session):
-    result = json.loads(ok("hz", session, "/insp/scan", "--duration", "3", "--json"))
+    # at once, as from several terminals: each measure is the server's own, and each refusal
+    # waits out the server's wait for a publisher
+    started = time.monotonic()
+    measured, windowed, chatter, orphan, nowhere, unknown, bad = together(
+        ("hz", session, "/insp/scan", "--duration", "3", "--json"),
+        ("hz", session, "/insp/scan", "--duration", "2", "-w", "5", "--json"),
+        ("hz", session, "insp/chatter", "--duration", "2"),
+        ("hz", session, "/insp/orphan", "--duration", "1"),
+        ("hz", session, "/insp/nowhere", "--duration", "1"),
+        ("hz", "nosuch", "/insp/scan"),
+        ("hz", session, "/insp/scan", "-w", "0"))
+    assert measured.returncode == 0, measured.stderr
+    result = json.loads(measured.stdout)
     assert result["topic"] == "/insp/scan"
     assert 10 < result["rate_hz"] < 30  # published at 20 Hz; loose: the machine is shared
     assert result["bytes_per_s"] > 0 and result["messages"] > 10
@@ -158,25 +178,22 @@ def test_hz_measures_a_known_rate_and_refuses_a_topic_nobody_publishes(session):
     assert result["window"] == result["messages"] - 1  # periods between the messages
     assert result["size_min"] <= result["size_mean"] <= result["size_max"]
     # -w N: the figures over the last N periods, as ros2 topic hz -w
-    assert json.loads(ok("hz", session, "/insp/scan", "--duration", "2", "-w", "5",
-                         "--json"))["window"] == 5
-    text = ok("hz", session, "insp/chatter", "--duration", "2")
-    lines = text.splitlines()
+    assert windowed.returncode == 0, windowed.stderr
+    assert json.loads(windowed.stdout)["window"] == 5
+    assert chatter.returncode == 0, chatter.stderr
+    lines = chatter.stdout.splitlines()
     assert lines[0].startswith("average rate: ")
     assert lines[1].startswith("\tmin: ") and " std dev: " in lines[1] and " window: " in \
         lines[1]
     assert lines[2].startswith("average bandwidth: ") and " messages" in lines[2]
     assert lines[3].startswith("\tmessage size mean: ")
-    started = time.monotonic()
-    error = one_line_error(tl("hz", session, "/insp/orphan", "--duration", "1"), "hz")
+    error = one_line_error(orphan, "hz")
     assert "topic /insp/orphan has no publisher (waited 5 s)" in error
-    missing = one_line_error(tl("hz", session, "/insp/nowhere", "--duration", "1"), "hz")
+    missing = one_line_error(nowhere, "hz")
     assert "no topic /insp/nowhere on the ROS graph" in missing
     assert time.monotonic() - started < 100  # never a hang (the deadlines are ~5 s each)
-    unknown = one_line_error(tl("hz", "nosuch", "/insp/scan"), "hz")
-    assert "no running session named nosuch" in unknown
-    bad = one_line_error(tl("hz", session, "/insp/scan", "-w", "0"), "hz")
-    assert "--window 0 is not a positive number of messages" in bad
+    assert "no running session named nosuch" in one_line_error(unknown, "hz")
+    assert "--window 0 is not a positive number of messages" in one_line_error(bad, "hz")
 
 
 def interrupted(args: list[str], ready: Callable[[str], bool]) -> tuple[int, str, str]:
@@ -235,11 +252,12 @@ def test_echo_runs_until_ctrl_c_and_honours_its_timeout(session):
                                       lambda out: out.count("---\n") >= 3)
     assert status == 130 and errors == "tuilaunch: interrupted\n"
     assert out.count("data: hello ") >= 3
+    orphan, timed = together(("echo", session, "/insp/orphan", "--timeout", "2"),
+                             ("echo", session, "/insp/chatter", "--timeout", "3"))
     # --timeout is the whole wait, the publisher's included
-    error = one_line_error(tl("echo", session, "/insp/orphan", "--timeout", "2"), "echo")
+    error = one_line_error(orphan, "echo")
     assert "topic /insp/orphan has no publisher (waited 2 s)" in error
     # no count: what came within the time is enough
-    timed = tl("echo", session, "/insp/chatter", "--timeout", "3")
     assert timed.returncode == 0 and "data: hello " in timed.stdout
 
 
@@ -256,6 +274,14 @@ def test_status_shows_cpu_memory_and_threads_per_process(session):
 
 
 def test_params_dump_then_load_round_trip(session, tmp_path):
+    with ThreadPoolExecutor(1) as pool:
+        # meanwhile: a node nobody runs, refused once the server's wait for it is over
+        ghost = pool.submit(tl, "params", session, "/ghost", "--dump")
+        round_trip(session, tmp_path)
+        assert "no node /ghost on the ROS graph" in one_line_error(ghost.result(), "params")
+
+
+def round_trip(session: str, tmp_path: Path) -> None:
     dumped = ok("params", session, FAST, "--dump")
     assert dumped.startswith("/insp/fast:\n  ros__parameters:\n")
     assert "label: lidar" in dumped and "p: 1.5" in dumped
@@ -269,17 +295,19 @@ def test_params_dump_then_load_round_trip(session, tmp_path):
     wrong.write_text("a: [")
     error = one_line_error(tl("params", session, FAST, "--load", str(wrong)), "params")
     assert f"parameter file {wrong}:" in error and "not valid YAML" in error
-    ghost = one_line_error(tl("params", session, "/ghost", "--dump"), "params")
-    assert "no node /ghost on the ROS graph" in ghost
     nobody = one_line_error(tl("params", session, "nobody", "--dump"), "params")
     assert "no node or process 'nobody'" in nobody
 
 
 def test_log_level_through_the_logger_service_or_says_how_to_restart(session):
-    ok("log-level", session, "/insp/busy", "debug")
-    eventually(lambda: "debug tick" in ok("logs", session, BUSY))
-    ok("log-level", session, BUSY, "info")
-    error = one_line_error(tl("log-level", session, PLAIN, "debug"), "log-level")
+    with ThreadPoolExecutor(1) as pool:
+        # meanwhile: a node with no logger service, refused once the server's wait for its
+        # service is over
+        plain = pool.submit(tl, "log-level", session, PLAIN, "debug")
+        ok("log-level", session, "/insp/busy", "debug")
+        eventually(lambda: "debug tick" in ok("logs", session, BUSY))
+        ok("log-level", session, BUSY, "info")
+        error = one_line_error(plain.result(), "log-level")
     assert "/insp/plain has no logger service" in error
     assert f"tuilaunch restart {session} {PLAIN} --log-level DEBUG" in error
     bad = one_line_error(tl("log-level", session, BUSY, "loud"), "log-level")

@@ -167,7 +167,10 @@ def test_no_process_outlives_tuilaunch(write, tmp_path, kill_leftovers, how):
 from launch.actions import ExecuteProcess
 def generate_launch_description():
     sl = SimpleLauncher()
-    sl.add_action(ExecuteProcess(cmd=['{script}'], name='stubborn'))
+    # launch's own escalation, shorter than its 5 s defaults: SIGTERM 1 s after the
+    # ignored SIGINT, SIGKILL 1 s after the ignored SIGTERM
+    sl.add_action(ExecuteProcess(cmd=['{script}'], name='stubborn', sigterm_timeout='1',
+                                 sigkill_timeout='1'))
     sl.node('tuilaunch_demos', 'no_such_exe')
     sl.node('tuilaunch_demos', 'listener')
     return sl.launch_description()
