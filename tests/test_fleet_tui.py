@@ -12,6 +12,7 @@ import os
 import re
 import signal
 
+import pytest
 from textual.widgets import Static
 
 from tuilaunch.client import remote_supervisor
@@ -22,7 +23,8 @@ from tuilaunch.tui.output_store import View
 from .conftest import run_cli, wait_for
 from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
 from .test_fleet_cli import start, start_all, with_gone_host
-from .test_sessions import Terminal, run_cli_together
+from .test_lifecycle_tui import LIFECYCLE
+from .test_sessions import Terminal, detached_with, run_cli_together, runtime, tl  # noqa: F401
 from .test_tui import until
 
 
@@ -34,6 +36,15 @@ def starts(member: Member, process: str) -> int:
 
 def ticks(member: Member) -> int:
     return sum(line.text.startswith("tick") for line in member.store.lines(View("ticker-1")))
+
+
+def notices(app: FleetApp) -> list[str]:
+    """What the app says in toasts from here on (each as it is said)."""
+    said: list[str] = []
+    notify = app.notify
+    app.notify = lambda message, **kw: (said.append(str(message)),  # type: ignore
+                                        notify(message, **kw))
+    return said
 
 
 async def select(pilot, member: Member, process: str) -> None:
@@ -52,10 +63,7 @@ def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Mach
 
     async def watched() -> None:
         app = FleetApp([("robot1", "base"), ("robot2", "arm")])
-        said: list[str] = []
-        notify = app.notify
-        app.notify = lambda message, **kw: (said.append(str(message)),  # type: ignore
-                                            notify(message, **kw))
+        said = notices(app)
         async with app.run_test(size=(100, 30)) as pilot:
             first, second = app.members
             await until(pilot, lambda: ticks(first) >= 3 and ticks(second) >= 3)
@@ -182,3 +190,46 @@ def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
     finally:
         terminal.close()
     assert run_cli("stop", "robot1:", "robot2:").returncode == 0
+
+
+@pytest.mark.usefixtures("runtime")  # a private session folder
+def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write):
+    """`]` and `[` in the fleet view, on two local sessions each with a lifecycle node: the
+    selected session's node steps (`[[` down to unconfigured, `]]` back up to active, typed
+    faster than it moves), the other session's stays active; where no step goes, one line."""
+    first, _ = detached_with(str(write(LIFECYCLE, "one.py")), "lc-1")
+    second, _ = detached_with(str(write(LIFECYCLE.replace("name='lc'", "name='lc2'"),
+                                        "two.py")), "lc2-1")
+
+    async def watched() -> None:
+        app = FleetApp([(None, first), (None, second)])
+        said = notices(app)
+        async with app.run_test(size=(100, 30)) as pilot:
+            one, two = app.members
+
+            def state(member: Member, process: str) -> str | None:
+                return None if member.supervisor is None else \
+                    member.supervisor.lifecycle.states.get(process)
+
+            await until(pilot, lambda: state(one, "lc-1") == "active"
+                        and state(two, "lc2-1") == "active")
+            await select(pilot, one, "lc-1")
+            await pilot.press("left_square_bracket", "left_square_bracket")
+            await until(pilot, lambda: state(one, "lc-1") == "unconfigured")
+            await until(pilot, lambda: "· unconfigured" in str(one.tree.rows["lc-1"].label))
+            await pilot.press("right_square_bracket", "right_square_bracket")
+            await until(pilot, lambda: state(one, "lc-1") == "active")
+            assert state(two, "lc2-1") == "active"  # the other robot's node: untouched
+            assert not [s for s in said if "refused" in s or "lc-1" in s]
+            # nothing above active: one line, no step
+            await until(pilot, lambda: "· active" in str(one.tree.rows["lc-1"].label))
+            await pilot.press("right_square_bracket")
+            await until(pilot, lambda: any(s.startswith("local:one-1: lc-1 is active: no step up")
+                                           for s in said))
+            await pilot.press("q")
+            await until(pilot, lambda: app.detached)
+
+    asyncio.run(watched())
+    for name, process in ((first, "lc-1"), (second, "lc2-1")):
+        assert tl("status", name, "--json").returncode == 0
+        tl("wait", name, process, "running", "--timeout", "30")  # q left both running

@@ -32,8 +32,25 @@ def test_two_steps_up_from_unconfigured_configure_then_activate_one_after_the_ot
         assert steps.step("lc", reported, "up") is None  # active: nothing above
         assert steps.step("lc", reported, "down") == "deactivate"
         await asyncio.gather(one, two)
-        # done: the node's own events say where it is again
+        # done, and the node's events not yet heard: still from where the steps led
+        assert steps.step("lc", "unconfigured", "down") == "deactivate"
+        # once they say it, from what they say
+        assert steps.step("lc", "active", "down") == "deactivate"
         assert steps.step("lc", "inactive", "up") == "activate"
 
     asyncio.run(scenario())
     assert asked == ["configure", "activate"]
+
+
+def test_a_refused_step_leaves_the_state_to_the_nodes_events():
+    steps = LifecycleSteps()
+
+    async def refused() -> bool:
+        return False
+
+    async def scenario() -> None:
+        assert steps.step("lc", "active", "down") == "deactivate"
+        assert await steps.take("lc", "deactivate", refused) is False
+        assert steps.step("lc", "active", "down") == "deactivate"  # not "cleanup"
+
+    asyncio.run(scenario())

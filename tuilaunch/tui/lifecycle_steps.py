@@ -27,7 +27,11 @@ class LifecycleSteps:
 
     def step(self, process: str, reported: str | None, direction: str) -> str | None:
         """The transition `direction` asks of `process`, whose events say `reported`."""
-        return STEPS[direction].get(self.ahead.get(process, reported or ""))
+        ahead = self.ahead.get(process)
+        if ahead is not None and ahead == reported and process not in self._pending:
+            del self.ahead[process]  # the node's events caught up: they say it from here
+            ahead = None
+        return STEPS[direction].get(ahead or reported or "")
 
     def take(self, process: str, transition: str,
              request: Callable[[], Awaitable[bool]]) -> Awaitable[bool]:
@@ -40,11 +44,16 @@ class LifecycleSteps:
 
     async def _in_turn(self, process: str, request: Callable[[], Awaitable[bool]]) -> bool:
         lock = self._locks.setdefault(process, asyncio.Lock())
+        made = False
         try:
             async with lock:
-                return await request()
+                made = await request()
+                return made
         finally:
             self._pending[process] -= 1
-            if not self._pending[process]:  # the node's events say where it is from here
+            if not self._pending[process]:
                 del self._pending[process]
-                self.ahead.pop(process, None)
+                if not made:  # refused or failed: where it is, its events say
+                    self.ahead.pop(process, None)
+                # made: the state it leads to holds until the node's events say it too (the
+                # answer may come before them), so a key typed meanwhile steps from there

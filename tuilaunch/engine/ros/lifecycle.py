@@ -278,8 +278,22 @@ class LifecycleTracker(Plugin):
             self._report(where, f"{proc.full_name} refused transition '{label}' ({origin}); "
                          f"it is {state or 'in an unknown state'}", "ERROR")
             return False
+        # the reply can come before the transition event that says the new state (a busy
+        # machine): answered once the state is known, so a step asked next (`]]`) is asked
+        # of the state it follows, not refused as asked of the one before
+        await self._reached(proc_id, GOALS.get(label))
         self._report(where, f"{proc.full_name}: {label} done ({origin})")
         return True
+
+    async def _reached(self, proc_id: str, goal: str | None, patience: float = 5.0) -> None:
+        """Until the node's transition events say `goal` (at most `patience` seconds, and
+        only for a node whose events are heard)."""
+        deadline = time.monotonic() + patience
+        while goal is not None and proc_id in self._heard \
+                and self.states.get(proc_id) != goal \
+                and self.supervisor.states.get(proc_id) in ALIVE \
+                and not self.supervisor.shutting_down and time.monotonic() < deadline:
+            await asyncio.sleep(0.05)  # its transition event ends the wait
 
     async def _settled(self, proc_id: str, patience: float | None = 5.0) -> str | None:
         """The node's state once the transition it is in is over (at most `patience`

@@ -22,6 +22,7 @@ import asyncio
 import contextlib
 import subprocess
 import sys
+from collections.abc import Awaitable
 from pathlib import Path
 
 from rich.text import Text
@@ -72,7 +73,8 @@ class FleetHelp(HelpScreen):
         for binding in FleetApp.BINDINGS:
             assert isinstance(binding, Binding)
             keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
-                "question_mark", "?").replace(",", ", ")
+                "question_mark", "?").replace("right_square_bracket", "]").replace(
+                "left_square_bracket", "[").replace(",", ", ")
             rows.append(f"  {keys:<9} {binding.tooltip or binding.description}")
         with VerticalScroll():
             yield Static("\n".join(rows))
@@ -95,6 +97,10 @@ class FleetApp(App[int]):
                 tooltip="Restart the selected node or group"),
         Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
         Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
+        Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up", show=False,
+                tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
+        Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
+                tooltip="Deactivate an active, clean up an inactive lifecycle node"),
         Binding("o", "open_session", "Open",
                 tooltip="The selected session in its own TUI: Args, Services, Params, "
                 "Topics (d there comes back)"),
@@ -301,14 +307,20 @@ class FleetApp(App[int]):
 
     # --- keys ------------------------------------------------------------------------------
 
-    def action_command(self, verb: Verb) -> None:
-        """s, r, t on the selected rows of the selected session, and nothing else."""
-        member = self.current
+    def _keys_reach(self, member: Member) -> bool:
+        """Whether keys can act on the member's session now; else one line says why."""
         why = member.unavailable()
         if why is not None or member.supervisor is None:
             self.notify(f"{member.label}: the session ended" if member.ended else
                         f"{member.label}: {why}; its nodes take no keys until it is back",
                         severity="warning")
+            return False
+        return True
+
+    def action_command(self, verb: Verb) -> None:
+        """s, r, t on the selected rows of the selected session, and nothing else."""
+        member = self.current
+        if not self._keys_reach(member) or member.supervisor is None:
             return
         processes = self.selected()
         node = member.tree.cursor_node
@@ -341,6 +353,42 @@ class FleetApp(App[int]):
             commands.append(supervisor.command(verb, process))
         self._carry_out(member, verb, commands)
         self.update_detail()
+
+    def action_lifecycle(self, direction: str) -> None:
+        """`]` (up), `[` (down) on the selected lifecycle node of the selected session, from
+        the state the steps typed before lead to (as in the single-session TUI)."""
+        member = self.current
+        supervisor = member.supervisor
+        if not self._keys_reach(member) or supervisor is None:
+            return
+        selected = self.selected()
+        states = supervisor.lifecycle.states
+        if len(selected) != 1 or selected[0] not in states:
+            self.notify(f"{member.label}: {']' if direction == 'up' else '['} steps one "
+                        "lifecycle node: select it", severity="warning")
+            return
+        process = selected[0]
+        transition = member.lifecycle_steps.step(process, states.get(process), direction)
+        if transition is None:
+            self.notify(f"{member.label}: {process} is {states.get(process)}: no step "
+                        f"{'up' if direction == 'up' else 'down'} from there",
+                        severity="warning")
+            return
+        # noted now, not in the worker: a `]` typed next picks the step after this one
+        asked = member.lifecycle_steps.take(process, transition, lambda: self.engine.run(
+            supervisor.lifecycle.request(process, transition)))
+        self._lifecycle(member, process, transition, asked)
+
+    @work(group="commands", exit_on_error=False)
+    async def _lifecycle(self, member: Member, process: str, transition: str,
+                         asked: Awaitable[bool]) -> None:
+        try:
+            done = await asked
+        except LaunchError as exc:
+            self.notify(f"{member.label}: {transition} {process}: {exc}", severity="error")
+            return
+        if not done:
+            self.notify(f"{member.label}: {process} refused {transition}", severity="error")
 
     @work(group="commands", exit_on_error=False)
     async def _carry_out(self, member: Member, verb: str, commands: list[object]) -> None:

@@ -18,6 +18,7 @@ from ...client.remote_supervisor import RemoteSupervisor
 from ...client.served_session import ServedSession
 from ...engine.run.event_buffer import EventBuffer
 from ...engine.run.supervisor.supervisor import Event
+from ..lifecycle_steps import LifecycleSteps
 from ..output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree
@@ -44,6 +45,8 @@ class Member:
     wake: asyncio.Event | None = None
     """Set by R: the next try to reach a session never reached, now."""
     asked_to_stop: set[str] = field(default_factory=set)
+    lifecycle_steps: LifecycleSteps = field(default_factory=LifecycleSteps)
+    """`]`, `[` on this session's lifecycle nodes, in the order typed."""
 
     @property
     def address(self) -> str:
