@@ -32,6 +32,7 @@ from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.events import ExitCause, ProcessExited
 from ..engine.run.machines.remote import RemoteLink
+from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.supervisor import Event
 from .lifecycle_steps import LifecycleSteps
 from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
@@ -269,10 +270,10 @@ class SessionLink(App[int]):
         self.supervisor.kill_all()
 
     def client(self) -> LaunchPort:
-        """The session's client; LaunchError before the session is followed (a key pressed
-        while its server still comes up)."""
+        """The session's client; SessionError (a LaunchError) before the session is
+        followed (a key pressed, a tab shown, while its server still comes up)."""
         if self.supervisor is None:
-            raise LaunchError(f"session {self.session_name} is not followed yet")
+            raise SessionError(f"session {self.session_name} is not followed yet")
         return self.supervisor
 
     def running(self) -> list[str]:
