@@ -19,6 +19,7 @@ from tuilaunch.client import remote_supervisor
 from tuilaunch.tui.fleet.app import FleetApp, FleetHelp
 from tuilaunch.tui.fleet.member import Member
 from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.interact_dialogs import CommandScreen
 
 from .conftest import run_cli, wait_for
 from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
@@ -196,7 +197,8 @@ def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
 def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write):
     """`]` and `[` in the fleet view, on two local sessions each with a lifecycle node: the
     selected session's node steps (`[[` down to unconfigured, `]]` back up to active, typed
-    faster than it moves), the other session's stays active; where no step goes, one line."""
+    faster than it moves), the other session's stays active; where no step goes, one line;
+    `c` shows the node's command line."""
     first, _ = detached_with(str(write(LIFECYCLE, "one.py")), "lc-1")
     second, _ = detached_with(str(write(LIFECYCLE.replace("name='lc'", "name='lc2'"),
                                         "two.py")), "lc2-1")
@@ -226,6 +228,11 @@ def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write):
             await pilot.press("right_square_bracket")
             await until(pilot, lambda: any(s.startswith("local:one-1: lc-1 is active: no step up")
                                            for s in said))
+            # c: the selected node's command line, as its session started it
+            await pilot.press("c")
+            await until(pilot, lambda: isinstance(app.screen, CommandScreen))
+            assert "lifecycle_talker" in app.screen.line and "__node:=lc" in app.screen.line
+            await pilot.press("escape")
             await pilot.press("q")
             await until(pilot, lambda: app.detached)
 

@@ -36,8 +36,10 @@ from ...client.port import LaunchPort, Verb
 from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
+from ..keyboard import command_of
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen, HelpScreen
+from ..screens.interact_dialogs import CommandScreen
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree, RowData
 from ..session_link import DRAIN_HZ, PANE_CHROME
@@ -97,6 +99,8 @@ class FleetApp(App[int]):
                 tooltip="Restart the selected node or group"),
         Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
         Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
+        Binding("c", "command_line", "Command", show=False,
+                tooltip="The exact command line the selected node was started with, to copy"),
         Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up", show=False,
                 tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
         Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
@@ -353,6 +357,33 @@ class FleetApp(App[int]):
             commands.append(supervisor.command(verb, process))
         self._carry_out(member, verb, commands)
         self.update_detail()
+
+    def action_command_line(self) -> None:
+        """c: the selected node's exact command line, as its session started it."""
+        member = self.current
+        supervisor = member.supervisor
+        if not self._keys_reach(member) or supervisor is None:
+            return
+        selected = self.selected()
+        if len(selected) != 1:
+            self.notify(f"{member.label}: c shows one node's command line: select it",
+                        severity="warning")
+            return
+        self._show_command(member, supervisor, selected[0])
+
+    @work(group="commands", exit_on_error=False)
+    async def _show_command(self, member: Member, supervisor: LaunchPort,
+                            process: str) -> None:
+        try:
+            line = (await self.engine.run(command_of(supervisor, process))).get("command_line")
+        except LaunchError as exc:
+            self.notify(f"{member.label}: {exc}", severity="error")
+            return
+        if not line:
+            self.notify(f"{member.label}: {process} has no command line (it could not be "
+                        "resolved)", severity="warning")
+            return
+        self.push_screen(CommandScreen(process, line))
 
     def action_lifecycle(self, direction: str) -> None:
         """`]` (up), `[` (down) on the selected lifecycle node of the selected session, from
