@@ -237,7 +237,9 @@ async def test_a_service_typed_with_the_tab_key_before_the_list_came_is_picked(t
         panel = app.query_one(ServicesPanel)
         await until(pilot, lambda: panel.selected is not None, limit=60)
         assert panel.selected == ("/tui6/enable", "std_srvs/srv/SetBool")
-        await until(pilot, lambda: app.focused is app.query_one("#field-data", Input))
+        # the form is mounted after the pick: its field has the focus once it is there
+        await until(pilot, lambda: isinstance(app.focused, Input)
+                    and app.focused.id == "field-data")
 
 
 def test_f_shows_a_programs_own_colours_and_not_a_loggers_level_colour():

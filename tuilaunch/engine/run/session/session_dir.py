@@ -128,21 +128,6 @@ def _handed_over(name: str) -> int | None:
     return fd
 
 
-def _claimed(name: str) -> bool:
-    """Whether a server (maybe still starting) holds the name."""
-    try:
-        fd = os.open(session_root() / f"{name}.lock", os.O_RDWR | os.O_CLOEXEC)
-    except OSError:
-        return False
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return True
-    finally:
-        os.close(fd)
-    return False
-
-
 def remove(name: str) -> None:
     root = session_root()
     for suffix in (".sock", ".json", ".lock"):
@@ -176,8 +161,16 @@ def live_sessions(clean: bool = True) -> list[str]:
             continue
         if is_alive(name):
             alive.append(name)
-        elif clean and not _claimed(name):
-            remove(name)
+        elif clean:
+            # removed while its lock is held here: a check that nobody holds it, then the
+            # removal, let a starter take the name in between and lose its lock file to
+            # the removal (then two starters held one name, seen under load)
+            fd = reserve(name)
+            if fd is not None:  # nobody holds it: a dead server's files
+                try:
+                    remove(name)
+                finally:
+                    os.close(fd)
     return sorted(alive, key=lambda n: (read_info(n) or {}).get("started", 0.0))
 
 
