@@ -74,13 +74,18 @@ async def launched(path: str, arguments: dict[str, str], tmp_path: Path,
                         except (LaunchError, ConnectionError):
                             pass  # it ended meanwhile (the test stopped it)
         finally:
-            server = app.server_process
-            if server is not None:
-                try:
-                    server.wait(timeout=60)  # it stops every process it started first
-                except subprocess.TimeoutExpired:
-                    end([server.pid])
-            end(servers_of(tmp_path))
+            reap(app.server_process, tmp_path)
+
+
+def reap(server: subprocess.Popen[bytes] | None, tmp_path: Path) -> None:
+    """A session server asked to stop, waited for (it stops every process it started
+    first), then whatever of the test's servers is left ended."""
+    if server is not None:
+        try:
+            server.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            end([server.pid])
+    end(servers_of(tmp_path))
 
 
 @contextmanager
@@ -94,11 +99,7 @@ def attached(path: str, arguments: dict[str, str], tmp_path: Path) -> Iterator[s
             yield name
         finally:
             send_once(name, {"id": 1, "op": "shutdown", "reason": "test over"})
-            try:
-                server.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                end([server.pid])
-            end(servers_of(tmp_path))
+            reap(server, tmp_path)
 
 
 @asynccontextmanager

@@ -10,10 +10,12 @@ from collections.abc import Callable
 from typing import Any
 
 from rich.text import Text
+from textual.app import App
 from textual.binding import Binding
 
 from ..client.port import LaunchPort
 from ..engine.errors import LaunchError
+from ..engine.run.engine_thread import EngineThread
 from ..engine.run.supervisor.supervisor import Event
 from .key_order import KeyHold, hold_keys
 from .keys import edit_line, is_release, key_bytes
@@ -313,17 +315,27 @@ class NodeKeyboard(SessionLink):
 
     async def _show_command(self, process: str, release: Callable[[], None]) -> None:
         try:
-            command = await self.engine.run(command_of(self.client(), process))
-            line = command.get("command_line")
-            if not line:
-                self.notify(f"{process} has no command line (it could not be resolved)",
-                            severity="warning")
-                return
-            self.push_screen(CommandScreen(process, line))
-        except LaunchError as exc:
+            await show_command_line(self, self.engine, self.client(), process)
+        except LaunchError as exc:  # not following the session yet
             self.notify(str(exc), severity="error")
         finally:
             release()
+
+
+async def show_command_line(app: App[Any], engine: EngineThread, port: LaunchPort,
+                            process: str, said: str = "") -> None:
+    """`c` (here and in a fleet's view): the process's exact command line in a dialog, or
+    one line saying why not, which starts with `said` (a fleet's session label)."""
+    try:
+        line = (await engine.run(command_of(port, process))).get("command_line")
+    except LaunchError as exc:
+        app.notify(f"{said}{exc}", severity="error")
+        return
+    if not line:
+        app.notify(f"{said}{process} has no command line (it could not be resolved)",
+                   severity="warning")
+        return
+    app.push_screen(CommandScreen(process, line))
 
 
 # --- the calls on the session's server ----------------------------------------------------

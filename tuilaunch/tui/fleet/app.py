@@ -36,10 +36,9 @@ from ...client.port import LaunchPort, Verb
 from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
-from ..keyboard import command_of
+from ..keyboard import show_command_line
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen, HelpScreen
-from ..screens.interact_dialogs import CommandScreen
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree, RowData
 from ..session_link import DRAIN_HZ, PANE_CHROME
@@ -374,16 +373,7 @@ class FleetApp(App[int]):
     @work(group="commands", exit_on_error=False)
     async def _show_command(self, member: Member, supervisor: LaunchPort,
                             process: str) -> None:
-        try:
-            line = (await self.engine.run(command_of(supervisor, process))).get("command_line")
-        except LaunchError as exc:
-            self.notify(f"{member.label}: {exc}", severity="error")
-            return
-        if not line:
-            self.notify(f"{member.label}: {process} has no command line (it could not be "
-                        "resolved)", severity="warning")
-            return
-        self.push_screen(CommandScreen(process, line))
+        await show_command_line(self, self.engine, supervisor, process, f"{member.label}: ")
 
     def action_lifecycle(self, direction: str) -> None:
         """`]` (up), `[` (down) on the selected lifecycle node of the selected session, from
