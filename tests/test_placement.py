@@ -25,6 +25,8 @@ from pathlib import Path
 
 import pytest
 
+from tuilaunch.tui.app import TuiLaunchApp, make_app
+
 from .conftest import run_cli, wait_for
 from .proc_tree import cmdline, descendants
 from .sshd import Machine, Machines, alive, free_port, keygen, machines_fixture  # noqa: F401
@@ -264,15 +266,21 @@ def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, 
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
 
 
-async def attached_tree_shows_machine(name: str, status: dict) -> None:
+def placed_app(name: str, status: dict) -> TuiLaunchApp:
+    """`tuilaunch attach NAME` of a placed session (`status`: its `status --json`): the tree
+    labels each process with its machine."""
     from tuilaunch.engine.plan.machines import placement_from_text
-    from tuilaunch.tui.app import make_app
-    from tuilaunch.tui.output_store import View
 
     placed = status["placement"]
-    app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
-                   session_name=name, placement=placement_from_text(placed["text"],
-                                                                    placed["path"]))
+    return make_app(status["file"], status["arguments"], Path(status["log_dir"]),
+                    session_name=name, placement=placement_from_text(placed["text"],
+                                                                     placed["path"]))
+
+
+async def attached_tree_shows_machine(name: str, status: dict) -> None:
+    from tuilaunch.tui.output_store import View
+
+    app = placed_app(name, status)
     async with app.run_test(size=(120, 30)) as pilot:
         assert app.supervisor is not None
         for _ in range(400):
@@ -519,14 +527,9 @@ def test_a_machine_off_at_the_start_is_tried_again_by_a_restart(setup, machines)
 
 
 async def tui_tries_the_machine_again(name: str, status: dict) -> None:
-    from tuilaunch.engine.plan.machines import placement_from_text
-    from tuilaunch.tui.app import make_app
     from tuilaunch.tui.output_store import View
 
-    placed = status["placement"]
-    app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
-                   session_name=name, placement=placement_from_text(placed["text"],
-                                                                    placed["path"]))
+    app = placed_app(name, status)
     async with app.run_test(size=(160, 30)) as pilot:
         tree = app.launch_tree
         for _ in range(400):
