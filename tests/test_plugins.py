@@ -11,7 +11,7 @@ import pytest
 
 from tuilaunch.engine.plan.model import ProcessPlan
 from tuilaunch.engine.plan.session import Session
-from tuilaunch.engine.run.events import Event
+from tuilaunch.engine.run.events import Event, Log
 from tuilaunch.engine.run.plugins import Clients, Handler, Plugin
 from tuilaunch.engine.run.session import session_dir
 from tuilaunch.engine.run.session.protocol import decode, encode
@@ -62,7 +62,7 @@ class Greeter(Plugin):
     def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
         async def greet(message: dict[str, Any]) -> Any:
             process = find_process(str(message.get("process")))
-            self.supervisor.emit(Event("log", process, reason=f"hello {process}"))
+            self.supervisor.emit(Log(process, reason=f"hello {process}"))
             return {"greeted": process}
 
         return {"greet": greet}

@@ -21,7 +21,7 @@ from textual.widgets import Input
 
 from tuilaunch.client import remote_supervisor
 from tuilaunch.engine.run.event_buffer import EventBuffer
-from tuilaunch.engine.run.events import Event
+from tuilaunch.engine.run.events import Event, Output
 from tuilaunch.tui import session_link
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
@@ -358,9 +358,9 @@ def test_a_fair_buffer_drops_the_loudest_process_lines_not_the_oldest():
     beside a flood; the unfair buffer (a local display's) keeps only the newest."""
     for fair, quiet_kept in ((True, ["hello"]), (False, [])):
         buffer = EventBuffer(max_lines=10, fair=fair)
-        buffer(Event("output", "quiet", lines=["hello"]))
+        buffer(Output("quiet", lines=["hello"]))
         for i in range(50):
-            buffer(Event("output", "loud", lines=[f"x{i}"]))
+            buffer(Output("loud", lines=[f"x{i}"]))
         events = buffer.drain()
         kept = {name: [text for e in events if e.kind == "output" and e.process == name
                        for text in e.lines] for name in ("quiet", "loud")}
@@ -374,12 +374,12 @@ def test_a_batch_carries_each_run_of_a_process_lines_once():
     """Reads of one pipe in a row are one event in a batch (one header over the link), in
     order; another process's output or a state event between them keeps them apart."""
     buffer = EventBuffer()
-    buffer(Event("output", "a", stream="stdout", lines=["1"]))
-    buffer(Event("output", "a", stream="stdout", lines=["2", "3"]))
-    buffer(Event("output", "a", stream="stderr", lines=["oops"]))
-    buffer(Event("output", "b", stream="stdout", lines=["b1"]))
+    buffer(Output("a", stream="stdout", lines=["1"]))
+    buffer(Output("a", stream="stdout", lines=["2", "3"]))
+    buffer(Output("a", stream="stderr", lines=["oops"]))
+    buffer(Output("b", stream="stdout", lines=["b1"]))
     buffer(Event("exited", "b", code=0))
-    buffer(Event("output", "a", stream="stderr", lines=["again"]))
+    buffer(Output("a", stream="stderr", lines=["again"]))
     events = buffer.drain()
     assert [(e.kind, e.process, e.stream, e.lines) for e in events] == [
         ("output", "a", "stdout", ["1", "2", "3"]), ("output", "a", "stderr", ["oops"]),

@@ -28,6 +28,7 @@ from textual.widgets import Input
 
 from tuilaunch.client.remote_supervisor import RemoteSupervisor
 from tuilaunch.engine.plan.session import Session
+from tuilaunch.engine.run.events import ProcessExited, Started, Stopping
 from tuilaunch.engine.run.session import session_dir
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import LEVELS, View
@@ -579,21 +580,21 @@ def test_the_server_refuses_another_users_connection(runtime, write):
 
 
 def test_a_client_queue_is_bounded_and_cuts_loose_a_client_that_reads_nothing():
+    from tuilaunch.engine.run.events import Output, Respawning
     from tuilaunch.engine.run.session.session_server import CLIENT_MAX_EVENTS, ClientQueue
-    from tuilaunch.engine.run.supervisor.supervisor import Event
 
     async def scenario() -> None:
         cut: list[bool] = []
         queue = ClientQueue(max_lines=100, on_overflow=lambda: cut.append(True))
         for i in range(50):
-            queue(Event("output", "flood", stream="stdout", lines=[f"{i} {n}" for n in
+            queue(Output("flood", stream="stdout", lines=[f"{i} {n}" for n in
                                                                    range(10)]))
         events = queue.take()
         assert events[0].kind == "dropped" and events[0].code == 400  # counted, not kept
         assert sum(len(e.lines) for e in events[1:]) == 100
         assert events[-1].lines[-1] == "49 9"  # the newest lines are the ones kept
         for _ in range(CLIENT_MAX_EVENTS + 5):
-            queue(Event("respawning", "crashy"))
+            queue(Respawning("crashy"))
         assert cut == [True] and queue.overflowed
 
     asyncio.run(scenario())
@@ -921,4 +922,74 @@ def test_a_client_is_sent_only_the_pane_it_shows_and_reads_the_others_when_shown
         await task
 
     asyncio.run(scenario())
+    tl("stop", name)
+
+
+SLOW_STOP = """
+import signal, sys, time, os
+from pathlib import Path
+def on_sigint(*_):
+    # a node saving its state on SIGINT: it ends once the test lets it
+    while not Path(os.environ["RELEASE"]).exists():
+        time.sleep(0.05)
+    sys.exit(0)
+signal.signal(signal.SIGINT, on_sigint)
+print("up", flush=True)
+while True:
+    signal.pause()
+"""
+
+
+def test_a_stop_in_progress_is_stopping_for_every_client_and_for_status(runtime, write,
+                                                                          tmp_path):
+    """The engine says when a stop begins: another client's tree, `status` and `wait`
+    see "stopping" (with its pid) until the process has ended, whoever asked."""
+    release = tmp_path / "release"
+    node = write(SLOW_STOP, "slow_node.py")
+    path = write(f"""
+        from simple_launch import SimpleLauncher
+        from launch.actions import ExecuteProcess
+        def generate_launch_description():
+            sl = SimpleLauncher()
+            sl.add_action(ExecuteProcess(name='slow', cmd=[{sys.executable!r}, {str(node)!r}],
+                                         additional_env={{'RELEASE': {str(release)!r}}},
+                                         sigterm_timeout='120'))
+            return sl.launch_description()
+        """)
+    name, _ = detached_with(str(path), "slow-1")
+    old = pids(name)["slow-1"]
+
+    async def scenario() -> None:
+        other = await RemoteSupervisor.open(name, Session(str(path), {}))
+        seen: list = []
+        other.subscribe(seen.append)
+        task = asyncio.ensure_future(other.run())
+        restart = await asyncio.create_subprocess_exec(
+            sys.executable, "-m", "tuilaunch", "restart", name, "slow-1")
+        waited = await asyncio.to_thread(tl, "wait", name, "slow-1", "stopping",
+                                         "--timeout", "60")
+        assert waited.returncode == 0
+        now = {p["id"]: p for p in (await asyncio.to_thread(status, name))["processes"]}
+        assert (now["slow-1"]["state"], now["slow-1"]["pid"]) == ("stopping", old)
+        for _ in range(600):
+            if other.states.get("slow-1") == "stopping":
+                break
+            await asyncio.sleep(0.05)
+        assert other.states["slow-1"] == "stopping"
+        release.touch()
+        assert await asyncio.wait_for(restart.wait(), 120) == 0
+        for _ in range(600):
+            if other.states.get("slow-1") == "running" and any(
+                    isinstance(e, Started) and e.process == "slow-1" for e in seen):
+                break
+            await asyncio.sleep(0.05)
+        life = [type(e) for e in seen if e.process == "slow-1" and isinstance(
+            e, (Stopping, ProcessExited, Started))]
+        assert life == [Stopping, ProcessExited, Started]
+        assert [e.pid for e in seen if isinstance(e, Stopping)] == [old]
+        await other.detach()
+        await task
+
+    asyncio.run(scenario())
+    assert status(name)["processes"][0]["state"] == "running"
     tl("stop", name)

@@ -302,12 +302,12 @@ def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
 
 def test_display_buffer_drops_oldest_lines_and_counts_them_but_never_other_events():
     from tuilaunch.engine.run.event_buffer import EventBuffer
-    from tuilaunch.engine.run.supervisor.supervisor import Event
+    from tuilaunch.engine.run.events import Event, Output, Started
 
     buffer = EventBuffer(max_lines=1000)
-    buffer(Event("started", "flood-1", pid=1))
+    buffer(Started("flood-1", pid=1))
     for start in range(0, 100_000, 100):
-        buffer(Event("output", "flood-1", stream="stdout",
+        buffer(Output("flood-1", stream="stdout",
                      lines=[str(n) for n in range(start, start + 100)]))
     buffer(Event("exited", "flood-1", code=0))
     events = buffer.drain()

@@ -21,7 +21,7 @@ from textual.widgets import Checkbox, DataTable, Input
 from tuilaunch.client.link import send_once
 from tuilaunch.client.session_start import start_session
 from tuilaunch.engine.errors import LaunchError
-from tuilaunch.engine.run.events import Event
+from tuilaunch.engine.run.events import LifecycleChanged
 from tuilaunch.tui.app import TuiLaunchApp, launch_app, make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.args_panel import ArgsPanel
@@ -515,7 +515,7 @@ async def test_an_engine_event_after_the_screens_closed_is_no_error(write, tmp_p
         async def then_an_event() -> None:
             await close_all()
             assert not app.screen_stack
-            app.show_events([Event("lifecycle", "stubborn-1", reason="finalized")])
+            app.show_events([LifecycleChanged("stubborn-1", reason="finalized")])
             delivered.append(True)
 
         app._close_all = then_an_event  # type: ignore[method-assign]

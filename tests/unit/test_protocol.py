@@ -4,10 +4,22 @@ the command line and ssh: tests/test_protocol_version.py."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 
 from tuilaunch import __version__
-from tuilaunch.engine.run.events import Event, ExitCause, ProcessExited
+from tuilaunch.engine.run.events import (
+    EVENT_TYPES,
+    Event,
+    ExitCause,
+    Output,
+    ProcessExited,
+    Respawning,
+    Started,
+    Stopping,
+    event_of,
+)
 from tuilaunch.engine.run.session.protocol import (
     PROTOCOL_VERSION,
     Stamps,
@@ -51,13 +63,33 @@ def test_something_else_than_a_greeting_is_refused():
 
 
 @pytest.mark.parametrize("event", [
-    Event("started", "talker-1", pid=42),
-    Event("output", "talker-1", lines=["a", "b"], stream="stderr"),
-    Event("state", "talker-1", data={"state": "active"}),
+    Started("talker-1", pid=42),
+    Output("talker-1", lines=["a", "b"], stream="stderr"),
+    Stopping("talker-1", pid=42),
+    Respawning("talker-1", reason="try 1 in 2 s", data={"try": 1, "delay": 2.0}),
+    Event("state", "talker-1", data={"state": "active"}),  # a kind no class knows
 ])
 def test_events_come_back_as_they_went(event: Event):
     back = event_from_dict(decode(encode(event_to_dict(event))))
-    assert back == Event(**{**event.__dict__, "time": round(event.time, 3)})
+    assert type(back) is type(event)
+    assert back == replace(event, time=round(event.time, 3))
+
+
+@pytest.mark.parametrize("kind", sorted(EVENT_TYPES))
+def test_every_kind_comes_back_as_its_own_class(kind: str):
+    made = event_of(kind, process="p", reason="why", data={"requested": True})
+    back = event_from_dict(decode(encode(event_to_dict(made))))
+    assert type(back) is EVENT_TYPES[kind] and back.kind == kind
+    assert back.process == "p"
+    # a dropped count's sentence is the client's to write: the wire leaves it out
+    assert back.reason == (None if kind == "dropped" else "why")
+
+
+def test_an_event_class_is_made_without_its_kind():
+    """The first argument of every event class is its process, never its kind."""
+    assert Stopping("a").process == "a" and Stopping("a").kind == "stopping"
+    with pytest.raises(TypeError):
+        Started(kind="output")  # type: ignore[call-arg]
 
 
 def test_stamps_go_apart_and_come_back():

@@ -299,7 +299,7 @@ def stop_session(address: str | None, said: str = "tuilaunch stop: ") -> str:
         subscribed = link.request("subscribe", max_lines=1,
                                   kinds=["exited", "failed", "log", "ended"])
         waiting = {p for p, state in (subscribed.get("states") or {}).items()
-                   if state in ("running", "respawning")}
+                   if state in ("running", "stopping", "respawning")}
         asking = link.send("shutdown", reason="tuilaunch stop")  # its reply comes at the end
         asked = time.monotonic()
         notice = asked + STOP_NOTICE

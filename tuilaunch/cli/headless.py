@@ -21,10 +21,22 @@ from typing import TYPE_CHECKING, TextIO, cast
 
 from ..engine.launcher import make_supervisor
 from ..engine.plan.model import Plan
-from ..engine.run.events import ProcessExited
+from ..engine.run.events import (
+    ActionFinished,
+    ComponentReport,
+    Event,
+    Failed,
+    LifecycleChanged,
+    Log,
+    Output,
+    ProcessExited,
+    Respawning,
+    Shutdown,
+    Started,
+    Stopping,
+)
 from ..engine.run.process.output import strip_ansi
 from ..engine.run.supervisor.stopping import CTRL_C_REASON
-from ..engine.run.supervisor.supervisor import Event
 from .stdout_writer import BackgroundWriter, LineJoiner
 
 if TYPE_CHECKING:
@@ -93,7 +105,7 @@ class Printer:
         if not text:
             return
         if self.writer is not None:
-            self.writer.write(text, len(event.lines) if event.kind == "output" else 0)
+            self.writer.write(text, len(event.lines) if isinstance(event, Output) else 0)
             return
         try:
             self.out.write(text)
@@ -115,7 +127,7 @@ class Printer:
                 f"(they are in the log files{where})\n")
 
     def format(self, event: Event) -> str:
-        if event.kind == "output":
+        if isinstance(event, Output):
             if not event.lines:
                 return ""  # an unfinished line shown by a TUI: printed once it is whole
             if event.stream in self.unshown.get(event.process or "", ()):
@@ -123,28 +135,30 @@ class Printer:
             form = self.formats.get(event.process or "")
             text = self._prefixed(event) if form is None else self._formatted(form, event)
             return text if self.colour or "\x1b" not in text else strip_ansi(text)
-        if event.kind in ("started", "finished") and event.pid is None:
+        if isinstance(event, (Started, ActionFinished)) and event.pid is None:
             return ""  # an action's progress: its log lines already say what happened
-        if event.kind == "started":
+        if isinstance(event, Stopping):
+            return ""  # as in launch, its signal's line says it (`sending signal ...`)
+        if isinstance(event, Started):
             return f"[INFO] [{self.label(event)}]: process started with pid [{event.pid}]\n"
         if isinstance(event, ProcessExited):
             return self._exit_line(event)
-        if event.kind == "failed":
+        if isinstance(event, Failed):
             return f"[ERROR] [{self.label(event)}]: failed to start: {event.reason}\n"
-        if event.kind == "respawning":
+        if isinstance(event, Respawning):
             return f"[WARN] [{self.label(event)}]: respawning ({event.reason})\n"
-        if event.kind == "lifecycle":
+        if isinstance(event, LifecycleChanged):
             return f"[INFO] [{self.label(event)}]: lifecycle state {event.reason}\n" \
                 if event.reason else ""
-        if event.kind == "component":
+        if isinstance(event, ComponentReport):
             if event.data and event.data.get("state") == "loading":
                 return ""  # "waiting for the service": the result line follows
             return f"[{event.level}] [{self.label(event)}]: {event.reason}\n"
-        if event.kind == "log":
+        if isinstance(event, Log):
             # LogInfo speaks as launch.user, as in ros2 launch (people grep for it)
             who = (event.data or {}).get("logger") or event.process or "launch.user"
             return f"[{event.level}] [{who}]: {event.reason}\n"
-        if event.kind == "shutdown" and (event.data or {}).get("launch"):
+        if isinstance(event, Shutdown) and (event.data or {}).get("launch"):
             # launch logs no reason for its ways to end (launch_service.py,
             # shutdown_action.py): its own lines (`user interrupted with ctrl-c (SIGINT)`,
             # `process[x] was required: ...`) are printed where it prints them
@@ -186,7 +200,7 @@ class Printer:
         return self.labels.get(event.process or "", event.process)
 
     def say(self, text: str) -> None:
-        self(Event("log", "launch", reason=text))
+        self(Log("launch", reason=text))
 
     def _give_up(self, exc: Exception) -> None:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
@@ -231,13 +245,13 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
                 # ros2 launch's words (launch_service.py's _on_sigterm), and its exit status
                 # 1 (its run is cancelled); unlike it, tuilaunch still stops every process
                 terminated = True
-                printer(Event("log", "launch", level="ERROR",
+                printer(Log("launch", level="ERROR",
                               reason=f"user interrupted with ctrl-\\ ({sig.name}), "
                               "terminating..."))
             stopping.add(asyncio.ensure_future(supervisor.shutdown(reason)))
             if sig == signal.SIGINT:
                 # ros2 launch's line, which people grep for
-                printer(Event("log", "launch", reason="user interrupted with ctrl-c (SIGINT)",
+                printer(Log("launch", reason="user interrupted with ctrl-c (SIGINT)",
                               level="WARNING"))
                 printer.say("stopping: Ctrl+C again sends SIGTERM now, a third time SIGKILL")
             return
@@ -249,8 +263,8 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
         loop.add_signal_handler(sig, on_signal, sig)
     # ros2 launch's first two lines (launch.logging.log_launch_config); tuilaunch logs at
     # INFO whatever --debug says (that flag asks for tracebacks)
-    printer(Event("log", "launch", reason=f"All log files can be found below {log_dir}"))
-    printer(Event("log", "launch", reason="Default logging verbosity is set to INFO"))
+    printer(Log("launch", reason=f"All log files can be found below {log_dir}"))
+    printer(Log("launch", reason="Default logging verbosity is set to INFO"))
     try:
         status = await supervisor.run()
         return (status or 1) if terminated else status

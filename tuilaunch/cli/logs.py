@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Protocol
 
 from ..client.link import Link, open_link
-from ..engine.run.events import Event
+from ..engine.run.events import Dropped, Event, Log, Output
 from ..engine.run.process.output import strip_ansi
 from ..engine.run.session.log_reader import (
     LAUNCH_LOG,
@@ -117,7 +117,7 @@ def show_logs(options: argparse.Namespace, address: str | None, out: Lines | Non
             as a LogInfo's, as --headless prints it among the processes' lines."""
             if event.process in offsets:
                 return True
-            return not options.process and event.kind == "log" and \
+            return not options.process and isinstance(event, Log) and \
                 event.process not in processes
 
         # without a filter, -n N reads only each file's tail
@@ -150,11 +150,11 @@ def show_logs(options: argparse.Namespace, address: str | None, out: Lines | Non
                 continue
             for data in message.get("events") or []:
                 event = event_from_dict(data)
-                if event.kind == "output" and event.process in offsets:
+                if isinstance(event, Output) and event.process in offsets:
                     for text in event.lines:
                         show(event.process, LogLine(event.time, event.stream or "stdout",
                                                     text))
-                elif event.kind == "dropped" and event.process in offsets:
+                elif isinstance(event, Dropped) and event.process in offsets:
                     print(f"tuilaunch logs: {tag}{event.code} lines of {event.process} skipped "
                           f"(too slow a reader); they are in {log_dir}", file=sys.stderr)
                 elif event.kind in LIFE_KINDS and ours(event):

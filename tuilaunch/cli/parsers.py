@@ -10,8 +10,8 @@ import argparse
 
 COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait", "topics", "hz", "echo",
             "plot", "params", "log-level", "completion", "serve")
-PROCESS_STATES = ("pending", "running", "exited", "failed", "respawning", "skipped", "done",
-                  "cancelled")
+PROCESS_STATES = ("pending", "running", "stopping", "exited", "failed", "respawning", "skipped",
+                  "done", "cancelled")
 LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 """The ROS levels, lowest first (as tui/output_store.py ranks a line)."""

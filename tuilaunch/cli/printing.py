@@ -7,7 +7,7 @@ from typing import Any
 
 from ..engine.plan.components import component_label
 from ..engine.plan.machines import Placement
-from ..engine.plan.model import ArgumentInfo, Plan, TreeItem
+from ..engine.plan.model import ActionKind, ArgumentInfo, Plan, TreeItem
 
 
 def format_arguments(arguments: list[ArgumentInfo], top_file: str) -> str:
@@ -72,7 +72,7 @@ def _components(item: TreeItem, plan: Plan) -> list[dict[str, Any]]:
     if item.kind == "process":
         return plan.process(item.ref).components
     action = next((a for a in plan.actions if a.id == item.ref), None)
-    if action is not None and action.kind == "load_components":
+    if action is not None and action.kind == ActionKind.LOAD_COMPONENTS:
         return list(action.data or [])
     return []
 

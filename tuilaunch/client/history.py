@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..engine.run.events import Event
+from ..engine.run.events import Event, Output
 from ..engine.run.process.output import screen_str
 from ..engine.run.session.log_reader import LogLine
 from ..engine.run.session.protocol import event_from_dict
@@ -15,9 +15,8 @@ def merged(lines: dict[str, list[LogLine]], recent: list[dict[str, Any]]) -> lis
     timed: list[tuple[float, int, Event]] = []
     for process, found in lines.items():
         for line in found:
-            timed.append((line.time, len(timed), Event(
-                "output", process, stream=line.stream, lines=[screen_str(line.text)],
-                time=line.time)))
+            timed.append((line.time, len(timed), Output(
+                process, stream=line.stream, lines=[screen_str(line.text)], time=line.time)))
     for data in recent:
         event = event_from_dict(data)
         timed.append((event.time, len(timed), event))
@@ -30,7 +29,7 @@ def batched(events: list[Event]) -> list[Event]:
     out: list[Event] = []
     for event in events:
         last = out[-1] if out else None
-        if (event.kind == "output" and last is not None and last.kind == "output"
+        if (isinstance(event, Output) and last is not None and isinstance(last, Output)
                 and last.process == event.process and last.stream == event.stream
                 and event.lines and last.data is None):
             last.lines.append(*event.lines)

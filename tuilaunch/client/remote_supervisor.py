@@ -31,7 +31,19 @@ from typing import Any
 
 from ..engine.plan.model import Plan, PlanDiff
 from ..engine.plan.session import Session
-from ..engine.run.events import ProcessExited
+from ..engine.run.events import (
+    Dropped,
+    Event,
+    Failed,
+    LifecycleChanged,
+    Log,
+    Output,
+    ProcessExited,
+    Relaunched,
+    Resources,
+    Shutdown,
+    Started,
+)
 from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
 from ..engine.run.session import session_dir
@@ -48,7 +60,6 @@ from ..engine.run.session.protocol import (
 )
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.supervisor.interacting import restart_fields
-from ..engine.run.supervisor.supervisor import Event
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering, send_once
 from .port import Verb
@@ -293,7 +304,7 @@ class RemoteSupervisor:
         """How processes ended before this client came (the server's recent events)."""
         for event in events:
             self._note_pid(event)
-            if event.kind in ("exited", "failed") and event.process and event.reason:
+            if isinstance(event, (ProcessExited, Failed)) and event.process and event.reason:
                 self.reasons[event.process] = event.reason
             if isinstance(event, ProcessExited) and event.process:
                 self._note_crash(event)
@@ -349,7 +360,7 @@ class RemoteSupervisor:
                     break
                 if self.host is None or self.link is None:
                     self.lost = True
-                    self._deliver(Event("log", reason=f"lost the connection to session "
+                    self._deliver(Log(reason=f"lost the connection to session "
                                         f"{self.name}", level="ERROR"))
                     break
                 if not await self._relink():
@@ -393,7 +404,7 @@ class RemoteSupervisor:
                     # not taken: the reconnection reads its lines and events from the gap
                     return None
                 except SessionError as exc:
-                    self._deliver(Event("log", reason=str(exc), level="ERROR"))
+                    self._deliver(Log(reason=str(exc), level="ERROR"))
             if kind == "events":
                 self._stamps = Stamps()  # each batch's stamps count from its first
                 events = message.get("events") or []
@@ -411,7 +422,7 @@ class RemoteSupervisor:
                         except (ConnectionError, ProtocolError):
                             return None  # the reconnection reads the gap
                         except SessionError as exc:
-                            self._deliver(Event("log", reason=str(exc), level="ERROR"))
+                            self._deliver(Log(reason=str(exc), level="ERROR"))
                     else:
                         self._take({"events": [data]})
             elif kind == "reply":
@@ -427,31 +438,31 @@ class RemoteSupervisor:
             if "stamps" in data:
                 self._stamps.unpack(data)
             event = event_from_dict(data)
-            if event.kind == "output" and event.process:
+            if isinstance(event, Output) and event.process:
                 self._count(event.process, len(event.lines))
                 if self.host is not None:  # only a link's stream leaves stamps out
                     event.data = {**(event.data or {}),
                                   "line": self._lines_before + self._lines_here}
                     self._lines_here += len(event.lines)
-            elif event.kind == "dropped" and event.process:
+            elif isinstance(event, Dropped) and event.process:
                 # in the file, not sent to us: where, for a display to read them back
                 event.data = self._where(event.process)
                 self._count(event.process, event.code or 0)
             else:
                 self._last_event = max(self._last_event, event.time)
-            if event.kind == "relaunched":
+            if isinstance(event, Relaunched):
                 self._adopt(dict(item.split(":=", 1) for item in event.lines), True)
             self._note_pid(event)
             if isinstance(event, ProcessExited) and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
                 self._note_crash(event)
-            if event.kind in ("exited", "failed") and event.process and event.reason:
+            if isinstance(event, (ProcessExited, Failed)) and event.process and event.reason:
                 self.reasons[event.process] = event.reason
-            if event.kind == "shutdown":
+            if isinstance(event, Shutdown):
                 self.shutdown_reason = event.reason or "stop requested"
-            if event.kind == "lifecycle" and event.process:
+            if isinstance(event, LifecycleChanged) and event.process:
                 self.lifecycle.follow(event.process, event.reason or "")
-            if event.kind == "resources":
+            if isinstance(event, Resources):
                 self._usage = merged_usage(self._usage, event.data or {})
                 event.data = dict(self._usage)  # the consumers get them all
             self._deliver(event)
@@ -493,7 +504,7 @@ class RemoteSupervisor:
                                         limit=self.scrollback, tail=True)
                 lines[process] = [LogLine(*line) for line in page["lines"]]
                 if page.get("skipped"):
-                    notes.append(Event("dropped", process, code=int(page["skipped"]),
+                    notes.append(Dropped(process, code=int(page["skipped"]),
                                        data={"start": begin, "skip": 0}))
             # everything up to `end` is now here; its events from the stream come after it
             self._from[process], self._received[process] = end, 0
@@ -553,13 +564,13 @@ class RemoteSupervisor:
         if SERVER_GONE_WORDS in why:
             # the link was up: the proxy there saw the session's server die (kill -9)
             self.lost = not self._stopping
-            self._deliver(Event("log", reason=f"{self.host}: {why.split('error: ', 1)[-1]}",
+            self._deliver(Log(reason=f"{self.host}: {why.split('error: ', 1)[-1]}",
                                 level="ERROR"))
             return False
         self.link_lost = f"link to {self.host} lost ({why})"
         self.lost_reason = why
         self._fail_replies(self.link_lost)
-        self._deliver(Event("log", reason=f"{self.link_lost}; session {self.name} runs on "
+        self._deliver(Log(reason=f"{self.link_lost}; session {self.name} runs on "
                             "there; reconnecting", level="ERROR"))
         delay = RETRY_FIRST
         said = ""
@@ -575,19 +586,19 @@ class RemoteSupervisor:
             except VersionMismatch as exc:
                 # another session of that name, of another tuilaunch: not ours to speak to
                 self.link_lost = None
-                self._deliver(Event("log", reason=str(exc), level="ERROR"))
+                self._deliver(Log(reason=str(exc), level="ERROR"))
                 return False
             except RemoteError as exc:
                 if "no running session" in str(exc):
                     self.lost = not self._stopping  # unless it was asked to stop
                     self.link_lost = None
-                    self._deliver(Event("log", reason=f"session {self.name} ended on "
+                    self._deliver(Log(reason=f"session {self.name} ended on "
                                         f"{self.host} while the link was down", level="ERROR"))
                     return False
                 self.lost_reason = str(exc)  # the outage's reason now, not its first
                 if str(exc) != said:  # each new reason once, not every try
                     said = str(exc)
-                    self._deliver(Event("log", reason=f"reconnecting: {exc}", level="WARN"))
+                    self._deliver(Log(reason=f"reconnecting: {exc}", level="WARN"))
                 delay = min(delay * 2, RETRY_MOST)
                 continue
             old, self.link = self.link, link
@@ -603,11 +614,11 @@ class RemoteSupervisor:
                 self._from, self._received = start, received
                 self._early.clear()
                 self._writer.close()
-                self._deliver(Event("log", reason=f"reconnecting: {exc}", level="WARN"))
+                self._deliver(Log(reason=f"reconnecting: {exc}", level="WARN"))
                 continue
             self.link_lost = self.lost_reason = None
             self.last_heard = time.monotonic()
-            self._deliver(Event("log", reason=f"link to {self.host} back: what happened "
+            self._deliver(Log(reason=f"link to {self.host} back: what happened "
                                 "meanwhile follows"))
             for event in missed:
                 self._deliver(event)
@@ -634,7 +645,7 @@ class RemoteSupervisor:
                                     end=end, limit=self.scrollback, tail=True)
             lines[process] = [LogLine(*line) for line in page["lines"]]
             if page.get("skipped"):  # read back only the last `scrollback` of them
-                notes.append(Event("dropped", process, code=int(page["skipped"]),
+                notes.append(Dropped(process, code=int(page["skipped"]),
                                    data={"start": begin, "skip": skip}))
         recent = [data for data in result["recent"]
                   if float(data.get("time") or 0.0) > self._last_event]
@@ -651,9 +662,9 @@ class RemoteSupervisor:
     def _note_pid(self, event: Event) -> None:
         if event.process is None:
             return
-        if event.kind == "started" and event.pid is not None:
+        if isinstance(event, Started) and event.pid is not None:
             self.pids[event.process] = event.pid
-        elif isinstance(event, ProcessExited) or event.kind == "failed":
+        elif isinstance(event, ProcessExited) or isinstance(event, Failed):
             self.pids.pop(event.process, None)
 
     def _note_crash(self, event: ProcessExited) -> None:
@@ -667,7 +678,7 @@ class RemoteSupervisor:
             consumer(event)
 
     def _warn(self, text: str) -> None:
-        self._deliver(Event("log", reason=text, level="WARN"))
+        self._deliver(Log(reason=text, level="WARN"))
 
     async def read_stamps(self, shown: bool, since: int | None,
                           ) -> tuple[int, int, dict[int, int]]:

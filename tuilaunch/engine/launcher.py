@@ -17,7 +17,7 @@ from .ros.actions import RosActions
 from .ros.composition import ComponentLoader
 from .ros.inspector import Inspector
 from .ros.lifecycle import LifecycleTracker
-from .run.events import Event
+from .run.events import Event, Relaunched
 from .run.supervisor.supervisor import Supervisor
 
 if TYPE_CHECKING:
@@ -46,7 +46,7 @@ class RosSupervisor(Supervisor):
         """After a relaunch, the bridge's clients of services no node of the new plan
         offers are destroyed: they would keep a moved namespace's services on the graph."""
         bridge = self.ros.made
-        if event.kind == "relaunched" and bridge is not None:
+        if isinstance(event, Relaunched) and bridge is not None:
             from .ros.bridge import in_plan
 
             bridge.drop_clients(in_plan(self.plan))

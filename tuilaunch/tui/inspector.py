@@ -14,9 +14,9 @@ from textual.renderables.sparkline import Sparkline
 from textual.timer import Timer
 
 from ..client.session_graph import GraphCalls, SessionGraph
+from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
 from ..engine.run.process.reported_names import current_node_name
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.supervisor.supervisor import Event
 from .navigation import Navigation
 from .screens.dialogs import ChoiceScreen, ConfirmScreen
 from .screens.topics_panel import TopicsPanel
@@ -67,22 +67,22 @@ class Inspector(Navigation):
 
     def inspector_event(self, event: Event) -> None:
         data = event.data or {}
-        if event.kind == "rates":
+        if isinstance(event, Rates):
             self.topics_panel.show_rates(data)
-        elif event.kind == "echo":
+        elif isinstance(event, Echo):
             self.topics_panel.show_echo(data)
-        elif event.kind == "plot":
+        elif isinstance(event, PlotSamples):
             if self.plot_screen is not None:
                 self.plot_screen.add(data)
-        elif event.kind == "resources":
+        elif isinstance(event, Resources):
             if self.watching_resources:  # one sent before the server heard "off" is stale
                 self.launch_tree.set_usage(data)
-        elif event.kind == "trend":
+        elif isinstance(event, Trend):
             if self.watching_resources:
                 for process, (cpu, rss) in data.items():
                     self.trends.setdefault(process, deque(maxlen=TREND_KEEP)).append(
                         (float(cpu or 0.0), float(rss or 0)))
-        elif event.kind == "qos":
+        elif isinstance(event, Qos):
             # the server says when the problems change (watch_qos): the tree marks both
             # nodes of each pair that cannot talk, the line above it says why
             self.launch_tree.set_qos_problems(self.qos_problems_by_process(
@@ -339,8 +339,6 @@ class Inspector(Navigation):
     async def _restart_at_level(self, process: str, level: str) -> None:
         assert self.supervisor is not None
         self.asked_to_stop.add(process)
-        if self.supervisor.states.get(process) == "running":
-            self.launch_tree.set_state(process, "stopping")
         try:
             await self.inspect("restart", process=process, log_level=level)
         except SessionError as exc:

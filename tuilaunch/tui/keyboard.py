@@ -16,7 +16,7 @@ from textual.binding import Binding
 from ..client.port import LaunchPort
 from ..engine.errors import LaunchError
 from ..engine.run.engine_thread import EngineThread
-from ..engine.run.supervisor.supervisor import Event
+from ..engine.run.events import Event, Failed, ProcessExited, Started, Typing
 from .key_order import KeyHold, hold_keys
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
@@ -260,12 +260,12 @@ class NodeKeyboard(SessionLink):
     def show_events(self, events: list[Event]) -> None:
         rest = []
         for event in events:
-            if event.kind in ("exited", "started", "failed") and event.process:
-                if event.kind == "exited" and (event.data or {}).get("again"):
+            if isinstance(event, (ProcessExited, Started, Failed)) and event.process:
+                if isinstance(event, ProcessExited) and (event.data or {}).get("again"):
                     self._coming_back.add(event.process)
                 else:
                     self._coming_back.discard(event.process)
-            if event.kind != "typing":
+            if not isinstance(event, Typing):
                 rest.append(event)
                 continue
             client = (event.data or {}).get("client")
@@ -281,7 +281,7 @@ class NodeKeyboard(SessionLink):
                 self.supervisor.states.get(self.typing_to) != "running" and \
                 self.typing_to not in self._coming_back:
             self.stop_typing(f"{self.typing_to} is no longer running: the keys are back")
-        elif any(e.kind == "typing" for e in events):
+        elif any(isinstance(e, Typing) for e in events):
             self.update_status()
 
     # --- a tool, the command line ---------------------------------------------------------

@@ -9,6 +9,7 @@ from textual import on
 from textual.widgets import Tree
 
 from ..client.port import Verb
+from ..engine.plan.model import ActionKind
 from .screens.dialogs import ConfirmScreen
 from .screens.tree_panel import RowData
 from .session_link import SessionLink
@@ -89,18 +90,17 @@ class NodeCommands(SessionLink):
     def _run_command(self, verb: Verb, processes: list[str]) -> None:
         assert self.supervisor is not None
         supervisor = self.supervisor
-        tree = self.launch_tree
         commands = []
         for process in processes:
             if verb in ("stop", "restart"):
                 self.asked_to_stop.add(process)
-                if supervisor.states.get(process) == "running":
-                    tree.set_state(process, "stopping")
             commands.append(supervisor.command(verb, process))
         actions = self._actions_to_rerun(processes) if verb in ("restart", "start") else []
         self.run_worker(self._carry_out(commands, actions), group="commands",
                         exit_on_error=False)
-        self.update_detail()  # the selected row says "stopping" now, not when they exit
+        # the rows say "stopping" when the session says so (its Stopping event), as every
+        # client attached sees it
+        self.update_detail()
         self.refresh_bindings()
 
     async def _carry_out(self, commands: list[Any], actions: list[str]) -> None:
@@ -125,8 +125,8 @@ class NodeCommands(SessionLink):
             return []
         plan = self.session.plan
         enabled = {a.id: a for a in plan.actions if a.enabled and a.kind in (
-            "set_parameters", "call_service") and (a.trigger is None or a.trigger.on not in (
-                "io", "shutdown"))}
+            ActionKind.SET_PARAMETERS, ActionKind.CALL_SERVICE) and (
+                a.trigger is None or a.trigger.on not in ("io", "shutdown"))}
         if node.data.kind in ("group", "all"):
             return [ref for ref in _action_refs(node) if ref in enabled]
         process = node.data.ref
@@ -142,7 +142,7 @@ class NodeCommands(SessionLink):
                 continue
             waits_for = action.trigger is not None and _trigger_targets(action.trigger,
                                                                         process)
-            addressed = action.kind == "set_parameters" and str(action.target) in names
+            addressed = action.kind == ActionKind.SET_PARAMETERS and str(action.target) in names
             if waits_for or addressed:
                 chosen.append(ref)
         return chosen

@@ -132,8 +132,6 @@ class Quitting(SessionLink):
             return
         self.quitting = True
         self.quit_started = time.monotonic()
-        for process in self.running():
-            self.launch_tree.set_state(process, "stopping")
         self.update_status()
         self.run_worker(self.engine.run(self.supervisor.shutdown(reason)),
                         group="shutdown", exit_on_error=False)

@@ -30,10 +30,24 @@ from ..engine.plan.resolve import remove_default_params_dir
 from ..engine.plan.session import Preview, Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.events import ExitCause, ProcessExited
+from ..engine.run.events import (
+    ComponentReport,
+    Dropped,
+    Event,
+    ExitCause,
+    Failed,
+    LifecycleChanged,
+    Log,
+    Output,
+    ProcessExited,
+    Reading,
+    Relaunched,
+    Respawning,
+    Started,
+    Stopping,
+)
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.supervisor.supervisor import Event
 from .lifecycle_steps import LifecycleSteps
 from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
 from .respawn_countdown import RespawnCountdown
@@ -57,8 +71,6 @@ ENDED_ELSEWHERE_PAUSE = 3.0
 """Seconds a client shows that its session was stopped elsewhere before it leaves."""
 WARNINGS_SHOWN = 3
 """The plan's warnings shown as toasts when the TUI opens; all are in the all nodes pane."""
-INSPECTOR_EVENTS = frozenset({"rates", "echo", "resources", "qos", "plot", "trend"})
-"""What the session server measures for a client that asks (tui/inspector.py shows it)."""
 
 
 class ServerStarted(Message):
@@ -279,7 +291,7 @@ class SessionLink(App[int]):
     def running(self) -> list[str]:
         if self.supervisor is None:
             return []
-        return [p for p, s in self.supervisor.states.items() if s == "running"]
+        return [p for p, s in self.supervisor.states.items() if s in ("running", "stopping")]
 
     # --- engine events -------------------------------------------------------------------
 
@@ -292,32 +304,29 @@ class SessionLink(App[int]):
         panel = self.output_panel
         fresh: list[Line] = []
         for event in events:
-            if event.kind == "output" and event.process:
+            if isinstance(event, Output) and event.process:
                 if event.data and "partial" in event.data:  # a prompt waiting, unfinished
                     self.store.set_partial(event.process, event.stream or "stdout",
                                            str(event.data["partial"]))
                 first = event.data.get("line") if event.data else None
                 fresh += self.store.add(event.process, event.stream or "stdout", event.lines,
                                         first)
-            elif event.kind == "log":
+            elif isinstance(event, Log):
                 if event.process and self.supervisor is not None:
                     state = self.supervisor.states.get(event.process, "")
                     shown = tree.states.get(event.process)
                     if shown == "respawning" != state:
                         tree.details.pop(event.process, None)  # "try 1 in 6 s": called off
-                    # a stop's own lines (`sending signal 'SIGINT'`) come while the server
-                    # still says running: the row keeps saying it is stopping
-                    if not (shown == "stopping" and state == "running"):
-                        # a detail it comes with: its machine being reached again
-                        detail = (event.data or {}).get("detail")
-                        tree.set_state(event.process, state, str(detail or ""))
+                    # a detail it comes with: its machine being reached again
+                    detail = (event.data or {}).get("detail")
+                    tree.set_state(event.process, state, str(detail or ""))
                 level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
                 fresh += self.store.add_event(event.process or "launch", event.reason or "",
                                               level)
-            elif event.kind == "lifecycle" and event.process:
+            elif isinstance(event, LifecycleChanged) and event.process:
                 tree.set_lifecycle(event.process, event.reason or "")
                 self.refresh_bindings()
-            elif event.kind == "component" and event.data:
+            elif isinstance(event, ComponentReport) and event.data:
                 data = event.data
                 short = f"id {data['unique_id']}" if "unique_id" in data else \
                     str(data.get("error") or data.get("text") or "")
@@ -326,16 +335,16 @@ class SessionLink(App[int]):
                     level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
                     fresh += self.store.add_event(event.process or "launch",
                                                   event.reason or "", level)
-            elif event.kind == "relaunched" and self.supervisor is not None:
+            elif isinstance(event, Relaunched) and self.supervisor is not None:
                 # any client's relaunch: the session already holds the new plan
                 tree.show_plan(self.session.plan, self.supervisor.states)
                 self.describe_waiting()
                 if event.lines != self.own_relaunch:
                     self._relaunched_elsewhere(event.lines, (event.data or {}).get("edited"))
                 self.own_relaunch = None
-            elif event.kind in INSPECTOR_EVENTS:
+            elif isinstance(event, Reading):
                 self.inspector_event(event)
-            elif event.kind == "dropped" and event.process:
+            elif isinstance(event, Dropped) and event.process:
                 # counted in the pane's status line; where the session says where they are
                 # in the log file, a line stands for them, read when scrolled back to
                 self.store.count_dropped(event.process, event.code or 0)
@@ -395,7 +404,7 @@ class SessionLink(App[int]):
         state = self.supervisor.states.get(process, event.kind)
         self.respawn_countdown.end(process)  # a new state: any wait counted is over
         is_process = any(p.id == process for p in self.session.plan.processes)
-        if event.kind == "started":
+        if isinstance(event, Started):
             self.asked_to_stop.discard(process)
             # its node name is learnt again from this run's lines (a relaunch may move it)
             self.store.reported.forget(process)
@@ -422,10 +431,10 @@ class SessionLink(App[int]):
             else:
                 text, level = f"process has died [pid {event.pid}, {event.reason}]", ERROR
             return self.store.add_event(process, text, level)
-        if event.kind == "failed":
+        if isinstance(event, Failed):
             tree.set_state(process, state, f"({event.reason})")
             return self.store.add_event(process, f"failed: {event.reason}", ERROR)
-        if event.kind == "respawning":
+        if isinstance(event, Respawning):
             data = event.data or {}
             detail = f"({event.reason})"
             if "delay" in data:  # counted down on the row until it comes back
@@ -579,9 +588,9 @@ def leave_now(status: int) -> None:
 
 
 def _detail(event: Event) -> str:
-    if event.kind == "started" and event.pid is not None:
+    if isinstance(event, (Started, Stopping)) and event.pid is not None:
         return f"pid {event.pid}"
-    if event.kind in ("exited", "failed", "respawning") and event.reason:
+    if isinstance(event, (ProcessExited, Failed, Respawning)) and event.reason:
         return f"({event.reason})"
     return ""
 

@@ -25,7 +25,7 @@ from ..describe.values import flatten_parameters, typed_value
 from ..errors import Origin
 from . import lifecycle as lifecycle_plan
 from .components import component_plan
-from .model import ActionPlan, ProcessPlan
+from .model import ActionKind, ActionPlan, ProcessPlan
 from .scope import Scope, join_namespace, resolve_name
 
 
@@ -47,10 +47,10 @@ class ActionPlanner:
         data: Any = None
         verbosity = ""
         if isinstance(entity, LogInfo):
-            kind = "log"
+            kind = ActionKind.LOG
             data = perform(entity.msg, ctx) if enabled else describe(entity.msg)
         elif isinstance(entity, CallService):
-            kind = "call_service"
+            kind = ActionKind.CALL_SERVICE
             if enabled:
                 target = resolve_name(scope.namespace, perform(entity.server, ctx))
                 data = request_values(entity.request, ctx, scope.namespace, entity.origin)
@@ -58,7 +58,7 @@ class ActionPlanner:
             else:
                 target = describe(entity.server)
         elif isinstance(entity, SetParameters):
-            kind = "set_parameters"
+            kind = ActionKind.SET_PARAMETERS
             if enabled:
                 target = resolve_name(scope.namespace, perform(entity.node_name, ctx))
                 data = flatten_parameters(entity.parameters, ctx, entity.origin)
@@ -66,26 +66,27 @@ class ActionPlanner:
             else:
                 target = describe(entity.node_name)
         elif isinstance(entity, Shutdown):
-            kind = "shutdown"
+            kind = ActionKind.SHUTDOWN
             data = perform(entity.reason, ctx) if enabled else describe(entity.reason)
         elif isinstance(entity, StopProcess | SendSignal):
             # the process `matches_action(x)` names: its id, once x is in the plan
-            kind = "stop_process" if isinstance(entity, StopProcess) else "signal_process"
+            kind = ActionKind.STOP_PROCESS if isinstance(entity, StopProcess) \
+                else ActionKind.SIGNAL_PROCESS
             target = self.entity_ids.get(id(entity.target)) or describe_entity(entity.target)
             data = getattr(entity, "signal_name", None)
         elif isinstance(entity, OpaqueCoroutine):
-            kind = "coroutine"
+            kind = ActionKind.COROUTINE
             data = entity.name
         elif isinstance(entity, LoadComposableNodes):
-            kind = "load_components"
+            kind = ActionKind.LOAD_COMPONENTS
             target, data = self.load_components(entity, scope, enabled)
         elif isinstance(entity, ChangeStateAction | LifecycleTransition):
-            kind = "lifecycle_transition"
+            kind = ActionKind.LIFECYCLE_TRANSITION
             target, data = lifecycle_plan.transition_action(entity, ctx) if enabled else (
                 describe(getattr(entity, "node_names", "lifecycle nodes")),
                 {"transitions": [], "transition_ids": [], "node_names": [], "targets": []})
         else:
-            kind = "event_callback"
+            kind = ActionKind.EVENT_CALLBACK
             data = len(entity.callbacks)
         action_id = self.action_id(kind)
         plan = ActionPlan(action_id, kind, target, data, scope.namespace, verbosity, enabled,
@@ -114,7 +115,7 @@ class ActionPlanner:
         else:
             text = perform(container, ctx)
             target = text if text.startswith("/") else "/" + text
-        base = self.action_id("load_components")
+        base = self.action_id(ActionKind.LOAD_COMPONENTS)
         return target, [component_plan(c, ctx, scope.namespace, scope.global_parameters,
                                        scope.remaps, f"{base}.{i + 1}", target)
                         for i, c in enumerate(entity.components)]

@@ -19,7 +19,7 @@ from ..describe.lifecycle import (
 )
 from ..describe.substitutions import PerformContext, perform, perform_optional
 from ..errors import LaunchError
-from .model import ActionPlan, ProcessPlan, TreeItem
+from .model import ActionKind, ActionPlan, ProcessPlan, TreeItem
 
 
 def transition_ids(values: list[Any], ctx: PerformContext, where: Any) -> list[int]:
@@ -61,7 +61,7 @@ def bind_targets(processes: list[ProcessPlan], actions: list[ActionPlan],
     lifecycle = [p for p in processes if p.lifecycle and p.enabled]
     warnings: list[str] = []
     for action in actions:
-        if action.kind != "lifecycle_transition":
+        if action.kind != ActionKind.LIFECYCLE_TRANSITION:
             continue
         source = action.source
         targets: list[str] = []

@@ -7,6 +7,7 @@ anything. The supervisor runs it; the UI draws its tree.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -162,11 +163,27 @@ class ProcessPlan:
         }
 
 
+class ActionKind(StrEnum):
+    """What an action of the plan does: one member per kind. A StrEnum, so the plan's JSON
+    (and a plugin's `actions()` keys) say the same words as before."""
+
+    LOG = "log"  # LogInfo
+    CALL_SERVICE = "call_service"
+    SET_PARAMETERS = "set_parameters"
+    SHUTDOWN = "shutdown"  # Shutdown, EmitEvent(Shutdown())
+    STOP_PROCESS = "stop_process"  # EmitEvent(ShutdownProcess(...))
+    SIGNAL_PROCESS = "signal_process"  # EmitEvent(SignalProcess(...))
+    COROUTINE = "coroutine"  # an OpaqueCoroutine
+    LOAD_COMPONENTS = "load_components"  # LoadComposableNodes
+    LIFECYCLE_TRANSITION = "lifecycle_transition"  # ChangeState, LifecycleTransition
+    EVENT_CALLBACK = "event_callback"  # a handler's callbacks, run when its event comes
+    DEFERRED = "deferred"  # what is known only at run time (OpaqueFunction's later part)
+
+
 @dataclass
 class ActionPlan:
     id: str
-    kind: str  # call_service | set_parameters | log | event_callback | shutdown | deferred
-    # | stop_process | signal_process | coroutine | load_components
+    kind: ActionKind
     target: str | None
     data: Any
     namespace: str

@@ -13,7 +13,7 @@ from typing import Any
 
 from ..describe.conditions import ConditionOutcome
 from ..errors import Origin
-from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
+from .model import ActionKind, ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 
 _ORIGIN = re.compile(r"^(?P<file>.*?):(?P<line>\d+)(?::(?P<column>\d+))?$")
 
@@ -79,7 +79,8 @@ def _process(data: dict[str, Any]) -> ProcessPlan:
 
 def _action(data: dict[str, Any]) -> ActionPlan:
     return ActionPlan(
-        id=data["id"], kind=data["kind"], target=data.get("target"), data=data.get("data"),
+        id=data["id"], kind=ActionKind(data["kind"]), target=data.get("target"),
+        data=data.get("data"),
         namespace=data.get("namespace") or "/", verbosity=data.get("verbosity") or "",
         enabled=bool(data.get("enabled", True)), skipped_by=_condition(data.get("skipped_by")),
         trigger=_trigger(data.get("trigger")), origin=_origin(data.get("origin")))

@@ -80,7 +80,7 @@ from .actions import ActionPlanner, describe_entity
 from .arguments import declare_argument
 from .command_line import LAUNCH_CONFIGURATIONS, ProcessPlanner
 from .components import interfaces_warning
-from .model import ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
+from .model import ActionKind, ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .opaque import is_custom_action, perform_opaque
 from .prefix import LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER
 from .scope import (
@@ -143,7 +143,7 @@ class Resolver:
         self.warnings += interfaces_warning(
             sum(len(p.components) for p in self.processes if p.enabled)
             + sum(len(a.data) for a in self.actions
-                  if a.enabled and a.kind == "load_components"))
+                  if a.enabled and a.kind == ActionKind.LOAD_COMPONENTS))
         declared = set(self.arguments)
         for name in self.cli_arguments:
             if name not in declared and name not in LAUNCH_OWN:
@@ -210,8 +210,9 @@ class Resolver:
     def defer(self, entities: list[Any], scope: Scope, parent: TreeItem, reason: str) -> None:
         enabled = scope.enabled
         what = ", ".join(describe_entity(e) for e in entities) or "nothing"
-        action_id = self._action_id("deferred")
-        plan = ActionPlan(action_id, "deferred", None, f"{what}: {reason}", scope.namespace, "",
+        action_id = self._action_id(ActionKind.DEFERRED)
+        plan = ActionPlan(action_id, ActionKind.DEFERRED, None, f"{what}: {reason}",
+                          scope.namespace, "",
                           enabled, scope.skipped_by, scope.trigger,
                           getattr(entities[0], "origin", None) if entities else None,
                           Deferred(entities, replace(scope, trigger=None), reason),

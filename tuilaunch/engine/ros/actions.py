@@ -11,8 +11,8 @@ import asyncio
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from ..plan.model import ActionPlan
-from ..run.events import Event
+from ..plan.model import ActionKind, ActionPlan
+from ..run.events import Event, Log
 from ..run.plugins import ActionRunner, Plugin
 from .ros_errors import MessageError, RosError
 
@@ -21,7 +21,7 @@ Emit = Callable[[Event], None]
 
 class RosActions(Plugin):
     # a call waiting for a service that never comes must not hold a shutdown
-    detached_actions = frozenset({"call_service", "set_parameters"})
+    detached_actions = frozenset({ActionKind.CALL_SERVICE, ActionKind.SET_PARAMETERS})
 
     def __init__(self, bridge_factory: Callable[[], Any] | None, service_timeout: float,
                  emit: Emit) -> None:
@@ -31,10 +31,11 @@ class RosActions(Plugin):
         self._emit_to = emit
 
     def actions(self) -> Mapping[str, ActionRunner]:
-        return {"call_service": self.call_service, "set_parameters": self.set_parameters}
+        return {ActionKind.CALL_SERVICE: self.call_service,
+                ActionKind.SET_PARAMETERS: self.set_parameters}
 
     def log(self, action: ActionPlan, text: str, level: str = "INFO") -> None:
-        self._emit_to(Event("log", action.id, reason=text, level=level))
+        self._emit_to(Log(action.id, reason=text, level=level))
 
     @property
     def made(self) -> Any:

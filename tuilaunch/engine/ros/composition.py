@@ -14,8 +14,8 @@ import asyncio
 from collections.abc import Awaitable, Mapping
 from typing import Any
 
-from ..plan.model import ActionPlan, ProcessPlan
-from ..run.events import Event
+from ..plan.model import ActionKind, ActionPlan, ProcessPlan
+from ..run.events import ComponentReport
 from ..run.plugins import ActionRunner, Plugin
 from ..run.supervisor.supervisor import Supervisor
 from .actions import RosActions
@@ -74,7 +74,7 @@ class ComponentLoader(Plugin):
         self._locks: dict[str, asyncio.Lock] = {}
 
     def actions(self) -> Mapping[str, ActionRunner]:
-        return {"load_components": self.run_action}
+        return {ActionKind.LOAD_COMPONENTS: self.run_action}
 
     def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
         # any node may be a container (nav2 starts one with Node): it loads what targets it
@@ -230,7 +230,7 @@ class ComponentLoader(Plugin):
             self.supervisor.failed_parts.add(component["id"])
         elif state == "loaded":  # loaded again after its container restarted
             self.supervisor.failed_parts.discard(component["id"])
-        self.supervisor.emit(Event("component", owner, reason=text, level=level, data=data))
+        self.supervisor.emit(ComponentReport(owner, reason=text, level=level, data=data))
 
 
 __all__ = ["ComponentLoader", "build_request", "load_node_class"]

@@ -13,7 +13,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from ..errors import LaunchError
-from ..run.events import Event
+from ..run.events import Echo, Event
 from .graph import topic_of
 from .ros_errors import RosError
 
@@ -78,7 +78,7 @@ class EchoStreams:
                     data: dict[str, Any] = {"topic": topic, "text": text}
                     if sent == count:
                         data["done"] = True
-                    self._send(Event("echo", data=data), client)
+                    self._send(Echo(data=data), client)
         finally:
             await bridge.stop_echo(stream)
             if self.streams.get((client, topic)) is asyncio.current_task():

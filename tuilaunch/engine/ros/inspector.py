@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from ..errors import LaunchError
-from ..run.events import Event
+from ..run.events import Event, Hz, Output, Rates, Started
 from ..run.plugins import Clients, Handler, Plugin
 from ..run.process.reported_names import ReportedNames
 from .actions import RosActions
@@ -86,10 +86,11 @@ class Inspector(Plugin):
         """Learns the node name a process reports in its log lines, for the nodes the launch
         file does not name: stops reading a process's lines once one is known, and starts
         again when the process starts again (a relaunch may have moved it)."""
-        if event.kind == "started" and event.process is not None:
+        if isinstance(event, Started) and event.process is not None:
             self.reported.forget(event.process)
             return
-        if event.kind != "output" or event.process is None or self.reported.get(event.process):
+        if not isinstance(event, Output) or event.process is None or \
+                self.reported.get(event.process):
             return
         plan = self.supervisor.plan
         if self.unnamed[0] is not plan:  # a relaunch replaced the plan
@@ -321,7 +322,7 @@ class Inspector(Plugin):
             while True:
                 await asyncio.sleep(every)
                 for result in meter.read(topic).values():
-                    self.send(Event("hz", data=result), client)
+                    self.send(Hz(data=result), client)
         finally:
             meter.stop_all()
             entry = self.hz_streams.get((client, topic))
@@ -403,7 +404,7 @@ class Inspector(Plugin):
                 data = {t: {"rate_hz": rates.get(t, {}).get("rate_hz"),
                             "bytes_per_s": rates.get(t, {}).get("bytes_per_s")}
                         for t in sorted(topics)}
-                self.send(Event("rates", data=data), client)
+                self.send(Rates(data=data), client)
 
     def send(self, event: Event, client: int) -> None:
         if self.clients is not None:

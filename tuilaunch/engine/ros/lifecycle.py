@@ -18,8 +18,8 @@ from typing import Any
 
 from ..describe.lifecycle import STATES, TRANSITIONS, state_keys
 from ..errors import LaunchError
-from ..plan.model import ActionPlan, ProcessPlan
-from ..run.events import Event
+from ..plan.model import ActionKind, ActionPlan, ProcessPlan
+from ..run.events import LifecycleChanged, Log
 from ..run.plugins import ActionRunner, Handler, Plugin
 from ..run.supervisor.supervisor import Supervisor
 from .actions import RosActions
@@ -61,7 +61,7 @@ class LifecycleTracker(Plugin):
     # --- the plugin's hooks ---------------------------------------------------------------
 
     def actions(self) -> Mapping[str, ActionRunner]:
-        return {"lifecycle_transition": self.run_action}
+        return {ActionKind.LIFECYCLE_TRANSITION: self.run_action}
 
     def process_started(self, proc: ProcessPlan) -> Awaitable[Any] | None:
         return self.follow(proc) if proc.lifecycle else None
@@ -201,10 +201,10 @@ class LifecycleTracker(Plugin):
             return
         self.states[proc_id] = state
         data = {"state": state, **(detail or {})}
-        self.supervisor.emit(Event("lifecycle", proc_id, reason=state, data=data))
+        self.supervisor.emit(LifecycleChanged(proc_id, reason=state, data=data))
 
     def _report(self, item: str, text: str, level: str = "INFO") -> None:
-        self.supervisor.emit(Event("log", item, reason=text, level=level))
+        self.supervisor.emit(Log(item, reason=text, level=level))
 
     def process_exited(self, proc_id: str) -> None:
         """A node that is gone has no lifecycle state any more."""
@@ -215,7 +215,7 @@ class LifecycleTracker(Plugin):
             except Exception:  # the bridge is closing
                 pass
         if self.states.pop(proc_id, None) is not None:
-                self.supervisor.emit(Event("lifecycle", proc_id, reason="",
+                self.supervisor.emit(LifecycleChanged(proc_id, reason="",
                                         data={"state": ""}))
 
     # --- driving ---------------------------------------------------------------------------

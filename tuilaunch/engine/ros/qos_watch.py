@@ -16,7 +16,7 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from ..errors import LaunchError
-from ..run.events import Event
+from ..run.events import Event, Qos
 from .ros_errors import RosError
 
 QOS_PERIOD = 5.0
@@ -77,7 +77,7 @@ class QosWatch:
     def _tell(self, client: int, problems: Problems) -> None:
         if client in self._sent and self._sent[client] != problems:
             self._sent[client] = problems
-            self._send(Event("qos", data={"topics": problems}), client)
+            self._send(Qos(data={"topics": problems}), client)
 
 
 __all__ = ["QOS_PERIOD", "QosWatch"]

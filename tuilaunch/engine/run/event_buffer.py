@@ -14,7 +14,7 @@ import itertools
 import threading
 from collections import deque
 
-from .supervisor.supervisor import Event
+from .events import Dropped, Event, Output
 
 
 class EventBuffer:
@@ -35,7 +35,7 @@ class EventBuffer:
     def __call__(self, event: Event) -> None:
         with self._lock:
             entry = (next(self._sequence), event)
-            if event.kind != "output":
+            if not isinstance(event, Output):
                 self._other.append(entry)
                 return
             self._output.append(entry)
@@ -75,7 +75,7 @@ class EventBuffer:
             self._lines = 0
             self._held = {}
             self._dropped = {}
-        notices = [Event("dropped", name, code=count,
+        notices = [Dropped(name, code=count,
                          reason=f"{count} lines not shown (all are in the log file)")
                    for name, count in dropped.items()]
         return notices + joined([event for _, event in entries])
@@ -87,7 +87,7 @@ def joined(events: list[Event]) -> list[Event]:
     out: list[Event] = []
     for event in events:
         last = out[-1] if out else None
-        if (last is not None and event.kind == "output" and last.kind == "output"
+        if (last is not None and isinstance(event, Output) and isinstance(last, Output)
                 and last.process == event.process and last.stream == event.stream
                 and last.pid == event.pid and last.level == event.level
                 and last.data is None and event.data is None):

@@ -351,8 +351,6 @@ class FleetApp(App[int]):
         for process in processes:
             if verb in ("stop", "restart"):
                 member.asked_to_stop.add(process)
-                if supervisor.states.get(process) == "running":
-                    member.tree.set_state(process, "stopping")
             commands.append(supervisor.command(verb, process))
         self._carry_out(member, verb, commands)
         self.update_detail()

@@ -17,7 +17,19 @@ from rich.text import Text
 from ...client.remote_supervisor import RemoteSupervisor
 from ...client.served_session import ServedSession
 from ...engine.run.event_buffer import EventBuffer
-from ...engine.run.supervisor.supervisor import Event
+from ...engine.run.events import (
+    STATE_EVENTS,
+    Dropped,
+    Event,
+    Failed,
+    LifecycleChanged,
+    Log,
+    Output,
+    ProcessExited,
+    Relaunched,
+    Started,
+    Stopping,
+)
 from ..lifecycle_steps import LifecycleSteps
 from ..output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
 from ..screens.output_panel import OutputPanel
@@ -102,30 +114,28 @@ class Member:
         tree, store = self.tree, self.store
         fresh: list[Line] = []
         for event in events:
-            if event.kind == "output" and event.process:
+            if isinstance(event, Output) and event.process:
                 first = event.data.get("line") if event.data else None
                 fresh += store.add(event.process, event.stream or "stdout", event.lines,
                                    first)
-            elif event.kind == "log":
+            elif isinstance(event, Log):
                 if event.process and self.supervisor is not None:
                     state = self.supervisor.states.get(event.process, "")
-                    if not (tree.states.get(event.process) == "stopping" and
-                            state == "running"):
-                        tree.set_state(event.process, state)
+                    tree.set_state(event.process, state)
                 level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
                 fresh += store.add_event(event.process or "launch", event.reason or "", level)
-            elif event.kind == "lifecycle" and event.process:
+            elif isinstance(event, LifecycleChanged) and event.process:
                 tree.set_lifecycle(event.process, event.reason or "")
-            elif event.kind == "relaunched" and self.supervisor is not None:
+            elif isinstance(event, Relaunched) and self.supervisor is not None:
                 self.show_plan()
-            elif event.kind == "dropped" and event.process:
+            elif isinstance(event, Dropped) and event.process:
                 store.count_dropped(event.process, event.code or 0)
                 where = event.data or {}
                 if event.code and "start" in where:
                     fresh += store.add_gap(event.process, Gap(
                         int(where["start"]), int(where["skip"]), event.code))
-            elif event.process and self.supervisor is not None and event.kind in (
-                    "started", "exited", "failed", "respawning"):
+            elif event.process and self.supervisor is not None and \
+                    isinstance(event, STATE_EVENTS):
                 fresh += self._life(event)
         if fresh:
             self.pane.append(fresh)
@@ -137,16 +147,19 @@ class Member:
         assert self.supervisor is not None and event.process is not None
         process, tree = event.process, self.tree
         state = self.supervisor.states.get(process, event.kind)
-        if event.kind == "started":
+        if isinstance(event, Started):
             self.asked_to_stop.discard(process)
             self.store.reported.forget(process)
             tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
             return self.store.add_event(process, f"process started with pid [{event.pid}]")
-        if event.kind == "exited":
+        if isinstance(event, Stopping):
+            tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
+            return []
+        if isinstance(event, ProcessExited):
             code = event.code if event.code is not None else 0
-            asked = process in self.asked_to_stop or bool(
-                event.data and event.data.get("requested"))
-            if code != 0 and not asked and state == "exited":
+            # its cause came with it, decided where it ended; this client's asking counts
+            asked = process in self.asked_to_stop or event.asked
+            if event.crashed and not asked and state == "exited":
                 state = "failed"
             tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
             if code == 0:
@@ -158,7 +171,7 @@ class Member:
             return self.store.add_event(
                 process, f"process has died [pid {event.pid}, {event.reason}]", ERROR)
         tree.set_state(process, state, f"({event.reason})")
-        if event.kind == "failed":
+        if isinstance(event, Failed):
             return self.store.add_event(process, f"failed: {event.reason}", ERROR)
         return self.store.add_event(process, f"respawning: {event.reason}", WARN)
 

@@ -12,7 +12,7 @@ from textual.widgets import Tree
 from textual.widgets.tree import TreeNode
 
 from ...engine.plan.components import component_label
-from ...engine.plan.model import Plan, PlanDiff, TreeItem
+from ...engine.plan.model import ActionKind, Plan, PlanDiff, TreeItem
 from ...engine.run.process.reported_names import current_node_name
 from .units import short_bytes, usage_text
 
@@ -120,7 +120,7 @@ class LaunchTree(Tree[RowData]):
             action = next((a for a in self.plan.actions if a.id == item.ref), None) \
                 if self.plan else None
             components = list(action.data or []) if action is not None and \
-                action.kind == "load_components" else []
+                action.kind == ActionKind.LOAD_COMPONENTS else []
             data = RowData("action", item.ref, [])
             node = parent.add(item.label, data) if components else \
                 parent.add_leaf(item.label, data)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ...errors import LaunchError
-from ...run.events import Event
+from ...run.events import Event, PlotSamples
 from ..graph import topic_of
 from ..ros_errors import RosError
 
@@ -204,7 +204,7 @@ class PlotStreams:
                     else:
                         continue
                     if data is not None:
-                        self._send(Event("plot", data=data), client)
+                        self._send(PlotSamples(data=data), client)
         finally:
             self.task = None
 

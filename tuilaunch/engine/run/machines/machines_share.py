@@ -30,7 +30,17 @@ from typing import Any
 
 from ...errors import LaunchError
 from ...plan.machines import Placement
-from ..events import Event
+from ..events import (
+    Dropped,
+    Event,
+    Failed,
+    Log,
+    Output,
+    ProcessExited,
+    Relaunched,
+    Shutdown,
+    Started,
+)
 from ..plugins import Plugin
 from ..process.logfiles import LogFile
 from ..process.output import screen_str
@@ -172,8 +182,8 @@ class MachinesCoordinator(Plugin):
                     self.supervisor.states.get(proc.id) in ("failed", "pending"):
                 if self.supervisor.states.get(proc.id) == "failed":
                     waiting.append(proc.id)
-                self.supervisor.mirror(Event(
-                    "log", proc.id, reason=f"{name}: connecting again...", level="WARN",
+                self.supervisor.mirror(Log(
+                    proc.id, reason=f"{name}: connecting again...", level="WARN",
                     data={"detail": f"(connecting to {name} again...)"}), "pending")
         if fresh:
             share.failure = None
@@ -188,7 +198,7 @@ class MachinesCoordinator(Plugin):
             # before the answer, so a status asked next agrees with it
             for waited in waiting:
                 if self.supervisor.states.get(waited) == "pending":
-                    self.supervisor.mirror(Event("failed", waited, reason=outcome), "failed")
+                    self.supervisor.mirror(Failed(waited, reason=outcome), "failed")
             raise LaunchError(f"{process_id} runs on {name}, tried again: {outcome}")
         if fresh and self.supervisor.plan.process(process_id).trigger is None:
             # its new share starts it: the answer says how that went, not "pending"
@@ -214,7 +224,7 @@ class MachinesCoordinator(Plugin):
         for proc in self.supervisor.plan.processes:
             if proc.machine == share.machine.name and proc.enabled and \
                     self.supervisor.states.get(proc.id) in ("pending", "running"):
-                self.supervisor.mirror(Event("failed", proc.id, reason=reason), "failed")
+                self.supervisor.mirror(Failed(proc.id, reason=reason), "failed")
 
     async def _connect(self, share: Share) -> None:
         link, reader, writer = await open_remote_streams(
@@ -328,7 +338,7 @@ class MachinesCoordinator(Plugin):
             self.supervisor.log(f"{share.machine.name}: {skipped} earlier lines of {process} "
                                 f"are only in its log file there", "WARN")
         for stamp, stream, text in result.get("lines") or []:
-            event = Event("output", process, stream=str(stream),
+            event = Output(process, stream=str(stream),
                           lines=[screen_str(str(text))], time=float(stamp))
             self._log_output(share, event)
             self.supervisor.mirror(event)
@@ -344,13 +354,13 @@ class MachinesCoordinator(Plugin):
                 continue
             if event.process not in mine:
                 continue
-            if event.kind == "output":
+            if isinstance(event, Output):
                 if event.lines:  # not an unfinished line (a prompt), shown until it is whole
                     share.received[event.process] += len(event.lines)
                     self._log_output(share, event)
                 self.supervisor.mirror(event)
                 continue
-            if event.kind == "dropped" and isinstance(event.code, int):
+            if isinstance(event, Dropped) and isinstance(event.code, int):
                 # lines its queue let go: in the file, said by this event, not sent again
                 share.received[event.process] += event.code
             key = (event.kind, event.process, event.pid, event.time)
@@ -379,23 +389,23 @@ class MachinesCoordinator(Plugin):
     # --- what happens here, and requests -----------------------------------------------------
 
     def _on_event(self, event: Event) -> None:
-        if event.kind in ("started", "exited") and event.process is not None and \
+        if isinstance(event, (Started, ProcessExited)) and event.process is not None and \
                 event.pid is not None:
             try:
                 machine = self.supervisor.plan.process(event.process).machine
             except KeyError:
                 return
-            on = "start" if event.kind == "started" else "exit"
+            on = "start" if isinstance(event, Started) else "exit"
             message = {"process": event.process, "on": on, "pid": event.pid,
                        "code": event.code}
             self.happened[(event.process, on)] = message
             for share in self.shares.values():
                 if share.machine.name != machine and share.writer is not None:
                     self._spawn(self._tell(share, {"op": "external_event", **message}))
-        elif event.kind == "shutdown":
+        elif isinstance(event, Shutdown):
             for share in self.shares.values():
                 self._spawn(self._stop_share(share, event.reason or "shutdown"))
-        elif event.kind == "relaunched":
+        elif isinstance(event, Relaunched):
             arguments = dict(line.split(":=", 1) for line in event.lines if ":=" in line)
             self.arguments = arguments
             for share in self.shares.values():
@@ -458,8 +468,8 @@ class MachinesCoordinator(Plugin):
 
 def _state_after(event: Event) -> str | None:
     """The state an event leaves its process in (the batch's states follow it)."""
-    return {"started": "running", "exited": "exited", "failed": "failed",
-            "respawning": "respawning"}.get(event.kind)
+    return {"started": "running", "stopping": "stopping", "exited": "exited",
+            "failed": "failed", "respawning": "respawning"}.get(event.kind)
 
 
 def placement_plugin(supervisor: Supervisor, placement: Placement | None, command: list[str],

@@ -22,7 +22,7 @@ from typing import Any
 
 from ...errors import LaunchError
 from ..event_buffer import EventBuffer
-from ..events import Event
+from ..events import Event, Output, View
 from ..process.output import strip_ansi
 from .protocol import ProtocolError, Stamps, decode, encode, event_to_dict
 
@@ -60,9 +60,9 @@ class ClientQueue:
     def __call__(self, event: Event) -> None:
         if self.kinds is not None and event.kind not in self.kinds:
             return
-        if self.only is not None and event.kind == "output" and event.process != self.only:
+        if self.only is not None and isinstance(event, Output) and event.process != self.only:
             return  # not on its screen: in the log file, read if it switches to it
-        if event.kind != "output":
+        if not isinstance(event, Output):
             self.events += 1
             if self.events > CLIENT_MAX_EVENTS and not self.overflowed:
                 self.overflowed = True
@@ -263,7 +263,7 @@ class ClientHub:
         before it that the client was not sent are in the files up to there, and the lines
         after it come as events."""
         queue.only = only
-        queue.buffer(Event("view", only, data={"offsets": self.offsets()}))
+        queue.buffer(View(only, data={"offsets": self.offsets()}))
         queue.ready.set()
         queue.prompt.set()
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...errors import LaunchError
-from ..events import Event
+from ..events import Typing
 from ..plugins import Handler
 from ..process.readers import NO_TERMINAL
 from ..supervisor.supervisor import Supervisor
@@ -49,7 +49,7 @@ class Keyboard:
             raise LaunchError(f"another client (client {self.client}) is typing into "
                               f"{self.process}; one client types at a time")
         state = self.supervisor.states.get(process)
-        if state != "running":
+        if state not in ("running", "stopping"):  # a stop's prompt can still be answered
             raise LaunchError(f"{process} is not running ({state}): there is nothing to "
                               "type into")
         if not self._has_terminal(process):
@@ -89,4 +89,4 @@ class Keyboard:
         return running is not None and running.terminal is not None
 
     def _tell(self, process: str, client: int | None) -> None:
-        self.supervisor.emit(Event("typing", process, data={"client": client}))
+        self.supervisor.emit(Typing(process, data={"client": client}))

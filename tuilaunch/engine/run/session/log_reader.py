@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..events import Event, ExitCause, ProcessExited
+from ..events import Event, ExitCause, ProcessExited, event_of
 
 LAUNCH_LOG = "@launch"
 """What `read_log` takes, instead of a process id, for launch.log: every event but output,
@@ -116,8 +116,8 @@ def life_event(line: LogLine) -> Event | None:
         return ProcessExited(process=process or None, pid=pid, code=code, reason=reason,
                              level=fields.get("level") or "INFO", time=line.time, data=data,
                              cause=ExitCause.of(code or 0, bool(data["requested"])))
-    return Event(line.stream, process or None, pid=pid, code=code, reason=reason,
-                 level=fields.get("level") or "INFO", time=line.time, data=data)
+    return event_of(line.stream, process=process or None, pid=pid, code=code, reason=reason,
+                    level=fields.get("level") or "INFO", time=line.time, data=data)
 
 
 def log_size(path: Path) -> int:

@@ -123,7 +123,7 @@ import re
 from typing import Any
 
 from .... import __version__
-from ..events import Event, ExitCause, ProcessExited
+from ..events import Dropped, Event, ExitCause, Output, ProcessExited, event_of
 from .session_dir import SessionError
 
 MAX_MESSAGE = 64 << 20
@@ -202,14 +202,14 @@ def event_to_dict(event: Event, display: bool = False) -> dict[str, Any]:
     # compression squeezes over an ssh link. `display`: for a screen, which stamps output
     # on arrival and shows no time of its own for a count of lines not sent
     data: dict[str, Any] = {"kind": event.kind}
-    output = event.kind == "output"
-    if not (display and event.kind in ("output", "dropped")):
+    output = isinstance(event, Output)
+    if not (display and isinstance(event, (Output, Dropped))):
         data["time"] = round(event.time, 3)
     for name in ("process", "pid", "stream", "code", "reason"):
         value = getattr(event, name)
         if value is None or (output and (name == "pid" or value == "stdout")):
             continue  # output: its pid is the started event's; stdout is the default stream
-        if name == "reason" and event.kind == "dropped":
+        if name == "reason" and isinstance(event, Dropped):
             continue  # the count says it; the sentence is the client's to write
         data[name] = value
     if event.lines:
@@ -301,9 +301,10 @@ def event_from_dict(data: dict[str, Any]) -> Event:
     fields = {k: v for k, v in data.items() if k in _EVENT_FIELDS}
     if not isinstance(fields.get("kind"), str):
         raise ProtocolError(f"an event without a kind: {data!r}")
-    if fields["kind"] == "exited":
+    kind = fields.pop("kind")
+    if kind == "exited":
         said = fields.get("data") or {}
         cause = ExitCause.of(int(fields.get("code") or 0), bool(said.get("requested")),
                              bool(said.get("typed")))
         return ProcessExited(**fields, cause=cause)
-    return Event(**fields)
+    return event_of(kind, **fields)

@@ -11,7 +11,7 @@ from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from ..events import Event
+from ..events import Event, Resources, Trend
 from .resources import ResourceSampler, Usage
 
 WATCH_PERIOD = 1.0
@@ -141,7 +141,7 @@ class ResourceWatch:
                 trend = {p: [data[p]["cpu_percent"], data[p]["rss_bytes"]]
                          for p in sorted(self.trend.get(client, ())) if p in data}
                 if trend:
-                    self.send(Event("trend", data=trend), client)
+                    self.send(Trend(data=trend), client)
 
     def _tell(self, client: int, data: dict[str, dict[str, Any]]) -> None:
         """Only the figures that moved (at the precision shown) of the processes it shows
@@ -162,7 +162,7 @@ class ResourceWatch:
         changed.update({p: usage_fields(None) for p in last if p not in view})
         self.sent[client] = view
         if changed or not last:
-            self.send(Event("resources", data=changed), client)
+            self.send(Resources(data=changed), client)
 
     def close(self) -> None:
         self.watchers.clear()

@@ -26,7 +26,7 @@ from typing import Any
 from ...describe.python.loader import set_command_line
 from ...errors import LaunchError
 from ...plan.session import Session
-from ..events import Event
+from ..events import Event, Log, Output, Relaunched, Started
 from ..plugins import Handler
 from ..supervisor.stopping import CTRL_C_REASON
 from ..supervisor.supervisor import Supervisor
@@ -133,20 +133,20 @@ class SessionServer:
     # --- the supervisor's events -------------------------------------------------------------
 
     def _on_event(self, event: Event) -> None:
-        if event.kind == "output" and event.process is not None:
+        if isinstance(event, Output) and event.process is not None:
             key = (event.process, event.stream or "stdout")
             if event.data and "partial" in event.data:
                 self.partials[key] = event
             elif event.lines:
                 self.partials.pop(key, None)
-        if event.kind != "output":
+        if not isinstance(event, Output):
             self.recent.append(event)
             if event.process is not None:
-                if event.kind == "started" and event.pid is not None:
+                if isinstance(event, Started) and event.pid is not None:
                     self.pids[event.process] = event.pid
                     # a restart or respawn: the last end's words are history now
                     self.details.pop(event.process, None)
-                if event.reason is not None and event.kind != "log":
+                if event.reason is not None and not isinstance(event, Log):
                     self.details[event.process] = event.reason
         self.hub.broadcast(event)
 
@@ -164,7 +164,7 @@ class SessionServer:
     def _running_pids(self) -> dict[str, int]:
         states = self.supervisor.states
         return {process: pid for process, pid in self.pids.items()
-                if states.get(process) == "running"}
+                if states.get(process) in ("running", "stopping")}
 
     def _client_gone(self, client: int) -> None:
         self.keyboard.release(client)  # a client that is gone types no more
@@ -205,9 +205,9 @@ class SessionServer:
             del fields["growing"]  # a trend needs watching; status is one look
             processes.append({
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
-                "pid": self.pids.get(proc.id) if state == "running" else None,
+                "pid": self.pids.get(proc.id) if state in ("running", "stopping") else None,
                 # the last end's code, until the process starts again
-                "exit_code": None if state in ("running", "pending") else
+                "exit_code": None if state in ("running", "stopping", "pending") else
                 self.supervisor.exit_codes.get(proc.id),
                 "detail": self.details.get(proc.id), "machine": proc.machine, **fields,
                 # the exact start (argv, paste-ready line, env changes); a crash's signal/core
@@ -378,7 +378,7 @@ class SessionServer:
         # an event like the others, so it reaches every client in order with their states,
         # and the plugins (the machines' shares are relaunched with the same values);
         # `edited`: the file that changed on disk, for the other clients to be told
-        self.supervisor.emit(Event("relaunched", reason=None, lines=[
+        self.supervisor.emit(Relaunched(reason=None, lines=[
             f"{k}:={v}" for k, v in self.session.arguments.items()],
             data={"edited": edited} if edited else None))
 

@@ -24,8 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from ...describe.python.launch_events import EventInfo
-from ...plan.model import ActionPlan, Plan
-from ..events import Consumer, Event, ProcessExited
+from ...plan.model import ActionKind, ActionPlan, Plan
+from ..events import Consumer, Event, Log, Output, ProcessExited
 from ..plugins import ActionRunner, SupervisorPlugin
 from ..process.logfiles import LogFile
 from ..process.process_command import StartCommand
@@ -49,7 +49,7 @@ class SupervisorCore:
         self.plugins: list[SupervisorPlugin] = []
         self.action_runners: dict[str, ActionRunner] = {}
         """The plugins' performers of action kinds `run` does not know, by kind."""
-        self.detached_actions: set[str] = {"coroutine"}
+        self.detached_actions: set[str] = {ActionKind.COROUTINE}
         """Action kinds performed in the background (a trigger does not wait for them), and
         cancelled by a shutdown (launch cancels an OpaqueCoroutine's task on shutdown)."""
         self.log_dir = log_dir
@@ -153,7 +153,7 @@ class SupervisorCore:
 
     def emit(self, event: Event) -> None:
         """Tells every consumer; one that raises is reported once and never stops us."""
-        if event.kind != "output":
+        if not isinstance(event, Output):
             # `tuilaunch logs` tells a process's life from these lines (log_reader.life_events):
             # a stop asked for is no crash, and a log line keeps its level; reason comes last
             requested = 1 if isinstance(event, ProcessExited) and event.asked else None
@@ -163,7 +163,7 @@ class SupervisorCore:
                                                        ("level", level),
                                                        ("reason", event.reason)) if v is not None)
             logger = (event.data or {}).get("logger")
-            if event.kind == "log" and logger:  # a LogInfo line, as ros2 launch logs it
+            if isinstance(event, Log) and logger:  # a LogInfo line, as ros2 launch logs it
                 detail = f"[{event.level}] [{logger}]: {event.reason}"
             self.launch_log.write(f"{event.time:.6f} {event.kind} {event.process or ''} "
                                    f"{detail}\n".encode())
@@ -172,12 +172,12 @@ class SupervisorCore:
                 consumer(event)
             except Exception as exc:
                 self._consumer_failed(consumer, exc)
-        if event.kind != "output":  # output settles nothing: no wake-up of `run` per block
+        if not isinstance(event, Output):  # output settles nothing: no wake-up of `run` per block
             self.changed.set()
 
     def log(self, text: str, level: str = "INFO") -> None:
         """A line for the launch pane and launch.log from whoever runs the supervisor."""
-        self.emit(Event("log", None, reason=text, level=level))
+        self.emit(Log(None, reason=text, level=level))
 
     def _consumer_failed(self, consumer: Consumer, exc: Exception) -> None:
         name = getattr(consumer, "__qualname__", type(consumer).__name__)
@@ -192,7 +192,7 @@ class SupervisorCore:
         """A log file that cannot be written: said to the consumers (on stderr without)."""
         if not self.consumers:
             to_stderr(f"tuilaunch: {text}")
-        event = Event("log", None, reason=text, level="ERROR")
+        event = Log(None, reason=text, level="ERROR")
         for consumer in list(self.consumers):
             try:
                 consumer(event)
@@ -216,7 +216,7 @@ class SupervisorCore:
                    logger: str | None = None) -> None:
         """A line in the launch pane on behalf of one action of the plan; `logger` names
         who says it in headless output and launch.log (LogInfo: launch's `launch.user`)."""
-        self.emit(Event("log", action.id, reason=text, level=level,
+        self.emit(Log(action.id, reason=text, level=level,
                         data={"logger": logger} if logger else None))
 
     # Made by the later files; declared here so the earlier ones can call them.

@@ -18,8 +18,8 @@ from ...describe.entities import Entity, LogInfo, Shutdown, entity_list
 from ...describe.environ import captured_environ, shown_environ
 from ...describe.python.launch_events import EventInfo, ProcessExited, event_for
 from ...describe.substitutions import PerformContext, perform
-from ...plan.model import ActionPlan, ProcessPlan, Trigger
-from ..events import Event, LaunchEvent
+from ...plan.model import ActionKind, ActionPlan, ProcessPlan, Trigger
+from ..events import ActionFinished, LaunchEvent, Log, Output, Started
 from ..process.readers import Running
 from .core import SupervisorCore
 from .triggers import flag_name, runs_in_shutdown
@@ -161,12 +161,12 @@ class PlanActions(SupervisorCore):
 
     def _action_begins(self, action: ActionPlan) -> None:
         self.states[action.id] = "running"
-        self.emit(Event("started", action.id))
+        self.emit(Started(action.id))
         self.flag(action.id, "start").set()
 
     def _action_ends(self, action: ActionPlan, ok: bool) -> None:
         self.states[action.id] = "done" if ok else "failed"
-        self.emit(Event("finished", action.id, reason=self.states[action.id]))
+        self.emit(ActionFinished(action.id, reason=self.states[action.id]))
         self.flag(action.id, "exit").set()
 
     async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
@@ -181,7 +181,7 @@ class PlanActions(SupervisorCore):
             runner = self.action_runners.get(action.kind)
             if runner is not None:
                 ok = await runner(action)
-            elif action.kind == "shutdown":
+            elif action.kind == ActionKind.SHUTDOWN:
                 if isinstance(event, ProcessExited) and not getattr(action.source, "emitted",
                                                                      False):
                     # launch's Shutdown action says so (shutdown_action.py); an emitted
@@ -193,19 +193,19 @@ class PlanActions(SupervisorCore):
                     await self.tell_shutdown(str(action.data))  # before the run may end
                 else:
                     self._request_shutdown(str(action.data), action)
-            elif action.kind == "log":
+            elif action.kind == ActionKind.LOG:
                 ok = self._log(action, event)
-            elif action.kind == "event_callback":
+            elif action.kind == ActionKind.EVENT_CALLBACK:
                 ok = self._run_callbacks(action, event or LaunchEvent())
-            elif action.kind == "deferred":
+            elif action.kind == ActionKind.DEFERRED:
                 from .event_actions import deferred_entities
 
                 ok = self._perform_at_event(action, deferred_entities(action), event)
-            elif action.kind == "stop_process":
+            elif action.kind == ActionKind.STOP_PROCESS:
                 ok = await self._stop_process(action)
-            elif action.kind == "signal_process":
+            elif action.kind == ActionKind.SIGNAL_PROCESS:
                 ok = self._signal_process(action)
-            elif action.kind == "coroutine":
+            elif action.kind == ActionKind.COROUTINE:
                 ok = await self._run_coroutine(action, event)
             else:
                 self.log_action(action, f"{action.kind} is not supported yet; skipped", "WARN")
@@ -283,7 +283,7 @@ class PlanActions(SupervisorCore):
             # launch: "not sent ... because it has closed already" (debug); a reaped pid
             # may be another process's by now
             return True
-        self.emit(Event("log", target, reason=f"sending signal '{name}' to process[{target}]"))
+        self.emit(Log(target, reason=f"sending signal '{name}' to process[{target}]"))
         with contextlib.suppress(ProcessLookupError):
             os.kill(running.process.pid, getattr(signal, name))
         return True
@@ -369,14 +369,14 @@ class PlanActions(SupervisorCore):
 
     def deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
         """A block of a process's output, already in its log file: to the consumers."""
-        self.emit(Event("output", running.plan.id, stream=stream, lines=lines))
+        self.emit(Output(running.plan.id, stream=stream, lines=lines))
         if self.triggers.watches_output:
             self.dispatch_io(running.plan.id, stream, lines, running.process.pid)
 
     def deliver_partial(self, running: Running, stream: str, text: str) -> None:
         """A line the process left unfinished (a prompt): shown until its whole line comes.
         An output event without lines, so nothing counts it as one (nor logs it)."""
-        self.emit(Event("output", running.plan.id, stream=stream, data={"partial": text}))
+        self.emit(Output(running.plan.id, stream=stream, data={"partial": text}))
 
     def dispatch_io(self, process_id: str, stream: str, lines: list[str], pid: int) -> None:
         watchers = self.triggers.output_handlers(process_id, stream)

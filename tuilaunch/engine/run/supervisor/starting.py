@@ -16,7 +16,7 @@ from pathlib import Path
 from ...errors import LaunchError
 from ...plan.model import ProcessPlan
 from ...plan.params import write_parameter_file
-from ..events import Event, ExitCause, ProcessExited
+from ..events import ExitCause, Failed, Log, ProcessExited, Respawning, Started
 from ..process.logfiles import LogFile
 from ..process.process_command import death_details, start_command
 from ..process.readers import ChannelReader, Running
@@ -79,7 +79,7 @@ class Starting(PlanActions):
             return
         if proc.log_cmd:  # launch's words (ExecuteLocal); its env is always a dict now
             shown = " ".join(part for part in start.cmd if part.strip())
-            self.emit(Event("log", process_id, reason=f"process details: cmd='{shown}', "
+            self.emit(Log(process_id, reason=f"process details: cmd='{shown}', "
                             f"cwd='{start.cwd}', custom_env?=True"))
         try:
             # no controlling terminal (vfork: fast) but under a tool, whose job control
@@ -122,7 +122,7 @@ class Starting(PlanActions):
         # followed before anything else runs: whatever raises below, its end is told
         self.spawn_task(self._wait(running))
         self.states[process_id] = "running"
-        self.emit(Event("started", process_id, pid=popen.pid))
+        self.emit(Started(process_id, pid=popen.pid))
         self.process_event(process_id, "start", popen.pid)
         self.flag(process_id, "start").set()
         for plugin in self.plugins:
@@ -138,7 +138,7 @@ class Starting(PlanActions):
 
     def _fail(self, process_id: str, reason: str) -> None:
         self.states[process_id] = "failed"
-        self.emit(Event("failed", process_id, reason=reason))
+        self.emit(Failed(process_id, reason=reason))
 
     def _watch_exit(self, running: Running) -> None:
         """The child's exit wakes the loop through a pidfd: no thread per child."""
@@ -236,7 +236,7 @@ class Starting(PlanActions):
         if running.plan.respawn and tool and code == 0 and not requested:
             # the operator left the tool (gdb's quit): a debugging session that ended, not
             # a node to bring back under gdb again; a crash under it still respawns
-            self.emit(Event("log", process_id, level="INFO", reason=(
+            self.emit(Log(process_id, level="INFO", reason=(
                 f"ended under '{tool}' with status 0: not respawned; a plain restart "
                 "runs it as the file says")))
         elif self.should_respawn(running, code):
@@ -244,7 +244,7 @@ class Starting(PlanActions):
         elif running.plan.respawn and not requested:
             tries = self.respawner.tries(process_id)
             ended = "failed" if code != 0 else "ended"
-            self.emit(Event("log", process_id, level="ERROR" if code != 0 else "INFO",
+            self.emit(Log(process_id, level="ERROR" if code != 0 else "INFO",
                             reason=(f"respawn gives up: it {ended} {tries + 1} times "
                                     f"(respawn_max_retries="
                                     f"{running.plan.respawn_max_retries})")))
@@ -257,7 +257,7 @@ class Starting(PlanActions):
         tries, delay = self.respawner.next_try(proc, running.started)
         self.states[proc.id] = "respawning"
         self.busy += 1
-        self.emit(Event("respawning", proc.id, reason=f"try {tries} in {delay:g} s",
+        self.emit(Respawning(proc.id, reason=f"try {tries} in {delay:g} s",
                         data={"try": tries, "delay": delay}))
         called_off = self.respawn_waits[proc.id] = asyncio.Event()
         try:

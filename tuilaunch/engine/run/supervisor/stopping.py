@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..events import Event
+from ..events import Event, Log
 from ..process.readers import Running
 
 STAGES = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
@@ -98,7 +98,7 @@ class Stopper:
             if running.exited.done():
                 break
             if stage == len(STAGES) - 1:
-                self._say(Event("log", proc.id, level="ERROR", reason=(
+                self._say(Log(proc.id, level="ERROR", reason=(
                     f"still there {waits[stage]:g} s after SIGKILL (stuck in the kernel?); "
                     "no longer waiting for it")))
                 return
@@ -114,16 +114,16 @@ class Stopper:
         as an ERROR `failed to terminate ... escalating to`, then `sending signal`."""
         signal_name = STAGES[stage].name
         if why == "timeout":
-            self._say(Event("log", name, level="ERROR", reason=(
+            self._say(Log(name, level="ERROR", reason=(
                 f"process[{name}] failed to terminate '{waits[stage - 1]:g}' seconds after "
                 f"receiving '{STAGES[stage - 1].name}', escalating to '{signal_name}'")))
         elif why:  # the operator insisted (a second Ctrl+C, q, `stop` again)
-            self._say(Event("log", name, level="WARN", reason=(
+            self._say(Log(name, level="WARN", reason=(
                 f"asked again: sending signal '{signal_name}' to process[{name}]")))
             return
         elif self.terminal_sigint and self._in_shutdown():
             return
-        self._say(Event("log", name, reason=f"sending signal '{signal_name}' to "
+        self._say(Log(name, reason=f"sending signal '{signal_name}' to "
                         f"process[{name}]"))
 
     def real_crashes(self, crashes: dict[str, int],

@@ -26,8 +26,18 @@ import time
 from pathlib import Path
 
 from ...errors import LaunchError
-from ...plan.model import Plan, PlanDiff, diff_plans
-from ..events import Consumer, Event, LaunchEvent, ProcessExited
+from ...plan.model import ActionKind, Plan, PlanDiff, diff_plans
+from ..events import (
+    Consumer,
+    Event,
+    LaunchEvent,
+    Log,
+    Output,
+    ProcessExited,
+    Shutdown,
+    Started,
+    Stopping,
+)
 from ..process.readers import Running
 from .interacting import Interacting, restart_fields
 from .placed import ELSEWHERE, RemoteControl
@@ -58,7 +68,7 @@ class Supervisor(Interacting):
                 begun = plugin.run_started()
                 if begun is not None:
                     self.spawn_task(begun)
-            said_now = [a for a in self.plan.actions if a.kind == "log" and a.enabled
+            said_now = [a for a in self.plan.actions if a.kind == ActionKind.LOG and a.enabled
                         and a.trigger is None and self.runs_actions()]
             for action in said_now:
                 self.log_now(action)
@@ -232,7 +242,7 @@ class Supervisor(Interacting):
         elif process_id in self.respawn_waits:  # between two runs: it does not come back
             self.respawn_waits.pop(process_id).set()
             self.states[process_id] = "exited"
-            self.emit(Event("log", process_id, reason="respawn called off: stopped while it "
+            self.emit(Log(process_id, reason="respawn called off: stopped while it "
                             "waited to come back"))
             self.changed.set()
 
@@ -264,7 +274,7 @@ class Supervisor(Interacting):
         """The Shutdown event: said, and seen by the OnShutdown handlers. A Shutdown action
         performed while the launch already stops calls this again, as launch emits its
         event again (its handlers see both reasons)."""
-        self.emit(Event("shutdown", reason=reason,
+        self.emit(Shutdown(reason=reason,
                         data={"launch": True} if reason in self.launch_reasons else None))
         for action in self.triggers.on_shutdown:
             try:
@@ -285,7 +295,12 @@ class Supervisor(Interacting):
         return sent
 
     async def escalate(self, running: Running) -> None:
-        """SIGINT, then SIGTERM, then SIGKILL, to the process's whole group."""
+        """SIGINT, then SIGTERM, then SIGKILL, to the process's whole group; it is
+        "stopping" until its end is told, for every client, whoever asked."""
+        process_id = running.plan.id
+        if self.states.get(process_id) == "running":
+            self.states[process_id] = "stopping"
+            self.emit(Stopping(process_id, pid=running.process.pid))
         await self.stopper.escalate(running)
 
     def kill_all(self) -> None:
@@ -352,13 +367,13 @@ class Supervisor(Interacting):
         process_id = event.process
         if process_id is None or process_id not in self.states:
             return
-        if event.kind == "output":
+        if isinstance(event, Output):
             self.emit(event)
             if self.triggers.watches_output:  # OnProcessIO handlers here
                 self.dispatch_io(process_id, event.stream or "stdout", event.lines,
                                  self.placing.pids_elsewhere.get(process_id, 0))
             return
-        if event.kind == "started" and event.pid is not None:
+        if isinstance(event, Started) and event.pid is not None:
             self.placing.pids_elsewhere[process_id] = event.pid
         if state is not None:
             self.states[process_id] = state
@@ -368,7 +383,7 @@ class Supervisor(Interacting):
                 self.crashes[process_id] = event.code
                 self.crash_times[process_id] = time.monotonic()
         self.emit(event)
-        if event.kind == "started":
+        if isinstance(event, Started):
             self.external_event(process_id, "start", event.pid)
         elif isinstance(event, ProcessExited):
             self.external_event(process_id, "exit", event.pid, event.code)
