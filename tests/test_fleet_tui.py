@@ -11,9 +11,10 @@ import json
 import os
 import re
 import signal
+from pathlib import Path
 
 import pytest
-from textual.widgets import Static
+from textual.widgets import Input, Static
 
 from tuilaunch.client import remote_supervisor
 from tuilaunch.tui.fleet.app import FleetApp, FleetHelp
@@ -23,7 +24,7 @@ from tuilaunch.tui.screens.interact_dialogs import CommandScreen
 
 from .conftest import run_cli, wait_for
 from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
-from .test_fleet_cli import start, start_all, with_gone_host
+from .test_fleet_cli import domain, start, start_all, with_gone_host
 from .test_lifecycle_tui import LIFECYCLE
 from .test_sessions import Terminal, detached_with, run_cli_together, runtime, tl  # noqa: F401
 from .test_tui import until
@@ -240,3 +241,85 @@ def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write):
     for name, process in ((first, "lc-1"), (second, "lc2-1")):
         assert tl("status", name, "--json").returncode == 0
         tl("wait", name, process, "running", "--timeout", "30")  # q left both running
+
+
+@pytest.mark.usefixtures("runtime")  # a private session folder
+def test_services_params_and_topics_tabs_follow_the_selected_session(write):
+    """Two robots' launches on two ROS domains: 3, 4 and 5 in the fleet view show the
+    services, the nodes' parameters and the topics of the session of the selected row, each
+    robot's own graph; a Nodes key does nothing there; `/` goes into the tab's filter."""
+    bringup = str(Path(__file__).parents[1] / "examples" / "bringup.py")
+    names = []
+    for robot, offset in (("ra", 0), ("rb", 1)):
+        done = run_cli(bringup, "--detach", "--name", robot, f"robot:={robot}",
+                       "listener:=false", env={**os.environ, "ROS_DOMAIN_ID": domain(offset)})
+        assert done.returncode == 0, done.stderr
+        names.append(robot)
+    for robot in names:
+        tl("wait", robot, "service_server-4", "running", "--timeout", "60")
+
+    async def watched() -> None:
+        app = FleetApp([(None, "ra"), (None, "rb")])
+        async with app.run_test(size=(100, 30)) as pilot:
+            ra, rb = app.members
+            await until(pilot, lambda: ra.supervisor is not None and rb.supervisor is not None)
+            panels = {m.label: app.session_tabs.of(m) for m in app.members}
+
+            def services(member: Member) -> list[str]:
+                return [name for name, _ in panels[member.label].services.services]
+
+            await select(pilot, ra, "talker-1")
+            await pilot.press("3")
+            assert app.tabs.active == "services"
+            await until(pilot, lambda: "/ra/reset" in services(ra))
+            assert not [s for s in services(ra) if s.startswith("/rb/")]
+            assert "[local:ra]" in str(app.status_bar.render())
+            # a Nodes key does nothing here: the talker runs on
+            await pilot.press("s")
+            assert ra.supervisor.states["talker-1"] == "running"
+            # / into this tab's filter, escape back to its list
+            await pilot.press("slash")
+            assert app.focused is panels["local:ra"].services.query_one("#svc-filter")
+            await pilot.press("escape")
+            assert app.focused is panels["local:ra"].services.query_one("#svc-list")
+
+            # the other robot: its own services, parameters and topics
+            await pilot.press("1")
+            await select(pilot, rb, "talker-1")
+            await pilot.press("3")
+            await until(pilot, lambda: "/rb/reset" in services(rb))
+            assert not [s for s in services(rb) if s.startswith("/ra/")]
+            assert "[local:rb]" in str(app.status_bar.render())
+            await pilot.press("4")
+            params = panels["local:rb"].params
+            await until(pilot, lambda: "/rb/talker" in params.nodes)
+            assert not [n for n in params.nodes if n.startswith("/ra/")]
+            await pilot.press("5")
+            topics = panels["local:rb"].topics
+            await until(pilot, lambda: "/rb/chatter" in topics.entries)
+            assert "/ra/chatter" not in topics.entries
+            await until(pilot, lambda: (topics.rates.get("/rb/chatter") or {}).get("rate_hz"))
+            assert topics.active and not panels["local:ra"].topics.active
+
+            # 2 on ra: its form; an edit and F5 relaunch ra alone
+            await pilot.press("1")
+            await select(pilot, ra, "talker-1")
+            await pilot.press("2")
+            form = panels["local:ra"].args
+            await until(pilot, lambda: form.query("#arg-rate"))
+            assert form.query_one("#arg-robot", Input).value == "ra"
+            form.query_one("#arg-rate", Input).value = "5.0"  # as typed
+            await until(pilot, lambda: form.preview is not None)
+            await pilot.press("f5")
+            await until(pilot, lambda: ra.session.arguments.get("rate") == "5.0"
+                        and starts(ra, "talker-1") == 2)
+            assert "Applied." in str(form.query_one("#args-preview", Static).render())
+            assert rb.session.arguments.get("rate") != "5.0" and starts(rb, "talker-1") == 1
+            await pilot.press("q")
+            await until(pilot, lambda: app.detached)
+
+    asyncio.run(watched())
+    assert tl("status", "ra", "--json").returncode == 0
+    assert json.loads(tl("status", "ra", "--json").stdout)["arguments"]["rate"] == "5.0"
+    for robot in names:
+        tl("stop", robot)

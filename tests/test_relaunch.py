@@ -550,7 +550,7 @@ def test_wait_running_waits_through_a_relaunch_that_stopped_the_process(
         relaunch.start()
         # echo is stopped; the slow one holds the relaunch for seconds
         wait_for(lambda: {p["id"]: p["state"] for p in status(name)["processes"]}
-                 == {"echo-1": "exited", "slow-2": "running"}, timeout=60)
+                 == {"echo-1": "exited", "slow-2": "stopping"}, timeout=60)
         tl("wait", name, "echo-1", "running", "--timeout", "60")
         relaunch.join(60)
         echo = next(p for p in status(name)["processes"] if p["id"] == "echo-1")

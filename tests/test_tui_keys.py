@@ -141,8 +141,8 @@ async def test_a_value_typed_after_the_args_tab_key_in_one_read_goes_into_its_fi
         burst(app, "2", "tab", "ctrl+u", *"r2sq")
         await until(pilot, lambda: field(app, "arg-robot").value == "r2sq")
         assert not app.quitting and pids(app) == before
-        await until(pilot, lambda: app.preview is not None
-                    and app.preview.arguments.get("robot") == "r2sq")
+        await until(pilot, lambda: app.args_tab.preview is not None
+                    and app.args_tab.preview.arguments.get("robot") == "r2sq")
         # back to Apply, right to Defaults: a space there resets nothing, Enter does
         burst(app, "shift+tab", "shift+tab", "right", "space")
         await until(pilot, lambda: app.focused is app.query_one("#defaults"))

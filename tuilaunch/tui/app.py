@@ -1,8 +1,9 @@
 """The Textual app: lays out the panels and wires them to the engine.
 
 The app is composed of one mixin per concern, all built on SessionLink (the state and the
-engine link): keyboard (typing into a node, tools), node_commands, navigation, arguments,
-quitting, inspector.
+engine link): keyboard (typing into a node, tools), node_commands, navigation, quitting,
+inspector. The Args tab is a widget of its own (arguments.py's ArgsTab) that owns its
+state, as each tab's will: the app is its host.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from ..engine.plan.machines import Placement
 from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
-from .arguments import Arguments
+from .arguments import ArgsTab
 from .gaps import Gaps
 from .inspector import Inspector
 from .key_order import KeyOrder
@@ -38,7 +39,6 @@ from .keyboard import NodeKeyboard
 from .navigation import Navigation
 from .node_commands import NodeCommands
 from .quitting import Quitting
-from .screens.args_panel import ArgsPanel
 from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
@@ -58,11 +58,12 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments, Quitting,
-                   Gaps, KeyOrder):
+class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, Gaps,
+                   KeyOrder):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
-    concern does lives in its mixin (session_link, node_commands, navigation, arguments,
-    quitting, inspector, gaps); key_order hands the keys out one after the other."""
+    concern does lives in its mixin (session_link, node_commands, navigation, quitting,
+    inspector, gaps) or its tab's widget (arguments); key_order hands the keys out one
+    after the other."""
 
     CSS_PATH = "screens/app.tcss"
     TITLE = "tuilaunch"
@@ -119,8 +120,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
                                       max_lines=self.scrollback, max_fps=self.pane_fps,
                                       id="output")
             with TabPane("2 Args", id="args"):
-                yield ArgsPanel(self.session.plan.arguments, self.session.plan.file,
-                                id="args-panel")
+                yield ArgsTab(self, id="args-tab")
             with TabPane("3 Services", id="services"):
                 yield ServicesPanel(self.graph, id="services-panel")
             with TabPane("4 Params", id="params"):
@@ -136,7 +136,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         # (help, quit) while the engine keeps reporting
         self.launch_tree = self.query_one(LaunchTree)
         self.output_panel = self.query_one(OutputPanel)
-        self.args_panel = self.query_one(ArgsPanel)
+        self.args_tab = self.query_one(ArgsTab)
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
         self.detail_bar = self.query_one("#detail", Static)
@@ -199,8 +199,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         self.supervisor = remote  # from here on, only its port (client/port.py)
         remote.subscribe(self.buffer)
         if isinstance(self.session, ServedSession):  # the form from the server's plan
-            self.args_panel.arguments = self.session.plan.arguments
-            self.args_panel.refresh(recompose=True)
+            self.args_tab.show_form()
         tree = self.launch_tree
         tree.show_plan(self.session.plan, self.supervisor.states)
         self.describe_waiting()
@@ -218,8 +217,16 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Arguments,
         if self.tabs.active == "nodes":
             tree.focus()
         self.tab_shown(self.tabs.active or "nodes")
-        if self.first_tab != "nodes":  # opened from a fleet TUI's 2-5 (fleet/app.py)
+        if self.first_tab != "nodes":  # `attach --tab`
             self.call_after_refresh(self.action_tab, self.first_tab)
+
+    def tab_shown(self, pane: str) -> None:
+        super().tab_shown(pane)
+        self.args_tab.set_shown(pane == "args")
+
+    def action_apply(self) -> None:
+        """F5, from any tab: the form's values and the file as it is on disk now."""
+        self.args_tab.apply()
 
     # --- command palette ---------------------------------------------------------------------
 

@@ -1,36 +1,89 @@
-"""Editing launch arguments: the preview of what they would change, and the relaunch."""
+"""The Args tab of one session: its form, the preview of what the edits change, and the
+relaunch (F5).
+
+`ArgsTab` is a widget of its own that owns that state (the preview, the file's stamp), and
+reaches its session through an `ArgsHost`: the single-session TUI is one, each session of
+a fleet TUI (fleet/tabs.py) another, so both show the same tab, each for its session.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Protocol
 
 from textual import on, work
+from textual.app import ComposeResult
+from textual.containers import Vertical
 from textual.timer import Timer
 
+from ..client.port import LaunchPort
 from ..engine.errors import LaunchError
 from ..engine.plan.model import ArgumentInfo, PlanDiff
-from ..engine.plan.session import Preview, Stamp, file_stamp
+from ..engine.plan.session import Preview, Session, Stamp, file_stamp
+from ..engine.run.engine_thread import EngineThread
 from .screens.args_panel import ArgsPanel, check_plan, check_values, type_notes
-from .session_link import SessionLink
+from .screens.tree_panel import LaunchTree
 
 
-class Arguments(SessionLink):
-    """The Args tab's edits: previewed against the plan as they are typed, applied (F5) as a
-    relaunch."""
+class ArgsHost(Protocol):
+    """What the Args tab needs of whoever holds its session."""
+
+    own_relaunch: list[str] | None
+    """The arguments of this client's own relaunch, until the session says it happened."""
+
+    @property
+    def session(self) -> Session: ...
+
+    @property
+    def supervisor(self) -> LaunchPort | None: ...
+
+    @property
+    def engine(self) -> EngineThread: ...
+
+    @property
+    def launch_tree(self) -> LaunchTree: ...
+
+    def describe_waiting(self) -> None: ...
+
+    def update_status(self) -> None: ...
+
+
+class ArgsTab(Vertical):
+    """The Args tab's edits: previewed against the plan as they are typed, applied (F5) as
+    a relaunch of the host's session."""
 
     FILE_CHECK_S = 1.0
-    """While the Args tab shows, the launch file's stamp is read this often: an edit saved
+    """While the tab shows, the launch file's stamp is read this often: an edit saved
     meanwhile (or a syntax error fixed) is previewed without a key, so the tab never says
     "No change" or "no longer loads" about a file that is not the one on disk."""
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(self, host: ArgsHost, **kwargs: object) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.host = host
+        self.preview: Preview | None = None
         self.file_timer: Timer | None = None
         self.file_seen: Stamp = None
 
+    def compose(self) -> ComposeResult:
+        plan = self.host.session.plan
+        yield ArgsPanel(plan.arguments, plan.file, id="args-panel")
+
+    @property
+    def panel(self) -> ArgsPanel:
+        return self.query_one(ArgsPanel)
+
+    def show_form(self) -> None:
+        """The form of the plan the session runs (a session's own, or a relaunch's, from
+        another client or with an edited file): an edit starts from what runs."""
+        self.preview = None
+        self.host.launch_tree.set_preview(None)
+        self.panel.arguments = self.host.session.plan.arguments
+        self.panel.refresh(recompose=True)
+
     @on(ArgsPanel.Edited)
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
-        self.preview_values(event.values)
+        event.stop()
+        if self.host.supervisor is not None:  # the form drawn before the session is followed
+            self.preview_values(event.values)
 
     def preview_values(self, values: dict[str, str], reread: bool = False,
                        shown: bool = False) -> None:
@@ -38,20 +91,22 @@ class Arguments(SessionLink):
         and F5 never applies it. The launch file is read again when it changed on disk
         (`reread`: whatever its stamp says, as F5 does), and what the edit changes is said.
         `shown`: the tab came on screen, nothing was typed."""
+        host = self.host
+        session = host.session
         previous = self.preview
-        current = {a.name: a.value for a in self.session.plan.arguments}
+        current = {a.name: a.value for a in session.plan.arguments}
         edits = {k: v for k, v in values.items() if v != current.get(k)}
-        panel = self.args_panel
-        tree = self.launch_tree
-        running = {p for p, s in (self.supervisor.states.items() if self.supervisor else ())
+        panel = self.panel
+        tree = host.launch_tree
+        running = {p for p, s in (host.supervisor.states.items() if host.supervisor else ())
                    if s == "running"}
-        problem = check_values(self.session.plan.arguments, edits)
+        problem = check_values(session.plan.arguments, edits)
         if problem is None:
-            self.preview = self.session.preview(edits, running, reread=reread)
+            self.preview = session.preview(edits, running, reread=reread)
             if self.preview.plan is not None:
                 problem = check_plan(self.preview.plan)
         else:
-            self.preview = Preview({**self.session.arguments, **edits}, None, None, problem)
+            self.preview = Preview({**session.arguments, **edits}, None, None, problem)
         if problem is not None:
             self.preview = Preview(self.preview.arguments, None, None, problem)
         if self.preview.error is not None or self.preview.diff is None:
@@ -70,18 +125,17 @@ class Arguments(SessionLink):
             # a value unlike its default's type is passed as written, as ros2 launch does:
             # said, as a slip is likely, never refused
             notes = "".join(f"Warning: {note} (passed as written); " for note in
-                            type_notes(self.session.plan.arguments, edits))
+                            type_notes(session.plan.arguments, edits))
             panel.set_preview_text(
-                notes + _describe_diff(self.preview, self.session.plan.arguments),
-                error=False)
-        self.refresh_bindings()
+                notes + _describe_diff(self.preview, session.plan.arguments), error=False)
+        self.app.refresh_bindings()
 
-    def tab_shown(self, pane: str) -> None:
-        super().tab_shown(pane)
-        if pane == "args" and self.supervisor is not None:
-            # the file may have been edited meanwhile: the preview says so before F5
-            self.file_seen = file_stamp(self.session.path)
-            self.preview_values(self.args_panel.values(), shown=True)
+    def set_shown(self, shown: bool) -> None:
+        """The tab came on screen (the file may have been edited meanwhile: the preview
+        says so before F5), or left it (the file is no longer watched)."""
+        if shown and self.host.supervisor is not None:
+            self.file_seen = file_stamp(self.host.session.path)
+            self.preview_values(self.panel.values(), shown=True)
             if self.file_timer is None:
                 self.file_timer = self.set_interval(self.FILE_CHECK_S, self._check_file,
                                                     pause=True)
@@ -91,19 +145,20 @@ class Arguments(SessionLink):
 
     def _check_file(self) -> None:
         """The file changed on disk while the tab shows: the preview says so now."""
-        stamp = file_stamp(self.session.path)
-        if stamp != self.file_seen and self.supervisor is not None:
+        stamp = file_stamp(self.host.session.path)
+        if stamp != self.file_seen and self.host.supervisor is not None:
             self.file_seen = stamp
-            self.preview_values(self.args_panel.values())
+            self.preview_values(self.panel.values())
 
     @on(ArgsPanel.ApplyRequested)
-    def _apply_requested(self) -> None:
-        self.action_apply()
+    def _apply_requested(self, event: ArgsPanel.ApplyRequested) -> None:
+        event.stop()
+        self.apply()
 
-    def action_apply(self) -> None:
-        # the form as it is now: keys typed just before F5 may not have been previewed yet;
-        # and the file as it is now, as a new ros2 launch would read it
-        self.preview_values(self.args_panel.values(), reread=True)
+    def apply(self) -> None:
+        """F5: the form as it is now (keys typed just before F5 may not have been previewed
+        yet), and the file as it is now, as a new ros2 launch would read it."""
+        self.preview_values(self.panel.values(), reread=True)
         preview = self.preview
         if preview is None or preview.plan is None or preview.diff is None:
             error = "" if preview is None else str(preview.error)
@@ -116,35 +171,37 @@ class Arguments(SessionLink):
 
     @work(group="relaunch", exclusive=True, exit_on_error=False)
     async def relaunch(self, preview: Preview) -> None:
-        assert self.supervisor is not None
-        saved = self.session.checkpoint()
-        plan = self.session.accept(preview)
-        self.own_relaunch = [f"{k}:={v}" for k, v in self.session.arguments.items()]
+        host = self.host
+        assert host.supervisor is not None
+        session = host.session
+        saved = session.checkpoint()
+        plan = session.accept(preview)
+        host.own_relaunch = [f"{k}:={v}" for k, v in session.arguments.items()]
         try:
-            diff = await self.engine.run(self.supervisor.replace_plan(plan))
+            diff = await host.engine.run(host.supervisor.replace_plan(plan))
         except LaunchError as exc:
             # the session refused (its file no longer loads there): nothing changed
-            self.session.rollback(saved)
-            self.own_relaunch = None
+            session.rollback(saved)
+            host.own_relaunch = None
             message = str(exc).split(": cannot apply: ", 1)[-1]
-            self.args_panel.set_preview_text(
+            self.panel.set_preview_text(
                 f"Not applied: {message}; the launch runs on as it was.", error=True)
             self.notify(message, title="relaunch refused", severity="error")
             return
         self.preview = None
-        tree = self.launch_tree
+        tree = host.launch_tree
         tree.set_preview(None)
-        tree.show_plan(plan, self.supervisor.states)
-        self.describe_waiting()
-        if _form_of(plan.arguments) != _form_of(self.args_panel.arguments):
+        tree.show_plan(plan, host.supervisor.states)
+        host.describe_waiting()
+        if _form_of(plan.arguments) != _form_of(self.panel.arguments):
             # the edited file declares other arguments: the form is the new file's
-            self.args_panel.arguments = plan.arguments
-            self.args_panel.refresh(recompose=True)
-        self.args_panel.set_preview_text(
+            self.panel.arguments = plan.arguments
+            self.panel.refresh(recompose=True)
+        self.panel.set_preview_text(
             f"Applied. Stopped: {', '.join(diff.stop) or 'none'}; started: "
             f"{', '.join(diff.start) or 'none'}.", error=False)
-        self.update_status()
-        self.refresh_bindings()
+        host.update_status()
+        self.app.refresh_bindings()
 
 
 def _describe_diff(preview: Preview, running: list[ArgumentInfo]) -> str:

@@ -27,7 +27,7 @@ from ..client.port import LaunchPort
 from ..client.read_only import ReadOnlyError
 from ..engine.errors import LaunchError
 from ..engine.plan.resolve import remove_default_params_dir
-from ..engine.plan.session import Preview, Session
+from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.events import (
@@ -48,10 +48,10 @@ from ..engine.run.events import (
 )
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.session.session_dir import SessionError
+from .arguments import ArgsTab
 from .lifecycle_steps import LifecycleSteps
 from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
 from .respawn_countdown import RespawnCountdown
-from .screens.args_panel import ArgsPanel
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree
 
@@ -93,7 +93,7 @@ class SessionLink(App[int]):
     # is a modal (help, quit) while the engine keeps reporting
     launch_tree: LaunchTree
     output_panel: OutputPanel
-    args_panel: ArgsPanel
+    args_tab: ArgsTab
     tabs: TabbedContent
     status_bar: Static
     detail_bar: Static
@@ -141,7 +141,6 @@ class SessionLink(App[int]):
         every change (client/read_only.py), and the refusal is shown as one line."""
         self.detached = False
         self.own_relaunch: list[str] | None = None
-        self.preview: Preview | None = None
         self.exit_status = 0
         self.quitting = False
         self.terminal_lost = False
@@ -465,10 +464,7 @@ class SessionLink(App[int]):
         """Another operator applied new values, or an edited file (`edited`: which one):
         the form shows them, so an edit here starts from what runs, never silently reverts
         theirs."""
-        self.preview = None
-        self.launch_tree.set_preview(None)
-        self.args_panel.arguments = self.session.plan.arguments
-        self.args_panel.refresh(recompose=True)
+        self.args_tab.show_form()
         if not self.replaying:  # a relaunch before this client came is no news to it
             what = [f"{edited} changed"] if edited else []
             what += [" ".join(arguments)] if arguments else [] if edited else ["defaults"]

@@ -9,10 +9,10 @@ link lost to one robot greys its root, says why and that it reconnects (RemoteSu
 retries by itself), and its rows refuse keys with one line while the others stay live. A
 robot unreachable at start is a root that says why and retries.
 
-The Args, Services, Params and Topics tabs are the single-session TUI's: `2`-`5` (and
-`o`, its Nodes tab) open it on the selected session at that tab (this screen suspended
-meanwhile; `d` there comes back here), so those tabs, and every key of one session, follow
-the session of the selected row without a second copy of them here.
+The Args, Services, Params and Topics tabs (`2`-`5`) are here, each session with its own
+panels (tabs.py), showing the session of the selected row; F5 relaunches that session. A
+plot (`p` in Topics) is `tuilaunch plot` on the selected session, and `o` the session in
+the single-session TUI (this screen suspended meanwhile; `q`, `d` there come back here).
 A fleet TUI never stops a session by leaving: `q` detaches from all of them.
 """
 
@@ -29,20 +29,27 @@ from rich.text import Text
 from textual import events, on, work
 from textual.app import App, ComposeResult
 from textual.binding import Binding
-from textual.containers import Horizontal, VerticalScroll
-from textual.widgets import ContentSwitcher, Footer, Static, Tree
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.widget import Widget
+from textual.widgets import ContentSwitcher, Footer, Static, TabbedContent, TabPane, Tree
 
 from ...client.port import LaunchPort, Verb
 from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
+from ...engine.run.session.session_dir import SessionError
 from ..keyboard import show_command_line
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen, HelpScreen
 from ..screens.output_panel import OutputPanel
+from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree, RowData
 from ..session_link import DRAIN_HZ, PANE_CHROME
 from .member import Member
+from .tabs import FleetTabs
+
+NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane"})
+"""The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
 """Seconds before a session that could not be opened is tried again (then doubling)."""
@@ -62,6 +69,13 @@ class FleetTree(LaunchTree):
             self.app.step_tree(self, -1)
         else:
             super().action_cursor_up()
+
+
+class FleetTabbed(TabbedContent):
+    """Tabs that change only when asked (the tab keys, a click), as the single TUI's."""
+
+    def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
+        event.stop()
 
 
 class FleetHelp(HelpScreen):
@@ -93,6 +107,16 @@ class FleetApp(App[int]):
     #fleet-panes { width: 1fr; }
     """
     BINDINGS = [
+        Binding("1", "tab('nodes')", "Nodes", show=False,
+                tooltip="The sessions' trees and the selected node's output"),
+        Binding("2", "tab('args')", "Args", show=False,
+                tooltip="The selected session's launch arguments: edit, F5 applies"),
+        Binding("3", "tab('services')", "Services", show=False,
+                tooltip="The selected session's services: call one"),
+        Binding("4", "tab('params')", "Params", show=False,
+                tooltip="The selected session's nodes' parameters: get and set them"),
+        Binding("5", "tab('topics')", "Topics", show=False,
+                tooltip="The selected session's topics, rates and QoS, echo"),
         Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
         Binding("r", "command('restart')", "Restart",
                 tooltip="Restart the selected node or group"),
@@ -105,16 +129,11 @@ class FleetApp(App[int]):
         Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
                 tooltip="Deactivate an active, clean up an inactive lifecycle node"),
         Binding("o", "open_session", "Open",
-                tooltip="The selected session in its own TUI: Args, Services, Params, "
-                "Topics (d there comes back)"),
-        Binding("2", "open_session('args')", "Args", show=False,
-                tooltip="The selected session's arguments, in its own TUI"),
-        Binding("3", "open_session('services')", "Services", show=False,
-                tooltip="Its services, in its own TUI"),
-        Binding("4", "open_session('params')", "Params", show=False,
-                tooltip="Its nodes' parameters, in its own TUI"),
-        Binding("5", "open_session('topics')", "Topics", show=False,
-                tooltip="Its topics, rates and QoS, in its own TUI"),
+                tooltip="The selected session in the single-session TUI, with every key of "
+                "one session (d there comes back)"),
+        Binding("f5", "apply", "Apply", show=False,
+                tooltip="Relaunch the selected session with the edited arguments and its "
+                "file as it is now"),
         Binding("R", "reconnect", "Reconnect", show=False,
                 tooltip="Try the selected session's link again now"),
         # the pane's keys, as the single-session TUI's NodesView binds them
@@ -155,6 +174,10 @@ class FleetApp(App[int]):
             pane = OutputPanel(store, Path.cwd(), max_lines=scrollback, id=f"fleet-pane-{i}")
             self.members.append(Member(label, host, name, tree, pane, store))
         self.current = self.members[0]
+        self.session_tabs = FleetTabs(self.members, self.member_request, lambda: self.engine,
+                                      self.update_status)
+        for member in self.members:
+            member.on_event = self.session_tabs.event
         self._status_text = ""
         self._detail_text = ""
         self.detached = False
@@ -163,20 +186,27 @@ class FleetApp(App[int]):
 
     def compose(self) -> ComposeResult:
         yield Static("", id="status")
-        yield Static("", id="detail")
-        with Horizontal(id="fleet-split"):
-            with VerticalScroll(id="fleet-trees"):
-                for member in self.members:
-                    yield member.tree
-            with ContentSwitcher(id="fleet-panes", initial=self.members[0].pane.id):
-                for member in self.members:
-                    yield member.pane
+        with FleetTabbed(initial="nodes", id="fleet-tabs"):
+            with TabPane("1 Nodes", id="nodes"), Vertical(id="nodes-tab"):
+                yield Static("", id="detail")
+                with Horizontal(id="fleet-split"):
+                    with VerticalScroll(id="fleet-trees"):
+                        for member in self.members:
+                            yield member.tree
+                    with ContentSwitcher(id="fleet-panes", initial=self.members[0].pane.id):
+                        for member in self.members:
+                            yield member.pane
+            for tab, title in (("args", "2 Args"), ("services", "3 Services"),
+                               ("params", "4 Params"), ("topics", "5 Topics")):
+                with TabPane(title, id=tab):
+                    yield from self.session_tabs.compose(tab)
         yield Footer()
 
     def on_mount(self) -> None:
         self.status_bar = self.query_one("#status", Static)
         self.detail_bar = self.query_one("#detail", Static)
-        self.switcher = self.query_one(ContentSwitcher)
+        self.switcher = self.query_one("#fleet-panes", ContentSwitcher)
+        self.tabs = self.query_one(FleetTabbed)
         self.engine = EngineThread()
         for member in self.members:
             self.follow(member)
@@ -208,6 +238,7 @@ class FleetApp(App[int]):
         member.problem = None
         supervisor.subscribe(member.buffer)
         member.show_plan()
+        self.session_tabs.followed(member)
         member.show_events(supervisor.history)
         self.update_status()
         await self.engine.run(supervisor.run(keep_alive=True))
@@ -286,7 +317,71 @@ class FleetApp(App[int]):
         if member is not self.current:
             self.current = member
             self.switcher.current = member.pane.id
+            if self.tabs.active != "nodes":
+                self.session_tabs.shown(self.tabs.active, member)
             self.update_status()
+
+    # --- the tabs ------------------------------------------------------------------------
+
+    async def member_request(self, member: Member, op: str, **fields: object) -> object:
+        """A request to a member's session, from its panels (on the engine thread)."""
+        why = member.unavailable()
+        if why is not None or member.supervisor is None:
+            raise SessionError(f"{member.label}: {why or 'not connected'}")
+        return await self.engine.run(member.supervisor.request(op, **fields))
+
+    def action_tab(self, tab: str) -> None:
+        """1, 3, 4, 5: the tab, for the session of the selected row; the cursor where the
+        tab's work starts, so the keys typed next go there."""
+        if self.tabs.active != tab:
+            self.tabs.active = tab
+        self.session_tabs.shown(tab, self.current)
+        self._go_home(tab)
+        self.refresh_bindings()
+
+    def _go_home(self, tab: str) -> None:
+        home: Widget | None = self.current.tree if tab == "nodes" else \
+            self.session_tabs.home(tab)
+        if home is not None:
+            self.screen.set_focus(home)
+
+    @on(TabbedContent.TabActivated)
+    def _tab_clicked(self, event: TabbedContent.TabActivated) -> None:
+        tab = event.pane.id or "nodes"
+        if tab != self.session_tabs.active:  # a click on the tab: as its key
+            self.action_tab(tab)
+
+    def action_apply(self) -> None:
+        """F5, from any tab: the selected session relaunched with its Args tab's values and
+        its file as it is now (as the single TUI's F5)."""
+        member = self.current
+        if self._keys_reach(member):
+            self.session_tabs.of(member).args.apply()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action in NODES_ONLY and self.tabs.active != "nodes":
+            # `/` into the tab's filter; the Nodes tab's other keys are not this tab's
+            return action == "pane" and parameters[:1] == ("search",)
+        return True
+
+    def action_leave_field(self) -> None:
+        """Escape in a text field: back where the tab's work starts."""
+        if self.tabs.active == "nodes":
+            self.current.pane.action_clear_search()
+        self._go_home(self.tabs.active)
+
+    @on(TopicsPanel.PlotAsked)
+    def _plot_asked(self, message: TopicsPanel.PlotAsked) -> None:
+        """p on a topic: `tuilaunch plot` on the selected session, this screen suspended
+        meanwhile (q there comes back)."""
+        member = self.current
+        if member.unavailable() is not None:
+            self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
+            return
+        with self.suspend():
+            subprocess.run([sys.executable, "-m", "tuilaunch", "plot", member.address,
+                            message.topic])
+        self.refresh()
 
     def step_tree(self, tree: FleetTree, step: int) -> None:
         """Up from a tree's first row, down from its last: the neighbouring session's."""
@@ -452,6 +547,11 @@ class FleetApp(App[int]):
         self.current.pane.show_view(None)
 
     def action_pane(self, name: str) -> None:
+        if self.tabs.active != "nodes":  # `/` in another tab: into its filter field
+            field = self.session_tabs.filter_field(self.tabs.active)
+            if field is not None:
+                self.screen.set_focus(field)
+            return
         getattr(self.current.pane, f"action_{name}")()
 
     def action_reconnect(self) -> None:

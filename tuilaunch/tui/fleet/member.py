@@ -10,6 +10,7 @@ relaunch, a stop or a lost link of one touches nothing of another.
 from __future__ import annotations
 
 import asyncio
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from rich.text import Text
@@ -26,6 +27,7 @@ from ...engine.run.events import (
     Log,
     Output,
     ProcessExited,
+    Reading,
     Relaunched,
     Started,
     Stopping,
@@ -59,6 +61,8 @@ class Member:
     asked_to_stop: set[str] = field(default_factory=set)
     lifecycle_steps: LifecycleSteps = field(default_factory=LifecycleSteps)
     """`]`, `[` on this session's lifecycle nodes, in the order typed."""
+    on_event: Callable[[Member, Event], None] | None = None
+    """Where the events for its tabs go (readings, relaunches): fleet/tabs.py."""
 
     @property
     def address(self) -> str:
@@ -124,10 +128,15 @@ class Member:
                     tree.set_state(event.process, state)
                 level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
                 fresh += store.add_event(event.process or "launch", event.reason or "", level)
+            elif isinstance(event, Reading):
+                if self.on_event is not None:
+                    self.on_event(self, event)
             elif isinstance(event, LifecycleChanged) and event.process:
                 tree.set_lifecycle(event.process, event.reason or "")
             elif isinstance(event, Relaunched) and self.supervisor is not None:
                 self.show_plan()
+                if self.on_event is not None:
+                    self.on_event(self, event)
             elif isinstance(event, Dropped) and event.process:
                 store.count_dropped(event.process, event.code or 0)
                 where = event.data or {}

@@ -94,6 +94,8 @@ class ParamsPanel(GraphListing, Horizontal):
         self.reported = reported or dict
         self.timeout = timeout
         self.nodes: list[str] = []
+        self.shared: list[str] = []
+        """Names more than one node of the graph has (each listed once)."""
         self.node: str | None = None
         self.params: dict[str, ParameterInfo] = {}
         self.current: str | None = None
@@ -120,8 +122,13 @@ class ParamsPanel(GraphListing, Horizontal):
         self.query_one("#prm-nodes", OptionList).border_title = self.title(0, "", "node")
 
     def show_listing(self, listing: list[str], reload: bool) -> None:
-        if listing != self.nodes or not self.query_one("#prm-nodes", OptionList).option_count:
-            self.nodes = listing
+        # two nodes of one name (two launches on one ROS domain): listed once, and said, as
+        # `ros2 node list` warns; their parameters are whichever answers
+        unique = list(dict.fromkeys(listing))
+        shared = sorted({n for n in unique if listing.count(n) > 1})
+        if unique != self.nodes or shared != self.shared or \
+                not self.query_one("#prm-nodes", OptionList).option_count:
+            self.nodes, self.shared = unique, shared
             self._fill_nodes()
         if reload and self.node is not None:
             self.load_node(self.node)
@@ -137,7 +144,10 @@ class ParamsPanel(GraphListing, Horizontal):
         shown = [n for n in self.nodes if term in n.lower()]
         listing.add_options([Option(Text(n, no_wrap=True, overflow="ellipsis"), id=n)
                              for n in shown])
-        listing.border_title = self.title(len(shown), term, "node")
+        shared = len(self.shared)
+        listing.border_title = self.title(len(shown), term, "node", (
+            f"; {shared} name{'s' if shared > 1 else ''} shared by several nodes"
+            if shared else ""))
         if was in shown:  # the row the user was on stays highlighted
             listing.highlighted = shown.index(was)
 

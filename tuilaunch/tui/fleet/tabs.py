@@ -1,0 +1,167 @@
+"""The fleet TUI's Args, Services, Params and Topics tabs: each session its own panels.
+
+Each robot has its own file, arguments and ROS graph, so each member holds its own ArgsTab,
+ServicesPanel, ParamsPanel and TopicsPanel (the single-session TUI's widgets), acting on
+its own session; a tab shows the panels of the session of the selected row (a
+ContentSwitcher per tab), and the header says which. A member's panels keep what they
+showed (an edited form, a service's form, a node's parameters) while another session is
+selected; the Topics panel of a session not on screen has its rates and echo stopped, as
+the single TUI stops them when its tab is left.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+from typing import Any
+
+from textual.app import ComposeResult
+from textual.widget import Widget
+from textual.widgets import ContentSwitcher
+
+from ...client.port import LaunchPort
+from ...client.session_graph import SessionGraph
+from ...engine.plan.session import Session
+from ...engine.run.engine_thread import EngineThread
+from ...engine.run.events import Echo, Event, Rates, Relaunched
+from ..arguments import ArgsTab
+from ..screens.fields import Field
+from ..screens.params_panel import ParamsPanel
+from ..screens.services_panel import ServicesPanel
+from ..screens.topics_panel import TopicsPanel
+from ..screens.tree_panel import LaunchTree
+from .member import Member
+
+TABS = ("args", "services", "params", "topics")
+"""The tabs whose panels are per session (Nodes is the fleet's own split)."""
+FILTERS = {"services": "#svc-filter", "params": "#prm-filter", "topics": "#tpc-filter"}
+HOMES = {"args": "#apply", "services": "#svc-list", "params": "#prm-nodes",
+         "topics": "#tpc-table"}
+"""Where each tab's work starts: never a text field, so the tab keys and q work at once."""
+
+
+class MemberHost:
+    """A member as its Args tab's host (arguments.py's ArgsHost): its session, its link,
+    its tree; the app's engine thread and header."""
+
+    def __init__(self, member: Member, engine: Callable[[], EngineThread],
+                 update_status: Callable[[], None]) -> None:
+        self.member = member
+        self._engine = engine
+        self.update_status = update_status
+        self.own_relaunch: list[str] | None = None
+
+    @property
+    def session(self) -> Session:
+        return self.member.session
+
+    @property
+    def supervisor(self) -> LaunchPort | None:
+        return self.member.supervisor
+
+    @property
+    def engine(self) -> EngineThread:
+        return self._engine()
+
+    @property
+    def launch_tree(self) -> LaunchTree:
+        return self.member.tree
+
+    def describe_waiting(self) -> None:
+        self.member.refresh_root()  # the new plan's counts
+
+
+class SessionPanels:
+    """One member's Args, Services, Params and Topics panels, acting on its session alone."""
+
+    def __init__(self, member: Member, index: int, request: Callable[..., Any],
+                 host: MemberHost) -> None:
+        self.member = member
+        self.host = host
+        ask = partial(request, member)
+        self.args = ArgsTab(host, id=f"args-{index}")
+        self.graph = SessionGraph(ask)
+        self.services = ServicesPanel(lambda: self.graph, id=f"services-{index}")
+        self.params = ParamsPanel(lambda: self.graph, lambda: member.session.plan,
+                                  reported=lambda: member.store.reported_names,
+                                  request=ask, id=f"params-{index}")
+        self.topics = TopicsPanel(ask, id=f"topics-{index}")
+
+    def panel(self, tab: str) -> Widget:
+        return {"args": self.args, "services": self.services, "params": self.params,
+                "topics": self.topics}[tab]
+
+
+class FleetTabs:
+    """The per-session tabs of a fleet TUI: which session's panels show, and what a tab
+    does when it comes on screen. `request(member, op, **fields)` asks a member's session
+    (raises SessionError while it cannot be reached)."""
+
+    def __init__(self, members: list[Member], request: Callable[..., Any],
+                 engine: Callable[[], EngineThread], update_status: Callable[[], None]) -> None:
+        self.panels = {id(m): SessionPanels(m, i, request,
+                                            MemberHost(m, engine, update_status))
+                       for i, m in enumerate(members)}
+        self.members = members
+        self.active = "nodes"
+        self.current = members[0]
+
+    def of(self, member: Member) -> SessionPanels:
+        return self.panels[id(member)]
+
+    def compose(self, tab: str) -> ComposeResult:
+        """The tab's switcher, every session's panel in it."""
+        panels = [self.of(m).panel(tab) for m in self.members]
+        yield ContentSwitcher(*panels, id=f"fleet-{tab}", initial=panels[0].id)
+
+    def shown(self, tab: str, member: Member) -> None:
+        """`tab` is on screen for `member` (the selected session): its panels show and
+        refresh; the others' Topics stop measuring."""
+        self.active, self.current = tab, member
+        panels = self.of(member)
+        if tab in TABS:
+            switcher = panels.panel(tab).parent
+            if isinstance(switcher, ContentSwitcher):
+                switcher.current = panels.panel(tab).id
+        for other in self.members:
+            self.of(other).topics.set_shown(tab == "topics" and other is member)
+            self.of(other).args.set_shown(tab == "args" and other is member)
+        if tab == "services":
+            panels.services.refresh_listing()
+        elif tab == "params":
+            panels.params.refresh_listing()
+
+    def home(self, tab: str) -> Widget | None:
+        """Where the tab's work starts, for the selected session."""
+        selector = HOMES.get(tab)
+        if selector is None:
+            return None
+        return self.of(self.current).panel(tab).query_one(selector)
+
+    def filter_field(self, tab: str) -> Field | None:
+        selector = FILTERS.get(tab)
+        if selector is None:
+            return None
+        return self.of(self.current).panel(tab).query_one(selector, Field)
+
+    def followed(self, member: Member) -> None:
+        """The member's session is followed (again): its Args tab shows its plan's form."""
+        self.of(member).args.show_form()
+
+    def event(self, member: Member, event: Event) -> None:
+        """An event of the member's session for its tabs: a reading (rates, echo) for its
+        Topics panel; a relaunch, the new form in its Args tab (another client's: said)."""
+        panels = self.of(member)
+        if isinstance(event, Relaunched):
+            if event.lines != panels.host.own_relaunch:
+                panels.args.show_form()
+                panels.args.notify(f"{member.label}: relaunched by another client: "
+                                   f"{' '.join(event.lines) or 'defaults'}")
+            panels.host.own_relaunch = None
+            return
+        topics = panels.topics
+        if isinstance(event, Rates):
+            topics.show_rates(event.data or {})
+        elif isinstance(event, Echo):
+            topics.show_echo(event.data or {})
+
