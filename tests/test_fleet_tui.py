@@ -7,20 +7,24 @@ leaves the other live.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import os
 import re
 import signal
+import sys
 from pathlib import Path
 
 import pytest
+from textual import events
 from textual.widgets import Input, Static
 
 from tuilaunch.client import remote_supervisor
+from tuilaunch.tui.fleet import app as fleet_app
 from tuilaunch.tui.fleet.app import FleetApp, FleetHelp
 from tuilaunch.tui.fleet.member import Member
 from tuilaunch.tui.output_store import View
-from tuilaunch.tui.screens.interact_dialogs import CommandScreen
+from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 
 from .conftest import run_cli, wait_for
 from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
@@ -173,14 +177,21 @@ def test_a_robot_unreachable_at_start_is_a_retrying_root_and_the_others_open(
 
 def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
     start_all(write, (machines["robot1"], "base", 0), (machines["robot2"], "arm", 1))
-    # what a fleet's 2 opens: the selected session's own TUI on its Args tab
-    single = Terminal("attach", "robot1:base", "--tab", "args")
+    # what a fleet's i opens: the selected session's own TUI, typing into the node (one
+    # run with pipes, as here, is offered a terminal first: n leaves it as it is)
+    single = Terminal("attach", "robot1:base", "--type", "quiet-2")
     try:
-        single.read_until(b"F5 applies")
-        os.write(single.master, b"d")
-        assert single.wait_exit() == 0
+        single.read_until(b"quiet-2 has no terminal")
+        os.write(single.master, b"n")
+        assert single.press_until_exit(b"d") == 0  # the keys after n were the node's
     finally:
         single.close()
+    wrong = Terminal("attach", "robot1:base", "--type", "nosuch")  # one line, no TUI
+    try:
+        assert wrong.wait_exit() == 2
+        assert b"tuilaunch attach: error: session base: no process 'nosuch'" in wrong.screen
+    finally:
+        wrong.close()
     terminal = Terminal("attach", "robot1:base", "robot2:")
     try:
         for marker in (b"robot1:base", b"robot2:arm", b"tick"):
@@ -195,11 +206,12 @@ def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
 
 
 @pytest.mark.usefixtures("runtime")  # a private session folder
-def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write):
+def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write, monkeypatch):
     """`]` and `[` in the fleet view, on two local sessions each with a lifecycle node: the
     selected session's node steps (`[[` down to unconfigured, `]]` back up to active, typed
     faster than it moves), the other session's stays active; where no step goes, one line;
-    `c` shows the node's command line."""
+    `c` shows the node's command line, `g` restarts it under a tool, `i` opens the
+    session's own TUI typing into it."""
     first, _ = detached_with(str(write(LIFECYCLE, "one.py")), "lc-1")
     second, _ = detached_with(str(write(LIFECYCLE.replace("name='lc'", "name='lc2'"),
                                         "two.py")), "lc2-1")
@@ -234,10 +246,36 @@ def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write):
             await until(pilot, lambda: isinstance(app.screen, CommandScreen))
             assert "lifecycle_talker" in app.screen.line and "__node:=lc" in app.screen.line
             await pilot.press("escape")
+            # g: restarted under a tool there, the other robot's node untouched
+            await pilot.press("g")
+            await until(pilot, lambda: isinstance(app.screen, PrefixPrompt))
+            await pilot.press(*"nice", "enter")
+            await until(pilot, lambda: any("lc-1 runs under nice" in s for s in said))
+            await until(pilot, lambda: state(one, "lc-1") == "active")
+            # i: the session's own TUI, typing into the node; keys read with i were typed
+            # for that TUI, and never act here (an s that came with it stops nothing)
+            ran: list[list[str]] = []
+            with monkeypatch.context() as patched:  # subprocess.run is everyone's: briefly
+                patched.setattr(fleet_app.subprocess, "run", lambda args: ran.append(args))
+                patched.setattr(app, "suspend", contextlib.nullcontext)  # no terminal here
+                app.post_message(events.Key("i", "i"))
+                app.post_message(events.Key("s", "s"))
+                await until(pilot, lambda: ran)
+            assert ran == [[sys.executable, "-m", "tuilaunch", "attach", first, "--type",
+                            "lc-1"]]
+            for _ in range(5):
+                await pilot.pause(0.05)
+            assert one.supervisor.states["lc-1"] == "running"
             await pilot.press("q")
             await until(pilot, lambda: app.detached)
 
     asyncio.run(watched())
+    command = next(p for p in json.loads(tl("status", first, "--json").stdout)["processes"]
+                   if p["id"] == "lc-1")["command_line"]
+    assert " nice /" in command  # after the environment launch gives it
+    other = next(p for p in json.loads(tl("status", second, "--json").stdout)["processes"]
+                 if p["id"] == "lc2-1")["command_line"]
+    assert " nice " not in other
     for name, process in ((first, "lc-1"), (second, "lc2-1")):
         assert tl("status", name, "--json").returncode == 0
         tl("wait", name, process, "running", "--timeout", "30")  # q left both running

@@ -24,7 +24,7 @@ from tuilaunch.engine.run.session.session_dir import SessionError
 from .conftest import run_cli, run_headless, wait_for
 from .gdb_support import requires_gdb
 from .terminal_harness import PROGRAMS
-from .test_sessions import runtime, status, tl  # noqa: F401  (runtime: a fixture)
+from .test_sessions import Terminal, runtime, status, tl  # noqa: F401  (runtime: a fixture)
 
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
 
@@ -358,3 +358,20 @@ def test_headless_keyboard_nodes_get_a_terminal_and_a_crash_is_an_error(write):
     assert "[lines-1] ready" in out and "[keys-2] ready" in out
     assert "stdin is not a terminal" not in out
     assert "[ERROR] [segv-3]: process has died" in out
+
+
+def test_attach_type_opens_the_tui_typing_into_the_process(write):
+    """`attach NAME --type PROCESS` (what a fleet's `i` runs): the TUI opens typing into
+    it, by its name as by its id; ctrl+] gives the keys back."""
+    name = start(write)
+    terminal = Terminal("attach", name, "--type", "lines")
+    try:
+        terminal.read_until(b"typing to lines-1")
+        os.write(terminal.master, b"hello there\r")
+        wait_for(lambda: "got: hello there" in logs(name, "lines-1"), what="the line typed")
+        os.write(terminal.master, b"\x1d")  # ctrl+]: the keys are tuilaunch's again
+        assert terminal.press_until_exit(b"d") == 0
+    finally:
+        terminal.close()
+    assert process(name, "lines-1")["state"] == "running"  # d left it running
+    tl("stop", name)

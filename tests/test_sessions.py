@@ -134,6 +134,15 @@ class Terminal:
             except OSError:
                 pass
 
+    def press_until_exit(self, key: bytes, limit: float = 60.0) -> int:
+        """`key` (d, q) again every half second until the TUI exits: keys that come right
+        after a burst it drops (the node's, typed with `i`) are dropped too."""
+        end = time.monotonic() + limit
+        while self.proc.poll() is None and time.monotonic() < end:
+            os.write(self.master, key)
+            self.pump(0.5)
+        return self.wait_exit()
+
     def wait_exit(self, limit: float = 60.0) -> int:
         end = time.monotonic() + limit
         while self.proc.poll() is None:

@@ -233,18 +233,27 @@ def cmd_attach(options: argparse.Namespace) -> int:
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {label} -f, or tuilaunch status {label}")
     remote = None
+    typed = None
     if where is not None and where.host is not None:
         # one ssh login for both: the status first, then the TUI's subscription
         remote = open_remote_link(where.host, where.name)
         link = Link.connected(where.name, remote.sock, remote.hello, where.host)
         try:
             info = link.request("status", short=True, resources=False)
+            if options.type_into:  # a process that is not there: one line, no TUI
+                typed = link.request("find", process=options.type_into)
         except BaseException:
             remote.close()
             raise
         link.release()
     else:
         info = session_status(label, resources=False)
+        if options.type_into:
+            here = open_link(label)
+            try:
+                typed = here.request("find", process=options.type_into)
+            finally:
+                here.close()
     from ..engine.describe.python.loader import set_command_line
     from ..tui.app import make_app
 
@@ -259,6 +268,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
                        served=host is None and edited_since(info),
                        read_only=options.read_only)
         app.first_tab = options.tab
+        app.first_typing = typed
         status = app.run() or 0
     finally:
         if remote is not None:

@@ -263,6 +263,9 @@ def attach_many(options: argparse.Namespace) -> int:
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {' '.join(options.name)} -f")
+    if options.type_into:
+        raise SessionError("--type types into one session's process",
+                           hint="attach one session with --type; over several, i on its row")
     addresses, failed = expand("attach", options.name)
     if not addresses:
         return FAILED

@@ -126,6 +126,9 @@ def commands_parser() -> argparse.ArgumentParser:
     attach.add_argument("--scrollback", type=int, default=5000, metavar="LINES")
     attach.add_argument("--tab", choices=TABS, default="nodes",
                         help="the tab shown first (one session)")
+    attach.add_argument("--type", metavar="PROCESS", dest="type_into",
+                        help="open typing into PROCESS's terminal, as `i` on its row does "
+                        "(ctrl+] gives the keys back; one session)")
     attach.add_argument("--read-only", action="store_true",
                         help="a view that changes nothing: stop, start, restart, relaunch, "
                         "typing into a node, parameters, services and log levels are "

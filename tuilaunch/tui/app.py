@@ -69,6 +69,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
     TITLE = "tuilaunch"
     first_tab = "nodes"
     """The tab shown once the session is followed (`attach --tab`)."""
+    first_typing: str | None = None
+    """The process typed into once the session is followed (`attach --type`, a fleet's
+    `i`), as `i` on its row."""
 
     BINDINGS = [
         Binding("1", "tab('nodes')", "Nodes", tooltip="The group tree and node output"),
@@ -219,6 +222,14 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
         self.tab_shown(self.tabs.active or "nodes")
         if self.first_tab != "nodes":  # `attach --tab`
             self.call_after_refresh(self.action_tab, self.first_tab)
+        elif self.first_typing is not None:  # `attach --type`: once the tree is laid out
+            self.call_after_refresh(self._type_first, self.first_typing)
+
+    def _type_first(self, process: str) -> None:
+        tree = self.launch_tree
+        if process in tree.rows:
+            tree.move_cursor(tree.rows[process])
+            self.action_type_into()
 
     def tab_shown(self, pane: str) -> None:
         super().tab_shown(pane)

@@ -172,14 +172,8 @@ class NodeKeyboard(SessionLink):
         """Restarts the node with `options` (a tool, a terminal); False, said, when the
         restart was refused."""
         assert self.supervisor is not None
-        self.asked_to_stop.add(process)
-        try:
-            await self.engine.run(self.supervisor.restart(process, **options))
-        except LaunchError as exc:
-            self.asked_to_stop.discard(process)
-            self.notify(str(exc), severity="error")
-            return False
-        return True
+        return await restart_with(self, self.engine, self.supervisor, process,
+                                  self.asked_to_stop, **options)
 
     def _typed(self, key: str, character: str | None) -> None:
         """A key pressed while typing: to the node, or ctrl+] back to tuilaunch."""
@@ -278,7 +272,7 @@ class NodeKeyboard(SessionLink):
         # a node stopped to start again keeps the keys: typing began once its restart
         # with a terminal was answered, and the news of its stop may come only now
         if self.typing_to is not None and self.supervisor is not None and \
-                self.supervisor.states.get(self.typing_to) != "running" and \
+                self.supervisor.states.get(self.typing_to) not in ("running", "stopping") and \
                 self.typing_to not in self._coming_back:
             self.stop_typing(f"{self.typing_to} is no longer running: the keys are back")
         elif any(isinstance(e, Typing) for e in events):
@@ -301,8 +295,7 @@ class NodeKeyboard(SessionLink):
     async def _restart_under(self, process: str, prefix: str) -> None:
         if not await self._restart_with(process, prefix=prefix):
             return
-        self.prefix_history = [prefix, *[p for p in self.prefix_history
-                                         if p != prefix]][:RECENT_PREFIXES]
+        self.prefix_history = remembered(self.prefix_history, prefix)
         self.notify(f"{process} runs under {prefix}: i types into it; r restarts it plain")
 
     def action_command_line(self) -> None:
@@ -320,6 +313,26 @@ class NodeKeyboard(SessionLink):
             self.notify(str(exc), severity="error")
         finally:
             release()
+
+
+async def restart_with(app: App[Any], engine: EngineThread, port: LaunchPort, process: str,
+                       asked_to_stop: set[str], said: str = "", **options: Any) -> bool:
+    """Restarts the process with `options` (a tool, a terminal), its stop noted as asked
+    for; False, and one line starting with `said` (a fleet's session label), when the
+    session refused it (here and in a fleet's view)."""
+    asked_to_stop.add(process)
+    try:
+        await engine.run(port.restart(process, **options))
+    except LaunchError as exc:
+        asked_to_stop.discard(process)
+        app.notify(f"{said}{exc}", severity="error")
+        return False
+    return True
+
+
+def remembered(history: list[str], prefix: str) -> list[str]:
+    """The tools the prompt offers, `prefix` first."""
+    return [prefix, *[p for p in history if p != prefix]][:RECENT_PREFIXES]
 
 
 async def show_command_line(app: App[Any], engine: EngineThread, port: LaunchPort,

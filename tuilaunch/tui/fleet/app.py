@@ -22,12 +22,13 @@ import asyncio
 import contextlib
 import subprocess
 import sys
+import time
 from collections.abc import Awaitable
 from pathlib import Path
 
 from rich.text import Text
 from textual import events, on, work
-from textual.app import App, ComposeResult
+from textual.app import App, ComposeResult, SuspendNotSupported
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
@@ -38,9 +39,10 @@ from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervi
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
-from ..keyboard import show_command_line
+from ..keyboard import remembered, restart_with, show_command_line
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen, HelpScreen
+from ..screens.interact_dialogs import PrefixPrompt
 from ..screens.output_panel import OutputPanel
 from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree, RowData
@@ -48,7 +50,8 @@ from ..session_link import DRAIN_HZ, PANE_CHROME
 from .member import Member
 from .tabs import FleetTabs
 
-NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane"})
+NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane",
+                        "type_into", "run_under"})
 """The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
@@ -128,6 +131,12 @@ class FleetApp(App[int]):
                 tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
         Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
                 tooltip="Deactivate an active, clean up an inactive lifecycle node"),
+        Binding("i", "type_into", "Type", show=False,
+                tooltip="Type into the selected node, in its session's TUI (ctrl+] there "
+                "gives the keys back, d comes back here)"),
+        Binding("g", "run_under", "Debug", show=False,
+                tooltip="Restart the selected node under a tool (gdb, valgrind...) until "
+                "its next plain restart"),
         Binding("o", "open_session", "Open",
                 tooltip="The selected session in the single-session TUI, with every key of "
                 "one session (d there comes back)"),
@@ -181,6 +190,10 @@ class FleetApp(App[int]):
         self._status_text = ""
         self._detail_text = ""
         self.detached = False
+        self.prefix_history: list[str] = []
+        self._resumed_at = 0.0
+        """When this screen came back from a TUI it waited for (o, i, p): keys read before
+        then were typed for that TUI, never for this one."""
 
     # --- layout ------------------------------------------------------------------------
 
@@ -378,10 +391,7 @@ class FleetApp(App[int]):
         if member.unavailable() is not None:
             self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
             return
-        with self.suspend():
-            subprocess.run([sys.executable, "-m", "tuilaunch", "plot", member.address,
-                            message.topic])
-        self.refresh()
+        self._run_elsewhere("plot", member.address, message.topic)
 
     def step_tree(self, tree: FleetTree, step: int) -> None:
         """Up from a tree's first row, down from its last: the neighbouring session's."""
@@ -569,10 +579,70 @@ class FleetApp(App[int]):
         if member.unavailable() is not None:
             self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
             return
-        with self.suspend():
-            subprocess.run([sys.executable, "-m", "tuilaunch", "attach", member.address,
-                            "--tab", tab])
+        self._run_elsewhere("attach", member.address, "--tab", tab)
+
+    def _run_elsewhere(self, *args: str) -> None:
+        """`tuilaunch ARGS` on this terminal, this screen suspended until it ends."""
+        try:
+            with self.suspend():
+                subprocess.run([sys.executable, "-m", "tuilaunch", *args])
+        except SuspendNotSupported:  # a browser's page (tuilaunch serve) has no terminal
+            self.notify(f"this view cannot hand its terminal over: run tuilaunch "
+                        f"{' '.join(args)} in one", severity="warning")
+            return
+        finally:
+            self._resumed_at = time.monotonic()
         self.refresh()
+
+    async def on_event(self, event: events.Event) -> None:
+        if isinstance(event, events.Key) and event.time < self._resumed_at:
+            return  # read before the other TUI took the terminal: typed for it
+        await super().on_event(event)
+
+    def _one_row(self, key: str, what: str) -> str | None:
+        """The selected node of the selected session, for a key that acts on one node;
+        None, said in one line, when the selection is not one node or the session is
+        out of reach."""
+        member = self.current
+        if not self._keys_reach(member):
+            return None
+        selected = self.selected()
+        if len(selected) != 1:
+            self.notify(f"{member.label}: {key} {what} one node: select it",
+                        severity="warning")
+            return None
+        return selected[0]
+
+    def action_type_into(self) -> None:
+        """i: typing into the selected node, in its session's own TUI (every key of the
+        single TUI's typing: a terminal offered to a node started with pipes, ctrl+]);
+        `d` there comes back here."""
+        process = self._one_row("i", "types into")
+        if process is not None:
+            self._run_elsewhere("attach", self.current.address, "--type", process)
+
+    def action_run_under(self) -> None:
+        """g: the selected node restarted under a tool, as in the single TUI."""
+        process = self._one_row("g", "restarts")
+        member = self.current
+        if process is None or member.supervisor is None:
+            return
+        supervisor = member.supervisor
+
+        def chosen(prefix: str | None) -> None:
+            if prefix:  # cancelled: nothing changes
+                self._restart_under(member, supervisor, process, prefix)
+
+        self.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
+
+    @work(group="commands", exit_on_error=False)
+    async def _restart_under(self, member: Member, supervisor: LaunchPort, process: str,
+                             prefix: str) -> None:
+        if await restart_with(self, self.engine, supervisor, process, member.asked_to_stop,
+                              f"{member.label}: ", prefix=prefix):
+            self.prefix_history = remembered(self.prefix_history, prefix)
+            self.notify(f"{member.label}: {process} runs under {prefix}: i types into it; "
+                        "r restarts it plain")
 
     def action_quit_fleet(self) -> None:
         """Leaves every session running: a fleet view is a watcher, each robot's launch its
