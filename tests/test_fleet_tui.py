@@ -24,6 +24,7 @@ from tuilaunch.tui.fleet import app as fleet_app
 from tuilaunch.tui.fleet.app import FleetApp, FleetHelp
 from tuilaunch.tui.fleet.member import Member
 from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.dialogs import ChoiceScreen, ConfirmScreen
 from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 
 from .conftest import run_cli, wait_for
@@ -353,11 +354,25 @@ def test_services_params_and_topics_tabs_follow_the_selected_session(write):
                         and starts(ra, "talker-1") == 2)
             assert "Applied." in str(form.query_one("#args-preview", Static).render())
             assert rb.session.arguments.get("rate") != "5.0" and starts(rb, "talker-1") == 1
+            # L on rb's talker: no logger service in the demo's nodes, so a restart at
+            # that level is offered, there only
+            await pilot.press("1")
+            await select(pilot, rb, "talker-1")
+            await pilot.press("L")
+            await until(pilot, lambda: isinstance(app.screen, ChoiceScreen))
+            await pilot.press("d")
+            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+            assert "talker has no logger service" in str(app.screen.question)
+            await pilot.press("y")
+            await until(pilot, lambda: starts(rb, "talker-1") == 2)
+            assert starts(ra, "talker-1") == 2  # ra's: only its F5's restart
             await pilot.press("q")
             await until(pilot, lambda: app.detached)
 
     asyncio.run(watched())
     assert tl("status", "ra", "--json").returncode == 0
     assert json.loads(tl("status", "ra", "--json").stdout)["arguments"]["rate"] == "5.0"
+    talker = json.loads(tl("status", "rb", "--json").stdout)["processes"][0]
+    assert "--log-level debug" in talker["command_line"]
     for robot in names:
         tl("stop", robot)

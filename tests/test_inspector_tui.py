@@ -178,7 +178,7 @@ async def test_log_level_key_sets_it_or_offers_a_restart(demo):
         await pilot.press("L")
         await until(pilot, lambda: isinstance(app.screen, ChoiceScreen))
         await pilot.press("d")  # debug
-        await until(pilot, lambda: app.log_levels.get("chatter-3") == "debug")
+        await until(pilot, lambda: app.log_levels.levels.get("chatter-3") == "debug")
 
         # a node without the logger service: the restart with --log-level is offered
         tree.move_cursor(tree.rows["mapper-2"])
@@ -192,7 +192,7 @@ async def test_log_level_key_sets_it_or_offers_a_restart(demo):
         old_pid = status(app.session_name or "")
         before = next(p["pid"] for p in old_pid["processes"] if p["id"] == "mapper-2")
         await pilot.press("y")
-        await until(pilot, lambda: app.log_levels.get("mapper-2") == "warn", limit=60)
+        await until(pilot, lambda: app.log_levels.levels.get("mapper-2") == "warn", limit=60)
 
         def restarted() -> bool:
             now = status(app.session_name or "")

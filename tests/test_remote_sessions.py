@@ -441,12 +441,16 @@ def clock(number: int) -> str:
 
 
 def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: Machines,
-                                                                       write):
+                                                                       write, monkeypatch,
+                                                                       tmp_path):
     """A TUI over ssh is not sent the ROS stamps its pane does not show: `T` (the time
     column) reads them for the lines it holds and has the next lines sent with them, `f`
     (the line as printed) the same, and a saved pane has every line as printed; turned off,
     the lines come without them again. Every line once, in order, with its own stamp."""
     robot = machines["robot1"]
+    # the pane saved here (its log folder is over there): in this test's folder, where no
+    # earlier run's saves are
+    monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "here"))
     path = write(STAMPED)
     assert run_cli(str(path), "--detach", "--name", "stamped", env=there(robot)).returncode == 0
     assert run_cli("wait", "stamped", "logger-1", "running", "--timeout", "30",

@@ -17,12 +17,11 @@ from ..client.session_graph import GraphCalls, SessionGraph
 from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
 from ..engine.run.process.reported_names import current_node_name
 from ..engine.run.session.session_dir import SessionError
+from .log_levels import LogLevels
 from .navigation import Navigation
-from .screens.dialogs import ChoiceScreen, ConfirmScreen
 from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import LaunchTree
 
-LEVELS = ["debug", "info", "warn", "error", "fatal"]
 FIGURES_SETTLE = 0.3
 """Seconds the selection rests before the server is told whose CPU and memory to send."""
 TREND_KEEP = 300
@@ -43,8 +42,7 @@ class Inspector(Navigation):
         self._figures_asked: list[str] | None = None
         """The processes the server sends CPU and memory of (None: all), last asked."""
         self._figures_timer: Timer | None = None
-        self.log_levels: dict[str, str] = {}
-        """The level last set per process (the level dialog starts there)."""
+        self.log_levels = LogLevels(self, self.inspect, self.asked_to_stop)
         self.session_graph = SessionGraph(self.inspect)
         self.trends: dict[str, deque[tuple[float, float]]] = {}
         """The selected process's (CPU%, RSS) a second, the server's last minutes first."""
@@ -302,47 +300,5 @@ class Inspector(Navigation):
 
     def action_log_level(self) -> None:
         process = self.selected_process()
-        if process is None:
-            return
-        node = self.node_name(process)
-
-        def answered(level: str | None) -> None:
-            if level:
-                self.run_worker(self._set_log_level(process, node, level), group="inspector",
-                                exit_on_error=False)
-
-        self.push_screen(ChoiceScreen(f"Log level of {node} ({process}):", LEVELS,
-                                      self.log_levels.get(process, "info")), answered)
-
-    async def _set_log_level(self, process: str, node: str, level: str) -> None:
-        try:
-            await self.inspect("log_level", node=node, level=level)
-        except SessionError as exc:
-            message = str(exc).split(": ", 1)[-1]
-            if "logger service" not in message:
-                self.notify(message, severity="error", title="log level")
-                return
-
-            def answered(yes: bool | None) -> None:
-                if yes:
-                    self.run_worker(self._restart_at_level(process, level),
-                                    group="inspector", exit_on_error=False)
-
-            self.push_screen(ConfirmScreen(
-                f"{node} has no logger service (enable_logger_service), so its level "
-                f"cannot change while it runs.\nRestart {process} with --log-level {level}? "
-                "(kept across its respawns)", "Restart (y)"), answered)
-            return
-        self.log_levels[process] = level
-        self.notify(f"{node}: log level {level}", title="log level")
-
-    async def _restart_at_level(self, process: str, level: str) -> None:
-        assert self.supervisor is not None
-        self.asked_to_stop.add(process)
-        try:
-            await self.inspect("restart", process=process, log_level=level)
-        except SessionError as exc:
-            self.notify(str(exc), severity="error", title="restart")
-            return
-        self.log_levels[process] = level
-        self.notify(f"{process} restarted with --log-level {level}", title="log level")
+        if process is not None:
+            self.log_levels.ask(process, self.node_name(process))

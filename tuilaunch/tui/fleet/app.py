@@ -24,6 +24,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Awaitable
+from functools import partial
 from pathlib import Path
 
 from rich.text import Text
@@ -38,8 +39,10 @@ from ...client.port import LaunchPort, Verb
 from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
+from ...engine.run.process.reported_names import current_node_name
 from ...engine.run.session.session_dir import SessionError
 from ..keyboard import remembered, restart_with, show_command_line
+from ..log_levels import LogLevels
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen, HelpScreen
 from ..screens.interact_dialogs import PrefixPrompt
@@ -51,7 +54,7 @@ from .member import Member
 from .tabs import FleetTabs
 
 NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane",
-                        "type_into", "run_under"})
+                        "type_into", "run_under", "log_level"})
 """The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
@@ -137,6 +140,8 @@ class FleetApp(App[int]):
         Binding("g", "run_under", "Debug", show=False,
                 tooltip="Restart the selected node under a tool (gdb, valgrind...) until "
                 "its next plain restart"),
+        Binding("L", "log_level", "Log level", show=False,
+                tooltip="Set the selected node's ROS log level"),
         Binding("o", "open_session", "Open",
                 tooltip="The selected session in the single-session TUI, with every key of "
                 "one session (d there comes back)"),
@@ -185,6 +190,9 @@ class FleetApp(App[int]):
         self.current = self.members[0]
         self.session_tabs = FleetTabs(self.members, self.member_request, lambda: self.engine,
                                       self.update_status)
+        self.log_levels = {id(m): LogLevels(self, partial(self.member_request, m),
+                                            m.asked_to_stop, f"{m.label}: ")
+                           for m in self.members}
         for member in self.members:
             member.on_event = self.session_tabs.event
         self._status_text = ""
@@ -620,6 +628,16 @@ class FleetApp(App[int]):
         process = self._one_row("i", "types into")
         if process is not None:
             self._run_elsewhere("attach", self.current.address, "--type", process)
+
+    def action_log_level(self) -> None:
+        """L: the selected node's ROS log level, as in the single TUI."""
+        process = self._one_row("L", "sets the log level of")
+        if process is None:
+            return
+        member = self.current
+        node = current_node_name(member.session.plan.process(process).full_name,
+                                 member.store.reported_names.get(process, ())) or process
+        self.log_levels[id(member)].ask(process, node)
 
     def action_run_under(self) -> None:
         """g: the selected node restarted under a tool, as in the single TUI."""
