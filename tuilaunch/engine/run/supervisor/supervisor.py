@@ -52,8 +52,8 @@ class Supervisor:
         """`plugins` (run/plugins.py) add what `run` does not know: ROS actions, lifecycle
         nodes, components. engine/launcher.py makes a supervisor with the ROS ones."""
         self.core = SupervisorCore(plan, log_dir, sigterm_timeout, sigkill_timeout, plugins)
-        # the supervisor's own verbs, not the parts': what a handler starts or stops is
-        # placed, counted and stopped as an operator's start or stop is
+        # the supervisor's verbs, looked up when called: starting and ending, which own
+        # them, are made after the actions and are handed them, so neither holds the other
         self.actions = PlanActions(self.core, start=self.start, stop=self.stop,
                                    shutdown=self.shutdown)
         self.starting = Starting(self.core, self.actions)
