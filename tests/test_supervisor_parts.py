@@ -1,6 +1,9 @@
-"""The supervisor's collaborators, each made and driven alone: the Respawner's policy and
-backoff, the Stopper's escalation on a real process group, the TriggerBook's handlers and
-flags, and Placing's answer to which side runs what."""
+"""The supervisor's parts, each made and driven alone. Its collaborators: the Respawner's
+policy and backoff, the Stopper's escalation on a real process group, the TriggerBook's
+handlers and flags, and Placing's answer to which side runs what. Its behaviours, over a
+real core and real processes, each handed only what it calls: PlanActions performing a
+timer's actions, Starting starting a process and following it to its end, Ending shutting
+the launch down, Interacting typing into a process's terminal."""
 
 from __future__ import annotations
 
@@ -9,19 +12,37 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
+from tuilaunch.engine import load_file, resolve
 from tuilaunch.engine.errors import LaunchError
 from tuilaunch.engine.plan.model import ActionPlan, Plan, ProcessPlan, Trigger
-from tuilaunch.engine.run.events import Event
+from tuilaunch.engine.run.events import (
+    Event,
+    ExitCause,
+    Log,
+    Output,
+    ProcessExited,
+    Shutdown,
+    Started,
+    Stopping,
+)
 from tuilaunch.engine.run.process.logfiles import LogFile
 from tuilaunch.engine.run.process.readers import Running
+from tuilaunch.engine.run.supervisor.core import SupervisorCore
+from tuilaunch.engine.run.supervisor.ending import Ending
+from tuilaunch.engine.run.supervisor.interacting import Interacting
 from tuilaunch.engine.run.supervisor.placed import Placing
+from tuilaunch.engine.run.supervisor.plan_actions import PlanActions
 from tuilaunch.engine.run.supervisor.respawn import MAX_DELAY, Respawner
+from tuilaunch.engine.run.supervisor.starting import Starting
 from tuilaunch.engine.run.supervisor.stopping import Stopper
 from tuilaunch.engine.run.supervisor.triggers import TriggerBook
+
+from .terminal_harness import PROGRAMS
 
 
 def process(pid: str = "talker", **fields: object) -> ProcessPlan:
@@ -178,3 +199,181 @@ def test_stopper_does_not_count_a_death_by_the_stop_signal_just_before_the_stop(
     now = time.monotonic()
     assert stopper.real_crashes(crashes, {"raced": now, "crashed": now}) == {
         "crashed": -signal.SIGSEGV}
+
+
+# --- the behaviours, each over a real core -----------------------------------------------
+
+LAUNCH_HEAD = """import sys
+from launch import LaunchDescription
+from launch.actions import (ExecuteProcess, LogInfo, RegisterEventHandler, Shutdown,
+                            TimerAction)
+from launch.event_handlers import OnProcessStart, OnShutdown
+def generate_launch_description():
+    return LaunchDescription([
+"""
+
+
+def core_of(tmp_path: Path, entities: str) -> tuple[SupervisorCore, list[Event]]:
+    """A core over the plan of a launch file holding `entities`, and what it tells."""
+    path = tmp_path / "parts_launch.py"
+    path.write_text(LAUNCH_HEAD + entities + "    ])\n")
+    core = SupervisorCore(resolve(load_file(str(path)), {}, tmp_path / "params"),
+                          tmp_path / "log", sigterm_timeout=5, sigkill_timeout=5)
+    heard: list[Event] = []
+    core.subscribe(heard.append)
+    return core, heard
+
+
+async def until(check: Callable[[], object], what: str, heard: list[Event]) -> None:
+    """Waits for `check` on the loop (the parts run on it); the deadline is a hang guard."""
+    deadline = time.monotonic() + 60
+    while not check():
+        assert time.monotonic() < deadline, f"never: {what}; heard {heard}"
+        await asyncio.sleep(0.02)
+
+
+async def closed(core: SupervisorCore) -> None:
+    """What a run's end does for the parts made without a Supervisor: its tasks ended, its
+    log closed, and the watchdog, which stops whatever of the launch is left, gone."""
+    for task in list(core.tasks):
+        task.cancel()
+    await asyncio.gather(*core.tasks, return_exceptions=True)
+    core.launch_log.close()
+    core.watchdog.close()
+    deadline = time.monotonic() + 30
+    while not core.watchdog.finished() and time.monotonic() < deadline:
+        await asyncio.sleep(0.02)
+
+
+def lines_of(heard: list[Event], process: str) -> list[str]:
+    return [line for e in heard if isinstance(e, Output) and e.process == process
+            for line in e.lines]
+
+
+def said(heard: list[Event]) -> list[str]:
+    return [e.reason or "" for e in heard if isinstance(e, Log)]
+
+
+async def refused(process_id: str) -> None:
+    raise AssertionError(f"nothing here starts or stops a process ({process_id})")
+
+
+async def test_plan_actions_alone_perform_a_timers_actions_and_hand_its_shutdown_over(
+        tmp_path: Path):
+    """The timer's LogInfo line is said as launch.user's; its Shutdown goes to the
+    supervisor's verb handed in; the Shutdown event then reaches the OnShutdown handler."""
+    core, heard = core_of(tmp_path, """
+        TimerAction(period=0.2, actions=[LogInfo(msg='tick'), Shutdown(reason='enough')]),
+        RegisterEventHandler(OnShutdown(on_shutdown=[LogInfo(msg='bye')])),
+""")
+    asked: list[str] = []
+
+    async def shutdown(reason: str) -> None:
+        asked.append(reason)
+
+    actions = PlanActions(core, start=refused, stop=refused, shutdown=shutdown)
+    try:
+        for action in core.plan.actions:
+            actions.schedule_action(action)
+        assert "tick" not in said(heard)  # the timer's, not at once
+        await until(lambda: asked, "the shutdown asked for", heard)
+        assert asked == ["enough"] and core.shutdown_requested
+        tick = next(e for e in heard if isinstance(e, Log) and e.reason == "tick")
+        assert tick.data == {"logger": "launch.user"}  # as ros2 launch's LogInfo says it
+        assert core.states["log-1"] == core.states["shutdown-2"] == "done"
+        assert "bye" not in said(heard)
+        await actions.tell_shutdown("enough")
+        told = next(e for e in heard if isinstance(e, Shutdown))
+        assert told.reason == "enough" and said(heard)[-1] == "bye"
+    finally:
+        await closed(core)
+
+
+async def test_starting_alone_starts_a_process_and_follows_it_to_its_end(tmp_path: Path):
+    """Its Started event carries the pid the process itself prints; its start runs the
+    plan's OnProcessStart handler; its failure is told with its status."""
+    core, heard = core_of(tmp_path, """
+        RegisterEventHandler(OnProcessStart(on_start=[LogInfo(msg='saw a start')])),
+        ExecuteProcess(name='talker', cmd=[sys.executable, '-c',
+                       'import os; print(os.getpid(), flush=True); raise SystemExit(3)']),
+""")
+    actions = PlanActions(core, start=refused, stop=refused, shutdown=refused)
+    starting = Starting(core, actions)
+    try:
+        for action in core.plan.actions:
+            actions.schedule_action(action)
+        await starting.start("talker-1")
+        started = next(e for e in heard if isinstance(e, Started))
+        assert started.process == "talker-1" and started.pid is not None
+        await until(lambda: core.states["talker-1"] == "failed", "its end", heard)
+        assert lines_of(heard, "talker-1") == [str(started.pid)]
+        ended = next(e for e in heard if isinstance(e, ProcessExited))
+        assert (ended.pid, ended.code, ended.cause) == (started.pid, 3, ExitCause.CRASHED)
+        assert core.exit_codes == {"talker-1": 3} and not core.running
+        await until(lambda: "saw a start" in said(heard), "the handler's line", heard)
+        # its log file has the line too: "TIME stdout LINE"
+        logged = (core.log_dir / "talker-1.log").read_text().split()
+        assert logged[1:] == ["stdout", str(started.pid)]
+    finally:
+        await closed(core)
+
+
+async def test_ending_alone_shuts_the_launch_down_and_stops_what_runs(tmp_path: Path):
+    """The Shutdown event and its handler first, then the process is stopping (its pid
+    said), gets SIGINT and ends as asked, not as a crash; then nothing is left to insist on."""
+    core, heard = core_of(tmp_path, """
+        ExecuteProcess(name='sleeper', cmd=['sleep', '600']),
+        RegisterEventHandler(OnShutdown(on_shutdown=[LogInfo(msg='bye')])),
+""")
+    actions = PlanActions(core, start=refused, stop=refused, shutdown=refused)
+    starting = Starting(core, actions)  # only to have something to stop
+    ending = Ending(core, actions)
+    try:
+        for action in core.plan.actions:
+            actions.schedule_action(action)
+        starting.start_now("sleeper-1")
+        pid = core.running["sleeper-1"].process.pid
+        await ending.shutdown("test over")
+        await until(lambda: core.states["sleeper-1"] == "exited", "its end", heard)
+        kinds = [type(e) for e in heard if type(e) in (Shutdown, Stopping, ProcessExited)]
+        assert kinds == [Shutdown, Stopping, ProcessExited]
+        stopping = next(e for e in heard if isinstance(e, Stopping))
+        ended = next(e for e in heard if isinstance(e, ProcessExited))
+        assert stopping.pid == ended.pid == pid
+        assert ended.code == -signal.SIGINT and ended.cause is ExitCause.ASKED
+        assert "bye" in said(heard) and \
+            "sending signal 'SIGINT' to process[sleeper-1]" in said(heard)
+        assert core.shutting_down and ending.escalate_now() is None
+    finally:
+        await closed(core)
+
+
+async def test_interacting_alone_types_a_line_into_a_process_terminal(tmp_path: Path):
+    """A bad tool changes nothing; the command it would start with is known before it
+    runs; a line typed reaches it and what it answers comes back; ctrl+d ends it."""
+    reader = str(PROGRAMS / "line_reader.py")
+    core, heard = core_of(tmp_path, f"""
+        ExecuteProcess(name='lines', cmd=[sys.executable, {reader!r}], emulate_tty=True),
+""")
+    starting = Starting(core, PlanActions(core, start=refused, stop=refused,
+                                          shutdown=refused))
+    hands = Interacting(core, starting)
+    try:
+        with pytest.raises(LaunchError, match="not running"):
+            hands.write_input("lines-1", b"too early\r")
+        with pytest.raises(LaunchError):
+            hands.restart_options("lines-1", prefix="no-such-tool-here --flag")
+        assert not core.run_prefixes
+        command = hands.command_of("lines-1")
+        assert command["command"][-1] == reader and command["terminal"] is True
+        starting.start_now("lines-1")
+        await until(lambda: "ready" in lines_of(heard, "lines-1"), "ready", heard)
+        assert hands.running_process("lines-1") is core.running["lines-1"]
+        assert hands.write_input("lines-1", b"hello robot\r") == 0
+        await until(lambda: "got: hello robot" in lines_of(heard, "lines-1"), "the answer",
+                    heard)
+        hands.write_input("lines-1", b"\x04")  # ctrl+d: the end of its input
+        await until(lambda: core.states["lines-1"] == "exited", "its end", heard)
+        assert "end of input" in lines_of(heard, "lines-1")
+    finally:
+        await closed(core)

@@ -1,17 +1,19 @@
 """The supervisor's state, its collaborators, and how it tells the world: events to
 consumers and launch.log.
 
-A concern that owns state of its own is an object the supervisor holds, with a small
-interface, made and tested alone: `triggers` (TriggerBook, triggers.py: what has happened,
-the event handlers), `stopper` (Stopper, stopping.py: the stop escalation), `respawner`
-(Respawner, respawn.py: the respawn policy and its backoff), `placing` (Placing, placed.py:
-which machine runs what). What acts on the run's shared state (the states, the running
-processes, the tasks) is the supervisor's own behaviour, one concern per file, stacked on
-this core: core <- plan_actions <- starting <- interacting <- supervisor. Every event goes
-through `emit`; a consumer that raises is reported once and never stops the launch.
+A concern that owns state of its own is an object the core holds, with a small interface,
+made and tested alone: `triggers` (TriggerBook, triggers.py: what has happened, the event
+handlers), `stopper` (Stopper, stopping.py: the stop escalation), `respawner` (Respawner,
+respawn.py: the respawn policy and its backoff), `placing` (Placing, placed.py: which
+machine runs what). What acts on the run's shared state (the states, the running processes,
+the tasks) is a behaviour of its own, one per file, each holding this core and handed the
+other behaviours it calls: PlanActions (plan_actions.py), Starting (starting.py), Ending
+(ending.py), Interacting (interacting.py); the Supervisor (supervisor.py) makes them and
+wires them together. Every event goes through `emit`; a consumer that raises is reported
+once and never stops the launch.
 
-The state and the methods several files share are public here (documented attributes), so
-no underscore name crosses a module; what one file alone uses stays private to it.
+The state the behaviours share is public here (documented attributes), so no underscore
+name crosses a module; what one file alone uses stays private to it.
 """
 
 from __future__ import annotations
@@ -142,6 +144,10 @@ class SupervisorCore:
         """Set when `what` ("start", "exit", "state:...") of `process_id` has happened."""
         return self.triggers.flag(process_id, what)
 
+    def runs_here(self, process_id: str) -> bool:
+        """Whether this supervisor spawns it (actions always run where the launch runs)."""
+        return self.placing.runs_here(self.plan, process_id)
+
     def add_plugin(self, plugin: SupervisorPlugin) -> None:
         """Plugs in before `run`: its action kinds join those the supervisor performs."""
         self.plugins.append(plugin)
@@ -218,23 +224,6 @@ class SupervisorCore:
         who says it in headless output and launch.log (LogInfo: launch's `launch.user`)."""
         self.emit(Log(action.id, reason=text, level=level,
                         data={"logger": logger} if logger else None))
-
-    # Made by the later files; declared here so the earlier ones can call them.
-
-    async def start(self, process_id: str, respawn: bool = False) -> None:
-        raise NotImplementedError  # supervisor.py
-
-    async def stop(self, process_id: str) -> None:
-        raise NotImplementedError  # supervisor.py
-
-    async def shutdown(self, reason: str = "shutdown") -> None:
-        raise NotImplementedError  # supervisor.py
-
-    async def tell_shutdown(self, reason: str) -> None:
-        raise NotImplementedError  # supervisor.py
-
-    async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
-        raise NotImplementedError  # plan_actions.py
 
 
 def to_stderr(text: str) -> None:

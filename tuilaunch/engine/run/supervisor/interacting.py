@@ -7,9 +7,10 @@ from typing import Any
 
 from ...errors import LaunchError
 from ...plan.prefix import with_prefix
-from ..process.process_command import check_log_level, describe_command, start_command
+from ..process.process_command import check_log_level, describe_command
 from ..process.readers import Running
 from ..process.terminal_input import InputRefused
+from .core import SupervisorCore
 from .starting import Starting
 
 
@@ -21,21 +22,26 @@ def restart_fields(prefix: str | None = None, log_level: str | None = None,
                               ("terminal", terminal or None)) if v is not None}
 
 
-class Interacting(Starting):
-    """Typing into a process, restart options, and its command for `status`."""
+class Interacting:
+    """Typing into a process, restart options, and its command for `status`. What it would
+    start with now is `starting`'s to say (starting.py), as it starts it."""
+
+    def __init__(self, core: SupervisorCore, starting: Starting) -> None:
+        self.core = core
+        self.starting = starting
 
     def running_process(self, process_id: str) -> Running | None:
         """The running process's record (its pid, its terminal), or None."""
-        return self.running.get(process_id)
+        return self.core.running.get(process_id)
 
     def write_input(self, process_id: str, data: bytes) -> int:
         """Types `data` into a running process's terminal (`\\r` for Enter, `\\x03` for
         ctrl+c: SIGINT to a line reader, a key to a raw one); returns the bytes dropped
         because it does not read them. LaunchError, one line naming it, when it cannot be
         typed into (not running, no terminal)."""
-        running = self.running.get(process_id)
+        running = self.core.running.get(process_id)
         if running is None:
-            raise LaunchError(f"{process_id} is not running ({self.states.get(process_id)}):"
+            raise LaunchError(f"{process_id} is not running ({self.core.states.get(process_id)}):"
                               " there is nothing to type into")
         try:
             return running.write_input(data)
@@ -51,7 +57,8 @@ class Interacting(Starting):
         process the file gives pipes) hold for the runs from this restart (respawns
         included) until a restart without them; `log_level` holds until a restart gives
         another (an empty one goes back to the file's)."""
-        proc = self.plan.process(process_id)
+        core = self.core
+        proc = core.plan.process(process_id)
         level = None
         if log_level:
             if proc.kind == "process":
@@ -60,30 +67,28 @@ class Interacting(Starting):
             level = check_log_level(log_level)
         if prefix:
             with_prefix(list(proc.cmd), prefix)  # a tool not on PATH fails here
-            self.run_prefixes[process_id] = prefix
+            core.run_prefixes[process_id] = prefix
         else:
-            self.run_prefixes.pop(process_id, None)
+            core.run_prefixes.pop(process_id, None)
         if terminal:
-            self.run_terminals.add(process_id)
+            core.run_terminals.add(process_id)
         else:
-            self.run_terminals.discard(process_id)
+            core.run_terminals.discard(process_id)
         if level:
-            self.log_levels[process_id] = level
+            core.log_levels[process_id] = level
         elif log_level is not None:
-            self.log_levels.pop(process_id, None)
+            core.log_levels.pop(process_id, None)
 
     def command_of(self, process_id: str) -> dict[str, Any]:
         """`command`, `command_line` and `env` of the process's last start, or of the
         start it would get now when it has not started yet."""
-        start = self.started_with.get(process_id)
+        start = self.core.started_with.get(process_id)
         if start is None:
-            proc = self.plan.process(process_id)
+            proc = self.core.plan.process(process_id)
             if not proc.cmd:
                 return {}
             try:
-                start = start_command(proc, self.base_env(), self.gets_tty(proc),
-                                      self.run_prefixes.get(process_id),
-                                      self.log_levels.get(process_id))
+                start = self.starting.command_for(proc)
             except LaunchError:
                 return {}
-        return describe_command(start, self.base_env())
+        return describe_command(start, self.starting.base_env())

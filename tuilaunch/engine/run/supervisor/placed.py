@@ -10,7 +10,7 @@ On another machine's share they are "elsewhere", and what they do arrives throug
 `Supervisor.external_event`, so a node there can wait for a node here.
 
 `Placing` owns this side's machine, its remote control and the pids of processes run
-elsewhere; the supervisor asks it (run/supervisor/supervisor.py). Made and tested alone:
+elsewhere; the supervisor's parts ask it (core.py holds it). Made and tested alone:
 tests/test_supervisor_parts.py.
 """
 

@@ -16,11 +16,13 @@ from pathlib import Path
 from ...errors import LaunchError
 from ...plan.model import ProcessPlan
 from ...plan.params import write_parameter_file
-from ..events import ExitCause, Failed, Log, ProcessExited, Respawning, Started
+from ..events import ExitCause, Failed, Log, Output, ProcessExited, Respawning, Started
 from ..process.logfiles import LogFile
-from ..process.process_command import death_details, start_command
+from ..process.process_command import StartCommand, death_details, start_command
 from ..process.readers import ChannelReader, Running
 from ..process.spawn import spawn
+from .core import SupervisorCore
+from .placed import ELSEWHERE
 from .plan_actions import PlanActions
 from .stopping import describe_exit, group_alive, kill_group
 
@@ -34,15 +36,41 @@ still prints is read and logged until the launch ends, and what waits in the cha
 is read before it is closed (ChannelReader.close)."""
 
 
-class Starting(PlanActions):
+class Starting:
     """Starting a process, following it until it has exited, and bringing it back (the
-    policy is the Respawner's, respawn.py)."""
+    policy is the Respawner's, respawn.py). Its start, its output and its exit set off the
+    plan's handlers: `actions` (plan_actions.py)."""
+
+    def __init__(self, core: SupervisorCore, actions: PlanActions) -> None:
+        self.core = core
+        self.actions = actions
+
+    async def start(self, process_id: str, respawn: bool = False) -> None:
+        """Starts one process (also a stopped or exited one, from the UI), here or on its
+        machine; `respawn`: it comes back after a crash, counted by the Respawner (an
+        operator's start counts from zero again)."""
+        core = self.core
+        if not respawn:
+            core.respawner.forget(process_id)
+        waiting = core.respawn_waits.pop(process_id, None)
+        if waiting is not None:
+            waiting.set()  # started now by the operator: the respawn under way is moot
+        ending = core.running.get(process_id)
+        if ending is not None and ending.exited.done():
+            await ending.gone.wait()  # it exited on its own a moment ago: its end first
+        if core.runs_here(process_id):
+            self.start_now(process_id)
+        elif core.placing.remote is None:
+            core.states[process_id] = ELSEWHERE  # its own machine starts it
+        else:
+            await core.placing.forward(core.plan, "start", process_id)
 
     def start_now(self, process_id: str) -> None:
         """From the check that the launch is not shutting down to the registration of the
         child nothing awaits, so a shutdown either prevents the start or sees the child."""
-        proc = self.plan.process(process_id)
-        if process_id in self.running or self.shutting_down:
+        core = self.core
+        proc = core.plan.process(process_id)
+        if process_id in core.running or core.shutting_down:
             return
         if proc.error:
             where = f" ({proc.origin})" if proc.origin else ""
@@ -55,31 +83,29 @@ class Starting(PlanActions):
             self._fail(process_id, f"cannot write its parameter file: {exc}")
             return
         try:
-            start = start_command(proc, self.base_env(), self.gets_tty(proc),
-                                  self.run_prefixes.get(process_id),
-                                  self.log_levels.get(process_id))
+            start = self.command_for(proc)
         except LaunchError as exc:  # the tool left PATH since the restart checked it
             self._fail(process_id, str(exc))
             return
-        self.started_with[process_id] = start
-        self.deaths.pop(process_id, None)
+        core.started_with[process_id] = start
+        core.deaths.pop(process_id, None)
         env = dict(start.env)
-        self.watchdog.start()
-        if self.watchdog.error and "watchdog" not in self.reported:
-            self.reported.add("watchdog")
-            self.report_io(f"{self.watchdog.error}: processes may outlive a crash of "
+        core.watchdog.start()
+        if core.watchdog.error and "watchdog" not in core.reported:
+            core.reported.add("watchdog")
+            core.report_io(f"{core.watchdog.error}: processes may outlive a crash of "
                            "tuilaunch")
-        self.watchdog.mark(env)
-        log_path = self.log_dir / f"{process_id}.log"
+        core.watchdog.mark(env)
+        log_path = core.log_dir / f"{process_id}.log"
         try:
-            log = LogFile(log_path, self.report_io)
+            log = LogFile(log_path, core.report_io)
         except OSError as exc:
             self._fail(process_id, f"cannot open its log file {log_path}: "
                        f"{exc.strerror or exc}")
             return
         if proc.log_cmd:  # launch's words (ExecuteLocal); its env is always a dict now
             shown = " ".join(part for part in start.cmd if part.strip())
-            self.emit(Log(process_id, reason=f"process details: cmd='{shown}', "
+            core.emit(Log(process_id, reason=f"process details: cmd='{shown}', "
                             f"cwd='{start.cwd}', custom_env?=True"))
         try:
             # no controlling terminal (vfork: fast) but under a tool, whose job control
@@ -97,9 +123,9 @@ class Starting(PlanActions):
         loop = asyncio.get_running_loop()
         running = None
         try:
-            self.watchdog.watch(popen.pid)
+            core.watchdog.watch(popen.pid)
             running = Running(proc, popen, log, time.monotonic(), loop.create_future())
-            self.running[process_id] = running
+            core.running[process_id] = running
             self._watch_exit(running)
             for channel in child.channels:
                 running.readers.append(ChannelReader(running, channel, self.deliver_lines,
@@ -115,30 +141,49 @@ class Starting(PlanActions):
                 loop.remove_reader(channel.fd)
                 close_quietly(channel.fd)
             log.close()
-            self.running.pop(process_id, None)
+            core.running.pop(process_id, None)
             self._fail(process_id, f"could not be tracked and was killed: "
                        f"{type(exc).__name__}: {exc}")
             return
         # followed before anything else runs: whatever raises below, its end is told
-        self.spawn_task(self._wait(running))
-        self.states[process_id] = "running"
-        self.emit(Started(process_id, pid=popen.pid))
-        self.process_event(process_id, "start", popen.pid)
-        self.flag(process_id, "start").set()
-        for plugin in self.plugins:
+        core.spawn_task(self._wait(running))
+        core.states[process_id] = "running"
+        core.emit(Started(process_id, pid=popen.pid))
+        self.actions.process_event(process_id, "start", popen.pid)
+        core.flag(process_id, "start").set()
+        for plugin in core.plugins:
             follow_up = plugin.process_started(proc)
             if follow_up is not None:
-                self.spawn_task(follow_up)
+                core.spawn_task(follow_up)
+
+    def deliver_lines(self, running: Running, stream: str, lines: list[str]) -> None:
+        """A block of a process's output, already in its log file: to the consumers."""
+        self.core.emit(Output(running.plan.id, stream=stream, lines=lines))
+        if self.core.triggers.watches_output:
+            self.actions.dispatch_io(running.plan.id, stream, lines, running.process.pid)
+
+    def deliver_partial(self, running: Running, stream: str, text: str) -> None:
+        """A line the process left unfinished (a prompt): shown until its whole line comes.
+        An output event without lines, so nothing counts it as one (nor logs it)."""
+        self.core.emit(Output(running.plan.id, stream=stream, data={"partial": text}))
+
+    def command_for(self, proc: ProcessPlan) -> StartCommand:
+        """What `proc` starts with now: the file's command under an operator's tool, log
+        level and terminal. LaunchError when the tool is no longer on PATH."""
+        return start_command(proc, self.base_env(), self.gets_tty(proc),
+                             self.core.run_prefixes.get(proc.id),
+                             self.core.log_levels.get(proc.id))
 
     def base_env(self) -> dict[str, str]:
         """tuilaunch's environment as it was at the first start: read once, not per child."""
-        if self.env_cache is None:
-            self.env_cache = dict(os.environ)
-        return self.env_cache
+        core = self.core
+        if core.env_cache is None:
+            core.env_cache = dict(os.environ)
+        return core.env_cache
 
     def _fail(self, process_id: str, reason: str) -> None:
-        self.states[process_id] = "failed"
-        self.emit(Failed(process_id, reason=reason))
+        self.core.states[process_id] = "failed"
+        self.core.emit(Failed(process_id, reason=reason))
 
     def _watch_exit(self, running: Running) -> None:
         """The child's exit wakes the loop through a pidfd: no thread per child."""
@@ -176,23 +221,24 @@ class Starting(PlanActions):
     async def _end(self, running: Running) -> tuple[int, bool]:
         """Its exit, told once its output is read: the state, the event, the handlers.
         Returns its exit code and whether the launch asked for the end."""
+        core = self.core
         code = await running.exited
         running.reaped = True
         pending = [r.done for r in running.readers if not r.done.done()]
         if pending:
             await asyncio.wait(pending, timeout=EOF_GRACE)
         lingering = [r for r in running.readers if not r.done.done()]
-        self.lingering.update(lingering)
+        core.lingering.update(lingering)
         for reader in lingering:
             reader.done.add_done_callback(self._forget_reader(reader))
         if not lingering:
             running.log.close()
         if not group_alive(running.process.pid):
-            self.watchdog.forget(running.process.pid)
+            core.watchdog.forget(running.process.pid)
         process_id = running.plan.id
-        del self.running[process_id]
-        self.exit_codes[process_id] = code
-        requested = running.stopping or self.shutting_down
+        del core.running[process_id]
+        core.exit_codes[process_id] = code
+        requested = running.stopping or core.shutting_down
         # a ctrl+c (or ctrl+\\, ctrl+z) typed into it was asked for by the operator too
         typed = code < 0 and -code in running.typed_signals
         if code > 0 and running.typed_signals & _ENDING_KEYS:
@@ -200,85 +246,88 @@ class Starting(PlanActions):
         cause = ExitCause.of(code, requested, typed)  # decided here, once
         crashed = cause is ExitCause.CRASHED
         if crashed:
-            self.crashes[process_id] = code
-            self.crash_times[process_id] = time.monotonic()
-        start = self.started_with.get(process_id)
+            core.crashes[process_id] = code
+            core.crash_times[process_id] = time.monotonic()
+        start = core.started_with.get(process_id)
         death = death_details(running.process.pid, code, requested or typed,
                               start.cwd if start else None,
                               os.path.basename(running.process.args[0]
                                                if running.process.args else "")[:15],
                               running.started)
         if death:
-            self.deaths[process_id] = death
+            core.deaths[process_id] = death
         # an end nobody asked for with a signal or a non-zero status is a failure, as
         # headless ("process has died", ERROR), the tree and the exit status have it
-        self.states[process_id] = "failed" if crashed else "exited"
-        for plugin in self.plugins:
+        core.states[process_id] = "failed" if crashed else "exited"
+        for plugin in core.plugins:
             plugin.process_exited(process_id)
         reason = describe_exit(code)
         if "core" in death:
             reason += f" (core: {death['core']})"
         # `requested`: a stop asked by anyone (another client, `tuilaunch stop`, a ctrl+c
         # typed into it: `typed`), not a crash
-        again = {"again": True} if process_id in self.coming_back else {}
-        self.emit(ProcessExited(process=process_id, pid=running.process.pid, code=code,
+        again = {"again": True} if process_id in core.coming_back else {}
+        core.emit(ProcessExited(process=process_id, pid=running.process.pid, code=code,
                                 reason=reason, cause=cause,
                                 data={"requested": requested or typed, "typed": typed,
                                       **again, **death}))
-        self.process_event(process_id, "exit", running.process.pid, code)
-        self.flag(process_id, "exit").set()
+        self.actions.process_event(process_id, "exit", running.process.pid, code)
+        core.flag(process_id, "exit").set()
         return code, requested
 
     async def _after_end(self, running: Running, code: int, requested: bool) -> None:
         """What follows an end the launch did not ask for: a respawn, or why not."""
+        core = self.core
         process_id = running.plan.id
-        tool = self.run_prefixes.get(process_id)
+        tool = core.run_prefixes.get(process_id)
         if running.plan.respawn and tool and code == 0 and not requested:
             # the operator left the tool (gdb's quit): a debugging session that ended, not
             # a node to bring back under gdb again; a crash under it still respawns
-            self.emit(Log(process_id, level="INFO", reason=(
+            core.emit(Log(process_id, level="INFO", reason=(
                 f"ended under '{tool}' with status 0: not respawned; a plain restart "
                 "runs it as the file says")))
         elif self.should_respawn(running, code):
             await self.respawn(running)
         elif running.plan.respawn and not requested:
-            tries = self.respawner.tries(process_id)
+            tries = core.respawner.tries(process_id)
             ended = "failed" if code != 0 else "ended"
-            self.emit(Log(process_id, level="ERROR" if code != 0 else "INFO",
+            core.emit(Log(process_id, level="ERROR" if code != 0 else "INFO",
                             reason=(f"respawn gives up: it {ended} {tries + 1} times "
                                     f"(respawn_max_retries="
                                     f"{running.plan.respawn_max_retries})")))
 
     def should_respawn(self, running: Running, code: int) -> bool:
-        return self.respawner.wants(running.plan, code, running.stopping or self.shutting_down)
+        core = self.core
+        return core.respawner.wants(running.plan, code, running.stopping or core.shutting_down)
 
     async def respawn(self, running: Running) -> None:
+        core = self.core
         proc = running.plan
-        tries, delay = self.respawner.next_try(proc, running.started)
-        self.states[proc.id] = "respawning"
-        self.busy += 1
-        self.emit(Respawning(proc.id, reason=f"try {tries} in {delay:g} s",
+        tries, delay = core.respawner.next_try(proc, running.started)
+        core.states[proc.id] = "respawning"
+        core.busy += 1
+        core.emit(Respawning(proc.id, reason=f"try {tries} in {delay:g} s",
                         data={"try": tries, "delay": delay}))
-        called_off = self.respawn_waits[proc.id] = asyncio.Event()
+        called_off = core.respawn_waits[proc.id] = asyncio.Event()
         try:
             await asyncio.wait_for(called_off.wait(), delay)
         except TimeoutError:
             pass  # the delay is over: it comes back
         finally:
-            self.busy -= 1
-            if self.respawn_waits.get(proc.id) is called_off:
-                del self.respawn_waits[proc.id]
+            core.busy -= 1
+            if core.respawn_waits.get(proc.id) is called_off:
+                del core.respawn_waits[proc.id]
         # called off: a stop (it stays down) or a start (it runs already) came meanwhile,
         # and said so itself
-        if not called_off.is_set() and not self.shutting_down:
+        if not called_off.is_set() and not core.shutting_down:
             await self.start(proc.id, respawn=True)
 
     def gets_tty(self, proc: ProcessPlan) -> bool:
         """The file's choice, or a terminal an operator's restart asked for."""
-        return wants_tty(proc) or proc.id in self.run_terminals
+        return wants_tty(proc) or proc.id in self.core.run_terminals
 
     def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:
-        return lambda _: self.lingering.discard(reader)
+        return lambda _: self.core.lingering.discard(reader)
 
 
 def wants_tty(proc: ProcessPlan) -> bool:

@@ -9,50 +9,174 @@ a dead terminal) never stops the reading of a pipe nor a shutdown.
 No thread per child: each child's exit is watched through a pidfd on the event loop, and
 its output through non-blocking reads on the same loop.
 
-A concern that owns state of its own is a collaborator the supervisor holds, made and
-tested alone: the TriggerBook (triggers.py), the Stopper (stopping.py), the Respawner
-(respawn.py), Placing (placed.py). The supervisor's own behaviour over the shared state is
-one concern per file, stacked on core.py (state, events): plan_actions.py (triggers waited
-for, actions performed), starting.py (a process's start, exit and respawn), interacting.py
-(the operator's hands on a process). This file runs the whole, stops, places, and changes
-the plan. Plugins (run/plugins.py) add what needs ROS.
+The Supervisor is made of parts, each made and tested alone: the state every part shares
+and the events out (`core`, core.py, with its collaborators: the TriggerBook, the Stopper,
+the Respawner, Placing), and the behaviours over that state, each handed the others it
+calls: `actions` (PlanActions, plan_actions.py: triggers waited for, actions performed),
+`starting` (Starting, starting.py: a process's start, exit and respawn), `ending` (Ending,
+ending.py: a stop, the shutdown), `hands` (Interacting, interacting.py: the operator's hands
+on a process). This file makes and wires them, runs the whole, places, and changes the
+plan; its public verbs and state are what the session server, the headless printer and the
+plugins use. Plugins (run/plugins.py) add what needs ROS.
 """
 
 from __future__ import annotations
 
 import asyncio
-import signal
 import time
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from ...errors import LaunchError
 from ...plan.model import ActionKind, Plan, PlanDiff, diff_plans
-from ..events import (
-    Consumer,
-    Event,
-    LaunchEvent,
-    Log,
-    Output,
-    ProcessExited,
-    Shutdown,
-    Started,
-    Stopping,
-)
+from ..events import Consumer, Event, LaunchEvent, Output, ProcessExited, Started
+from ..plugins import SupervisorPlugin
 from ..process.readers import Running
+from .core import SupervisorCore
+from .ending import Ending
 from .interacting import Interacting, restart_fields
 from .placed import ELSEWHERE, RemoteControl
-from .stopping import CTRL_C_REASON, kill_group
-
-ACTION_STOP_S = 5.0
-"""How long the shutdown waits for a cancelled action (a call_service waiting for its
-service) to end: a well-behaved one ends at once; one that ignores the cancellation must
-not hold the launch forever."""
+from .plan_actions import PlanActions
+from .starting import Starting
 
 __all__ = ["Consumer", "Event", "LaunchEvent", "Supervisor"]
 
 
-class Supervisor(Interacting):
+class Supervisor:
     """Runs a plan: see what it is made of (module docstring)."""
+
+    def __init__(self, plan: Plan, log_dir: Path, sigterm_timeout: float = 5.0,
+                 sigkill_timeout: float = 5.0,
+                 plugins: Iterable[SupervisorPlugin] = ()) -> None:
+        """`plugins` (run/plugins.py) add what `run` does not know: ROS actions, lifecycle
+        nodes, components. engine/launcher.py makes a supervisor with the ROS ones."""
+        self.core = SupervisorCore(plan, log_dir, sigterm_timeout, sigkill_timeout, plugins)
+        # the supervisor's verbs, looked up when called: starting and ending, which own
+        # them, are made after the actions and are handed them, so neither holds the other
+        self.actions = PlanActions(self.core, start=self.start, stop=self.stop,
+                                   shutdown=self.shutdown)
+        self.starting = Starting(self.core, self.actions)
+        self.ending = Ending(self.core, self.actions)
+        self.hands = Interacting(self.core, self.starting)
+
+    # --- the state others read (the core's) ---------------------------------------------------
+
+    @property
+    def plan(self) -> Plan:
+        return self.core.plan
+
+    @property
+    def states(self) -> dict[str, str]:
+        """Each process's and action's state, by id."""
+        return self.core.states
+
+    @property
+    def running(self) -> dict[str, Running]:
+        """The processes that run now, by id."""
+        return self.core.running
+
+    @property
+    def shutting_down(self) -> bool:
+        return self.core.shutting_down
+
+    @property
+    def exit_codes(self) -> dict[str, int]:
+        return self.core.exit_codes
+
+    @property
+    def deaths(self) -> dict[str, dict[str, str]]:
+        """A crash's `signal` name and `core` location, until the process starts again."""
+        return self.core.deaths
+
+    @property
+    def failed_parts(self) -> set[str]:
+        """What failed inside a process (a component), by id: the launch ends non-zero."""
+        return self.core.failed_parts
+
+    @property
+    def coming_back(self) -> set[str]:
+        """Processes stopped to be started again (a restart, a relaunch)."""
+        return self.core.coming_back
+
+    @property
+    def retries(self) -> dict[str, int]:
+        """Respawns of each process so far."""
+        return self.core.retries
+
+    @property
+    def respawn_waits(self) -> dict[str, asyncio.Event]:
+        """Processes waiting out their respawn delay."""
+        return self.core.respawn_waits
+
+    @property
+    def busy(self) -> int:
+        """Triggers sleeping or respawns scheduled: the run is not over while any is."""
+        return self.core.busy
+
+    @property
+    def log_dir(self) -> Path:
+        return self.core.log_dir
+
+    @property
+    def plugins(self) -> list[SupervisorPlugin]:
+        return self.core.plugins
+
+    # --- how the world hears of the launch, and plugs into it (the core's) --------------------
+
+    def subscribe(self, consumer: Consumer) -> None:
+        self.core.subscribe(consumer)
+
+    def emit(self, event: Event) -> None:
+        """Tells every consumer; one that raises is reported once and never stops us."""
+        self.core.emit(event)
+
+    def log(self, text: str, level: str = "INFO") -> None:
+        """A line for the launch pane and launch.log from whoever runs the supervisor."""
+        self.core.log(text, level)
+
+    def add_plugin(self, plugin: SupervisorPlugin) -> None:
+        """Plugs in before `run`: its action kinds join those the supervisor performs."""
+        self.core.add_plugin(plugin)
+
+    def state_reached(self, process_id: str, what: str) -> None:
+        """A lifecycle transition matching `what`, as a plugin reports it (plan_actions.py)."""
+        self.actions.state_reached(process_id, what)
+
+    # --- the verbs on processes (the parts') --------------------------------------------------
+
+    async def start(self, process_id: str, respawn: bool = False) -> None:
+        """Starts one process, here or on its machine (starting.py)."""
+        await self.starting.start(process_id, respawn)
+
+    async def stop(self, process_id: str) -> None:
+        """Stops one process; returns once its end is told (ending.py)."""
+        await self.ending.stop(process_id)
+
+    async def shutdown(self, reason: str = "shutdown") -> None:
+        """Ends the launch: the Shutdown event, then every process stopped (ending.py)."""
+        await self.ending.shutdown(reason)
+
+    def escalate_now(self) -> str | None:
+        """The operator insists: the next signal now; None when nothing is left to stop."""
+        return self.ending.escalate_now()
+
+    def kill_all(self) -> None:
+        """SIGKILL to every process, for a caller that cannot wait."""
+        self.ending.kill_all()
+
+    def running_process(self, process_id: str) -> Running | None:
+        return self.hands.running_process(process_id)
+
+    def write_input(self, process_id: str, data: bytes) -> int:
+        """Types `data` into a running process's terminal (interacting.py)."""
+        return self.hands.write_input(process_id, data)
+
+    def command_of(self, process_id: str) -> dict[str, Any]:
+        """The command, command line and env of the process's last start (interacting.py)."""
+        return self.hands.command_of(process_id)
+
+    # --- the run ------------------------------------------------------------------------------
 
     async def run(self, keep_alive: bool = False) -> int:
         """Runs until nothing can happen any more, or shutdown; returns an exit status.
@@ -62,87 +186,98 @@ class Supervisor(Interacting):
 
         With keep_alive (an interactive UI), only shutdown ends the run: an operator who
         stops every process still wants to start them again."""
-        self.keep_alive = keep_alive
+        core = self.core
+        core.keep_alive = keep_alive
+        runs_actions = core.placing.runs_actions()
         try:
-            for plugin in self.plugins:
+            for plugin in core.plugins:
                 begun = plugin.run_started()
                 if begun is not None:
-                    self.spawn_task(begun)
-            said_now = [a for a in self.plan.actions if a.kind == ActionKind.LOG and a.enabled
-                        and a.trigger is None and self.runs_actions()]
+                    core.spawn_task(begun)
+            said_now = [a for a in core.plan.actions if a.kind == ActionKind.LOG and a.enabled
+                        and a.trigger is None and runs_actions]
             for action in said_now:
-                self.log_now(action)
+                self.actions.log_now(action)
             said = {action.id for action in said_now}
-            for proc in self.plan.processes:
-                if not self.runs_here(proc.id):
+            for proc in core.plan.processes:
+                if not core.runs_here(proc.id):
                     continue  # its machine's share starts it (placed.py)
                 if proc.enabled and proc.trigger is None:
-                    self.start_now(proc.id)  # no task per process: start-up at the floor
+                    self.starting.start_now(proc.id)  # no task per process: start-up at the floor
                 elif proc.enabled:
-                    self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
-            for action in self.plan.actions:
-                if action.enabled and self.runs_actions() and action.id not in said:
-                    self.schedule_action(action)
+                    core.spawn_task(self.actions.when_ready(proc.trigger, self.start, proc.id))
+            for action in core.plan.actions:
+                if action.enabled and runs_actions and action.id not in said:
+                    self.actions.schedule_action(action)
             while not self._settled():
-                self.changed.clear()
-                await self.changed.wait()
-            if not self.shutting_down and self.triggers.on_shutdown:
+                core.changed.clear()
+                await core.changed.wait()
+            if not core.shutting_down and core.triggers.on_shutdown:
                 # as launch does when nothing is left to run: OnShutdown handlers see it
                 await self.shutdown("idle")
                 while not self._settled():
-                    self.changed.clear()
-                    await self.changed.wait()
+                    core.changed.clear()
+                    await core.changed.wait()
         finally:
             await self._finish()
-        real = self.stopper.real_crashes(self.crashes, self.crash_times)
-        for process_id in set(self.crashes) - set(real):
-            if self.states.get(process_id) == "failed":
-                self.states[process_id] = "exited"  # the stop's own signal, a hair early
-        failed = [item for item, state in self.states.items() if state == "failed"]
-        return 1 if failed or real or self.failed_parts else 0
+        real = core.stopper.real_crashes(core.crashes, core.crash_times)
+        for process_id in set(core.crashes) - set(real):
+            if core.states.get(process_id) == "failed":
+                core.states[process_id] = "exited"  # the stop's own signal, a hair early
+        failed = [item for item, state in core.states.items() if state == "failed"]
+        return 1 if failed or real or core.failed_parts else 0
 
     async def _finish(self) -> None:
         """Whatever ended the run: nothing left running, nothing left open."""
-        if self.running:  # cancelled from outside: stop what still runs, quickly
-            self.shutting_down = True
-            self.stopper.at_least(1)
-            await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
+        core = self.core
+        if core.running:  # cancelled from outside: stop what still runs, quickly
+            core.shutting_down = True
+            core.stopper.at_least(1)
+            await asyncio.gather(*(self.ending.escalate(r) for r in list(core.running.values())),
                                  return_exceptions=True)
         await self._drain()
-        for reader in list(self.lingering):
+        for reader in list(core.lingering):
             reader.close()
-        for plugin in self.plugins:
+        for plugin in core.plugins:
             try:
                 await plugin.close()
             except Exception as exc:  # a plugin that fails to close never stops the end
-                self.report_io(f"{type(plugin).__name__} failed to close: "
+                core.report_io(f"{type(plugin).__name__} failed to close: "
                                f"{type(exc).__name__}: {exc}")
-        self.launch_log.close()
-        self.remove_parameter_files()
+        core.launch_log.close()
+        self.ending.remove_parameter_files()
         # the watchdog stops what a node left behind (daemons, stray group members)
-        self.watchdog.close()
-        deadline = time.monotonic() + self.watchdog.grace + 3.0
-        while not self.watchdog.finished() and time.monotonic() < deadline:
+        core.watchdog.close()
+        deadline = time.monotonic() + core.watchdog.grace + 3.0
+        while not core.watchdog.finished() and time.monotonic() < deadline:
             await asyncio.sleep(0.02)
 
     def _settled(self) -> bool:
-        if self.shutting_down:
+        core = self.core
+        book, states, processes = core.triggers, core.states, core.plan.processes
+        if core.shutting_down:
             # waiting actions, timers and respawns are cancelled when the run drains;
             # exit handlers of the processes being stopped still run, as in launch, and
             # those of the actions stopped as simple_launch stops their nodes
-            return not self.running and not self.actions_stopping and \
-                not self.triggers.due_in_shutdown(
-                    self.plan.actions, self.states, self.detached_actions)
-        if self.keep_alive or self.running or self.busy or self.shutdown_requested:
+            return not core.running and not core.actions_stopping and \
+                not book.due_in_shutdown(core.plan.actions, states, core.detached_actions)
+        if core.keep_alive or core.running or core.busy or core.shutdown_requested:
             return False
-        if any(state == "running" for state in self.states.values()):
+        if any(state == "running" for state in states.values()):
             return False  # an action is waiting for its service or node
         # a pending item can still start only if what it waits for is alive or pending
-        waiting = [p.trigger for p in self.plan.processes if self.states[p.id] == "pending"]
-        book, states, processes = self.triggers, self.states, self.plan.processes
+        waiting = [p.trigger for p in processes if states[p.id] == "pending"]
         return not any(book.can_fire(trigger, states, processes) for trigger in waiting) and \
-            not any(book.action_can_fire(a, states, processes) for a in self.plan.actions
+            not any(book.action_can_fire(a, states, processes) for a in core.plan.actions
                     if states.get(a.id) == "pending")
+
+    async def _drain(self) -> None:
+        for task in list(self.core.tasks):
+            if not task.done():
+                task.cancel()
+        await asyncio.gather(*self.core.tasks, return_exceptions=True)
+
+    # --- changing what runs ---------------------------------------------------------------------
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """Relaunch with new argument values: stop what changed, start what is new.
@@ -151,175 +286,76 @@ class Supervisor(Interacting):
         are (running, finished or waiting for their trigger); triggers of new processes fire
         at once when what they wait for already happened.
         """
-        running = {pid for pid in self.running}
-        diff = diff_plans(self.plan, plan, running)
+        core = self.core
+        running = {pid for pid in core.running}
+        diff = diff_plans(core.plan, plan, running)
         again = set(diff.stop) & set(diff.start)
-        self.busy += 1
-        self.coming_back |= again
+        core.busy += 1
+        core.coming_back |= again
         try:
             await asyncio.gather(*(self.stop(pid) for pid in diff.stop if pid in running))
-            old_actions = {(a.kind, a.target, repr(a.data)) for a in self.plan.actions
+            old_actions = {(a.kind, a.target, repr(a.data)) for a in core.plan.actions
                            if a.enabled}
-            self.plan = plan
+            core.plan = plan
             for proc in plan.processes:
                 # a kept process keeps its state: finished, failed, or still waiting
-                if proc.id not in self.running and proc.id not in diff.keep:
-                    self.states[proc.id] = "pending" if proc.enabled else "skipped"
-            self.triggers.forget_handlers()
+                if proc.id not in core.running and proc.id not in diff.keep:
+                    core.states[proc.id] = "pending" if proc.enabled else "skipped"
+            core.triggers.forget_handlers()
             for proc in plan.processes:
-                if proc.id in diff.start and self.runs_here(proc.id):
-                    self.spawn_task(self.when_ready(proc.trigger, self.start, proc.id))
+                if proc.id in diff.start and core.runs_here(proc.id):
+                    core.spawn_task(self.actions.when_ready(proc.trigger, self.start, proc.id))
             for action in plan.actions:
-                self.states.setdefault(action.id, "pending" if action.enabled else "skipped")
+                core.states.setdefault(action.id, "pending" if action.enabled else "skipped")
                 fresh = (action.kind, action.target, repr(action.data)) not in old_actions
                 on_event = action.trigger is not None and action.trigger.on in ("io", "shutdown")
                 # event watchers were cleared above and come back; one-off actions rerun
                 # only when they are new or their target or data changed
-                if action.enabled and (fresh or on_event) and self.runs_actions():
-                    self.schedule_action(action)
+                if action.enabled and (fresh or on_event) and core.placing.runs_actions():
+                    self.actions.schedule_action(action)
         finally:
-            self.busy -= 1
-            self.coming_back -= again  # they are pending now, or running
-            self.changed.set()
-        self.set_placement(self.placing.machine, self.placing.remote)  # the new plan's
+            core.busy -= 1
+            core.coming_back -= again  # they are pending now, or running
+            core.changed.set()
+        self.set_placement(core.placing.machine, core.placing.remote)  # the new plan's
         return diff
 
     async def restart(self, process_id: str, prefix: str | None = None,
                       log_level: str | None = None, terminal: bool = False) -> None:
         """Stops and starts one process; `prefix` runs it under a tool (gdb, valgrind) and
         `terminal` gives it a terminal, until a restart without them; `log_level` sets its
-        ROS log level until changed (see `restart_options`: checked before anything
-        stops)."""
-        self.busy += 1  # the run must not look finished between the stop and the start
-        self.coming_back.add(process_id)
+        ROS log level until changed (see `Interacting.restart_options`: checked before
+        anything stops)."""
+        core = self.core
+        core.busy += 1  # the run must not look finished between the stop and the start
+        core.coming_back.add(process_id)
         try:
-            if not self.runs_here(process_id) and self.placing.remote is not None:
+            if not core.runs_here(process_id) and core.placing.remote is not None:
                 # its machine restarts it, in one request: the tool is looked for on its
                 # PATH, and its end there says it comes back (`again`), as one here does
-                await self.placing.forward(self.plan, "restart", process_id,
+                await core.placing.forward(core.plan, "restart", process_id,
                                            **restart_fields(prefix, log_level, terminal))
                 return
-            self.restart_options(process_id, prefix, log_level, terminal)
+            self.hands.restart_options(process_id, prefix, log_level, terminal)
             await self.stop(process_id)
             await self.start(process_id)
         finally:
-            self.busy -= 1
-            self.coming_back.discard(process_id)
-            self.changed.set()
+            core.busy -= 1
+            core.coming_back.discard(process_id)
+            core.changed.set()
 
     async def run_action(self, action_id: str) -> None:
         """Performs one action of the plan again (the UI restarted its group)."""
-        action = next((a for a in self.plan.actions if a.id == action_id), None)
-        if action is None or not action.enabled or self.shutting_down:
+        core = self.core
+        action = next((a for a in core.plan.actions if a.id == action_id), None)
+        if action is None or not action.enabled or core.shutting_down:
             return
-        self.busy += 1
+        core.busy += 1
         try:
-            await self.perform_action(action)
+            await self.actions.perform_action(action)
         finally:
-            self.busy -= 1
-            self.changed.set()
-
-    async def _drain(self) -> None:
-        for task in list(self.tasks):
-            if not task.done():
-                task.cancel()
-        await asyncio.gather(*self.tasks, return_exceptions=True)
-
-    # --- stopping (the escalation is the Stopper's, stopping.py) ----------------------------
-
-    async def stop(self, process_id: str) -> None:
-        self.respawner.forget(process_id)
-        if not self.runs_here(process_id):
-            await self.placing.forward(self.plan, "stop", process_id)
-            return
-        running = self.running.get(process_id)
-        if running is not None:
-            running.stopping = True
-            await self.escalate(running)
-            # reaped is not ended: its last output is read and its end told first, so a
-            # start that follows (a restart, a relaunch) finds it gone, not still running
-            await running.gone.wait()
-        elif process_id in self.respawn_waits:  # between two runs: it does not come back
-            self.respawn_waits.pop(process_id).set()
-            self.states[process_id] = "exited"
-            self.emit(Log(process_id, reason="respawn called off: stopped while it "
-                            "waited to come back"))
-            self.changed.set()
-
-    async def shutdown(self, reason: str = "shutdown") -> None:
-        if self.shutting_down:
-            return
-        self.shutting_down = True
-        self.stopper.began()
-        self.stopper.terminal_sigint = reason == CTRL_C_REASON
-        try:
-            await self.tell_shutdown(reason)
-        finally:
-            self.actions_stopping = list(self.detached_tasks.values())
-            for task in self.actions_stopping:
-                task.cancel()
-            await asyncio.gather(*(self.escalate(r) for r in list(self.running.values())),
-                                 self._actions_stopped(), return_exceptions=True)
-            self.changed.set()
-
-    async def _actions_stopped(self) -> None:
-        """The cancelled actions have ended (their end, as a node's, fires their exit
-        handlers); one that ignores its cancellation holds the run for ACTION_STOP_S."""
-        if self.actions_stopping:
-            await asyncio.wait(self.actions_stopping, timeout=ACTION_STOP_S)
-        self.actions_stopping = []
-        self.changed.set()
-
-    async def tell_shutdown(self, reason: str) -> None:
-        """The Shutdown event: said, and seen by the OnShutdown handlers. A Shutdown action
-        performed while the launch already stops calls this again, as launch emits its
-        event again (its handlers see both reasons)."""
-        self.emit(Shutdown(reason=reason,
-                        data={"launch": True} if reason in self.launch_reasons else None))
-        for action in self.triggers.on_shutdown:
-            try:
-                await self.perform_action(action, LaunchEvent(reason=reason))
-            except Exception as exc:  # an OnShutdown action never stops the shutdown
-                self.report_io(f"on-shutdown action {action.id} raised "
-                               f"{type(exc).__name__}: {exc}")
-
-    def escalate_now(self) -> str | None:
-        """The operator insists (a second Ctrl+C): SIGTERM now; once more: SIGKILL.
-
-        Returns the signal's name now sent, or None when nothing is left to stop."""
-        if not self.running:
-            return None
-        sent = self.stopper.insist()
-        if not self.shutting_down:
-            self.spawn_task(self.shutdown("stop requested again"))
-        return sent
-
-    async def escalate(self, running: Running) -> None:
-        """SIGINT, then SIGTERM, then SIGKILL, to the process's whole group; it is
-        "stopping" until its end is told, for every client, whoever asked."""
-        process_id = running.plan.id
-        if self.states.get(process_id) == "running":
-            self.states[process_id] = "stopping"
-            self.emit(Stopping(process_id, pid=running.process.pid))
-        await self.stopper.escalate(running)
-
-    def kill_all(self) -> None:
-        """Last resort when the caller cannot wait (the UI is being torn down): SIGKILL,
-        and the watchdog sweeps what the processes left behind."""
-        self.shutting_down = True
-        for running in list(self.running.values()):
-            kill_group(running.process.pid, signal.SIGKILL)
-        self.remove_parameter_files()
-        self.watchdog.close()
-
-    def remove_parameter_files(self) -> None:
-        for proc in self.plan.processes:
-            for path, _ in proc.generated_parameter_files:
-                Path(path).unlink(missing_ok=True)
-        try:
-            self.plan.params_dir.rmdir()
-        except OSError:
-            pass
+            core.busy -= 1
+            core.changed.set()
 
     # --- placement over machines (which side runs what is Placing's, placed.py) -------------
 
@@ -327,62 +363,32 @@ class Supervisor(Interacting):
         """Before `run`: this side is `machine`'s share; `remote` starts and stops the
         others (the launching side's coordinator), or None (another machine's share, which
         only hears of them)."""
-        for item_id in self.placing.place(machine, remote, self.plan):
-            self.states[item_id] = ELSEWHERE
-
-    @property
-    def machine(self) -> str | None:
-        """The machine whose share this supervisor runs; None: the launching side."""
-        return self.placing.machine
-
-    def runs_actions(self) -> bool:
-        return self.placing.runs_actions()
-
-    def runs_here(self, process_id: str) -> bool:
-        """Whether this supervisor spawns it (actions always run where the launch runs)."""
-        return self.placing.runs_here(self.plan, process_id)
-
-    async def start(self, process_id: str, respawn: bool = False) -> None:
-        """Starts one process (also a stopped or exited one, from the UI), here or on its
-        machine; `respawn`: it comes back after a crash, counted by the Respawner (an
-        operator's start counts from zero again)."""
-        if not respawn:
-            self.respawner.forget(process_id)
-        waiting = self.respawn_waits.pop(process_id, None)
-        if waiting is not None:
-            waiting.set()  # started now by the operator: the respawn under way is moot
-        ending = self.running.get(process_id)
-        if ending is not None and ending.exited.done():
-            await ending.gone.wait()  # it exited on its own a moment ago: its end first
-        if self.runs_here(process_id):
-            self.start_now(process_id)
-        elif self.placing.remote is None:
-            self.states[process_id] = ELSEWHERE  # its own machine starts it
-        else:
-            await self.placing.forward(self.plan, "start", process_id)
+        for item_id in self.core.placing.place(machine, remote, self.core.plan):
+            self.core.states[item_id] = ELSEWHERE
 
     def mirror(self, event: Event, state: str | None = None) -> None:
         """An event of a process another machine runs, as its share sent it, with the
         state it left it in: told to the consumers and triggers as a local one is."""
+        core = self.core
         process_id = event.process
-        if process_id is None or process_id not in self.states:
+        if process_id is None or process_id not in core.states:
             return
         if isinstance(event, Output):
-            self.emit(event)
-            if self.triggers.watches_output:  # OnProcessIO handlers here
-                self.dispatch_io(process_id, event.stream or "stdout", event.lines,
-                                 self.placing.pids_elsewhere.get(process_id, 0))
+            core.emit(event)
+            if core.triggers.watches_output:  # OnProcessIO handlers here
+                self.actions.dispatch_io(process_id, event.stream or "stdout", event.lines,
+                                         core.placing.pids_elsewhere.get(process_id, 0))
             return
         if isinstance(event, Started) and event.pid is not None:
-            self.placing.pids_elsewhere[process_id] = event.pid
+            core.placing.pids_elsewhere[process_id] = event.pid
         if state is not None:
-            self.states[process_id] = state
+            core.states[process_id] = state
         if isinstance(event, ProcessExited) and event.code is not None:
-            self.exit_codes[process_id] = event.code
-            if event.crashed and not self.shutting_down:  # as its machine decided
-                self.crashes[process_id] = event.code
-                self.crash_times[process_id] = time.monotonic()
-        self.emit(event)
+            core.exit_codes[process_id] = event.code
+            if event.crashed and not core.shutting_down:  # as its machine decided
+                core.crashes[process_id] = event.code
+                core.crash_times[process_id] = time.monotonic()
+        core.emit(event)
         if isinstance(event, Started):
             self.external_event(process_id, "start", event.pid)
         elif isinstance(event, ProcessExited):
@@ -394,8 +400,9 @@ class Supervisor(Interacting):
         for it here (a start-up chain, an OnProcessStart/Exit handler) goes on."""
         if on not in ("start", "exit"):
             raise ValueError(f"an external event is start or exit, not {on!r}")
-        if process_id not in {p.id for p in self.plan.processes}:
+        core = self.core
+        if process_id not in {p.id for p in core.plan.processes}:
             raise LaunchError(f"no process {process_id!r} in this launch")
-        self.process_event(process_id, on, pid, code)
-        self.flag(process_id, on).set()
-        self.changed.set()
+        self.actions.process_event(process_id, on, pid, code)
+        core.flag(process_id, on).set()
+        core.changed.set()
