@@ -1,7 +1,7 @@
 """A fleet TUI's cost: `tuilaunch attach robot1:s1 ... robot1:sN` for N = 1, 2, 4.
 
 N sessions of the same small launch (a node printing a line a second, one sleeping) run on
-"robot1" (a real sshd on 127.0.0.1, tests/sshd.py); one fleet TUI at 80x24 follows them
+"robot1" (a real sshd on 127.0.0.1, tests/integration/sshd.py); one fleet TUI at 80x24 follows them
 all, each over its own ssh link. Measured side by side in one run, for each N:
   - the bytes a second crossing the ssh links, idle (counted on the TCP connections by
     remote_bench.py's relay as ssh's ProxyCommand: encrypted, keep-alives included), and
@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 
 from remote_bench import Link  # noqa: E402  (bench/ is on sys.path as a script)
 
-from tests.sshd import Machines  # noqa: E402  (the tests' sshd)
+from tests.integration.sshd import Machines  # noqa: E402  (the tests' sshd)
 
 WINDOW = 10.0  # seconds each rate is measured over
 SIZES = (1, 2, 4)

@@ -1,6 +1,6 @@
 """Plot figures (issue 40), one run on this machine.
 
-A session runs two publishers of geometry_msgs/Point (3 numeric fields: tests/nodes/
+A session runs two publishers of geometry_msgs/Point (3 numeric fields: tests/integration/nodes/
 signal_node.py), one at 1 kHz and one at 100 Hz. For each topic, over MEASURE_S seconds:
 
 - the session server's CPU (its process, the publishers excluded) with nobody plotting,
@@ -42,7 +42,7 @@ from inspector_bench import cpu_ticks, tl  # the session commands, /proc ticks
 
 MEASURE_S = 10.0
 ROOT = Path(__file__).resolve().parent.parent
-SIGNAL_NODE = ROOT / "tests" / "nodes" / "signal_node.py"
+SIGNAL_NODE = ROOT / "tests" / "integration" / "nodes" / "signal_node.py"
 LAUNCH = """
 from launch import LaunchDescription
 from launch.actions import ExecuteProcess

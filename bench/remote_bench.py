@@ -1,7 +1,7 @@
 """Bytes crossing the ssh link for a TUI on a session on another machine, one run.
 
 Side by side, at 80x24, with the demo (examples/bringup.py) running as a session on
-"robot1" (a real sshd on 127.0.0.1, from tests/sshd.py):
+"robot1" (a real sshd on 127.0.0.1, from tests/integration/sshd.py):
   - `tuilaunch attach robot1:NAME`: the TUI here, only the session protocol crosses;
   - `ssh -t robot1 tuilaunch attach NAME`: the same TUI drawn over ssh, as without it.
 Each idle (the demo alone) and under a flood (the demo and a node printing 2,000 lines a
@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from tui_bench import Terminal  # noqa: E402  (bench/ is on sys.path as a script)
 
-from tests.sshd import Machines  # noqa: E402  (the tests' sshd, as the issue asks)
+from tests.integration.sshd import Machines  # noqa: E402  (the tests' sshd, as the issue asks)
 
 WINDOW = 10.0  # seconds each rate is measured over
 MARKERS = {"demo": b"says hi", "flood": b"of the lidar"}

@@ -1,7 +1,7 @@
 """`tuilaunch serve` figures, one run on this machine, each beside its terminal counterpart.
 
 With the demo (examples/bringup.py) running as a session on "robot1" (a real sshd on
-127.0.0.1, from tests/sshd.py) and `tuilaunch serve` on it:
+127.0.0.1, from tests/integration/sshd.py) and `tuilaunch serve` on it:
 
 1. Time to the tree: from opening the URL in Debian's chromium (headless, driven by
    Selenium, a fresh profile each time) until the page's terminal shows a node of the tree
@@ -38,9 +38,9 @@ sys.path.insert(0, str(ROOT))
 from remote_bench import FLOOD_CODE, FLOODER, Link, measure, start_session  # noqa: E402
 from tui_bench import Terminal  # noqa: E402  (bench/ is on sys.path as a script)
 
-from tests.browser import Page, free_port, need_chromium  # noqa: E402
-from tests.proc_tree import cmdline, descendants  # noqa: E402
-from tests.sshd import Machines  # noqa: E402
+from tests.integration.browser import Page, free_port, need_chromium  # noqa: E402
+from tests.integration.proc_tree import cmdline, descendants  # noqa: E402
+from tests.integration.sshd import Machines  # noqa: E402
 
 WINDOW = 10.0
 SETTLE = 5.0

@@ -1,6 +1,6 @@
 """The session protocol's messages alone (engine/run/session/protocol.py): a greeting's
 version checked, events through their wire form and back. The same with a real server,
-the command line and ssh: tests/test_protocol_version.py."""
+the command line and ssh: tests/integration/test_protocol_version.py."""
 
 from __future__ import annotations
 

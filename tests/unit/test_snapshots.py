@@ -1,6 +1,7 @@
 """One snapshot per dialog and per graph tab, each in a small host app at 80x24 (no
 process, no ROS graph: the tabs ask a graph that answers as a session does). The Nodes and
-Args tabs, which need a session, are snapshotted over a real one in tests/test_tui.py."""
+Args tabs, which need a session, are snapshotted over a real one in
+tests/integration/test_tui.py."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The web side of `tuilaunch serve`: aiohttp pages and one TUI process per browser tab.
 
 Imported only by `tuilaunch serve` (aiohttp and textual-serve are not light): the launcher,
-the TUI and the other commands never load it (tests/test_light.py).
+the TUI and the other commands never load it (tests/integration/test_light.py).
 
 Each tab's websocket runs `tuilaunch attach NAME` under Textual's web driver through
 textual-serve's `AppService` (its process, the packets of its pipes, resizes); the page is

@@ -11,7 +11,7 @@ On another machine's share they are "elsewhere", and what they do arrives throug
 
 `Placing` owns this side's machine, its remote control and the pids of processes run
 elsewhere; the supervisor's parts ask it (core.py holds it). Made and tested alone:
-tests/test_supervisor_parts.py.
+tests/integration/test_supervisor_parts.py.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 The `Respawner` owns the count of respawns and of quick failures in a row per process; it
 decides, the supervisor waits and starts (`Starting.respawn`). Made and tested alone:
-tests/test_supervisor_parts.py.
+tests/integration/test_supervisor_parts.py.
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@
 Each process leads its own process group; it is signalled as one. Each stage waits for the
 process's own sigterm_timeout / sigkill_timeout; the operator can hurry it
 (`Supervisor.escalate_now` -> `Stopper.insist`). The `Stopper` owns the escalation's state
-and is made and tested alone (tests/test_supervisor_parts.py); `Ending`'s `stop`, `shutdown`
-and `kill_all` (run/supervisor/ending.py) use it.
+and is made and tested alone (tests/integration/test_supervisor_parts.py); `Ending`'s `stop`,
+`shutdown` and `kill_all` (run/supervisor/ending.py) use it.
 """
 
 from __future__ import annotations

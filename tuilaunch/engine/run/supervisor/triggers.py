@@ -5,7 +5,7 @@ process's start or exit, a lifecycle state), the count of lifecycle transitions 
 OnStateTransition re-runs on, and the event handlers filed by event (output, shutdown, any
 process's start or exit). It answers whether a trigger can still fire; the supervisor does
 the waiting and the performing (run/supervisor/plan_actions.py). It is made and read alone:
-tests/test_supervisor_parts.py.
+tests/integration/test_supervisor_parts.py.
 """
 
 from __future__ import annotations
