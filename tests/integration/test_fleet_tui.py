@@ -339,6 +339,12 @@ def test_services_params_and_topics_tabs_follow_the_selected_session(write):
             assert "/ra/chatter" not in topics.entries
             await until(pilot, lambda: (topics.rates.get("/rb/chatter") or {}).get("rate_hz"))
             assert topics.active and not panels["local:ra"].topics.active
+            # o on rb's talker: its topics only, in its Topics tab
+            await pilot.press("1")
+            await select(pilot, rb, "talker-1")
+            await pilot.press("o")
+            assert app.tabs.active == "topics" and topics.node == "/rb/talker"
+            await until(pilot, lambda: "/rb/chatter" in topics.entries)
 
             # 2 on ra: its form; an edit and F5 relaunch ra alone
             await pilot.press("1")

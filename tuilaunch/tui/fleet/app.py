@@ -54,7 +54,7 @@ from .member import Member
 from .tabs import FleetTabs
 
 NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane",
-                        "type_into", "run_under", "log_level"})
+                        "type_into", "run_under", "log_level", "node_topics"})
 """The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
@@ -142,7 +142,9 @@ class FleetApp(App[int]):
                 "its next plain restart"),
         Binding("L", "log_level", "Log level", show=False,
                 tooltip="Set the selected node's ROS log level"),
-        Binding("o", "open_session", "Open",
+        Binding("o", "node_topics", "Topics of node", show=False,
+                tooltip="The selected node's topics, in the Topics tab"),
+        Binding("O", "open_session", "Open",
                 tooltip="The selected session in the single-session TUI, with every key of "
                 "one session (d there comes back)"),
         Binding("f5", "apply", "Apply", show=False,
@@ -629,15 +631,27 @@ class FleetApp(App[int]):
         if process is not None:
             self._run_elsewhere("attach", self.current.address, "--type", process)
 
+    def action_node_topics(self) -> None:
+        """o: the selected node's topics in the Topics tab, as in the single TUI."""
+        process = self._one_row("o", "lists the topics of")
+        if process is None:
+            return
+        self.session_tabs.of(self.current).topics.show_node(self._node_name(process))
+        self.action_tab("topics")
+
+    def _node_name(self, process: str) -> str:
+        """The ROS name of a process's node in the selected session: its plan's, else the
+        one it reports."""
+        member = self.current
+        return current_node_name(member.session.plan.process(process).full_name,
+                                 member.store.reported_names.get(process, ())) or process
+
     def action_log_level(self) -> None:
         """L: the selected node's ROS log level, as in the single TUI."""
         process = self._one_row("L", "sets the log level of")
         if process is None:
             return
-        member = self.current
-        node = current_node_name(member.session.plan.process(process).full_name,
-                                 member.store.reported_names.get(process, ())) or process
-        self.log_levels[id(member)].ask(process, node)
+        self.log_levels[id(self.current)].ask(process, self._node_name(process))
 
     def action_run_under(self) -> None:
         """g: the selected node restarted under a tool, as in the single TUI."""
@@ -689,7 +703,7 @@ class FleetApp(App[int]):
         why = member.unavailable()
         what = why if why is not None else member.counts_text()
         file = Path(member.session.plan.file).name if member.supervisor else ""
-        line = f"[{member.label}] {file}  {what}  ({others + 1} sessions; o: this one in full)"
+        line = f"[{member.label}] {file}  {what}  ({others + 1} sessions; O: this one in full)"
         if line != self._status_text:
             self._status_text = line
             self.status_bar.update(Text(line))
