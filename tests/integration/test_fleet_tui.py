@@ -197,12 +197,23 @@ def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
     try:
         for marker in (b"robot1:base", b"robot2:arm", b"tick"):
             terminal.read_until(marker)
+        # a burst as ssh delivers it: the Services tab, its filter, a term; none of its
+        # letters is a fleet key (s stops, t starts) on its way to the field
+        os.write(terminal.master, b"3/stop")
+        terminal.read_until(b"stop")
+        os.write(terminal.master, b"\x1b1")  # out of the field, back to the trees
+        terminal.read_until(b"1 Nodes")
+        assert b"Stop all" not in terminal.screen
         os.write(terminal.master, b"q")
         assert terminal.wait_exit() == 0
         assert b"detached; the sessions run on: tuilaunch attach robot1:base robot2:arm" \
             in terminal.screen
     finally:
         terminal.close()
+    for address in ("robot1:base", "robot2:arm"):  # the burst stopped nothing
+        states = {p["id"]: p["state"] for p in json.loads(
+            run_cli("status", address, "--json").stdout)["processes"]}
+        assert states == {"ticker-1": "running", "quiet-2": "running"}, address
     assert run_cli("stop", "robot1:", "robot2:").returncode == 0
 
 

@@ -29,7 +29,7 @@ from pathlib import Path
 
 from rich.text import Text
 from textual import events, on, work
-from textual.app import App, ComposeResult, SuspendNotSupported
+from textual.app import ComposeResult, SuspendNotSupported
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
@@ -41,6 +41,7 @@ from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
 from ...engine.run.process.reported_names import current_node_name
 from ...engine.run.session.session_dir import SessionError
+from ..key_order import KeyOrder
 from ..keyboard import remembered, restart_with, show_command_line
 from ..log_levels import LogLevels
 from ..output_store import OutputStore
@@ -101,8 +102,10 @@ class FleetHelp(HelpScreen):
             yield Static("\n".join(rows))
 
 
-class FleetApp(App[int]):
-    """One TUI over several sessions (see the module's docstring)."""
+class FleetApp(KeyOrder):
+    """One TUI over several sessions (see the module's docstring). Its keys are handled one
+    after the other, as the single TUI's (key_order.py): `3/reset` typed at once over ssh
+    filters the services, never stopping a node with its `s`."""
 
     CSS_PATH = "../screens/app.tcss"  # the single-session TUI's look
     TITLE = "tuilaunch"
@@ -605,7 +608,8 @@ class FleetApp(App[int]):
         self.refresh()
 
     async def on_event(self, event: events.Event) -> None:
-        if isinstance(event, events.Key) and event.time < self._resumed_at:
+        if isinstance(event, events.Key) and not event.is_forwarded and \
+                event.time < self._resumed_at:
             return  # read before the other TUI took the terminal: typed for it
         await super().on_event(event)
 
