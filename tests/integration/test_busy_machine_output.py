@@ -125,7 +125,7 @@ def test_what_launch_code_prints_at_run_time_is_never_cut_by_the_nodes_lines(wri
     """With PYTHONUNBUFFERED (usual in ROS containers) `print(a, b, c)` writes each piece
     apart; an OpaqueFunction printing while a node floods headless stdout must still come
     out as whole lines, as under ros2 launch, where both are written by one thread."""
-    from .conftest import run_cli
+    from ..conftest import run_cli
 
     path = write(f"""
 from launch import LaunchDescription

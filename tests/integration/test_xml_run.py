@@ -145,7 +145,7 @@ def test_argument_edits_preview_and_restart_only_what_changes(tmp_path):
 
 
 def test_package_and_xml_file_like_ros2_launch(control_prefix):
-    from .conftest import run_cli
+    from ..conftest import run_cli
 
     launch_dir = control_prefix / "share" / "controller_manager" / "launch"
     launch_dir.mkdir()

@@ -57,6 +57,8 @@ class LifecycleTracker(Plugin):
         self._subscriptions: dict[str, Any] = {}
         self._heard: set[str] = set()  # processes whose transition events arrived
         self._events: dict[str, int] = {}  # transition events heard, per process
+        self._goal_seen: dict[tuple[str, str], int] = {}
+        """(process, state) -> the count of its transition events when it last reached it."""
 
     # --- the plugin's hooks ---------------------------------------------------------------
 
@@ -190,6 +192,7 @@ class LifecycleTracker(Plugin):
     def _on_transition(self, proc_id: str, transition: str, start: str, goal: str) -> None:
         self._heard.add(proc_id)
         self._events[proc_id] = self._events.get(proc_id, 0) + 1
+        self._goal_seen[(proc_id, goal)] = self._events[proc_id]
         self._set_state(proc_id, goal, {"transition": transition, "start": start})
         for key in state_keys(transition, start, goal):
             self.supervisor.state_reached(proc_id, "state:" + key)
@@ -281,16 +284,19 @@ class LifecycleTracker(Plugin):
         # the reply can come before the transition event that says the new state (a busy
         # machine): answered once the state is known, so a step asked next (`]]`) is asked
         # of the state it follows, not refused as asked of the one before
-        await self._reached(proc_id, GOALS.get(label))
+        await self._reached(proc_id, GOALS.get(label), before)
         self._report(where, f"{proc.full_name}: {label} done ({origin})")
         return True
 
-    async def _reached(self, proc_id: str, goal: str | None, patience: float = 5.0) -> None:
-        """Until the node's transition events say `goal` (at most `patience` seconds, and
-        only for a node whose events are heard)."""
+    async def _reached(self, proc_id: str, goal: str | None, before: int,
+                       patience: float = 5.0) -> None:
+        """Until the node's transition events say it reached `goal` since the `before`-th
+        (at most `patience` seconds, and only for a node whose events are heard). Reached,
+        not is in: a handler on that state may have moved it on already (inactive, then
+        active at once)."""
         deadline = time.monotonic() + patience
         while goal is not None and proc_id in self._heard \
-                and self.states.get(proc_id) != goal \
+                and self._goal_seen.get((proc_id, goal), 0) <= before \
                 and self.supervisor.states.get(proc_id) in ALIVE \
                 and not self.supervisor.shutting_down and time.monotonic() < deadline:
             await asyncio.sleep(0.05)  # its transition event ends the wait
