@@ -39,7 +39,7 @@ from pathlib import Path
 from run_bench import write_launch  # bench/ is on sys.path when run as a script
 
 from tuilaunch.engine.packages import ensure_environment
-from tuilaunch.tui.app import make_app
+from tuilaunch.tui.app import launch_app
 from tuilaunch.tui.output_store import View
 
 
@@ -224,13 +224,17 @@ def rss_mb() -> float:
 
 
 async def memory(path: Path, log_dir: Path, count: int, lines: int) -> tuple[float, int]:
-    """RSS growth once every process has printed all its lines (the log files say so),
-    and how many lines the scrollbacks then hold."""
+    """The TUI's RSS growth once every process has printed all its lines (the log files
+    say so), and how many lines the scrollbacks then hold. The TUI runs as `tuilaunch
+    FILE` runs it (launch_app): the launch is in its session server, a process of its
+    own, so this is the client's memory."""
     before = rss_mb()
-    app = make_app(str(path), {}, log_dir, scrollback=5000)
+    app = launch_app(str(path), {}, log_dir, scrollback=5000)
     async with app.run_test(size=(100, 30)) as pilot:
-        assert app.supervisor is not None
         deadline = time.monotonic() + 300
+        while app.supervisor is None:  # the server starts once the tree shows
+            assert time.monotonic() < deadline, "the session never started"
+            await pilot.pause(0.2)
 
         def logged() -> int:
             return sum(sum(1 for _ in open(f)) for f in log_dir.glob("n*.log"))
@@ -242,6 +246,8 @@ async def memory(path: Path, log_dir: Path, count: int, lines: int) -> tuple[flo
         held = sum(len(app.store.lines(View(p))) for p in app.supervisor.states)
         used = rss_mb() - before
         await app.engine.run(app.supervisor.shutdown("bench over"))
+    if app.server_process is not None:
+        app.server_process.wait(timeout=120)
     return used, held
 
 
