@@ -22,7 +22,7 @@ from textual.widgets import Input
 
 from tuilaunch.client import remote_supervisor
 from tuilaunch.engine.run.event_buffer import EventBuffer
-from tuilaunch.engine.run.events import Event, Output
+from tuilaunch.engine.run.events import Event, Output, Resources
 from tuilaunch.tui import session_link
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
@@ -175,17 +175,20 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
         app = make_app(status["file"], status["arguments"], Path(status["log_dir"]),
                        session_name="far", session_host="robot1")
         async with app.run_test(size=(100, 30)) as pilot:
-            await until(pilot, lambda: len(ticks(app)) >= 3)
-            assert "[robot1:far]" in str(app.status_bar.render())
-            # the Nodes tab watches CPU and memory: the server sends them each second
+            # the Nodes tab watches CPU and memory: the server says them once the watch
+            # begins (a second after it is asked), then as they change
+            await until(pilot, lambda: app.supervisor is not None)
             assert app.supervisor is not None
             usage: list[Event] = []
-            app.supervisor.subscribe(lambda e: usage.append(e) if e.kind == "resources"
+            app.supervisor.subscribe(lambda e: usage.append(e) if isinstance(e, Resources)
                                      else None)
+            await until(pilot, lambda: len(ticks(app)) >= 3)
+            assert "[robot1:far]" in str(app.status_bar.render())
             await until(pilot, lambda: usage)
             for pid in proxies_on(robot):
                 os.kill(pid, signal.SIGKILL)  # the link dies; ssh ends with it
             await until(pilot, lambda: "link to robot1 lost" in str(app.status_bar.render()))
+            usage.clear()  # nothing comes while the link is down
             seen = len(ticks(app))
             # meanwhile, over there: lines go on, and another operator restarts a node
             restarted = run_cli("restart", "robot1:far", "quiet")
@@ -203,7 +206,6 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
             shown = ticks(app)
             assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
             # the watch ended with the old connection; the new one asked again
-            usage.clear()
             await until(pilot, lambda: usage)
             quiet = [line.text for line in app.store.lines(View("quiet-2"))]
             assert sum("process started with pid" in t for t in quiet) == 2
