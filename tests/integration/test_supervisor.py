@@ -308,7 +308,7 @@ def test_display_buffer_drops_oldest_lines_and_counts_them_but_never_other_event
     buffer(Started("flood-1", pid=1))
     for start in range(0, 100_000, 100):
         buffer(Output("flood-1", stream="stdout",
-                     lines=[str(n) for n in range(start, start + 100)]))
+                      lines=[str(n) for n in range(start, start + 100)]))
     buffer(Event("exited", "flood-1", code=0))
     events = buffer.drain()
     assert [e.kind for e in events if e.kind != "output"] == ["dropped", "started", "exited"]

@@ -246,13 +246,13 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
                 # 1 (its run is cancelled); unlike it, tuilaunch still stops every process
                 terminated = True
                 printer(Log("launch", level="ERROR",
-                              reason=f"user interrupted with ctrl-\\ ({sig.name}), "
-                              "terminating..."))
+                            reason=f"user interrupted with ctrl-\\ ({sig.name}), "
+                            "terminating..."))
             stopping.add(asyncio.ensure_future(supervisor.shutdown(reason)))
             if sig == signal.SIGINT:
                 # ros2 launch's line, which people grep for
                 printer(Log("launch", reason="user interrupted with ctrl-c (SIGINT)",
-                              level="WARNING"))
+                            level="WARNING"))
                 printer.say("stopping: Ctrl+C again sends SIGTERM now, a third time SIGKILL")
             return
         sent = supervisor.escalate_now()

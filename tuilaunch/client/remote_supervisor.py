@@ -361,7 +361,7 @@ class RemoteSupervisor:
                 if self.host is None or self.link is None:
                     self.lost = True
                     self._deliver(Log(reason=f"lost the connection to session "
-                                        f"{self.name}", level="ERROR"))
+                                      f"{self.name}", level="ERROR"))
                     break
                 if not await self._relink():
                     if self._stopping and not self.lost:
@@ -505,7 +505,7 @@ class RemoteSupervisor:
                 lines[process] = [LogLine(*line) for line in page["lines"]]
                 if page.get("skipped"):
                     notes.append(Dropped(process, code=int(page["skipped"]),
-                                       data={"start": begin, "skip": 0}))
+                                         data={"start": begin, "skip": 0}))
             # everything up to `end` is now here; its events from the stream come after it
             self._from[process], self._received[process] = end, 0
         for event in notes + merged(lines, []):
@@ -565,13 +565,13 @@ class RemoteSupervisor:
             # the link was up: the proxy there saw the session's server die (kill -9)
             self.lost = not self._stopping
             self._deliver(Log(reason=f"{self.host}: {why.split('error: ', 1)[-1]}",
-                                level="ERROR"))
+                              level="ERROR"))
             return False
         self.link_lost = f"link to {self.host} lost ({why})"
         self.lost_reason = why
         self._fail_replies(self.link_lost)
         self._deliver(Log(reason=f"{self.link_lost}; session {self.name} runs on "
-                            "there; reconnecting", level="ERROR"))
+                          "there; reconnecting", level="ERROR"))
         delay = RETRY_FIRST
         said = ""
         while not self.detached:
@@ -593,7 +593,7 @@ class RemoteSupervisor:
                     self.lost = not self._stopping  # unless it was asked to stop
                     self.link_lost = None
                     self._deliver(Log(reason=f"session {self.name} ended on "
-                                        f"{self.host} while the link was down", level="ERROR"))
+                                      f"{self.host} while the link was down", level="ERROR"))
                     return False
                 self.lost_reason = str(exc)  # the outage's reason now, not its first
                 if str(exc) != said:  # each new reason once, not every try
@@ -619,7 +619,7 @@ class RemoteSupervisor:
             self.link_lost = self.lost_reason = None
             self.last_heard = time.monotonic()
             self._deliver(Log(reason=f"link to {self.host} back: what happened "
-                                "meanwhile follows"))
+                              "meanwhile follows"))
             for event in missed:
                 self._deliver(event)
             return True
@@ -646,7 +646,7 @@ class RemoteSupervisor:
             lines[process] = [LogLine(*line) for line in page["lines"]]
             if page.get("skipped"):  # read back only the last `scrollback` of them
                 notes.append(Dropped(process, code=int(page["skipped"]),
-                                   data={"start": begin, "skip": skip}))
+                                     data={"start": begin, "skip": skip}))
         recent = [data for data in result["recent"]
                   if float(data.get("time") or 0.0) > self._last_event]
         self._note_recent(recent)

@@ -76,7 +76,7 @@ class EventBuffer:
             self._held = {}
             self._dropped = {}
         notices = [Dropped(name, code=count,
-                         reason=f"{count} lines not shown (all are in the log file)")
+                           reason=f"{count} lines not shown (all are in the log file)")
                    for name, count in dropped.items()]
         return notices + joined([event for _, event in entries])
 

@@ -339,7 +339,7 @@ class MachinesCoordinator(Plugin):
                                 f"are only in its log file there", "WARN")
         for stamp, stream, text in result.get("lines") or []:
             event = Output(process, stream=str(stream),
-                          lines=[screen_str(str(text))], time=float(stamp))
+                           lines=[screen_str(str(text))], time=float(stamp))
             self._log_output(share, event)
             self.supervisor.mirror(event)
 

@@ -223,7 +223,7 @@ class SupervisorCore:
         """A line in the launch pane on behalf of one action of the plan; `logger` names
         who says it in headless output and launch.log (LogInfo: launch's `launch.user`)."""
         self.emit(Log(action.id, reason=text, level=level,
-                        data={"logger": logger} if logger else None))
+                      data={"logger": logger} if logger else None))
 
 
 def to_stderr(text: str) -> None:

@@ -106,7 +106,7 @@ class Starting:
         if proc.log_cmd:  # launch's words (ExecuteLocal); its env is always a dict now
             shown = " ".join(part for part in start.cmd if part.strip())
             core.emit(Log(process_id, reason=f"process details: cmd='{shown}', "
-                            f"cwd='{start.cwd}', custom_env?=True"))
+                          f"cwd='{start.cwd}', custom_env?=True"))
         try:
             # no controlling terminal (vfork: fast) but under a tool, whose job control
             # needs one; the terminal's writer turns ctrl+c into SIGINT otherwise
@@ -292,7 +292,7 @@ class Starting:
             tries = core.respawner.tries(process_id)
             ended = "failed" if code != 0 else "ended"
             core.emit(Log(process_id, level="ERROR" if code != 0 else "INFO",
-                            reason=(f"respawn gives up: it {ended} {tries + 1} times "
+                          reason=(f"respawn gives up: it {ended} {tries + 1} times "
                                     f"(respawn_max_retries="
                                     f"{running.plan.respawn_max_retries})")))
 
@@ -307,7 +307,7 @@ class Starting:
         core.states[proc.id] = "respawning"
         core.busy += 1
         core.emit(Respawning(proc.id, reason=f"try {tries} in {delay:g} s",
-                        data={"try": tries, "delay": delay}))
+                             data={"try": tries, "delay": delay}))
         called_off = core.respawn_waits[proc.id] = asyncio.Event()
         try:
             await asyncio.wait_for(called_off.wait(), delay)

@@ -124,7 +124,7 @@ class Stopper:
         elif self.terminal_sigint and self._in_shutdown():
             return
         self._say(Log(name, reason=f"sending signal '{signal_name}' to "
-                        f"process[{name}]"))
+                      f"process[{name}]"))
 
     def real_crashes(self, crashes: dict[str, int],
                      crash_times: dict[str, float]) -> dict[str, int]:
