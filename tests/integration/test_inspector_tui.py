@@ -141,13 +141,15 @@ async def test_tree_shows_cpu_memory_and_qos_problems_while_the_nodes_tab_is_sho
         # for the detail line, and with the root selected none
         tree.move_cursor(tree.rows["lidar-1"])
         await pilot.pause()
-        await until(pilot, lambda: "cpu " in str(app.query_one("#detail", Static).render()))
+        # its figures, not only the minutes kept before (the sparklines, which can come
+        # first on a loaded machine)
+        await until(pilot, lambda: "threads" in str(app.query_one("#detail", Static).render()))
         line = str(app.query_one("#detail", Static).render())
-        assert "mem " in line and "threads" in line
+        assert "cpu " in line and "mem " in line
         assert set(tree.usage) == {"lidar-1"}
         tree.move_cursor(tree.rows["chatter-3"])
         await until(pilot, lambda: set(tree.usage) == {"chatter-3"})
-        await until(pilot, lambda: "cpu " in str(app.query_one("#detail", Static).render()))
+        await until(pilot, lambda: "threads" in str(app.query_one("#detail", Static).render()))
         tree.move_cursor(tree.rows["lidar-1"])
         # a tree wide enough shows them in the rows: every process's are sent
         assert tree.size.width < 44 and "%" not in row_text(app, "lidar-1")

@@ -184,7 +184,11 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
                                      else None)
             await until(pilot, lambda: len(ticks(app)) >= 3)
             assert "[robot1:far]" in str(app.status_bar.render())
-            await until(pilot, lambda: usage)
+            # the first may have come before (a loaded machine draws the first frame late):
+            # a process selected, its figures are sent
+            tree = app.launch_tree
+            tree.move_cursor(tree.rows["ticker-1"])
+            await until(pilot, lambda: any("ticker-1" in (e.data or {}) for e in usage))
             for pid in proxies_on(robot):
                 os.kill(pid, signal.SIGKILL)  # the link dies; ssh ends with it
             await until(pilot, lambda: "link to robot1 lost" in str(app.status_bar.render()))
