@@ -32,6 +32,7 @@ from ..client.session_start import session_name_for as session_name_for
 from ..client.session_start import start_session as start_session
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import placement_from_text
+from ..engine.run.events import LIVE_STATES
 from ..engine.run.machines.remote import open_remote_link
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
@@ -309,7 +310,7 @@ def stop_session(address: str | None, said: str = "tuilaunch stop: ") -> str:
         subscribed = link.request("subscribe", max_lines=1,
                                   kinds=["exited", "failed", "log", "ended"])
         waiting = {p for p, state in (subscribed.get("states") or {}).items()
-                   if state in ("running", "stopping", "respawning")}
+                   if state in (*LIVE_STATES, "respawning")}
         asking = link.send("shutdown", reason="tuilaunch stop")  # its reply comes at the end
         asked = time.monotonic()
         notice = asked + STOP_NOTICE

@@ -15,7 +15,6 @@ from textual.timer import Timer
 
 from ..client.session_graph import GraphCalls, SessionGraph
 from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
-from ..engine.run.process.reported_names import current_node_name
 from ..engine.run.session.session_dir import SessionError
 from .log_levels import LogLevels
 from .navigation import Navigation
@@ -230,9 +229,7 @@ class Inspector(Navigation):
 
     def node_name(self, process: str) -> str:
         """The ROS name of a process's node: the plan's, else the one it reports."""
-        proc = self.session.plan.process(process)
-        return current_node_name(proc.full_name,
-                                 self.store.reported_names.get(process, ())) or process
+        return self.store.node_name(self.session.plan, process)
 
     def selected_process(self) -> str | None:
         node = self.launch_tree.cursor_node

@@ -16,7 +16,7 @@ from textual.binding import Binding
 from ..client.port import LaunchPort
 from ..engine.errors import LaunchError
 from ..engine.run.engine_thread import EngineThread
-from ..engine.run.events import Event, Failed, ProcessExited, Started, Typing
+from ..engine.run.events import LIVE_STATES, Event, Failed, ProcessExited, Started, Typing
 from .key_order import KeyHold, hold_keys
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
@@ -272,7 +272,7 @@ class NodeKeyboard(SessionLink):
         # a node stopped to start again keeps the keys: typing began once its restart
         # with a terminal was answered, and the news of its stop may come only now
         if self.typing_to is not None and self.supervisor is not None and \
-                self.supervisor.states.get(self.typing_to) not in ("running", "stopping") and \
+                self.supervisor.states.get(self.typing_to) not in LIVE_STATES and \
                 self.typing_to not in self._coming_back:
             self.stop_typing(f"{self.typing_to} is no longer running: the keys are back")
         elif any(isinstance(e, Typing) for e in events):

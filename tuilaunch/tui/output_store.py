@@ -14,8 +14,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
+from ..engine.plan.model import Plan
 from ..engine.run.process.output import expand_tabs, screen_str, strip_ansi
-from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames
+from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames, current_node_name
 from ..engine.run.session.protocol import with_stamp
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
@@ -140,6 +141,12 @@ class OutputStore:
         """Counts changes to `partials`, so a pane redraws them only when they change."""
         self.unstamped = Unstamped(all_scrollback)
 
+
+    def node_name(self, plan: Plan, process: str) -> str:
+        """The ROS name of a process's node: its plan's, else the one it reports in its
+        lines (the process id while it has said none)."""
+        return current_node_name(plan.process(process).full_name,
+                                 self.reported_names.get(process, ())) or process
     def add(self, process: str, stream: str, texts: Iterable[str],
             first: int | None = None) -> list[Line]:
         """`first`: the number of the first of these lines in a link's stream that leaves

@@ -31,6 +31,7 @@ from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.events import (
+    LIVE_STATES,
     ComponentReport,
     Dropped,
     Event,
@@ -290,7 +291,7 @@ class SessionLink(App[int]):
     def running(self) -> list[str]:
         if self.supervisor is None:
             return []
-        return [p for p, s in self.supervisor.states.items() if s in ("running", "stopping")]
+        return [p for p, s in self.supervisor.states.items() if s in LIVE_STATES]
 
     # --- engine events -------------------------------------------------------------------
 
@@ -412,23 +413,9 @@ class SessionLink(App[int]):
                 return self.store.add_event(process, f"process started with pid [{event.pid}]")
             return []
         if isinstance(event, ProcessExited):
-            code = event.code if event.code is not None else 0
-            # the cause came with it, decided where it ended: whether anyone asked for the
-            # stop (another client, a `tuilaunch stop`, a stop begun before this client
-            # attached); this client's own asking counts too
-            asked = process in self.asked_to_stop or self.quitting or event.asked
-            if event.crashed and not asked and state == "exited":
-                state = "failed"  # a crash, not the operator's stop
+            state, text, level = process_ended(
+                event, state, process in self.asked_to_stop or self.quitting)
             tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
-            if code == 0:
-                text, level = f"process has finished cleanly [pid {event.pid}]", INFO
-            elif event.cause is ExitCause.TYPED:
-                text, level = (f"process stopped by a key typed into it [pid {event.pid}, "
-                               f"{event.reason}]"), INFO
-            elif asked:
-                text, level = f"process stopped [pid {event.pid}, {event.reason}]", INFO
-            else:
-                text, level = f"process has died [pid {event.pid}, {event.reason}]", ERROR
             return self.store.add_event(process, text, level)
         if isinstance(event, Failed):
             tree.set_state(process, state, f"({event.reason})")
@@ -581,6 +568,26 @@ def leave_now(status: int) -> None:
     leaving behind nothing atexit would have removed: the plan's parameter folder."""
     remove_default_params_dir()
     os._exit(status)
+
+
+def process_ended(event: ProcessExited, state: str, asked_here: bool) -> tuple[str, str, int]:
+    """A process's end as a client shows it (here and in a fleet's view): its row's state
+    and its pane's line, in ros2 launch's words, with its level. The cause came with it,
+    decided where it ended (another client's stop, a `tuilaunch stop`, a stop begun before
+    this client attached); this client's own asking (`asked_here`) counts too: a crash
+    nobody asked for is failed."""
+    asked = asked_here or event.asked
+    if event.crashed and not asked and state == "exited":
+        state = "failed"
+    code = event.code if event.code is not None else 0
+    if code == 0:
+        return state, f"process has finished cleanly [pid {event.pid}]", INFO
+    if event.cause is ExitCause.TYPED:
+        return state, (f"process stopped by a key typed into it [pid {event.pid}, "
+                       f"{event.reason}]"), INFO
+    if asked:
+        return state, f"process stopped [pid {event.pid}, {event.reason}]", INFO
+    return state, f"process has died [pid {event.pid}, {event.reason}]", ERROR
 
 
 def _detail(event: Event) -> str:

@@ -221,6 +221,9 @@ class ProcessExited(Event):
         return self.cause in (ExitCause.ASKED, ExitCause.TYPED)
 
 
+LIVE_STATES = ("running", "stopping")
+"""The states of a process that runs (has a pid, can be typed into), a stop begun or not."""
+
 STATE_EVENTS = (Started, Failed, Stopping, Respawning, ProcessExited)
 """The events that change a process's state in the tree."""
 
@@ -252,8 +255,8 @@ LaunchEvent = EventInfo
 Consumer = Callable[[Event], None]
 
 
-__all__ = ["EVENT_TYPES", "STATE_EVENTS", "ActionFinished", "ComponentReport", "Consumer",
-           "Dropped", "Echo", "Event", "ExitCause", "Failed", "Hz", "LaunchEvent",
+__all__ = ["EVENT_TYPES", "LIVE_STATES", "STATE_EVENTS", "ActionFinished", "ComponentReport",
+           "Consumer", "Dropped", "Echo", "Event", "ExitCause", "Failed", "Hz", "LaunchEvent",
            "LifecycleChanged", "Log", "Output", "PlotSamples", "ProcessExited", "Qos", "Rates",
            "Reading", "Relaunched", "Resources", "Respawning", "Shutdown", "Started",
            "Stopping", "Trend", "Typing", "View", "event_of"]

@@ -39,7 +39,6 @@ from ...client.port import LaunchPort, Verb
 from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
-from ...engine.run.process.reported_names import current_node_name
 from ...engine.run.session.session_dir import SessionError
 from ..key_order import KeyOrder
 from ..keyboard import remembered, restart_with, show_command_line
@@ -367,7 +366,7 @@ class FleetApp(KeyOrder):
 
     def _go_home(self, tab: str) -> None:
         home: Widget | None = self.current.tree if tab == "nodes" else \
-            self.session_tabs.home(tab)
+            self.session_tabs.home(tab, self.current)
         if home is not None:
             self.screen.set_focus(home)
 
@@ -475,16 +474,10 @@ class FleetApp(KeyOrder):
 
     def action_command_line(self) -> None:
         """c: the selected node's exact command line, as its session started it."""
+        process = self._one_row("c", "shows the command line of")
         member = self.current
-        supervisor = member.supervisor
-        if not self._keys_reach(member) or supervisor is None:
-            return
-        selected = self.selected()
-        if len(selected) != 1:
-            self.notify(f"{member.label}: c shows one node's command line: select it",
-                        severity="warning")
-            return
-        self._show_command(member, supervisor, selected[0])
+        if process is not None and member.supervisor is not None:
+            self._show_command(member, member.supervisor, process)
 
     @work(group="commands", exit_on_error=False)
     async def _show_command(self, member: Member, supervisor: LaunchPort,
@@ -571,7 +564,7 @@ class FleetApp(KeyOrder):
 
     def action_pane(self, name: str) -> None:
         if self.tabs.active != "nodes":  # `/` in another tab: into its filter field
-            field = self.session_tabs.filter_field(self.tabs.active)
+            field = self.session_tabs.filter_field(self.tabs.active, self.current)
             if field is not None:
                 self.screen.set_focus(field)
             return
@@ -644,11 +637,8 @@ class FleetApp(KeyOrder):
         self.action_tab("topics")
 
     def _node_name(self, process: str) -> str:
-        """The ROS name of a process's node in the selected session: its plan's, else the
-        one it reports."""
-        member = self.current
-        return current_node_name(member.session.plan.process(process).full_name,
-                                 member.store.reported_names.get(process, ())) or process
+        """The ROS name of a process's node in the selected session."""
+        return self.current.store.node_name(self.current.session.plan, process)
 
     def action_log_level(self) -> None:
         """L: the selected node's ROS log level, as in the single TUI."""

@@ -36,6 +36,7 @@ from ..lifecycle_steps import LifecycleSteps
 from ..output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree
+from ..session_link import process_ended
 
 COUNTED = ("running", "pending", "stopping", "exited", "failed", "respawning")
 
@@ -165,20 +166,9 @@ class Member:
             tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
             return []
         if isinstance(event, ProcessExited):
-            code = event.code if event.code is not None else 0
-            # its cause came with it, decided where it ended; this client's asking counts
-            asked = process in self.asked_to_stop or event.asked
-            if event.crashed and not asked and state == "exited":
-                state = "failed"
+            state, text, level = process_ended(event, state, process in self.asked_to_stop)
             tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
-            if code == 0:
-                return self.store.add_event(
-                    process, f"process has finished cleanly [pid {event.pid}]")
-            if asked:
-                return self.store.add_event(
-                    process, f"process stopped [pid {event.pid}, {event.reason}]")
-            return self.store.add_event(
-                process, f"process has died [pid {event.pid}, {event.reason}]", ERROR)
+            return self.store.add_event(process, text, level)
         tree.set_state(process, state, f"({event.reason})")
         if isinstance(event, Failed):
             return self.store.add_event(process, f"failed: {event.reason}", ERROR)

@@ -104,7 +104,7 @@ class FleetTabs:
                        for i, m in enumerate(members)}
         self.members = members
         self.active = "nodes"
-        self.current = members[0]
+        """The tab last shown (a click on a tab is told from its key by it)."""
 
     def of(self, member: Member) -> SessionPanels:
         return self.panels[id(member)]
@@ -117,7 +117,7 @@ class FleetTabs:
     def shown(self, tab: str, member: Member) -> None:
         """`tab` is on screen for `member` (the selected session): its panels show and
         refresh; the others' Topics stop measuring."""
-        self.active, self.current = tab, member
+        self.active = tab
         panels = self.of(member)
         if tab in TABS:
             switcher = panels.panel(tab).parent
@@ -131,18 +131,18 @@ class FleetTabs:
         elif tab == "params":
             panels.params.refresh_listing()
 
-    def home(self, tab: str) -> Widget | None:
-        """Where the tab's work starts, for the selected session."""
+    def home(self, tab: str, member: Member) -> Widget | None:
+        """Where the tab's work starts, for `member` (the selected session)."""
         selector = HOMES.get(tab)
         if selector is None:
             return None
-        return self.of(self.current).panel(tab).query_one(selector)
+        return self.of(member).panel(tab).query_one(selector)
 
-    def filter_field(self, tab: str) -> Field | None:
+    def filter_field(self, tab: str, member: Member) -> Field | None:
         selector = FILTERS.get(tab)
         if selector is None:
             return None
-        return self.of(self.current).panel(tab).query_one(selector, Field)
+        return self.of(member).panel(tab).query_one(selector, Field)
 
     def followed(self, member: Member) -> None:
         """The member's session is followed (again): its Args tab shows its plan's form."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...errors import LaunchError
-from ..events import Typing
+from ..events import LIVE_STATES, Typing
 from ..plugins import Handler
 from ..process.readers import NO_TERMINAL
 from ..supervisor.supervisor import Supervisor
@@ -49,7 +49,7 @@ class Keyboard:
             raise LaunchError(f"another client (client {self.client}) is typing into "
                               f"{self.process}; one client types at a time")
         state = self.supervisor.states.get(process)
-        if state not in ("running", "stopping"):  # a stop's prompt can still be answered
+        if state not in LIVE_STATES:  # a stop's prompt can still be answered
             raise LaunchError(f"{process} is not running ({state}): there is nothing to "
                               "type into")
         if not self._has_terminal(process):

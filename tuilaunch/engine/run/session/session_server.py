@@ -26,7 +26,7 @@ from typing import Any
 from ...describe.python.loader import set_command_line
 from ...errors import LaunchError
 from ...plan.session import Session
-from ..events import Event, Log, Output, Relaunched, Started
+from ..events import LIVE_STATES, Event, Log, Output, Relaunched, Started
 from ..plugins import Handler
 from ..supervisor.stopping import CTRL_C_REASON
 from ..supervisor.supervisor import Supervisor
@@ -164,7 +164,7 @@ class SessionServer:
     def _running_pids(self) -> dict[str, int]:
         states = self.supervisor.states
         return {process: pid for process, pid in self.pids.items()
-                if states.get(process) in ("running", "stopping")}
+                if states.get(process) in LIVE_STATES}
 
     def _client_gone(self, client: int) -> None:
         self.keyboard.release(client)  # a client that is gone types no more
@@ -205,9 +205,9 @@ class SessionServer:
             del fields["growing"]  # a trend needs watching; status is one look
             processes.append({
                 "id": proc.id, "name": proc.full_name or proc.label, "state": state,
-                "pid": self.pids.get(proc.id) if state in ("running", "stopping") else None,
+                "pid": self.pids.get(proc.id) if state in LIVE_STATES else None,
                 # the last end's code, until the process starts again
-                "exit_code": None if state in ("running", "stopping", "pending") else
+                "exit_code": None if state in (*LIVE_STATES, "pending") else
                 self.supervisor.exit_codes.get(proc.id),
                 "detail": self.details.get(proc.id), "machine": proc.machine, **fields,
                 # the exact start (argv, paste-ready line, env changes); a crash's signal/core
