@@ -40,6 +40,7 @@ from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervi
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
+from ..app import LaunchTabs
 from ..key_order import KeyOrder
 from ..keyboard import remembered, restart_with, show_command_line
 from ..log_levels import LogLevels
@@ -75,13 +76,6 @@ class FleetTree(LaunchTree):
             self.app.step_tree(self, -1)
         else:
             super().action_cursor_up()
-
-
-class FleetTabbed(TabbedContent):
-    """Tabs that change only when asked (the tab keys, a click), as the single TUI's."""
-
-    def _on_tab_pane_focused(self, event: TabPane.Focused) -> None:
-        event.stop()
 
 
 class FleetHelp(HelpScreen):
@@ -211,7 +205,7 @@ class FleetApp(KeyOrder):
 
     def compose(self) -> ComposeResult:
         yield Static("", id="status")
-        with FleetTabbed(initial="nodes", id="fleet-tabs"):
+        with LaunchTabs(initial="nodes", id="fleet-tabs"):
             with TabPane("1 Nodes", id="nodes"), Vertical(id="nodes-tab"):
                 yield Static("", id="detail")
                 with Horizontal(id="fleet-split"):
@@ -231,7 +225,7 @@ class FleetApp(KeyOrder):
         self.status_bar = self.query_one("#status", Static)
         self.detail_bar = self.query_one("#detail", Static)
         self.switcher = self.query_one("#fleet-panes", ContentSwitcher)
-        self.tabs = self.query_one(FleetTabbed)
+        self.tabs = self.query_one(LaunchTabs)
         self.engine = EngineThread()
         for member in self.members:
             self.follow(member)
