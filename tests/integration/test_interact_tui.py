@@ -22,9 +22,19 @@ from .test_tui_keys import burst
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
 
 
-def select(app, process_id: str) -> None:
+async def select(pilot, app, process_id: str) -> None:
+    """The row of `process_id` selected, as the arrows would; again while a row drawn
+    afresh (a state just changed on a loaded machine) puts the cursor elsewhere."""
     tree = app.launch_tree
-    tree.move_cursor(tree.rows[process_id])
+
+    def there() -> bool:
+        node = tree.cursor_node
+        if node is None or node.data is None or node.data.ref != process_id:
+            tree.move_cursor(tree.rows[process_id])
+            return False
+        return True
+
+    await until(pilot, there)
 
 
 def pane(app, process_id: str) -> str:
@@ -33,7 +43,7 @@ def pane(app, process_id: str) -> str:
 
 async def terminal_offered(pilot, app, process_id: str) -> str:
     """`i` on a node started with pipes: the question it asks."""
-    select(app, process_id)
+    await select(pilot, app, process_id)
     await pilot.pause()
     await pilot.press("i")
     await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
@@ -57,7 +67,7 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             assert app.typing_to is None
             assert process(name, "segv-3")["state"] == "failed"
 
-            select(app, "lines-1")
+            await select(pilot, app, "lines-1")
             await pilot.pause()
             await pilot.press("i")
             await until(pilot, lambda: app.typing_to == "lines-1")
@@ -72,7 +82,7 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             await until(pilot, lambda: status(name)["typing"] is None)
 
             # the raw reader: arrows as escape sequences, ctrl+c as a key, not a quit
-            select(app, "keys-2")
+            await select(pilot, app, "keys-2")
             await pilot.pause()
             await pilot.press("i")
             await until(pilot, lambda: app.typing_to == "keys-2")
@@ -84,7 +94,7 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             await pilot.press("ctrl+right_square_bracket")
 
             # ctrl+c to the line reader is SIGINT; the keys come back when it ends
-            select(app, "lines-1")
+            await select(pilot, app, "lines-1")
             await pilot.pause()
             await pilot.press("i")
             await until(pilot, lambda: app.typing_to == "lines-1")
@@ -112,7 +122,7 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
         async with app.run_test(size=(120, 32)) as pilot:
             await until(pilot, lambda: app.supervisor.states.get("lines-1") == "failed")
             await until(pilot, lambda: "stdin is not a terminal" in pane(app, "lines-1"))
-            select(app, "lines-1")
+            await select(pilot, app, "lines-1")
             await pilot.pause()
             await pilot.press("i", "y")
             await until(pilot, lambda: app.typing_to == "lines-1")
@@ -128,7 +138,7 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             # second to stop: the keys after `y` wait out the restart, and are the node's,
             # not tuilaunch's (its `s` would stop the node, its `r` restart it)
             await until(pilot, lambda: "no terminal: waiting" in pane(app, "slow-3"))
-            select(app, "slow-3")
+            await select(pilot, app, "slow-3")
             await pilot.pause()
             burst(app, "i", "y", *"hello rs", "enter")
             await until(pilot, lambda: "got: hello rs" in pane(app, "slow-3"))
@@ -149,7 +159,7 @@ def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
         app = make_app(path, {}, log_dir, session_name=name)
         async with app.run_test(size=(120, 32)) as pilot:
             await until(pilot, lambda: app.supervisor.states.get("keys-2") == "running")
-            select(app, "keys-2")
+            await select(pilot, app, "keys-2")
             await pilot.pause()
             # a cancelled prompt changes nothing
             await pilot.press("g")
@@ -193,7 +203,7 @@ async def test_i_types_into_a_node_of_the_tuis_own_launch(tmp_path, write):
     # `tuilaunch FILE`: the TUI that started the session (its owner), the same keys
     async with launched(str(write(LAUNCH)), {}, tmp_path, (120, 32)) as (app, pilot):
         await until(pilot, lambda: "ready" in pane(app, "lines-1"))
-        select(app, "lines-1")
+        await select(pilot, app, "lines-1")
         await pilot.pause()
         await pilot.press("i")
         await until(pilot, lambda: app.typing_to == "lines-1")
