@@ -77,7 +77,7 @@ def test_keys_typed_with_i_are_dropped_while_another_client_types(write):
             app = make_app(path, {}, log_dir, session_name=name)
             async with app.run_test(size=(120, 32)) as pilot:
                 await until(pilot, lambda: "ready" in pane(app, "lines-1"))
-                select(app, "lines-1")
+                await select(pilot, app, "lines-1")
                 await pilot.pause()
                 shown = app.output_panel.view
                 burst(app, "i", *"abc", "s")
@@ -206,7 +206,7 @@ def test_a_progress_line_shows_as_it_stands_while_it_is_rewritten(write, tmp_pat
     async def scenario() -> None:
         app = make_app(path, {}, log_dir, session_name=name)
         async with app.run_test(size=(120, 32)) as pilot:
-            select(app, "fetch-1")
+            await select(pilot, app, "fetch-1")
             await until(pilot, lambda: mark.exists(), limit=60)
             await until(pilot, lambda: any("downloading  60%" in line.text
                                            for line in app.store.partials.values()))
