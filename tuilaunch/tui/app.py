@@ -1,9 +1,11 @@
 """The Textual app: lays out the panels and wires them to the engine.
 
-The app is composed of one mixin per concern, all built on SessionLink (the state and the
-engine link): keyboard (typing into a node, tools), node_commands, navigation, quitting,
-inspector. The Args tab is a widget of its own (arguments.py's ArgsTab) that owns its
-state, as each tab's will: the app is its host.
+The app keeps the session's link and the screens, with one mixin per concern of the app's
+keys, all built on SessionLink (the state and the engine link): keyboard (typing into a
+node, tools), node_commands, navigation, quitting, inspector. The tabs are widgets that own
+their state, the app their host: the Nodes tab (nodes/tab.py's NodesTab: the tree, the
+detail line and the pane, sent the session's events as messages) and the Args tab
+(arguments.py's ArgsTab), as the graph tabs in screens/.
 """
 
 from __future__ import annotations
@@ -19,7 +21,6 @@ from typing import Any
 
 from textual.app import ComposeResult, SystemCommand
 from textual.binding import Binding
-from textual.containers import Vertical
 from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
@@ -32,18 +33,17 @@ from ..engine.plan.session import Session
 from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
 from .arguments import ArgsTab
-from .gaps import Gaps
 from .inspector import Inspector
 from .key_order import KeyOrder
 from .keyboard import NodeKeyboard
 from .navigation import Navigation
 from .node_commands import NodeCommands
+from .nodes.tab import NodesTab
 from .quitting import Quitting
-from .screens.output_panel import NodesView, OutputPanel
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
-from .screens.tree_panel import LaunchTree, ascii_terminal
+from .screens.tree_panel import ascii_terminal
 from .session_link import DRAIN_HZ, PANE_CHROME
 
 
@@ -58,11 +58,10 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, Gaps,
-                   KeyOrder):
+class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, KeyOrder):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
     concern does lives in its mixin (session_link, node_commands, navigation, quitting,
-    inspector, gaps) or its tab's widget (arguments); key_order hands the keys out one
+    inspector) or its tab's widget (nodes, arguments); key_order hands the keys out one
     after the other."""
 
     CSS_PATH = "screens/app.tcss"
@@ -115,13 +114,10 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
     def compose(self) -> ComposeResult:
         yield Static("", id="status")
         with LaunchTabs(initial="nodes"):
-            with TabPane("1 Nodes", id="nodes"), Vertical(id="nodes-tab"):
-                yield Static("", id="detail")
-                with NodesView(id="nodes-split"):
-                    yield LaunchTree(id="tree")
-                    yield OutputPanel(self.store, self.pane_save_dir(),
-                                      max_lines=self.scrollback, max_fps=self.pane_fps,
-                                      id="output")
+            with TabPane("1 Nodes", id="nodes"):
+                yield NodesTab(self, self.store, self.pane_save_dir(),
+                               max_lines=self.scrollback, max_fps=self.pane_fps,
+                               id="nodes-tab")
             with TabPane("2 Args", id="args"):
                 yield ArgsTab(self, id="args-tab")
             with TabPane("3 Services", id="services"):
@@ -137,14 +133,15 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
     def on_mount(self) -> None:
         # held, not queried: App.query_one searches the active screen, which is a modal
         # (help, quit) while the engine keeps reporting
-        self.launch_tree = self.query_one(LaunchTree)
-        self.output_panel = self.query_one(OutputPanel)
+        self.nodes = self.query_one(NodesTab)
+        # the tab's widgets, as the keys and the inspector act on them
+        self.launch_tree, self.output_panel = self.nodes.launch_tree, self.nodes.pane
+        self.detail_bar = self.nodes.detail
+        self.nodes.trend_of = self.trend_of
         self.args_tab = self.query_one(ArgsTab)
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
-        self.detail_bar = self.query_one("#detail", Static)
         self.topics_panel = self.query_one(TopicsPanel)
-        self.launch_tree.reported = self.store.reported_names
         if ascii_terminal():  # app.tcss draws ASCII lines for this class
             self.add_class("-ascii")
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
@@ -156,8 +153,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
         if self.start_server is not None:
             # nothing runs yet: the tree shows the plan, every process waiting, and the
             # launch starts once it is on screen (on_ready)
-            self.launch_tree.show_plan(self.session.plan, {})
-            self.describe_waiting()
+            self.nodes.events.show_plan()
             self.status_bar.update(f"starting {Path(self.session.plan.file).name}...")
             self.launch_tree.focus()
             return
@@ -204,13 +200,9 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
         if isinstance(self.session, ServedSession):  # the form from the server's plan
             self.args_tab.show_form()
         tree = self.launch_tree
-        tree.show_plan(self.session.plan, self.supervisor.states)
-        self.describe_waiting()
-        self.replaying = True  # what was printed before we came: shown, not news
-        self.show_events(self.supervisor.history)
-        self.replaying = False
-        for process, state in self.supervisor.lifecycle.states.items():
-            tree.set_lifecycle(process, state)  # states reached before we came
+        self.nodes.events.show_plan()
+        # what was printed before we came: shown, not news
+        self.show_events(self.supervisor.history, replaying=True)
         self.run_supervisor()
         self.drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         self.update_status()

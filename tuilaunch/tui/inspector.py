@@ -8,9 +8,7 @@ import re
 from collections import deque
 from typing import Any
 
-from rich.text import Text
 from textual import on
-from textual.renderables.sparkline import Sparkline
 from textual.timer import Timer
 
 from ..client.session_graph import GraphCalls, SessionGraph
@@ -25,8 +23,6 @@ FIGURES_SETTLE = 0.3
 """Seconds the selection rests before the server is told whose CPU and memory to send."""
 TREND_KEEP = 300
 """CPU and memory samples kept for the selected node's sparklines: one a second, 5 min."""
-TREND_WIDTH = 10
-"""Columns of each sparkline on the detail line (CPU, memory): shown when the line has room."""
 
 
 class Inspector(Navigation):
@@ -46,7 +42,6 @@ class Inspector(Navigation):
         self.trends: dict[str, deque[tuple[float, float]]] = {}
         """The selected process's (CPU%, RSS) a second, the server's last minutes first."""
         self._trend_asked: str | None = None
-        self._trend_drawn: tuple[Any, ...] | None = None
         self.plot_screen: Any = None
         """The plot on screen (screens/plot_screen.py, imported with the first plot)."""
         self.topics_process: str | None = None
@@ -171,13 +166,6 @@ class Inspector(Navigation):
             self.run_worker(self._watch_resources(True), group="inspector",
                             exit_on_error=False)
 
-    def _sparkline(self, data: list[float]) -> Text:
-        """Textual's Sparkline of `data`, TREND_WIDTH columns, as text for the detail
-        line (a line of text, as the rest of it: read back by the tests, cut alike)."""
-        options = self.console.options.update_width(TREND_WIDTH)
-        segments = self.console.render(Sparkline(data, width=TREND_WIDTH), options)
-        return Text.assemble(*((s.text, s.style or "") for s in segments if s.text != "\n"))
-
     # --- plots ------------------------------------------------------------------------------
 
     @on(TopicsPanel.PlotAsked)
@@ -232,10 +220,11 @@ class Inspector(Navigation):
         return self.store.node_name(self.session.plan, process)
 
     def selected_process(self) -> str | None:
-        node = self.launch_tree.cursor_node
-        if node is None or node.data is None or node.data.kind != "process":
-            return None
-        return node.data.ref
+        return self.nodes.selected_process()
+
+    def trend_of(self, process: str) -> deque[tuple[float, float]] | None:
+        """A process's CPU and memory trend, while the Nodes tab measures them."""
+        return self.trends.get(process) if self.watching_resources else None
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action in ("node_topics", "log_level"):
@@ -254,36 +243,8 @@ class Inspector(Navigation):
 
     def update_detail(self) -> None:
         super().update_detail()
-        self._show_trend()
         self._follow_topics_node()
         self._figures_follow()  # the selection may have moved
-
-    def _show_trend(self) -> None:
-        """The selected node's CPU and memory over the last minutes, as two sparklines
-        (Textual's) at the end of the detail line, when it has room for them."""
-        process = self.selected_process()
-        trend = self.trends.get(process or "") if self.watching_resources else None
-        text = self._detail_text
-        # a column to spare: a line one cell too long would wrap
-        room = self.detail_bar.size.width - len(text) - 2 * (TREND_WIDTH + 5) - 1
-        if trend is None or len(trend) < 2 or room < 0:
-            if self._trend_drawn is not None:  # the plain line again
-                self._trend_drawn = None
-                self._detail_text = ""
-                super().update_detail()
-            return
-        drawn = (text, process, tuple(trend))
-        if drawn == self._trend_drawn:
-            return  # the same picture is not sent to the terminal again
-        self._trend_drawn = drawn
-        cpu = [c for c, _ in trend]
-        memory = [r for _, r in trend]
-        line = Text(text, style="bold red" if ": failed" in text else "")
-        line.append(" " * room)
-        for label, data in ((" cpu ", cpu), (" mem ", memory)):
-            line.append(label, style="dim")
-            line.append_text(self._sparkline(data))
-        self.detail_bar.update(line)
 
     def _follow_topics_node(self) -> None:
         """After events: the node `o` listed may now be elsewhere (robot:=r1 -> r2)."""

@@ -241,7 +241,8 @@ class NodeKeyboard(SessionLink):
 
     def update_status(self) -> None:
         super().update_status()
-        if self.supervisor is None or not hasattr(self, "status_bar"):
+        if self.supervisor is None or self.ended_elsewhere is not None or \
+                not hasattr(self, "status_bar"):
             return
         notes = [f"client {client} types into {process}"
                  for process, client in self.other_typists.items()]
@@ -251,7 +252,7 @@ class NodeKeyboard(SessionLink):
             self.status_bar.update(Text(f"{'  '.join(notes)}  |  {self._status_text}"))
             self._status_text = ""  # the plain line is drawn again when the notes go
 
-    def show_events(self, events: list[Event]) -> None:
+    def show_events(self, events: list[Event], replaying: bool = False) -> None:
         rest = []
         for event in events:
             if isinstance(event, (ProcessExited, Started, Failed)) and event.process:
@@ -268,7 +269,7 @@ class NodeKeyboard(SessionLink):
                 self.other_typists.pop(process, None)  # ours, or given back
             else:
                 self.other_typists[process] = int(client)
-        super().show_events(rest)
+        super().show_events(rest, replaying)
         # a node stopped to start again keeps the keys: typing began once its restart
         # with a terminal was answered, and the news of its stop may come only now
         if self.typing_to is not None and self.supervisor is not None and \

@@ -21,15 +21,10 @@ class NodeCommands(SessionLink):
 
     @on(Tree.NodeHighlighted, "#tree")
     def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
-        data = event.node.data
+        """The Nodes tab showed the row (its pane, its detail): the keys that apply."""
         self.update_detail()
-        if data is None:
-            return
-        self.refresh_bindings()  # the lifecycle keys apply to lifecycle nodes only
-        if data.kind == "all":
-            self.output_panel.show_view(None)
-        elif data.kind == "process":
-            self.output_panel.show_view(data.ref)
+        if event.node.data is not None:
+            self.refresh_bindings()  # the lifecycle keys apply to lifecycle nodes only
 
     def selected(self) -> list[str]:
         node = self.launch_tree.cursor_node

@@ -1,8 +1,9 @@
 """The app's state and its link to the engine: supervisor wiring, engine events, status.
 
 Engine events reach the UI through one EventBuffer drained on a timer, so a flood from a
-node costs one batched write per pane per tick. The App constructor does no I/O: the
-supervisor and the ROS bridge start in on_mount.
+node costs one batched write per pane per tick: each tick's batch goes to the Nodes tab as
+a message (nodes/tab.py), the readings a tab asked for to the inspector. The App
+constructor does no I/O: the session's client starts in on_mount.
 """
 
 from __future__ import annotations
@@ -30,29 +31,13 @@ from ..engine.plan.resolve import remove_default_params_dir
 from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.events import (
-    LIVE_STATES,
-    ComponentReport,
-    Dropped,
-    Event,
-    ExitCause,
-    Failed,
-    LifecycleChanged,
-    Log,
-    Output,
-    ProcessExited,
-    Reading,
-    Relaunched,
-    Respawning,
-    Started,
-    Stopping,
-)
+from ..engine.run.events import LIVE_STATES, Event, Reading
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.session.session_dir import SessionError
 from .arguments import ArgsTab
 from .lifecycle_steps import LifecycleSteps
-from .output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
-from .respawn_countdown import RespawnCountdown
+from .nodes.tab import NodesTab, SessionEvents
+from .output_store import WARN, Line, OutputStore
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree
 
@@ -92,6 +77,7 @@ class SessionLink(App[int]):
 
     # held, not queried (set in on_mount): App.query_one searches the active screen, which
     # is a modal (help, quit) while the engine keeps reporting
+    nodes: NodesTab
     launch_tree: LaunchTree
     output_panel: OutputPanel
     args_tab: ArgsTab
@@ -124,9 +110,7 @@ class SessionLink(App[int]):
         self.sigkill_timeout = sigkill_timeout
         self.pane_fps = pane_fps
         self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
-        self.respawn_countdown = RespawnCountdown()
         self.lifecycle_steps = LifecycleSteps()
-        self._countdown_timer: Timer | None = None
         # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
@@ -149,12 +133,10 @@ class SessionLink(App[int]):
         self.ended_elsewhere: str | None = None
         """Why the session ended when neither this client nor its terminal asked
         (`tuilaunch stop`, another client's quit): said on screen, then in the shell."""
-        self.replaying = False  # showing what happened before this client came
         # stops the operator asked for: their non-zero exit is not a failure
         self.asked_to_stop: set[str] = set()
         self.quit_started: float | None = None
         self._status_text = ""
-        self._detail_text = ""
         # the session's server not started yet: it is, once the tree is on screen (on_ready)
         self.start_server = start_server
         self.server_process: subprocess.Popen[bytes] | None = None
@@ -298,70 +280,34 @@ class SessionLink(App[int]):
     def drain(self) -> None:
         self.show_events(self.buffer.drain())
 
-    def show_events(self, events: list[Event]) -> None:
+    def show_events(self, events: list[Event], replaying: bool = False) -> None:
+        """A batch of the session's events (the tick's, often none): the readings a tab
+        asked for to the inspector; the rest down to the Nodes tab, by message, which says
+        when they are on screen (`on_nodes_tab_shown`). `replaying`: what happened before
+        this client came, shown but no news."""
         self._tell_pane_shown()
-        tree = self.launch_tree
-        panel = self.output_panel
-        fresh: list[Line] = []
+        rest: list[Event] = []
         for event in events:
-            if isinstance(event, Output) and event.process:
-                if event.data and "partial" in event.data:  # a prompt waiting, unfinished
-                    self.store.set_partial(event.process, event.stream or "stdout",
-                                           str(event.data["partial"]))
-                first = event.data.get("line") if event.data else None
-                fresh += self.store.add(event.process, event.stream or "stdout", event.lines,
-                                        first)
-            elif isinstance(event, Log):
-                if event.process and self.supervisor is not None:
-                    state = self.supervisor.states.get(event.process, "")
-                    shown = tree.states.get(event.process)
-                    if shown == "respawning" != state:
-                        tree.details.pop(event.process, None)  # "try 1 in 6 s": called off
-                    # a detail it comes with: its machine being reached again
-                    detail = (event.data or {}).get("detail")
-                    tree.set_state(event.process, state, str(detail or ""))
-                level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
-                fresh += self.store.add_event(event.process or "launch", event.reason or "",
-                                              level)
-            elif isinstance(event, LifecycleChanged) and event.process:
-                tree.set_lifecycle(event.process, event.reason or "")
-                self.refresh_bindings()
-            elif isinstance(event, ComponentReport) and event.data:
-                data = event.data
-                short = f"id {data['unique_id']}" if "unique_id" in data else \
-                    str(data.get("error") or data.get("text") or "")
-                tree.set_component(str(data["component"]), str(data["state"]), short)
-                if data["state"] not in ("loading", "waiting"):
-                    level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
-                    fresh += self.store.add_event(event.process or "launch",
-                                                  event.reason or "", level)
-            elif isinstance(event, Relaunched) and self.supervisor is not None:
-                # any client's relaunch: the session already holds the new plan
-                tree.show_plan(self.session.plan, self.supervisor.states)
-                self.describe_waiting()
-                if event.lines != self.own_relaunch:
-                    self._relaunched_elsewhere(event.lines, (event.data or {}).get("edited"))
-                self.own_relaunch = None
-            elif isinstance(event, Reading):
+            if isinstance(event, Reading):
                 self.inspector_event(event)
-            elif isinstance(event, Dropped) and event.process:
-                # counted in the pane's status line; where the session says where they are
-                # in the log file, a line stands for them, read when scrolled back to
-                self.store.count_dropped(event.process, event.code or 0)
-                where = event.data or {}
-                if event.code and "start" in where:
-                    fresh += self.store.add_gap(event.process, Gap(
-                        int(where["start"]), int(where["skip"]), event.code))
-            elif event.process and self.supervisor is not None:
-                fresh += self._process_event(event)
-        if fresh:
-            panel.append(fresh)
-        panel.flush()
-        if events:
-            self.update_status()
-            self.update_detail()
-        elif self.quit_started is not None or self.over_link() is not None:
+            else:
+                rest.append(event)
+        self.nodes.post_message(SessionEvents(rest, replaying))
+        if not rest and (self.quit_started is not None or self.over_link() is not None):
             self.update_status()  # the signal stage, a link's silence: move on with time
+
+    def on_nodes_tab_shown(self, message: NodesTab.Shown) -> None:
+        """The Nodes tab shows a batch: the status line, the keys that apply, the form
+        after a relaunch, follow."""
+        for event in message.shown.relaunched:
+            if event.lines != self.own_relaunch:
+                self._relaunched_elsewhere(event.lines, (event.data or {}).get("edited"),
+                                           message.replaying)
+            self.own_relaunch = None
+        if message.shown.lifecycle:
+            self.refresh_bindings()
+        self.update_status()
+        self.update_detail()
 
     def _tell_pane_shown(self) -> None:
         """Over an ssh link the server sends only the output pane's process's lines (all
@@ -395,64 +341,13 @@ class SessionLink(App[int]):
     def tab_shown(self, pane: str) -> None:
         """A tab came on screen (the Inspector mixin measures only what it shows)."""
 
-    def _process_event(self, event: Event) -> list[Line]:
-        """A state change: the tree row, and a line in the node's pane as ros2 launch
-        prints it ("process started with pid", "process has died [pid, exit code]")."""
-        assert self.supervisor is not None and event.process is not None
-        process = event.process
-        tree = self.launch_tree
-        state = self.supervisor.states.get(process, event.kind)
-        self.respawn_countdown.end(process)  # a new state: any wait counted is over
-        is_process = any(p.id == process for p in self.session.plan.processes)
-        if isinstance(event, Started):
-            self.asked_to_stop.discard(process)
-            # its node name is learnt again from this run's lines (a relaunch may move it)
-            self.store.reported.forget(process)
-            tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
-            if is_process:
-                return self.store.add_event(process, f"process started with pid [{event.pid}]")
-            return []
-        if isinstance(event, ProcessExited):
-            state, text, level = process_ended(
-                event, state, process in self.asked_to_stop or self.quitting)
-            tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
-            return self.store.add_event(process, text, level)
-        if isinstance(event, Failed):
-            tree.set_state(process, state, f"({event.reason})")
-            return self.store.add_event(process, f"failed: {event.reason}", ERROR)
-        if isinstance(event, Respawning):
-            data = event.data or {}
-            detail = f"({event.reason})"
-            if "delay" in data:  # counted down on the row until it comes back
-                detail = self.respawn_countdown.begin(process, int(data["try"]),
-                                                      float(data["delay"]))
-                if self._countdown_timer is None:
-                    self._countdown_timer = self.set_interval(1.0, self._count_down)
-            tree.set_state(process, state, detail)
-            return self.store.add_event(process, f"respawning: {event.reason}", WARN)
-        tree.set_state(process, state, _detail(event))
-        return []
-
-    def _count_down(self) -> None:
-        """Once a second while a respawn waits: its row says how long is left."""
-        tree = self.launch_tree
-        for process, text in self.respawn_countdown.tick().items():
-            if tree.states.get(process) != "respawning":
-                self.respawn_countdown.end(process)  # called off, or a relaunch's plan
-            elif tree.details.get(process) != text:
-                tree.details[process] = text
-                tree.refresh_row(process)
-        self.update_detail()
-        if not self.respawn_countdown and self._countdown_timer is not None:
-            self._countdown_timer.stop()
-            self._countdown_timer = None
-
-    def _relaunched_elsewhere(self, arguments: list[str], edited: str | None = None) -> None:
+    def _relaunched_elsewhere(self, arguments: list[str], edited: str | None,
+                              replaying: bool) -> None:
         """Another operator applied new values, or an edited file (`edited`: which one):
         the form shows them, so an edit here starts from what runs, never silently reverts
         theirs."""
         self.args_tab.show_form()
-        if not self.replaying:  # a relaunch before this client came is no news to it
+        if not replaying:  # a relaunch before this client came is no news to it
             what = [f"{edited} changed"] if edited else []
             what += [" ".join(arguments)] if arguments else [] if edited else ["defaults"]
             self.notify(f"relaunched by another client: {'; '.join(what)}")
@@ -475,12 +370,11 @@ class SessionLink(App[int]):
                 self.notify(f"{len(warnings) - WARNINGS_SHOWN} more warnings: in the all "
                             "nodes pane (a)", severity="warning", timeout=20)
         if lines:
-            self.output_panel.append(lines)
-            self.output_panel.flush()
+            self.nodes.show_lines(lines)
 
     def update_status(self) -> None:
-        if self.supervisor is None:
-            return
+        if self.supervisor is None or self.ended_elsewhere is not None:
+            return  # the line says the session ended elsewhere until the TUI leaves
         counts: dict[str, int] = {}
         shown = self.launch_tree.states
         for proc in self.session.plan.processes:
@@ -542,25 +436,12 @@ class SessionLink(App[int]):
             (self.sigterm_timeout, self.sigkill_timeout)
 
     def update_detail(self) -> None:
-        """The selected row in full, above the tree and the pane: state, pid, exit code,
-        failure reason or condition, whatever the tree's width cuts."""
-        node = self.launch_tree.cursor_node
-        text = self.launch_tree.describe(node) if node is not None else ""
-        if text != self._detail_text:
-            self._detail_text = text
-            self.detail_bar.update(Text(text, style=_detail_style(text)))
+        """The selected row in full on the Nodes tab's detail line."""
+        self.nodes.update_detail()
 
     def describe_waiting(self) -> None:
-        tree = self.launch_tree
-        for proc in self.session.plan.processes:
-            if proc.enabled and proc.trigger is not None:
-                tree.details[proc.id] = f"({proc.trigger.describe()})"
-            elif not proc.enabled and proc.skipped_by is not None:
-                tree.details[proc.id] = f"({proc.skipped_by.expression} = " \
-                                        f"{proc.skipped_by.value!r})"
-            elif proc.error:
-                tree.details[proc.id] = f"({proc.error})"
-            tree.refresh_row(proc.id)
+        """Each process not started yet says why on its row."""
+        self.nodes.events.describe_waiting()
 
 
 def leave_now(status: int) -> None:
@@ -568,37 +449,3 @@ def leave_now(status: int) -> None:
     leaving behind nothing atexit would have removed: the plan's parameter folder."""
     remove_default_params_dir()
     os._exit(status)
-
-
-def process_ended(event: ProcessExited, state: str, asked_here: bool) -> tuple[str, str, int]:
-    """A process's end as a client shows it (here and in a fleet's view): its row's state
-    and its pane's line, in ros2 launch's words, with its level. The cause came with it,
-    decided where it ended (another client's stop, a `tuilaunch stop`, a stop begun before
-    this client attached); this client's own asking (`asked_here`) counts too: a crash
-    nobody asked for is failed."""
-    asked = asked_here or event.asked
-    if event.crashed and not asked and state == "exited":
-        state = "failed"
-    code = event.code if event.code is not None else 0
-    if code == 0:
-        return state, f"process has finished cleanly [pid {event.pid}]", INFO
-    if event.cause is ExitCause.TYPED:
-        return state, (f"process stopped by a key typed into it [pid {event.pid}, "
-                       f"{event.reason}]"), INFO
-    if asked:
-        return state, f"process stopped [pid {event.pid}, {event.reason}]", INFO
-    return state, f"process has died [pid {event.pid}, {event.reason}]", ERROR
-
-
-def _detail(event: Event) -> str:
-    if isinstance(event, (Started, Stopping)) and event.pid is not None:
-        return f"pid {event.pid}"
-    if isinstance(event, (ProcessExited, Failed, Respawning)) and event.reason:
-        return f"({event.reason})"
-    return ""
-
-
-def _detail_style(text: str) -> str:
-    if ": failed" in text or "refused" in text:
-        return "bold red"
-    return ""

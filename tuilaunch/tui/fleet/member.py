@@ -19,24 +19,15 @@ from ...client.remote_supervisor import RemoteSupervisor
 from ...client.served_session import ServedSession
 from ...engine.run.event_buffer import EventBuffer
 from ...engine.run.events import (
-    STATE_EVENTS,
-    Dropped,
     Event,
-    Failed,
-    LifecycleChanged,
-    Log,
-    Output,
-    ProcessExited,
     Reading,
     Relaunched,
-    Started,
-    Stopping,
 )
 from ..lifecycle_steps import LifecycleSteps
-from ..output_store import ERROR, INFO, WARN, Gap, Line, OutputStore
+from ..nodes.events import NodeEvents
+from ..output_store import OutputStore
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree
-from ..session_link import process_ended
 
 COUNTED = ("running", "pending", "stopping", "exited", "failed", "respawning")
 
@@ -64,6 +55,15 @@ class Member:
     """`]`, `[` on this session's lifecycle nodes, in the order typed."""
     on_event: Callable[[Member, Event], None] | None = None
     """Where the events for its tabs go (readings, relaunches): fleet/tabs.py."""
+    events: NodeEvents = field(init=False)
+    """How its events show in its tree and pane."""
+
+    def __post_init__(self) -> None:
+        self.events = NodeEvents(
+            self.tree, self.store, lambda: self.session.plan,
+            lambda: None if self.supervisor is None else self.supervisor.states,
+            lambda: {} if self.supervisor is None else self.supervisor.lifecycle.states,
+            asked_to_stop=self.asked_to_stop)
 
     @property
     def address(self) -> str:
@@ -114,70 +114,23 @@ class Member:
     # --- events ------------------------------------------------------------------------------
 
     def show_events(self, events: list[Event]) -> None:
-        """The events of a drain into this member's tree and pane (as SessionLink's, for
-        the rows and the lines a fleet shows)."""
-        tree, store = self.tree, self.store
-        fresh: list[Line] = []
-        for event in events:
-            if isinstance(event, Output) and event.process:
-                first = event.data.get("line") if event.data else None
-                fresh += store.add(event.process, event.stream or "stdout", event.lines,
-                                   first)
-            elif isinstance(event, Log):
-                if event.process and self.supervisor is not None:
-                    state = self.supervisor.states.get(event.process, "")
-                    tree.set_state(event.process, state)
-                level = {"WARN": WARN, "ERROR": ERROR}.get(event.level, INFO)
-                fresh += store.add_event(event.process or "launch", event.reason or "", level)
-            elif isinstance(event, Reading):
-                if self.on_event is not None:
+        """The events of a drain into this member's tree and pane, as the single TUI's
+        Nodes tab shows them (the same NodeEvents); the readings and the relaunches to its
+        tabs (`on_event`)."""
+        shown = self.events.show([e for e in events if not isinstance(e, Reading)])
+        if self.on_event is not None:
+            for event in events:
+                if isinstance(event, (Reading, Relaunched)):
                     self.on_event(self, event)
-            elif isinstance(event, LifecycleChanged) and event.process:
-                tree.set_lifecycle(event.process, event.reason or "")
-            elif isinstance(event, Relaunched) and self.supervisor is not None:
-                self.show_plan()
-                if self.on_event is not None:
-                    self.on_event(self, event)
-            elif isinstance(event, Dropped) and event.process:
-                store.count_dropped(event.process, event.code or 0)
-                where = event.data or {}
-                if event.code and "start" in where:
-                    fresh += store.add_gap(event.process, Gap(
-                        int(where["start"]), int(where["skip"]), event.code))
-            elif event.process and self.supervisor is not None and \
-                    isinstance(event, STATE_EVENTS):
-                fresh += self._life(event)
-        if fresh:
-            self.pane.append(fresh)
+        if shown.lines:
+            self.pane.append(shown.lines)
         self.pane.flush()
+        if shown.counting:  # a respawn's wait: its row counts down (only changed rows drawn)
+            self.events.count_down()
         if events:
             self.refresh_root()
 
-    def _life(self, event: Event) -> list[Line]:
-        assert self.supervisor is not None and event.process is not None
-        process, tree = event.process, self.tree
-        state = self.supervisor.states.get(process, event.kind)
-        if isinstance(event, Started):
-            self.asked_to_stop.discard(process)
-            self.store.reported.forget(process)
-            tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
-            return self.store.add_event(process, f"process started with pid [{event.pid}]")
-        if isinstance(event, Stopping):
-            tree.set_state(process, state, f"pid {event.pid}" if event.pid else "")
-            return []
-        if isinstance(event, ProcessExited):
-            state, text, level = process_ended(event, state, process in self.asked_to_stop)
-            tree.set_state(process, state, f"({event.reason}, pid {event.pid})")
-            return self.store.add_event(process, text, level)
-        tree.set_state(process, state, f"({event.reason})")
-        if isinstance(event, Failed):
-            return self.store.add_event(process, f"failed: {event.reason}", ERROR)
-        return self.store.add_event(process, f"respawning: {event.reason}", WARN)
-
     def show_plan(self) -> None:
         """The session's plan as the tree's children, its root the session."""
-        assert self.supervisor is not None
-        self.tree.show_plan(self.session.plan, self.supervisor.states)
-        for process, state in self.supervisor.lifecycle.states.items():
-            self.tree.set_lifecycle(process, state)
+        self.events.show_plan()
         self.refresh_root()

@@ -1,0 +1,88 @@
+"""Reading back what a link did not send: a flood's lines kept off the screen, and the
+ROS stamps of lines sent while no pane showed them.
+
+Under a flood a display is sent what it can draw (over an ssh link, a pane's worth of lines
+a second); the session says where each run of lines it did not send is in the process's
+log file, and the pane shows a line standing for it. When the user scrolls back to that
+line, its lines are read from the log file through the session (`read_log`, where the
+nodes run), a thousand at a time, and take its place: scrolled back, nothing is missed,
+and only what the user scrolls back to crosses the link.
+
+Over a link, the lines also come without their ROS stamp while the pane shows neither the
+time column nor the raw format: the server keeps the stamps, and they are read for the
+lines held here before either is shown or the pane is saved or copied.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from ...client.port import LaunchPort
+from ...engine.run.engine_thread import EngineThread
+from ...engine.run.session.session_dir import SessionError
+from ..output_store import Gap, Line, OutputStore
+from ..screens.output_panel import OutputPanel
+
+GAP_READ = 1000
+"""Lines of a gap read at a time: a few screens to scroll through, and a small answer over
+a link; the rest of a longer gap is read when the user scrolls on to it."""
+
+
+class GapReader:
+    """Reads a pane's gaps and missing stamps through the session's client (`port`, on
+    the engine thread `engine`), into the store and the pane; `notify` says what failed."""
+
+    def __init__(self, store: OutputStore, pane: OutputPanel, engine: Callable[[], EngineThread],
+                 port: Callable[[], LaunchPort | None],
+                 notify: Callable[..., Any]) -> None:
+        self.store, self.pane = store, pane
+        self._engine, self._port, self._notify = engine, port, notify
+
+    async def read_gap(self, marker: Line, reading_up: bool) -> None:
+        gap, port = marker.gap, self._port()
+        if gap is None or port is None:
+            return
+        take = min(gap.count, GAP_READ)
+        # reading upwards, the gap's newest lines come first: those next to the lines below
+        skip = gap.skip + gap.count - take if reading_up else gap.skip
+        try:
+            page = await self._engine().run(port.request(
+                "read_log", process=marker.process, start=gap.start, skip=skip, limit=take))
+        except SessionError as exc:
+            self.pane.gap_not_read(marker)  # asked again when next on screen
+            self._notify(f"{marker.process}: the lines not drawn could not be read: {exc}",
+                         severity="warning")
+            return
+        rows = list(page.get("lines") or [])
+        if not rows:  # the file was removed or cut short meanwhile: the line says so
+            self._notify(f"{marker.process}: its log file no longer has the lines not drawn "
+                         "there", severity="warning")
+            return
+        left = gap.count - take
+        rest = None if left <= 0 else Gap(gap.start, gap.skip, left) if reading_up else \
+            Gap(gap.start, gap.skip + take, left)
+        lines = self.store.fill_gap(marker, rows, rest, rest_first=reading_up)
+        self.pane.fill_gap(marker, lines)
+
+    def stamps_known(self, port: LaunchPort | None, shown: bool) -> bool:
+        """Whether every line here has its stamp and the link sends them so (nothing to
+        read): no link between, or one already sending what `shown` wants."""
+        return port is None or (shown == port.stamps_shown and
+                                self.store.unstamped.first() is None)
+
+    async def read_stamps(self, port: LaunchPort,
+                          shown: bool) -> tuple[int, int, dict[int, int]] | None:
+        """The stamps of the lines held here without theirs (None: not read, said)."""
+        try:
+            first, end, stamps = await self._engine().run(
+                port.read_stamps(shown, self.store.unstamped.first()))
+        except Exception as exc:  # the link is down, or worse: the key still does its part
+            self._notify(f"ROS stamps not read: {exc}. Lines that came without theirs show "
+                         "when they arrived.", severity="warning")
+            return None
+        return first, end, stamps
+
+    def fill_stamps(self, first: int, end: int, stamps: dict[int, int]) -> None:
+        if self.store.unstamped.fill(first, end, stamps):
+            self.pane.stamps_read()

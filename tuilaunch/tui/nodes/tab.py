@@ -1,0 +1,230 @@
+"""The Nodes tab as one widget: the detail line, the group tree and the output pane.
+
+The app posts it the session's events (`SessionEvents`, once a tick, as Textual intends:
+down by message) and it shows them in its tree and pane through `NodeEvents`; what the
+app does about them (the status line, the keys that apply, the form after a relaunch) it
+learns from the tab's `Shown` message, posted up. The tab reads a pane's gaps and missing
+stamps through the session itself (`GapReader`), and draws the selected row in full on the
+detail line, with its CPU and memory trend when the app has one (`trend_of`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Protocol
+
+from rich.text import Text
+from textual import on
+from textual.app import ComposeResult
+from textual.containers import Vertical
+from textual.message import Message
+from textual.renderables.sparkline import Sparkline
+from textual.timer import Timer
+from textual.widgets import Static, Tree
+
+from ...client.port import LaunchPort
+from ...engine.plan.session import Session
+from ...engine.run.engine_thread import EngineThread
+from ...engine.run.events import Event
+from ..output_store import Line, OutputStore
+from ..screens.output_panel import NodesView, OutputPanel
+from ..screens.tree_panel import LaunchTree, RowData
+from .events import NodeEvents, Shown
+from .gaps import GapReader
+
+TREND_WIDTH = 10
+"""Columns of each sparkline (CPU, memory) at the end of the detail line."""
+
+
+class NodesHost(Protocol):
+    """What the Nodes tab needs of whoever holds the session's link (the app)."""
+
+    engine: EngineThread
+    supervisor: LaunchPort | None
+    session: Session
+    quitting: bool
+    asked_to_stop: set[str]
+
+    def over_link(self) -> LaunchPort | None: ...
+
+    def drain(self) -> None: ...
+
+
+class SessionEvents(Message, bubble=False):
+    """A batch of the session's events for the tab (the app's tick: often none, and the
+    pane then repaints what it held back); `replaying`: what happened before this client
+    came, shown but no news."""
+
+    def __init__(self, events: list[Event], replaying: bool = False) -> None:
+        super().__init__()
+        self.events = events
+        self.replaying = replaying
+
+
+class StampsRead(Message, bubble=False):
+    """Stamps read for the lines held without theirs: filled in after the events drained
+    before the answer, which are in the tab's queue before this."""
+
+    def __init__(self, first: int, end: int, stamps: dict[int, int],
+                 then: Callable[[], None]) -> None:
+        super().__init__()
+        self.first, self.end, self.stamps, self.then = first, end, stamps, then
+
+
+class NodesTab(Vertical):
+    """The tree, the detail line and the pane of one session."""
+
+    class Shown(Message):
+        """A batch of events is on screen; `shown` says what else changed."""
+
+        def __init__(self, events: list[Event], shown: Shown, replaying: bool) -> None:
+            super().__init__()
+            self.events, self.shown, self.replaying = events, shown, replaying
+
+    def __init__(self, host: NodesHost, store: OutputStore, save_dir: Path, max_lines: int,
+                 max_fps: float, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self.host = host
+        self.store = store
+        self._save_dir, self._max_lines, self._max_fps = save_dir, max_lines, max_fps
+        self.trend_of: Callable[[str], Sequence[tuple[float, float]] | None] = lambda _: None
+        """The selected process's (CPU%, RSS) samples, oldest first (the app's inspector
+        sets it; None: not measured)."""
+        self._detail_text = ""
+        self._detail_drawn: tuple[object, ...] | None = None
+        self._countdown: Timer | None = None
+
+    def compose(self) -> ComposeResult:
+        yield Static("", id="detail")
+        with NodesView(id="nodes-split"):
+            yield LaunchTree(id="tree")
+            yield OutputPanel(self.store, self._save_dir, max_lines=self._max_lines,
+                              max_fps=self._max_fps, id="output")
+
+    def on_mount(self) -> None:
+        # held, not queried: the events keep coming while a modal is the active screen
+        self.launch_tree = self.query_one(LaunchTree)
+        self.pane = self.query_one(OutputPanel)
+        self.detail = self.query_one("#detail", Static)
+        self.launch_tree.reported = self.store.reported_names
+        host = self.host
+        self.events = NodeEvents(
+            self.launch_tree, self.store, lambda: host.session.plan,
+            lambda: None if host.supervisor is None else host.supervisor.states,
+            lambda: {} if host.supervisor is None else host.supervisor.lifecycle.states,
+            lambda: host.quitting, host.asked_to_stop)
+        self.gaps = GapReader(self.store, self.pane, lambda: host.engine,
+                              lambda: host.supervisor, self.app.notify)
+
+    # --- events ------------------------------------------------------------------------------
+
+    def on_session_events(self, message: SessionEvents) -> None:
+        shown = self.events.show(message.events)
+        if message.replaying:
+            self.events.show_lifecycle()
+        self.show_lines(shown.lines)
+        if shown.counting and self._countdown is None:
+            self._countdown = self.set_interval(1.0, self._count_down)
+        if message.events:
+            self.update_detail()
+            self.post_message(self.Shown(message.events, shown, message.replaying))
+
+    def show_lines(self, lines: list[Line]) -> None:
+        """New lines for the pane (the plan's warnings, a batch's), and the pane's tick."""
+        if lines:
+            self.pane.append(lines)
+        self.pane.flush()
+
+    def _count_down(self) -> None:
+        if not self.events.count_down() and self._countdown is not None:
+            self._countdown.stop()
+            self._countdown = None
+        self.update_detail()
+
+    # --- the selection -----------------------------------------------------------------------
+
+    def selected_process(self) -> str | None:
+        node = self.launch_tree.cursor_node
+        if node is None or node.data is None or node.data.kind != "process":
+            return None
+        return node.data.ref
+
+    @on(Tree.NodeHighlighted, "#tree")
+    def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
+        """The pane follows the selection (and the message goes on up: the keys that
+        apply change with it)."""
+        data = event.node.data
+        self.update_detail()
+        if data is not None and data.kind == "all":
+            self.pane.show_view(None)
+        elif data is not None and data.kind == "process":
+            self.pane.show_view(data.ref)
+
+    def update_detail(self) -> None:
+        """The selected row in full above the tree and the pane: state, pid, exit code,
+        failure reason or condition, whatever the tree's width cuts; its CPU and memory
+        over the last minutes at the end, as two sparklines, when there is room."""
+        node = self.launch_tree.cursor_node
+        text = self.launch_tree.describe(node) if node is not None else ""
+        process = self.selected_process()
+        trend = list(self.trend_of(process) or ()) if process is not None else []
+        # a column to spare: a line one cell too long would wrap
+        room = self.detail.size.width - len(text) - 2 * (TREND_WIDTH + 5) - 1
+        if len(trend) < 2 or room < 0:
+            trend = []
+        drawn = (text, process, tuple(trend))
+        if drawn == self._detail_drawn:
+            return  # the same picture is not sent to the terminal again
+        self._detail_drawn = drawn
+        self._detail_text = text
+        line = Text(text, style=_detail_style(text))
+        if trend:
+            line.append(" " * room)
+            for label, data in ((" cpu ", [c for c, _ in trend]),
+                                (" mem ", [r for _, r in trend])):
+                line.append(label, style="dim")
+                line.append_text(self._sparkline(data))
+        self.detail.update(line)
+
+    def _sparkline(self, data: list[float]) -> Text:
+        """Textual's Sparkline of `data`, TREND_WIDTH columns, as text for the detail
+        line (a line of text, as the rest of it: read back by the tests, cut alike)."""
+        console = self.app.console
+        options = console.options.update_width(TREND_WIDTH)
+        segments = console.render(Sparkline(data, width=TREND_WIDTH), options)
+        return Text.assemble(*((s.text, s.style or "") for s in segments if s.text != "\n"))
+
+    # --- what a link did not send ------------------------------------------------------------
+
+    @on(OutputPanel.GapShown)
+    def _gap_shown(self, message: OutputPanel.GapShown) -> None:
+        self.run_worker(self.gaps.read_gap(message.line, message.reading_up), group="gaps",
+                        exit_on_error=False)
+
+    @on(OutputPanel.StampsWanted)
+    def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
+        port = self.host.over_link()
+        if port is None or self.gaps.stamps_known(port, message.shown):
+            message.then()
+            return
+        self.run_worker(self._read_stamps(port, message), group="stamps",
+                        exit_on_error=False)
+
+    async def _read_stamps(self, port: LaunchPort, message: OutputPanel.StampsWanted) -> None:
+        read = await self.gaps.read_stamps(port, message.shown)
+        if read is None:
+            message.then()  # the key still does its part
+            return
+        self.host.drain()  # the lines sent before the answer: in the queue before the stamps
+        self.post_message(StampsRead(*read, message.then))
+
+    def on_stamps_read(self, message: StampsRead) -> None:
+        self.gaps.fill_stamps(message.first, message.end, message.stamps)
+        message.then()
+
+
+def _detail_style(text: str) -> str:
+    if ": failed" in text or "refused" in text:
+        return "bold red"
+    return ""
