@@ -309,7 +309,12 @@ async def test_starting_alone_starts_a_process_and_follows_it_to_its_end(tmp_pat
         assert lines_of(heard, "talker-1") == [str(started.pid)]
         ended = next(e for e in heard if isinstance(e, ProcessExited))
         assert (ended.pid, ended.code, ended.cause) == (started.pid, 3, ExitCause.CRASHED)
-        assert core.exit_codes == {"talker-1": 3} and not core.running
+        # its record: the end, the crash, and the start it ended (status's command line)
+        record = core.records["talker-1"]
+        assert (record.exit_code, record.crash_code) == (3, 3) and not core.running
+        assert record.started_with is not None and record.started_with.cmd[0] == \
+            sys.executable
+        assert core.records.having("exit_code") == {"talker-1": 3}
         await until(lambda: "saw a start" in said(heard), "the handler's line", heard)
         # its log file has the line too: "TIME stdout LINE"
         logged = (core.log_dir / "talker-1.log").read_text().split()
@@ -363,7 +368,7 @@ async def test_interacting_alone_types_a_line_into_a_process_terminal(tmp_path: 
             hands.write_input("lines-1", b"too early\r")
         with pytest.raises(LaunchError):
             hands.restart_options("lines-1", prefix="no-such-tool-here --flag")
-        assert not core.run_prefixes
+        assert not core.records.having("prefix")  # refused: nothing of it kept
         command = hands.command_of("lines-1")
         assert command["command"][-1] == reader and command["terminal"] is True
         starting.start_now("lines-1")

@@ -30,10 +30,10 @@ from ...plan.model import ActionKind, ActionPlan, Plan
 from ..events import Consumer, Event, Log, Output, ProcessExited
 from ..plugins import ActionRunner, SupervisorPlugin
 from ..process.logfiles import LogFile
-from ..process.process_command import StartCommand
 from ..process.readers import ChannelReader, Running
 from ..process.watchdog import Watchdog
 from .placed import Placing
+from .records import ProcessRecords
 from .respawn import Respawner
 from .stopping import CTRL_C_REASON, Stopper
 from .triggers import TriggerBook
@@ -77,21 +77,15 @@ class SupervisorCore:
         self.failed_parts: set[str] = set()
         """What failed inside a process (a component its container could not load), by id:
         the launch then ends non-zero, as the action that loads it would."""
-        self.exit_codes: dict[str, int] = {}
-        self.crashes: dict[str, int] = {}
-        """Processes that exited on their own with a non-zero status (not stopped by us)."""
-        self.crash_times: dict[str, float] = {}
-        """When each process last crashed (loop time), for the respawn policy."""
+        self.records = ProcessRecords()
+        """What is kept of each process besides its state and its child: its last exit and
+        crash, its respawn wait, the operator's tool, terminal and log level (records.py)."""
         self.running: dict[str, Running] = {}
         """The processes that run now, by id: their process, pty or pipes, readers."""
         self.lingering: set[ChannelReader] = set()
         """Output still open after its process exited (a grandchild holds the pipe)."""
         self.busy = 0
         """Triggers sleeping or respawns scheduled: the run is not over while any is."""
-        self.coming_back: set[str] = set()
-        """Processes stopped to be started again (a restart; a relaunch that changed them):
-        their exit is a step, marked `again` in its event, so a `tuilaunch wait ... running`
-        waits on through it instead of taking it for the end."""
         self.tasks: set[asyncio.Task[Any]] = set()
         """The supervisor's background tasks (`spawn_task`), cancelled at the end of a run."""
         self.shutting_down = False
@@ -104,21 +98,6 @@ class SupervisorCore:
         """Failures already said once (a consumer that keeps raising)."""
         self.env_cache: dict[str, str] | None = None
         """The environment the processes start from, built once."""
-        self.respawn_waits: dict[str, asyncio.Event] = {}
-        """Processes waiting out their respawn delay; setting the event calls it off (a stop
-        asked meanwhile: the node is between two runs, and it must not come back)."""
-        self.run_prefixes: dict[str, str] = {}
-        """An operator's tool (`gdb -q -ex run --args`) a process runs under, from a
-        `restart` with a prefix until the next restart without one."""
-        self.run_terminals: set[str] = set()
-        """Processes an operator restarted with a terminal (to type into one started without,
-        as launch's default is): from that restart until the next plain one."""
-        self.log_levels: dict[str, str] = {}
-        """`--log-level` given at a restart, kept across respawns until a restart changes it."""
-        self.started_with: dict[str, StartCommand] = {}
-        """The last start of each process, exactly (status's command line)."""
-        self.deaths: dict[str, dict[str, str]] = {}
-        """A crash's `signal` name and `core` location, until the process starts again."""
         self.watchdog = Watchdog()
         self.triggers = TriggerBook()
         """What has happened, and the event handlers by event."""

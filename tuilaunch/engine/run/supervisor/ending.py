@@ -44,8 +44,10 @@ class Ending:
             # reaped is not ended: its last output is read and its end told first, so a
             # start that follows (a restart, a relaunch) finds it gone, not still running
             await running.gone.wait()
-        elif process_id in core.respawn_waits:  # between two runs: it does not come back
-            core.respawn_waits.pop(process_id).set()
+        elif (wait := core.records[process_id].respawn_wait) is not None:
+            # between two runs: it does not come back
+            core.records[process_id].respawn_wait = None
+            wait.set()
             core.states[process_id] = "exited"
             core.emit(Log(process_id, reason="respawn called off: stopped while it "
                           "waited to come back"))

@@ -67,22 +67,15 @@ class Interacting:
             level = check_log_level(log_level)
         if prefix:
             with_prefix(list(proc.cmd), prefix)  # a tool not on PATH fails here
-            core.run_prefixes[process_id] = prefix
-        else:
-            core.run_prefixes.pop(process_id, None)
-        if terminal:
-            core.run_terminals.add(process_id)
-        else:
-            core.run_terminals.discard(process_id)
-        if level:
-            core.log_levels[process_id] = level
-        elif log_level is not None:
-            core.log_levels.pop(process_id, None)
+        record = core.records[process_id]
+        record.prefix, record.terminal = prefix or None, terminal
+        if level or log_level is not None:  # "" clears it; None leaves it as it was
+            record.log_level = level or None
 
     def command_of(self, process_id: str) -> dict[str, Any]:
         """`command`, `command_line` and `env` of the process's last start, or of the
         start it would get now when it has not started yet."""
-        start = self.core.started_with.get(process_id)
+        start = self.core.records[process_id].started_with
         if start is None:
             proc = self.core.plan.process(process_id)
             if not proc.cmd:

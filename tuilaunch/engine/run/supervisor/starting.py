@@ -52,7 +52,8 @@ class Starting:
         core = self.core
         if not respawn:
             core.respawner.forget(process_id)
-        waiting = core.respawn_waits.pop(process_id, None)
+        record = core.records[process_id]
+        waiting, record.respawn_wait = record.respawn_wait, None
         if waiting is not None:
             waiting.set()  # started now by the operator: the respawn under way is moot
         ending = core.running.get(process_id)
@@ -87,8 +88,8 @@ class Starting:
         except LaunchError as exc:  # the tool left PATH since the restart checked it
             self._fail(process_id, str(exc))
             return
-        core.started_with[process_id] = start
-        core.deaths.pop(process_id, None)
+        record = core.records[process_id]
+        record.started_with, record.death = start, None  # a death is said until a start
         env = dict(start.env)
         core.watchdog.start()
         if core.watchdog.error and "watchdog" not in core.reported:
@@ -171,8 +172,8 @@ class Starting:
         """What `proc` starts with now: the file's command under an operator's tool, log
         level and terminal. LaunchError when the tool is no longer on PATH."""
         return start_command(proc, self.base_env(), self.gets_tty(proc),
-                             self.core.run_prefixes.get(proc.id),
-                             self.core.log_levels.get(proc.id))
+                             self.core.records[proc.id].prefix,
+                             self.core.records[proc.id].log_level)
 
     def base_env(self) -> dict[str, str]:
         """tuilaunch's environment as it was at the first start: read once, not per child."""
@@ -237,7 +238,8 @@ class Starting:
             core.watchdog.forget(running.process.pid)
         process_id = running.plan.id
         del core.running[process_id]
-        core.exit_codes[process_id] = code
+        record = core.records[process_id]
+        record.exit_code = code
         requested = running.stopping or core.shutting_down
         # a ctrl+c (or ctrl+\\, ctrl+z) typed into it was asked for by the operator too
         typed = code < 0 and -code in running.typed_signals
@@ -246,16 +248,15 @@ class Starting:
         cause = ExitCause.of(code, requested, typed)  # decided here, once
         crashed = cause is ExitCause.CRASHED
         if crashed:
-            core.crashes[process_id] = code
-            core.crash_times[process_id] = time.monotonic()
-        start = core.started_with.get(process_id)
+            record.crash_code, record.crash_time = code, time.monotonic()
+        start = record.started_with
         death = death_details(running.process.pid, code, requested or typed,
                               start.cwd if start else None,
                               os.path.basename(running.process.args[0]
                                                if running.process.args else "")[:15],
                               running.started)
         if death:
-            core.deaths[process_id] = death
+            record.death = death
         # an end nobody asked for with a signal or a non-zero status is a failure, as
         # headless ("process has died", ERROR), the tree and the exit status have it
         core.states[process_id] = "failed" if crashed else "exited"
@@ -266,7 +267,7 @@ class Starting:
             reason += f" (core: {death['core']})"
         # `requested`: a stop asked by anyone (another client, `tuilaunch stop`, a ctrl+c
         # typed into it: `typed`), not a crash
-        again = {"again": True} if process_id in core.coming_back else {}
+        again = {"again": True} if record.coming_back else {}
         core.emit(ProcessExited(process=process_id, pid=running.process.pid, code=code,
                                 reason=reason, cause=cause,
                                 data={"requested": requested or typed, "typed": typed,
@@ -279,7 +280,7 @@ class Starting:
         """What follows an end the launch did not ask for: a respawn, or why not."""
         core = self.core
         process_id = running.plan.id
-        tool = core.run_prefixes.get(process_id)
+        tool = core.records[process_id].prefix
         if running.plan.respawn and tool and code == 0 and not requested:
             # the operator left the tool (gdb's quit): a debugging session that ended, not
             # a node to bring back under gdb again; a crash under it still respawns
@@ -308,15 +309,16 @@ class Starting:
         core.busy += 1
         core.emit(Respawning(proc.id, reason=f"try {tries} in {delay:g} s",
                              data={"try": tries, "delay": delay}))
-        called_off = core.respawn_waits[proc.id] = asyncio.Event()
+        record = core.records[proc.id]
+        called_off = record.respawn_wait = asyncio.Event()
         try:
             await asyncio.wait_for(called_off.wait(), delay)
         except TimeoutError:
             pass  # the delay is over: it comes back
         finally:
             core.busy -= 1
-            if core.respawn_waits.get(proc.id) is called_off:
-                del core.respawn_waits[proc.id]
+            if record.respawn_wait is called_off:
+                record.respawn_wait = None
         # called off: a stop (it stays down) or a start (it runs already) came meanwhile,
         # and said so itself
         if not called_off.is_set() and not core.shutting_down:
@@ -324,7 +326,7 @@ class Starting:
 
     def gets_tty(self, proc: ProcessPlan) -> bool:
         """The file's choice, or a terminal an operator's restart asked for."""
-        return wants_tty(proc) or proc.id in self.core.run_terminals
+        return wants_tty(proc) or self.core.records[proc.id].terminal
 
     def _forget_reader(self, reader: ChannelReader) -> Callable[[asyncio.Future[None]], None]:
         return lambda _: self.core.lingering.discard(reader)

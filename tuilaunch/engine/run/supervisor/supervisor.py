@@ -82,12 +82,13 @@ class Supervisor:
 
     @property
     def exit_codes(self) -> dict[str, int]:
-        return self.core.exit_codes
+        """Each process's last exit status."""
+        return self.core.records.having("exit_code")
 
     @property
     def deaths(self) -> dict[str, dict[str, str]]:
         """A crash's `signal` name and `core` location, until the process starts again."""
-        return self.core.deaths
+        return self.core.records.having("death")
 
     @property
     def failed_parts(self) -> set[str]:
@@ -97,7 +98,7 @@ class Supervisor:
     @property
     def coming_back(self) -> set[str]:
         """Processes stopped to be started again (a restart, a relaunch)."""
-        return self.core.coming_back
+        return set(self.core.records.having("coming_back"))
 
     @property
     def retries(self) -> dict[str, int]:
@@ -107,7 +108,7 @@ class Supervisor:
     @property
     def respawn_waits(self) -> dict[str, asyncio.Event]:
         """Processes waiting out their respawn delay."""
-        return self.core.respawn_waits
+        return self.core.records.having("respawn_wait")
 
     @property
     def busy(self) -> int:
@@ -220,8 +221,9 @@ class Supervisor:
                     await core.changed.wait()
         finally:
             await self._finish()
-        real = core.stopper.real_crashes(core.crashes, core.crash_times)
-        for process_id in set(core.crashes) - set(real):
+        crashes = core.records.having("crash_code")
+        real = core.stopper.real_crashes(crashes, core.records.having("crash_time"))
+        for process_id in set(crashes) - set(real):
             if core.states.get(process_id) == "failed":
                 core.states[process_id] = "exited"  # the stop's own signal, a hair early
         failed = [item for item, state in core.states.items() if state == "failed"]
@@ -291,7 +293,8 @@ class Supervisor:
         diff = diff_plans(core.plan, plan, running)
         again = set(diff.stop) & set(diff.start)
         core.busy += 1
-        core.coming_back |= again
+        for process_id in again:
+            core.records[process_id].coming_back = True
         try:
             await asyncio.gather(*(self.stop(pid) for pid in diff.stop if pid in running))
             old_actions = {(a.kind, a.target, repr(a.data)) for a in core.plan.actions
@@ -315,7 +318,8 @@ class Supervisor:
                     self.actions.schedule_action(action)
         finally:
             core.busy -= 1
-            core.coming_back -= again  # they are pending now, or running
+            for process_id in again:  # they are pending now, or running
+                core.records[process_id].coming_back = False
             core.changed.set()
         self.set_placement(core.placing.machine, core.placing.remote)  # the new plan's
         return diff
@@ -328,7 +332,7 @@ class Supervisor:
         anything stops)."""
         core = self.core
         core.busy += 1  # the run must not look finished between the stop and the start
-        core.coming_back.add(process_id)
+        core.records[process_id].coming_back = True
         try:
             if not core.runs_here(process_id) and core.placing.remote is not None:
                 # its machine restarts it, in one request: the tool is looked for on its
@@ -341,7 +345,7 @@ class Supervisor:
             await self.start(process_id)
         finally:
             core.busy -= 1
-            core.coming_back.discard(process_id)
+            core.records[process_id].coming_back = False
             core.changed.set()
 
     async def run_action(self, action_id: str) -> None:
@@ -384,10 +388,10 @@ class Supervisor:
         if state is not None:
             core.states[process_id] = state
         if isinstance(event, ProcessExited) and event.code is not None:
-            core.exit_codes[process_id] = event.code
+            record = core.records[process_id]
+            record.exit_code = event.code
             if event.crashed and not core.shutting_down:  # as its machine decided
-                core.crashes[process_id] = event.code
-                core.crash_times[process_id] = time.monotonic()
+                record.crash_code, record.crash_time = event.code, time.monotonic()
         core.emit(event)
         if isinstance(event, Started):
             self.external_event(process_id, "start", event.pid)
