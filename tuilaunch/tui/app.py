@@ -2,7 +2,7 @@
 
 The app keeps the session's link and the screens, with one mixin per concern of the app's
 keys, all built on SessionLink (the state and the engine link): keyboard (typing into a
-node, tools), node_commands, navigation, quitting, inspector. The tabs are widgets that own
+node, tools), navigation, quitting, inspector. The tabs are widgets that own
 their state, the app their host: the Nodes tab (nodes/tab.py's NodesTab: the tree, the
 detail line and the pane, sent the session's events as messages) and the Args tab
 (arguments.py's ArgsTab), as the graph tabs in screens/.
@@ -37,7 +37,6 @@ from .inspector import Inspector
 from .key_order import KeyOrder
 from .keyboard import NodeKeyboard
 from .navigation import Navigation
-from .node_commands import NodeCommands
 from .nodes.tab import NodesTab
 from .quitting import Quitting
 from .screens.params_panel import ParamsPanel
@@ -45,6 +44,9 @@ from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import ascii_terminal
 from .session_link import DRAIN_HZ, PANE_CHROME
+
+NODE_COMMANDS = frozenset({"stop", "restart", "start", "lifecycle", "all_output"})
+"""The app's keys that act on the Nodes tab's selection."""
 
 
 class LaunchTabs(TabbedContent):
@@ -58,10 +60,10 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, KeyOrder):
+class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, KeyOrder):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
-    concern does lives in its mixin (session_link, node_commands, navigation, quitting,
-    inspector) or its tab's widget (nodes, arguments); key_order hands the keys out one
+    concern does lives in its mixin (session_link, navigation, quitting, inspector,
+    keyboard) or its tab's widget (nodes, arguments); key_order hands the keys out one
     after the other."""
 
     CSS_PATH = "screens/app.tcss"
@@ -223,6 +225,34 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
             tree.move_cursor(tree.rows[process])
             self.action_type_into()
 
+    # --- the Nodes tab's selection: its commands (nodes/commands.py) ------------------------
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        allowed = super().check_action(action, parameters)  # none while typing into a node
+        if allowed is not True or action not in NODE_COMMANDS:
+            return allowed
+        if self.supervisor is None or self.tabs.active != "nodes":
+            return False
+        return self.nodes.commands.applies(action, parameters)
+
+    def selected(self) -> list[str]:
+        return self.nodes.commands.selected()
+
+    def action_stop(self) -> None:
+        self.nodes.commands.command("stop")
+
+    def action_restart(self) -> None:
+        self.nodes.commands.command("restart")
+
+    def action_start(self) -> None:
+        self.nodes.commands.command("start")
+
+    def action_lifecycle(self, direction: str) -> None:
+        self.nodes.commands.lifecycle(direction)
+
+    def action_all_output(self) -> None:
+        self.nodes.show_all()
+
     def tab_shown(self, pane: str) -> None:
         super().tab_shown(pane)
         self.args_tab.set_shown(pane == "args")
@@ -255,7 +285,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, NodeCommands, Navigation, Quitting, 
                 yield SystemCommand(
                     f"Lifecycle: {transition.replace('_', ' ')} {process}",
                     f"Ask the lifecycle node (now {state}) for this transition",
-                    lambda t=transition, p=process: self.lifecycle_transition(p, t))
+                    lambda t=transition, p=process: self.nodes.commands.lifecycle_transition(
+                        p, t))
         if len(selected) == 1:
             yield SystemCommand("Topics of selected node", "The node's topics, rates and QoS",
                                 self.action_node_topics)

@@ -17,11 +17,11 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rich.text import Text
-from textual import work
+from textual import on, work
 from textual.app import App, ScreenStackError
 from textual.message import Message
 from textual.timer import Timer
-from textual.widgets import Static, TabbedContent
+from textual.widgets import Static, TabbedContent, Tree
 from textual.worker import Worker, WorkerState
 
 from ..client.port import LaunchPort
@@ -35,11 +35,10 @@ from ..engine.run.events import LIVE_STATES, Event, Reading
 from ..engine.run.machines.remote import RemoteLink
 from ..engine.run.session.session_dir import SessionError
 from .arguments import ArgsTab
-from .lifecycle_steps import LifecycleSteps
 from .nodes.tab import NodesTab, SessionEvents
 from .output_store import WARN, Line, OutputStore
 from .screens.output_panel import OutputPanel
-from .screens.tree_panel import LaunchTree
+from .screens.tree_panel import LaunchTree, RowData
 
 # the UI's tick: events are taken from the engine this often; the output pane repaints at
 # most PANE_FPS times a second and only when what it shows changed, so a terminal over ssh
@@ -110,7 +109,6 @@ class SessionLink(App[int]):
         self.sigkill_timeout = sigkill_timeout
         self.pane_fps = pane_fps
         self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
-        self.lifecycle_steps = LifecycleSteps()
         # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
@@ -144,6 +142,14 @@ class SessionLink(App[int]):
         self._start_lock = threading.Lock()  # the server comes up while the app may leave
         self._start_thread: threading.Thread | None = None
         self.quit_before_start = False  # left before following the launch: it is stopped
+
+    @on(Tree.NodeHighlighted, "#tree")
+    def _selection_moved(self, event: Tree.NodeHighlighted[RowData]) -> None:
+        """The Nodes tab showed the row (its pane, its detail): what follows the selection
+        (the inspector's figures) and the keys that apply to it."""
+        self.update_detail()
+        if event.node.data is not None:
+            self.refresh_bindings()  # the lifecycle keys apply to lifecycle nodes only
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         """A command a read-only client refused: said in one line (the commands' workers

@@ -36,7 +36,7 @@ LEVELS = {"WARN": WARN, "ERROR": ERROR}
 
 
 @dataclass
-class Shown:
+class Batch:
     """What a batch of events changed beyond the rows and the lines: the host's part."""
 
     lines: list[Line] = field(default_factory=list)
@@ -104,9 +104,9 @@ class NodeEvents:
 
     # --- events ------------------------------------------------------------------------------
 
-    def show(self, events: list[Event]) -> Shown:
+    def show(self, events: list[Event]) -> Batch:
         """A batch of events into the rows and the store; the pane's new lines returned."""
-        shown = Shown()
+        shown = Batch()
         tree, store = self.tree, self.store
         states = self._states()
         for event in events:

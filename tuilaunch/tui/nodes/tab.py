@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Protocol
 
 from rich.text import Text
 from textual import on
@@ -24,31 +23,17 @@ from textual.timer import Timer
 from textual.widgets import Static, Tree
 
 from ...client.port import LaunchPort
-from ...engine.plan.session import Session
-from ...engine.run.engine_thread import EngineThread
 from ...engine.run.events import Event
 from ..output_store import Line, OutputStore
 from ..screens.output_panel import NodesView, OutputPanel
 from ..screens.tree_panel import LaunchTree, RowData
-from .events import NodeEvents, Shown
+from .commands import SelectionCommands
+from .events import Batch, NodeEvents
 from .gaps import GapReader
+from .host import NodesHost
 
 TREND_WIDTH = 10
 """Columns of each sparkline (CPU, memory) at the end of the detail line."""
-
-
-class NodesHost(Protocol):
-    """What the Nodes tab needs of whoever holds the session's link (the app)."""
-
-    engine: EngineThread
-    supervisor: LaunchPort | None
-    session: Session
-    quitting: bool
-    asked_to_stop: set[str]
-
-    def over_link(self) -> LaunchPort | None: ...
-
-    def drain(self) -> None: ...
 
 
 class SessionEvents(Message, bubble=False):
@@ -78,7 +63,7 @@ class NodesTab(Vertical):
     class Shown(Message):
         """A batch of events is on screen; `shown` says what else changed."""
 
-        def __init__(self, events: list[Event], shown: Shown, replaying: bool) -> None:
+        def __init__(self, events: list[Event], shown: Batch, replaying: bool) -> None:
             super().__init__()
             self.events, self.shown, self.replaying = events, shown, replaying
 
@@ -116,6 +101,7 @@ class NodesTab(Vertical):
             lambda: host.quitting, host.asked_to_stop)
         self.gaps = GapReader(self.store, self.pane, lambda: host.engine,
                               lambda: host.supervisor, self.app.notify)
+        self.commands = SelectionCommands(self, host, self.launch_tree, self.store)
 
     # --- events ------------------------------------------------------------------------------
 
@@ -149,6 +135,12 @@ class NodesTab(Vertical):
         if node is None or node.data is None or node.data.kind != "process":
             return None
         return node.data.ref
+
+    def show_all(self) -> None:
+        """The all nodes row selected, its pane shown (`a`)."""
+        tree = self.launch_tree
+        tree.move_cursor(tree.root.children[0])
+        self.pane.show_view(None)
 
     @on(Tree.NodeHighlighted, "#tree")
     def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:

@@ -300,8 +300,10 @@ class SessionServer:
                 await supervisor.restart(process, message.get("prefix") or None,
                                          message.get("log_level"),
                                          bool(message.get("terminal")))
+            elif op == "start":
+                await supervisor.start(process)
             else:
-                await getattr(supervisor, op)(process)
+                await supervisor.stop(process)
             return {"process": process, "state": supervisor.states.get(process)}
         if op == "shutdown":
             await supervisor.shutdown(str(message.get("reason") or "stop requested"))
@@ -315,10 +317,7 @@ class SessionServer:
             supervisor.kill_all()  # the impatient second `q`: SIGKILL whatever is left
             return {}
         if op == "run_action":
-            run_action = getattr(supervisor, "run_action", None)
-            if run_action is None:
-                raise LaunchError("this supervisor cannot run an action again")
-            await run_action(self.find_process(str(message.get("action"))))
+            await supervisor.run_action(self.find_process(str(message.get("action"))))
             return {}
         if op == "find":
             return self.find_process(str(message.get("process")))

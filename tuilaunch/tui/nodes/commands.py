@@ -1,68 +1,71 @@
-"""Commands on the tree's selection: stop, restart, start, lifecycle transitions."""
+"""Commands on the Nodes tab's selection: stop, restart, start, the lifecycle steps, and
+which of them apply to it.
+
+`SelectionCommands` is an object the Nodes tab holds over its tree; the app's keys (`s`,
+`r`, `t`, `]`, `[`, `a`) and its command palette call it. It reaches the session through the
+tab's host (`NodesHost`): its client on the engine thread, the plan, the stops it asked.
+"""
 
 from __future__ import annotations
 
 import asyncio
 from typing import Any
 
-from textual import on
-from textual.widgets import Tree
+from textual.widget import Widget
 
-from ..client.port import Verb
-from ..engine.plan.model import ActionKind
-from .screens.dialogs import ConfirmScreen
-from .screens.tree_panel import RowData
-from .session_link import SessionLink
+from ...client.port import Verb
+from ...engine.plan.model import ActionKind
+from ..lifecycle_steps import LifecycleSteps
+from ..output_store import OutputStore
+from ..screens.dialogs import ConfirmScreen
+from ..screens.tree_panel import LaunchTree
+from .host import NodesHost
 
 
-class NodeCommands(SessionLink):
-    """The selected row of the tree and what the keys do to it: stop, restart, start, the
-    lifecycle steps; which keys apply to it (check_action)."""
+class SelectionCommands:
+    """The selected row of `tree` and what the keys do to it, run as workers of `owner`
+    (the tab): a command outlives no tab."""
 
-    @on(Tree.NodeHighlighted, "#tree")
-    def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
-        """The Nodes tab showed the row (its pane, its detail): the keys that apply."""
-        self.update_detail()
-        if event.node.data is not None:
-            self.refresh_bindings()  # the lifecycle keys apply to lifecycle nodes only
+    def __init__(self, owner: Widget, host: NodesHost, tree: LaunchTree,
+                 store: OutputStore) -> None:
+        self.owner, self.host, self.tree, self.store = owner, host, tree, store
+        self.lifecycle_steps = LifecycleSteps()
+        """`]`, `[` on lifecycle nodes, in the order typed."""
 
     def selected(self) -> list[str]:
-        node = self.launch_tree.cursor_node
+        """The processes of the selected row: one, a group's, or all of them."""
+        node = self.tree.cursor_node
         if node is None or node.data is None:
             return []
         if node.data.kind == "all":
-            return [p.id for p in self.session.plan.enabled_processes()]
+            return [p.id for p in self.host.session.plan.enabled_processes()]
         return list(node.data.processes)
 
-    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        if action in ("stop", "restart", "start", "all_output"):
-            if self.supervisor is None or self.tabs.active != "nodes":
-                return False
-            if action == "all_output":
-                return True
-            states = [self.supervisor.states.get(p) for p in self.selected()]
-            if action == "stop":  # one waiting to respawn can be stopped too: it stays down
-                return True if "running" in states or "respawning" in states else None
-            if action == "start":
-                return True if any(s not in ("running", "skipped") for s in states) else None
-            return True if states else None
-        if action == "detach":
+    def applies(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """As Textual's check_action for these keys: False hides the key, None greys it."""
+        supervisor = self.host.supervisor
+        if supervisor is None:
+            return False
+        if action == "all_output":
             return True
         if action == "lifecycle":
-            if self.supervisor is None or self.tabs.active != "nodes":
-                return False
             selected = self.selected()
             # shown only while a lifecycle node is selected: other launches keep their footer
-            if len(selected) != 1 or selected[0] not in self.supervisor.lifecycle.states:
+            if len(selected) != 1 or selected[0] not in supervisor.lifecycle.states:
                 return False
-            return True if self._lifecycle_step(str(parameters[0])) else None
-        return True
+            return True if self.lifecycle_step(str(parameters[0])) else None
+        states = [supervisor.states.get(p) for p in self.selected()]
+        if action == "stop":  # one waiting to respawn can be stopped too: it stays down
+            return True if "running" in states or "respawning" in states else None
+        if action == "start":
+            return True if any(s not in ("running", "skipped") for s in states) else None
+        return True if states else None
 
-    def _command(self, verb: Verb) -> None:
+    def command(self, verb: Verb) -> None:
         """Stop, restart or start the selection; a stop or restart of more than one
         process (the root, all nodes, a group) asks first, from a key as from the palette."""
-        assert self.supervisor is not None
-        supervisor = self.supervisor
+        supervisor = self.host.supervisor
+        assert supervisor is not None
         processes = self.selected()
         if verb == "stop":
             touched = [p for p in processes
@@ -72,53 +75,53 @@ class NodeCommands(SessionLink):
         if verb in ("stop", "restart") and len(touched) > 1:
             def answered(yes: bool | None) -> None:
                 if yes:
-                    self._run_command(verb, processes)
+                    self._run(verb, processes)
 
             what = "running processes" if verb == "stop" else "processes"
-            self.push_screen(ConfirmScreen(
+            self.owner.app.push_screen(ConfirmScreen(
                 f"{verb.capitalize()} all {len(touched)} {what}: {', '.join(touched[:6])}"
                 f"{' ...' if len(touched) > 6 else ''}?", f"{verb.capitalize()} them (y)"),
                 answered)
             return
-        self._run_command(verb, processes)
+        self._run(verb, processes)
 
-    def _run_command(self, verb: Verb, processes: list[str]) -> None:
-        assert self.supervisor is not None
-        supervisor = self.supervisor
+    def _run(self, verb: Verb, processes: list[str]) -> None:
+        supervisor = self.host.supervisor
+        assert supervisor is not None
         commands = []
         for process in processes:
             if verb in ("stop", "restart"):
-                self.asked_to_stop.add(process)
+                self.host.asked_to_stop.add(process)
             commands.append(supervisor.command(verb, process))
-        actions = self._actions_to_rerun(processes) if verb in ("restart", "start") else []
-        self.run_worker(self._carry_out(commands, actions), group="commands",
-                        exit_on_error=False)
+        actions = self._actions_to_rerun() if verb in ("restart", "start") else []
+        self.owner.run_worker(self._carry_out(commands, actions), group="commands",
+                              exit_on_error=False)
         # the rows say "stopping" when the session says so (its Stopping event), as every
         # client attached sees it
-        self.update_detail()
-        self.refresh_bindings()
+        self.owner.app.refresh_bindings()
 
     async def _carry_out(self, commands: list[Any], actions: list[str]) -> None:
         """The commands together; then the group's actions (set_parameters, call_service)
         again, so a restarted node gets what the launch file gave it after its start."""
-        assert self.supervisor is not None
-        results = await asyncio.gather(*(self.engine.run(c) for c in commands),
+        supervisor, engine = self.host.supervisor, self.host.engine
+        assert supervisor is not None
+        results = await asyncio.gather(*(engine.run(c) for c in commands),
                                        return_exceptions=True)
         for result in results:
             if isinstance(result, Exception):  # e.g. its machine could not be reached
-                self.notify(str(result).split(": ", 1)[-1] if str(result).startswith(
+                self.owner.app.notify(str(result).split(": ", 1)[-1] if str(result).startswith(
                     "session ") else str(result), severity="error", timeout=8)
         for action in actions:
-            self.run_worker(self.engine.run(self.supervisor.run_action(action)),
-                            group="commands", exit_on_error=False)
+            self.owner.run_worker(engine.run(supervisor.run_action(action)),
+                                  group="commands", exit_on_error=False)
 
-    def _actions_to_rerun(self, processes: list[str]) -> list[str]:
+    def _actions_to_rerun(self) -> list[str]:
         """The enabled one-off actions of the selected group, or for one node those of its
         group that wait for it or address it by name."""
-        node = self.launch_tree.cursor_node
+        node = self.tree.cursor_node
         if node is None or node.data is None or node.data.kind == "action":
             return []
-        plan = self.session.plan
+        plan = self.host.session.plan
         enabled = {a.id: a for a in plan.actions if a.enabled and a.kind in (
             ActionKind.SET_PARAMETERS, ActionKind.CALL_SERVICE) and (
                 a.trigger is None or a.trigger.on not in ("io", "shutdown"))}
@@ -142,43 +145,32 @@ class NodeCommands(SessionLink):
                 chosen.append(ref)
         return chosen
 
-    def action_stop(self) -> None:
-        self._command("stop")
+    # --- lifecycle ------------------------------------------------------------------------
 
-    def action_restart(self) -> None:
-        self._command("restart")
-
-    def action_start(self) -> None:
-        self._command("start")
-
-    def _lifecycle_step(self, direction: str) -> tuple[str, str] | None:
+    def lifecycle_step(self, direction: str) -> tuple[str, str] | None:
         """(process, transition) that `]` (up) or `[` (down) asks of the selected node:
         from the state it will be in once the steps asked before are done."""
         selected = self.selected()
-        if self.supervisor is None or len(selected) != 1:
+        supervisor = self.host.supervisor
+        if supervisor is None or len(selected) != 1:
             return None
         transition = self.lifecycle_steps.step(
-            selected[0], self.supervisor.lifecycle.states.get(selected[0]), direction)
+            selected[0], supervisor.lifecycle.states.get(selected[0]), direction)
         return (selected[0], transition) if transition else None
 
-    def action_lifecycle(self, direction: str) -> None:
-        step = self._lifecycle_step(direction)
+    def lifecycle(self, direction: str) -> None:
+        step = self.lifecycle_step(direction)
         if step is not None:
             self.lifecycle_transition(*step)
 
     def lifecycle_transition(self, process: str, transition: str) -> None:
         """Asks a lifecycle node for a transition, after those asked before; the result
         arrives as events."""
-        supervisor = self.supervisor
+        supervisor, engine = self.host.supervisor, self.host.engine
         assert supervisor is not None
-        self.run_worker(self.lifecycle_steps.take(process, transition, lambda: self.engine.run(
+        self.owner.run_worker(self.lifecycle_steps.take(process, transition, lambda: engine.run(
             supervisor.lifecycle.request(process, transition))), group="commands",
             exit_on_error=False)
-
-    def action_all_output(self) -> None:
-        tree = self.launch_tree
-        tree.move_cursor(tree.root.children[0])
-        self.output_panel.show_view(None)
 
 
 def _action_refs(node: Any) -> list[str]:
