@@ -292,12 +292,12 @@ class SessionLink(App[int]):
         when they are on screen (`on_nodes_tab_shown`). `replaying`: what happened before
         this client came, shown but no news."""
         self._tell_pane_shown()
-        rest: list[Event] = []
-        for event in events:
-            if isinstance(event, Reading):
-                self.inspector_event(event)
-            else:
-                rest.append(event)
+        rest = [event for event in events if not isinstance(event, Reading)]
+        readings = [event for event in events if isinstance(event, Reading)]
+        for reading in readings:
+            self.inspector_event(reading)
+        if readings:
+            self.update_detail()  # a node's figures on its row, and so on the detail line
         self.nodes.post_message(SessionEvents(rest, replaying))
         if not rest and (self.quit_started is not None or self.over_link() is not None):
             self.update_status()  # the signal stage, a link's silence: move on with time
