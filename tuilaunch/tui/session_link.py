@@ -290,7 +290,7 @@ class SessionLink(App[int]):
         """A batch of the session's events (the tick's, often none): the readings a tab
         asked for to the inspector; the rest down to the Nodes tab, by message, which says
         when they are on screen (`on_nodes_tab_shown`). `replaying`: what happened before
-        this client came, shown but no news."""
+        this client came, shown but no news, at once."""
         self._tell_pane_shown()
         rest = [event for event in events if not isinstance(event, Reading)]
         readings = [event for event in events if isinstance(event, Reading)]
@@ -298,7 +298,12 @@ class SessionLink(App[int]):
             self.inspector_event(reading)
         if readings:
             self.update_detail()  # a node's figures on its row, and so on the detail line
-        self.nodes.post_message(SessionEvents(rest, replaying))
+        if replaying:
+            # shown with the tree it comes with (the states the session has now), before
+            # either is on screen: no frame has a row's end without its lines
+            self.nodes.show_batch(rest, replaying=True)
+        else:
+            self.nodes.post_message(SessionEvents(rest))
         if not rest and (self.quit_started is not None or self.over_link() is not None):
             self.update_status()  # the signal stage, a link's silence: move on with time
 

@@ -106,15 +106,20 @@ class NodesTab(Vertical):
     # --- events ------------------------------------------------------------------------------
 
     def on_session_events(self, message: SessionEvents) -> None:
-        shown = self.events.show(message.events)
-        if message.replaying:
+        self.show_batch(message.events, message.replaying)
+
+    def show_batch(self, events: list[Event], replaying: bool = False) -> None:
+        """A batch into the tree and the pane (a message's; the replay of what happened
+        before this client came, called at once); the app hears of it by `Shown`."""
+        shown = self.events.show(events)
+        if replaying:
             self.events.show_lifecycle()
         self.show_lines(shown.lines)
         if shown.counting and self._countdown is None:
             self._countdown = self.set_interval(1.0, self._count_down)
-        if message.events:
+        if events:
             self.update_detail()
-            self.post_message(self.Shown(message.events, shown, message.replaying))
+            self.post_message(self.Shown(events, shown, replaying))
 
     def show_lines(self, lines: list[Line]) -> None:
         """New lines for the pane (the plan's warnings, a batch's), and the pane's tick."""
