@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, cast
 
 import pytest
+from textual.css.query import NoMatches
 from textual.pilot import Pilot
 from textual.widgets import Checkbox, DataTable, Input
 
@@ -42,12 +43,21 @@ async def until(pilot: Pilot, check: Callable[[], object], limit: float = 60.0,
     """Lets the app run until `check` holds, calling `every` once a second (a refresh);
     the limit only guards against a hang."""
     waited = 0.0
-    while not check():
+    while not holds(check):
         assert waited < limit, f"condition never held: {check}"
         if every is not None and int(waited * 20) % 20 == 0:
             every()
         await pilot.pause(0.05)
         waited += 0.05
+
+
+def holds(check: Callable[[], object]) -> bool:
+    """Whether `check` holds; not yet while a widget it reads is not mounted (a screen
+    pushed and not yet composed, on a loaded machine)."""
+    try:
+        return bool(check())
+    except NoMatches:
+        return False
 
 
 @asynccontextmanager

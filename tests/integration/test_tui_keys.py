@@ -41,6 +41,13 @@ def generate_launch_description():
 """
 
 
+def palette_input(app: Any) -> str | None:
+    """What the command palette's input holds; None before the palette has laid it out
+    (pushed, not yet composed, on a loaded machine)."""
+    found = app.screen.query("CommandInput")
+    return str(found.first().value) if found else None
+
+
 def burst(app: TuiLaunchApp, *keys: str) -> None:
     """Keys as one read from the terminal delivers them: posted together, nothing run in
     between (Pilot.press waits after each key, which hides ordering faults)."""
@@ -118,13 +125,13 @@ async def test_the_palette_and_a_field_opened_by_a_tab_key_get_the_burst(write, 
         # ctrl+p and a command's words in one read: the words are in the palette's input
         burst(app, "ctrl+p", *"stop")
         await until(pilot, lambda: type(app.screen).__name__ == "CommandPalette")
-        await until(pilot, lambda: app.screen.query_one("CommandInput").value == "stop")
+        await until(pilot, lambda: palette_input(app) == "stop")
         burst(app, "escape")
         await until(pilot, lambda: type(app.screen).__name__ != "CommandPalette")
         # `:` opens the palette too (as in vim, k9s)
         burst(app, "colon", *"rst")
         await until(pilot, lambda: type(app.screen).__name__ == "CommandPalette")
-        await until(pilot, lambda: app.screen.query_one("CommandInput").value == "rst")
+        await until(pilot, lambda: palette_input(app) == "rst")
         burst(app, "escape")
         await until(pilot, lambda: type(app.screen).__name__ != "CommandPalette")
         # the Topics tab and its filter, in one read with the text
@@ -232,7 +239,7 @@ async def test_f1_and_the_palettes_keys_show_the_keys_and_esc_closes_them(write,
         await until(pilot, lambda: dialogs(app) == [])
         burst(app, "ctrl+p", *"keys")
         await until(pilot, lambda: dialogs(app) == ["CommandPalette"]
-                    and app.screen.query_one("CommandInput").value == "keys")
+                    and palette_input(app) == "keys")
         await until(pilot, lambda: "Keys" in str(app.screen.query_one("CommandList")
                                                   .get_option_at_index(0).prompt))
         burst(app, "enter")
