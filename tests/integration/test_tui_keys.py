@@ -289,7 +289,7 @@ def test_a_linux_console_gets_ascii_lines_and_a_checkbox_that_reads_its_value(wr
         os.write(master, b"3")
         screen += read_until(master, b"services")
         os.write(master, b"q")
-        screen += read_until(master, b"Stop them all and quit?")
+        screen += read_until(master, b"and quit?")
         # the characters drawn, without the colour changes between them
         text = re.sub(r"\x1b\[[0-9;]*m", "", screen.decode("utf-8", "replace"))
         drawn = [glyph for glyph in "▎▊▔▁╸╺━├└│╭╮╰╯▐▌" if glyph in text]

@@ -122,3 +122,13 @@ def test_tab_snapshot(snap_compare, name: str):
         return settled(pilot)
 
     assert snap_compare(Tab(TABS[name]), terminal_size=SIZE, run_before=shown)
+
+
+async def test_the_quit_question_says_one_process_in_the_singular():
+    from textual.widgets import Static
+
+    app = Over(lambda: QuitScreen(["talker-1"]))
+    async with app.run_test(size=SIZE) as pilot:
+        await pilot.pause()
+        said = str(app.screen.query(Static).first().render())
+        assert said.startswith("1 process still runs: talker-1\nStop it and quit?"), said

@@ -152,7 +152,11 @@ class QuitScreen(ModalScreen[str]):
 
     def compose(self) -> ComposeResult:
         names = ", ".join(self.running[:8]) + (" ..." if len(self.running) > 8 else "")
-        question = f"{len(self.running)} processes still run: {names}\nStop them all and quit?"
+        if len(self.running) == 1:
+            question = f"1 process still runs: {names}\nStop it and quit?"
+        else:
+            question = f"{len(self.running)} processes still run: {names}\n" \
+                       "Stop them all and quit?"
         if self.detach:
             question += "\nOr detach: they run on, tuilaunch attach comes back to them."
         # a narrow terminal (40 columns) gets short, one-line buttons: all three fit, Keep
