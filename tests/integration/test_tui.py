@@ -542,6 +542,7 @@ async def test_quit_shows_which_processes_are_still_stopping(write, tmp_path):
         await pilot.press("q", "y")
         status = app.query_one("#status")
         assert "stopping stubborn-1" in str(status.render())
-        assert "stopping" in row_text(app, "stubborn-1")
+        # the row says so when the session's Stopping event comes (every client's does)
+        await until(pilot, lambda: "stopping" in row_text(app, "stubborn-1"))
         # SIGINT is ignored; SIGTERM after the timeout ends it
         await until(pilot, lambda: not pids(app), limit=60)
