@@ -91,7 +91,10 @@ def test_one_tui_over_two_robots_keys_act_on_the_selected_session(machines: Mach
             assert second.supervisor.states["quiet-2"] == "running"
             await pilot.press("t")
             await until(pilot, lambda: first.supervisor.states["quiet-2"] == "running" and
-                        starts(first, "quiet-2") == 2)
+                        starts(first, "quiet-2") == 2,
+                        explain=lambda: f"states {first.supervisor.states}, "
+                        f"{starts(first, 'quiet-2')} starts, said {said}, pane "
+                        f"{[line.text for line in first.store.lines(View('quiet-2'))]}")
             # s on robot2's quiet stops it there, and nothing on robot1
             await select(pilot, second, "quiet-2")
             assert "[robot2:arm]" in str(app.status_bar.render())  # the header follows

@@ -39,12 +39,14 @@ BRINGUP = str(EXAMPLES / "bringup.py")
 
 
 async def until(pilot: Pilot, check: Callable[[], object], limit: float = 60.0,
-                every: Callable[[], object] | None = None) -> None:
+                every: Callable[[], object] | None = None,
+                explain: Callable[[], object] | None = None) -> None:
     """Lets the app run until `check` holds, calling `every` once a second (a refresh);
-    the limit only guards against a hang."""
+    the limit only guards against a hang, and `explain` says what was seen instead."""
     waited = 0.0
     while not holds(check):
-        assert waited < limit, f"condition never held: {check}"
+        assert waited < limit, f"condition never held: {check}" + (
+            f"; {explain()}" if explain is not None else "")
         if every is not None and int(waited * 20) % 20 == 0:
             every()
         await pilot.pause(0.05)
