@@ -219,9 +219,6 @@ class Inspector(Navigation):
         """The ROS name of a process's node: the plan's, else the one it reports."""
         return self.store.node_name(self.session.plan, process)
 
-    def selected_process(self) -> str | None:
-        return self.nodes.selected_process()
-
     def trend_of(self, process: str) -> deque[tuple[float, float]] | None:
         """A process's CPU and memory trend, while the Nodes tab measures them."""
         return self.trends.get(process) if self.watching_resources else None

@@ -67,19 +67,13 @@ class NodeKeyboard(SessionLink):
         if action in ("type_into", "run_under", "command_line"):
             if self.supervisor is None or self.tabs.active != "nodes":
                 return False
-            return True if self._one_process() else None
+            return True if self.selected_process() else None
         return super().check_action(action, parameters)
-
-    def _one_process(self) -> str | None:
-        node = self.launch_tree.cursor_node
-        if node is None or node.data is None or node.data.kind != "process":
-            return None
-        return node.data.ref
 
     # --- typing ---------------------------------------------------------------------------
 
     def action_type_into(self) -> None:
-        process = self._one_process()
+        process = self.selected_process()
         if process is None or self.supervisor is None:
             return
         # the keys typed right after `i` are for the node (they wait for its typing line),
@@ -282,7 +276,7 @@ class NodeKeyboard(SessionLink):
     # --- a tool, the command line ---------------------------------------------------------
 
     def action_run_under(self) -> None:
-        process = self._one_process()
+        process = self.selected_process()
         if process is None:
             return
 
@@ -300,7 +294,7 @@ class NodeKeyboard(SessionLink):
         self.notify(f"{process} runs under {prefix}: i types into it; r restarts it plain")
 
     def action_command_line(self) -> None:
-        process = self._one_process()
+        process = self.selected_process()
         if process is not None:
             # `c y` typed together copies the command: the y waits for its dialog
             release = hold_keys(self)

@@ -141,12 +141,12 @@ class OutputStore:
         """Counts changes to `partials`, so a pane redraws them only when they change."""
         self.unstamped = Unstamped(all_scrollback)
 
-
     def node_name(self, plan: Plan, process: str) -> str:
         """The ROS name of a process's node: its plan's, else the one it reports in its
         lines (the process id while it has said none)."""
         return current_node_name(plan.process(process).full_name,
                                  self.reported_names.get(process, ())) or process
+
     def add(self, process: str, stream: str, texts: Iterable[str],
             first: int | None = None) -> list[Line]:
         """`first`: the number of the first of these lines in a link's stream that leaves

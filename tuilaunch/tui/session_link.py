@@ -276,6 +276,10 @@ class SessionLink(App[int]):
             raise SessionError(f"session {self.session_name} is not followed yet")
         return self.supervisor
 
+    def selected_process(self) -> str | None:
+        """The process of the Nodes tab's selected row (None: a group, the root)."""
+        return self.nodes.selected_process()
+
     def running(self) -> list[str]:
         if self.supervisor is None:
             return []

@@ -26,6 +26,7 @@ import time
 from collections.abc import Awaitable
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 from rich.text import Text
 from textual import events, on, work
@@ -44,6 +45,7 @@ from ..app import LaunchTabs
 from ..key_order import KeyOrder
 from ..keyboard import remembered, restart_with, show_command_line
 from ..log_levels import LogLevels
+from ..nodes.gaps import GapReader
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen, HelpScreen
 from ..screens.interact_dialogs import PrefixPrompt
@@ -188,6 +190,7 @@ class FleetApp(KeyOrder):
         self.current = self.members[0]
         self.session_tabs = FleetTabs(self.members, self.member_request, lambda: self.engine,
                                       self.update_status)
+        self.gap_readers = {id(m): self._gap_reader(m) for m in self.members}
         self.log_levels = {id(m): LogLevels(self, partial(self.member_request, m),
                                             m.asked_to_stop, f"{m.label}: ")
                            for m in self.members}
@@ -522,32 +525,34 @@ class FleetApp(KeyOrder):
             if isinstance(result, Exception):
                 self.notify(f"{member.label}: {verb}: {result}", severity="error")
 
+    def _gap_reader(self, member: Member) -> GapReader:
+        """What reads back what the member's link did not send; says so naming it."""
+        def notify(text: str, **options: Any) -> None:
+            self.notify(f"{member.label}: {text}", **options)
+
+        return GapReader(member.store, member.pane, lambda: self.engine,
+                         lambda: member.supervisor, notify)
+
     @on(OutputPanel.StampsWanted)
     def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
-        """T, f: the ROS stamps of the lines a link sent without them, read first (as
-        gaps.py does for the single-session TUI)."""
+        """T, f: the ROS stamps of the lines a link sent without them, read first (the
+        single-session TUI's GapReader, one a session)."""
         member = self.current  # the keys reach the selected session's pane alone
         supervisor = member.supervisor
-        if supervisor is None or supervisor.host is None or (
-                message.shown == supervisor.stamps_shown and
-                member.store.unstamped.first() is None):
+        port = supervisor if supervisor is not None and supervisor.host is not None else None
+        gaps = self.gap_readers[id(member)]
+        if port is None or gaps.stamps_known(port, message.shown):
             message.then()
             return
-        self._read_stamps(member, supervisor, message)
+        self._read_stamps(member, gaps, port, message)
 
     @work(group="stamps", exit_on_error=False)
-    async def _read_stamps(self, member: Member, supervisor: LaunchPort,
+    async def _read_stamps(self, member: Member, gaps: GapReader, port: LaunchPort,
                            message: OutputPanel.StampsWanted) -> None:
-        try:
-            first, end, stamps = await self.engine.run(
-                supervisor.read_stamps(message.shown, member.store.unstamped.first()))
-        except Exception as exc:  # the link is down: the key still does its part
-            self.notify(f"{member.label}: ROS stamps not read: {exc}. Lines that came "
-                        "without theirs show when they arrived.", severity="warning")
-        else:
+        read = await gaps.read_stamps(port, message.shown)
+        if read is not None:  # else not read, and said: the key still does its part
             member.show_events(member.buffer.drain())  # the lines sent before the answer
-            if member.store.unstamped.fill(first, end, stamps):
-                member.pane.stamps_read()
+            gaps.fill_stamps(*read)
         message.then()
 
     def action_help(self) -> None:
