@@ -76,7 +76,6 @@ class NodesTab(Vertical):
         self.trend_of: Callable[[str], Sequence[tuple[float, float]] | None] = lambda _: None
         """The selected process's (CPU%, RSS) samples, oldest first (the app's inspector
         sets it; None: not measured)."""
-        self._detail_text = ""
         self._detail_drawn: tuple[object, ...] | None = None
         self._countdown: Timer | None = None
 
@@ -174,7 +173,6 @@ class NodesTab(Vertical):
         if drawn == self._detail_drawn:
             return  # the same picture is not sent to the terminal again
         self._detail_drawn = drawn
-        self._detail_text = text
         line = Text(text, style=_detail_style(text))
         if trend:
             line.append(" " * room)
