@@ -8,6 +8,10 @@ its own messages at load time are printed by `console.info` / `console.warn` as
 
 from __future__ import annotations
 
+import time
+
+from tuilaunch.engine.run.supervisor.ending import ACTION_STOP_S
+
 from ..conftest import plan_of, run_cli, run_headless
 
 
@@ -99,3 +103,32 @@ def test_robot_description_in_an_opaque_function_is_folded_as_elsewhere(write, t
                  for path in (plain, opaque)]
     assert described[0] == described[1]
     assert "\n" not in described[0] and "base_blue" in described[0]
+
+
+def test_once_ctrl_c_began_an_exit_group_logs_but_starts_no_call(write):
+    """launch starts nothing once shutdown has begun (ExecuteLocal.execute returns at once
+    when `context.is_shutdown`), and simple_launch's `set_parameters` and `call_service`
+    are nodes: in the OnProcessExit group of a node that Ctrl+C stops they never run, while
+    the `log_info` beside them is performed (LogInfo is no process) and logged."""
+    path = write("""
+from simple_launch import SimpleLauncher
+from simple_launch.events import When, OnProcessExit
+
+def generate_launch_description():
+    sl = SimpleLauncher()
+    talker = sl.node('tuilaunch_demos', 'talker', name='talker')
+    with sl.group(when=When(talker, OnProcessExit)):
+        sl.log_info('talker is gone')
+        sl.set_parameters('talker', {'rate': 2.0})
+        sl.call_service('/talker/reset')
+    return sl.launch_description()
+""")
+    started = time.monotonic()
+    out = run_headless(path, until=("Publishing:",))
+    took = time.monotonic() - started
+    lines = out.splitlines()
+    assert "[INFO] [launch.user]: talker is gone" in lines, out
+    # neither is performed: no wait for the node or the service, no line of theirs
+    assert not [line for line in lines if "set_parameters" in line or "call_service" in line
+                or "waiting for" in line], out
+    assert took < ACTION_STOP_S + 20, (took, out)

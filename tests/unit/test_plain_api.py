@@ -88,3 +88,20 @@ def generate_launch_description():
                               OpaqueFunction(function=setup)])
 """)
     assert [p.name for p in plan_of(path, count=3).processes] == ["t0", "t1", "t2"]
+
+
+def test_the_keywords_of_dashing_are_taken_as_docs_launch_files_says(write):
+    """docs/launch-files.md, "what differs on purpose": `node_executable`, `node_name` and
+    `node_namespace` (Dashing, Eloquent) mean `executable`, `name` and `namespace`, which
+    launch_ros since Galactic refuses."""
+    path = write("""
+from launch import LaunchDescription
+from launch_ros.actions import Node
+
+def generate_launch_description():
+    return LaunchDescription([Node(package='tuilaunch_demos', node_executable='talker',
+                                   node_name='old_talker', node_namespace='r1')])
+""")
+    (proc,) = plan_of(path).processes
+    assert (proc.name, proc.namespace) == ("old_talker", "/r1")
+    assert proc.cmd[0].endswith("talker")

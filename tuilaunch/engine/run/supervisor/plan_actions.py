@@ -26,6 +26,11 @@ from .triggers import flag_name, runs_in_shutdown
 
 USER_LOGGER = "launch.user"  # the logger launch's LogInfo writes with
 
+STARTED_AS_NODES = frozenset({ActionKind.CALL_SERVICE, ActionKind.SET_PARAMETERS})
+"""Actions simple_launch runs as nodes (`simple_launch/call_service`, `set_parameters`):
+launch starts no process once shutdown has begun (ExecuteLocal.execute returns when
+`context.is_shutdown`), so these are never performed then, while a LogInfo beside them is."""
+
 
 class PlanActions:
     """Waiting for triggers, performing one action of the plan, and what event handlers add
@@ -193,6 +198,12 @@ class PlanActions:
 
     async def perform_action(self, action: ActionPlan, event: EventInfo | None = None) -> None:
         core = self.core
+        if core.shutting_down and action.kind in STARTED_AS_NODES:
+            # never started, as launch's node: no line, no exit event for what waits on it
+            core.states[action.id] = "cancelled"
+            core.emit(ActionFinished(action.id, reason="cancelled"))
+            core.changed.set()
+            return
         if event is None:
             event = self._event_of(action)
         self._action_begins(action)
