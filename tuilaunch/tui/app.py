@@ -24,6 +24,7 @@ from textual.binding import Binding
 from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
+from ..client.port import LaunchPort
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
 from ..client.served_session import ServedSession
 from ..client.session_start import session_name_for, start_session
@@ -170,7 +171,10 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, KeyOrder):
         """Follows the launch: the session's server, through its client, wired to the
         panels; on mount, or once the session's server is up."""
         # built on the engine thread, whose loop its asyncio objects belong to
-        if self.session_host is not None:
+        remote: LaunchPort
+        if self.given_port is not None:
+            remote = self.given_port
+        elif self.session_host is not None:
             # the session is on another machine: the protocol crosses an ssh link
             # sent what the output pane can show each second; what it cannot is
             # counted, and is in the log files over there
@@ -185,7 +189,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, KeyOrder):
                 return
         else:
             try:
-                remote = self.engine.submit(RemoteSupervisor.open(
+                local = self.engine.submit(RemoteSupervisor.open(
                     self.session_name, self.session, self.scrollback,
                     max_lines=self.buffer.max_lines, interval=1 / DRAIN_HZ)).result(timeout=60)
             except LaunchError as exc:  # a server of another protocol version, one gone
@@ -195,7 +199,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, KeyOrder):
                 self.start_error = str(exc)
                 self.exit(2, return_code=2)
                 return
-            remote.owner, remote.keep_on_hangup = self.owner, self.keep_on_hangup
+            local.owner, local.keep_on_hangup = self.owner, self.keep_on_hangup
+            remote = local
         remote.read_only = self.read_only
         self.supervisor = remote  # from here on, only its port (client/port.py)
         remote.subscribe(self.buffer)

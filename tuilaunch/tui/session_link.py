@@ -93,7 +93,7 @@ class SessionLink(App[int]):
                  session_host: str | None = None,
                  remote_link: RemoteLink | None = None,
                  start_server: Callable[[], subprocess.Popen[bytes]] | None = None,
-                 read_only: bool = False) -> None:
+                 read_only: bool = False, port: LaunchPort | None = None) -> None:
         no_color = os.environ.get("NO_COLOR")
         super().__init__()
         # no animated tab underlines or scrolling: every frame is bytes over ssh
@@ -113,6 +113,9 @@ class SessionLink(App[int]):
         # the rest is counted on screen and kept in the log files
         self.buffer = EventBuffer(max_lines=2500)
         self.supervisor: LaunchPort | None = None
+        self.given_port = port
+        """A session's port handed in (an in-memory one, in tests/unit): followed as the
+        session server's client would be, without opening one."""
         # with a session name the launch runs in a session server and this app is a client
         self.session_name = session_name
         self.session_host = session_host  # the session runs there, reached over ssh

@@ -1,0 +1,189 @@
+"""An in-memory session for the TUI's tests: a `LaunchPort` (client/port.py) with no server
+behind it. The test says what the session tells (`tell`: events, and the states they
+bring), and reads what the TUI asked of it (`asked`: every command and request, in order).
+
+It stands in for `RemoteSupervisor` below the App, so the App's rules (what a key does on a
+row, which answer a question starts on, what the status line says) are tested under Pilot
+in tests/unit, in milliseconds, with no process, socket or DDS. What needs a real session
+(its timing, a real terminal's bytes, the server's own refusals) stays in
+tests/integration, on the path users run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from tuilaunch.client.port import Verb
+from tuilaunch.engine.plan.model import Plan, PlanDiff
+from tuilaunch.engine.run.events import (
+    Consumer,
+    Event,
+    Failed,
+    LifecycleChanged,
+    ProcessExited,
+    Respawning,
+    Started,
+    Stopping,
+)
+
+
+class MemoryLifecycle:
+    """The lifecycle states the session's events said, and the transitions asked."""
+
+    def __init__(self, asked: list[tuple[str, dict[str, Any]]]) -> None:
+        self.states: dict[str, str] = {}
+        self._asked = asked
+
+    async def request(self, process: str, transition: str) -> bool:
+        self._asked.append(("transition", {"process": process, "transition": transition}))
+        return True
+
+
+class MemoryPort:
+    """A session in memory: states follow the events told, as a server's would (a start
+    runs, a stop is stopping, an exit is exited or failed); commands are recorded and,
+    unless `answers` says otherwise, succeed without changing anything (the test tells
+    the events that a real server would send back)."""
+
+    def __init__(self, plan: Plan, name: str = "mem", log_dir: Path | None = None,
+                 host: str | None = None) -> None:
+        self.name = name
+        self.host = host
+        self.log_dir = log_dir or Path("/nonexistent/tuilaunch-memory-port")
+        self.states: dict[str, str] = {
+            p.id: "pending" if p.enabled else "skipped" for p in plan.processes}
+        self.pids: dict[str, int] = {}
+        self.reasons: dict[str, str] = {}
+        self.crashed: dict[str, str] = {}
+        self.history: list[Event] = []
+        self.asked: list[tuple[str, dict[str, Any]]] = []
+        """What the TUI asked, in order: ("stop", {"process": ...}), ("status", {...})."""
+        self.answers: dict[str, Callable[..., Any]] = {}
+        """A request's answer by its op (`status`, `topics`, ...): called with its fields;
+        an exception it raises is the session's refusal."""
+        self._lifecycle = MemoryLifecycle(self.asked)
+        self.read_only = False
+        self.detached = False
+        self.lost = False
+        self.killed_server = False
+        self.shutdown_reason: str | None = None
+        self.link_lost: str | None = None
+        self.lost_reason: str | None = None
+        self.only: str | None = None
+        self.stamps_shown = False
+        self.silence = 0.0
+        """What `silent_for` says: a link's seconds without a word."""
+        self._consumers: list[Consumer] = []
+        self._lock = threading.Lock()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._ended: asyncio.Event | None = None
+        self._status = 0
+
+    @property
+    def lifecycle(self) -> MemoryLifecycle:
+        return self._lifecycle
+
+    # --- the test's side -----------------------------------------------------------------
+
+    def tell(self, *events: Event) -> None:
+        """The session says these events: states follow, each consumer (the App's buffer,
+        drained on its tick) is handed them."""
+        with self._lock:
+            for event in events:
+                self._follow(event)
+                for consumer in list(self._consumers):
+                    consumer(event)
+
+    def end(self, status: int = 0, reason: str | None = None) -> None:
+        """The session ends (its server said `ended`)."""
+        self.shutdown_reason = reason
+        self._status = status
+        if self._loop is not None and self._ended is not None:
+            self._loop.call_soon_threadsafe(self._ended.set)
+
+    def ops(self) -> list[str]:
+        return [op for op, _ in self.asked]
+
+    def _follow(self, event: Event) -> None:
+        process = event.process
+        if process is None:
+            return
+        if isinstance(event, Started):
+            self.states[process] = "running"
+            if event.pid is not None:
+                self.pids[process] = event.pid
+        elif isinstance(event, Stopping):
+            self.states[process] = "stopping"
+        elif isinstance(event, Respawning):
+            self.states[process] = "respawning"
+        elif isinstance(event, (ProcessExited, Failed)):
+            self.pids.pop(process, None)
+            crashed = isinstance(event, ProcessExited) and event.crashed
+            self.states[process] = "failed" if crashed or isinstance(event, Failed) \
+                else "exited"
+            if event.reason:
+                self.reasons[process] = event.reason
+        elif isinstance(event, LifecycleChanged):
+            self._lifecycle.states[process] = event.reason or ""
+
+    # --- LaunchPort -------------------------------------------------------------------------
+
+    def subscribe(self, consumer: Consumer) -> None:
+        with self._lock:
+            self._consumers.append(consumer)
+
+    async def run(self, keep_alive: bool = True) -> int:
+        self._loop = asyncio.get_running_loop()
+        self._ended = asyncio.Event()
+        await self._ended.wait()
+        return 0 if self.detached else self._status
+
+    async def request(self, op: str, **fields: Any) -> Any:
+        self.asked.append((op, fields))
+        answer = self.answers.get(op)
+        return answer(**fields) if answer is not None else {}
+
+    async def command(self, verb: Verb, process: str) -> None:
+        await self.request(verb, process=process)
+
+    async def restart(self, process_id: str, prefix: str | None = None,
+                      log_level: str | None = None, terminal: bool = False) -> None:
+        await self.request("restart", process=process_id, prefix=prefix,
+                           log_level=log_level, terminal=terminal)
+
+    async def run_action(self, action_id: str) -> None:
+        await self.request("run_action", action=action_id)
+
+    async def replace_plan(self, plan: Plan) -> PlanDiff:
+        await self.request("apply")
+        return PlanDiff([], [], [])
+
+    async def show(self, process: str | None) -> None:
+        self.only = process
+
+    async def read_stamps(self, shown: bool, since: int | None,
+                          ) -> tuple[int, int, dict[int, int]]:
+        self.stamps_shown = shown
+        return 0, 0, {}
+
+    async def shutdown(self, reason: str = "shutdown") -> None:
+        await self.request("shutdown", reason=reason)
+        self.end(0, reason)
+
+    async def detach(self) -> None:
+        self.detached = True
+        self.asked.append(("detach", {}))
+        self.end(0)
+
+    def kill_all(self) -> None:
+        self.asked.append(("kill", {}))
+
+    def silent_for(self) -> float:
+        return self.silence
+
+    def retry_now(self) -> None:
+        self.asked.append(("retry", {}))

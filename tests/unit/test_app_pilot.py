@@ -1,0 +1,102 @@
+"""The TUI's rules under Pilot, over an in-memory session (memory_port.py): what a key does
+on each kind of row, what a question starts on, what the status line says. No process, no
+socket, no DDS: the session's events are told by the test, its commands read back.
+
+The same rules are tested on the path users run (a session server, a real terminal, keys
+in one burst) in tests/integration; here they are checked in milliseconds, each alone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+import pytest
+from textual.pilot import Pilot
+
+from tests.unit.memory_port import MemoryPort
+from tuilaunch.engine.plan.session import Session
+from tuilaunch.engine.run.events import ExitCause, Output, ProcessExited, Started, Stopping
+from tuilaunch.tui.app import TuiLaunchApp
+from tuilaunch.tui.output_store import View
+from tuilaunch.tui.screens.tree_panel import LaunchTree
+
+BRINGUP = Path(__file__).resolve().parents[2] / "examples" / "bringup.py"
+DEADLINE = 10.0
+
+
+async def until(pilot: Pilot[int], check: Callable[[], object], what: str) -> None:
+    """Waits (on the app's own clock) until `check` holds; fails naming `what`."""
+    for _ in range(int(DEADLINE / 0.02)):
+        if check():
+            return
+        await pilot.pause(0.02)
+    raise AssertionError(f"not seen within {DEADLINE} s: {what}")
+
+
+@asynccontextmanager
+async def running(tmp_path: Path, **arguments: str) -> AsyncIterator[
+        tuple[TuiLaunchApp, Pilot[int], MemoryPort]]:
+    """The TUI over an in-memory session of examples/bringup.py, every enabled process
+    started (as its server would say), at 80x24."""
+    session = Session(str(BRINGUP), dict(arguments))
+    port = MemoryPort(session.plan, name="bringup")
+    app = TuiLaunchApp(session, tmp_path, session_name="bringup", port=port)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await until(pilot, lambda: app.supervisor is port, "the session followed")
+        for number, proc in enumerate(session.plan.enabled_processes()):
+            port.tell(Started(proc.id, pid=1000 + number))
+        await until(pilot, lambda: app.launch_tree.states.get(
+            session.plan.enabled_processes()[-1].id) == "running", "every row running")
+        yield app, pilot, port
+        port.end(0)
+
+
+def select(app: TuiLaunchApp, row: str) -> None:
+    """Moves the tree's cursor to a process's row, or to the first row whose label
+    starts with `row` (a group: `ns /r1`, `all nodes`)."""
+    tree: LaunchTree = app.launch_tree
+    if row in tree.rows:
+        tree.move_cursor(tree.rows[row])
+        return
+    node = next(n for n in _walk(tree.root) if str(n.label).lstrip("▼▶ ").startswith(row))
+    tree.move_cursor(node)
+
+
+def _walk(node):  # type: ignore[no-untyped-def]
+    yield node
+    for child in node.children:
+        yield from _walk(child)
+
+
+async def test_the_tree_shows_the_sessions_states(tmp_path: Path) -> None:
+    async with running(tmp_path, robot="r2") as (app, pilot, port):
+        assert app.launch_tree.states["talker-1"] == "running"
+        port.tell(ProcessExited("talker-1", code=-11, reason="killed by SIGSEGV",
+                                cause=ExitCause.CRASHED))
+        await until(pilot, lambda: app.launch_tree.states.get("talker-1") == "failed",
+                    "talker-1's row failed")
+        await until(pilot, lambda: "1 failed" in str(app.status_bar.render()),
+                    "the status line counting the failure")
+
+
+async def test_s_on_a_node_stops_it_and_the_row_says_stopping(tmp_path: Path) -> None:
+    async with running(tmp_path) as (app, pilot, port):
+        select(app, "talker-1")
+        await pilot.press("s")
+        await until(pilot, lambda: ("stop", {"process": "talker-1"}) in port.asked,
+                    "a stop of talker-1 asked of the session")
+        assert [op for op in port.ops() if op in ("stop", "restart", "start")] == ["stop"]
+        port.tell(Stopping("talker-1"))
+        await until(pilot, lambda: app.launch_tree.states.get("talker-1") == "stopping",
+                    "the row stopping")
+
+
+async def test_a_pane_shows_the_lines_the_session_sends(tmp_path: Path) -> None:
+    async with running(tmp_path) as (app, pilot, port):
+        select(app, "talker-1")
+        port.tell(Output("talker-1", stream="stdout", lines=["hello from the talker"]))
+        await until(pilot, lambda: any("hello from the talker" in text for text in
+                                       app.store.text(View(process="talker-1"))),
+                    "the line in talker-1's pane")
