@@ -45,9 +45,13 @@ from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import ascii_terminal
 from .session_link import DRAIN_HZ, PANE_CHROME
+from .toasts import OnceToasts
 
 NODE_COMMANDS = frozenset({"stop", "restart", "start", "lifecycle", "all_output"})
 """The app's keys that act on the Nodes tab's selection."""
+
+READ_ONLY_REFUSES = frozenset({"stop", "restart", "start", "lifecycle", "apply", "log_level"})
+"""The app's keys whose every request a read-only client refuses: its footer hides them."""
 
 
 class LaunchTabs(TabbedContent):
@@ -61,7 +65,7 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, KeyOrder):
+class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, KeyOrder):
     """The launcher's UI: the panels laid out, wired to the engine on mount; what each
     concern does lives in its mixin (session_link, navigation, quitting, inspector,
     keyboard) or its tab's widget (nodes, arguments); key_order hands the keys out one
@@ -234,6 +238,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, KeyOrder):
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         allowed = super().check_action(action, parameters)  # none while typing into a node
+        if self.read_only and action in READ_ONLY_REFUSES:
+            return False
         if allowed is not True or action not in NODE_COMMANDS:
             return allowed
         if self.supervisor is None or self.tabs.active != "nodes":

@@ -88,7 +88,8 @@ class KeyHold:
     the hold), or dropped with the rest of their burst when it will not (`drop`). Either
     once: the first call counts."""
 
-    def __init__(self, let_go: Callable[[bool], None] | None = None) -> None:
+    def __init__(self, let_go: Callable[[bool, Callable[[], None] | None], None] | None
+                 = None) -> None:
         self._let_go = let_go
 
     def __call__(self) -> None:
@@ -97,13 +98,15 @@ class KeyHold:
     def release(self) -> None:
         self._end(drop=False)
 
-    def drop(self) -> None:
-        self._end(drop=True)
+    def drop(self, said: Callable[[], None] | None = None) -> None:
+        """Drops the keys held and the rest of their burst; `said` is called once, when a
+        key was dropped (none typed with the action: nothing to say)."""
+        self._end(drop=True, said=said)
 
-    def _end(self, drop: bool) -> None:
+    def _end(self, drop: bool, said: Callable[[], None] | None = None) -> None:
         let_go, self._let_go = self._let_go, None
         if let_go is not None:
-            let_go(drop)
+            let_go(drop, said)
 
 
 STUCK_AFTER = 3.0
@@ -173,6 +176,8 @@ class KeyOrder(App[int]):
         self._settling: asyncio.Task[None] | None = None
         self._dropping_until = 0.0
         """Until when a key read belongs to a burst being dropped (`_drop_burst`)."""
+        self._say_dropped: Callable[[], None] | None = None
+        """Says that the burst being dropped was: once, at its first key dropped."""
 
     async def on_event(self, event: events.Event) -> None:
         if not isinstance(event, (events.Key, events.Paste)):
@@ -253,18 +258,22 @@ class KeyOrder(App[int]):
         self._key_holds += 1
         return KeyHold(self._let_go)
 
-    def _let_go(self, drop: bool) -> None:
+    def _let_go(self, drop: bool, said: Callable[[], None] | None = None) -> None:
         self._key_holds = max(0, self._key_holds - 1)  # 0 already when it was stuck
         if drop:
-            self._drop_burst()
+            self._drop_burst(said)
         self._next_key()
 
-    def _drop_burst(self) -> None:
+    def _drop_burst(self, said: Callable[[], None] | None = None) -> None:
         """Drops the keys waiting (those typed after the held action's key), and the keys of
-        the same burst still arriving: until a pause of `BURST_GAP` between two keys."""
+        the same burst still arriving: until a pause of `BURST_GAP` between two keys.
+        `said` is called at the first key dropped."""
         if self._key_holds:
             return  # another hold still waits for its field: those keys are its
-        self._keys_waiting.clear()
+        self._say_dropped = said
+        if self._keys_waiting:
+            self._keys_waiting.clear()
+            self._tell_dropped()
         self._first_in_line = 0
         self._dropping_until = time.monotonic() + BURST_GAP
 
@@ -272,9 +281,16 @@ class KeyOrder(App[int]):
         """A key of a burst being dropped: it goes nowhere, and the burst goes on."""
         now = time.monotonic()
         if now >= self._dropping_until:
+            self._say_dropped = None
             return False
         self._dropping_until = now + BURST_GAP
+        self._tell_dropped()
         return True
+
+    def _tell_dropped(self) -> None:
+        said, self._say_dropped = self._say_dropped, None
+        if said is not None:
+            said()
 
     def _key_done(self, key: TrackedKey) -> None:
         if self._key_in_flight is not key:

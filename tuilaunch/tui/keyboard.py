@@ -14,6 +14,7 @@ from textual.app import App
 from textual.binding import Binding
 
 from ..client.port import LaunchPort
+from ..client.read_only import refusal
 from ..engine.errors import LaunchError
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.events import LIVE_STATES, Event, Failed, ProcessExited, Started, Typing
@@ -36,6 +37,11 @@ class NodeKeyboard(SessionLink):
                 "valgrind...) until its next plain restart"),
         Binding("c", "command_line", "Command", show=False,
                 tooltip="The exact command line the node was started with, to copy"),
+        # where `i` or `g` cannot act (a row that is not a node, a read-only view), these
+        # take the key: the keys typed with it are dropped and one line says why, where
+        # they would otherwise run as commands (`istop` Enter on a group stopped it)
+        Binding("i", "keys_not_here('i')", show=False),
+        Binding("g", "keys_not_here('g')", show=False),
     ]
 
     typing_to: str | None = None
@@ -65,10 +71,34 @@ class NodeKeyboard(SessionLink):
         if action == "find":  # `/` into a list's filter: the tabs whose panel has no `/`
             return self.tabs.active in ("services", "params")
         if action in ("type_into", "run_under", "command_line"):
-            if self.supervisor is None or self.tabs.active != "nodes":
-                return False
+            if self.supervisor is None or self.tabs.active != "nodes" or (
+                    self.read_only and action != "command_line"):
+                return False  # a read-only footer offers nothing it refuses
             return True if self.selected_process() else None
+        if action == "keys_not_here":  # reached only when the key's own action cannot run
+            return self.tabs.active == "nodes"
         return super().check_action(action, parameters)
+
+    def action_keys_not_here(self, key: str) -> None:
+        """`i` or `g` where it cannot act: said at once, and the rest of its burst dropped
+        (never commands)."""
+        self._refused(hold_keys(self), self._why_not_here(key), key)
+
+    def _why_not_here(self, key: str) -> str:
+        if self.read_only:
+            return refusal("typing into a node" if key == "i" else
+                           "running a node under a tool").args[0]
+        if self.supervisor is None:
+            return "the session is not followed yet"
+        node = self.launch_tree.cursor_node
+        kind = node.data.kind if node is not None and node.data is not None else ""
+        label = str(node.label) if node is not None else ""
+        label = label if len(label) <= 40 else label[:39] + "…"
+        what = {"all": "every node's output", "action": "an action",
+                "component": "a component (its container is the process)"}.get(
+                    kind, "the launch" if node is self.launch_tree.root else "a group")
+        verb = "types into" if key == "i" else "runs under a tool"
+        return f"{label!r} is {what}, not a node: {key} {verb} a node (select its row)"
 
     # --- typing ---------------------------------------------------------------------------
 
@@ -94,22 +124,23 @@ class NodeKeyboard(SessionLink):
         except LaunchError as exc:
             self._refused(hold, str(exc))
             return
-        if terminal is False:
+        if terminal is False or state in ("exited", "failed"):
             self._offer_terminal(process, "Restart" if state == "running" else "Start",
-                                 piped=True)
-            hold.release()  # the question takes them: its y, its n, nothing else
-        elif state in ("exited", "failed"):
-            self._offer_terminal(process, "Start", piped=False)
-            hold.release()
+                                 piped=terminal is False)
+            # the question waits for a key typed once it is shown: the keys typed with
+            # `i` were for the node, and a `y` among them (`iyes`) must not answer it
+            hold.drop(said=lambda: self.notify(
+                "The keys typed with i were not sent: answer the question with a key "
+                "typed now", severity="warning"))
         elif state != "running":
             self._refused(hold, f"{process} is not running ({state}): there is nothing to "
                           "type into")
         else:
             await self._start_typing(process, hold)
 
-    def _refused(self, hold: KeyHold, why: str) -> None:
+    def _refused(self, hold: KeyHold, why: str, key: str = "i") -> None:
         hold.drop()
-        self.notify(f"{why}. The keys typed with i were not sent", severity="warning")
+        self.notify(f"{why}. The keys typed with {key} were not sent", severity="warning")
 
     async def _start_typing(self, process: str, hold: KeyHold) -> None:
         try:

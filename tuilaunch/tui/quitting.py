@@ -69,17 +69,14 @@ class Quitting(SessionLink):
             self.action_detach()
             return
 
-        def answered(stop: bool | None) -> None:
-            if stop:
+        def answered(answer: str | None) -> None:
+            if answer == "stop":
                 self.stop_all_and_exit()
-            else:
+            elif answer == "detach":
                 self.action_detach()
 
-        names = ", ".join(running[:8]) + (" ..." if len(running) > 8 else "")
-        self._ask_quit(ConfirmScreen(
-            f"{len(running)} processes run on {self.session_host}: {names}\n"
-            "Stop them all, or leave them running there and detach?",
-            "Stop and quit (y)", "Detach (n)"), answered)
+        # the local question's keys: `n` keeps running here too, `d` detaches
+        self._ask_quit(QuitScreen(running, detach=True, host=self.session_host), answered)
 
     async def action_quit(self) -> None:
         self.action_request_quit()

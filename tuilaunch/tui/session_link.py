@@ -126,6 +126,9 @@ class SessionLink(App[int]):
         """A view of a session that changes nothing (`--read-only`): its client refuses
         every change (client/read_only.py), and the refusal is shown as one line."""
         self.detached = False
+        self.opened_at = time.time()
+        """When this client opened: a relaunch before it is no news to it, also when its
+        event comes after the history (the server's events at subscribing)."""
         self.own_relaunch: list[str] | None = None
         self.exit_status = 0
         self.quitting = False
@@ -320,7 +323,7 @@ class SessionLink(App[int]):
         for event in message.shown.relaunched:
             if event.lines != self.own_relaunch:
                 self._relaunched_elsewhere(event.lines, (event.data or {}).get("edited"),
-                                           message.replaying)
+                                           message.replaying or event.time < self.opened_at)
             self.own_relaunch = None
         if message.shown.lifecycle:
             self.refresh_bindings()

@@ -27,8 +27,10 @@ class SelectionCommands:
     (the tab): a command outlives no tab."""
 
     def __init__(self, owner: Widget, host: NodesHost, tree: LaunchTree,
-                 store: OutputStore) -> None:
+                 store: OutputStore, who: str = "") -> None:
         self.owner, self.host, self.tree, self.store = owner, host, tree, store
+        self.who = who
+        """The session a question names (a fleet's `nuc:base`; one TUI's needs none)."""
         self.lifecycle_steps = LifecycleSteps()
         """`]`, `[` on lifecycle nodes, in the order typed."""
 
@@ -66,12 +68,15 @@ class SelectionCommands:
         process (the root, all nodes, a group) asks first, from a key as from the palette."""
         supervisor = self.host.supervisor
         assert supervisor is not None
-        processes = self.selected()
+        # what the plan runs: a node its condition skipped (`listener:=false`) is no part
+        # of the launch, and a group's start or restart never starts it (the session
+        # refuses it too, for every client)
+        processes = [p for p in self.selected() if supervisor.states.get(p) != "skipped"]
         if verb == "stop":
             touched = [p for p in processes
                        if supervisor.states.get(p) in ("running", "respawning")]
         else:
-            touched = [p for p in processes if supervisor.states.get(p) != "skipped"]
+            touched = processes
         if verb in ("stop", "restart") and len(touched) > 1:
             def answered(yes: bool | None) -> None:
                 if yes:
@@ -79,7 +84,8 @@ class SelectionCommands:
 
             what = "running processes" if verb == "stop" else "processes"
             self.owner.app.push_screen(ConfirmScreen(
-                f"{verb.capitalize()} all {len(touched)} {what}: {', '.join(touched[:6])}"
+                f"{verb.capitalize()} all {len(touched)} {what}"
+                f"{f' of {self.who}' if self.who else ''}: {', '.join(touched[:6])}"
                 f"{' ...' if len(touched) > 6 else ''}?", f"{verb.capitalize()} them (y)"),
                 answered)
             return

@@ -59,8 +59,11 @@ class FormButton(Button):
             self.screen.focus_next()
 
     def action_along(self, step: int) -> None:
+        """To the next button along the bar; at its end the focus stays (no wrap: `right`
+        pressed once too often on Defaults must not land on Apply, where Enter relaunches)."""
         buttons = list(self.parent.query(FormButton)) if self.parent else [self]
-        self.screen.set_focus(buttons[(buttons.index(self) + step) % len(buttons)])
+        at = max(0, min(len(buttons) - 1, buttons.index(self) + step))
+        self.screen.set_focus(buttons[at])
 
     def action_nothing(self) -> None:
         pass
@@ -88,6 +91,10 @@ def bool_text(arg: ArgumentInfo, state: bool) -> str:
 
 
 class ArgsPanel(Vertical):
+    """The Apply and Defaults bar above the values; `shift+tab` from the first value goes
+    back to Apply, where the tab starts (not to Defaults, which resets the form)."""
+
+    BINDINGS = [Binding("shift+tab", "back_to_apply", show=False)]
     DEFAULT_CSS = """
     ArgsPanel #args-preview { height: auto; max-height: 4; padding: 0 1; background: $boost; }
     ArgsPanel #args-preview.error { color: $error; }
@@ -196,6 +203,15 @@ class ArgsPanel(Vertical):
                 ("true" if event.value else "false")
         if self.is_mounted:
             self._edited()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "back_to_apply":  # elsewhere shift+tab goes back as anywhere
+            editors = self.query(".arg-editor")
+            return bool(editors) and self.screen.focused is editors.first()
+        return True
+
+    def action_back_to_apply(self) -> None:
+        self.screen.set_focus(self.query_one("#apply", FormButton))
 
     @on(Button.Pressed, "#apply")
     def _apply(self) -> None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from rich.text import Text
 from textual import events, on
@@ -95,7 +95,10 @@ class QuestionScreen(ModalScreen[ResultT]):
 
 
 class ConfirmScreen(QuestionScreen[bool]):
-    """A yes/no question with the keys on its buttons."""
+    """A yes/no question with the keys on its buttons. Its yes stops, restarts or quits
+    something: the question opens with No focused, so an Enter alone (the end of a line
+    typed for a node, a reflex) changes nothing; `y`, or Enter once the focus is moved to
+    the yes button, does it."""
 
     DEFAULT_CSS = dialog_css("ConfirmScreen", 60, "warning",
                              more="ConfirmScreen Horizontal { height: 3; }")
@@ -114,6 +117,9 @@ class ConfirmScreen(QuestionScreen[bool]):
             yield Button(self.yes, id="yes", variant="error")
             yield Button(self.no, id="no")
 
+    def on_mount(self) -> None:
+        self.query_one("#no", Button).focus()  # the safe answer (see the class)
+
     def action_answer(self, answer: bool) -> None:
         self.dismiss(answer)
 
@@ -122,17 +128,14 @@ class ConfirmScreen(QuestionScreen[bool]):
         self.dismiss(event.button.id == "yes")
 
     def on_key(self, event: events.Key) -> None:
-        """Only the question's own keys answer it: the others stop here, before the app's
-        bindings (a burst typed for a node, `iquit yes`, must not quit through this dialog,
-        and a space must not press the button that has the focus)."""
-        if event.key not in self._bindings.key_to_bindings and event.key not in ANSWER_KEYS:
-            event.stop()
-            event.prevent_default()
+        only_answer_keys(self, event)
 
 
 class QuitScreen(ModalScreen[str]):
     """Quit while processes run: stop them all ("stop"), keep running ("keep"), or, for a
-    session, leave it running without this window ("detach")."""
+    session, leave it running without this window ("detach"). The same keys on a local and
+    a remote session (`host`): `y` stops, `d` detaches, `n` and esc keep running; it opens
+    with Keep running focused, so an Enter alone stops nothing and leaves nothing."""
 
     DEFAULT_CSS = dialog_css("QuitScreen", 64, "warning",
                              more="QuitScreen Horizontal { height: auto; }\n"
@@ -145,20 +148,25 @@ class QuitScreen(ModalScreen[str]):
 
     quit_question = True
 
-    def __init__(self, running: list[str], detach: bool = False) -> None:
+    def __init__(self, running: list[str], detach: bool = False,
+                 host: str | None = None) -> None:
         super().__init__()
         self.running = running
         self.detach = detach
+        self.host = host
 
     def compose(self) -> ComposeResult:
         names = ", ".join(self.running[:8]) + (" ..." if len(self.running) > 8 else "")
+        where = f" on {self.host}" if self.host else ""
         if len(self.running) == 1:
-            question = f"1 process still runs: {names}\nStop it and quit?"
+            question = f"1 process still runs{where}: {names}\nStop it and quit?"
         else:
-            question = f"{len(self.running)} processes still run: {names}\n" \
+            question = f"{len(self.running)} processes still run{where}: {names}\n" \
                        "Stop them all and quit?"
         if self.detach:
-            question += "\nOr detach: they run on, tuilaunch attach comes back to them."
+            there = " there" if self.host else ""
+            question += f"\nOr detach: they run on{there}, tuilaunch attach comes back to " \
+                        "them."
         # a narrow terminal (40 columns) gets short, one-line buttons: all three fit, Keep
         # running among them, where the full ones ran off the screen's edge
         narrow = self.app.size.width < 66
@@ -172,6 +180,9 @@ class QuitScreen(ModalScreen[str]):
                 yield Button("Keep (n)" if narrow else "Keep running (n)", id="keep",
                              compact=narrow)
 
+    def on_mount(self) -> None:
+        self.query_one("#keep", Button).focus()  # the safe answer (see the class)
+
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action == "answer" and parameters == ("detach",) and not self.detach:
             return False
@@ -183,6 +194,18 @@ class QuitScreen(ModalScreen[str]):
     @on(Button.Pressed)
     def _pressed(self, event: Button.Pressed) -> None:
         self.dismiss(event.button.id or "keep")
+
+    def on_key(self, event: events.Key) -> None:
+        only_answer_keys(self, event)
+
+
+def only_answer_keys(screen: ModalScreen[Any], event: events.Key) -> None:
+    """Only a question's own keys answer it: the others stop here, before the app's
+    bindings (a burst typed for a node, `iquit yes`, must not quit through the dialog, and
+    a space must not press the button that has the focus)."""
+    if event.key not in screen._bindings.key_to_bindings and event.key not in ANSWER_KEYS:
+        event.stop()
+        event.prevent_default()
 
 
 class ChoiceScreen(QuestionScreen[str | None]):

@@ -50,6 +50,15 @@ class Starting:
         machine; `respawn`: it comes back after a crash, counted by the Respawner (an
         operator's start counts from zero again)."""
         core = self.core
+        proc = core.plan.process(process_id)
+        if not proc.enabled:
+            # a node its condition skipped is not part of the launch: no client (a group's
+            # `t`, a fleet's, `tuilaunch start`) starts it; a relaunch whose values enable
+            # it does
+            why = f" ({proc.skipped_by.expression} = {proc.skipped_by.value!r})" \
+                if proc.skipped_by is not None else ""
+            raise LaunchError(f"{process_id} is skipped by its condition{why}: the launch "
+                              "does not run it")
         if not respawn:
             core.respawner.forget(process_id)
         record = core.records[process_id]
