@@ -142,6 +142,11 @@ def report_failures(supervisor: LaunchPort) -> None:
         print(f"tuilaunch: every log of this launch: {supervisor.log_dir}", file=sys.stderr)
 
 
+def one_line(exc: LaunchError) -> str:
+    """An error in one line: its message, and its hint after a semicolon."""
+    return f"{exc.message}; {exc.hint}" if exc.hint else exc.message
+
+
 def argument_line(arguments: dict[str, str]) -> str:
     return " ".join(f"{k}:={v}" for k, v in arguments.items())
 
@@ -295,58 +300,84 @@ STOP_NOTICE = 3.0
 
 
 def cmd_stop(options: argparse.Namespace) -> int:
-    stop_session(options.name)
+    name = stop_session(options.name, quiet=options.json)
+    if options.json:
+        print(json.dumps([{"session": name, "state": "stopped"}], indent=2))
     return 0
 
 
-def stop_session(address: str | None, said: str = "tuilaunch stop: ") -> str:
+def stop_session(address: str | None, said: str = "tuilaunch stop: ",
+                 quiet: bool = False) -> str:
     """Stops the session at `address` and waits for its end; says on stderr (after `said`)
-    what it waits for. Its label once stopped; a SessionError when it cannot be."""
+    what it waits for. Its label once stopped (`quiet`: not said on stdout); a SessionError
+    when it cannot be."""
     link = open_link(address, timeout=None)
     name = link.label
     pid = int(link.info["pid"]) if link.host is None else 0  # a pid there is not ours
     try:
-        # the ends and the escalation's words, as the TUI's countdown shows them
-        subscribed = link.request("subscribe", max_lines=1,
-                                  kinds=["exited", "failed", "log", "ended"])
-        waiting = {p for p, state in (subscribed.get("states") or {}).items()
-                   if state in (*LIVE_STATES, "respawning")}
+        waiting = watch_ends(link)
         asking = link.send("shutdown", reason="tuilaunch stop")  # its reply comes at the end
-        asked = time.monotonic()
-        notice = asked + STOP_NOTICE
         # the server closes its connections once every process is gone
-        while True:
-            try:
-                message = link.receive_until(notice)
-            except TimeoutError:
-                if waiting:
-                    print(f"{said}waiting for {', '.join(sorted(waiting))} "
-                          f"({time.monotonic() - asked:.0f} s)", file=sys.stderr)
-                notice = time.monotonic() + STOP_NOTICE
-                continue
-            if message is None:
-                lost = link.lost()
-                if lost is not None:  # not stopped: only the link is gone
-                    raise lost
-                break
-            if message.get("type") == "reply" and message.get("id") == asking and \
-                    not message.get("ok"):
-                raise SessionError(f"session {name}: {message.get('error')}")
-            for event in message.get("events") or []:
-                process = event.get("process")
-                if event.get("kind") in ("exited", "failed"):
-                    waiting.discard(process)
-                elif event.get("kind") == "log" and process in waiting and \
-                        event.get("level") in ("WARN", "ERROR"):
-                    print(f"{said}{process}: {event.get('reason')}",
-                          file=sys.stderr)
+        reply = await_stops(link, {asking: "shutdown"}, waiting, said, until_closed=True)
+        if isinstance(reply.get(asking), str):
+            raise SessionError(f"session {name}: {reply[asking]}")
     finally:
         link.close()
     deadline = time.monotonic() + 10
     while session_dir.pid_alive(pid) and time.monotonic() < deadline:
         time.sleep(0.02)
-    print(f"session {name} stopped")
+    if not quiet:
+        print(f"session {name} stopped")
     return name
+
+
+def watch_ends(link: Link) -> set[str]:
+    """Subscribes to the processes' ends and the escalation's words (what `await_stops`
+    reads); the processes that run now."""
+    subscribed = link.request("subscribe", max_lines=1,
+                              kinds=["exited", "failed", "log", "ended"])
+    return {p for p, state in (subscribed.get("states") or {}).items()
+            if state in (*LIVE_STATES, "respawning")}
+
+
+def await_stops(link: Link, asks: dict[int, str], waiting: set[str], said: str,
+                until_closed: bool = False) -> dict[int, Any]:
+    """Reads the link until each request of `asks` (its id: what it asks) has its reply
+    (`until_closed`: until the server closes the connection), saying on stderr every
+    STOP_NOTICE s which of `waiting` still run, and each escalation, as the TUI's countdown
+    shows them. Each request's result, or its error's text."""
+    replies: dict[int, Any] = {}
+    asked = time.monotonic()
+    notice = asked + STOP_NOTICE
+    while until_closed or len(replies) < len(asks):
+        try:
+            message = link.receive_until(notice)
+        except TimeoutError:
+            if waiting:
+                print(f"{said}waiting for {', '.join(sorted(waiting))} "
+                      f"({time.monotonic() - asked:.0f} s)", file=sys.stderr)
+            notice = time.monotonic() + STOP_NOTICE
+            continue
+        if message is None:
+            lost = link.lost()
+            if lost is not None:  # not stopped: only the link is gone
+                raise lost
+            if len(replies) < len(asks) and not until_closed:
+                raise SessionError(f"session {link.label} ended before the stop was done")
+            break
+        if message.get("type") == "reply" and message.get("id") in asks:
+            replies[message["id"]] = message.get("result") if message.get("ok") else \
+                str(message.get("error"))
+            if until_closed and isinstance(replies[message["id"]], str):
+                break  # refused: nothing is stopping, no close is coming
+        for event in message.get("events") or []:
+            process = event.get("process")
+            if event.get("kind") in ("exited", "failed"):
+                waiting.discard(process)
+            elif event.get("kind") == "log" and process in waiting and \
+                    event.get("level") in ("WARN", "ERROR"):
+                print(f"{said}{process}: {event.get('reason')}", file=sys.stderr)
+    return replies
 
 
 def cmd_status(options: argparse.Namespace) -> int:

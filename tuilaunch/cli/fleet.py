@@ -1,6 +1,7 @@
 """The session commands over several sessions and machines: `ls HOST [HOST ...]`, and
 `status`, `stop`, `logs` of several sessions (`tuilaunch stop nuc:base arm:base`, or
-`arm:` for every session on arm).
+`arm:` for every session on arm); and which form a command line is (`stop A B`: two
+sessions, or a session and its process).
 
 Each machine or session is asked in a thread of its own, so one slow or unreachable robot
 costs its own time, not the sum; one that fails is one line on stderr naming it and why,
@@ -24,8 +25,10 @@ from ..engine.run.machines.remote import check_host, list_remote
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
 from . import commands
+from .commands import one_line
 from .logs import show_logs
 from .parsers import commands_parser
+from .process_commands import cmd_start, stop_processes
 
 FAILED = 2
 """The exit status when any machine or session failed (as a single one's error)."""
@@ -46,6 +49,8 @@ def route(options: argparse.Namespace) -> Callable[[argparse.Namespace], int] | 
     command = options.command
     if command == "ls":
         return ls_hosts if options.host else None
+    if command == "start":
+        return cmd_start
     if command not in ("stop", "status", "logs", "attach"):
         return None
     words: list[str] = list(options.name)
@@ -53,6 +58,11 @@ def route(options: argparse.Namespace) -> Callable[[argparse.Namespace], int] | 
         options.process = None
         if len(words) > 1 and not is_session(words[-1]):
             options.process = words.pop()
+    if command == "stop" and len(words) > 1 and not all(is_session(w) for w in words):
+        # `stop NAME PROCESS ...`: processes of one session; a word that is neither is
+        # said before anything stops (process_commands.py)
+        options.name, options.process = words[0], words[1:]
+        return stop_processes
     if len(words) > 1 or any(w.endswith(":") for w in words):
         options.name = words
         return {"stop": stop_many, "status": status_many, "logs": logs_many,
@@ -91,11 +101,6 @@ def in_parallel(work: Callable[[T], R], items: Sequence[T]) -> list[R | LaunchEr
         while thread.is_alive():
             thread.join(0.2)  # wakes up for a KeyboardInterrupt
     return results
-
-
-def one_line(exc: LaunchError) -> str:
-    """An error in one line: its message, and its hint after a semicolon."""
-    return f"{exc.message}; {exc.hint}" if exc.hint else exc.message
 
 
 def say(command: str, exc: LaunchError) -> None:
@@ -196,12 +201,17 @@ def stop_many(options: argparse.Namespace) -> int:
     """Stops every session given at once (a robot slow to stop does not hold the others
     back); each says when it stopped, or why not."""
     addresses, failed = expand("stop", options.name)
-    results = in_parallel(lambda a: commands.stop_session(a, f"tuilaunch stop: {a}: "),
-                          addresses)
-    for result in results:
+    results = in_parallel(lambda a: commands.stop_session(a, f"tuilaunch stop: {a}: ",
+                                                          quiet=options.json), addresses)
+    listed = []
+    for address, result in zip(addresses, results, strict=True):
         if isinstance(result, LaunchError):
             say("stop", result)
             failed = True
+        else:
+            listed.append({"session": address, "state": "stopped"})
+    if options.json:
+        print(json.dumps(listed, indent=2))
     return FAILED if failed else 0
 
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import argparse
 
-COMMANDS = ("ls", "attach", "stop", "status", "logs", "restart", "wait", "topics", "hz", "echo",
-            "plot", "params", "log-level", "completion", "serve")
+COMMANDS = ("ls", "attach", "stop", "start", "status", "logs", "restart", "wait", "topics", "hz",
+            "echo", "plot", "params", "log-level", "completion", "serve", "record")
 PROCESS_STATES = ("pending", "running", "stopping", "exited", "failed", "respawning", "skipped",
                   "done", "cancelled")
 LIFECYCLE_STATES = ("unconfigured", "inactive", "active", "finalized")
@@ -93,9 +93,16 @@ def launch_parser() -> argparse.ArgumentParser:
     parser.add_argument("-a", "--show-all-subprocesses-output", action="store_true",
                         help="as ros2 launch: print every process's output whatever its "
                         "output= says (OVERRIDE_LAUNCH_PROCESS_OUTPUT=both)")
+    parser.add_argument("--black-box", type=float, metavar="SECONDS",
+                        help="keep the last SECONDS of every topic and line in memory, "
+                        "written as MCAP into the log folder when a process dies unasked")
+    parser.add_argument("--black-box-size", type=float, default=BLACK_BOX_SIZE, metavar="MB",
+                        help=f"the black box's bound in memory, the oldest dropped first "
+                        f"(default {BLACK_BOX_SIZE} MB)")
     parser.add_argument("-d", "--debug", action="store_true", help="tracebacks for errors")
     parser.epilog = (parser.epilog or "") + (
-        "  Sessions: tuilaunch ls | attach [NAME] | stop NAME | status NAME | logs NAME "
+        "  Sessions: tuilaunch ls | attach [NAME] | stop NAME [PROCESS ...] | start NAME "
+        "PROCESS | status NAME | logs NAME "
         "[PROCESS] | restart NAME PROCESS | wait NAME PROCESS STATE; inspecting: topics NAME | "
         "hz NAME TOPIC | echo NAME TOPIC | plot NAME TOPIC FIELD | params NAME NODE "
         "--dump/--load FILE | log-level NAME NODE LEVEL (tuilaunch COMMAND -h); in a web "
@@ -104,7 +111,8 @@ def launch_parser() -> argparse.ArgumentParser:
     return parser
 
 
-SESSIONS = "[HOST:]NAME ..."
+SESSIONS = "[HOST:]NAME"
+"""A session word's metavar; argparse adds the `...` of several itself."""
 SESSIONS_HELP = ("sessions: NAME (here), HOST:NAME, or HOST: for every session there "
                  "(local: is this computer); default: the only one here")
 
@@ -133,15 +141,39 @@ def commands_parser() -> argparse.ArgumentParser:
                         help="a view that changes nothing: stop, start, restart, relaunch, "
                         "typing into a node, parameters, services and log levels are "
                         "refused (q leaves, the launch runs on)")
-    stop = commands.add_parser("stop", help="stop every process of a session, then exit")
-    stop.add_argument("name", nargs="*", metavar=SESSIONS, help=SESSIONS_HELP)
+    # one positional for both forms: `stop A B` is two sessions when every word names
+    # one, else a session and its processes (fleet.py's route tells them apart)
+    stop = commands.add_parser(
+        "stop", help="stop every process of sessions, or some processes of one session",
+        usage="tuilaunch stop [-h] [--json] [HOST:]NAME [PROCESS ...]\n"
+        "       tuilaunch stop [-h] [--json] [[HOST:]NAME ...]",
+        description="Stop sessions (every process, then the session ends), or the "
+        "processes named of one session (the others and the session run on). Returns once "
+        "they are stopped.")
+    stop.add_argument("name", nargs="*", metavar="WORD",
+                      help=SESSIONS_HELP + "; or one session, then process ids or node "
+                      "names of it")
+    stop.add_argument("--json", action="store_true",
+                      help="one JSON list: each session or process and its state")
+    start = commands.add_parser(
+        "start", help="start processes of a session (as t in the TUI)",
+        description="Start the processes named (stopped, exited or failed ones; one that "
+        "runs is left as it is; one its condition skipped is refused). Returns once they "
+        "are started.")
+    start.add_argument("name", metavar="[HOST:]NAME", help="the session")
+    start.add_argument("process", nargs="+", metavar="PROCESS",
+                       help="a process id or node name")
+    start.add_argument("--json", action="store_true",
+                       help="one JSON list: each process and its state")
     status = commands.add_parser("status", help="each process's state")
     status.add_argument("name", nargs="*", metavar=SESSIONS, help=SESSIONS_HELP)
     status.add_argument("--json", action="store_true", help="one JSON object")
-    logs = commands.add_parser("logs", help="the output of a session's processes")
+    logs = commands.add_parser("logs", help="the output of a session's processes",
+                               usage="tuilaunch logs [-h] [-f] [-n N] [--since T] "
+                               "[--level L] [[HOST:]NAME ...] [PROCESS]")
     # the last word is the PROCESS unless it names a session (HOST:NAME, HOST:, or a
     # session here): `logs far talker`, `logs nuc:base arm:base -f`
-    logs.add_argument("name", nargs="*", metavar=SESSIONS + " [PROCESS]",
+    logs.add_argument("name", nargs="*", metavar="WORD",
                       help=SESSIONS_HELP + "; then a process id or node name (default: all)")
     logs.add_argument("-f", "--follow", action="store_true", help="keep printing new lines")
     logs.add_argument("-n", "--lines", type=int, metavar="N",
@@ -174,7 +206,7 @@ def commands_parser() -> argparse.ArgumentParser:
                       f"{', '.join(LIFECYCLE_STATES)}")
     wait.add_argument("--timeout", type=float, default=None, metavar="S",
                       help="give up after S seconds (exit status 1)")
-    subs = [ls, attach, stop, status, logs, restart, wait]
+    subs = [ls, attach, stop, start, status, logs, restart, wait]
     subs += _inspector_commands(commands)
     completion = commands.add_parser(
         "completion", help="the shell code of Tab completion: "
@@ -182,12 +214,37 @@ def commands_parser() -> argparse.ArgumentParser:
     completion.add_argument("shell", choices=SHELLS)
     subs.append(completion)
     subs.append(_serve_command(commands))
+    subs.append(_record_command(commands))
     for sub in subs:
         sub.add_argument("--debug", action="store_true", help=argparse.SUPPRESS)
     return parser
 
 
 SERVE_PORT = 8000
+BLACK_BOX_SIZE = 256
+"""`--black-box-size`'s default, in MB."""
+
+
+def _record_command(commands: argparse._SubParsersAction[argparse.ArgumentParser])\
+        -> argparse.ArgumentParser:
+    """`record` (record.py runs it)."""
+    record = commands.add_parser(
+        "record", help="record topics and the output into an MCAP file on this computer, "
+        "until Ctrl+C; or write the black box now")
+    record.add_argument("name", metavar="[HOST:]NAME", help="the session")
+    record.add_argument("topic", nargs="*", metavar="TOPIC",
+                        help="the topics (default: every topic the launch's nodes publish)")
+    record.add_argument("-o", "--output", metavar="FILE.mcap",
+                        help="the file (default NAME-DATE-TIME.mcap here; never overwritten)")
+    record.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
+    record.add_argument("--black-box", action="store_true",
+                        help="write the session's black box now, in its log folder")
+    record.add_argument("--black-box-on", type=float, metavar="SECONDS",
+                        help="switch the session's black box on (0: off) and exit")
+    record.add_argument("--black-box-size", type=float, default=BLACK_BOX_SIZE, metavar="MB",
+                        help=f"with --black-box-on: its bound in memory (default "
+                        f"{BLACK_BOX_SIZE} MB)")
+    return record
 
 
 def _serve_command(commands: argparse._SubParsersAction[argparse.ArgumentParser])\
@@ -258,11 +315,14 @@ def _inspector_commands(commands: argparse._SubParsersAction[argparse.ArgumentPa
     plot.add_argument("topic")
     plot.add_argument("fields", nargs="+", metavar="FIELD",
                       help="a numeric field by dotted path: data, pose.pose.position.x, "
-                      "ranges[0]")
+                      "ranges[0]; a word starting with / starts another topic, a "
+                      "HOST:NAME another session: FIELD... [[HOST:]NAME] [TOPIC FIELD...]")
     plot.add_argument("--csv", action="store_true",
                       help="print time,FIELD,... then one line per message (time in seconds "
                       "since the first, as received) instead of plotting")
     plot.add_argument("--duration", type=float, metavar="S", help="stop after S seconds")
+    plot.add_argument("--stamp", action="store_true", help="the time of each message is its "
+                      "header.stamp (epoch seconds in the CSV), not when it was received")
     params = commands.add_parser("params", help="a node's live parameters as a params file, "
                                  "or such a file loaded into it")
     params.add_argument("name", metavar="[HOST:]NAME")

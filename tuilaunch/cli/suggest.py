@@ -1,6 +1,6 @@
 """What a mistyped launch command line is told: `did you mean` for a file and a package, the
 launch files of a package given without one, a `name=value` missing its colon, a file that
-is no launch file."""
+is no launch file; `guess` serves the session commands too (a mistyped process)."""
 
 from __future__ import annotations
 
@@ -28,10 +28,18 @@ def check_assignments(positional: list[str]) -> None:
                               hint=f"{match.group(1)}:={match.group(2)}")
 
 
-def _guess(word: str, choices: list[str]) -> str:
+def close_matches(word: str, choices: list[str]) -> list[str]:
     import difflib  # paid by a mistyped name alone: every launch imports this module
 
-    close = difflib.get_close_matches(word, choices, n=3, cutoff=0.6)
+    return difflib.get_close_matches(word, choices, n=3, cutoff=0.6)
+
+
+def did_you_mean(word: str, choices: list[str]) -> str:
+    close = close_matches(word, choices)
+    return said_as_guess(close)
+
+
+def said_as_guess(close: list[str]) -> str:
     return f"did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
 
 
@@ -61,9 +69,9 @@ def missing_file(path: str) -> PackageError:
                      if e.name.endswith(LAUNCH_EXTENSIONS) and e.is_file()]
         except OSError:
             pass
-    guess = _guess(Path(path).name, names)
+    guess = did_you_mean(Path(path).name, names)
     if not guess and "/" not in path:
-        guess = _guess(path, list(known_packages()))
+        guess = did_you_mean(path, list(known_packages()))
         guess = guess.replace("did you mean", "did you mean the package") if guess else ""
     hint = guess or "give a path, or PACKAGE FILE to search a package's share"
     return PackageError(f"launch file {path} does not exist", hint=hint)
@@ -74,7 +82,7 @@ def missing_package(package: str) -> PackageError | None:
     packages = known_packages()
     if package in packages:
         return None
-    guess = _guess(package, list(packages))
+    guess = did_you_mean(package, list(packages))
     return PackageError(f"package '{package}' not found in the ament index",
                         hint=guess or "source the workspace that provides it, or install it "
                         "into this environment")
@@ -85,7 +93,7 @@ def missing_in_package(package: str, name: str, error: PackageError) -> PackageE
     if "not found in package" not in str(error):
         return error
     files = launch_files(package)
-    guess = _guess(name, files)
+    guess = did_you_mean(name, files)
     listed = f"its launch files: {', '.join(files)}" if files else \
         "its share has no launch file"
     return PackageError(f"launch file '{name}' not found in package '{package}'",
