@@ -175,7 +175,10 @@ def world(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, object
 
 @pytest.fixture(scope="module")
 def bash(world: dict[str, object], tmp_path_factory: pytest.TempPathFactory) -> Iterator[Shell]:
-    shell = Shell("bash", tmp_path_factory.mktemp("home"), world["work"])  # type: ignore[arg-type]
+    home = tmp_path_factory.mktemp("home")
+    (home / ".ssh").mkdir()  # a host of the ssh config: offered as `nuc:` with the sessions
+    (home / ".ssh" / "config").write_text("Host nuc\n  HostName 127.0.0.1\n")
+    shell = Shell("bash", home, world["work"])  # type: ignore[arg-type]
     try:
         yield shell
     finally:
@@ -185,7 +188,8 @@ def bash(world: dict[str, object], tmp_path_factory: pytest.TempPathFactory) -> 
 def test_bash_completes_commands_packages_and_launch_files(bash):
     screen = bash.tab("tuilaunch lo", ["logs", "log-level"])
     assert "ls" not in screen.split()
-    bash.completes("tuilaunch sta", "tuilaunch status ")  # one match: completed in the line
+    bash.tab("tuilaunch sta", ["start", "status"])
+    bash.completes("tuilaunch stat", "tuilaunch status ")  # one match: completed in the line
     bash.completes("tuilaunch cmp_", "tuilaunch cmp_nodes ")
     screen = bash.tab("tuilaunch cmp_nodes ", ["robot.launch.py", "sim_launch.xml",
                                                "view.launch.yaml"],
@@ -216,6 +220,18 @@ def test_bash_completes_sessions_processes_topics_and_levels(bash):
     bash.completes("tuilaunch hz cmpdemo /cmp/ch", "tuilaunch hz cmpdemo /cmp/chatter ")
     bash.tab("tuilaunch completion ", ["bash", "zsh"])
     bash.tab("tuilaunch serve ", ["cmpdemo", "demo.launch.py"])  # a session, or a file
+
+
+def test_bash_offers_a_sessions_processes_after_it_not_the_hosts(bash):
+    bash.tab("tuilaunch stop ", ["cmpdemo", "nuc:"])  # the first word: sessions and hosts
+    for command in ("stop", "start", "logs"):
+        bash.tab(f"tuilaunch {command} cmpdemo ", ["talker-1", "/cmp/talker"],
+                 absent=("nuc:",))
+    # stop and start take several processes
+    bash.completes("tuilaunch stop cmpdemo /cmp/talker tal",
+                   "tuilaunch stop cmpdemo /cmp/talker talker-1 ")
+    bash.completes("tuilaunch start cmpdemo talker-1 /cmp/t",
+                   "tuilaunch start cmpdemo talker-1 /cmp/talker ")
 
 
 def test_bad_input_completes_to_nothing_and_never_hangs_the_shell(bash):

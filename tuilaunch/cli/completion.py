@@ -10,8 +10,9 @@ it here before anything heavy is imported. What is completed:
   after `name:=`, the argument's choices (the file is loaded as `--show-args` loads it);
 - session names for every session command, local ones and `HOST:` for each host of the
   ssh config, and after `HOST:`, that host's sessions (one ssh round trip, time-limited);
-- process ids and node names (logs, restart, wait), topics (hz, echo), nodes (params,
-  log-level), states (wait), log levels, shells.
+- process ids and node names (restart, wait, start, and after a session logs and stop;
+  not the hosts there), topics (hz, echo), nodes (params, log-level), states (wait), log
+  levels, shells.
 
 A completion never prints into the user's shell: the shell code sends our stdout and stderr
 to /dev/null (argcomplete writes the answer to fd 8), each completer swallows its own
@@ -24,6 +25,7 @@ import argparse
 import os
 import signal
 from collections.abc import Callable, Iterable
+from functools import partial
 from typing import Any
 
 from .parsers import (
@@ -228,8 +230,9 @@ def _attach_command_completers(parser: argparse.ArgumentParser) -> None:
         for command, sub in action.choices.items():
             for sub_action in sub._actions:
                 completer = by_dest.get(sub_action.dest)
-                if command == "logs" and sub_action.dest == "name":
-                    completer = sessions_or_processes  # the last word may be a process
+                if command in ("logs", "stop") and sub_action.dest == "name":
+                    # a session, then its processes (the last word of logs, the rest of stop)
+                    completer = partial(sessions_or_processes, several=command == "stop")
                 if command == "log-level" and sub_action.dest == "level":
                     completer = _choice(NODE_LEVELS)
                 elif sub_action.dest == "log_level":
@@ -287,23 +290,25 @@ def session_names(prefix: str, **_: Any) -> list[str]:
     return here + [f"{h}:" for h in ssh_hosts() if h.startswith(prefix)]
 
 
-def sessions_or_processes(prefix: str, parsed_args: argparse.Namespace,
+def sessions_or_processes(prefix: str, parsed_args: argparse.Namespace, several: bool,
                           **kwargs: Any) -> list[str]:
-    """`logs`: sessions, and once one is given, its processes (the last word may be one);
-    nothing after a word that names no session (only the last word may be a process)."""
+    """`logs` and `stop`: sessions (and hosts); after one session, its processes, not the
+    hosts (`stop NAME PROCESS ...`, `logs NAME PROCESS`); after several, more sessions (the
+    form over a fleet); after a process, `several` (stop) more of them, else nothing."""
     from ..engine.run.session import session_dir
 
     given = list(getattr(parsed_args, "name", None) or [])
+    if not given or ":" in prefix:  # the first word, or a HOST:NAME being typed
+        return session_names(prefix)
     here = session_dir.live_sessions(clean=False)
-    if any(":" not in word and word not in here for word in given):
-        return []
-    found = session_names(prefix)
-    if given:
-        try:
-            found += processes(prefix, parsed_args)
-        except Exception:
-            pass  # not a session after all, or gone: the sessions alone
-    return found
+    sessions = [word for word in given if ":" in word or word in here]
+    if given[0] not in sessions:
+        return []  # no session to ask
+    if len(sessions) == len(given) > 1:
+        return session_names(prefix)
+    if len(sessions) < len(given) and not several:
+        return []  # logs takes one process, the last word
+    return processes(prefix, parsed_args)
 
 
 def ssh_hosts() -> list[str]:
