@@ -150,6 +150,11 @@ def _main(argv: list[str] | None) -> int:
         from ..engine.run.machines import proxy
 
         return proxy.main(argv)
+    if is_command(argv) and argv[0] == "record":  # one session at a time: record.py
+        from .record import main as record_main
+
+        ensure_environment()
+        return record_main(argv)
     if is_command(argv):
         from .fleet import main as command_main
 
@@ -168,6 +173,10 @@ def _main(argv: list[str] | None) -> int:
         positional, arguments = split_items(options.items)
         placement = _placement(options)
         options.placement = placement
+        if options.black_box is not None:  # the server started below reads it (record/)
+            from .record import black_box_option
+
+            black_box_option(options.black_box, options.black_box_size)
         if options.show_all_subprocesses_output:  # ros2launch's way: its children see it
             os.environ["OVERRIDE_LAUNCH_PROCESS_OUTPUT"] = "both"
         # after the user's own name:=value, so these win, as in ros2 launch

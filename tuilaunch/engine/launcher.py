@@ -17,6 +17,7 @@ from .ros.actions import RosActions
 from .ros.composition import ComponentLoader
 from .ros.inspector import Inspector
 from .ros.lifecycle import LifecycleTracker
+from .ros.record.recorder import Recorder
 from .run.events import Event, Relaunched
 from .run.supervisor.supervisor import Supervisor
 
@@ -37,8 +38,10 @@ class RosSupervisor(Supervisor):
         self.lifecycle = LifecycleTracker(self, self.ros)
         self.components = ComponentLoader(self, self.ros)
         self.inspector = Inspector(self, self.ros)  # topics, rates, echo, params, loggers
+        self.recorder = Recorder(self, self.inspector)  # recordings and the black box
         # the bridge last: its close (the ROS node) comes after the others let go of it
-        for plugin in (self.lifecycle, self.components, self.inspector, self.ros):
+        for plugin in (self.lifecycle, self.components, self.inspector, self.recorder,
+                       self.ros):
             self.add_plugin(plugin)
         self.subscribe(self._forget_moved_services)
 
