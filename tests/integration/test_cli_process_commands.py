@@ -171,3 +171,17 @@ def test_host_name_process_works_over_ssh(robot):
     started = robot.cli("start", "robot1:pc", "ticker-1")
     assert (started.returncode, started.stdout) == (0, "ticker-1 started\n"), started.stderr
     assert robot.states()["ticker-1"][0] == "running"
+
+
+def test_errors_name_the_session_as_typed_over_ssh(robot):
+    """What the session refuses is said with the address typed, not the bare name: with
+    two robots each running `pc`, `session pc` would not say which."""
+    level = robot.cli("log-level", "robot1:pc", "nobody", "info")
+    assert level.returncode == 2
+    assert level.stderr.startswith("tuilaunch log-level: error: session robot1:pc: no node or "
+                                   "process 'nobody' in this launch"), level.stderr
+    plot = robot.cli("plot", "robot1:pc", "/pc/chatter", "nofield", "--csv")
+    assert plot.returncode == 2
+    assert plot.stderr.startswith("tuilaunch plot: error: session robot1:pc: /pc/chatter "
+                                  "(std_msgs/msg/String) has no numeric field 'nofield'"), \
+        plot.stderr

@@ -160,7 +160,7 @@ def streamed(link: Link, kind: str, end: float | None) -> Iterator[dict[str, Any
             if lost is not None:  # the ssh link, not the session: exit 1, not 2
                 raise lost
         if message is None or message.get("type") == "ended":
-            raise SessionError(f"session {link.name} ended")
+            raise SessionError(f"session {link.label} ended")  # as typed: HOST:NAME
         for event in message.get("events") or []:
             if event.get("kind") == kind:
                 yield event.get("data") or {}

@@ -215,10 +215,11 @@ class Link:
             message = self.receive()
             if message is None:
                 raise self.lost() or SessionError(
-                    f"session {self.name} closed the connection during {op}")
+                    f"session {self.label} closed the connection during {op}")
             if message.get("type") == "reply" and message.get("id") == request_id:
                 if not message.get("ok"):
-                    raise SessionError(f"session {self.name}: {message.get('error')}")
+                    # named as typed (HOST:NAME): every command's errors say it
+                    raise SessionError(f"session {self.label}: {message.get('error')}")
                 return message.get("result")
             if message.get("type") == "events":
                 self.pending.append(message)
