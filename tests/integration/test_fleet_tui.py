@@ -193,7 +193,8 @@ def test_attach_of_two_sessions_on_a_terminal(machines: Machines, write):
     wrong = Terminal("attach", "robot1:base", "--type", "nosuch")  # one line, no TUI
     try:
         assert wrong.wait_exit() == 2
-        assert b"tuilaunch attach: error: session base: no process 'nosuch'" in wrong.screen
+        assert b"tuilaunch attach: error: session robot1:base: no process 'nosuch'" in \
+            wrong.screen
     finally:
         wrong.close()
     terminal = Terminal("attach", "robot1:base", "robot2:")
