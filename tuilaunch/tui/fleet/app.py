@@ -23,7 +23,6 @@ import contextlib
 import subprocess
 import sys
 import time
-from collections.abc import Awaitable
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -45,15 +44,17 @@ from ..app import LaunchTabs
 from ..key_order import KeyOrder
 from ..keyboard import remembered, restart_with, show_command_line
 from ..log_levels import LogLevels
+from ..nodes.commands import SelectionCommands
 from ..nodes.gaps import GapReader
 from ..output_store import OutputStore
-from ..screens.dialogs import ConfirmScreen, HelpScreen
+from ..screens.dialogs import HelpScreen
 from ..screens.interact_dialogs import PrefixPrompt
 from ..screens.output_panel import OutputPanel
 from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree, RowData
 from ..session_link import DRAIN_HZ, PANE_CHROME
 from .member import Member
+from .plots import FleetPlots
 from .tabs import FleetTabs
 
 NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane",
@@ -65,7 +66,9 @@ FIRST_RETRY = 1.0
 
 
 class FleetTree(LaunchTree):
-    """A session's tree; the cursor moves on to the next session's tree past its end."""
+    """A session's tree; the cursor moves on to the next session's tree past its end, and
+    stops at the first session's root and the last session's last row (it never wraps
+    from one robot onto another)."""
 
     def action_cursor_down(self) -> None:
         if self.cursor_line >= self.last_line and isinstance(self.app, FleetApp):
@@ -86,12 +89,14 @@ class FleetHelp(HelpScreen):
     def compose(self) -> ComposeResult:
         rows = ["One TUI over several sessions: a tree per session; the keys act on the",
                 "session of the selected row. up/down cross from one session's tree to the",
-                "next.", ""]
+                "next and stop at the ends; } and { jump to a session's root. s and r on more",
+                "than one running node ask first, naming the session.", ""]
         for binding in FleetApp.BINDINGS:
             assert isinstance(binding, Binding)
             keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
                 "question_mark", "?").replace("right_square_bracket", "]").replace(
                 "left_square_bracket", "[").replace(",", ", ")
+            keys = keys.replace("right_curly_bracket", "}").replace("left_curly_bracket", "{")
             rows.append(f"  {keys:<9} {binding.tooltip or binding.description}")
         with VerticalScroll():
             yield Static("\n".join(rows))
@@ -125,6 +130,10 @@ class FleetApp(KeyOrder):
         Binding("r", "command('restart')", "Restart",
                 tooltip="Restart the selected node or group"),
         Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+        Binding("right_curly_bracket", "jump(1)", "Next session", show=False,
+                tooltip="The next session's root (as k9s switches context)"),
+        Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
+                tooltip="The previous session's root"),
         Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
         Binding("c", "command_line", "Command", show=False,
                 tooltip="The exact command line the selected node was started with, to copy"),
@@ -188,8 +197,9 @@ class FleetApp(KeyOrder):
             pane = OutputPanel(store, Path.cwd(), max_lines=scrollback, id=f"fleet-pane-{i}")
             self.members.append(Member(label, host, name, tree, pane, store))
         self.current = self.members[0]
+        self.plots = FleetPlots(self, self.members, self.member_request)
         self.session_tabs = FleetTabs(self.members, self.member_request, lambda: self.engine,
-                                      self.update_status)
+                                      self.update_status, self.plots)
         self.gap_readers = {id(m): self._gap_reader(m) for m in self.members}
         self.log_levels = {id(m): LogLevels(self, partial(self.member_request, m),
                                             m.asked_to_stop, f"{m.label}: ")
@@ -289,12 +299,9 @@ class FleetApp(KeyOrder):
         for member in self.members:
             if member.supervisor is None:
                 continue
-            lost = member.supervisor.link_lost
             member.show_events(member.buffer.drain())
-            if lost != getattr(member, "_shown_lost", None):
-                member._shown_lost = lost  # type: ignore[attr-defined]
-                member.refresh_root()
-                self.update_status()
+            # a link lost, back, or silent for one more second: the root says it
+            member.refresh_root()
             self._tell_pane_shown(member)
         self.update_status()
         self.update_detail()
@@ -334,6 +341,7 @@ class FleetApp(KeyOrder):
         elif data is not None and data.kind == "all":
             member.pane.show_view(None)
         self.update_detail()
+        self.refresh_bindings()  # the keys that apply follow the row
 
     def select(self, member: Member) -> None:
         if member is not self.current:
@@ -384,6 +392,10 @@ class FleetApp(KeyOrder):
         if action in NODES_ONLY and self.tabs.active != "nodes":
             # `/` into the tab's filter; the Nodes tab's other keys are not this tab's
             return action == "pane" and parameters[:1] == ("search",)
+        if action == "command" and self.current.unavailable() is None:
+            # greyed as in the single TUI (nothing to stop); a session out of reach keeps
+            # them, to say why in one line
+            return self.commands().applies(str(parameters[0]), ())
         return True
 
     def action_leave_field(self) -> None:
@@ -394,33 +406,44 @@ class FleetApp(KeyOrder):
 
     @on(TopicsPanel.PlotAsked)
     def _plot_asked(self, message: TopicsPanel.PlotAsked) -> None:
-        """p on a topic: `tuilaunch plot` on the selected session, this screen suspended
-        meanwhile (q there comes back)."""
+        """p on a topic: the single TUI's plot, over the selected session's link."""
+        message.stop()
         member = self.current
-        if member.unavailable() is not None:
-            self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
-            return
-        self._run_elsewhere("plot", member.address, message.topic)
+        if self._keys_reach(member):
+            self.plots.open(member, message.topic)
 
     def step_tree(self, tree: FleetTree, step: int) -> None:
         """Up from a tree's first row, down from its last: the neighbouring session's."""
         member = self.member_of(tree)
         if member is None:
             return
-        index = (self.members.index(member) + step) % len(self.members)
+        index = self.members.index(member) + step
+        if not 0 <= index < len(self.members):
+            return  # the first or last row of all: the cursor stays (no wrap)
         target = self.members[index].tree
         target.focus()
         target.cursor_line = 0 if step > 0 else target.last_line
         target.scroll_to_node(target.cursor_node or target.root)
 
+    def action_jump(self, step: int) -> None:
+        """`}`, `{`: the next (previous) session's root, as k9s switches context; at the
+        last (first) session the cursor stays."""
+        index = self.members.index(self.current) + step
+        if not 0 <= index < len(self.members):
+            return
+        target = self.members[index].tree
+        if self.tabs.active != "nodes":
+            self.action_tab("nodes")
+        target.focus()
+        target.cursor_line = 0
+        target.scroll_to_node(target.root)
+
+    def commands(self, member: Member | None = None) -> SelectionCommands:
+        """The single TUI's commands on the member's tree (the selected session's)."""
+        return self.session_tabs.of(member or self.current).commands
+
     def selected(self) -> list[str]:
-        tree = self.current.tree
-        node = tree.cursor_node
-        if node is None or node.data is None:
-            return []
-        if node.data.kind == "all":
-            return [p.id for p in self.current.session.plan.enabled_processes()]
-        return list(node.data.processes)
+        return self.commands().selected()
 
     # --- keys ------------------------------------------------------------------------------
 
@@ -435,39 +458,12 @@ class FleetApp(KeyOrder):
         return True
 
     def action_command(self, verb: Verb) -> None:
-        """s, r, t on the selected rows of the selected session, and nothing else."""
+        """s, r, t on the selected rows of the selected session, and nothing else: the
+        single TUI's commands (a stop or restart of more than one asks, naming it)."""
         member = self.current
-        if not self._keys_reach(member) or member.supervisor is None:
-            return
-        processes = self.selected()
-        node = member.tree.cursor_node
-        running = [p for p in processes
-                   if member.supervisor.states.get(p) in ("running", "respawning")]
-        if verb == "stop" and len(running) > 1 and node is not None and node.data is not None \
-                and (node is member.tree.root or node.data.kind == "all"):
-
-            def answered(yes: bool | None) -> None:
-                if yes:
-                    self._command(member, verb, processes)
-
-            self.push_screen(ConfirmScreen(
-                f"Stop all {len(running)} running processes of {member.label}: "
-                f"{', '.join(running[:6])}{' ...' if len(running) > 6 else ''}?",
-                "Stop them (y)"), answered)
-            return
-        self._command(member, verb, processes)
-
-    def _command(self, member: Member, verb: Verb, processes: list[str]) -> None:
-        supervisor = member.supervisor
-        if supervisor is None or not processes:
-            return
-        commands = []
-        for process in processes:
-            if verb in ("stop", "restart"):
-                member.asked_to_stop.add(process)
-            commands.append(supervisor.command(verb, process))
-        self._carry_out(member, verb, commands)
-        self.update_detail()
+        if self._keys_reach(member):
+            self.commands(member).command(verb)
+            self.update_detail()
 
     def action_command_line(self) -> None:
         """c: the selected node's exact command line, as its session started it."""
@@ -483,47 +479,25 @@ class FleetApp(KeyOrder):
 
     def action_lifecycle(self, direction: str) -> None:
         """`]` (up), `[` (down) on the selected lifecycle node of the selected session, from
-        the state the steps typed before lead to (as in the single-session TUI)."""
+        the state the steps typed before lead to (the single TUI's steps)."""
         member = self.current
         supervisor = member.supervisor
         if not self._keys_reach(member) or supervisor is None:
             return
-        selected = self.selected()
+        commands = self.commands(member)
+        selected = commands.selected()
         states = supervisor.lifecycle.states
         if len(selected) != 1 or selected[0] not in states:
             self.notify(f"{member.label}: {']' if direction == 'up' else '['} steps one "
                         "lifecycle node: select it", severity="warning")
             return
-        process = selected[0]
-        transition = member.lifecycle_steps.step(process, states.get(process), direction)
-        if transition is None:
-            self.notify(f"{member.label}: {process} is {states.get(process)}: no step "
-                        f"{'up' if direction == 'up' else 'down'} from there",
+        step = commands.lifecycle_step(direction)
+        if step is None:
+            self.notify(f"{member.label}: {selected[0]} is {states.get(selected[0])}: no "
+                        f"step {'up' if direction == 'up' else 'down'} from there",
                         severity="warning")
             return
-        # noted now, not in the worker: a `]` typed next picks the step after this one
-        asked = member.lifecycle_steps.take(process, transition, lambda: self.engine.run(
-            supervisor.lifecycle.request(process, transition)))
-        self._lifecycle(member, process, transition, asked)
-
-    @work(group="commands", exit_on_error=False)
-    async def _lifecycle(self, member: Member, process: str, transition: str,
-                         asked: Awaitable[bool]) -> None:
-        try:
-            done = await asked
-        except LaunchError as exc:
-            self.notify(f"{member.label}: {transition} {process}: {exc}", severity="error")
-            return
-        if not done:
-            self.notify(f"{member.label}: {process} refused {transition}", severity="error")
-
-    @work(group="commands", exit_on_error=False)
-    async def _carry_out(self, member: Member, verb: str, commands: list[object]) -> None:
-        results = await asyncio.gather(*(self.engine.run(c) for c in commands),  # type: ignore[arg-type]
-                                       return_exceptions=True)
-        for result in results:
-            if isinstance(result, Exception):
-                self.notify(f"{member.label}: {verb}: {result}", severity="error")
+        commands.lifecycle_transition(*step)
 
     def _gap_reader(self, member: Member) -> GapReader:
         """What reads back what the member's link did not send; says so naming it."""
@@ -693,7 +667,7 @@ class FleetApp(KeyOrder):
     def update_status(self) -> None:
         member = self.current
         others = len(self.members) - 1
-        why = member.unavailable()
+        why = member.unavailable() or member.silence()
         what = why if why is not None else member.counts_text()
         file = Path(member.session.plan.file).name if member.supervisor else ""
         line = f"[{member.label}] {file}  {what}  ({others + 1} sessions; O: this one in full)"

@@ -23,11 +23,11 @@ from ...engine.run.events import (
     Reading,
     Relaunched,
 )
-from ..lifecycle_steps import LifecycleSteps
 from ..nodes.events import NodeEvents
 from ..output_store import OutputStore
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree
+from ..session_link import SILENCE_SHOWN
 
 COUNTED = ("running", "pending", "stopping", "exited", "failed", "respawning")
 
@@ -51,8 +51,6 @@ class Member:
     wake: asyncio.Event | None = None
     """Set by R: the next try to reach a session never reached, now."""
     asked_to_stop: set[str] = field(default_factory=set)
-    lifecycle_steps: LifecycleSteps = field(default_factory=LifecycleSteps)
-    """`]`, `[` on this session's lifecycle nodes, in the order typed."""
     on_event: Callable[[Member, Event], None] | None = None
     """Where the events for its tabs go (readings, relaunches): fleet/tabs.py."""
     events: NodeEvents = field(init=False)
@@ -75,6 +73,17 @@ class Member:
         if self.supervisor is None or self.ended:
             return self.problem or "not connected"
         return self.supervisor.link_lost
+
+    def silence(self) -> str | None:
+        """`no word from arm for 7 s`: a link that says nothing, probed meanwhile, for
+        SILENCE_SHOWN s or more (as the single TUI's header says it); a hung link is said
+        lost only after ssh's 15 s."""
+        supervisor = self.supervisor
+        if supervisor is None or self.ended or supervisor.host is None:
+            return None
+        silent = supervisor.silent_for()  # 0 while the link is down: link_lost says it
+        return f"no word from {supervisor.host} for {silent:.0f} s" \
+            if silent >= SILENCE_SHOWN else None
 
     def counts(self) -> dict[str, int]:
         counts: dict[str, int] = {}
@@ -104,12 +113,18 @@ class Member:
             label.append(f" {why}" + ("; reconnecting (R: now)" if self.supervisor else ""),
                          "italic")
             label.stylize("dim")
+        elif self.silence() is not None:
+            # what it shows may be old: said first, before the counts it last sent
+            label.append(f" {self.silence()}", "bold yellow")
+            label.append(f"  {self.counts_text()}")
         else:
             label.append(f"  {self.counts_text()}")
         return label
 
     def refresh_root(self) -> None:
-        self.tree.root.set_label(self.root_label())
+        label = self.root_label()
+        if label.plain != str(self.tree.root.label):  # an unchanged row is not sent again
+            self.tree.root.set_label(label)
 
     # --- events ------------------------------------------------------------------------------
 

@@ -1,4 +1,6 @@
-"""The fleet TUI's Args, Services, Params and Topics tabs: each session its own panels.
+"""The fleet TUI's per-session pieces: each session's Args, Services, Params and Topics
+panels and the commands on its tree's selection, the single TUI's own; the plot (`p`)
+over them all (plots.py).
 
 Each robot has its own file, arguments and ROS graph, so each member holds its own ArgsTab,
 ServicesPanel, ParamsPanel and TopicsPanel (the single-session TUI's widgets), acting on
@@ -23,14 +25,16 @@ from ...client.port import LaunchPort
 from ...client.session_graph import SessionGraph
 from ...engine.plan.session import Session
 from ...engine.run.engine_thread import EngineThread
-from ...engine.run.events import Echo, Event, Rates, Relaunched
+from ...engine.run.events import Echo, Event, PlotSamples, Rates, Relaunched
 from ..arguments import ArgsTab
+from ..nodes.commands import SelectionCommands
 from ..screens.fields import Field
 from ..screens.params_panel import ParamsPanel
 from ..screens.services_panel import ServicesPanel
 from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree
 from .member import Member
+from .plots import FleetPlots
 
 TABS = ("args", "services", "params", "topics")
 """The tabs whose panels are per session (Nodes is the fleet's own split)."""
@@ -41,8 +45,12 @@ HOMES = {"args": "#apply", "services": "#svc-list", "params": "#prm-nodes",
 
 
 class MemberHost:
-    """A member as its Args tab's host (arguments.py's ArgsHost): its session, its link,
-    its tree; the app's engine thread and header."""
+    """A member as the host of the single TUI's pieces: its Args tab's (arguments.py's
+    ArgsHost) and its tree's commands' (nodes/host.py's NodesHost): its session, its link,
+    its tree, the stops it asked; the app's engine thread and header."""
+
+    quitting = False
+    """A fleet view never stops its sessions by leaving."""
 
     def __init__(self, member: Member, engine: Callable[[], EngineThread],
                  update_status: Callable[[], None]) -> None:
@@ -67,12 +75,25 @@ class MemberHost:
     def launch_tree(self) -> LaunchTree:
         return self.member.tree
 
+    @property
+    def asked_to_stop(self) -> set[str]:
+        return self.member.asked_to_stop
+
+    def over_link(self) -> LaunchPort | None:
+        supervisor = self.member.supervisor
+        return supervisor if supervisor is not None and supervisor.host is not None else None
+
+    def drain(self) -> None:
+        self.member.show_events(self.member.buffer.drain())
+
     def describe_waiting(self) -> None:
         self.member.refresh_root()  # the new plan's counts
 
 
 class SessionPanels:
-    """One member's Args, Services, Params and Topics panels, acting on its session alone."""
+    """One member's Args, Services, Params and Topics panels and its tree's commands (`s`,
+    `r`, `t`, `]`, `[`: the questions the single TUI asks, naming the session), acting on
+    its session alone."""
 
     def __init__(self, member: Member, index: int, request: Callable[..., Any],
                  host: MemberHost) -> None:
@@ -86,6 +107,8 @@ class SessionPanels:
                                   reported=lambda: member.store.reported_names,
                                   request=ask, id=f"params-{index}")
         self.topics = TopicsPanel(ask, id=f"topics-{index}")
+        self.commands = SelectionCommands(member.tree, host, member.tree, member.store,
+                                          who=member.label)
 
     def panel(self, tab: str) -> Widget:
         return {"args": self.args, "services": self.services, "params": self.params,
@@ -98,7 +121,9 @@ class FleetTabs:
     (raises SessionError while it cannot be reached)."""
 
     def __init__(self, members: list[Member], request: Callable[..., Any],
-                 engine: Callable[[], EngineThread], update_status: Callable[[], None]) -> None:
+                 engine: Callable[[], EngineThread], update_status: Callable[[], None],
+                 plots: FleetPlots) -> None:
+        self.plots = plots
         self.panels = {id(m): SessionPanels(m, i, request,
                                             MemberHost(m, engine, update_status))
                        for i, m in enumerate(members)}
@@ -160,7 +185,9 @@ class FleetTabs:
             panels.host.own_relaunch = None
             return
         topics = panels.topics
-        if isinstance(event, Rates):
+        if isinstance(event, PlotSamples):
+            self.plots.add(event.data or {})
+        elif isinstance(event, Rates):
             topics.show_rates(event.data or {})
         elif isinstance(event, Echo):
             topics.show_echo(event.data or {})

@@ -14,11 +14,17 @@ class NodesHost(Protocol):
     on, the session (its plan), whether this client is stopping the launch, and the stops it
     asked for (their non-zero exit is no failure)."""
 
-    engine: EngineThread
-    supervisor: LaunchPort | None
-    session: Session
-    quitting: bool
-    asked_to_stop: set[str]
+    # read, never set, by the tab: properties, so a fleet's session can be a host too
+    @property
+    def engine(self) -> EngineThread: ...
+    @property
+    def supervisor(self) -> LaunchPort | None: ...
+    @property
+    def session(self) -> Session: ...
+    @property
+    def quitting(self) -> bool: ...
+    @property
+    def asked_to_stop(self) -> set[str]: ...
 
     def over_link(self) -> LaunchPort | None:
         """The client, when an ssh link is between (what crosses it is kept small)."""

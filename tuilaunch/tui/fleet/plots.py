@@ -1,0 +1,65 @@
+"""`p` in a fleet view's Topics tab: the single TUI's plot screen (screens/plot_screen.py),
+over the fleet's sessions.
+
+The topic picked is plotted from the selected session, through its own link; the screen
+reaches every session of the fleet by its label (`robot1:base`), so `a` there adds a topic
+of another robot beside it. The sessions' `plot` readings are handed to the screen as they
+come (each stream's tag says whose).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Awaitable, Callable
+from functools import partial
+from typing import Any
+
+from textual.app import App
+
+from ...engine.run.session.session_dir import SessionError
+from .member import Member
+
+Request = Callable[..., Awaitable[Any]]
+"""`request(member, op, **fields)`: a request to a member's session (SessionError while it
+cannot be reached)."""
+
+
+class FleetPlots:
+    """The plot on screen, if any, of `app`, over the sessions of `members`."""
+
+    def __init__(self, app: App[Any], members: list[Member], request: Request) -> None:
+        self.app, self.members, self.request = app, members, request
+        self.screen: Any = None
+        """The plot on screen (the screen's module is imported with the first plot)."""
+
+    def open(self, member: Member, topic: str) -> None:
+        self.app.run_worker(self._open(member, topic), group="plot", exit_on_error=False)
+
+    def add(self, data: dict[str, Any]) -> None:
+        """A `plot` reading of one of the sessions."""
+        if self.screen is not None:
+            self.screen.add(data)
+
+    async def _open(self, member: Member, topic: str) -> None:
+        try:
+            info = await self.request(member, "plot_fields", topic=topic)
+        except SessionError as exc:
+            self.app.notify(f"{member.label}: {str(exc).split(': ', 1)[-1]}",
+                            severity="error", title="plot")
+            return
+        numeric = list(info.get("fields") or [])
+        if not numeric:
+            self.app.notify(f"{member.label}: {topic} ({info.get('type')}) has no numeric "
+                            "field to plot", severity="warning", title="plot")
+            return
+        # plotext: imported only once a plot is shown
+        from ...client.plot_series import Source
+        from ..screens.plot_screen import PlotScreen, SessionPlots
+
+        requesters = {m.label: partial(self.request, m) for m in self.members}
+        self.screen = PlotScreen(SessionPlots(requesters, self._leave),
+                                 [Source(member.label, topic, numeric[:1])])
+        self.app.push_screen(self.screen)
+
+    def _leave(self) -> None:
+        self.screen = None
+        self.app.pop_screen()
