@@ -40,6 +40,7 @@ from .keyboard import NodeKeyboard
 from .navigation import Navigation
 from .nodes.tab import NodesTab
 from .quitting import Quitting
+from .recording import Recordings
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
@@ -99,6 +100,8 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
                 tooltip="The selected node's topics, in the Topics tab"),
         Binding("L", "log_level", "Log level", show=False,
                 tooltip="Set the selected node's log level"),
+        Binding("b", "black_box", "Black box", show=False,
+                tooltip="Write the session's black box now (its log folder)"),
         Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
                 "opens it again"),
         Binding("R", "reconnect", "Reconnect", show=False,
@@ -149,6 +152,7 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
         self.topics_panel = self.query_one(TopicsPanel)
+        self.recordings = Recordings(self)  # w in the Topics tab, b
         if ascii_terminal():  # app.tcss draws ASCII lines for this class
             self.add_class("-ascii")
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
@@ -263,6 +267,13 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
 
     def action_all_output(self) -> None:
         self.nodes.show_all()
+
+    def action_black_box(self) -> None:
+        self.run_worker(self.recordings.black_box_now(), group="recording",
+                        exit_on_error=False)
+
+    def on_topics_panel_record_asked(self, message: TopicsPanel.RecordAsked) -> None:
+        self.recordings.toggle(message.topic)
 
     def tab_shown(self, pane: str) -> None:
         super().tab_shown(pane)

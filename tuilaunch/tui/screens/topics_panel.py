@@ -89,8 +89,16 @@ class TopicsPanel(Vertical):
             super().__init__()
             self.topic = topic
 
+    class RecordAsked(Message):
+        """`w` on a topic: the app records it, or stops its recording (tui/recording.py)."""
+
+        def __init__(self, topic: str | None) -> None:
+            super().__init__()
+            self.topic = topic
+
     DEFAULT_CSS = """
     TopicsPanel #tpc-bar { height: 1; }
+    TopicsPanel #tpc-rec { width: auto; padding: 0 1; color: $error; }
     TopicsPanel #tpc-filter { width: 1fr; }
     TopicsPanel #tpc-scope { width: auto; padding: 0 1; color: $text-muted; }
     /* a long type is cut (the detail shows it whole): no horizontal scrollbar to repaint */
@@ -107,6 +115,8 @@ class TopicsPanel(Vertical):
         Binding("e", "echo", "Echo", tooltip="Show the selected topic's messages (e again "
                 "stops)"),
         Binding("p", "plot", "Plot", tooltip="Plot the selected topic's numeric fields"),
+        Binding("w", "record", "Record", tooltip="Record the selected topic into an MCAP "
+                "file here (w again stops)"),
         Binding("slash", "filter", "Filter", tooltip="Filter topics by name or type"),
         Binding("x", "all_topics", "All topics", tooltip="Back from one node's topics to all"),
         Binding("u", "update", "Update", show=False, tooltip="Ask for the topic list now"),
@@ -145,6 +155,7 @@ class TopicsPanel(Vertical):
             yield Field(placeholder="/ filter topics (name or type)", id="tpc-filter",
                         compact=True, leave_on_enter=True)
             yield Static("all topics", id="tpc-scope")
+            yield Static("", id="tpc-rec")  # a recording and its size (tui/recording.py)
         yield QuietTable(id="tpc-table", cursor_type="row", zebra_stripes=False)
         yield Static("", id="tpc-note")
         with Horizontal(id="tpc-trend"):
@@ -388,6 +399,12 @@ class TopicsPanel(Vertical):
     def action_plot(self) -> None:
         if self.selected is not None:
             self.post_message(self.PlotAsked(self.selected))
+
+    def action_record(self) -> None:
+        self.post_message(self.RecordAsked(self.selected))
+
+    def show_recording(self, text: str) -> None:
+        self.query_one("#tpc-rec", Static).update(text)
 
     # --- the selected topic ------------------------------------------------------------------
 

@@ -385,9 +385,10 @@ class Recorder(Plugin):
                                      reason=f"black box not written: {exc}"))
             return
         self.written[process] = (now, path)
+        # its detail (the tree's row, the detail line) and a line of its pane and launch.log
         self.supervisor.emit(Log(process, level="WARN", reason=(
             f"black box written: {path} (the last {self.box_seconds:g} s, "
-            f"{count} messages)")))
+            f"{count} messages)"), data={"detail": f"black box {path}"}))
 
 
 def _full_name(info: Any) -> str:
