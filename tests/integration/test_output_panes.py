@@ -318,3 +318,76 @@ def test_a_client_attaching_to_a_session_sees_the_waiting_prompt(write, runtime)
 
     asyncio.run(scenario())
     tl("stop", name)
+
+
+# --- long lines -----------------------------------------------------------------------------
+
+LONG = 1 << 20
+LONG_LINE = "<<" + ("0123456789" * (LONG // 10 + 1))[:LONG - 4] + ">>"  # long_line.py's
+
+
+def test_a_1_mib_line_is_kept_whole_in_the_log_logs_and_the_pane(write, runtime):  # noqa: F811
+    """A robot description or a message dumped on one line: written 4 KB at a time, it was
+    cut into 64 KB lines everywhere. Now it is one line in the log file, in `tuilaunch
+    logs`, and in the pane of a TUI attached over the session's socket, whose `w` saves it
+    whole; the pane draws the start of it on its row."""
+    import asyncio
+    import time
+
+    path = launch(write, ("long_line", []))
+    name, log_dir = detached_with(path, "long_line-1")
+    try:
+        log = log_dir / "long_line-1.log"
+        deadline = time.monotonic() + 60
+        while b" after" not in log.read_bytes()[-100:] and time.monotonic() < deadline:
+            time.sleep(0.05)
+        logged = [line.split(b" ", 2)[2].rstrip(b"\r") for line in log.read_bytes().splitlines()]
+        assert logged == [b"before", LONG_LINE.encode(), b"after"]
+
+        printed = tl("logs", name, "long_line-1").stdout.splitlines()
+        assert [line for line in printed if line.strip()][-3:] == \
+            ["before", LONG_LINE, "after"], [line[:80] for line in printed]
+
+        async def scenario() -> None:
+            app = make_app(path, {}, log_dir, session_name=name)
+            async with app.run_test(size=(80, 24)) as pilot:
+                await select(app, pilot, "long_line-1")
+                await until(pilot, lambda: "I after" in rows(app))
+                shown = rows(app)
+                assert shown[-3] == "I before" and shown[-2].startswith("I <<0123456789")
+                assert len(shown[-2]) < 80  # drawn on its row, not wrapped over the pane
+                panel = panel_of(app)
+                assert panel.pane_lines()[-3:] == ["before", LONG_LINE, "after"]
+                await pilot.press("w")
+                await until(pilot, lambda: any(panel.save_dir.glob("long_line-1-pane-*")))
+                saved = next(panel.save_dir.glob("long_line-1-pane-*")).read_text()
+                assert saved.splitlines()[-3:] == ["before", LONG_LINE, "after"]
+
+        asyncio.run(scenario())
+    finally:
+        tl("stop", name)
+
+
+def test_a_line_without_end_is_cut_at_8_mib_and_the_rest_kept(write):
+    """Memory stays bounded for a process that never ends its line: past MAX_LINE (8 MiB)
+    the line is cut into pieces of that size, and every byte is kept."""
+    from tuilaunch.engine.run.process.output import MAX_LINE
+
+    total = 2 * MAX_LINE + 1000
+    path = write(f"""
+import sys
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+PROGRAM = ("import sys, os\\n"
+           "for _ in range({total} // 65536): os.write(1, b'x' * 65536)\\n"
+           "os.write(1, b'x' * ({total} % 65536) + b'\\\\nend\\\\n')\\n")
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='endless', output='screen',
+                                             cmd=[sys.executable, '-c', PROGRAM])])
+""")
+    from ..conftest import run_headless
+
+    out = run_headless(path, until=("[endless-1] end",))
+    lengths = [len(line) - len("[endless-1] ") for line in out.splitlines()
+               if line.startswith("[endless-1] x")]
+    assert lengths == [MAX_LINE, MAX_LINE, 1000], lengths

@@ -296,8 +296,8 @@ def test_line_splitter_handles_partial_lines_progress_and_bad_bytes():
     assert splitter.feed(b"lo\nwor") == ["hello"]
     assert splitter.feed(b"ld\r\n10%\r50%\r100%\n\xff\xfeok\n") == [
         "world", "100%", "\ufffd\ufffdok"]
-    assert splitter.feed(b"x" * 200_000) != []  # a huge line is cut, not held forever
-    assert splitter.flush() and splitter.flush() == []
+    assert splitter.feed(b"x" * 200_000) == []  # a long line is kept whole, not cut at 64 KB
+    assert splitter.flush() == ["x" * 200_000] and splitter.flush() == []
 
 
 def test_display_buffer_drops_oldest_lines_and_counts_them_but_never_other_events():

@@ -16,10 +16,17 @@ from collections import deque
 
 from .events import Dropped, Event, Output
 
+MAX_BYTES = 32 << 20
+"""Output text a buffer holds at most, whatever its count of lines: lines are kept whole up
+to 8 MiB (process/output.py), so a count alone would let a few thousand long lines take
+gigabytes for a display that reads slowly."""
+
 
 class EventBuffer:
-    def __init__(self, max_lines: int = 20_000, fair: bool = False) -> None:
+    def __init__(self, max_lines: int = 20_000, fair: bool = False,
+                 max_bytes: int = MAX_BYTES) -> None:
         self.max_lines = max_lines
+        self.max_bytes = max_bytes
         self.fair = fair
         self._held: dict[str, int] = {}  # lines buffered per process
         # two queues, merged by sequence number on drain, so trimming output is O(1) per
@@ -28,6 +35,7 @@ class EventBuffer:
         self._other: list[tuple[int, Event]] = []
         self._sequence = itertools.count()
         self._lines = 0
+        self._bytes = 0  # the characters of the lines held
         self._dropped: dict[str, int] = {}
         self._lock = threading.Lock()
         self.total_dropped = 0
@@ -40,12 +48,17 @@ class EventBuffer:
                 return
             self._output.append(entry)
             self._lines += len(event.lines)
+            self._bytes += sum(map(len, event.lines))
             name = event.process or ""
             self._held[name] = self._held.get(name, 0) + len(event.lines)
             while self._lines > self.max_lines:
                 self._trim(self._lines - self.max_lines)
+            while self._bytes > self.max_bytes and len(self._output) > 1:
+                self._trim(None)
 
-    def _trim(self, excess: int) -> None:
+    def _trim(self, excess: int | None) -> None:
+        """Drops `excess` lines (None: as many as bring the text under max_bytes, at least
+        one), the oldest first, or the loudest process's oldest when fair."""
         index = 0
         if self.fair:
             # a scan, but a fair buffer is a small one (a screenful a second)
@@ -53,11 +66,19 @@ class EventBuffer:
             index = next(i for i, (_, event) in enumerate(self._output)
                          if (event.process or "") == loudest)
         _, oldest = self._output[index]
+        if excess is None:
+            over, excess = self._bytes - self.max_bytes, 0
+            for line in oldest.lines:
+                excess += 1
+                over -= len(line)
+                if over <= 0:
+                    break
         cut = min(excess, len(oldest.lines))
         name = oldest.process or ""
         self._dropped[name] = self._dropped.get(name, 0) + cut
         self.total_dropped += cut
         self._lines -= cut
+        self._bytes -= sum(map(len, oldest.lines[:cut]))
         self._held[name] -= cut
         if cut == len(oldest.lines):
             del self._output[index]
@@ -73,6 +94,7 @@ class EventBuffer:
             self._output = deque()
             self._other = []
             self._lines = 0
+            self._bytes = 0
             self._held = {}
             self._dropped = {}
         notices = [Dropped(name, code=count,

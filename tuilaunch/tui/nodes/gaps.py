@@ -44,17 +44,27 @@ class GapReader:
         if gap is None or port is None:
             return
         take = min(gap.count, GAP_READ)
-        # reading upwards, the gap's newest lines come first: those next to the lines below
-        skip = gap.skip + gap.count - take if reading_up else gap.skip
-        try:
-            page = await self._engine().run(port.request(
-                "read_log", process=marker.process, start=gap.start, skip=skip, limit=take))
-        except SessionError as exc:
-            self.pane.gap_not_read(marker)  # asked again when next on screen
-            self._notify(f"{marker.process}: the lines not drawn could not be read: {exc}",
-                         severity="warning")
-            return
-        rows = list(page.get("lines") or [])
+        while True:
+            # reading upwards, the gap's newest lines come first: those next to the lines
+            # below
+            skip = gap.skip + gap.count - take if reading_up else gap.skip
+            try:
+                page = await self._engine().run(port.request(
+                    "read_log", process=marker.process, start=gap.start, skip=skip,
+                    limit=take))
+            except SessionError as exc:
+                self.pane.gap_not_read(marker)  # asked again when next on screen
+                self._notify(f"{marker.process}: the lines not drawn could not be read: "
+                             f"{exc}", severity="warning")
+                return
+            rows = list(page.get("lines") or [])
+            if not rows or len(rows) >= take:
+                break
+            # an answer carries a few MiB of text: of long lines, fewer than asked, the
+            # first of them; upwards, those next to the lines below are asked for instead
+            take = len(rows)
+            if not reading_up:
+                break
         if not rows:  # the file was removed or cut short meanwhile: the line says so
             self._notify(f"{marker.process}: its log file no longer has the lines not drawn "
                          "there", severity="warning")

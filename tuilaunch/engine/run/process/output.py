@@ -12,7 +12,11 @@ import re
 import unicodedata
 
 ANSI = re.compile(r"\x1b\[[0-9;?]*[ -/]*[@-~]|\x1b\][^\x07]*\x07")
-MAX_LINE = 64 * 1024
+MAX_LINE = 8 << 20
+"""The longest line kept whole: 8 MiB, eight times a 1 MiB robot description. Longer ones
+are cut into pieces of this size, so a process that never writes a newline costs at most
+this much per channel, and a piece sent to a client (JSON escapes a byte into at most six)
+stays below the session protocol's MAX_MESSAGE."""
 
 
 def strip_ansi(text: str) -> str:
@@ -126,16 +130,42 @@ def rewritten(tail: bytes) -> bytes:
 class LineSplitter:
     """Feeds chunks, yields whole lines; keeps the unfinished tail for the next chunk.
 
-    A line longer than MAX_LINE is cut into pieces rather than held forever.
+    A line is kept whole up to MAX_LINE bytes (a robot description, a JSON dump of a
+    message on one line); past that it is cut into MAX_LINE pieces, so a process that
+    never writes a newline holds at most that much. The tail is kept as the chunks it came
+    in and joined once, when its line ends: a long line costs its length, not its length
+    times its chunks.
     """
 
     def __init__(self) -> None:
-        self._tail = b""
+        self._pieces: list[bytes] = []
+        self._size = 0
 
     @property
     def tail(self) -> bytes:
         """The unfinished line so far (a prompt waiting for its answer)."""
-        return self._tail
+        return b"".join(self._pieces)
+
+    @property
+    def tail_size(self) -> int:
+        """How long the unfinished line is, without joining it."""
+        return self._size
+
+    def tail_head(self, limit: int) -> bytes:
+        """The first `limit` bytes of the unfinished line (what a screen shows of a
+        partial line), without joining the rest."""
+        head: list[bytes] = []
+        size = 0
+        for piece in self._pieces:
+            if size >= limit:
+                break
+            head.append(piece[:limit - size])
+            size += len(head[-1])
+        return b"".join(head)
+
+    def _keep(self, tail: bytes) -> None:
+        self._pieces = [tail] if tail else []
+        self._size = len(tail)
 
     def feed_block(self, chunk: bytes) -> bytes:
         """The complete lines this chunk ends, as one block of bytes, each line ending in
@@ -144,38 +174,50 @@ class LineSplitter:
         A line rewritten with `\r` (a progress bar, a download) is kept as a terminal shows
         it: its last state only, so it is never cut at MAX_LINE mid-word however long it
         keeps rewriting, and the log file gets that last state once the line ends."""
-        data = self._tail + chunk if self._tail else chunk
-        end = data.rfind(b"\n") + 1
-        block, tail = last_states(data[:end]), rewritten(data[end:])
-        if len(tail) > MAX_LINE:
-            pieces = []
-            while len(tail) > MAX_LINE:
-                pieces.append(tail[:MAX_LINE])
-                tail = tail[MAX_LINE:]
-            block += b"\n".join(pieces) + b"\n"
-        self._tail = tail
+        if not chunk:
+            return b""
+        end = chunk.rfind(b"\n") + 1
+        if end:
+            # the old tail's rewrites are already taken out, but for a `\r` at its very end
+            data = chunk if not self._pieces else b"".join(self._pieces) + chunk
+            cut = len(data) - len(chunk) + end
+            block = last_states(data[:cut])
+            if self._size + chunk.find(b"\n") > MAX_LINE:
+                first = block.find(b"\n")  # the line the tail was: cut as it would have been
+                block = _cut(block[:first]) + block[first:]
+            self._keep(rewritten(chunk[end:]))
+        else:
+            block = b""
+            if self._pieces and self._pieces[-1].endswith(b"\r"):
+                self._keep(b"")  # `\r` then more: the line starts again
+            rest = rewritten(chunk)
+            if len(rest) < len(chunk):
+                self._keep(b"")  # rewound within this chunk: what came before is gone
+            self._pieces.append(rest)
+            self._size += len(rest)
+        if self._size > MAX_LINE:
+            tail = _cut(b"".join(self._pieces))
+            rest = tail.rfind(b"\n") + 1
+            block += tail[:rest]
+            self._keep(tail[rest:])
         return block
 
     def flush_block(self) -> bytes:
-        tail, self._tail = self._tail, b""
+        tail = b"".join(self._pieces)
+        self._keep(b"")
         return tail + b"\n" if tail else b""
-
-    def feed_raw(self, chunk: bytes) -> list[bytes]:
-        data = self._tail + chunk if self._tail else chunk
-        parts = data.split(b"\n")
-        self._tail = parts.pop()
-        while len(self._tail) > MAX_LINE:
-            parts.append(self._tail[:MAX_LINE])
-            self._tail = self._tail[MAX_LINE:]
-        return parts
-
-    def flush_raw(self) -> list[bytes]:
-        tail, self._tail = self._tail, b""
-        return [tail] if tail else []
 
     def feed(self, chunk: bytes) -> list[str]:
         """Screen lines: a progress bar drawn with `\\r` becomes one line, not thousands."""
-        return [screen_text(p) for p in self.feed_raw(chunk)]
+        block = self.feed_block(chunk)
+        return screen_lines(block) if block else []
 
     def flush(self) -> list[str]:
-        return [screen_text(p) for p in self.flush_raw()]
+        block = self.flush_block()
+        return screen_lines(block) if block else []
+
+
+def _cut(line: bytes) -> bytes:
+    """A line longer than MAX_LINE as its pieces of MAX_LINE, each but the last ending in
+    `\n`."""
+    return b"\n".join(line[start:start + MAX_LINE] for start in range(0, len(line), MAX_LINE))

@@ -41,6 +41,11 @@ PARTIAL_AFTER = 0.05
 that long for sure, while a flood's chunks that end mid-line are never shown half."""
 
 
+PARTIAL_SHOWN = 64 * 1024
+"""The most of an unfinished line handed on to be shown before it ends: a line that grows
+to megabytes without a newline is not sent again and again as it grows."""
+
+
 NO_TERMINAL = ("it has no terminal: it was started with pipes, as without emulate_tty=True "
                "in ros2 launch (`i` in the TUI, or `tuilaunch restart --terminal`, restarts "
                "it with one)")
@@ -82,7 +87,7 @@ class ChannelReader:
             self.close()
             return
         self._deliver(self.splitter.feed_block(chunk))
-        if self.partial is not None and self.splitter.tail:
+        if self.partial is not None and self.splitter.tail_size:
             if b"\r" in chunk and time.monotonic() - self._progress_shown >= PROGRESS_EVERY:
                 # a line rewritten in place (a progress bar) never goes quiet: shown as it
                 # stands now and then, as a terminal would, not once it ends
@@ -96,8 +101,7 @@ class ChannelReader:
     def _quiet_now(self) -> None:
         """The quiet timer: hands on the unfinished line once nothing came for a while."""
         self._quiet = None
-        tail = self.splitter.tail
-        if not tail or self.done.done():
+        if not self.splitter.tail_size or self.done.done():
             return
         if self._read_since:  # still coming: look again later (one timer per channel)
             self._read_since = False
@@ -106,7 +110,9 @@ class ChannelReader:
         self._show_tail()
 
     def _show_tail(self) -> None:
-        tail = self.splitter.tail
+        # a screen's preview of the unfinished line: its head; the whole line comes when
+        # it ends (a prompt is short; a line longer than this is no prompt)
+        tail = self.splitter.tail_head(PARTIAL_SHOWN)
         if tail != self._shown_tail and self.partial is not None:
             self._shown_tail = tail
             self.partial(self.running, self.channel.name, screen_text(tail))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import itertools
 import os
 import re
@@ -24,7 +25,7 @@ from ...errors import LaunchError
 from ..event_buffer import EventBuffer
 from ..events import Event, Output, View
 from ..process.output import strip_ansi
-from .protocol import ProtocolError, Stamps, decode, encode, event_to_dict
+from .protocol import MESSAGE_TEXT, ProtocolError, Stamps, decode, encode, event_to_dict
 
 CLIENT_MAX_LINES = 20_000
 """Output lines queued per client before the oldest are dropped for that client."""
@@ -302,18 +303,19 @@ class ClientHub:
         touched = {process: state for process, state in self.states().items()
                    if queue.sent_states.get(process) != state}
         queue.sent_states.update(touched)  # a flood's batches do not repeat "running"
-        batch: dict[str, Any] = {"type": "events",
-                                 "events": [event_to_dict(e, queue.plain) for e in events]}
-        if queue.plain:  # on what is sent, not on every line of a flood
-            stamps = Stamps()
-            for data in batch["events"]:
-                if data["kind"] == "output":
-                    data["lines"] = [shown_line(line) for line in data.get("lines") or []]
-                    queue.stamps.add(stamps.pack(data) if queue.stamps.sending
-                                     else stamps.take(data))
-        if touched:
-            batch["states"] = touched
-        await send_message(writer, lock, batch)
+        for part in in_messages(events):
+            batch: dict[str, Any] = {"type": "events",
+                                     "events": [event_to_dict(e, queue.plain) for e in part]}
+            if queue.plain:  # on what is sent, not on every line of a flood
+                stamps = Stamps()
+                for data in batch["events"]:
+                    if data["kind"] == "output":
+                        data["lines"] = [shown_line(line) for line in data.get("lines") or []]
+                        queue.stamps.add(stamps.pack(data) if queue.stamps.sending
+                                         else stamps.take(data))
+            if touched:
+                batch["states"] = touched
+            await send_message(writer, lock, batch)
 
     async def _answer(self, message: dict[str, Any], writer: asyncio.StreamWriter,
                       lock: asyncio.Lock) -> None:
@@ -333,6 +335,31 @@ class ClientHub:
 
 
 _ROS_STAMP = re.compile(r"^(\[[A-Z]+\]\s*\[\d+\.\d{3})\d+\]")
+
+
+def in_messages(events: list[Event], budget: int = MESSAGE_TEXT) -> list[list[Event]]:
+    """A batch as the messages that carry it, in order: one unless its lines hold more
+    than `budget` characters (long lines, kept whole), when an output event's lines are
+    spread over several."""
+    parts: list[list[Event]] = [[]]
+    size = 0
+    for event in events:
+        if not isinstance(event, Output):
+            parts[-1].append(event)
+            continue
+        taken: list[str] = []
+        for line in event.lines:
+            if size + len(line) > budget and (size or taken):
+                if taken:
+                    parts[-1].append(dataclasses.replace(event, lines=taken))
+                parts.append([])
+                taken, size = [], 0
+            taken.append(line)
+            size += len(line)
+        if taken or not event.lines:
+            parts[-1].append(event if len(taken) == len(event.lines) else
+                             dataclasses.replace(event, lines=taken))
+    return [part for part in parts if part]
 
 
 def shown_line(line: str) -> str:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..events import Event, ExitCause, ProcessExited, event_of
+from .protocol import MESSAGE_TEXT
 
 LAUNCH_LOG = "@launch"
 """What `read_log` takes, instead of a process id, for launch.log: every event but output,
@@ -62,27 +63,39 @@ def read_lines(path: Path, end: int | None = None, start: int = 0) -> Iterator[L
                 yield line
 
 
-def tail_lines(path: Path, end: int, count: int) -> list[LogLine]:
+def tail_lines(path: Path, end: int, count: int,
+               budget: int | None = None) -> list[LogLine]:
     """The last `count` lines before byte `end`, read backwards: a huge log costs only its
-    tail."""
+    tail. `budget`: no more than that many bytes of them (at least the last line)."""
     if count <= 0 or end <= 0:
         return []
     try:
         handle = open(path, "rb")
     except OSError:
         return []
+    blocks: list[bytes] = []  # joined once: a long line is read in blocks, not copied in each
+    newlines = 0
     with handle:
         block = 1 << 16
         position = end
-        data = b""
-        while position > 0 and data.count(b"\n") <= count:
+        while position > 0 and newlines <= count:
+            if budget is not None and end - position > budget and newlines > 1:
+                break
             step = min(block, position)
             position -= step
             handle.seek(position)
-            data = handle.read(step) + data
+            blocks.append(handle.read(step))
+            newlines += blocks[-1].count(b"\n")
+    data = b"".join(reversed(blocks))
     if position > 0:
         data = data[data.index(b"\n") + 1:]  # the first line may be cut
     raws = data.split(b"\n")[:-1][-count:]
+    if budget is not None:
+        size, first = 0, len(raws)
+        while first > 0 and (size + len(raws[first - 1]) <= budget or first == len(raws)):
+            first -= 1
+            size += len(raws[first])
+        raws = raws[first:]
     lines = [parse(raw.decode("utf-8", "replace")) for raw in raws]
     return [line for line in lines if line is not None]
 
@@ -144,11 +157,14 @@ def read_log(path: Path, start: int = 0, end: int | None = None, skip: int = 0,
     end = size if end is None else min(int(end), size)
     start = max(0, int(start))
     if tail and skip <= 0 and start == 0:
-        lines = tail_lines(path, end, limit)  # backwards: a huge log costs only its tail
+        # backwards: a huge log costs only its tail
+        lines = tail_lines(path, end, limit, MESSAGE_TEXT)
         return {"lines": [[line.time, line.stream, line.text] for line in lines],
                 "next": end, "size": size, "skipped": None}
-    kept: collections.deque[list[object]] = collections.deque(maxlen=limit if tail else None)
+    kept: collections.deque[list[object]] = collections.deque()
+    sizes: collections.deque[int] = collections.deque()
     seen = 0
+    text = 0  # bytes of the lines kept: an answer carries at most MESSAGE_TEXT of them
     position = start
     try:
         handle = open(path, "rb")
@@ -160,8 +176,8 @@ def read_log(path: Path, start: int = 0, end: int | None = None, skip: int = 0,
             raw = handle.readline(end - position)
             if not raw.endswith(b"\n"):
                 break  # a half-written last line is the next reader's
-            if not tail and len(kept) >= limit:
-                break
+            if not tail and (len(kept) >= limit or (kept and text + len(raw) > MESSAGE_TEXT)):
+                break  # the client asks again from `next`
             position += len(raw)
             if skip > 0:
                 skip -= 1
@@ -170,6 +186,11 @@ def read_log(path: Path, start: int = 0, end: int | None = None, skip: int = 0,
             if line is None:
                 continue
             kept.append([line.time, line.stream, line.text])
+            sizes.append(len(raw))
+            text += len(raw)
             seen += 1
+            while tail and (len(kept) > limit or (text > MESSAGE_TEXT and len(kept) > 1)):
+                kept.popleft()  # the oldest go: `skipped` counts them
+                text -= sizes.popleft()
     return {"lines": list(kept), "next": position, "size": size,
             "skipped": seen - len(kept)}

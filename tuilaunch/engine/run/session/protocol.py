@@ -128,6 +128,12 @@ from .session_dir import SessionError
 
 MAX_MESSAGE = 64 << 20
 
+MESSAGE_TEXT = 8 << 20
+"""Output text one message carries at most (an event batch, a read_log answer), but for a
+single longer line, itself at most process/output.py's MAX_LINE (8 MiB): JSON escapes a
+character into at most six bytes, so a message stays below MAX_MESSAGE, past which the
+other side refuses to read."""
+
 PROTOCOL_VERSION = 2
 """The session protocol's version, in every hello and `status` (`version_fields`). Raise
 it when a message changes meaning: a detached session outlives an upgrade, and `HOST:NAME`
