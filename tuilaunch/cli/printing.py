@@ -7,7 +7,10 @@ from typing import Any
 
 from ..engine.plan.components import component_label
 from ..engine.plan.machines import Placement
-from ..engine.plan.model import ActionKind, ArgumentInfo, Plan, TreeItem
+from ..engine.plan.model import ActionKind, ArgumentInfo, Plan, ProcessPlan, TreeItem
+
+COMMAND_WIDTH = 60
+"""An ExecuteProcess's command is cut here in the tree (--print --json has it whole)."""
 
 
 def format_arguments(arguments: list[ArgumentInfo], top_file: str) -> str:
@@ -40,6 +43,18 @@ def argument_description(arg: ArgumentInfo) -> str:
         return arg.description
     text = arg.description if arg.description.endswith(".") else arg.description + "."
     return f"{text} Valid choices are: {arg.choices}"
+
+
+def process_title(proc: ProcessPlan) -> str:
+    """How the tree names a process: a ROS node by its node name (`/r2/talker`, or
+    `/r2/<talker>` when its code names it); an ExecuteProcess, which has no node name (as
+    ros2 launch describes it: by its cmd), by its command line, `$ sh -c 'sleep 1'`."""
+    if proc.kind != "process":
+        return proc.label
+    import shlex
+
+    line = shlex.join(proc.cmd)
+    return "$ " + (line if len(line) <= COMMAND_WIDTH else line[:COMMAND_WIDTH - 1] + "…")
 
 
 def _annotations(item: TreeItem, plan: Plan) -> str:
@@ -103,7 +118,9 @@ def format_tree(plan: Plan) -> str:
             last = index == len(item.children) - 1
             mark = "" if child.enabled else "(skipped) "
             notes = _annotations(child, plan)
-            lines.append(f"{prefix}{'└─ ' if last else '├─ '}{mark}{child.label}"
+            label = process_title(plan.process(child.ref)) \
+                if child.kind == "process" and child.ref else child.label
+            lines.append(f"{prefix}{'└─ ' if last else '├─ '}{mark}{label}"
                          + (f"  {notes}" if notes else ""))
             inner = prefix + ("   " if last else "│  ")
             components = _components(child, plan)
@@ -119,7 +136,7 @@ def format_tree(plan: Plan) -> str:
         lines.append("Not running:")
         for proc in skipped:
             assert proc.skipped_by is not None
-            lines.append(f"  {proc.id} {proc.label}: {proc.skipped_by.expression} is "
+            lines.append(f"  {proc.id} {process_title(proc)}: {proc.skipped_by.expression} is "
                          f"{proc.skipped_by.value!r}")
     for warning in plan.warnings:
         lines.append(f"warning: {warning}")
