@@ -166,6 +166,10 @@ def _main(argv: list[str] | None) -> int:
 
     options = launch_parser().parse_intermixed_args(argv)
     ensure_environment()
+    if options.on:  # the file is HOST's, read and run there (client/session_start.py)
+        from .start_on import start_on
+
+        return start_on(options)
     # a launch file's own print() must not corrupt the JSON a tool reads on stdout
     file_output = contextlib.redirect_stdout(sys.stderr) if options.print_plan and \
         options.json else contextlib.nullcontext()

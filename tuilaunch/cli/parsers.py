@@ -75,6 +75,9 @@ def launch_parser() -> argparse.ArgumentParser:
                         "exit (tuilaunch attach NAME opens it)")
     parser.add_argument("--name", metavar="NAME",
                         help="the session's name (default: the file's stem and a number)")
+    parser.add_argument("--on", metavar="HOST",
+                        help="start the launch on HOST (over ssh; its file and packages are "
+                        "HOST's) as a session, then attach to it (--detach: only start)")
     parser.add_argument("--keep-on-hangup", action="store_true",
                         help="TUI: a dropped terminal (SIGHUP) detaches instead of stopping "
                         "the launch")

@@ -84,3 +84,25 @@ def _start_server(path: str, arguments: dict[str, str], name: str, log_dir: Path
             raise SessionError(f"session {name} did not answer within {timeout:g} s")
         time.sleep(0.02)
     return server
+
+
+REMOTE_START_TIMEOUT = 90.0
+"""Seconds `--on HOST` waits for the session there to answer (ssh, then the launch's own
+start, which `--detach` there waits for up to 60 s)."""
+
+
+def start_remote_session(host: str, items: list[str], name: str | None) -> str:
+    """`tuilaunch --on HOST FILE [name:=value ...]`: FILE (or PACKAGE FILE) started on HOST
+    as a detached session, by the tuilaunch there (`tuilaunch ITEMS --detach` over ssh: the
+    file, its packages and its environment are HOST's); the session's name. A RemoteError
+    (SessionError) names what failed: HOST not reached, or the remote tuilaunch's own line
+    (no such file, a name taken)."""
+    from ..engine.run.machines.remote import check_host, run_remote
+
+    args = [*items, "--detach", *(["--name", name] if name else [])]
+    out = run_remote(check_host(host), args, timeout=REMOTE_START_TIMEOUT)
+    started = out.strip().splitlines()[-1:] if out.strip() else []
+    if not started:
+        raise SessionError(f"{host}: the remote tuilaunch started no session",
+                           hint="is TUILAUNCH_REMOTE a tuilaunch?")
+    return started[0].strip()
