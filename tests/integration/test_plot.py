@@ -55,6 +55,7 @@ def generate_launch_description():
     ])
 """
 WAVE, FAST = "/plot/wave", "/plot/fast"
+X, Z = f"{WAVE}/x", f"{WAVE}/z"
 
 
 def tl(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
@@ -89,13 +90,13 @@ def test_csv_prints_every_message_as_published(session):
     done = tl("plot", session, WAVE, "x", "y", "z", "--csv", "--duration", "3")
     assert done.returncode == 0, done.stderr
     header, rows = csv_rows(done.stdout)
-    assert header == ["time", "x", "y", "z"]
+    assert header == ["time", f"{WAVE}/x", f"{WAVE}/y", f"{WAVE}/z"]
     assert len(rows) > 20
-    samples = [int(float(row["z"])) for row in rows]
+    samples = [int(float(row[f"{WAVE}/z"])) for row in rows]
     # every message, none missing between the first and the last, each value exact
     assert samples == list(range(samples[0], samples[0] + len(samples)))
     for row, k in zip(rows, samples, strict=True):
-        assert (float(row["x"]), float(row["y"])) == expected(k, 50.0, 4.0)
+        assert (float(row[f"{WAVE}/x"]), float(row[f"{WAVE}/y"])) == expected(k, 50.0, 4.0)
     times = [float(row["time"]) for row in rows]
     assert times[0] == 0.0 and times == sorted(times) and times[-1] > 0
 
@@ -104,10 +105,10 @@ def test_csv_of_a_1khz_topic_misses_no_message(session):
     done = tl("plot", session, FAST, "x", "z", "--csv", "--duration", "3")
     assert done.returncode == 0, done.stderr
     _, rows = csv_rows(done.stdout)
-    samples = [int(float(row["z"])) for row in rows]
+    samples = [int(float(row[f"{FAST}/z"])) for row in rows]
     assert len(samples) > 500
     assert samples == list(range(samples[0], samples[0] + len(samples)))
-    assert all(float(row["x"]) == expected(k, 1000.0, 4.0)[0]
+    assert all(float(row[f"{FAST}/x"]) == expected(k, 1000.0, 4.0)[0]
                for row, k in zip(rows, samples, strict=True))
 
 
@@ -117,7 +118,7 @@ def test_ctrl_c_ends_the_csv_quietly(session):
                             text=True)
     try:
         assert proc.stdout is not None
-        assert proc.stdout.readline() == "time,x\n"
+        assert proc.stdout.readline() == f"time,{WAVE}/x\n"
         first = proc.stdout.readline()
         assert first.startswith("0.000000,")
         proc.send_signal(signal.SIGINT)
@@ -301,8 +302,11 @@ async def test_the_selected_node_detail_line_draws_its_cpu_and_memory_trend(sess
         drawn = line()
         assert drawn.startswith("wave-1 (/wave): running")
         cpu, memory = drawn.rstrip().rsplit(" cpu ", 1)[1].split(" mem ")
-        for bars in (cpu, memory):  # a bar a column, from the last minutes
-            assert len(bars.strip()) == 10 and set(bars.strip()) <= set("▁▂▃▄▅▆▇█"), drawn
+        for shown in (cpu, memory):  # a bar a column, from the last minutes, then its max
+            bars = shown.split()[0]
+            assert len(bars) == 10 and set(bars) <= set("▁▂▃▄▅▆▇█"), drawn
+            assert "█" in bars  # from zero to the max: the max is a full bar
+        assert cpu.split()[1].endswith("%") and memory.split()[1][-1] in "KMG", drawn
         await pilot.press("down")  # another node: its own trend, its minutes before too
         await until(pilot, lambda: line().startswith("fast-2 (/fast)") and " cpu " in line())
         assert len(app.trends["fast-2"]) >= 3
@@ -311,7 +315,7 @@ async def test_the_selected_node_detail_line_draws_its_cpu_and_memory_trend(sess
 # --- on screen -------------------------------------------------------------------------------
 
 async def test_p_in_the_topics_tab_plots_the_topic_with_its_figures(session):
-    from textual.widgets import DataTable, Sparkline
+    from textual.widgets import DataTable
     from textual_plotext import PlotextPlot
 
     from tuilaunch.tui.app import make_app
@@ -331,15 +335,18 @@ async def test_p_in_the_topics_tab_plots_the_topic_with_its_figures(session):
         table.move_cursor(row=panel.shown.index(WAVE))
         await until(pilot, lambda: panel.selected == WAVE)
         # the selected topic's rate over the last minutes, as a sparkline above its detail
-        spark = panel.query_one("#tpc-spark", Sparkline)
-        await until(pilot, lambda: len(spark.data or []) >= 3)
+        await until(pilot, lambda: len(panel.trend_data) >= 3)
         assert panel.query_one("#tpc-trend").has_class("shown")
-        assert 40 < spark.data[-1] < 60  # type: ignore[index]
+        assert 40 < panel.trend_data[-1] < 60
+        # a steady 50 Hz is a steady row of high bars, from zero to the max said beside
+        bars = str(panel.query_one("#tpc-spark").render()).strip()
+        assert len(bars) >= 3 and set(bars) <= set("▇█"), bars
+        assert "(0 to " in str(panel.query_one("#tpc-trend-label").render())
         await pilot.press("p")
         await until(pilot, lambda: isinstance(app.screen, PlotScreen))
         screen = app.screen
         assert isinstance(screen, PlotScreen)
-        assert screen.series.fields == ["x"]  # the first numeric field
+        assert screen.series.columns == [X]  # the first numeric field, named TOPIC/FIELD
         # a second field picked: z, the sample's number, says which message was last
         screen.set_fields(["x", "z"])
         await pilot.press("w")  # 60 s: the spike, every 4 s, is on it
@@ -348,12 +355,12 @@ async def test_p_in_the_topics_tab_plots_the_topic_with_its_figures(session):
         # subscription's depth), so wait for a trough received whole: 30 a minute
         def settled() -> bool:
             drawn = screen.drawn
-            return "z" in drawn and "x" in drawn and drawn["x"][2] == 10.0 and \
-                drawn["x"][1] <= -1.98
+            return Z in drawn and X in drawn and drawn[X][2] == 10.0 and \
+                drawn[X][1] <= -1.98
         await until(pilot, settled, limit=90)
-        last, low, high = screen.drawn["x"]
+        last, low, high = screen.drawn[X]
         assert low == pytest.approx(-2.0, rel=0.01) and high == pytest.approx(10.0, rel=0.01)
-        k = int(screen.drawn["z"][0])
+        k = int(screen.drawn[Z][0])
         assert last == pytest.approx(expected(k, 50.0, 4.0)[0], rel=0.01, abs=1e-3)
         # the curve is drawn (braille dots), with each field's figures beside it; back on
         # the 10 s window (w: 5 min, then 10 s again) it spans the plot's width
@@ -365,7 +372,7 @@ async def test_p_in_the_topics_tab_plots_the_topic_with_its_figures(session):
             return sum(1 for c in canvas if 0x2800 < ord(c) <= 0x28FF)
         await until(pilot, lambda: dots() > 40, limit=90)
         side = str(screen.query_one("#plot-side").render())
-        assert "max  10" in side and "■ x" in side and "■ z" in side
+        assert "max  10" in side and f"■ {X}" in side and f"■ {Z}" in side
         await pilot.press("q")
         await until(pilot, lambda: not isinstance(app.screen, PlotScreen))
 
@@ -399,8 +406,9 @@ def test_plot_command_shows_the_curve_full_screen_at_80x24_and_q_leaves(session,
                 break
             time.sleep(0.5)
         lines = screen.splitlines()
-        assert lines[0].split() == [WAVE, "geometry_msgs/msg/Point", "10", "s", "(w)", "live"]
-        assert "max  10" in screen and "■ x" in screen and "■ y" in screen, screen
+        assert lines[0].split() == [WAVE, "geometry_msgs/msg/Point", "10", "s", "(w)",
+                                    "arrival", "(t)", "live"]
+        assert "max  10" in screen and f"■ {X}" in screen and f"■ {WAVE}/y" in screen, screen
         assert sum(1 for c in screen if 0x2800 < ord(c) <= 0x28FF) > 40, screen
         assert all(len(line) <= 80 for line in lines) and len(lines) <= 24
         tmux("send-keys", "-t", "plot", "q")

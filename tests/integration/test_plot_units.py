@@ -9,12 +9,18 @@ import math
 import pytest
 from geometry_msgs.msg import PolygonStamped
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import LaserScan
+from sensor_msgs.msg import JointState, LaserScan
 from std_msgs.msg import Bool, String
 
-from tuilaunch.client.plot_series import PlotSeries, rebinned
+from tuilaunch.client.plot_series import PlotSeries, Source, rebinned
 from tuilaunch.engine.ros.plot.buckets import FieldBuckets
-from tuilaunch.engine.ros.plot.fields import FieldError, compile_path, numeric_fields
+from tuilaunch.engine.ros.plot.fields import (
+    FieldError,
+    compile_path,
+    has_sequences,
+    numeric_fields,
+    stamp_reader,
+)
 
 
 def test_numeric_fields_are_listed_by_dotted_path_nested_and_indexed():
@@ -92,16 +98,48 @@ def test_a_slow_topic_bucket_closes_when_its_time_is_over():
 
 
 def test_the_plot_keeps_its_own_stream_points_once_and_rebins_them_keeping_the_spike():
-    series = PlotSeries(["x"], tag=2)
+    old = Source("", "/a", ["x"])
+    series = PlotSeries([old])
+    source = Source("", "/a", ["x"])
+    assert series.put(source) is old  # the same topic asked again: its new stream
     points = [[t * 50, -1.0, 1.0 if t != 50 else 9.0, 0.5] for t in range(200)]  # ms
-    assert not series.add({"tag": 1, "t0": 7, "points": {"x": points}})  # the one replaced
-    assert series.add({"tag": 2, "t0": 7, "points": {"x": points[:100]}})
-    assert series.add({"tag": 2, "t0": 7, "points": {"x": points[90:]}})  # again: kept once
-    assert len(series.points["x"]) == 200
+    assert not series.add({"tag": old.tag, "t0": 7, "points": {"x": points}})  # replaced
+    assert series.add({"tag": source.tag, "t0": 7, "points": {"x": points[:100]}})
+    assert series.add({"tag": source.tag, "t0": 7, "points": {"x": points[90:]}})  # once
+    assert len(series.points["/a/x"]) == 200
     end = series.newest()
     assert end == pytest.approx(7 + 199 / 20)
-    stats = series.stats("x", 10.0, end)
+    stats = series.stats("/a/x", 10.0, end)
     assert (stats.last, stats.low, stats.high) == (0.5, -1.0, 9.0)
-    xs, ys = rebinned(series.shown("x", 10.0, end), end - 10.0, end, 40)
+    xs, ys = rebinned(series.shown("/a/x", 10.0, end), end - 10.0, end, 40)
     assert len(xs) == len(ys) <= 80 and max(ys) == 9.0 and min(ys) == -1.0
     assert xs == sorted(xs)
+
+
+def test_a_sample_message_lists_every_element_of_its_sequences():
+    joints = JointState(name=["a", "b", "c"], position=[0.1, 0.2, 0.3], velocity=[1.0])
+    fields = numeric_fields(JointState, sample=joints)
+    assert [f for f in fields if "[" in f] == [
+        "position[0]", "position[1]", "position[2]", "velocity[0]", "effort[0]"]
+    assert has_sequences(JointState) and not has_sequences(Odometry)
+    # without a message, the type alone: a sequence's first element
+    assert "position[1]" not in numeric_fields(JointState)
+
+
+def test_a_stamp_is_read_where_the_type_has_a_header():
+    joints = JointState()
+    joints.header.stamp.sec, joints.header.stamp.nanosec = 1_000_000, 250_000_000
+    read = stamp_reader(JointState)
+    assert read is not None and read(joints) == 1_000_000.25
+    assert stamp_reader(Bool) is None
+
+
+def test_a_stamp_older_than_what_was_sent_is_folded_at_the_end_not_lost():
+    buckets = FieldBuckets(width=0.05)
+    for k in range(10):
+        buckets.add(100 + k * 0.05, float(k))
+    buckets.add(99.0, -5.0)  # a stamp from the past: into the open bucket
+    buckets.close_until(200)
+    sent = buckets.since(-1)
+    assert sum(b.count for b in sent) == 11 and min(b.low for b in sent) == -5.0
+    assert [b.time for b in sent] == sorted(b.time for b in sent)

@@ -24,7 +24,7 @@ from tuilaunch.tui.screens.dialogs import (
 )
 from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion
 from tuilaunch.tui.screens.params_panel import ParamsPanel
-from tuilaunch.tui.screens.plot_screen import FieldPicker
+from tuilaunch.tui.screens.plot_pickers import FieldPicker
 from tuilaunch.tui.screens.services_panel import ServicesPanel
 from tuilaunch.tui.screens.topics_panel import TopicsPanel
 
@@ -55,7 +55,8 @@ DIALOGS: dict[str, Callable[[], Screen[Any]]] = {
     "tool": lambda: PrefixPrompt("talker-1", ["gdb -ex run --args", "valgrind"]),
     "command": lambda: CommandScreen("talker-1", "env -- ROS_DOMAIN_ID=3 /opt/demo/talker "
                                      "--ros-args -r __node:=talker -r __ns:=/r1"),
-    "plot_fields": lambda: FieldPicker(["linear.x", "linear.y", "angular.z"], ["linear.x"]),
+    "plot_fields": lambda: FieldPicker([(f, f) for f in ("linear.x", "linear.y", "angular.z")],
+                                       ["linear.x"]),
 }
 
 

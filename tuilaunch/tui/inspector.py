@@ -185,33 +185,18 @@ class Inspector(Navigation):
             self.notify(f"{topic} ({info.get('type')}) has no numeric field to plot",
                         severity="warning", title="plot")
             return
-        from .screens.plot_screen import PlotScreen  # plotext: only once a plot is shown
-
-        def ask(fields: list[str], tag: int) -> None:
-            self.run_worker(self._ask_plot(topic, fields, tag), group="inspector",
-                            exit_on_error=False)
+        from ..client.plot_series import Source
+        from .screens.plot_screen import PlotScreen, SessionPlots  # plotext: once shown
 
         def leave() -> None:
             self.plot_screen = None
             self.pop_screen()
-            self.run_worker(self._stop_plot(topic), group="inspector", exit_on_error=False)
 
-        self.plot_screen = PlotScreen(topic, str(info.get("type")), numeric, numeric[:1],
-                                      ask, leave)
+        # the screen asks its streams of the session itself (plot, plot_fields, topics,
+        # plot_stop), as `tuilaunch plot` and the fleet's do: this app hands it the events
+        self.plot_screen = PlotScreen(SessionPlots({"": self.inspect}, leave),
+                                      [Source("", topic, numeric[:1])])
         self.push_screen(self.plot_screen)
-        ask(numeric[:1], 1)
-
-    async def _ask_plot(self, topic: str, fields: list[str], tag: int) -> None:
-        try:
-            await self.inspect("plot", topic=topic, fields=fields, tag=tag)
-        except SessionError as exc:
-            self.notify(str(exc).split(": ", 1)[-1], severity="error", title="plot")
-
-    async def _stop_plot(self, topic: str) -> None:
-        try:
-            await self.inspect("plot_stop", topic=topic)
-        except SessionError:
-            pass  # the session or its link went: the stream went with it
 
     # --- from the Nodes tab ------------------------------------------------------------------
 

@@ -1,78 +1,101 @@
 """`tuilaunch plot NAME TOPIC FIELD ...` without --csv: the plot screen of the TUI
 (screens/plot_screen.py), full screen in a terminal of its own, `q` leaves.
 
-It reads the session's link (a blocking one, client/link.py) on a thread of its own and
-hands each `plot` event to the screen; a change of fields is sent on the same link, its
-reply read by the thread among the events.
+It reaches each session as the TUI does, through its port (client/remote_supervisor.py,
+on an engine thread of its own): the screen asks its streams of them (`SessionPlots`), and
+each session's `plot` readings are handed to it. A session that ends, or an ssh link that
+drops, ends the plot with the line the other streaming commands say (`error` keeps it for
+the command line: a LinkLost, status 1; a SessionError, status 2).
 """
 
 from __future__ import annotations
 
-import threading
-import time
+from collections import deque
+from collections.abc import Awaitable
+from functools import partial
+from pathlib import Path
 from typing import Any
 
 from textual.app import App
 
-from ..client.link import Link
-from .screens.plot_screen import PlotScreen
+from ..client.link import LinkLost, parse_session
+from ..client.plot_series import Source
+from ..client.port import LaunchPort
+from ..engine.errors import LaunchError
+from ..engine.run.engine_thread import EngineThread
+from ..engine.run.events import Event, PlotSamples
+from ..engine.run.session.session_dir import SessionError
+from .screens.plot_screen import PlotScreen, SessionPlots
 
-READ_SLICE = 0.2
-"""Seconds the reading thread waits at a time before it looks whether the app has ended."""
+DRAIN_S = 0.1
+"""Seconds between handing the readings received to the screen."""
 
 
 class PlotApp(App[int]):
-    """One plot, full screen."""
+    """One plot, full screen, of the sessions in `ports` (by the name the user gave)."""
 
-    def __init__(self, link: Link, answer: dict[str, Any], duration: float | None) -> None:
+    ENABLE_COMMAND_PALETTE = False  # the footer's room is the plot's keys'
+
+    def __init__(self, engine: EngineThread, ports: dict[str, LaunchPort],
+                 sources: list[Source], stamp: bool, duration: float | None,
+                 runs: dict[str, Any]) -> None:
+        """`runs`: each port's `run()` future (its end is the session's, or its link's)."""
         super().__init__()
-        self.link = link
-        self.answer = answer
+        self.engine = engine
+        self.ports = ports
+        self.runs = runs
         self.duration = duration
-        self.ended = threading.Event()
-        self.error: str | None = None
-        self.plot_screen = PlotScreen(
-            str(answer["topic"]), str(answer["type"]), list(answer["numeric"]),
-            list(answer["fields"]), self._ask, self._leave)
+        self.error: LaunchError | None = None
+        self.readings: deque[dict[str, Any]] = deque()
+        requesters = {label: partial(self._request, port) for label, port in ports.items()}
+        self.plot_screen = PlotScreen(SessionPlots(requesters, self._leave), sources, stamp,
+                                      started=True, folder=Path.cwd())
+        for port in ports.values():
+            port.subscribe(self._take)
+
+    def _take(self, event: Event) -> None:
+        """On the engine thread: a reading kept for the screen's next drain."""
+        if isinstance(event, PlotSamples):
+            self.readings.append(event.data or {})
+
+    def _request(self, port: LaunchPort, op: str, **fields: Any) -> Awaitable[Any]:
+        return self.engine.run(port.request(op, **fields))
 
     def on_mount(self) -> None:
         self.push_screen(self.plot_screen)
-        threading.Thread(target=self._read, daemon=True, name="plot link").start()
+        self.set_interval(DRAIN_S, self._drain)
         if self.duration is not None:
             self.set_timer(self.duration, self._leave)
 
-    def _ask(self, fields: list[str], tag: int) -> None:
-        self.link.send("plot", topic=self.answer["topic"], fields=fields, tag=tag)
+    def _drain(self) -> None:
+        while self.readings:
+            self.plot_screen.add(self.readings.popleft())
+        if self.error is None:
+            self.error = self._gone()
+            if self.error is not None:
+                self._leave()
+
+    def _gone(self) -> LaunchError | None:
+        """Why the plot cannot go on: a link lost, a session ended; None while all run."""
+        for label, port in self.ports.items():
+            lost = port.link_lost
+            if lost is not None:  # said as hz and echo say it: the session may run on
+                host = parse_session(label).host or label
+                return LinkLost(f"link to {host} lost: {port.lost_reason or 'closed'}")
+            if self.runs[label].done():
+                return SessionError(f"session {label} ended")
+        return None
 
     def _leave(self) -> None:
-        self.ended.set()
         self.exit(0 if self.error is None else 1)
 
-    def _read(self) -> None:
-        """Until the app ends or the session does: events to the screen, refusals said."""
-        while not self.ended.is_set():
-            try:
-                message = self.link.receive_until(time.monotonic() + READ_SLICE)
-            except TimeoutError:
-                continue
-            except (OSError, ValueError):
-                message = None
-            if message is None or message.get("type") == "ended":
-                if not self.ended.is_set():
-                    self.error = f"session {self.link.name} ended"
-                    self.call_from_thread(self._leave)
-                return
-            if message.get("type") == "reply" and not message.get("ok"):
-                self.call_from_thread(self.notify, str(message.get("error")),
-                                      severity="error", title="plot")
-            for event in message.get("events") or []:
-                if event.get("kind") == "plot":
-                    self.call_from_thread(self.plot_screen.add, event.get("data") or {})
 
-
-def run_plot_app(link: Link, answer: dict[str, Any], duration: float | None) -> int:
-    app = PlotApp(link, answer, duration)
-    status = app.run()
+def run_plot_app(engine: EngineThread, ports: dict[str, LaunchPort], sources: list[Source],
+                 stamp: bool, duration: float | None, runs: dict[str, Any]) -> None:
+    """The plot until `q`, `duration` or its end; raises what ended it (LaunchError)."""
+    app = PlotApp(engine, ports, sources, stamp, duration, runs)
+    app.run()
     if app.error is not None:
-        print(f"tuilaunch plot: {app.error}")
-    return int(status or 0)
+        raise app.error
+
+

@@ -18,7 +18,6 @@ from textual import on
 from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.message import Message
-from textual.renderables.sparkline import Sparkline
 from textual.timer import Timer
 from textual.widgets import Static, Tree
 
@@ -27,6 +26,7 @@ from ...engine.run.events import Event
 from ..output_store import Line, OutputStore
 from ..screens.output_panel import NodesView, OutputPanel
 from ..screens.tree_panel import LaunchTree, RowData
+from ..screens.units import short_bytes, spark
 from .commands import SelectionCommands
 from .events import Batch, NodeEvents
 from .gaps import GapReader
@@ -34,6 +34,8 @@ from .host import NodesHost
 
 TREND_WIDTH = 10
 """Columns of each sparkline (CPU, memory) at the end of the detail line."""
+SCALE_WIDTH = 6
+"""Columns of each sparkline's scale after it (its max: ` 12%`, ` 66M`)."""
 
 
 class SessionEvents(Message, bubble=False):
@@ -166,7 +168,7 @@ class NodesTab(Vertical):
         process = self.selected_process()
         trend = list(self.trend_of(process) or ()) if process is not None else []
         # a column to spare: a line one cell too long would wrap
-        room = self.detail.size.width - len(text) - 2 * (TREND_WIDTH + 5) - 1
+        room = self.detail.size.width - len(text) - 2 * (TREND_WIDTH + 5 + SCALE_WIDTH) - 1
         if len(trend) < 2 or room < 0:
             trend = []
         drawn = (text, process, tuple(trend))
@@ -176,19 +178,14 @@ class NodesTab(Vertical):
         line = Text(text, style=_detail_style(text))
         if trend:
             line.append(" " * room)
-            for label, data in ((" cpu ", [c for c, _ in trend]),
-                                (" mem ", [r for _, r in trend])):
+            cpu, memory = [c for c, _ in trend], [r for _, r in trend]
+            # from zero to the max said after the bars: 10 % beside 12 % are alike
+            for label, data, high in ((" cpu ", cpu, f"{max(cpu):.0f}%"),
+                                      (" mem ", memory, short_bytes(max(memory)))):
                 line.append(label, style="dim")
-                line.append_text(self._sparkline(data))
+                line.append(spark(data, TREND_WIDTH))
+                line.append(f" {high}".ljust(SCALE_WIDTH), style="dim")
         self.detail.update(line)
-
-    def _sparkline(self, data: list[float]) -> Text:
-        """Textual's Sparkline of `data`, TREND_WIDTH columns, as text for the detail
-        line (a line of text, as the rest of it: read back by the tests, cut alike)."""
-        console = self.app.console
-        options = console.options.update_width(TREND_WIDTH)
-        segments = console.render(Sparkline(data, width=TREND_WIDTH), options)
-        return Text.assemble(*((s.text, s.style or "") for s in segments if s.text != "\n"))
 
     # --- what a link did not send ------------------------------------------------------------
 

@@ -57,3 +57,24 @@ def usage_text(usage: dict[str, Any]) -> str:
     if usage.get("growing"):
         parts.append("memory keeps growing")
     return ", ".join(parts)
+
+
+BARS = "▁▂▃▄▅▆▇█"
+
+
+def spark(data: list[float], width: int) -> str:
+    """`data` as a sparkline `width` bars wide (each bar the max of its share of the
+    samples; fewer samples than bars are stretched, as Textual's Sparkline does), from a
+    zero baseline to the largest value: a steady rate is a steady row of full bars (not
+    nothing, as scaled between its own min and max), 10 % beside 12 % CPU nearly the same
+    height. Say the scale beside it (its max)."""
+    if not data or width < 1:
+        return ""
+    n = len(data)
+    shares = [max(data[i * n // width:max((i + 1) * n // width, i * n // width + 1)])
+              for i in range(width)]
+    high = max(shares)
+    if high <= 0:
+        return BARS[0] * width
+    top = len(BARS) - 1
+    return "".join(BARS[max(0, min(top, round(v / high * top)))] for v in shares)

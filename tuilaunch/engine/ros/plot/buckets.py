@@ -58,8 +58,13 @@ class FieldBuckets:
             return
         index = math.floor(time / self.width)
         bucket = self.open
-        if bucket is not None and bucket.index == index:
-            bucket.time = time
+        if bucket is None and self.closed and index <= self.closed[-1].index:
+            # a header.stamp older than what was sent: drawn where the buckets end
+            index, time = self.closed[-1].index + 1, max(time, self.closed[-1].time)
+        if bucket is not None and index <= bucket.index:
+            # the same bucket; or a header.stamp older than it (stamps need not come in
+            # order): folded into it, as buckets already sent are not sent again
+            bucket.time = max(bucket.time, time)
             bucket.low = min(bucket.low, value)
             bucket.high = max(bucket.high, value)
             bucket.last = value

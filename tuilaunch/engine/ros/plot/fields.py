@@ -4,8 +4,9 @@
 The paths are read from the message class's own description (its SLOT_TYPES, rosidl's
 parsed .msg), not from a sample: a field is checked before the first message comes, and
 an error lists every numeric field the topic has. Fixed-size arrays list each element
-(up to LISTED_ELEMENTS); a sequence, whose length only a message knows, lists its first
-element, and any index is accepted (a message too short for it has no value there).
+(up to LISTED_ELEMENTS); a sequence, whose length only a message knows, lists each element
+of a sample message when one is given (`position[0..n]` of the joint states received last),
+else its first; any index is accepted (a message too short for it has no value there).
 """
 
 from __future__ import annotations
@@ -72,31 +73,73 @@ def _basic(kind: Any) -> str | None:
     return name if isinstance(name, str) and not hasattr(kind, "value_type") else None
 
 
-def numeric_fields(cls: Any, prefix: str = "", depth: int = 0) -> list[str]:
-    """Every numeric field of a message class by dotted path, in the .msg's order."""
+def numeric_fields(cls: Any, prefix: str = "", depth: int = 0,
+                   sample: Any = None) -> list[str]:
+    """Every numeric field of a message class by dotted path, in the .msg's order;
+    `sample`: a message of it, whose sequences' lengths are listed (each element, up to
+    LISTED_ELEMENTS) where the type alone offers a sequence's first element."""
     found: list[str] = []
     if depth > 16:  # message types do not nest this deep; a guard, not a limit met
         return found
     for name, kind in _slots(cls):
         path = f"{prefix}{name}"
+        value = getattr(sample, name, None) if sample is not None else None
         value_type = getattr(kind, "value_type", None)
         if value_type is None:
-            found += _leaf_fields(kind, path, depth)
+            found += _leaf_fields(kind, path, depth, value)
             continue
         size = getattr(kind, "size", None)  # an Array; a sequence has maximum_size or none
-        indexes = range(min(size, LISTED_ELEMENTS)) if isinstance(size, int) else range(1)
-        for index in indexes:
-            found += _leaf_fields(value_type, f"{path}[{index}]", depth)
+        if not isinstance(size, int):
+            size = len(value) if value is not None and len(value) > 0 else 1
+        for index in range(min(size, LISTED_ELEMENTS)):
+            element = value[index] if value is not None and index < len(value) else None
+            found += _leaf_fields(value_type, f"{path}[{index}]", depth, element)
     return found
 
 
-def _leaf_fields(kind: Any, path: str, depth: int) -> list[str]:
+def _leaf_fields(kind: Any, path: str, depth: int, sample: Any = None) -> list[str]:
     basic = _basic(kind)
     if basic is not None:
         return [path] if basic in NUMERIC else []
     if hasattr(kind, "namespaces"):
-        return numeric_fields(_nested_class(kind), path + ".", depth + 1)
+        return numeric_fields(_nested_class(kind), path + ".", depth + 1, sample)
     return []  # strings
+
+
+def has_sequences(cls: Any, depth: int = 0) -> bool:
+    """Whether a message of the type may hold a sequence (whose length only a message
+    knows): the field picker then asks for one message to list every element."""
+    if depth > 16:
+        return False
+    for _, kind in _slots(cls):
+        element = getattr(kind, "value_type", None)
+        if element is not None:
+            if not isinstance(getattr(kind, "size", None), int):
+                return True
+            kind = element
+        if hasattr(kind, "namespaces") and has_sequences(_nested_class(kind), depth + 1):
+            return True
+    return False
+
+
+STAMP = "header.stamp"
+"""Where a message's own time is (std_msgs/Header): `--stamp` plots against it."""
+
+
+def stamp_reader(cls: Any) -> Any:
+    """A function reading a message's header.stamp in seconds (epoch, or the sim clock's),
+    or None when the type has no header.stamp."""
+    try:
+        compile_path(cls, f"{STAMP}.sec")
+        compile_path(cls, f"{STAMP}.nanosec")
+    except FieldError:
+        return None
+
+    def stamp(message: Any) -> float:
+        time = message.header.stamp
+        return float(time.sec) + time.nanosec * 1e-9
+
+    return stamp
 
 
 def small(cls: Any, depth: int = 0) -> bool:

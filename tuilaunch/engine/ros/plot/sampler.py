@@ -6,6 +6,8 @@ executor runs it: a thread of its own waits on a wait set and takes every messag
 (an executor callback costs a whole core at 1 kHz). Each message is deserialized by rclpy's
 C code, its fields read, and its values folded into each field's buckets (buckets.py)
 and appended to the rows of the clients that want every message (`tuilaunch plot --csv`).
+A type with a header.stamp has each field folded twice, by arrival and by stamp: a plot
+switches between the two times at once, with the minutes kept of both.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Any
 
 from ..rates import IDLE_WAIT_NS, NotByExecutor
 from .buckets import FieldBuckets
-from .fields import FieldPath
+from .fields import FieldPath, stamp_reader
 
 RAW_KEEP = 200_000
 """Rows kept for a client that wants every message and has not been sent them yet: at
@@ -27,10 +29,12 @@ counted (the client says so)."""
 
 
 class RawRows:
-    """Every message's values of one client's fields, until sent: (time, values)."""
+    """Every message's values of one client's fields, until sent: (time, values), the
+    time its arrival or, with `stamp`, its header.stamp."""
 
-    def __init__(self, fields: list[FieldPath]) -> None:
+    def __init__(self, fields: list[FieldPath], stamp: bool = False) -> None:
         self.fields = fields
+        self.stamp = stamp
         self.rows: deque[tuple[float, list[float | None]]] = deque(maxlen=RAW_KEEP)
         self.dropped = 0
 
@@ -45,6 +49,12 @@ class PlotSampler:
         self.lock = threading.Lock()
         self.fields: dict[str, FieldPath] = {}
         self.buckets: dict[str, FieldBuckets] = {}
+        self.stamp_of = stamp_reader(message_class)
+        """header.stamp in seconds, or None: the type has none."""
+        self.stamped: dict[str, FieldBuckets] = {}
+        """By field, the buckets by header.stamp (a type with one only)."""
+        self.last: Any = None
+        """The last message received (the field picker lists its sequences' elements)."""
         self.raw: dict[int, RawRows] = {}
         """By client: the rows of every message for the clients that want them."""
         self.received = 0
@@ -67,10 +77,13 @@ class PlotSampler:
             for path in list(self.fields):
                 if path not in wanted:
                     del self.fields[path], self.buckets[path]
+                    self.stamped.pop(path, None)
             for path, field in wanted.items():
                 if path not in self.fields:
                     self.fields[path] = field
                     self.buckets[path] = FieldBuckets()
+                    if self.stamp_of is not None:
+                        self.stamped[path] = FieldBuckets()
 
     def close(self, timeout: float = 5.0) -> None:
         """The thread ended and the subscription destroyed (after the thread let go of
@@ -110,21 +123,27 @@ class PlotSampler:
     def _take(self) -> None:
         handle, message_class = self.subscription.handle, self.message_class
         clock = time.time  # as received, in the server's clock: the same for every client
+        stamp_of = self.stamp_of
         while (taken := handle.take_message(message_class, False)) is not None:
             now = clock()
             message = taken[0]
+            stamp = now if stamp_of is None else stamp_of(message)
             with self.lock:
                 self.received += 1
+                self.last = message
                 values: dict[str, float | None] = {}
                 for path, field in self.fields.items():
                     value = values[path] = _value(field, message)
                     if value is not None:
                         self.buckets[path].add(now, value)
+                        if stamp_of is not None:
+                            self.stamped[path].add(stamp, value)
                 for rows in self.raw.values():
                     if len(rows.rows) == RAW_KEEP:
                         rows.dropped += 1
-                    rows.rows.append((now, [values[f.path] if f.path in values
-                                            else _value(f, message) for f in rows.fields]))
+                    rows.rows.append((stamp if rows.stamp else now,
+                                      [values[f.path] if f.path in values
+                                       else _value(f, message) for f in rows.fields]))
 
 
 def _value(field: FieldPath, message: Any) -> float | None:

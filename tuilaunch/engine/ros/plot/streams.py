@@ -6,7 +6,10 @@ A stream is sent, every SEND_PERIOD, the buckets (buckets.py: min, max, last of 
 topic's rate; a new stream is first sent the buckets the sampler kept (up to 5 minutes, when
 another client was plotting the topic already). A `raw` stream (`tuilaunch plot --csv`)
 is sent every message's values instead: as many as the link carries (RAW_KEEP rows wait
-for it, then the oldest are dropped and counted).
+for it, then the oldest are dropped and counted). A `stamp` stream's times are its
+messages' header.stamp (where the type has one), not when they were received.
+
+A client plots several topics with a stream each (their tags tell their events apart).
 
 Streams end with `plot_stop`, their client (`client_gone`) or the session; the sampler of
 a topic ends with its last stream.
@@ -30,6 +33,9 @@ SEND_PERIOD = 0.25
 faster."""
 RAW_SEND_PERIOD = 0.1
 """Seconds between a raw stream's events (every message of them)."""
+SAMPLE_WAIT = 1.0
+"""Seconds `plot_fields` waits for a message whose sequences' lengths it lists (a topic
+of joint states: `position[0..n]`); past it, the type's fields (a sequence's first)."""
 DEPTH_SMALL, DEPTH_LARGE = 1000, 50
 """Messages the subscription keeps waiting for the sampler's thread: a second of a 1 kHz
 topic of small messages (a busy machine's thread may wake late and
@@ -47,6 +53,8 @@ class PlotStream:
     replaced, still on their way, are told apart."""
     sent: dict[str, int] = field(default_factory=dict)
     """By field: the index of the last bucket sent."""
+    stamp: bool = False
+    """Times are the messages' header.stamp (the type has one)."""
 
 
 class PlotStreams:
@@ -82,11 +90,34 @@ class PlotStreams:
         return message_class(infos[0].topic_type), infos
 
     async def plot_fields(self, message: dict[str, Any]) -> dict[str, Any]:
-        """`{"type", "fields"}`: the topic's numeric fields by dotted path (the picker)."""
-        from .fields import numeric_fields, type_name
+        """`{"type", "fields", "stamped"}`: the topic's numeric fields by dotted path (the
+        picker), each element of its sequences as a message received now has them."""
+        from .fields import has_sequences, numeric_fields, stamp_reader, type_name
 
-        cls, _ = await self._topic_type(topic_of(message), self._wait(message))
-        return {"type": type_name(cls), "fields": numeric_fields(cls)}
+        topic = topic_of(message)
+        cls, infos = await self._topic_type(topic, self._wait(message))
+        sample = None
+        if has_sequences(cls):
+            sample = await self._sample(topic, cls, infos)
+        return {"type": type_name(cls), "fields": numeric_fields(cls, sample=sample),
+                "stamped": stamp_reader(cls) is not None}
+
+    async def _sample(self, topic: str, cls: Any, infos: list[Any]) -> Any:
+        """The last message of `topic`: its plot's, else one waited for (SAMPLE_WAIT) on a
+        sampler of its own; None when none came."""
+        sampler: Any = self.samplers.get(topic)
+        own = sampler is None
+        if own:
+            sampler = await self._new_sampler(topic, cls, infos)
+        try:
+            loop = asyncio.get_running_loop()
+            deadline = loop.time() + SAMPLE_WAIT
+            while sampler.last is None and loop.time() < deadline:
+                await asyncio.sleep(0.05)
+            return sampler.last
+        finally:
+            if own:
+                await asyncio.to_thread(sampler.close)
 
     def _wait(self, message: dict[str, Any]) -> float:
         return min(float(message.get("wait") or self._publisher_wait), self._publisher_wait)
@@ -112,33 +143,38 @@ class PlotStreams:
             stream = PlotStream(fields, bool(message.get("raw")), message.get("tag"))
             self.streams[(client, topic)] = stream
             sampler = await self._sampler(topic, cls, infos)
+            stream.stamp = bool(message.get("stamp")) and sampler.stamp_of is not None
             self._update(topic)
             if stream.raw:
                 from .sampler import RawRows
 
                 with sampler.lock:
-                    sampler.raw[client] = RawRows(fields)
+                    sampler.raw[client] = RawRows(fields, stream.stamp)
             elif client in sampler.raw:
                 with sampler.lock:
                     del sampler.raw[client]
         if self.task is None:
             self.task = asyncio.ensure_future(self._tick())
         return {"topic": topic, "type": type_name(cls), "fields": [f.path for f in fields],
-                "numeric": numeric_fields(cls), "points_per_s": POINTS_PER_S}
+                "numeric": numeric_fields(cls, sample=sampler.last),
+                "stamped": sampler.stamp_of is not None, "stamp": stream.stamp,
+                "points_per_s": POINTS_PER_S}
 
     async def _sampler(self, topic: str, cls: Any, infos: list[Any]) -> Any:
         sampler = self.samplers.get(topic)
         if sampler is None:
-            from ..rates import matching_qos
-            from .fields import small
-            from .sampler import PlotSampler
-
-            bridge = await self._bridge()
-            qos = matching_qos([i.qos_profile for i in infos])
-            qos.depth = DEPTH_SMALL if small(cls) else DEPTH_LARGE
-            sampler = PlotSampler(bridge.node, topic, cls, qos)
-            self.samplers[topic] = sampler
+            sampler = self.samplers[topic] = await self._new_sampler(topic, cls, infos)
         return sampler
+
+    async def _new_sampler(self, topic: str, cls: Any, infos: list[Any]) -> Any:
+        from ..rates import matching_qos
+        from .fields import small
+        from .sampler import PlotSampler
+
+        bridge = await self._bridge()
+        qos = matching_qos([i.qos_profile for i in infos])
+        qos.depth = DEPTH_SMALL if small(cls) else DEPTH_LARGE
+        return PlotSampler(bridge.node, topic, cls, qos)
 
     def _update(self, topic: str) -> None:
         """The sampler follows the union of the topic's streams' fields."""
@@ -214,8 +250,9 @@ class PlotStreams:
         now = time.time()
         fresh: dict[str, list[Any]] = {}
         with sampler.lock:
+            kept = sampler.stamped if stream.stamp else sampler.buckets
             for field_path in stream.fields:
-                buckets = sampler.buckets.get(field_path.path)
+                buckets = kept.get(field_path.path)
                 if buckets is None:
                     continue
                 buckets.close_until(now)

@@ -70,9 +70,11 @@ Client to server: `{"id": n, "op": ...}` requests: subscribe {max_lines, interva
   at most 5)} -> {}: events "echo", data
   {topic, text: one message's YAML ending in "---"}, to this client until echo_stop {topic}
   or `count` messages (the last has data "done": true); a subscribed client only;
-  plot_fields {topic} -> {type, fields: [numeric fields by dotted path]}; plot {topic,
-  fields: [dotted paths], raw?: bool, tag?: any, wait?: s} -> {topic, type, fields,
-  numeric, points_per_s}: events "plot" to this subscribed client until plot_stop {topic}:
+  plot_fields {topic} -> {type, fields: [numeric fields by dotted path, each element of a
+  sequence as the last message has them], stamped}; plot {topic, fields: [dotted paths],
+  raw?: bool, tag?: any, stamp?: bool (times are header.stamp), wait?: s} -> {topic, type,
+  fields, numeric, stamped, stamp, points_per_s}: events "plot" to this subscribed client
+  (one stream per topic) until plot_stop {topic}:
   data {topic, tag, t0, points: {field: [[ms, min, max, last], ...]}} (buckets of
   1/points_per_s s; a bucket's time, its last sample's as received, is t0 + ms/1000 in
   seconds of the server's clock), four a second,
