@@ -197,9 +197,9 @@ class LineSplitter:
             self._size += len(rest)
         if self._size > MAX_LINE:
             tail = _cut(b"".join(self._pieces))
-            rest = tail.rfind(b"\n") + 1
-            block += tail[:rest]
-            self._keep(tail[rest:])
+            whole = tail.rfind(b"\n") + 1
+            block += tail[:whole]
+            self._keep(tail[whole:])
         return block
 
     def flush_block(self) -> bytes:

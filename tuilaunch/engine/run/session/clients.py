@@ -347,6 +347,11 @@ def in_messages(events: list[Event], budget: int = MESSAGE_TEXT) -> list[list[Ev
         if not isinstance(event, Output):
             parts[-1].append(event)
             continue
+        whole = sum(map(len, event.lines))  # a flood's lines are counted, not walked
+        if size + whole <= budget:
+            parts[-1].append(event)
+            size += whole
+            continue
         taken: list[str] = []
         for line in event.lines:
             if size + len(line) > budget and (size or taken):
