@@ -13,6 +13,9 @@ import pytest
 
 from ..conftest import EXAMPLES, run_cli, run_headless, sl_file
 from .launch_world import make_package
+from .test_relaunch import preview_text, session_tui
+from .test_sessions import runtime  # noqa: F401
+from .test_tui import until
 
 HEADER = "from simple_launch import SimpleLauncher\n"
 BRINGUP = str(EXAMPLES / "bringup.py")
@@ -363,3 +366,38 @@ def test_an_argument_an_include_overrides_is_said(tmp_path):
     # the same value, or none given: nothing to say
     assert "overrides" not in run_cli(str(parent), "rate:=5.0", "--print").stdout
     assert "overrides" not in run_cli(str(parent), "--print").stdout
+
+
+TYPED = sl_file("""
+    sl.declare_arg('gain', 1.5)
+    sl.declare_arg('count', 3)
+    sl.add_action(ExecuteProcess(name='uses', cmd=['sh', '-c', 'echo gain "$0"; exec sleep 600',
+                                                   sl.arg('gain')]))
+""", header=HEADER + "from launch.actions import ExecuteProcess\n")
+GAIN_NOTE = "argument 'gain' = 'abc' is not a number like its default 1.5 (passed as written)"
+
+
+def test_a_value_unlike_its_defaults_type_is_warned_headless_and_in_print(write):
+    path = write(TYPED.replace("exec sleep 600", "true"))
+    printed = run_cli(str(path), "gain:=abc", "count:=2.5", "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert f"warning: {GAIN_NOTE}\n" in printed.stdout
+    assert "argument 'count' = '2.5' is not a whole number like its default 3" in \
+        printed.stdout
+    ran = run_cli(str(path), "gain:=abc", "--headless")
+    assert ran.returncode == 0, ran.stderr
+    assert f"tuilaunch: warning: {GAIN_NOTE}\n" in ran.stderr
+    assert "[uses-1] gain abc" in ran.stdout  # passed as written, as ros2 launch does
+    fine = run_cli(str(path), "gain:=2", "count:=4", "--print")  # a whole number is a number
+    assert "warning" not in fine.stdout + fine.stderr
+
+
+async def test_a_value_unlike_its_defaults_type_is_warned_at_start_and_in_the_args_tab(
+        runtime, write):  # noqa: F811
+    path = write(TYPED)
+    async with session_tui(str(path), "gain:=abc", wait=("uses-1",)) as (app, pilot, _name):
+        await until(pilot, lambda: "uses-1" in app.launch_tree.rows)
+        said = [n.message for n in app._notifications]
+        assert any(GAIN_NOTE in message for message in said), said
+        await pilot.press("2")  # nothing edited: the Args tab says it all the same
+        await until(pilot, lambda: f"Warning: {GAIN_NOTE}" in preview_text(app))

@@ -131,3 +131,20 @@ def test_argument_used_but_never_declared(write):
 """))
     with pytest.raises(LaunchError, match="'ghost' is used but has no value"):
         plan_of(path)
+
+
+def test_a_command_line_value_unlike_its_defaults_type_is_a_plan_warning(write):
+    """Said wherever the plan's warnings are (start, --print, the TUI), by the function
+    the Args tab asks of an edit (type_notes); passed as written, never refused."""
+    path = write(sl_file("""
+    sl.declare_arg('gain', 1.5)
+    sl.declare_arg('count', 3)
+    sl.declare_arg('name', 'r1')
+"""))
+    plan = plan_of(path, gain="abc", count="2.5", name="7")
+    assert plan.warnings == [
+        "argument 'gain' = 'abc' is not a number like its default 1.5 (passed as written)",
+        "argument 'count' = '2.5' is not a whole number like its default 3 (passed as "
+        "written)"]
+    assert {a.name: a.value for a in plan.arguments}["gain"] == "abc"
+    assert plan_of(path, gain="2", count=" 4").warnings == []

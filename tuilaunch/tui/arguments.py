@@ -98,6 +98,10 @@ class ArgsTab(Vertical):
         edits = {k: v for k, v in values.items() if v != current.get(k)}
         panel = self.panel
         tree = host.launch_tree
+        # a value unlike its default's type, typed here or given on the command line, is
+        # passed as written, as ros2 launch does: said (a slip is likely), never refused
+        notes = "".join(f"Warning: {note} (passed as written); " for note in
+                        type_notes(session.plan.arguments, values))
         running = {p for p, s in (host.supervisor.states.items() if host.supervisor else ())
                    if s == "running"}
         problem = check_values(session.plan.arguments, edits)
@@ -118,14 +122,10 @@ class ArgsTab(Vertical):
         elif not edits and self.preview.file_changes is None:
             self.preview = None
             tree.set_preview(None)
-            if not (shown and previous is None):  # the tab's hint stays until an edit
-                panel.set_preview_text("No change from what runs now.", error=False)
+            if notes or not (shown and previous is None):  # the hint stays until an edit
+                panel.set_preview_text(notes + "No change from what runs now.", error=False)
         else:
             tree.set_preview(self.preview.diff)
-            # a value unlike its default's type is passed as written, as ros2 launch does:
-            # said, as a slip is likely, never refused
-            notes = "".join(f"Warning: {note} (passed as written); " for note in
-                            type_notes(session.plan.arguments, edits))
             panel.set_preview_text(
                 notes + _describe_diff(self.preview, session.plan.arguments), error=False)
         self.app.refresh_bindings()

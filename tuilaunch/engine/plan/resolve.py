@@ -77,7 +77,7 @@ from ..errors import (
 )
 from . import lifecycle as lifecycle_plan
 from .actions import ActionPlanner, describe_entity
-from .arguments import declare_argument
+from .arguments import declare_argument, type_notes
 from .command_line import LAUNCH_CONFIGURATIONS, ProcessPlanner
 from .components import interfaces_warning
 from .model import ActionKind, ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
@@ -148,6 +148,10 @@ class Resolver:
         for name in self.cli_arguments:
             if name not in declared and name not in LAUNCH_OWN:
                 self.warnings.append(undeclared_warning(name, declared, loaded.path))
+        # a value unlike its default's type (gain:=abc for 1.0): passed as written, as ros2
+        # launch does, and said wherever the plan's warnings are (start, --print, the TUI)
+        self.warnings += [f"{note} (passed as written)" for note in type_notes(
+            list(self.arguments.values()), self.cli_arguments)]
         plan = Plan(loaded.path, list(self.arguments.values()), self.processes, self.actions,
                     root, self.params_dir, self.warnings)
         plan.entity_ids = self.entity_ids
