@@ -13,9 +13,13 @@ signal_node.py), one at 1 kHz and one at 100 Hz. For each topic, over MEASURE_S 
 - `tuilaunch plot --csv` (every message) in the same way, its output to /dev/null;
 - beside them a plain rclpy subscriber printing each message's fields (the stand-in for
   `ros2 topic echo`, whose ros2cli is not installable here: it deserializes each message in
-  an executor callback and prints it), its output to /dev/null.
+  an executor callback and prints it), its output to /dev/null;
+- then (issue 47) 4 fields of 2 topics at 1 kHz on one plot (`tuilaunch plot NAME
+  /bench/fast x y /bench/fast2 x y`, a second 1 kHz publisher): the server's and the plot
+  client's CPU, full screen and with --csv.
 
-    python bench/plot_bench.py
+    python bench/plot_bench.py            # all of it
+    python bench/plot_bench.py two        # the 4 fields of 2 topics only
 """
 
 from __future__ import annotations
@@ -52,6 +56,8 @@ def generate_launch_description():
                                          '/bench/fast', '--rate', '1000']),
         ExecuteProcess(name='slow', cmd=[{python!r}, {node!r}, 'bench_slow', '--topic',
                                          '/bench/slow', '--rate', '100']),
+        ExecuteProcess(name='fast2', cmd=[{python!r}, {node!r}, 'bench_fast2', '--topic',
+                                          '/bench/fast2', '--rate', '1000']),
     ])
 """
 ECHO_STANDIN = textwrap.dedent("""
@@ -172,13 +178,16 @@ def main() -> None:
     launch.write_text(LAUNCH.format(python=sys.executable, node=str(SIGNAL_NODE)))
     name = tl(str(launch), "--detach", "--name", "plotbench").strip()
     try:
-        for process in ("fast-1", "slow-2"):
+        for process in ("fast-1", "slow-2", "fast2-3"):
             tl("wait", name, process, "running", "--timeout", "60")
         server = int(json.loads(tl("status", name, "--json"))["pid"])
         tl("topics", name)  # the server's ROS node is up from here
         time.sleep(2)
         (idle,) = cpu_over([server], MEASURE_S)
         print(f"session server, nobody plotting: {idle:5.1f}% of a core")
+        if sys.argv[1:] == ["two"]:
+            two_topics(name, server)
+            return
         for topic, rate in (("/bench/fast", 1000), ("/bench/slow", 100)):
             print(f"{topic} ({rate} Hz, geometry_msgs/Point, plotting x y z), "
                   f"{MEASURE_S:g} s each:")
@@ -212,8 +221,32 @@ def main() -> None:
                 echo.wait()
             print(f"   echo stand-in (rclpy subscriber printing each message): "
                   f"{echo_cpu:5.1f}% of a core")
+        two_topics(name, server)
     finally:
         tl("stop", name)
+
+
+def two_topics(name: str, server: int) -> None:
+    """4 fields of 2 topics at 1 kHz on one plot: full screen, then --csv."""
+    words = ["/bench/fast", "x", "y", "/bench/fast2", "x", "y"]
+    print(f"4 fields of 2 topics at 1 kHz ({' '.join(words)}), {MEASURE_S:g} s each:")
+    plot = PtyClient(name, *words)
+    time.sleep(4)
+    plot.counting = True
+    server_cpu, client_cpu = cpu_over([server, plot.proc.pid], MEASURE_S)
+    screen = plot.bytes / MEASURE_S
+    plot.close()
+    print(f"   plot on screen:  server {server_cpu:5.1f}%, plot client {client_cpu:5.1f}% "
+          f"of a core; its terminal {screen:6.0f} B/s")
+    with open(os.devnull, "w") as null:
+        csv = subprocess.Popen([sys.executable, "-m", "tuilaunch", "plot", name, *words,
+                                "--csv"], stdout=null)
+        time.sleep(4)
+        server_cpu, client_cpu = cpu_over([server, csv.pid], MEASURE_S)
+        csv.terminate()
+        csv.wait(10)
+    print(f"   --csv:           server {server_cpu:5.1f}%, csv client {client_cpu:5.1f}% "
+          "of a core")
 
 
 if __name__ == "__main__":
