@@ -11,6 +11,7 @@ from .entities import (
     OnProcessIO,
     OnProcessStart,
     OnShutdown,
+    TriggerOn,
 )
 
 __all__ = [
@@ -22,12 +23,12 @@ __all__ = [
     "When",
 ]
 
-_KINDS: dict[type, str] = {
-    OnProcessStart: "start",
-    OnProcessExit: "exit",
-    OnExecutionComplete: "exit",
-    OnProcessIO: "io",
-    OnShutdown: "shutdown",
+_KINDS: dict[type, TriggerOn] = {
+    OnProcessStart: TriggerOn.START,
+    OnProcessExit: TriggerOn.EXIT,
+    OnExecutionComplete: TriggerOn.EXIT,
+    OnProcessIO: TriggerOn.IO,
+    OnShutdown: TriggerOn.SHUTDOWN,
 }
 
 
@@ -40,8 +41,9 @@ class When:
         self.target = action
         self.delay = delay
         self.io = io
+        self.on: TriggerOn
         if event is None:
-            self.on = "timer"
+            self.on = TriggerOn.TIMER
             if delay is None:
                 raise DslError("When() needs an event, a delay, or both", self.origin)
             return

@@ -13,7 +13,7 @@ from typing import Any
 
 from ..errors import DslError, caller_origin
 from .conditions import Condition
-from .entities import EMITTED_EVENTS, Entity, EventHandler, Node
+from .entities import EMITTED_EVENTS, Entity, EventHandler, Node, TriggerOn
 from .substitutions import SubValue
 
 # lifecycle_msgs/msg/Transition ids and lifecycle_msgs/msg/State ids, as in the message
@@ -160,7 +160,7 @@ class StateTransition:
 class OnStateTransition(EventHandler):
     """launch_ros.event_handlers.OnStateTransition: entities run when a node changes state."""
 
-    on = "state"
+    on = TriggerOn.STATE
 
     def __init__(self, *, entities: Any = None, target_lifecycle_node: Any = None,
                  transition: SubValue = None, start_state: SubValue = None,

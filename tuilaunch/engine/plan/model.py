@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ..describe.conditions import ConditionOutcome
+from ..describe.entities import TriggerOn
 from ..errors import Origin
 from ..packages import ENVIRONMENT_CHANGES
 
@@ -20,7 +21,7 @@ from ..packages import ENVIRONMENT_CHANGES
 class Trigger:
     """What starts an item: an event on another process or action, then a delay."""
 
-    on: str  # "start" | "exit" | "io" | "timer" | "shutdown"
+    on: TriggerOn
     target: str | None = None
     delay: float = 0.0
     io: str | None = None
@@ -39,15 +40,15 @@ class Trigger:
     def describe(self) -> str:
         who = self.target or "any process"
         event = {
-            "start": f"{who} starts",
-            "exit": f"{who} exits",
-            "io": f"{who} prints on {self.io}",
-            "timer": "launch",
-            "shutdown": "shutdown",
-            "state": f"{'a lifecycle node' if self.target == '*' else self.target} reaches "
+            TriggerOn.START: f"{who} starts",
+            TriggerOn.EXIT: f"{who} exits",
+            TriggerOn.IO: f"{who} prints on {self.io}",
+            TriggerOn.TIMER: "launch",
+            TriggerOn.SHUTDOWN: "shutdown",
+            TriggerOn.STATE: f"{'a lifecycle node' if self.target == '*' else self.target} reaches "
                      f"{_state_text(self.io)}",
         }[self.on]
-        if self.on == "timer" and self.after is not None:
+        if self.on is TriggerOn.TIMER and self.after is not None:
             # a delay nested in an event group counts from that event
             outer = self.after.describe().removeprefix("when ")
             return f"{self.delay:g} s after {outer}" if self.delay else f"when {outer}"

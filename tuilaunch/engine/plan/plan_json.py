@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ..describe.conditions import ConditionOutcome
+from ..describe.entities import TriggerOn
 from ..errors import Origin
 from .model import ActionKind, ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 
@@ -34,8 +35,9 @@ def plan_from_json(data: dict[str, Any]) -> Plan:
 def _trigger(data: dict[str, Any] | None) -> Trigger | None:
     if data is None:
         return None
-    return Trigger(on=data["on"], target=data.get("target"), delay=float(data.get("delay") or 0),
-                   io=data.get("io"), after=_trigger(data.get("after")))
+    return Trigger(on=TriggerOn(data["on"]), target=data.get("target"),
+                   delay=float(data.get("delay") or 0), io=data.get("io"),
+                   after=_trigger(data.get("after")))
 
 
 def _condition(data: dict[str, Any] | None) -> ConditionOutcome | None:

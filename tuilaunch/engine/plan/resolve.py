@@ -54,6 +54,7 @@ from ..describe.entities import (
     Shutdown,
     StopProcess,
     TimerAction,
+    TriggerOn,
     UnsetEnvironmentVariable,
     UnsetLaunchConfiguration,
     entity_list,
@@ -375,7 +376,7 @@ class Resolver:
             except ValueError:
                 raise ArgumentError(f"TimerAction period {text!r} is not a number",
                                     timer.origin) from None
-        scope.trigger = Trigger("timer", None, delay, None, outer.trigger)
+        scope.trigger = Trigger(TriggerOn.TIMER, None, delay, None, outer.trigger)
         item = TreeItem("group", f"timer {delay:g} s", enabled, scope.namespace, None,
                         scope.trigger)
         parent.children.append(item)
@@ -388,19 +389,19 @@ class Resolver:
         scope = outer.child(False)
         scope.enabled, scope.skipped_by = enabled, skipped
         io = handler.io
-        if handler.on == "state":
+        if handler.on is TriggerOn.STATE:
             io = lifecycle_plan.state_trigger_io(handler, outer.context())  # type: ignore[arg-type]
         # a state handler without a target node applies to every lifecycle node: "*"
-        target = "*" if handler.on == "state" and handler.target is None else None
+        target = "*" if handler.on is TriggerOn.STATE and handler.target is None else None
         scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target,
-                                repeat=handler.on == "state" and
+                                repeat=handler.on is TriggerOn.STATE and
                                 not getattr(handler, "handle_once", False))
         self.triggers.append(scope.trigger)
         item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
                         scope.trigger)
         parent.children.append(item)
         self.handler_body(handler.handler, handler.target is None and handler.on in
-                          ("start", "exit", "io"), scope, item)
+                          (TriggerOn.START, TriggerOn.EXIT, TriggerOn.IO), scope, item)
 
     def handler_body(self, body: Any, every_process: bool, scope: Scope, item: TreeItem)\
             -> None:
@@ -415,7 +416,7 @@ class Resolver:
     def on_exit(self, entity: Node | ExecuteProcess, outer: Scope, parent: TreeItem) -> None:
         """`Node(on_exit=...)`: a handler for this process's exit."""
         scope = outer.child(False)
-        scope.trigger = Trigger("exit", None, 0.0, None, outer.trigger, entity)
+        scope.trigger = Trigger(TriggerOn.EXIT, None, 0.0, None, outer.trigger, entity)
         self.triggers.append(scope.trigger)
         item = TreeItem("group", "on exit", scope.enabled, scope.namespace, None,
                         scope.trigger)

@@ -48,6 +48,7 @@ from .handlers import (
     OnProcessStart,
     OnShutdown,
     RegisterEventHandler,
+    TriggerOn,
 )
 from .processes import (
     ComposableNode,
@@ -144,6 +145,7 @@ __all__ = [
     "SignalProcess",
     "StopProcess",
     "TimerAction",
+    "TriggerOn",
     "UnsetEnvironmentVariable",
     "UnsetLaunchConfiguration",
     "entity_list",

@@ -4,6 +4,7 @@ prints, when the launch shuts down; and RegisterEventHandler, which puts one in 
 from __future__ import annotations
 
 from collections.abc import Callable
+from enum import StrEnum
 from typing import Any
 
 from ...errors import DslError
@@ -11,10 +12,22 @@ from ..conditions import Condition
 from .base import Entity
 
 
+class TriggerOn(StrEnum):
+    """What a trigger waits for: the kind of an event handler, of a `When`, of a plan's
+    Trigger. A StrEnum: the plan's JSON and launch.log say its value."""
+
+    START = "start"  # OnProcessStart, When(node, OnProcessStart)
+    EXIT = "exit"  # OnProcessExit, OnExecutionComplete, Node(on_exit=...)
+    IO = "io"  # OnProcessIO: a line on stdout, stderr (or stdin)
+    TIMER = "timer"  # TimerAction, When(delay=...): counted from the launch or an event
+    SHUTDOWN = "shutdown"  # OnShutdown
+    STATE = "state"  # launch_ros's OnStateTransition: a lifecycle node reaches a state
+
+
 class EventHandler(Entity):
     """launch.event_handlers.*: actions run when a process starts, exits, prints, ..."""
 
-    on: str = ""
+    on: TriggerOn
 
     def __init__(self, target_action: Any = None, handler: Any = None, io: str | None = None)\
             -> None:
@@ -25,21 +38,21 @@ class EventHandler(Entity):
 
 
 class OnProcessStart(EventHandler):
-    on = "start"
+    on = TriggerOn.START
 
     def __init__(self, *, target_action: Any = None, on_start: Any = None, **_: Any) -> None:
         super().__init__(target_action, on_start)
 
 
 class OnProcessExit(EventHandler):
-    on = "exit"
+    on = TriggerOn.EXIT
 
     def __init__(self, *, target_action: Any = None, on_exit: Any = None, **_: Any) -> None:
         super().__init__(target_action, on_exit)
 
 
 class OnExecutionComplete(EventHandler):
-    on = "exit"
+    on = TriggerOn.EXIT
 
     def __init__(self, *, target_action: Any = None, on_completion: Any = None, **_: Any)\
             -> None:
@@ -47,7 +60,7 @@ class OnExecutionComplete(EventHandler):
 
 
 class OnProcessIO(EventHandler):
-    on = "io"
+    on = TriggerOn.IO
 
     def __init__(self, *, target_action: Any = None, on_stdin: Any = None,
                  on_stdout: Any = None, on_stderr: Any = None, **_: Any) -> None:
@@ -56,7 +69,7 @@ class OnProcessIO(EventHandler):
 
 
 class OnShutdown(EventHandler):
-    on = "shutdown"
+    on = TriggerOn.SHUTDOWN
 
     def __init__(self, *, on_shutdown: Any = None, **_: Any) -> None:
         super().__init__(None, on_shutdown)

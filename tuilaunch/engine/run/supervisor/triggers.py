@@ -14,9 +14,12 @@ import asyncio
 from collections.abc import Iterable, Mapping
 from typing import Any, Literal
 
+from ...describe.entities import TriggerOn
 from ...plan.model import ActionPlan, ProcessPlan, Trigger
 
 Filing = Literal["handler", "every_state", "chain"]
+EVERY_PROCESS = (TriggerOn.START, TriggerOn.EXIT, TriggerOn.IO)
+"""The kinds of handler that, without a target, fire for every process's event."""
 """How an action waits: filed as an event handler, re-run on every lifecycle transition,
 or performed once its start-up chain has happened."""
 
@@ -63,19 +66,19 @@ class TriggerBook:
     def file(self, action: ActionPlan) -> Filing:
         """Files an event handler under its event; says how any other action waits."""
         chain = action.trigger
-        while chain is not None and chain.on not in ("io", "shutdown"):
+        while chain is not None and chain.on not in (TriggerOn.IO, TriggerOn.SHUTDOWN):
             chain = chain.after
         first = action.trigger
-        if chain is not None and chain.on == "shutdown":
+        if chain is not None and chain.on is TriggerOn.SHUTDOWN:
             self.on_shutdown.append(action)
-        elif first is not None and first.target is None and first.on in ("start", "exit", "io"):
+        elif first is not None and first.target is None and first.on in EVERY_PROCESS:
             # a handler without target_action: every process's event runs it
-            kind = f"io:{first.io or 'stdout'}" if first.on == "io" else first.on
+            kind = f"io:{first.io or 'stdout'}" if first.on is TriggerOn.IO else first.on
             self.any_watchers.setdefault(kind, []).append(action)
         elif chain is not None and chain.target is not None:
             key = (chain.target, chain.io or "stdout")
             self.io_watchers.setdefault(key, []).append(action)
-        elif first is not None and first.on == "state" and first.repeat and \
+        elif first is not None and first.on is TriggerOn.STATE and first.repeat and \
                 first.target is not None:
             return "every_state"
         else:
@@ -105,13 +108,14 @@ class TriggerBook:
                  processes: Iterable[ProcessPlan]) -> bool:
         """Whether what `trigger` waits for has happened or is alive or pending."""
         while trigger is not None:
-            if trigger.target == "*" and trigger.on == "state":
+            if trigger.target == "*" and trigger.on is TriggerOn.STATE:
                 # any lifecycle node of the launch: one of them must still be able to run
                 if not self.flag("*", flag_name(trigger)).is_set() and not any(
                         p.lifecycle and states.get(p.id) in ("running", "pending")
                         for p in processes):
                     return False
-            if trigger.target not in (None, "*") and trigger.on in ("start", "exit", "state"):
+            if trigger.target not in (None, "*") and trigger.on in (
+                    TriggerOn.START, TriggerOn.EXIT, TriggerOn.STATE):
                 assert trigger.target is not None
                 done = self.flag(trigger.target, flag_name(trigger)).is_set()
                 if not done and states.get(trigger.target) not in ("running", "pending"):
@@ -123,14 +127,13 @@ class TriggerBook:
                         processes: Iterable[ProcessPlan]) -> bool:
         """Whether a pending action may still run before the launch goes idle."""
         trigger = action.trigger
-        if trigger is not None and trigger.target is None and trigger.on in ("start", "exit",
-                                                                              "io"):
+        if trigger is not None and trigger.target is None and trigger.on in EVERY_PROCESS:
             return False  # runs per event; it never holds the launch open by itself
         chain = trigger
         while chain is not None:
-            if chain.on == "shutdown":
+            if chain.on is TriggerOn.SHUTDOWN:
                 return False
-            if chain.on == "io" and chain.target is not None and \
+            if chain.on is TriggerOn.IO and chain.target is not None and \
                     states.get(chain.target) not in ("running", "pending"):
                 return False
             chain = chain.after
@@ -149,7 +152,7 @@ class TriggerBook:
                 step: Trigger | None = action.trigger
                 due = True
                 while step is not None and due:
-                    due = (step.on == "exit" and not step.delay and step.target is not None
+                    due = (step.on is TriggerOn.EXIT and not step.delay and step.target is not None
                            and self.flag(step.target, "exit").is_set())
                     step = step.after
                 if due:
@@ -159,9 +162,9 @@ class TriggerBook:
 
 def runs_in_shutdown(step: Trigger, item: Any) -> bool:
     """Exit handlers run while launch shuts down (their process stopped because of it)."""
-    return isinstance(item, ActionPlan) and step.on == "exit" and not step.delay
+    return isinstance(item, ActionPlan) and step.on is TriggerOn.EXIT and not step.delay
 
 
 def flag_name(trigger: Trigger) -> str:
     """A lifecycle state trigger waits for its own filter, other triggers for the event."""
-    return f"state:{trigger.io}" if trigger.on == "state" else trigger.on
+    return f"state:{trigger.io}" if trigger.on is TriggerOn.STATE else trigger.on
