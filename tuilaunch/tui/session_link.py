@@ -401,7 +401,8 @@ class SessionLink(App[int]):
         for proc in self.session.plan.processes:
             state = shown.get(proc.id) or self.supervisor.states.get(proc.id, "pending")
             counts[state] = counts.get(state, 0) + 1
-        order = ("running", "pending", "stopping", "exited", "failed", "respawning", "skipped")
+        order = ("running", "unknown", "pending", "stopping", "exited", "failed", "respawning",
+                 "skipped")  # unknown: placed on a machine whose link is lost
         text = "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in order
                          if counts.get(s))
         undeclared = self.session.undeclared()

@@ -29,11 +29,12 @@ STATE_LOOK = {
     "stopping": ("◌", "yellow", "stopping"),
     "done": ("✓", "green", "done"),
     "cancelled": ("○", "dim", "cancelled"),
+    "unknown": ("?", "yellow", "unknown"),  # placed on a machine whose link is lost
 }
 # the Linux console's font lacks most of those: plain ASCII there
 ASCII_ICONS = {"pending": ".", "running": "*", "exited": "#", "failed": "x",
                "respawning": "~", "skipped": "o", "stopping": "-", "done": "+",
-               "cancelled": "o"}
+               "cancelled": "o", "unknown": "?"}
 # an action "running" is waiting for its service or node
 ACTION_WORDS = {"running": "working", "pending": "waiting"}
 # a lifecycle node's state, shown after its process state

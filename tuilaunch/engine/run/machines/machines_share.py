@@ -31,25 +31,24 @@ from typing import Any
 from ...errors import LaunchError
 from ...plan.machines import Placement
 from ..events import (
-    Dropped,
     Event,
     Failed,
     Log,
-    Output,
     ProcessExited,
     Relaunched,
     Shutdown,
     Started,
 )
 from ..plugins import Plugin
-from ..process.logfiles import LogFile
-from ..process.output import screen_str
-from ..session.protocol import ProtocolError, decode, encode, event_from_dict
+from ..session.protocol import ProtocolError, decode
 from ..session.session_dir import launch_stem
+from ..supervisor.placed import UNKNOWN
 from ..supervisor.supervisor import Supervisor
 from .remote import RemoteError, open_remote_streams, run_remote
-from .share_link import Share
-from .share_side import LINES_OP, ShareSide
+from .share_link import REQUEST_IDS, Share
+from .share_mirror import ShareMirror
+from .share_requests import ShareRequests
+from .share_side import ShareSide
 
 SHARE_OPTION = "--share"
 MACHINES_TEXT_OPTION = "--machines-text"
@@ -104,8 +103,11 @@ class MachinesCoordinator(Plugin):
         """The last start and exit of each process, told to each share (again on connect:
         what a node there waits for may have happened before)."""
         self._tasks: set[asyncio.Task[Any]] = set()
-        self._next_id = 0
         self._closing = False
+        self.requests = ShareRequests(self.shares, lambda: supervisor.plan, self._spawn)
+        """Their processes' commands, their keyboards (share_requests.py)."""
+        self.mirror = ShareMirror(supervisor)
+        """Their events, states and lines, shown here as local ones (share_mirror.py)."""
         supervisor.set_placement(None, self)
         supervisor.subscribe(self._on_event)
 
@@ -138,11 +140,14 @@ class MachinesCoordinator(Plugin):
                 self._fail_share(share, str(exc))
                 return
         delays = iter(RECONNECT_DELAYS)
+        said = ""
         while not share.ended.is_set():
             try:
                 await self._connect(share)
-                delays = iter(RECONNECT_DELAYS)
+                delays, said = iter(RECONNECT_DELAYS), ""
                 reason = await self._read(share)  # told once subscribed (_answered)
+                if not share.ended.is_set():
+                    self.mirror.lost(share, reason)
             except (LaunchError, OSError) as exc:
                 reason = str(exc)
                 if "no running session named" in reason:
@@ -157,8 +162,10 @@ class MachinesCoordinator(Plugin):
             if share.ended.is_set():
                 return
             delay = next(delays, RECONNECT_DELAYS[-1])
-            self.supervisor.log(f"{share.machine.name}: {reason}; its share runs on there; "
-                                f"connecting again in {delay:g} s", "WARN")
+            if reason != said:  # each new reason once: a machine off for an hour is one line
+                said = reason
+                self.supervisor.log(f"{share.machine.name}: {reason}; its share runs on "
+                                    f"there; connecting again in {delay:g} s", "WARN")
             share.wake.clear()
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(share.wake.wait(), delay)
@@ -223,7 +230,7 @@ class MachinesCoordinator(Plugin):
         share.tell(reason)
         for proc in self.supervisor.plan.processes:
             if proc.machine == share.machine.name and proc.enabled and \
-                    self.supervisor.states.get(proc.id) in ("pending", "running"):
+                    self.supervisor.states.get(proc.id) in ("pending", "running", UNKNOWN):
                 self.supervisor.mirror(Failed(proc.id, reason=reason), "failed")
 
     async def _connect(self, share: Share) -> None:
@@ -238,8 +245,7 @@ class MachinesCoordinator(Plugin):
             await self._stop_share(share, "the launch ended")
 
     def _new_id(self) -> int:
-        self._next_id += 1
-        return self._next_id
+        return next(REQUEST_IDS)
 
     async def _read(self, share: Share) -> str:
         """Mirrors the share's messages until its link closes; why it closed."""
@@ -263,13 +269,14 @@ class MachinesCoordinator(Plugin):
                 elif kind == "events" and share.backfill:
                     share.held.append(message)  # after the earlier lines, in order
                 elif kind == "events":
-                    self._mirror(share, message.get("events") or [],
+                    self.mirror.events(share, message.get("events") or [],
                                  message.get("states") or {})
                 elif kind == "ended":
                     share.ended.set()
                     return "ended"
         finally:
             writer, share.writer = share.writer, None
+            share.typing = None  # its keyboard there is given back with the link
             if writer is not None:
                 writer.close()
             for future in share.replies.values():
@@ -278,7 +285,7 @@ class MachinesCoordinator(Plugin):
             share.replies.clear()
             share.backfill.clear()
             for held in share.held:
-                self._mirror(share, held.get("events") or [], held.get("states") or {})
+                self.mirror.events(share, held.get("events") or [], held.get("states") or {})
             share.held.clear()
             link = share.link
             share.link = None
@@ -291,18 +298,21 @@ class MachinesCoordinator(Plugin):
         result = message.get("result")
         if isinstance(result, dict) and "states" in result and "recent" in result:
             # the subscription: what happened there before (or while the link was down)
-            self._mirror(share, result.get("recent") or [], {}, result.get("states") or {})
-            self._ask_lines(share, result.get("offsets") or {})
+            self.mirror.events(share, result.get("recent") or [], {},
+                               result.get("states") or {})
+            self.mirror.back(share)
+            self.mirror.ask_lines(share, result.get("offsets") or {})
             share.tell(None)  # reached, and its processes' states known here
         request_id = int(message.get("id") or 0)
         if request_id in share.backfill:
             process = share.backfill.pop(request_id)
             if message.get("ok") and isinstance(result, dict):
-                self._backfilled(share, process, result)
+                self.mirror.backfilled(share, process, result)
             if not share.backfill:
                 held, share.held = share.held, []
                 for batch in held:
-                    self._mirror(share, batch.get("events") or [], batch.get("states") or {})
+                    self.mirror.events(share, batch.get("events") or [],
+                                       batch.get("states") or {})
         future = share.replies.pop(int(message.get("id") or 0), None)
         if future is not None and not future.done():
             if message.get("ok"):
@@ -310,81 +320,6 @@ class MachinesCoordinator(Plugin):
             else:
                 future.set_exception(LaunchError(
                     f"{share.machine.name}: {message.get('error')}"))
-
-    def _ask_lines(self, share: Share, offsets: dict[str, int]) -> None:
-        """What its processes printed before this subscription and was not seen here
-        (before the first link, or while the link was down): asked for, and shown before
-        the events that follow."""
-        if share.writer is None:
-            return
-        for proc in self.supervisor.plan.processes:
-            end = offsets.get(proc.id)
-            if proc.machine != share.machine.name or end is None:
-                continue
-            start = share.offsets.get(proc.id, 0)
-            share.offsets[proc.id] = end
-            skip = share.received.pop(proc.id, 0)
-            if end <= start:
-                continue
-            request_id = self._new_id()
-            share.backfill[request_id] = proc.id
-            share.writer.write(encode({
-                "op": LINES_OP, "id": request_id, "process": proc.id, "start": start,
-                "end": end, "skip": skip}))
-
-    def _backfilled(self, share: Share, process: str, result: dict[str, Any]) -> None:
-        skipped = int(result.get("skipped") or 0)
-        if skipped:
-            self.supervisor.log(f"{share.machine.name}: {skipped} earlier lines of {process} "
-                                f"are only in its log file there", "WARN")
-        for stamp, stream, text in result.get("lines") or []:
-            event = Output(process, stream=str(stream),
-                           lines=[screen_str(str(text))], time=float(stamp))
-            self._log_output(share, event)
-            self.supervisor.mirror(event)
-
-    def _mirror(self, share: Share, events: list[dict[str, Any]], touched: dict[str, str],
-                states: dict[str, str] | None = None) -> None:
-        mine = {p.id for p in self.supervisor.plan.processes
-                if p.machine == share.machine.name}
-        for data in events:
-            try:
-                event = event_from_dict(data)
-            except (ProtocolError, TypeError):
-                continue
-            if event.process not in mine:
-                continue
-            if isinstance(event, Output):
-                if event.lines:  # not an unfinished line (a prompt), shown until it is whole
-                    share.received[event.process] += len(event.lines)
-                    self._log_output(share, event)
-                self.supervisor.mirror(event)
-                continue
-            if isinstance(event, Dropped) and isinstance(event.code, int):
-                # lines its queue let go: in the file, said by this event, not sent again
-                share.received[event.process] += event.code
-            key = (event.kind, event.process, event.pid, event.time)
-            if key in share.seen:
-                continue
-            share.seen.add(key)
-            self.supervisor.mirror(event, _state_after(event))
-        for process, state in {**(states or {}), **touched}.items():
-            if process in mine and state != "elsewhere":
-                self.supervisor.states[process] = state
-
-    def _log_output(self, share: Share, event: Event) -> None:
-        """Its lines also go to this side's log file of the process, as local lines do."""
-        assert event.process is not None
-        log = share.logs.get(event.process)
-        if log is None:
-            path = self.supervisor.log_dir / f"{event.process}.log"
-            try:
-                log = share.logs[event.process] = LogFile(path, self.supervisor.log)
-            except OSError:
-                return
-        stamp = f"{event.time:.6f} {event.stream or 'stdout'} ".encode()
-        log.write(b"".join(stamp + line.encode(errors="replace") + b"\n"
-                           for line in event.lines), len(event.lines))
 
     # --- what happens here, and requests -----------------------------------------------------
 
@@ -424,18 +359,24 @@ class MachinesCoordinator(Plugin):
             fresh = await self.reach(share, process_id)
             if fresh and not options:
                 return  # its share was started anew, and this process with it
-        if share is None or share.writer is None:
-            why = share.failure if share is not None and share.failure else "not connected"
-            raise LaunchError(f"{process_id} runs on {machine}: {why}")
-        request_id = self._new_id()
-        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        share.replies[request_id] = future
-        await share.send({"op": op, "process": process_id, "id": request_id, **options})
-        result = await future
+        share = self.requests.connected(process_id)
+        result = await share.ask({"op": op, "process": process_id, **options}, START_TIMEOUT)
         state = result.get("state") if isinstance(result, dict) else None
         if isinstance(state, str):
             # as it is there once done (its events may still be on their way)
             self.supervisor.states[process_id] = state
+
+    async def commands(self) -> dict[str, dict[str, Any]]:
+        return await self.requests.commands()
+
+    async def take_keys(self, process_id: str) -> None:
+        await self.requests.take_keys(process_id)
+
+    def give_keys(self, process_id: str) -> None:
+        self.requests.give_keys(process_id)
+
+    async def type_keys(self, process_id: str, data: bytes) -> int:
+        return await self.requests.type_keys(process_id, data)
 
     async def _stop_share(self, share: Share, reason: str) -> None:
         """Asks the share to stop; its `ended` closes the link."""
@@ -464,12 +405,6 @@ class MachinesCoordinator(Plugin):
         for share in self.shares.values():
             for log in share.logs.values():
                 log.close()
-
-
-def _state_after(event: Event) -> str | None:
-    """The state an event leaves its process in (the batch's states follow it)."""
-    return {"started": "running", "stopping": "stopping", "exited": "exited",
-            "failed": "failed", "respawning": "respawning"}.get(event.kind)
 
 
 def placement_plugin(supervisor: Supervisor, placement: Placement | None, command: list[str],

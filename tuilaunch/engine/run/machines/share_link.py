@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import itertools
 from typing import Any
 
 from ...errors import LaunchError
@@ -14,6 +15,12 @@ from ...plan.machines import Machine
 from ..process.logfiles import LogFile
 from ..session.protocol import encode
 from .remote import RemoteLink
+
+REQUEST_IDS = itertools.count(1)
+"""The ids of the launching side's requests to the shares (one count: a reply is matched
+to its request by id alone)."""
+ASK_TIMEOUT = 30.0
+"""How long a request waits for its share's reply (a restart there stops, then starts)."""
 
 
 class Share:
@@ -42,6 +49,11 @@ class Share:
         self.waiters: list[asyncio.Future[str | None]] = []
         """Requests waiting for the next attempt to reach it: told None once connected,
         else why not."""
+        self.typing: str | None = None
+        """The process whose keyboard this side holds there (a new link holds none: the
+        share gave it back when the last one closed)."""
+        self.unknown: dict[str, str] = {}
+        """The processes shown `unknown` since its link was lost, and the state each had."""
 
     def tell(self, outcome: str | None) -> None:
         """The outcome of an attempt to reach it, to the requests waiting for one."""
@@ -55,6 +67,23 @@ class Share:
             raise LaunchError(f"{self.machine.name} is not connected")
         self.writer.write(encode(message))
         await self.writer.drain()
+
+    async def ask(self, message: dict[str, Any], timeout: float = ASK_TIMEOUT) -> Any:
+        """A request of the session protocol to the share; its result (LaunchError with the
+        share's words when it refuses, or when the link is lost before it answers)."""
+        request_id = next(REQUEST_IDS)
+        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
+        self.replies[request_id] = future
+        try:
+            await self.send({**message, "id": request_id})
+            return await asyncio.wait_for(future, timeout)
+        except TimeoutError:
+            raise LaunchError(f"{self.machine.name} did not answer within {timeout:g} s "
+                              f"({message.get('op')})") from None
+        except (ConnectionError, OSError):
+            raise LaunchError(f"lost the link to {self.machine.name}") from None
+        finally:
+            self.replies.pop(request_id, None)
 
 
 __all__ = ["Share"]

@@ -13,7 +13,6 @@ from typing import Any
 from ...errors import LaunchError
 from ..events import LIVE_STATES, Typing
 from ..plugins import Handler
-from ..process.readers import NO_TERMINAL
 from ..supervisor.supervisor import Supervisor
 
 
@@ -52,11 +51,12 @@ class Keyboard:
         if state not in LIVE_STATES:  # a stop's prompt can still be answered
             raise LaunchError(f"{process} is not running ({state}): there is nothing to "
                               "type into")
-        if not self._has_terminal(process):
-            raise LaunchError(f"{process} cannot be typed into: {NO_TERMINAL}")
+        # a terminal here, or its keyboard on the machine that runs it taken for us
+        await self.supervisor.take_keys(process)
         previous = self.process
         self.client, self.process = int(client) if client is not None else None, process
         if previous is not None and previous != process:
+            self.supervisor.give_keys(previous)
             self._tell(previous, None)
         self._tell(process, self.client)
         return {}
@@ -72,7 +72,7 @@ class Keyboard:
                 if self.client is not None else "nobody holds the keyboard"
             raise LaunchError(f"input to {process} refused: {who}; ask for it with "
                               "typing {on: true} first")
-        dropped = self.supervisor.write_input(process, data.encode())
+        dropped = await self.supervisor.type_keys(process, data.encode())
         return {"dropped": dropped} if dropped else {}
 
     def release(self, client: int) -> None:
@@ -82,11 +82,8 @@ class Keyboard:
         process = self.process
         self.client = self.process = None
         if process is not None:
+            self.supervisor.give_keys(process)
             self._tell(process, None)
-
-    def _has_terminal(self, process: str) -> bool:
-        running = self.supervisor.running_process(process)
-        return running is not None and running.terminal is not None
 
     def _tell(self, process: str, client: int | None) -> None:
         self.supervisor.emit(Typing(process, data={"client": client}))

@@ -148,7 +148,17 @@ class SessionServer:
                     self.details.pop(event.process, None)
                 if event.reason is not None and not isinstance(event, Log):
                     self.details[event.process] = event.reason
+                elif isinstance(event, Log) and (event.data or {}).get("detail") is not None:
+                    # a row's detail said by a line (a machine being reached again, a lost
+                    # link): `status` says it too while the process does not run
+                    self._detail(event.process, str((event.data or {})["detail"]))
         self.hub.broadcast(event)
+
+    def _detail(self, process: str, detail: str) -> None:
+        if self.supervisor.states.get(process) in LIVE_STATES or not detail.strip("()"):
+            self.details.pop(process, None)
+        else:
+            self.details[process] = detail.strip("()")
 
     def send(self, event: Event, client: int | None = None) -> None:
         """An event for one subscribed client (by id) or all, neither logged nor kept for
@@ -194,10 +204,16 @@ class SessionServer:
         return {"placement": {"text": placement.text, "path": placement.machines.path,
                               "share": placement.share}}
 
-    def status(self, usage: Mapping[str, Usage] | None = None) -> dict[str, Any]:
+    def status(self, usage: Mapping[str, Usage] | None = None,
+               elsewhere: Mapping[str, dict[str, Any]] | None = None) -> dict[str, Any]:
         """Each process's state; with `usage` (ResourceWatch.current), its CPU%, resident
-        memory and threads (None when it is not running)."""
+        memory and threads (None when it is not running). `elsewhere`: how the processes
+        placed on other machines were started, as those machines say (a terminal there is
+        theirs to know: unknown, None, for one whose machine did not answer)."""
         states = self.supervisor.states
+        placed = {p.id for p in self.session.plan.processes
+                  if not self.supervisor.core.runs_here(p.id)} \
+            if self.supervisor.core.placing.remote is not None else set()
         processes = []
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
@@ -212,6 +228,8 @@ class SessionServer:
                 "detail": self.details.get(proc.id), "machine": proc.machine, **fields,
                 # the exact start (argv, paste-ready line, env changes); a crash's signal/core
                 **self.supervisor.command_of(proc.id),
+                **({"terminal": None, **(elsewhere or {}).get(proc.id, {})}
+                   if proc.id in placed else {}),
                 **(self.supervisor.deaths.get(proc.id, {}) if state == "failed" else {})})
         counts: dict[str, int] = {}
         for proc in self.session.plan.processes:
@@ -282,7 +300,10 @@ class SessionServer:
         if op == "status":
             # `ls` asks every session and needs no CPU figures: it can spare their 0.3 s
             wanted = message.get("resources", True) is not False
-            return self.status(await self.resources.current() if wanted else None)
+            usage, elsewhere = await asyncio.gather(
+                self.resources.current() if wanted else _nothing(),
+                self.supervisor.commands_elsewhere())
+            return self.status(usage, elsewhere)
         if op == "watch_resources":
             shown = message.get("processes")
             client, on = int(message["client"]), bool(message.get("on", True))
@@ -380,4 +401,8 @@ class SessionServer:
         self.supervisor.emit(Relaunched(reason=None, lines=[
             f"{k}:={v}" for k, v in self.session.arguments.items()],
             data={"edited": edited} if edited else None))
+
+
+async def _nothing() -> None:
+    return None
 

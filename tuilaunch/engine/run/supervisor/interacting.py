@@ -1,5 +1,6 @@
-"""The operator's hands on one process: typing into its terminal, running it under a tool
-(gdb, valgrind...) or at another log level, and the exact command it was started with."""
+"""The operator's hands on one process: typing into its terminal (here, or on the machine
+that runs it: `take_keys`, `type_keys`), running it under a tool (gdb, valgrind...) or at
+another log level, and the exact command it was started with."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any
 from ...errors import LaunchError
 from ...plan.prefix import with_prefix
 from ..process.process_command import check_log_level, describe_command
-from ..process.readers import Running
+from ..process.readers import NO_TERMINAL, Running
 from ..process.terminal_input import InputRefused
 from .core import SupervisorCore
 from .starting import Starting
@@ -47,6 +48,33 @@ class Interacting:
             return running.write_input(data)
         except InputRefused as exc:
             raise LaunchError(f"{process_id} cannot be typed into: {exc}") from None
+
+    async def take_keys(self, process_id: str) -> None:
+        """Checks that `process_id` can be typed into, before a client takes its keyboard:
+        a terminal here, or, run on another machine, its keyboard there taken for this
+        side (its machine says why not: the terminal it gave it is its own to know).
+        LaunchError, one line, when it cannot."""
+        core = self.core
+        if not core.runs_here(process_id):
+            await core.placing.keys_of(core.plan, process_id).take_keys(process_id)
+            return
+        running = core.running.get(process_id)
+        if running is None or running.terminal is None:
+            raise LaunchError(f"{process_id} cannot be typed into: {NO_TERMINAL}")
+
+    def give_keys(self, process_id: str) -> None:
+        """The client typing into `process_id` let go: run elsewhere, so does this side."""
+        core = self.core
+        if not core.runs_here(process_id) and core.placing.remote is not None:
+            core.placing.remote.give_keys(process_id)
+
+    async def type_keys(self, process_id: str, data: bytes) -> int:
+        """`write_input`, for a process here or on another machine (the keys are sent
+        there, in order); the bytes it dropped."""
+        core = self.core
+        if core.runs_here(process_id):
+            return self.write_input(process_id, data)
+        return await core.placing.keys_of(core.plan, process_id).type_keys(process_id, data)
 
     def restart_options(self, process_id: str, prefix: str | None = None,
                         log_level: str | None = None, terminal: bool = False) -> None:

@@ -23,6 +23,9 @@ from ...plan.model import Plan
 
 ELSEWHERE = "elsewhere"
 """The state, in a share, of a process another machine runs."""
+UNKNOWN = "unknown"
+"""The state, on the launching side, of a process whose machine's link is lost: it may run
+on there, or not; nobody here can say until the link is back."""
 
 
 class RemoteControl(Protocol):
@@ -31,6 +34,24 @@ class RemoteControl(Protocol):
     async def forward(self, op: str, process_id: str, **options: Any) -> None:
         """`op` is start, stop or restart (`options`: its prefix, log_level, terminal); raises
         LaunchError when the machine cannot be asked."""
+        ...
+
+    async def commands(self) -> dict[str, dict[str, Any]]:
+        """What each process placed elsewhere was started with, as its machine's `status`
+        says it (command, command_line, env, terminal), for the machines that answer now."""
+        ...
+
+    async def take_keys(self, process_id: str) -> None:
+        """Takes the keyboard of `process_id` on its machine for this side (LaunchError, its
+        machine's words, when it cannot be typed into there)."""
+        ...
+
+    def give_keys(self, process_id: str) -> None:
+        """Gives that keyboard back (in the background: a link that is gone gave it back)."""
+        ...
+
+    async def type_keys(self, process_id: str, data: bytes) -> int:
+        """Types `data` into `process_id` on its machine; the bytes it dropped."""
         ...
 
 
@@ -78,5 +99,14 @@ class Placing:
                               "side")
         await self.remote.forward(op, process_id, **options)
 
+    def keys_of(self, plan: Plan, process_id: str) -> RemoteControl:
+        """Who types into `process_id`, run elsewhere: the launching side's remote control
+        (the keys go to the machine that runs it); LaunchError from a share."""
+        if self.remote is None:
+            where = plan.process(process_id).machine or "the launching side"
+            raise LaunchError(f"{process_id} runs on {where}: type into it from there or "
+                              "from the launching side")
+        return self.remote
 
-__all__ = ["ELSEWHERE", "Placing", "RemoteControl"]
+
+__all__ = ["ELSEWHERE", "UNKNOWN", "Placing", "RemoteControl"]

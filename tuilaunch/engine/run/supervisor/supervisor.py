@@ -36,7 +36,7 @@ from ..process.readers import Running
 from .core import SupervisorCore
 from .ending import Ending
 from .interacting import Interacting, restart_fields
-from .placed import ELSEWHERE, RemoteControl
+from .placed import ELSEWHERE, UNKNOWN, RemoteControl
 from .plan_actions import PlanActions
 from .starting import Starting
 
@@ -166,16 +166,32 @@ class Supervisor:
         """SIGKILL to every process, for a caller that cannot wait."""
         self.ending.kill_all()
 
-    def running_process(self, process_id: str) -> Running | None:
-        return self.hands.running_process(process_id)
-
     def write_input(self, process_id: str, data: bytes) -> int:
         """Types `data` into a running process's terminal (interacting.py)."""
         return self.hands.write_input(process_id, data)
 
+    async def take_keys(self, process_id: str) -> None:
+        """LaunchError unless it can be typed into, here or on its machine (interacting.py)."""
+        await self.hands.take_keys(process_id)
+
+    def give_keys(self, process_id: str) -> None:
+        """Nobody types into it any more (interacting.py)."""
+        self.hands.give_keys(process_id)
+
+    async def type_keys(self, process_id: str, data: bytes) -> int:
+        """Types into it, here or on its machine; the bytes dropped (interacting.py)."""
+        return await self.hands.type_keys(process_id, data)
+
     def command_of(self, process_id: str) -> dict[str, Any]:
         """The command, command line and env of the process's last start (interacting.py)."""
         return self.hands.command_of(process_id)
+
+    async def commands_elsewhere(self) -> dict[str, dict[str, Any]]:
+        """`command_of` of the processes placed on other machines, as those machines say
+        it (a tool, a terminal given there by a restart are theirs to know), for the ones
+        that answer now: the launching side's `status` reports them."""
+        remote = self.core.placing.remote
+        return {} if remote is None else await remote.commands()
 
     # --- the run ------------------------------------------------------------------------------
 
@@ -265,8 +281,10 @@ class Supervisor:
                 not book.due_in_shutdown(core.plan.actions, states, core.detached_actions)
         if core.keep_alive or core.running or core.busy or core.shutdown_requested:
             return False
-        if any(state == "running" for state in states.values()):
-            return False  # an action is waiting for its service or node
+        if any(state in ("running", UNKNOWN) for state in states.values()):
+            # an action is waiting for its service or node; a process whose machine's link
+            # is lost may run on there (machines_share.py connects again)
+            return False
         # a pending item can still start only if what it waits for is alive or pending
         waiting = [p.trigger for p in processes if states[p.id] == "pending"]
         return not any(book.can_fire(trigger, states, processes) for trigger in waiting) and \
