@@ -1,0 +1,48 @@
+"""A recording over ssh: `tuilaunch record HOST:NAME` through a real sshd on 127.0.0.1
+(tests/integration/sshd.py) records where the publisher runs and writes the file on this
+computer, every message as published."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..conftest import run_cli
+from .sshd import Machines, machines_fixture  # noqa: F401
+from .test_plot_ssh import there  # a user's environment on that machine
+from .test_record import read
+
+SIGNAL_NODE = Path(__file__).resolve().parent / "nodes" / "signal_node.py"
+LAUNCH = f"""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='wave', cmd=[
+        {sys.executable!r}, {str(SIGNAL_NODE)!r}, 'ssh_rec', '--topic', '/ssh/rec',
+        '--rate', '50'])])
+"""
+
+
+def test_a_recording_over_ssh_is_written_here(machines: Machines, write, tmp_path):
+    robot = machines["robot1"]
+    done = run_cli(str(write(LAUNCH)), "--detach", "--name", "farrec", env=there(robot))
+    assert done.returncode == 0, done.stderr
+    out = tmp_path / "here" / "far.mcap"
+    out.parent.mkdir()
+    try:
+        assert run_cli("wait", "farrec", "wave-1", "running", "--timeout", "60",
+                       env=there(robot)).returncode == 0
+        recorded = run_cli("record", "robot1:farrec", "/ssh/rec", "-o", str(out),
+                           "--duration", "4")
+        assert recorded.returncode == 0, recorded.stderr
+        again = run_cli("record", "robot1:farrec", "/ssh/rec", "-o", str(out),
+                        "--duration", "1")
+        assert again.returncode != 0 and "Traceback" not in again.stderr
+        assert f"{out} exists: tuilaunch never overwrites a recording" in again.stderr
+    finally:
+        run_cli("stop", "farrec", env=there(robot))
+    _, messages = read(out)
+    numbers = [int(m.z) for topic, _, m in messages if topic == "/ssh/rec"]
+    assert len(numbers) > 50
+    assert numbers == list(range(numbers[0], numbers[0] + len(numbers)))
+    assert not list((robot.folder / "roslog").rglob("*.mcap"))  # nothing written there
