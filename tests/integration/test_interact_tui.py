@@ -112,8 +112,9 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
 
 def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into_it(write):
     """The keyboard node fails with pipes, as teleop_twist_keyboard does under ros2 launch
-    without emulate_tty; `i y` starts it with a terminal and the keys go to it. A line typed
-    in the same read as `i y` waits out a slow restart and goes to the node."""
+    without emulate_tty; `i`, then `y` once the question shows, starts it with a terminal
+    and the keys go to it. A line typed in the same read as `y` waits out a slow restart and
+    goes to the node."""
     path = str(write(PIPED))
     name, log_dir = detached_with(path, "nap-2")
 
@@ -124,7 +125,10 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await until(pilot, lambda: "stdin is not a terminal" in pane(app, "lines-1"))
             await select(pilot, app, "lines-1")
             await pilot.pause()
-            await pilot.press("i", "y")
+            await pilot.press("i")
+            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+            await pilot.pause(0.5)  # a question `i` opens takes a key typed once it shows
+            await pilot.press("y")
             await until(pilot, lambda: app.typing_to == "lines-1")
             await pilot.press(*"hello", "enter")
             await until(pilot, lambda: "got: hello" in pane(app, "lines-1"))
@@ -140,7 +144,10 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await until(pilot, lambda: "no terminal: waiting" in pane(app, "slow-3"))
             await select(pilot, app, "slow-3")
             await pilot.pause()
-            burst(app, "i", "y", *"hello rs", "enter")
+            burst(app, "i")
+            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+            await pilot.pause(0.5)
+            burst(app, "y", *"hello rs", "enter")
             await until(pilot, lambda: "got: hello rs" in pane(app, "slow-3"))
             assert app.typing_to == "slow-3"
             assert pane(app, "slow-3").count("stopped slowly") == 1

@@ -43,8 +43,9 @@ def generate_launch_description():
 def test_a_line_typed_with_i_into_a_stopped_node_quits_nothing(write, tmp_path):
     """On a real terminal, as ssh delivers a typed line: `iquit yes` Enter on a node with a
     terminal that was stopped. Before, `q` asked to quit and `y` answered: the whole launch
-    stopped. Now `i` asks whether to start the node: the letters before `y` are not
-    commands, `y` starts it, and the rest of the line is the node's."""
+    stopped. Now `i` asks whether to start the node and the rest of the burst goes nowhere
+    (its `y` does not answer); a `y` typed once the question shows starts it, and what
+    follows it is the node's."""
     proc, master = start_on_pty(tmp_path, str(write(TYPED_TWO)))
     try:
         read_until(master, b"2 running")
@@ -53,8 +54,10 @@ def test_a_line_typed_with_i_into_a_stopped_node_quits_nothing(write, tmp_path):
         os.write(master, b"s")
         read_until(master, b"process stopped [pid")
         os.write(master, b"iquit yes\r")
-        screen = read_until(master, b"got: es")
-        assert b"is not running (exited)" in screen  # what `i` asked
+        screen = read_until(master, b"is not running (exited)")  # what `i` asked
+        time.sleep(1.0)  # the next burst: typed once the question shows
+        os.write(master, b"yes\r")
+        screen += read_until(master, b"got: es")
         assert b"still run" not in screen  # no quit question
         os.write(master, b"\x1d")  # ctrl+]: the keys back
         read_until(master, b"Type")  # the footer offers tuilaunch's keys again

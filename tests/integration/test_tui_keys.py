@@ -150,8 +150,9 @@ async def test_a_value_typed_after_the_args_tab_key_in_one_read_goes_into_its_fi
         assert not app.quitting and pids(app) == before
         await until(pilot, lambda: app.args_tab.preview is not None
                     and app.args_tab.preview.arguments.get("robot") == "r2sq")
-        # back to Apply, right to Defaults: a space there resets nothing, Enter does
-        burst(app, "shift+tab", "shift+tab", "right", "space")
+        # back to Apply (shift+tab from the first value), right to Defaults: a space there
+        # resets nothing, Enter does
+        burst(app, "shift+tab", "right", "space")
         await until(pilot, lambda: app.focused is app.query_one("#defaults"))
         await pilot.pause(0.2)
         assert field(app, "arg-robot").value == "r2sq"

@@ -1,0 +1,267 @@
+"""What a third hour of demanding use found: a key typed for a node never stops, restarts or
+quits anything, whatever row `i` lands on; a question opens on its safe answer; `t` on a
+group starts what the plan runs, never a node its condition skipped.
+
+One session (a detached session server) for the module; each test attaches a TUI to it in
+a real terminal (tmux), and writes its keys as one burst, as ssh delivers a typed line.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from tuilaunch.client.link import open_link
+from tuilaunch.engine.run.session.session_dir import SessionError
+
+from .proc_tree import end, servers_of
+from .test_sessions import status, tl
+
+pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
+
+DEADLINE = 30.0
+
+THREE = """
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess, GroupAction
+from launch.conditions import IfCondition
+from launch.substitutions import LaunchConfiguration
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('listener', default_value='true'),
+        GroupAction([
+            ExecuteProcess(name='talker', cmd=['sleep', '600']),
+            GroupAction([ExecuteProcess(name='listener', cmd=['sleep', '600'])],
+                        condition=IfCondition(LaunchConfiguration('listener'))),
+            ExecuteProcess(name='piped', cmd=['sleep', '600']),
+        ]),
+    ])
+"""
+
+
+@pytest.fixture(scope="module")
+def session() -> Iterator[str]:
+    """One session of THREE with `listener:=false` (listener-2 skipped) for the module, in
+    a private session folder; stopped, with whatever it runs, at the end."""
+    folder = Path(tempfile.mkdtemp(prefix="tl3"))
+    logs = folder / "log"
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("XDG_RUNTIME_DIR", str(folder))
+        patch.setenv("ROS_LOG_DIR", str(logs))
+        path = folder / "three.launch.py"
+        path.write_text(THREE)
+        name = tl(str(path), "listener:=false", "--detach", "--name", "three").stdout.strip()
+        try:
+            tl("wait", name, "piped-3", "running", "--timeout", "60")
+            yield name
+        finally:
+            tl("stop", name, check=False)
+            end([json.loads(info.read_text())["pid"]
+                 for info in (folder / "tuilaunch").glob("*.json")])
+            end(servers_of(logs))
+            shutil.rmtree(folder, ignore_errors=True)
+
+
+def states(name: str) -> dict[str, str]:
+    return {p["id"]: p["state"] for p in status(name)["processes"]}
+
+
+def pids(name: str) -> dict[str, int | None]:
+    return {p["id"]: p["pid"] for p in status(name)["processes"]}
+
+
+def wait_for(check: Callable[[], object], what: str, seen: Callable[[], object]) -> None:
+    end_at = time.monotonic() + DEADLINE
+    while not check():
+        if time.monotonic() > end_at:
+            raise AssertionError(f"not seen within {DEADLINE} s: {what}; saw:\n{seen()}")
+        time.sleep(0.1)
+
+
+class Tmux:
+    """`tuilaunch attach` in a tmux pane of its own server (a private socket): its screen
+    as tmux draws it, keys written by `send-keys -l` as one burst."""
+
+    def __init__(self, *args: str) -> None:
+        self.socket = f"tl3-{uuid.uuid4().hex[:8]}"
+        env = " ".join(f"{k}={shlex.quote(os.environ[k])}"
+                       for k in ("XDG_RUNTIME_DIR", "ROS_LOG_DIR", "PATH"))
+        command = " ".join(shlex.quote(a) for a in (sys.executable, "-m", "tuilaunch", *args))
+        self.tmux("new-session", "-d", "-x", "140", "-y", "30",
+                  f"env -u COLUMNS -u LINES {env} TERM=xterm-256color {command}; "
+                  "echo TUI-ENDED $?; sleep 600")  # the size is the pane's, not pytest's
+
+    def tmux(self, *args: str) -> str:
+        return subprocess.run(["tmux", "-L", self.socket, *args], capture_output=True,
+                              text=True, check=True).stdout
+
+    def screen(self) -> str:
+        return self.tmux("capture-pane", "-p")
+
+    def shows(self, text: str) -> None:
+        wait_for(lambda: text in self.screen(), f"{text!r} on screen", self.screen)
+
+    def toasts(self) -> str:
+        """The toasts' text, their lines joined (a toast wraps at its own width)."""
+        parts = [line.split("▌", 1)[1].strip() for line in self.screen().splitlines()
+                 if "▌" in line]
+        return " ".join(part for part in parts if part)
+
+    def says(self, text: str) -> None:
+        wait_for(lambda: text in self.toasts(), f"{text!r} said", self.screen)
+
+    def burst(self, keys: str) -> None:
+        """`keys` in one write, as ssh delivers a typed line (`\\r`: Enter)."""
+        self.tmux("send-keys", "-l", keys)
+
+    def keys(self, *names: str) -> None:
+        """Named keys (Down, Home), each its own write."""
+        self.tmux("send-keys", *names)
+
+    def close(self) -> None:
+        subprocess.run(["tmux", "-L", self.socket, "kill-server"], capture_output=True)
+
+
+@pytest.fixture
+def attached(session: str) -> Iterator[Callable[..., Tmux]]:
+    """Attaches a TUI to the module's session (more arguments: `--read-only`); every pane
+    is closed after the test (an attached client leaves the session running)."""
+    panes: list[Tmux] = []
+
+    def attach(*args: str) -> Tmux:
+        pane = Tmux("attach", session, *args)
+        panes.append(pane)
+        pane.shows("2 of 2 processes running")  # the tree drawn, the root selected
+        return pane
+
+    yield attach
+    for pane in panes:
+        pane.close()
+
+
+def row(pane: Tmux, down: int) -> None:
+    """The tree's cursor `down` rows below the root (all nodes 1, the group 2, talker-1 3,
+    the condition 4, listener-2 5, piped-3 6)."""
+    # apart from the bursts before and after: a dropped burst goes on until a pause of
+    # 0.3 s (key_order.BURST_GAP), as a person's next keys come after reading the screen
+    time.sleep(0.5)
+    pane.keys("Home", *["Down"] * down)
+    time.sleep(0.5)
+
+
+def test_keys_typed_with_i_on_a_row_that_is_not_a_node_are_never_commands(session, attached):
+    """`iquit yes` Enter on the root quit the launch; `istop` Enter on a group or on all
+    nodes stopped every process (its question opened with Stop focused). Now `i` says at
+    once that the row is not a node, and the rest of the burst goes nowhere."""
+    before = pids(session)
+    pane = attached()
+    row(pane, 0)  # the root
+    pane.burst("iquit yes\r")
+    pane.says("is the launch, not a node")
+    for down, said in ((1, "is every node's output, not a node"), (2, "is a group, not a node"),
+                       (4, "is a group, not a node")):  # all nodes, the group, the condition
+        row(pane, down)
+        pane.burst("istop\r")
+        pane.says(said)
+    time.sleep(1.0)  # what the dropped keys would have done had time to happen
+    screen = pane.screen()
+    assert "TUI-ENDED" not in screen and "still run" not in screen and "Stop all" not in screen
+    assert pids(session) == before  # nothing stopped, nothing restarted
+
+
+def test_a_question_i_opens_waits_for_a_key_typed_once_it_shows(session, attached):
+    """`iyes` Enter on a node started with pipes restarted it with a terminal: the `y`
+    answered the question `i` opened. Now the question stays, says why the keys went
+    nowhere, and only a key typed after it answers it."""
+    before = pids(session)
+    pane = attached()
+    row(pane, 6)  # piped-3
+    pane.burst("iyes\r")
+    pane.shows("Restart it with a terminal")
+    pane.says("The keys typed with i were not sent")
+    time.sleep(1.0)
+    assert "Restart it with a terminal" in pane.screen()  # not answered by the burst
+    assert pids(session) == before
+    pane.burst("n")  # typed once the question shows: it answers
+    wait_for(lambda: "Restart it with a terminal" not in pane.screen(), "the question gone",
+             pane.screen)
+    assert pids(session) == before
+
+
+def test_questions_that_stop_or_quit_open_on_the_safe_answer(session, attached):
+    """Enter alone answers No: `s` on a group, then Enter, stops nothing; `q`, then Enter,
+    keeps the TUI and the launch; `n` in the quit question keeps running (it never
+    detaches)."""
+    before = pids(session)
+    pane = attached()
+    row(pane, 2)  # the group: a stop of several asks first
+    pane.burst("s")
+    pane.shows("Stop all 2 running processes")
+    pane.burst("\r")
+    wait_for(lambda: "Stop all" not in pane.screen(), "the question answered", pane.screen)
+    for answer in ("\r", "n"):
+        pane.burst("q")
+        pane.shows("Stop them all and quit?")
+        pane.burst(answer)
+        wait_for(lambda: "and quit?" not in pane.screen(), "the quit question answered",
+                 pane.screen)
+    time.sleep(1.0)
+    assert "TUI-ENDED" not in pane.screen()  # neither quit nor detached
+    assert pids(session) == before
+
+
+def test_t_on_a_group_never_starts_the_node_its_condition_skipped(session, attached):
+    """`listener:=false`: stop the group, start it again: talker-1 and piped-3 run, and
+    listener-2 stays skipped. The session refuses its start for any client, with one
+    line."""
+    pane = attached()
+    row(pane, 2)
+    pane.burst("s")
+    pane.shows("Stop all 2 running processes")
+    pane.burst("y")
+    wait_for(lambda: states(session) == {"talker-1": "exited", "listener-2": "skipped",
+                                         "piped-3": "exited"}, "the group stopped",
+             lambda: states(session))
+    pane.burst("t")
+    wait_for(lambda: states(session) == {"talker-1": "running", "listener-2": "skipped",
+                                         "piped-3": "running"}, "the group started again",
+             lambda: states(session))
+    time.sleep(0.5)
+    assert states(session)["listener-2"] == "skipped"
+    link = open_link(session)
+    try:
+        with pytest.raises(SessionError, match=r"listener-2 is skipped by its condition "
+                           r"\(if \$\(var listener\) = 'false'\): the launch does not run it"):
+            link.request("start", process="listener-2")
+    finally:
+        link.close()
+    assert states(session)["listener-2"] == "skipped"
+
+
+def test_a_read_only_view_offers_no_key_it_refuses_and_i_refuses_at_once(session, attached):
+    before = pids(session)
+    pane = attached("--read-only")
+    pane.shows("d Detach")  # the footer once the tree has the keys
+    footer = next(line for line in pane.screen().splitlines() if "palette" in line)
+    for offered in ("s Stop", "r Restart", "t Start", "i Type", "g Debug"):
+        assert offered not in footer, footer
+    row(pane, 3)  # talker-1
+    pane.burst("iquit\r")
+    pane.says("read-only view: typing into a node is refused")
+    time.sleep(0.5)  # a burst of its own
+    pane.burst("g")
+    pane.says("running a node under a tool is refused")
+    time.sleep(1.0)
+    assert "TUI-ENDED" not in pane.screen()  # the q of `iquit` did not leave
+    assert pids(session) == before
