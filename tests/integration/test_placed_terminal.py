@@ -32,7 +32,7 @@ from .terminal_harness import PROGRAMS
 
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
-NAME = "placedtty"
+NAME = "ptty"
 LAUNCH = """
 import sys
 from launch import LaunchDescription
@@ -235,15 +235,18 @@ def test_i_types_into_the_debugger_of_a_node_under_pdb_on_another_machine(
 
 
 def robot1_off(placed: Placed) -> None:
-    """robot1 leaves the network: its sshd takes no new login, and the link the launching
-    side holds to its share dies (as a cable pulled out ends it, once ssh notices)."""
+    """robot1 leaves the network: its sshd takes no new login, and every link to it dies
+    (the launching side's to its share, an attached TUI's), as a cable pulled out ends
+    them once ssh notices."""
     machine = placed.machines["robot1"]
+    there = [pid for pid in descendants(machine.proc.pid) if b"__proxy" in cmdline(pid)]
     terminate(machine.proc)
     server = json.loads((placed.runtime / "tuilaunch" / f"{NAME}.json").read_text())["pid"]
     links = [pid for pid in descendants(server) if b"__proxy" in cmdline(pid)]
     assert links, "no ssh link to robot1's share"
-    for pid in links:
-        os.kill(pid, signal.SIGKILL)
+    for pid in [*links, *there]:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
 
 
 def robot1_on(placed: Placed) -> None:
@@ -260,11 +263,18 @@ def test_a_node_on_a_machine_whose_link_is_lost_is_not_shown_running(placed: Pla
     """Its state is unknown since the link was lost: said on its row, in the header's
     counts and by `status`; once the link is back, it is running again everywhere."""
     pid = placed.process("lines-1")["pid"]
-    with attached(placed, size=(120, 30)) as tui:
+    share = f"{NAME}-r1"
+    with attached(placed, size=(120, 30)) as tui, \
+            contextlib.closing(Tmux(placed.folder, "attach", f"robot1:{share}")) as there:
         tui.wait_for("3 running")
         tui.select("lines-1")
+        there.wait_for(f"[robot1:{share}]")  # robot1's share itself, over ssh, at 80x24
         robot1_off(placed)
         try:
+            # its lost-link line keeps the latest attempt's reason's end at 80 columns
+            said = there.wait_for("Connection refused", 60).splitlines()[0]
+            assert said.startswith(f" link to robot1 lost · reconnecting · {share} · R: now ·"
+                                   ) and said.rstrip().endswith("… Connection refused"), said
             # the detail line says the selected row whole (the tree cuts it)
             screen = tui.wait_for("lines-1 (/lines): unknown (since the link to r1 was lost)")
             assert "1 running  2 unknown" in screen.splitlines()[0], screen

@@ -65,6 +65,21 @@ class LinkLost(SessionError):
 LINK_LOST_STATUS = 1
 
 
+def short_reason(reason: str, room: int) -> str:
+    """A lost link's reason in `room` columns, its end kept: ssh says what failed last
+    (`cannot reach robot1: connect to host 10.0.0.7 port 22: Connection refused`), and at
+    80 columns `cannot reach robot1: … Connection refused` says more than its first half."""
+    if len(reason) <= room:
+        return reason
+    head, _, rest = reason.partition(": ")
+    last = rest.rsplit(": ", 1)[-1] if rest else reason
+    short = f"{head}: … {last}" if rest and last != rest else reason
+    if len(short) <= room:
+        return short
+    tail = f"… {last}"
+    return tail if len(tail) <= room else "…" + last[len(last) - max(room - 1, 0):]
+
+
 class Link:
     """A blocking connection for one-shot commands (status, stop, restart, wait, logs).
 

@@ -271,6 +271,9 @@ class NodeKeyboard(SessionLink):
             return
         notes = [f"client {client} types into {process}"
                  for process, client in self.other_typists.items()]
+        link = self.over_link()
+        if link is not None and link.link_lost:
+            notes = []  # not known while the link is down: the line says that, whole
         if self.typing_to is not None:
             notes.insert(0, f"typing to {self.typing_to}: {self.typed_line}")
         if notes:

@@ -24,6 +24,7 @@ from textual.timer import Timer
 from textual.widgets import Static, TabbedContent, Tree
 from textual.worker import Worker, WorkerState
 
+from ..client.link import short_reason
 from ..client.port import LaunchPort
 from ..client.read_only import ReadOnlyError
 from ..engine.errors import LaunchError
@@ -423,8 +424,9 @@ class SessionLink(App[int]):
         if link is not None and link.link_lost:
             # what is shown is as it was when the link dropped; the short form first, so
             # 80 columns show it whole: the reason (the latest attempt's) may be cut
-            prefix = f"link to {link.host} lost · reconnecting · {self.session_name} · " \
-                     f"R: now · {link.lost_reason}  {prefix}"
+            said = f"link to {link.host} lost · reconnecting · {self.session_name} · R: now · "
+            room = (self.status_bar.size.width or 78) - len(said)  # the reason's end kept
+            prefix = f"{said}{short_reason(link.lost_reason or '', room)}  {prefix}"
             name = Path(self.session.plan.file).name
         elif link is not None and link.silent_for() >= SILENCE_SHOWN:
             prefix = f"no word from {link.host} for {link.silent_for():.0f} s · {prefix}"
