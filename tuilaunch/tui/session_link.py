@@ -423,7 +423,7 @@ class SessionLink(App[int]):
         link = self.over_link()
         if link is not None and link.link_lost:
             # what is shown is as it was when the link dropped; the short form first, so
-            # 80 columns show it whole: the reason (the latest attempt's) may be cut
+            # 80 columns show it whole, then the reason (the latest attempt's), its end kept
             said = f"link to {link.host} lost · reconnecting · {self.session_name} · R: now · "
             room = (self.status_bar.size.width or 78) - len(said)  # the reason's end kept
             prefix = f"{said}{short_reason(link.lost_reason or '', room)}  {prefix}"
