@@ -270,7 +270,10 @@ def logs_many(options: argparse.Namespace) -> int:
 def attach_many(options: argparse.Namespace) -> int:
     """One TUI over several sessions (tui/fleet/app.py). A `HOST:` that cannot be listed
     is a line here; a session whose machine cannot be reached is a root that retries."""
-    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+    from .commands import in_browser
+
+    web = in_browser()  # a browser's tab (tuilaunch serve A B): the page is its terminal
+    if not web and not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise SessionError("attach needs a terminal",
                            hint=f"tuilaunch logs {' '.join(options.name)} -f")
     if options.type_into:
@@ -282,7 +285,9 @@ def attach_many(options: argparse.Namespace) -> int:
     from ..tui.fleet.app import FleetApp
 
     where = [parse_session(a) for a in addresses]
-    app = FleetApp([(w.host, w.name) for w in where], scrollback=options.scrollback)
+    app = FleetApp([(w.host, w.name) for w in where], scrollback=options.scrollback,
+                   read_only=options.read_only)
     status = app.run() or 0
-    print(f"detached; the sessions run on: tuilaunch attach {' '.join(addresses)}")
+    if not web:  # a browser tab's stdout is the page's stream
+        print(f"detached; the sessions run on: tuilaunch attach {' '.join(addresses)}")
     return FAILED if failed else int(status)

@@ -1,10 +1,12 @@
 """`tuilaunch serve`: the TUI in a web browser, through textual-serve.
 
-`serve [HOST:]NAME` serves that session; `serve FILE [name:=value ...]` (or PACKAGE FILE)
-starts the launch as a detached session first, as `--detach` does, then serves it; `serve`
-alone serves a page listing this machine's sessions, each opening its TUI. The first line
-on stdout is the URL to open. Each browser tab runs `tuilaunch attach NAME` (one more
-client of the session): closing the tab, `q` in it, or stopping serve stops nothing.
+`serve [HOST:]NAME` serves that session; `serve A B ...` or `serve nuc: arm:` serves the
+fleet view of those sessions (tui/fleet/) at one URL; `serve FILE [name:=value ...]` (or
+PACKAGE FILE) starts the launch as a detached session first, as `--detach` does, then
+serves it; `serve` alone serves a page listing this machine's sessions, each opening its
+TUI, and all of them together in the fleet view. The first line on stdout is the URL to
+open. Each browser tab runs `tuilaunch attach NAME ...` (one more client of each session):
+closing the tab, `q` in it, or stopping serve stops nothing.
 
 Safe by default (serve_guard.py): loopback only unless `--host` says otherwise, and then a
 token. `--read-only` makes every tab a view that changes nothing (client/read_only.py).
@@ -26,7 +28,7 @@ from urllib.parse import quote, urlsplit
 
 from ..client.link import resolve_name
 from ..engine.errors import LaunchError
-from ..engine.run.machines.remote import parse_address
+from ..engine.run.machines.remote import check_host, parse_address
 from ..engine.run.session.session_dir import SessionError
 from .serve_guard import Guard
 
@@ -40,7 +42,7 @@ def serve(options: argparse.Namespace,
     guard = Guard.make(options.host, options.port, options.token_file, options.public_url)
     if options.public_url and urlsplit(options.public_url).scheme not in ("http", "https"):
         raise LaunchError(f"--public-url {options.public_url}: not an http:// or https:// URL")
-    session, launch = _target(options.items)
+    sessions, launch = _target(options.items)
     if options.name and launch is None:
         raise LaunchError("--name names the session a launch file starts: give FILE too")
     from ..engine.packages import ensure_environment
@@ -59,13 +61,15 @@ def serve(options: argparse.Namespace,
             name = await asyncio.get_running_loop().run_in_executor(
                 None, start_detached, launch, options.name)
             started.append(name)
-            app.session = name
+            app.sessions = [name]
         print(url_of(options, guard), flush=True)
-        what = f"session {app.session}" if app.session else "the sessions of this machine"
+        what = "the sessions of this machine" if not app.sessions else \
+            f"session {app.sessions[0]}" if len(app.sessions) == 1 else \
+            f"the fleet view of {' '.join(app.sessions)}"
         print(f"tuilaunch serve: serving {what}{' read-only' if options.read_only else ''}"
               f"; Ctrl+C stops serving, the launch runs on", file=sys.stderr, flush=True)
 
-    app = serve_web.ServeApp(guard, session, options.read_only, local_sessions)
+    app = serve_web.ServeApp(guard, sessions, options.read_only, local_sessions)
     try:
         asyncio.run(serve_web.serve_until_stopped(app, options.host, options.port, ready))
     except OSError as exc:
@@ -80,19 +84,34 @@ def serve(options: argparse.Namespace,
     return 0
 
 
-def _target(items: list[str]) -> tuple[str | None, list[str] | None]:
-    """(the session to serve, or the launch to start first: FILE or PACKAGE FILE and its
-    name:=value); (None, None): the page of the sessions."""
+def _target(items: list[str]) -> tuple[list[str], list[str] | None]:
+    """(the sessions to serve, or the launch to start first: FILE or PACKAGE FILE and its
+    name:=value); ([], None): the page of the sessions. Several sessions, or `HOST:` (every
+    session there), are served as one fleet view."""
     if not items:
-        return None, None
-    word = items[0]
-    if len(items) == 1 and ":=" not in word and not os.path.exists(word) and \
-            not word.endswith(LAUNCH_SUFFIXES):
-        where = parse_address(word)
-        if where.host is not None:
-            return str(where), None  # over ssh, checked by the tab's attach
-        return resolve_name(where.name), None  # a session here, or one line saying why not
-    return None, items
+        return [], None
+    if all(_is_session(word) for word in items):
+        return [_session(word) for word in items], None
+    return [], items
+
+
+def _is_session(word: str) -> bool:
+    """A session's address, not a launch file (or PACKAGE FILE, or name:=value)."""
+    return ":=" not in word and not os.path.exists(word) and \
+        not word.endswith(LAUNCH_SUFFIXES)
+
+
+def _session(word: str) -> str:
+    """A session as the tab's attach takes it; one line when it cannot be one."""
+    if word.endswith(":"):  # every session on a host: listed by the tab's attach
+        host = word[:-1].strip("[]")
+        if host != "local":
+            check_host(host, word)
+        return word
+    where = parse_address(word)
+    if where.host is not None:
+        return str(where)  # over ssh, checked by the tab's attach
+    return resolve_name(where.name)  # a session here, or one line saying why not
 
 
 def start_detached(items: list[str], name: str | None) -> str:

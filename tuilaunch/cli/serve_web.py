@@ -3,11 +3,11 @@
 Imported only by `tuilaunch serve` (aiohttp and textual-serve are not light): the launcher,
 the TUI and the other commands never load it (tests/integration/test_light.py).
 
-Each tab's websocket runs `tuilaunch attach NAME` under Textual's web driver through
-textual-serve's `AppService` (its process, the packets of its pipes, resizes); the page is
-our own (no font or script from another site: a robot's network may have no internet,
-and its page must not call out), using textual-serve's xterm.js client and font. Every
-request passes serve_guard.py's rules first.
+Each tab's websocket runs `tuilaunch attach NAME ...` (several: the fleet view) under
+Textual's web driver through textual-serve's `AppService` (its process, the packets of its
+pipes, resizes); the page is our own (no font or script from another site: a robot's
+network may have no internet, and its page must not call out), using textual-serve's
+xterm.js client and font. Every request passes serve_guard.py's rules first.
 """
 
 from __future__ import annotations
@@ -58,21 +58,22 @@ class TabService(AppService):
         return None if process is None or process.returncode is not None else process.pid
 
 
-def tab_command(session: str, read_only: bool) -> str:
-    """The shell command textual-serve runs for a tab: attach, under the web driver."""
-    return shlex.join([sys.executable, "-m", "tuilaunch", "attach", session,
+def tab_command(sessions: list[str], read_only: bool) -> str:
+    """The shell command textual-serve runs for a tab: attach (of several sessions, or of
+    `HOST:`, the fleet view), under the web driver."""
+    return shlex.join([sys.executable, "-m", "tuilaunch", "attach", *sessions,
                        *(["--read-only"] if read_only else [])])
 
 
 class ServeApp:
-    """The pages and websockets of one `tuilaunch serve`: a session's TUI at `/` (`session`
-    given), or a page listing this machine's sessions at `/`, each one's TUI at
-    `/s/NAME/`."""
+    """The pages and websockets of one `tuilaunch serve`: the TUI of `sessions` at `/` (one
+    session's, or the fleet view of several), or (none given) a page listing this machine's
+    sessions at `/`, each one's TUI at `/s/NAME/` and all of them together at `/fleet/`."""
 
-    def __init__(self, guard: Guard, session: str | None, read_only: bool,
+    def __init__(self, guard: Guard, sessions: list[str], read_only: bool,
                  list_sessions: Callable[[], list[dict[str, Any]]]) -> None:
         self.guard = guard
-        self.session = session
+        self.sessions = sessions
         self.read_only = read_only
         self.list_sessions = list_sessions
         self.tabs: set[TabService] = set()
@@ -86,6 +87,8 @@ class ServeApp:
             web.get("/ws", self.websocket),
             web.get("/s/{name}/", self.session_page),
             web.get("/s/{name}/ws", self.websocket),
+            web.get("/fleet/", self.fleet_page),
+            web.get("/fleet/ws", self.fleet_websocket),
             web.static("/static", STATIC),
         ])
         app.on_shutdown.append(self._close_tabs)
@@ -129,11 +132,12 @@ class ServeApp:
     # --- pages -----------------------------------------------------------------------------
 
     async def index(self, request: web.Request) -> web.Response:
-        if self.session is not None:
-            if ":" not in self.session and not session_dir.is_alive(self.session):
-                raise web.HTTPNotFound(text=f"tuilaunch serve: session {self.session} is not "
+        if self.sessions:
+            gone = [s for s in self.sessions if ":" not in s and not session_dir.is_alive(s)]
+            if len(self.sessions) == 1 and gone:  # a fleet view says an ended one itself
+                raise web.HTTPNotFound(text=f"tuilaunch serve: session {gone[0]} is not "
                                        "running (any more)\n")
-            return self._tui_page(request, self.session, "static/")
+            return self._tui_page(request, " ".join(self.sessions), "static/")
         sessions = await asyncio.get_running_loop().run_in_executor(None, self.list_sessions)
         return web.Response(text=sessions_page(sessions, self.read_only),
                             content_type="text/html")
@@ -142,10 +146,23 @@ class ServeApp:
         name = self._listed(request)
         return self._tui_page(request, name, "../../static/")
 
+    async def fleet_page(self, request: web.Request) -> web.Response:
+        return self._tui_page(request, "every session", "../static/")
+
+    async def _fleet(self) -> list[str]:
+        """`/fleet/`: every session of this machine that answers, in one fleet view."""
+        if self.sessions:
+            raise web.HTTPNotFound(text="tuilaunch serve: no fleet page here\n")
+        listed = await asyncio.get_running_loop().run_in_executor(None, self.list_sessions)
+        names = [str(s["name"]) for s in listed if s.get("answering")]
+        if not names:
+            raise web.HTTPNotFound(text="tuilaunch serve: no running session here\n")
+        return names
+
     def _listed(self, request: web.Request) -> str:
         """`/s/NAME/`: a session of this machine, on the page that lists them."""
         name = request.match_info["name"]
-        if self.session is not None or not session_dir.is_alive(name):
+        if self.sessions or not session_dir.is_alive(name):
             raise web.HTTPNotFound(text=f"tuilaunch serve: no session {name} here\n")
         return name
 
@@ -157,9 +174,14 @@ class ServeApp:
 
     # --- a tab ------------------------------------------------------------------------------
 
-    async def websocket(self, request: web.Request) -> web.WebSocketResponse:
-        name = self.session if "name" not in request.match_info else self._listed(request)
-        assert name is not None
+    async def fleet_websocket(self, request: web.Request) -> web.WebSocketResponse:
+        return await self.websocket(request, await self._fleet())
+
+    async def websocket(self, request: web.Request,
+                        sessions: list[str] | None = None) -> web.WebSocketResponse:
+        if sessions is None:
+            sessions = [self._listed(request)] if "name" in request.match_info else \
+                self.sessions
         websocket = web.WebSocketResponse(heartbeat=15)
         await websocket.prepare(request)
         self.sockets.add(websocket)
@@ -169,7 +191,7 @@ class ServeApp:
         async def close() -> None:
             await websocket.close()
 
-        tab = TabService(tab_command(name, self.read_only), write_bytes=websocket.send_bytes,
+        tab = TabService(tab_command(sessions, self.read_only), write_bytes=websocket.send_bytes,
                          write_str=websocket.send_str, close=close,
                          download_manager=self.downloads)
         self.tabs.add(tab)
@@ -284,8 +306,11 @@ def sessions_page(sessions: list[dict[str, Any]], read_only: bool) -> str:
         rows.append(f"<tr><td>{link}</td><td>{running}</td>"
                     f"<td>{html.escape(str(s.get('file', '')))}</td>"
                     f"<td>{html.escape(arguments)}</td></tr>")
+    answering = sum(1 for s in sessions if s.get("answering"))
+    fleet = "<p style='margin: 0 2em'><a href='fleet/'>All of them in one view</a> (the " \
+        "fleet view: a tree per session)</p>" if answering > 1 else ""
     body = ("<table><tr><th>session</th><th>running</th><th>file</th><th>arguments</th></tr>"
-            + "".join(rows) + "</table>") if rows else \
+            + "".join(rows) + "</table>" + fleet) if rows else \
         "<p style='margin: 2em'>no running sessions (tuilaunch FILE --detach starts one; " \
         "reload this page then)</p>"
     title = f"tuilaunch sessions{' (read-only)' if read_only else ''}"

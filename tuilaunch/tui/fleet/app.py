@@ -114,7 +114,14 @@ class FleetApp(KeyOrder):
     #fleet-trees FleetTree { width: 100%; height: auto; border-right: none; }
     #fleet-split { height: 1fr; }
     #fleet-panes { width: 1fr; }
+    /* a phone (a browser 390 px wide: ~40 columns): the trees above the pane, each whole */
+    FleetApp.-narrow #fleet-split { layout: vertical; }
+    FleetApp.-narrow #fleet-trees { width: 100%; height: 1fr; border-right: none;
+                                    border-bottom: tall $panel; }
+    FleetApp.-narrow #fleet-panes { width: 100%; height: 1fr; }
     """
+    NARROW = 70
+    """Columns below which the trees go above the pane (a phone's browser)."""
     BINDINGS = [
         Binding("1", "tab('nodes')", "Nodes", show=False,
                 tooltip="The sessions' trees and the selected node's output"),
@@ -183,9 +190,11 @@ class FleetApp(KeyOrder):
     ]
 
     def __init__(self, addresses: list[tuple[str | None, str]], scrollback: int = 5000,
-                 ) -> None:
-        """`addresses`: (host or None for here, session name), in the order shown."""
+                 read_only: bool = False) -> None:
+        """`addresses`: (host or None for here, session name), in the order shown;
+        `read_only`: every session's client refuses what would change it (a wall screen)."""
         super().__init__()
+        self.read_only = read_only
         self.animation_level = "none"  # every frame is bytes over ssh
         self.scrollback = scrollback
         self.members: list[Member] = []
@@ -246,6 +255,9 @@ class FleetApp(KeyOrder):
         self.members[0].tree.focus()
         self.update_status()
 
+    def on_resize(self, event: events.Resize) -> None:
+        self.set_class(event.size.width < self.NARROW, "-narrow")
+
     # --- the members' links ------------------------------------------------------------
 
     @work(exit_on_error=False)
@@ -268,6 +280,7 @@ class FleetApp(KeyOrder):
         if supervisor is None:
             return
         member.problem = None
+        supervisor.read_only = self.read_only  # refused by the client, said in one line
         supervisor.subscribe(member.buffer)
         member.show_plan()
         self.session_tabs.followed(member)
@@ -670,7 +683,8 @@ class FleetApp(KeyOrder):
         why = member.unavailable() or member.silence()
         what = why if why is not None else member.counts_text()
         file = Path(member.session.plan.file).name if member.supervisor else ""
-        line = f"[{member.label}] {file}  {what}  ({others + 1} sessions; O: this one in full)"
+        label = f"{member.label} read-only" if self.read_only else member.label
+        line = f"[{label}] {file}  {what}  ({others + 1} sessions; O: this one in full)"
         if line != self._status_text:
             self._status_text = line
             self.status_bar.update(Text(line))

@@ -1,0 +1,62 @@
+"""`tuilaunch serve A B`: the fleet view of two sessions at one URL, in a real browser
+(Debian's chromium, driven by Selenium): both roots on the page at 1100x700, 1024x768 and
+390x844; `}` reaches the second session's root and `s` on a node there stops it alone; the
+page of `serve` alone links each session and the whole fleet.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from ..conftest import wait_for
+from .browser import Serving, free_port, page, tab_processes
+from .test_serve import states
+from .test_sessions import runtime, start_detached, tl  # noqa: F401
+
+pytestmark = pytest.mark.timeout(900)
+
+
+def test_serve_of_two_sessions_is_one_fleet_page(runtime, write):  # noqa: F811
+    first = start_detached(write, "--name", "nuc")
+    second = start_detached(write, "--name", "arm")
+    serving = Serving(first, second, "--port", str(free_port()))
+    try:
+        assert "the fleet view of nuc arm" in serving.errors() or wait_for(
+            lambda: "the fleet view of nuc arm" in serving.errors(), what="serve says what")
+        with page() as browser:
+            for width, height in ((1100, 700), (1024, 768), (390, 844)):
+                browser.driver.set_window_size(width, height)
+                browser.open(serving.url)
+                browser.wait_screen(lambda t: "▼ local:nuc  2 running" in t and
+                                    "▼ local:arm  2 running" in t,
+                                    f"both roots at {width}x{height}")
+            browser.driver.set_window_size(1100, 700)
+            browser.open(serving.url)
+            browser.wait_screen(lambda t: "local:arm" in t and "echo-3" in t, "both trees")
+            browser.type("}")  # arm's root
+            browser.wait_screen(lambda t: "[local:arm]" in t, "arm selected")
+            browser.type("\ue015\ue015")  # down past all nodes to arm's ticker
+            text = browser.wait_screen(lambda t: t.splitlines()[3].strip().startswith(
+                "ticker-1"), "arm's ticker-1 selected")
+            assert "[local:arm]" in text
+            browser.type("s")
+            wait_for(lambda: states(second)["ticker-1"] == "exited", what="arm's ticker stopped")
+            assert states(first)["ticker-1"] == "running"  # nuc's: untouched
+    finally:
+        serving.close()
+    # serve alone: a page linking each session and all of them together
+    listing = Serving("--port", str(free_port()))
+    try:
+        with page() as browser:
+            browser.open(listing.url)
+            source = browser.driver.page_source
+            assert "href=\"s/nuc/\"" in source and "href=\"s/arm/\"" in source
+            assert "href=\"fleet/\"" in source
+            browser.open(listing.url.rstrip("/") + "/fleet/")
+            browser.wait_screen(lambda t: "local:nuc" in t and "local:arm" in t,
+                                "the fleet of every session")
+    finally:
+        listing.close()
+    wait_for(lambda: not tab_processes(runtime), what="no tab's TUI left")
+    for name in (first, second):
+        tl("stop", name)
