@@ -12,8 +12,8 @@ On another machine's share they are "elsewhere", and what they do arrives throug
 `Placing` owns this side's machine, its remote control and the pids of processes run
 elsewhere; the supervisor's parts ask it (core.py holds it). The remote control also says
 how its machine started each process (the launching side's `status`) and types into them
-there (`i`, `attach --type`), so a terminal node placed elsewhere is reached as one here. Made and tested alone:
-tests/integration/test_supervisor_parts.py.
+there (`i`, `attach --type`), so a terminal node placed elsewhere is reached as one here.
+Made and tested alone: tests/integration/test_supervisor_parts.py.
 """
 
 from __future__ import annotations
