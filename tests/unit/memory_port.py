@@ -20,6 +20,7 @@ from typing import Any
 from tuilaunch.client.port import Verb
 from tuilaunch.engine.plan.model import Plan, PlanDiff
 from tuilaunch.engine.run.events import (
+    ActionFinished,
     Consumer,
     Event,
     Failed,
@@ -54,8 +55,10 @@ class MemoryPort:
         self.name = name
         self.host = host
         self.log_dir = log_dir or Path("/nonexistent/tuilaunch-memory-port")
+        # a server's states hold its plan's actions too (set_parameters, call_service)
         self.states: dict[str, str] = {
-            p.id: "pending" if p.enabled else "skipped" for p in plan.processes}
+            p.id: "pending" if p.enabled else "skipped" for p in [*plan.processes,
+                                                                  *plan.actions]}
         self.pids: dict[str, int] = {}
         self.reasons: dict[str, str] = {}
         self.crashed: dict[str, str] = {}
@@ -98,6 +101,14 @@ class MemoryPort:
                 for consumer in list(self._consumers):
                     consumer(event)
 
+    def happened(self, *events: Event) -> None:
+        """What the session said before the TUI came: its history, which the TUI shows
+        (as no news) when it follows the session, as an attached client's; states follow."""
+        with self._lock:
+            for event in events:
+                self._follow(event)
+                self.history.append(event)
+
     def end(self, status: int = 0, reason: str | None = None) -> None:
         """The session ends (its server said `ended`)."""
         self.shutdown_reason = reason
@@ -127,6 +138,8 @@ class MemoryPort:
                 else "exited"
             if event.reason:
                 self.reasons[process] = event.reason
+        elif isinstance(event, ActionFinished):
+            self.states[process] = event.reason or "done"
         elif isinstance(event, LifecycleChanged):
             self._lifecycle.states[process] = event.reason or ""
 

@@ -13,6 +13,8 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 
 from textual.pilot import Pilot
+from textual.widgets import Static
+from textual.widgets._footer import FooterKey
 
 from tests.unit.memory_port import MemoryPort
 from tuilaunch.engine.plan.session import Session
@@ -35,31 +37,54 @@ async def until(pilot: Pilot[int], check: Callable[[], object], what: str) -> No
 
 
 @asynccontextmanager
+async def following(tmp_path: Path, launch: Path = BRINGUP,
+                    arguments: dict[str, str] | None = None, *, started: bool = True,
+                    size: tuple[int, int] = (80, 24), host: str | None = None,
+                    name: str = "bringup") -> AsyncIterator[
+        tuple[TuiLaunchApp, Pilot[int], MemoryPort]]:
+    """The TUI following an in-memory session of `launch`, as a client attaching to it:
+    every enabled process already started (`started`; the session's history, replayed)
+    or every one still waiting. `host`: the session is on that machine, over a link."""
+    session = Session(str(launch), dict(arguments or {}))
+    port = MemoryPort(session.plan, name=name, host=host)
+    enabled = session.plan.enabled_processes()
+    if started:
+        port.happened(*(Started(p.id, pid=1000 + n) for n, p in enumerate(enabled)))
+    app = TuiLaunchApp(session, tmp_path, session_name=name, port=port)
+    async with app.run_test(size=size) as pilot:
+        await until(pilot, lambda: app.supervisor is port and (
+            not started or not enabled or
+            app.launch_tree.states.get(enabled[-1].id) == "running"),
+            "the session followed, its rows drawn")
+        yield app, pilot, port
+        port.detached = True  # the test is over: no "stopped elsewhere" pause
+        port.end(0)
+
+
+@asynccontextmanager
 async def running(tmp_path: Path, **arguments: str) -> AsyncIterator[
         tuple[TuiLaunchApp, Pilot[int], MemoryPort]]:
     """The TUI over an in-memory session of examples/bringup.py, every enabled process
-    started (as its server would say), at 80x24."""
-    session = Session(str(BRINGUP), dict(arguments))
-    port = MemoryPort(session.plan, name="bringup")
-    app = TuiLaunchApp(session, tmp_path, session_name="bringup", port=port)
-    async with app.run_test(size=(80, 24)) as pilot:
-        await until(pilot, lambda: app.supervisor is port, "the session followed")
-        for number, proc in enumerate(session.plan.enabled_processes()):
+    started as its server says it live, at 80x24."""
+    async with following(tmp_path, arguments=arguments, started=False) as (app, pilot, port):
+        enabled = app.session.plan.enabled_processes()
+        for number, proc in enumerate(enabled):
             port.tell(Started(proc.id, pid=1000 + number))
-        await until(pilot, lambda: app.launch_tree.states.get(
-            session.plan.enabled_processes()[-1].id) == "running", "every row running")
+        await until(pilot, lambda: app.launch_tree.states.get(enabled[-1].id) == "running",
+                    "every row running")
         yield app, pilot, port
-        port.end(0)
 
 
 def select(app: TuiLaunchApp, row: str) -> None:
     """Moves the tree's cursor to a process's row, or to the first row whose label
-    starts with `row` (a group: `ns /r1`, `all nodes`)."""
+    starts with `row`, after its icon if it has one (a group: `ns /r1`, `all nodes`; an
+    action: `call /r1/reset`)."""
     tree: LaunchTree = app.launch_tree
     if row in tree.rows:
         tree.move_cursor(tree.rows[row])
         return
-    node = next(n for n in _walk(tree.root) if str(n.label).lstrip("▼▶ ").startswith(row))
+    node = next(n for n in _walk(tree.root)
+                if any(label.startswith(row) for label in (str(n.label), str(n.label)[2:])))
     tree.move_cursor(node)
 
 
@@ -67,6 +92,45 @@ def _walk(node):  # type: ignore[no-untyped-def]
     yield node
     for child in node.children:
         yield from _walk(child)
+
+
+# --- what is on screen ----------------------------------------------------------------------
+
+def status(app: TuiLaunchApp) -> str:
+    """The status line, as drawn."""
+    return str(app.status_bar.render())
+
+
+def detail(app: TuiLaunchApp) -> str:
+    """The line above the tree that says the selected row in full."""
+    return str(app.detail_bar.render())
+
+
+def row(app: TuiLaunchApp, process: str) -> str:
+    """A process's row of the tree, as drawn."""
+    return str(app.launch_tree.rows[process].label)
+
+
+def pane(app: TuiLaunchApp) -> list[str]:
+    """The lines the output pane shows (its filters applied), in full."""
+    return app.output_panel.pane_lines()
+
+
+def pane_status(app: TuiLaunchApp) -> str:
+    """The output pane's own status line."""
+    return str(app.output_panel.query_one("#output-status", Static).render())
+
+
+def footer(app: TuiLaunchApp) -> dict[str, bool]:
+    """The keys the footer offers, by description: True where it can be pressed, False
+    where it is greyed out."""
+    return {key.description: not key.has_class("-disabled")
+            for key in app.screen.query(FooterKey)}
+
+
+def toasts(app: TuiLaunchApp) -> list[str]:
+    """The notifications on screen, oldest first."""
+    return [str(n.message) for n in app._notifications]
 
 
 async def test_the_tree_shows_the_sessions_states(tmp_path: Path) -> None:
