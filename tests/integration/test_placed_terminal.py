@@ -171,7 +171,10 @@ class Tmux:
 
     def close(self) -> None:
         pane = self.tmux("list-panes", "-t", "tl", "-F", "#{pane_pid}").strip()
+        where = self.tmux("display-message", "-p", "#{socket_path}").strip()
         self.tmux("kill-server")
+        if where:  # its socket file too: nothing of the test is left behind
+            Path(where).unlink(missing_ok=True)
         if pane.isdigit():  # the shell and the TUI under it: nothing outlives the test
             for pid in [int(pane), *descendants(int(pane))]:
                 with contextlib.suppress(ProcessLookupError):
