@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from tuilaunch.engine import load_file, resolve
+from tuilaunch.engine.describe.entities import TriggerOn
 from tuilaunch.engine.errors import LaunchError
 from tuilaunch.engine.plan.model import ActionPlan, Plan, ProcessPlan, Trigger
 from tuilaunch.engine.run.events import (
@@ -86,10 +87,10 @@ def test_respawner_gives_up_after_the_files_retries():
 
 def test_trigger_book_files_handlers_by_event_and_knows_what_can_still_fire():
     book = TriggerBook()
-    every_exit = action("a0", Trigger("exit"))
-    on_output = action("a1", Trigger("io", "talker", io="stderr"))
-    at_stop = action("a2", Trigger("shutdown"))
-    after_talker = action("a3", Trigger("exit", "talker"))
+    every_exit = action("a0", Trigger(TriggerOn.EXIT))
+    on_output = action("a1", Trigger(TriggerOn.IO, "talker", io="stderr"))
+    at_stop = action("a2", Trigger(TriggerOn.SHUTDOWN))
+    after_talker = action("a3", Trigger(TriggerOn.EXIT, "talker"))
     filings = [book.file(a) for a in (every_exit, on_output, at_stop, after_talker)]
     assert filings == ["handler", "handler", "handler", "chain"]
     assert book.handlers_of("exit") == [every_exit]

@@ -48,7 +48,7 @@ class Trigger:
             TriggerOn.STATE: f"{'a lifecycle node' if self.target == '*' else self.target} reaches "
                      f"{_state_text(self.io)}",
         }[self.on]
-        if self.on is TriggerOn.TIMER and self.after is not None:
+        if self.on == TriggerOn.TIMER and self.after is not None:
             # a delay nested in an event group counts from that event
             outer = self.after.describe().removeprefix("when ")
             return f"{self.delay:g} s after {outer}" if self.delay else f"when {outer}"

@@ -389,12 +389,12 @@ class Resolver:
         scope = outer.child(False)
         scope.enabled, scope.skipped_by = enabled, skipped
         io = handler.io
-        if handler.on is TriggerOn.STATE:
+        if handler.on == TriggerOn.STATE:
             io = lifecycle_plan.state_trigger_io(handler, outer.context())  # type: ignore[arg-type]
         # a state handler without a target node applies to every lifecycle node: "*"
-        target = "*" if handler.on is TriggerOn.STATE and handler.target is None else None
+        target = "*" if handler.on == TriggerOn.STATE and handler.target is None else None
         scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target,
-                                repeat=handler.on is TriggerOn.STATE and
+                                repeat=handler.on == TriggerOn.STATE and
                                 not getattr(handler, "handle_once", False))
         self.triggers.append(scope.trigger)
         item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,

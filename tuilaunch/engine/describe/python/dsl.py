@@ -272,7 +272,7 @@ class SimpleLauncher(GazeboLauncher):
             yield self
         finally:
             self._stack.pop()
-            if when is not None and when.on is TriggerOn.IO:
+            if when is not None and when.on == TriggerOn.IO:
                 callbacks = [c for c in group.children if callable(c)]
                 group.children = [IoCallbacks(callbacks, self)] if callbacks else []
 
@@ -307,7 +307,7 @@ class SimpleLauncher(GazeboLauncher):
             return action
         group = self._current
         if callable(action) and not hasattr(action, "condition"):
-            if group.when is None or group.when.on is not TriggerOn.IO:
+            if group.when is None or group.when.on != TriggerOn.IO:
                 raise DslError("add_action() got a function outside an OnProcessIO group",
                                caller_origin(), hint="functions receive OnProcessIO events")
         group.children.append(action)

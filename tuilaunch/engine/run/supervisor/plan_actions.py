@@ -90,7 +90,7 @@ class PlanActions:
             chain.insert(0, trigger)
             trigger = trigger.after
         for step in chain:
-            if step.on is TriggerOn.SHUTDOWN or step.on is TriggerOn.IO:
+            if step.on == TriggerOn.SHUTDOWN or step.on == TriggerOn.IO:
                 return  # run by their own events, not as a start-up chain
             if step.target is not None:
                 await core.flag(step.target, flag_name(step)).wait()
@@ -446,7 +446,7 @@ def failure_line(action: ActionPlan, exc: Exception) -> str:
 def _in_shutdown_handler(action: ActionPlan) -> bool:
     step = action.trigger
     while step is not None:
-        if step.on is TriggerOn.SHUTDOWN:
+        if step.on == TriggerOn.SHUTDOWN:
             return True
         step = step.after
     return False
@@ -458,7 +458,7 @@ def _launch_file_seen(action: ActionPlan) -> str | None:
     what an event handler returns, where ThisLaunchFileDir fails as launch's does."""
     trigger = action.trigger
     while trigger is not None:
-        if trigger.on is not TriggerOn.TIMER:
+        if trigger.on != TriggerOn.TIMER:
             return None
         trigger = trigger.after
     return action.launch_file

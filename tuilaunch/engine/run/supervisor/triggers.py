@@ -69,16 +69,16 @@ class TriggerBook:
         while chain is not None and chain.on not in (TriggerOn.IO, TriggerOn.SHUTDOWN):
             chain = chain.after
         first = action.trigger
-        if chain is not None and chain.on is TriggerOn.SHUTDOWN:
+        if chain is not None and chain.on == TriggerOn.SHUTDOWN:
             self.on_shutdown.append(action)
         elif first is not None and first.target is None and first.on in EVERY_PROCESS:
             # a handler without target_action: every process's event runs it
-            kind = f"io:{first.io or 'stdout'}" if first.on is TriggerOn.IO else first.on
+            kind = f"io:{first.io or 'stdout'}" if first.on == TriggerOn.IO else first.on
             self.any_watchers.setdefault(kind, []).append(action)
         elif chain is not None and chain.target is not None:
             key = (chain.target, chain.io or "stdout")
             self.io_watchers.setdefault(key, []).append(action)
-        elif first is not None and first.on is TriggerOn.STATE and first.repeat and \
+        elif first is not None and first.on == TriggerOn.STATE and first.repeat and \
                 first.target is not None:
             return "every_state"
         else:
@@ -108,7 +108,7 @@ class TriggerBook:
                  processes: Iterable[ProcessPlan]) -> bool:
         """Whether what `trigger` waits for has happened or is alive or pending."""
         while trigger is not None:
-            if trigger.target == "*" and trigger.on is TriggerOn.STATE:
+            if trigger.target == "*" and trigger.on == TriggerOn.STATE:
                 # any lifecycle node of the launch: one of them must still be able to run
                 if not self.flag("*", flag_name(trigger)).is_set() and not any(
                         p.lifecycle and states.get(p.id) in ("running", "pending")
@@ -131,9 +131,9 @@ class TriggerBook:
             return False  # runs per event; it never holds the launch open by itself
         chain = trigger
         while chain is not None:
-            if chain.on is TriggerOn.SHUTDOWN:
+            if chain.on == TriggerOn.SHUTDOWN:
                 return False
-            if chain.on is TriggerOn.IO and chain.target is not None and \
+            if chain.on == TriggerOn.IO and chain.target is not None and \
                     states.get(chain.target) not in ("running", "pending"):
                 return False
             chain = chain.after
@@ -152,7 +152,7 @@ class TriggerBook:
                 step: Trigger | None = action.trigger
                 due = True
                 while step is not None and due:
-                    due = (step.on is TriggerOn.EXIT and not step.delay and step.target is not None
+                    due = (step.on == TriggerOn.EXIT and not step.delay and step.target is not None
                            and self.flag(step.target, "exit").is_set())
                     step = step.after
                 if due:
@@ -162,9 +162,9 @@ class TriggerBook:
 
 def runs_in_shutdown(step: Trigger, item: Any) -> bool:
     """Exit handlers run while launch shuts down (their process stopped because of it)."""
-    return isinstance(item, ActionPlan) and step.on is TriggerOn.EXIT and not step.delay
+    return isinstance(item, ActionPlan) and step.on == TriggerOn.EXIT and not step.delay
 
 
 def flag_name(trigger: Trigger) -> str:
     """A lifecycle state trigger waits for its own filter, other triggers for the event."""
-    return f"state:{trigger.io}" if trigger.on is TriggerOn.STATE else trigger.on
+    return f"state:{trigger.io}" if trigger.on == TriggerOn.STATE else trigger.on
