@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from tuilaunch.client.port import Verb
-from tuilaunch.engine.plan.model import Plan, PlanDiff
+from tuilaunch.engine.plan.model import Plan, PlanDiff, diff_plans
 from tuilaunch.engine.run.events import (
     ActionFinished,
     Consumer,
@@ -30,6 +30,13 @@ from tuilaunch.engine.run.events import (
     Started,
     Stopping,
 )
+
+EMPTY_GRAPH: dict[str, Callable[..., Any]] = {
+    "nodes": lambda **_: {"nodes": []},
+    "services": lambda **_: {"services": []},
+    "topics": lambda **_: {"topics": []},
+}
+"""A ROS graph with nothing discovered yet: the Services, Params and Topics tabs ask it."""
 
 
 class MemoryLifecycle:
@@ -65,9 +72,11 @@ class MemoryPort:
         self.history: list[Event] = []
         self.asked: list[tuple[str, dict[str, Any]]] = []
         """What the TUI asked, in order: ("stop", {"process": ...}), ("status", {...})."""
-        self.answers: dict[str, Callable[..., Any]] = {}
+        self.answers: dict[str, Callable[..., Any]] = dict(EMPTY_GRAPH)
         """A request's answer by its op (`status`, `topics`, ...): called with its fields;
-        an exception it raises is the session's refusal."""
+        an exception it raises is the session's refusal. The graph's start empty."""
+        self.plan = plan
+        """The plan the session runs: a relaunch (F5) replaces it."""
         self._lifecycle = MemoryLifecycle(self.asked)
         self.read_only = False
         self.detached = False
@@ -172,8 +181,15 @@ class MemoryPort:
         await self.request("run_action", action=action_id)
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
-        await self.request("apply")
-        return PlanDiff([], [], [])
+        """A relaunch: what it stops and starts is told by the test (its events), what it
+        would is answered, as a server's diff of the two plans."""
+        await self.request("apply", arguments={a.name: a.value for a in plan.arguments})
+        running = {p for p, s in self.states.items() if s == "running"}
+        diff = diff_plans(self.plan, plan, running)
+        self.plan = plan
+        for proc in plan.processes:
+            self.states.setdefault(proc.id, "pending" if proc.enabled else "skipped")
+        return diff
 
     async def show(self, process: str | None) -> None:
         self.only = process
