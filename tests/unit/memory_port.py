@@ -19,6 +19,7 @@ from typing import Any
 
 from tuilaunch.client.port import Verb
 from tuilaunch.engine.plan.model import Plan, PlanDiff, diff_plans
+from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.events import (
     ActionFinished,
     Consumer,
@@ -26,6 +27,7 @@ from tuilaunch.engine.run.events import (
     Failed,
     LifecycleChanged,
     ProcessExited,
+    Relaunched,
     Respawning,
     Started,
     Stopping,
@@ -77,6 +79,9 @@ class MemoryPort:
         an exception it raises is the session's refusal. The graph's start empty."""
         self.plan = plan
         """The plan the session runs: a relaunch (F5) replaces it."""
+        self.session: Session | None = None
+        """The TUI's session, when the test gives it: another client's relaunch (a
+        `Relaunched` told) resolves its values there, as RemoteSupervisor does."""
         self._lifecycle = MemoryLifecycle(self.asked)
         self.read_only = False
         self.detached = False
@@ -129,6 +134,11 @@ class MemoryPort:
         return [op for op, _ in self.asked]
 
     def _follow(self, event: Event) -> None:
+        if isinstance(event, Relaunched) and self.session is not None:
+            preview = self.session.preview(dict(item.split(":=", 1) for item in event.lines),
+                                           reread=True)
+            if preview.plan is not None:
+                self.plan = self.session.accept(preview)
         process = event.process
         if process is None:
             return

@@ -47,10 +47,11 @@ async def following(tmp_path: Path, launch: Path = BRINGUP,
     or every one still waiting. `host`: the session is on that machine, over a link."""
     session = Session(str(launch), dict(arguments or {}))
     port = MemoryPort(session.plan, name=name, host=host)
+    port.session = session
     enabled = session.plan.enabled_processes()
     if started:
         port.happened(*(Started(p.id, pid=1000 + n) for n, p in enumerate(enabled)))
-    app = TuiLaunchApp(session, tmp_path, session_name=name, port=port)
+    app = TuiLaunchApp(session, tmp_path, session_name=name, port=port, session_host=host)
     async with app.run_test(size=size) as pilot:
         await until(pilot, lambda: app.supervisor is port and (
             not started or not enabled or

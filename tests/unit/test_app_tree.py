@@ -154,3 +154,15 @@ async def test_an_action_row_says_waiting_then_done(tmp_path: Path) -> None:
         port.tell(ActionFinished(action, reason="done"))
         await until(pilot, lambda: detail(app).startswith(f"call /r1/reset [{action}]: done"),
                     "the action done")
+
+
+async def test_a_long_failure_reason_is_read_whole_at_80_columns(tmp_path: Path) -> None:
+    missing = "executable 'no-such-program-" + "x" * 60 + "' not found"
+    async with following(tmp_path, started=False) as (app, pilot, port):
+        select(app, "monitor-5")
+        port.tell(Failed("monitor-5", reason=missing))
+        # the detail line wraps rather than cut the reason at the screen's edge
+        await until(pilot, lambda: missing in detail(app), "the reason above the tree")
+        await until(pilot, lambda: app.detail_bar.size.height >= 2, "the line wrapped")
+        await until(pilot, lambda: any(missing in line for line in pane(app)),
+                    "tuilaunch's own line in the pane")
