@@ -10,10 +10,11 @@ retries by itself), and its rows refuse keys with one line while the others stay
 robot unreachable at start is a root that says why and retries.
 
 The Args, Services, Params and Topics tabs (`2`-`5`) are here, each session with its own
-panels (tabs.py), showing the session of the selected row; F5 relaunches that session. A
-plot (`p` in Topics) is `tuilaunch plot` on the selected session, and `o` the session in
-the single-session TUI (this screen suspended meanwhile; `q`, `d` there come back here).
-A fleet TUI never stops a session by leaving: `q` detaches from all of them.
+panels (tabs.py), showing the session of the selected row; F5 relaunches that session. The
+keys on a tree's selection are the single TUI's SelectionCommands, one per session (its
+questions name the session); `p` in Topics is the single TUI's plot screen (plots.py); `O`
+is the session in the single-session TUI (this screen suspended meanwhile; `q`, `d` there
+come back here). A fleet TUI never stops a session by leaving: `q` detaches from all.
 """
 
 from __future__ import annotations
@@ -30,7 +31,6 @@ from typing import Any
 from rich.text import Text
 from textual import events, on, work
 from textual.app import ComposeResult, SuspendNotSupported
-from textual.binding import Binding
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Footer, Static, TabbedContent, TabPane, Tree
@@ -47,12 +47,12 @@ from ..log_levels import LogLevels
 from ..nodes.commands import SelectionCommands
 from ..nodes.gaps import GapReader
 from ..output_store import OutputStore
-from ..screens.dialogs import HelpScreen
 from ..screens.interact_dialogs import PrefixPrompt
 from ..screens.output_panel import OutputPanel
 from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree, RowData
 from ..session_link import DRAIN_HZ, PANE_CHROME
+from .bindings import BINDINGS, FleetHelp
 from .member import Member
 from .plots import FleetPlots
 from .tabs import FleetTabs
@@ -83,25 +83,6 @@ class FleetTree(LaunchTree):
             super().action_cursor_up()
 
 
-class FleetHelp(HelpScreen):
-    """The fleet's keys (its bindings, with what each does), over the screen."""
-
-    def compose(self) -> ComposeResult:
-        rows = ["One TUI over several sessions: a tree per session; the keys act on the",
-                "session of the selected row. up/down cross from one session's tree to the",
-                "next and stop at the ends; } and { jump to a session's root. s and r on more",
-                "than one running node ask first, naming the session.", ""]
-        for binding in FleetApp.BINDINGS:
-            assert isinstance(binding, Binding)
-            keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
-                "question_mark", "?").replace("right_square_bracket", "]").replace(
-                "left_square_bracket", "[").replace(",", ", ")
-            keys = keys.replace("right_curly_bracket", "}").replace("left_curly_bracket", "{")
-            rows.append(f"  {keys:<9} {binding.tooltip or binding.description}")
-        with VerticalScroll():
-            yield Static("\n".join(rows))
-
-
 class FleetApp(KeyOrder):
     """One TUI over several sessions (see the module's docstring). Its keys are handled one
     after the other, as the single TUI's (key_order.py): `3/reset` typed at once over ssh
@@ -122,72 +103,7 @@ class FleetApp(KeyOrder):
     """
     NARROW = 70
     """Columns below which the trees go above the pane (a phone's browser)."""
-    BINDINGS = [
-        Binding("1", "tab('nodes')", "Nodes", show=False,
-                tooltip="The sessions' trees and the selected node's output"),
-        Binding("2", "tab('args')", "Args", show=False,
-                tooltip="The selected session's launch arguments: edit, F5 applies"),
-        Binding("3", "tab('services')", "Services", show=False,
-                tooltip="The selected session's services: call one"),
-        Binding("4", "tab('params')", "Params", show=False,
-                tooltip="The selected session's nodes' parameters: get and set them"),
-        Binding("5", "tab('topics')", "Topics", show=False,
-                tooltip="The selected session's topics, rates and QoS, echo"),
-        Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
-        Binding("r", "command('restart')", "Restart",
-                tooltip="Restart the selected node or group"),
-        Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
-        Binding("right_curly_bracket", "jump(1)", "Next session", show=False,
-                tooltip="The next session's root (as k9s switches context)"),
-        Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
-                tooltip="The previous session's root"),
-        Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
-        Binding("c", "command_line", "Command", show=False,
-                tooltip="The exact command line the selected node was started with, to copy"),
-        Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up", show=False,
-                tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
-        Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
-                tooltip="Deactivate an active, clean up an inactive lifecycle node"),
-        Binding("i", "type_into", "Type", show=False,
-                tooltip="Type into the selected node, in its session's TUI (ctrl+] there "
-                "gives the keys back, d comes back here)"),
-        Binding("g", "run_under", "Debug", show=False,
-                tooltip="Restart the selected node under a tool (gdb, valgrind...) until "
-                "its next plain restart"),
-        Binding("L", "log_level", "Log level", show=False,
-                tooltip="Set the selected node's ROS log level"),
-        Binding("o", "node_topics", "Topics of node", show=False,
-                tooltip="The selected node's topics, in the Topics tab"),
-        Binding("O", "open_session", "Open",
-                tooltip="The selected session in the single-session TUI, with every key of "
-                "one session (d there comes back)"),
-        Binding("f5", "apply", "Apply", show=False,
-                tooltip="Relaunch the selected session with the edited arguments and its "
-                "file as it is now"),
-        Binding("R", "reconnect", "Reconnect", show=False,
-                tooltip="Try the selected session's link again now"),
-        # the pane's keys, as the single-session TUI's NodesView binds them
-        Binding("slash", "pane('search')", "Search", show=False,
-                tooltip="Highlight a text in the pane; n / N jump"),
-        Binding("l", "pane('cycle_level')", "Level", show=False,
-                tooltip="Show only lines from this ROS level up"),
-        Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
-        Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
-        Binding("backslash", "pane('filter')", "Filter", show=False,
-                tooltip="Show only lines containing a text"),
-        Binding("n", "pane('next_match')", "Next", show=False),
-        Binding("N", "pane('previous_match')", "Prev", show=False),
-        Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
-        Binding("f", "pane('raw')", "Format", show=False,
-                tooltip="Lines as printed, or compact"),
-        Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
-        Binding("escape", "pane('clear_search')", "Clear", show=False,
-                tooltip="Clear the search"),
-        Binding("question_mark,f1", "help", "Help", tooltip="These keys"),
-        Binding("q", "quit_fleet", "Quit (detach)",
-                tooltip="Leave: every session runs on (tuilaunch stop stops them)"),
-        Binding("ctrl+c", "quit_fleet", "Quit", show=False, priority=True),
-    ]
+    BINDINGS = BINDINGS
 
     def __init__(self, addresses: list[tuple[str | None, str]], scrollback: int = 5000,
                  read_only: bool = False) -> None:

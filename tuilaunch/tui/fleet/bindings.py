@@ -1,0 +1,100 @@
+"""The fleet view's keys (tui/fleet/app.py's bindings) and its help screen listing them.
+
+The tree's commands, the pane's keys and the tabs' are the single TUI's pieces (nodes/,
+screens/); these say which key reaches which, in a fleet of several sessions.
+"""
+
+from __future__ import annotations
+
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import VerticalScroll
+from textual.widgets import Static
+
+from ..screens.dialogs import HelpScreen
+
+BINDINGS: list[BindingType] = [
+    Binding("1", "tab('nodes')", "Nodes", show=False,
+            tooltip="The sessions' trees and the selected node's output"),
+    Binding("2", "tab('args')", "Args", show=False,
+            tooltip="The selected session's launch arguments: edit, F5 applies"),
+    Binding("3", "tab('services')", "Services", show=False,
+            tooltip="The selected session's services: call one"),
+    Binding("4", "tab('params')", "Params", show=False,
+            tooltip="The selected session's nodes' parameters: get and set them"),
+    Binding("5", "tab('topics')", "Topics", show=False,
+            tooltip="The selected session's topics, rates and QoS, echo"),
+    Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
+    Binding("r", "command('restart')", "Restart",
+            tooltip="Restart the selected node or group"),
+    Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+    Binding("right_curly_bracket", "jump(1)", "Next session", show=False,
+            tooltip="The next session's root (as k9s switches context)"),
+    Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
+            tooltip="The previous session's root"),
+    Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
+    Binding("c", "command_line", "Command", show=False,
+            tooltip="The exact command line the selected node was started with, to copy"),
+    Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up", show=False,
+            tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
+    Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
+            tooltip="Deactivate an active, clean up an inactive lifecycle node"),
+    Binding("i", "type_into", "Type", show=False,
+            tooltip="Type into the selected node, in its session's TUI (ctrl+] there "
+            "gives the keys back, d comes back here)"),
+    Binding("g", "run_under", "Debug", show=False,
+            tooltip="Restart the selected node under a tool (gdb, valgrind...) until "
+            "its next plain restart"),
+    Binding("L", "log_level", "Log level", show=False,
+            tooltip="Set the selected node's ROS log level"),
+    Binding("o", "node_topics", "Topics of node", show=False,
+            tooltip="The selected node's topics, in the Topics tab"),
+    Binding("O", "open_session", "Open",
+            tooltip="The selected session in the single-session TUI, with every key of "
+            "one session (d there comes back)"),
+    Binding("f5", "apply", "Apply", show=False,
+            tooltip="Relaunch the selected session with the edited arguments and its "
+            "file as it is now"),
+    Binding("R", "reconnect", "Reconnect", show=False,
+            tooltip="Try the selected session's link again now"),
+    # the pane's keys, as the single-session TUI's NodesView binds them
+    Binding("slash", "pane('search')", "Search", show=False,
+            tooltip="Highlight a text in the pane; n / N jump"),
+    Binding("l", "pane('cycle_level')", "Level", show=False,
+            tooltip="Show only lines from this ROS level up"),
+    Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
+    Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
+    Binding("backslash", "pane('filter')", "Filter", show=False,
+            tooltip="Show only lines containing a text"),
+    Binding("n", "pane('next_match')", "Next", show=False),
+    Binding("N", "pane('previous_match')", "Prev", show=False),
+    Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
+    Binding("f", "pane('raw')", "Format", show=False,
+            tooltip="Lines as printed, or compact"),
+    Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
+    Binding("escape", "pane('clear_search')", "Clear", show=False,
+            tooltip="Clear the search"),
+    Binding("question_mark,f1", "help", "Help", tooltip="These keys"),
+    Binding("q", "quit_fleet", "Quit (detach)",
+            tooltip="Leave: every session runs on (tuilaunch stop stops them)"),
+    Binding("ctrl+c", "quit_fleet", "Quit", show=False, priority=True),
+]
+
+
+class FleetHelp(HelpScreen):
+    """The fleet's keys (its bindings, with what each does), over the screen."""
+
+    def compose(self) -> ComposeResult:
+        rows = ["One TUI over several sessions: a tree per session; the keys act on the",
+                "session of the selected row. up/down cross from one session's tree to the",
+                "next and stop at the ends; } and { jump to a session's root. s and r on more",
+                "than one running node ask first, naming the session.", ""]
+        for binding in BINDINGS:
+            assert isinstance(binding, Binding)
+            keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
+                "question_mark", "?").replace("right_square_bracket", "]").replace(
+                "left_square_bracket", "[").replace(",", ", ")
+            keys = keys.replace("right_curly_bracket", "}").replace("left_curly_bracket", "{")
+            rows.append(f"  {keys:<9} {binding.tooltip or binding.description}")
+        with VerticalScroll():
+            yield Static("\n".join(rows))
