@@ -10,6 +10,7 @@ import signal
 from tuilaunch.client.link import open_link
 from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.run.session import session_dir
+from tuilaunch.engine.run.vocabulary.requests import Apply, Subscribe
 
 from ..conftest import run_cli, wait_for
 from .inspector_helpers import eventually, run
@@ -70,7 +71,7 @@ def test_a_relaunched_namespace_leaves_no_stale_service_on_the_graph(runtime, wr
     dumped(name, "/r1/talker")
     link = open_link(name)
     try:  # what the Args tab's F5 asks: robot:=r2
-        link.request("apply", arguments={"robot": "r2"})
+        link.request(Apply(arguments={"robot": "r2"}))
     finally:
         link.close()
     tl("wait", name, "talker-1", "running", "--timeout", "60")
@@ -156,7 +157,7 @@ def test_what_launch_code_prints_in_a_session_is_a_line_every_client_sees(runtim
     def said() -> set[str]:
         link = open_link(name)
         try:
-            recent = link.request("subscribe", max_lines=1)["recent"]
+            recent = link.request(Subscribe(max_lines=1))["recent"]
         finally:
             link.close()
         return {e.get("reason") for e in recent

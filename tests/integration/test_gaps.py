@@ -18,6 +18,7 @@ from textual.pilot import Pilot
 from tuilaunch.client.remote_supervisor import RemoteSupervisor
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.supervisor.supervisor import Event
+from tuilaunch.engine.run.vocabulary.requests import ReadLog
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.output_store import View
 
@@ -86,8 +87,8 @@ def test_every_line_kept_from_a_client_is_where_its_gap_says(runtime, write, tmp
                 seen += event.lines
                 continue
             where = event.data or {}
-            page = await client.request("read_log", process="flood-1", start=where["start"],
-                                        skip=where["skip"], limit=event.code)
+            page = await client.request(ReadLog(process="flood-1", start=where["start"],
+                                                skip=where["skip"], limit=event.code))
             seen += [text for _, _, text in page["lines"]]
         await client.detach()
         await asyncio.wait_for(task, 60)

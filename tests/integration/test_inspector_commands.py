@@ -27,6 +27,17 @@ from tuilaunch.client.remote_supervisor import merged_usage
 from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.ros.graph import full_node_name
 from tuilaunch.engine.run.session.session_dir import SessionError
+from tuilaunch.engine.run.vocabulary.requests import (
+    EchoStart,
+    EchoStop,
+    Find,
+    Start,
+    Stop,
+    Subscribe,
+    WatchQos,
+    WatchRates,
+    WatchResources,
+)
 
 from ..conftest import run_cli, session_folders
 from .inspector_helpers import NODE_SCRIPT
@@ -330,7 +341,7 @@ def events_for(link: Link, seconds: float) -> list[dict[str, Any]]:
     """The events that arrive within `seconds` (to count them, or show that none of a kind
     comes): a request after the wait brings every event sent before its reply."""
     time.sleep(seconds)
-    link.request("find", process=FAST)
+    link.request(Find(process=FAST))
     found = [e for message in link.pending for e in message.get("events") or []]
     link.pending.clear()
     return found
@@ -339,21 +350,21 @@ def events_for(link: Link, seconds: float) -> list[dict[str, Any]]:
 def test_a_watching_client_gets_rates_and_resources_until_it_stops(session):
     link = Link(session, timeout=60)
     try:
-        link.request("subscribe", max_lines=1, kinds=["rates", "resources"])
-        answer = link.request("watch_rates", topics=["/insp/scan", "/insp/orphan"])
+        link.request(Subscribe(max_lines=1, kinds=["rates", "resources"]))
+        answer = link.request(WatchRates(topics=["/insp/scan", "/insp/orphan"]))
         assert answer["unmeasured"] == {"/insp/orphan": "topic /insp/orphan has no publisher"}
         event = events_until(link, "rates",
                              lambda d: (d["/insp/scan"]["rate_hz"] or 0) > 5)
         assert event["data"]["/insp/orphan"] == {"rate_hz": None, "bytes_per_s": None}
-        link.request("watch_resources", on=True)
+        link.request(WatchResources(on=True))
         # the first event has every figure; the next ones only those that moved
         event = events_until(link, "resources", lambda d: BUSY in d)
         assert set(event["data"][BUSY]) == {"cpu_percent", "rss_bytes", "threads", "growing"}
         if (event["data"][BUSY]["cpu_percent"] or 0) <= 5:
             events_until(link, "resources",
                          lambda d: (d.get(BUSY, {}).get("cpu_percent") or 0) > 5)
-        link.request("watch_rates", topics=[])
-        link.request("watch_resources", on=False)
+        link.request(WatchRates(topics=[]))
+        link.request(WatchResources(on=False))
         stopped = time.time()
         late = [e for e in events_for(link, 3.0) if e["time"] > stopped]
         assert late == []
@@ -367,21 +378,21 @@ def test_a_watcher_is_sent_the_figures_of_the_processes_it_shows_only(session):
     selection moves, the new one's figures come at once and the old one's are taken back."""
     link = Link(session, timeout=60)
     try:
-        link.request("subscribe", max_lines=1, kinds=["resources"])
-        link.request("watch_resources", on=True, processes=[BUSY])
+        link.request(Subscribe(max_lines=1, kinds=["resources"]))
+        link.request(WatchResources(on=True, processes=[BUSY]))
         first = events_until(link, "resources", lambda d: BUSY in d)["data"]
         assert set(first[BUSY]) == {"cpu_percent", "rss_bytes", "threads", "growing"}
         assert first[FAST] == {"growing": False}
         for event in [e for e in events_for(link, 2.5) if e["kind"] == "resources"]:
             assert set(event["data"]) <= {BUSY}, event  # the others' figures stay home
-        link.request("watch_resources", on=True, processes=[FAST])
+        link.request(WatchResources(on=True, processes=[FAST]))
         moved = events_until(link, "resources", lambda d: FAST in d)["data"]
         assert moved[FAST]["rss_bytes"] > 0 and moved[FAST]["threads"] >= 1
         assert moved[BUSY] == {"cpu_percent": None, "rss_bytes": None, "threads": None}
-        link.request("watch_resources", on=True, processes=None)  # the tree grew wide
+        link.request(WatchResources(on=True, processes=None))  # the tree grew wide
         every = events_until(link, "resources", lambda d: BUSY in d)["data"]
         assert every[BUSY]["rss_bytes"] > 0 and every[BUSY]["cpu_percent"] is not None
-        link.request("watch_resources", on=False)
+        link.request(WatchResources(on=False))
     finally:
         link.close()
 
@@ -411,19 +422,19 @@ def test_a_qos_watcher_is_told_the_problems_when_they_change_and_only_then(sessi
 
     link = Link(session, timeout=60)
     try:
-        link.request("subscribe", max_lines=1, kinds=["qos"])
-        link.request("watch_qos", on=True)
+        link.request(Subscribe(max_lines=1, kinds=["qos"]))
+        link.request(WatchQos(on=True))
         told = events_until(link, "qos", scan_problem)
         (scan,) = [t for t in told["data"]["topics"] if t["name"] == "/insp/scan"]
         assert "publisher /insp/fast and subscriber /insp/strict cannot talk" in \
             scan["qos_problems"][0]
         # a check runs every 5 s: what did not change is not sent again
         assert [e for e in events_for(link, 6.0) if e["data"] == told["data"]] == []
-        link.request("stop", process=STRICT)
+        link.request(Stop(process=STRICT))
         events_until(link, "qos", lambda data: not scan_problem(data))
-        link.request("start", process=STRICT)
+        link.request(Start(process=STRICT))
         events_until(link, "qos", scan_problem)
-        link.request("watch_qos", on=False)
+        link.request(WatchQos(on=False))
     finally:
         link.close()
         ok("wait", session, STRICT, "running", "--timeout", "60")
@@ -433,15 +444,15 @@ def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):
     link = Link(session, timeout=60)
     try:
         with pytest.raises(SessionError, match="subscribe first"):
-            link.request("echo", topic="/insp/scan")
-        link.request("subscribe", max_lines=1, kinds=["echo"])
-        link.request("echo", topic="/insp/scan", max_per_s=2)
+            link.request(EchoStart(topic="/insp/scan"))
+        link.request(Subscribe(max_lines=1, kinds=["echo"]))
+        link.request(EchoStart(topic="/insp/scan", max_per_s=2))
         first = events_until(link, "echo", lambda d: d["topic"] == "/insp/scan")
         assert first["data"]["text"].startswith("data: hello ")
         # 20 messages a second are published; a screen is sent at most 2 of them
         shown = [e for e in events_for(link, 3.0) if e["kind"] == "echo"]
         assert 1 <= len(shown) <= 8
-        link.request("echo_stop", topic="/insp/scan")
+        link.request(EchoStop(topic="/insp/scan"))
         stopped = time.time()
         assert [e for e in events_for(link, 2.0) if e["time"] > stopped] == []
     finally:

@@ -15,6 +15,8 @@ import yaml
 from textual.pilot import Pilot
 from textual.widgets import Input, Static
 
+from tuilaunch.engine.run.vocabulary.request import Request
+from tuilaunch.engine.run.vocabulary.requests import Topics
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.screens.dialogs import ChoiceScreen, ConfirmScreen, PathScreen
 from tuilaunch.tui.screens.params_panel import ParamsPanel
@@ -248,8 +250,8 @@ async def test_an_empty_topic_list_says_discovery_goes_on():
             "subscribers": []}
     answers: list[list[dict[str, object]]] = [[], [late]]
 
-    async def request(op: str, **fields: object) -> object:
-        if op == "topics":
+    async def request(asked: Request[object]) -> object:
+        if isinstance(asked, Topics):
             return {"topics": answers.pop(0) if len(answers) > 1 else answers[0]}
         return {}
 

@@ -20,6 +20,7 @@ import pytest
 
 from tuilaunch.client.link import Link
 from tuilaunch.engine.run.session.session_dir import SessionError
+from tuilaunch.engine.run.vocabulary.requests import Input, Stop, Subscribe, TakeKeys
 
 from ..conftest import run_cli, run_headless, wait_for
 from .gdb_support import requires_gdb
@@ -67,31 +68,31 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(write):
     typist, other = Link(name), Link(name)
     try:
         with pytest.raises(SessionError, match="nobody holds the keyboard"):
-            typist.request("input", process="lines-1", data="x\r")
-        other.request("subscribe")
-        typist.request("typing", process="lines-1", on=True)
+            typist.request(Input(process="lines-1", data="x\r"))
+        other.request(Subscribe())
+        typist.request(TakeKeys(process="lines-1", on=True))
         # only one client types at a time; the others are told who does
         with pytest.raises(SessionError, match=r"another client .* is typing into lines-1"):
-            other.request("typing", process="lines-1", on=True)
+            other.request(TakeKeys(process="lines-1", on=True))
         with pytest.raises(SessionError, match="refused"):
-            other.request("input", process="lines-1", data="x\r")
+            other.request(Input(process="lines-1", data="x\r"))
         assert status(name)["typing"]["process"] == "lines-1"
-        typist.request("input", process="lines-1", data="hello robot\r")
+        typist.request(Input(process="lines-1", data="hello robot\r"))
         wait_for(lambda: "got: hello robot" in logs(name, "lines-1"), what="the typed line")
         # the raw reader: keys one by one, ctrl+c is a key for it
-        typist.request("typing", process="keys-2", on=True)
-        typist.request("input", process="keys-2", data="w\u0003")
+        typist.request(TakeKeys(process="keys-2", on=True))
+        typist.request(Input(process="keys-2", data="w\u0003"))
         wait_for(lambda: "key: '\\x03'" in logs(name, "keys-2"), what="ctrl+c as a key")
         assert "key: 'w'" in logs(name, "keys-2")
         assert process(name, "keys-2")["state"] == "running"
         # the line reader: ctrl+c is SIGINT, as in a terminal
-        typist.request("typing", process="lines-1", on=True)
-        typist.request("input", process="lines-1", data="\u0003")
+        typist.request(TakeKeys(process="lines-1", on=True))
+        typist.request(Input(process="lines-1", data="\u0003"))
         tl("wait", name, "lines-1", "exited", "--timeout", "60")
         assert "interrupted by SIGINT" in logs(name, "lines-1")
         # typing into a node that is not running: one line, nothing else changes
         with pytest.raises(SessionError, match="lines-1 is not running"):
-            typist.request("input", process="lines-1", data="x\r")
+            typist.request(Input(process="lines-1", data="x\r"))
         events = [event for message in other.pending for event in message["events"]
                   if event["kind"] == "typing"]
         assert events and events[0]["process"] == "lines-1"
@@ -100,8 +101,8 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(write):
         typist.close()
     # a client that is gone gives the keyboard back
     wait_for(lambda: status(name)["typing"] is None, what="the keyboard given back")
-    other.request("typing", process="keys-2", on=True)
-    other.request("input", process="keys-2", data="q")
+    other.request(TakeKeys(process="keys-2", on=True))
+    other.request(Input(process="keys-2", data="q"))
     tl("wait", name, "keys-2", "exited", "--timeout", "60")
     other.close()
     tl("stop", name)
@@ -137,14 +138,14 @@ def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_pla
     try:
         with pytest.raises(SessionError, match="nap-2 cannot be typed into: it has no "
                            "terminal: it was started with pipes"):
-            typist.request("typing", process="nap-2", on=True)
+            typist.request(TakeKeys(process="nap-2", on=True))
         assert tl("restart", name, "lines-1", "--terminal").stdout == "lines-1: running\n"
         assert process(name, "lines-1")["terminal"] is True
         wait_for(lambda: "ready" in logs(name, "lines-1"), what="the reader ready")
-        typist.request("typing", process="lines-1", on=True)
-        typist.request("input", process="lines-1", data="hello robot\r")
+        typist.request(TakeKeys(process="lines-1", on=True))
+        typist.request(Input(process="lines-1", data="hello robot\r"))
         wait_for(lambda: "got: hello robot" in logs(name, "lines-1"), what="the typed line")
-        typist.request("typing", process="lines-1", on=False)
+        typist.request(TakeKeys(process="lines-1", on=False))
         tl("restart", name, "lines-1", check=False)
         tl("wait", name, "lines-1", "failed", "--timeout", "60")
         assert process(name, "lines-1")["terminal"] is False
@@ -193,7 +194,7 @@ def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
     tl("wait", name, "stays-2", "running", "--timeout", "60")
     link = Link(name)
     try:
-        link.request("stop", process="stays-2")
+        link.request(Stop(process="stays-2"))
     finally:
         link.close()
     tl("wait", name, "stays-2", "exited", "--timeout", "60")  # asked for: not a failure

@@ -76,7 +76,7 @@ async def test_tabs_line_up_at_8_columns_as_in_a_terminal(write, tmp_path):
 
 
 def test_a_wide_character_takes_two_columns_before_a_tab():
-    from tuilaunch.engine.run.process.output import expand_tabs
+    from tuilaunch.engine.run.vocabulary.text import expand_tabs
 
     assert expand_tabs("日本\tx") == "日本    x"  # 4 columns of text, 4 of spaces
     assert expand_tabs("e\u0301\tx") == "e\u0301       x"  # a combining accent takes none

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import pytest
 
+from tuilaunch.engine.run.vocabulary.requests import Apply
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 
 from ..conftest import run_cli, wait_for
@@ -394,7 +395,7 @@ def test_a_relaunch_with_new_arguments_is_applied_on_robot1(setup, machines, wri
         wait_for(lambda: "far tick" in run_cli("logs", name, "far-1").stdout)
         link = Link(name, timeout=None)
         try:
-            link.request("apply", arguments={"word": "tock"})
+            link.request(Apply(arguments={"word": "tock"}))
         finally:
             link.close()
         wait_for(lambda: "far tock" in run_cli("logs", name, "far-1").stdout)

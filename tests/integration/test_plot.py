@@ -31,6 +31,12 @@ import pytest
 
 from tuilaunch.cli.inspector import streamed
 from tuilaunch.client.link import Link, open_link
+from tuilaunch.engine.run.vocabulary.requests import (
+    PlotStart,
+    Subscribe,
+    WatchRates,
+    WatchResources,
+)
 
 from ..conftest import run_cli, session_folders
 from .launch_world import make_package
@@ -165,8 +171,8 @@ def collect(name: str, topic: str, fields: list[str], seconds: float,
     points: Points = {f: [] for f in fields}
     link = open_link(name, timeout=60)
     try:
-        link.request("subscribe", max_lines=1, kinds=["plot"])
-        link.request("plot", topic=topic, fields=fields, tag="t")
+        link.request(Subscribe(max_lines=1, kinds=["plot"]))
+        link.request(PlotStart(topic=topic, fields=fields, tag="t"))
         if started is not None:
             started.set()
         for data in streamed(link, "plot", time.monotonic() + seconds):
@@ -234,14 +240,14 @@ def test_a_second_client_sees_the_same_points(session):
 def test_a_client_that_starts_watching_a_rate_is_sent_the_minutes_before(session):
     watcher = open_link(session, timeout=60)
     try:
-        watcher.request("subscribe", max_lines=1, kinds=["rates"])
-        watcher.request("watch_rates", topics=[WAVE])
+        watcher.request(Subscribe(max_lines=1, kinds=["rates"]))
+        watcher.request(WatchRates(topics=[WAVE]))
         rates = [data[WAVE]["rate_hz"] for data in first_sent(watcher, "rates", 3)]
         assert len(rates) >= 3
         later = open_link(session, timeout=60)
         try:
-            later.request("subscribe", max_lines=1, kinds=["rates"])
-            history = later.request("watch_rates", topics=[WAVE])["history"][WAVE]
+            later.request(Subscribe(max_lines=1, kinds=["rates"]))
+            history = later.request(WatchRates(topics=[WAVE]))["history"][WAVE]
         finally:
             later.close()
     finally:
@@ -255,16 +261,16 @@ def test_a_client_that_starts_watching_a_rate_is_sent_the_minutes_before(session
 def test_a_client_that_draws_a_node_trend_is_sent_the_minutes_before(session):
     watcher = open_link(session, timeout=60)
     try:
-        watcher.request("subscribe", max_lines=1, kinds=["trend"])
-        watcher.request("watch_resources", on=True, processes=["wave-1"], trend=["wave-1"])
+        watcher.request(Subscribe(max_lines=1, kinds=["trend"]))
+        watcher.request(WatchResources(on=True, processes=["wave-1"], trend=["wave-1"]))
         samples = [data["wave-1"] for data in first_sent(watcher, "trend", 3)]
         assert len(samples) >= 3
         assert all(cpu is not None and rss > 10 << 20 for cpu, rss in samples)
         later = open_link(session, timeout=60)
         try:
-            later.request("subscribe", max_lines=1, kinds=["trend"])
-            kept = later.request("watch_resources", on=True, processes=["fast-2"],
-                                 trend=["wave-1", "fast-2"])["history"]
+            later.request(Subscribe(max_lines=1, kinds=["trend"]))
+            kept = later.request(WatchResources(on=True, processes=["fast-2"],
+                                                trend=["wave-1", "fast-2"]))["history"]
         finally:
             later.close()
     finally:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import tempfile
-from collections.abc import Awaitable, Callable, Mapping
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
 from typing import Any
 
 import pytest
@@ -12,11 +13,13 @@ import pytest
 from tuilaunch.engine.plan.model import ProcessPlan
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.events import Event, Log
-from tuilaunch.engine.run.plugins import Clients, Handler, Plugin
+from tuilaunch.engine.run.plugins import Clients, Handlers, Plugin
 from tuilaunch.engine.run.session import session_dir
 from tuilaunch.engine.run.session.protocol import decode, encode
 from tuilaunch.engine.run.session.session_server import SessionServer
 from tuilaunch.engine.run.supervisor.supervisor import Supervisor
+from tuilaunch.engine.run.vocabulary.request import Request
+from tuilaunch.engine.run.vocabulary.requests import Status
 
 from ..conftest import python_prints
 
@@ -45,6 +48,18 @@ def test_the_run_layer_loads_without_ros_and_the_engine_without_textual():
     assert "tuilaunch.engine.ros.lifecycle" in wired
 
 
+@dataclass(frozen=True)
+class Greet(Request[dict[str, Any]], op="greet"):
+    """A plugin's own request: its class names its op, as the session's requests do."""
+
+    process: str
+
+
+@dataclass(frozen=True)
+class Whisper(Request[dict[str, Any]], op="whisper"):
+    pass
+
+
 class Greeter(Plugin):
     """Follows the processes that start and answers `greet` with an event to every client."""
 
@@ -59,13 +74,13 @@ class Greeter(Plugin):
     def snapshot(self) -> dict[str, Any]:
         return {"greeted": list(self.started)}
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
-        async def greet(message: dict[str, Any]) -> Any:
-            process = find_process(str(message.get("process")))
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
+        async def greet(request: Greet, client: int) -> Any:
+            process = find_process(request.process)
             self.supervisor.emit(Log(process, reason=f"hello {process}"))
             return {"greeted": process}
 
-        return {"greet": greet}
+        return {Greet: greet}
 
 
 def test_a_plugin_answers_its_own_request_and_reaches_every_client(write, tmp_path,
@@ -77,7 +92,7 @@ def test_a_plugin_answers_its_own_request_and_reaches_every_client(write, tmp_pa
     supervisor.add_plugin(greeter)
     server = SessionServer("plugged", session, tmp_path / "log", supervisor=supervisor)
     with pytest.raises(ValueError, match="already answered"):
-        server.add_handler("status", greeter.handlers(server.find_process)["greet"])
+        server.add_handler(Status, greeter.handlers(server.find_process)[Greet])
 
     async def scenario() -> None:
         serving = asyncio.ensure_future(server.serve())
@@ -127,15 +142,14 @@ class Whisperer(Plugin):
     def client_gone(self, client: int) -> None:
         self.gone.append(client)
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
-        async def whisper(message: dict[str, Any]) -> Any:
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
+        async def whisper(request: Whisper, client: int) -> Any:
             assert self.clients is not None
-            client = message["client"]
             self.asked.append(client)
             self.clients.send(Event("whisper", reason=f"to {client}"), client)
             return {"subscribed": self.clients.subscribed(client)}
 
-        return {"whisper": whisper}
+        return {Whisper: whisper}
 
 
 def test_a_plugin_streams_to_the_client_that_asked_and_hears_when_it_leaves(

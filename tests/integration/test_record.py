@@ -20,6 +20,7 @@ from typing import Any
 import pytest
 
 from tuilaunch.client.link import open_link
+from tuilaunch.engine.run.vocabulary.requests import BlackBox
 
 from ..conftest import run_cli, session_folders
 from .launch_world import make_package
@@ -173,11 +174,11 @@ def test_a_flood_of_images_stays_within_the_black_box_size(root):
             link = open_link(name, timeout=30)
             try:
                 # 27 MB/s of images: the bound is reached within a second of the first
-                full = eventually(lambda: (s := link.request("black_box"))["bytes"] >
+                full = eventually(lambda: (s := link.request(BlackBox()))["bytes"] >
                                   bound - 2 * 921_700 and s, what="the black box filled")
                 assert full["size"] == bound
                 for _ in range(10):
-                    assert link.request("black_box")["bytes"] <= bound
+                    assert link.request(BlackBox())["bytes"] <= bound
                     time.sleep(0.1)
             finally:
                 link.close()

@@ -15,6 +15,7 @@ from pathlib import Path
 from textual.pilot import Pilot
 from textual.widgets import Input, Static
 
+from tuilaunch.engine.run.vocabulary.requests import Apply
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ChoiceScreen
@@ -233,7 +234,7 @@ async def test_the_session_refuses_a_relaunch_of_a_file_that_no_longer_loads(
         link = open_link(name)
         try:
             try:
-                link.request("apply", arguments={"word": "gamma"})
+                link.request(Apply(arguments={"word": "gamma"}))
                 raise AssertionError("the relaunch was applied")
             except SessionError as exc:
                 message = str(exc)
@@ -302,7 +303,7 @@ def apply_elsewhere(name: str, **arguments: str) -> None:
 
     link = open_link(name)
     try:
-        link.request("apply", arguments=arguments)
+        link.request(Apply(arguments=arguments))
     finally:
         link.close()
 

@@ -33,6 +33,8 @@ from tuilaunch.engine.run.machines.remote import (
 )
 from tuilaunch.engine.run.session.protocol import decode, encode
 from tuilaunch.engine.run.session.session_dir import SessionError
+from tuilaunch.engine.run.vocabulary.request import Request, to_message
+from tuilaunch.engine.run.vocabulary.requests import Status
 
 from ..conftest import run_cli, wait_for
 from .sshd import (  # noqa: F401
@@ -67,8 +69,10 @@ def start_on(machine: Machine, write, name: str) -> None:
     assert wait.returncode == 0, wait.stderr
 
 
-def request(sock, op: str, request_id: int = 1, **fields) -> dict:
-    sock.sendall(encode({"id": request_id, "op": op, **fields}))
+def request(sock, asked: Request, request_id: int = 1) -> dict:
+    """The whole reply message to `asked`, read off the raw socket."""
+    sock.sendall(encode(to_message(asked, request_id)))
+    op = asked.op
     reader = sock.makefile("rb")
     try:
         while True:
@@ -130,7 +134,7 @@ def test_a_session_on_robot1_answers_over_ssh_and_closing_the_link_stops_nothing
     link = open_remote_link("robot1", "far")
     try:
         assert link.info["name"] == "far"
-        reply = request(link.sock, "status")
+        reply = request(link.sock, Status())
         assert reply["ok"], reply
         states = {p["id"]: p["state"] for p in reply["result"]["processes"]}
         assert states == {"ticker-1": "running"}
@@ -142,7 +146,7 @@ def test_a_session_on_robot1_answers_over_ssh_and_closing_the_link_stops_nothing
     assert alive(server)  # the session runs on
     again = open_remote_link("robot1", "far")
     try:
-        assert request(again.sock, "status")["result"]["counts"] == {"running": 1}
+        assert request(again.sock, Status())["result"]["counts"] == {"running": 1}
     finally:
         again.close()
 
@@ -295,7 +299,7 @@ def test_a_dropped_link_stops_nothing_and_says_why(machines, write):
     assert alive(server)
     again = open_remote_link("robot1", "far")  # and can come back
     try:
-        assert request(again.sock, "status")["result"]["pid"] == server
+        assert request(again.sock, Status())["result"]["pid"] == server
     finally:
         again.close()
 

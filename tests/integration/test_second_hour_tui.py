@@ -13,6 +13,7 @@ import pytest
 from textual.widgets import Input
 
 from tuilaunch.client.link import open_link
+from tuilaunch.engine.run.vocabulary.requests import TakeKeys
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.services_panel import ServicesPanel
@@ -74,7 +75,7 @@ def test_keys_typed_with_i_are_dropped_while_another_client_types(write):
     name, log_dir = detached_with(path, "lines-1")
     other = open_link(name)
     try:
-        other.request("typing", process="lines-1", on=True)
+        other.request(TakeKeys(process="lines-1", on=True))
 
         async def scenario() -> None:
             app = make_app(path, {}, log_dir, session_name=name)

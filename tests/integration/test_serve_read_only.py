@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from tuilaunch.client.read_only import REFUSED_OPS, ReadOnlyError
+from tuilaunch.engine.run.vocabulary.requests import Find
 from tuilaunch.tui.app import make_app
 
 from .test_sessions import LAUNCH, pids, runtime, start_detached, status  # noqa: F401
@@ -50,7 +51,7 @@ def test_a_read_only_client_refuses_every_change_with_one_line(runtime, write): 
             with pytest.raises(ReadOnlyError, match="calling a service is refused"):
                 await app.engine.run(graph.call_service("/reset", {}))
             # reading goes through
-            found = await app.engine.run(supervisor.request("find", process="echo-3"))
+            found = await app.engine.run(supervisor.request(Find(process="echo-3")))
             assert found == "echo-3"
             assert status(name)["counts"] == {"running": 2, "exited": 1}
             await pilot.press("q")  # leaves, no question: nothing is stopped

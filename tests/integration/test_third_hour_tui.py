@@ -24,6 +24,7 @@ import pytest
 
 from tuilaunch.client.link import open_link
 from tuilaunch.engine.run.session.session_dir import SessionError
+from tuilaunch.engine.run.vocabulary.requests import Start
 
 from .proc_tree import end, servers_of
 from .test_sessions import status, tl
@@ -243,7 +244,7 @@ def test_t_on_a_group_never_starts_the_node_its_condition_skipped(session, attac
     try:
         with pytest.raises(SessionError, match=r"listener-2 is skipped by its condition "
                            r"\(if \$\(var listener\) = 'false'\): the launch does not run it"):
-            link.request("start", process="listener-2")
+            link.request(Start(process="listener-2"))
     finally:
         link.close()
     assert states(session)["listener-2"] == "skipped"

@@ -23,6 +23,7 @@ from tuilaunch.client.link import send_once
 from tuilaunch.client.session_start import start_session
 from tuilaunch.engine.errors import LaunchError
 from tuilaunch.engine.run.events import LifecycleChanged
+from tuilaunch.engine.run.vocabulary.requests import ShutdownLaunch
 from tuilaunch.tui.app import TuiLaunchApp, launch_app, make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.args_panel import ArgsPanel
@@ -110,7 +111,7 @@ def attached(path: str, arguments: dict[str, str], tmp_path: Path) -> Iterator[s
         try:
             yield name
         finally:
-            send_once(name, {"id": 1, "op": "shutdown", "reason": "test over"})
+            send_once(name, ShutdownLaunch("test over"))
             reap(server, tmp_path)
 
 

@@ -15,9 +15,9 @@ import asyncio
 import threading
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
-from tuilaunch.client.port import Verb
+from tuilaunch.client.port import VERBS, Verb
 from tuilaunch.engine.plan.model import Plan, PlanDiff, diff_plans
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.events import (
@@ -32,6 +32,10 @@ from tuilaunch.engine.run.events import (
     Started,
     Stopping,
 )
+from tuilaunch.engine.run.vocabulary.request import Request, to_message
+from tuilaunch.engine.run.vocabulary.requests import Apply, Restart, RunAction, ShutdownLaunch
+
+R = TypeVar("R")
 
 EMPTY_GRAPH: dict[str, Callable[..., Any]] = {
     "nodes": lambda **_: {"nodes": []},
@@ -174,26 +178,28 @@ class MemoryPort:
         await self._ended.wait()
         return 0 if self.detached else self._status
 
-    async def request(self, op: str, **fields: Any) -> Any:
+    async def request(self, request: Request[R]) -> R:
+        fields = to_message(request)  # as the wire says it: the fields not at their default
+        op = fields.pop("op")
         self.asked.append((op, fields))
         answer = self.answers.get(op)
-        return answer(**fields) if answer is not None else {}
+        return request.reply(answer(**fields) if answer is not None else {})
 
     async def command(self, verb: Verb, process: str) -> None:
-        await self.request(verb, process=process)
+        await self.request(VERBS[verb](process))
 
     async def restart(self, process_id: str, prefix: str | None = None,
                       log_level: str | None = None, terminal: bool = False) -> None:
-        await self.request("restart", process=process_id, prefix=prefix,
-                           log_level=log_level, terminal=terminal)
+        await self.request(Restart(process=process_id, prefix=prefix, log_level=log_level,
+                                   terminal=terminal))
 
     async def run_action(self, action_id: str) -> None:
-        await self.request("run_action", action=action_id)
+        await self.request(RunAction(action=action_id))
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """A relaunch: what it stops and starts is told by the test (its events), what it
         would is answered, as a server's diff of the two plans."""
-        await self.request("apply", arguments={a.name: a.value for a in plan.arguments})
+        await self.request(Apply(arguments={a.name: a.value for a in plan.arguments}))
         running = {p for p, s in self.states.items() if s == "running"}
         diff = diff_plans(self.plan, plan, running)
         self.plan = plan
@@ -210,7 +216,7 @@ class MemoryPort:
         return 0, 0, {}
 
     async def shutdown(self, reason: str = "shutdown") -> None:
-        await self.request("shutdown", reason=reason)
+        await self.request(ShutdownLaunch(reason=reason))
         self.end(0, reason)
 
     async def detach(self) -> None:

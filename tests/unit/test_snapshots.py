@@ -14,6 +14,8 @@ from textual.screen import Screen
 from textual.widget import Widget
 
 from tuilaunch.client.session_graph import field_info
+from tuilaunch.engine.run.vocabulary.request import Request
+from tuilaunch.engine.run.vocabulary.requests import Topics
 from tuilaunch.tui.log_levels import LEVELS
 from tuilaunch.tui.screens.dialogs import (
     ChoiceScreen,
@@ -79,8 +81,8 @@ class Graph:
                             "is_sequence": False})]
 
 
-async def topics(op: str, **fields: Any) -> dict[str, Any]:
-    if op == "topics":
+async def topics(request: Request[Any]) -> dict[str, Any]:
+    if isinstance(request, Topics):
         return {"topics": [
             {"name": "/r1/chatter", "types": ["std_msgs/msg/String"], "publishers": [{}],
              "subscribers": [{}, {}]},

@@ -36,7 +36,14 @@ from ..engine.run.events import LIVE_STATES
 from ..engine.run.machines.remote import open_remote_link
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.supervisor.interacting import restart_fields
+from ..engine.run.vocabulary.requests import (
+    Find,
+    LifecycleState,
+    Restart,
+    ShutdownLaunch,
+    Status,
+    Subscribe,
+)
 from . import inspector
 from .logs import cmd_logs as cmd_logs  # found by name in main
 from .parsers import COMMANDS as COMMANDS
@@ -161,7 +168,7 @@ def session_status(name: str | None, answer_timeout: float = ANSWER_TIMEOUT,
     """`resources`: with each process's CPU, memory and threads (0.3 s more)."""
     link = open_link(name, answer_timeout=answer_timeout)
     try:
-        result: dict[str, Any] = link.request("status", short=True, resources=resources)
+        result: dict[str, Any] = link.request(Status(resources=resources), short=True)
         return result
     finally:
         link.close()
@@ -245,9 +252,9 @@ def cmd_attach(options: argparse.Namespace) -> int:
         remote = open_remote_link(where.host, where.name)
         link = Link.connected(where.name, remote.sock, remote.hello, where.host)
         try:
-            info = link.request("status", short=True, resources=False)
+            info = link.request(Status(resources=False), short=True)
             if options.type_into:  # a process that is not there: one line, no TUI
-                typed = link.request("find", process=options.type_into)
+                typed = link.request(Find(process=options.type_into))
         except BaseException:
             remote.close()
             raise
@@ -257,7 +264,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
         if options.type_into:
             here = open_link(label)
             try:
-                typed = here.request("find", process=options.type_into)
+                typed = here.request(Find(process=options.type_into))
             finally:
                 here.close()
     from ..engine.describe.python.loader import set_command_line
@@ -316,7 +323,7 @@ def stop_session(address: str | None, said: str = "tuilaunch stop: ",
     pid = int(link.info["pid"]) if link.host is None else 0  # a pid there is not ours
     try:
         waiting = watch_ends(link)
-        asking = link.send("shutdown", reason="tuilaunch stop")  # its reply comes at the end
+        asking = link.send(ShutdownLaunch(reason="tuilaunch stop"))  # its reply comes at the end
         # the server closes its connections once every process is gone
         reply = await_stops(link, {asking: "shutdown"}, waiting, said, until_closed=True)
         if isinstance(reply.get(asking), str):
@@ -334,8 +341,7 @@ def stop_session(address: str | None, said: str = "tuilaunch stop: ",
 def watch_ends(link: Link) -> set[str]:
     """Subscribes to the processes' ends and the escalation's words (what `await_stops`
     reads); the processes that run now."""
-    subscribed = link.request("subscribe", max_lines=1,
-                              kinds=["exited", "failed", "log", "ended"])
+    subscribed = link.request(Subscribe(max_lines=1, kinds=["exited", "failed", "log", "ended"]))
     return {p for p, state in (subscribed.get("states") or {}).items()
             if state in (*LIVE_STATES, "respawning")}
 
@@ -410,29 +416,28 @@ def print_status(status: dict[str, Any], label: str | None = None) -> None:
 
 def cmd_restart(options: argparse.Namespace) -> int:
     link = open_link(options.name, timeout=None)
-    fields = restart_fields(options.prefix, options.log_level, options.terminal)
     try:
-        status = link.request("status", short=True, resources=False)
-        process = link.request("find", short=True, process=options.process)
+        status = link.request(Status(resources=False), short=True)
+        process = link.request(Find(process=options.process), short=True)
         machine = next((p.get("machine") for p in status["processes"] if p["id"] == process),
                        None)
+        restart = Restart(process, options.prefix, options.log_level, options.terminal)
         if machine:
-            result = _restart_placed(link, process, machine, fields)
+            result = _restart_placed(link, restart, machine)
         else:
-            result = link.request("restart", process=process, **fields)
+            result = link.request(restart)
     finally:
         link.close()
     print(f"{result['process']}: {result['state']}")
     return 0 if result["state"] == "running" else 1
 
 
-def _restart_placed(link: Link, process: str, machine: str,
-                    fields: dict[str, Any]) -> dict[str, Any]:
+def _restart_placed(link: Link, restart: Restart, machine: str) -> dict[str, Any]:
     """A restart of a process another machine runs: what the launch says of reaching that
     machine meanwhile ("nuc: connecting again...") is printed as it comes, then the
     result."""
-    link.request("subscribe", max_lines=1, kinds=["log"])
-    asking = link.send("restart", process=process, **fields)
+    link.request(Subscribe(max_lines=1, kinds=["log"]))
+    asking = link.send(restart)
     reaching = False
     while True:
         message = link.receive()
@@ -465,10 +470,10 @@ def cmd_wait(options: argparse.Namespace) -> int:
         ANSWER_TIMEOUT, max(1.0, options.timeout))
     link = open_link(options.name, timeout=None, answer_timeout=answer)
     try:
-        process = link.request("find", short=True, process=options.process)
+        process = link.request(Find(process=options.process), short=True)
         if state in LIFECYCLE_STATES:
             return _wait_lifecycle(link, process, state, deadline)
-        result = link.request("subscribe")
+        result = link.request(Subscribe())
         current = result["states"].get(process)
         last: dict[str, Any] = {"events": result.get("recent") or []}
         # stopped by a restart or a relaunch that starts it again: not an end to give up on
@@ -547,7 +552,7 @@ def _death(message: dict[str, Any], process: str) -> str:
 def _wait_lifecycle(link: Link, process: str, state: str, deadline: float | None) -> int:
     label = None
     while True:
-        answer = link.request("lifecycle", process=process)
+        answer = link.request(LifecycleState(process=process))
         label = answer.get("state")
         if label == state:
             return 0

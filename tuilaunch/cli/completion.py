@@ -28,6 +28,8 @@ from collections.abc import Callable, Iterable
 from functools import partial
 from typing import Any
 
+from ..engine.run.vocabulary.request import Request
+from ..engine.run.vocabulary.requests import Status, Topics
 from .parsers import (
     COMMANDS,
     LEVELS,
@@ -337,8 +339,8 @@ def ssh_hosts() -> list[str]:
     return list(dict.fromkeys(hosts))
 
 
-def _ask(parsed_args: argparse.Namespace, op: str, wait: float | None = None,
-         **fields: Any) -> Any:
+def _ask(parsed_args: argparse.Namespace, request: Request[Any],
+         wait: float | None = None) -> Any:
     """One request to the session named on the line (a host's over ssh), time-limited."""
     from ..client.link import open_link
 
@@ -349,13 +351,13 @@ def _ask(parsed_args: argparse.Namespace, op: str, wait: float | None = None,
     wait = wait or (REMOTE_TIMEOUT if remote else SESSION_TIMEOUT)
     link = open_link(address, timeout=wait, answer_timeout=wait)
     try:
-        return link.request(op, short=True, **fields)
+        return link.request(request, short=True)
     finally:
         link.close()
 
 
 def processes(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
-    status = _ask(parsed_args, "status", resources=False)
+    status = _ask(parsed_args, Status(resources=False))
     found = []
     for process in status["processes"]:
         found.append(process["id"])
@@ -366,7 +368,7 @@ def processes(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[st
 
 def nodes(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
     """Node names first (what ros2 param takes); a process id also names its node."""
-    status = _ask(parsed_args, "status", resources=False)
+    status = _ask(parsed_args, Status(resources=False))
     named = [p["name"] for p in status["processes"] if p.get("name")]
     ids = [p["id"] for p in status["processes"] if p.get("name")]
     return _starting(dict.fromkeys(named + ids), prefix)
@@ -374,7 +376,7 @@ def nodes(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
 
 def topics(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
     # the session's first `topics` makes its ROS node and waits for discovery: more time
-    graph = _ask(parsed_args, "topics", wait=REMOTE_TIMEOUT)
+    graph = _ask(parsed_args, Topics(), wait=REMOTE_TIMEOUT)
     return _starting((t["name"] for t in graph["topics"]), prefix)
 
 

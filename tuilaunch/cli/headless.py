@@ -35,8 +35,8 @@ from ..engine.run.events import (
     Started,
     Stopping,
 )
-from ..engine.run.process.output import strip_ansi
 from ..engine.run.supervisor.stopping import CTRL_C_REASON
+from ..engine.run.vocabulary.text import strip_ansi
 from .stdout_writer import BackgroundWriter, LineJoiner
 
 if TYPE_CHECKING:

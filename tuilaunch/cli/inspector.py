@@ -16,22 +16,36 @@ import sys
 import textwrap
 import time
 from collections.abc import Iterator
-from typing import Any
+from typing import Any, TypeVar
 
 from ..client.link import Link, open_link
 from ..engine.run.session.protocol import ProtocolError
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.request import Request
+from ..engine.run.vocabulary.requests import (
+    EchoStart,
+    Find,
+    HzRead,
+    HzWatch,
+    LogLevel,
+    ParamsDump,
+    ParamsLoad,
+    Subscribe,
+    Topics,
+)
+
+R = TypeVar("R")
 
 SLACK = 30.0
 """Seconds a reply may take beyond the work asked for (a bridge made for the request waits
 for discovery; a topic's publisher is waited for 5 s; a node has 5 s to answer)."""
 
 
-def ask(name: str, op: str, wait: float = 0.0, **fields: Any) -> Any:
+def ask(name: str, request: Request[R], wait: float = 0.0) -> R:
     """One request's result; `wait`: the seconds the work itself takes."""
     link = open_link(name, timeout=wait + SLACK)
     try:
-        return link.request(op, **fields)
+        return link.request(request)
     finally:
         link.close()
 
@@ -39,8 +53,7 @@ def ask(name: str, op: str, wait: float = 0.0, **fields: Any) -> Any:
 # --- topics ----------------------------------------------------------------------------------
 
 def cmd_topics(options: argparse.Namespace) -> int:
-    fields = {"node": options.node} if options.node else {}
-    graph = ask(options.name, "topics", **fields)
+    graph = ask(options.name, Topics(node=options.node or None))
     if options.json:
         print(json.dumps(graph, indent=2))
         return 0
@@ -170,7 +183,7 @@ def _figures_now(link: Link, topic: str) -> dict[str, Any] | None:
     """The session's hz figures at this moment; None when it cannot say at once (Ctrl+C
     leaves without them rather than wait)."""
     try:
-        figures: dict[str, Any] = link.request("hz_read", short=True, topic=topic)
+        figures: dict[str, Any] = link.request(HzRead(topic=topic), short=True)
     except (SessionError, ProtocolError, OSError, ValueError):
         return None
     return figures
@@ -187,8 +200,8 @@ def cmd_hz(options: argparse.Namespace) -> int:
         raise SessionError(f"--duration {duration:g} is not a positive number of seconds")
     link = open_link(options.name, timeout=SLACK)
     try:
-        link.request("subscribe", max_lines=1, kinds=["hz"])  # no output lines wanted
-        link.request("hz_watch", topic=options.topic, messages=options.window)
+        link.request(Subscribe(max_lines=1, kinds=["hz"]))  # no output lines wanted
+        link.request(HzWatch(topic=options.topic, messages=options.window))
         end = None if duration is None else time.monotonic() + duration
         shown = 0  # messages counted at the last block: a block only when new ones came
         last: dict[str, Any] | None = None
@@ -205,7 +218,7 @@ def cmd_hz(options: argparse.Namespace) -> int:
             if now is not None and now["rate_hz"] is not None and now["messages"] > shown:
                 sys.stdout.write(hz_block(now))
             return 0
-        result = link.request("hz_read", short=True, topic=options.topic)
+        result = link.request(HzRead(topic=options.topic), short=True)
     finally:
         link.close()
     if options.json:
@@ -234,13 +247,9 @@ def cmd_echo(options: argparse.Namespace) -> int:
     link = open_link(options.name, timeout=SLACK)
     shown = 0
     try:
-        link.request("subscribe", max_lines=1, kinds=["echo"])  # no output lines wanted
-        fields: dict[str, Any] = {"topic": options.topic, "max_per_s": 0}
-        if count is not None:
-            fields["count"] = count
-        if options.timeout is not None:
-            fields["wait"] = options.timeout
-        link.request("echo", **fields)
+        link.request(Subscribe(max_lines=1, kinds=["echo"]))  # no output lines wanted
+        # every message (max_per_s 0); --timeout is also how long a publisher is waited for
+        link.request(EchoStart(options.topic, count, 0, options.timeout))
         for data in streamed(link, "echo", end):
             sys.stdout.write(data.get("text", ""))
             sys.stdout.flush()
@@ -262,7 +271,7 @@ def cmd_echo(options: argparse.Namespace) -> int:
 
 def cmd_params(options: argparse.Namespace) -> int:
     if options.dump:
-        print(ask(options.name, "params_dump", node=options.node)["yaml"], end="")
+        print(ask(options.name, ParamsDump(node=options.node))["yaml"], end="")
         return 0
     try:
         with open(options.load, encoding="utf-8") as handle:
@@ -270,8 +279,8 @@ def cmd_params(options: argparse.Namespace) -> int:
     except (OSError, UnicodeDecodeError) as exc:
         raise SessionError(f"parameter file {options.load} cannot be read: "
                            f"{getattr(exc, 'strerror', None) or exc}") from None
-    results = ask(options.name, "params_load", node=options.node, yaml=text,
-                  source=options.load)["results"]
+    results = ask(options.name,
+                  ParamsLoad(node=options.node, yaml=text, source=options.load))["results"]
     for result in results:
         if result["ok"]:
             reason = f" ({result['reason']})" if result["reason"] else ""
@@ -286,12 +295,12 @@ def cmd_params(options: argparse.Namespace) -> int:
 def cmd_log_level(options: argparse.Namespace) -> int:
     name = options.name
     try:
-        ask(name, "log_level", node=options.node, level=options.level)
+        ask(name, LogLevel(node=options.node, level=options.level))
     except SessionError as exc:
         if "has no logger service" in str(exc):
             link = open_link(name)
             try:
-                process = link.request("find", short=True, process=options.node)
+                process = link.request(Find(process=options.node), short=True)
             except SessionError:
                 raise exc from None
             finally:

@@ -24,7 +24,6 @@ from typing import Protocol
 
 from ..client.link import Link, open_link
 from ..engine.run.events import Dropped, Event, Log, Output
-from ..engine.run.process.output import strip_ansi
 from ..engine.run.session.log_reader import (
     LAUNCH_LOG,
     LIFE_KINDS,
@@ -36,6 +35,8 @@ from ..engine.run.session.log_reader import (
 )
 from ..engine.run.session.protocol import event_from_dict
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.requests import Find, ReadLog, Status, Subscribe
+from ..engine.run.vocabulary.text import strip_ansi
 from ..tui.output_store import LEVELS, level_of
 from .headless import Printer
 
@@ -66,16 +67,16 @@ def show_logs(options: argparse.Namespace, address: str | None, out: Lines | Non
         raise SessionError(f"--lines {last} is not a number of lines", hint="0 or more")
     link = open_link(address, timeout=None)
     try:
-        status = link.request("status", short=True, resources=False)
+        status = link.request(Status(resources=False), short=True)
         log_dir = Path(status["log_dir"])
         wanted = [p["id"] for p in status["processes"] if p["state"] != "skipped"]
         processes = {p["id"] for p in status["processes"]}
         if options.process:
-            wanted = [link.request("find", short=True, process=options.process)]
+            wanted = [link.request(Find(process=options.process), short=True)]
         prefixed = len(wanted) > 1 or not options.process
         offsets: dict[str, int | None] = dict.fromkeys(wanted)
         if options.follow:
-            subscribed = link.request("subscribe", short=True)
+            subscribed = link.request(Subscribe(), short=True)
             offsets = {p: subscribed["offsets"].get(p, 0) for p in wanted}
         # launch.log's size after the subscription: its events come after, as events
         launch_end = _launch_log_size(link, log_dir)
@@ -171,7 +172,7 @@ def show_logs(options: argparse.Namespace, address: str | None, out: Lines | Non
 def _launch_log_size(link: Link, log_dir: Path) -> int:
     if link.host is None:
         return log_size(log_dir / "launch.log")
-    return int(link.request("read_log", short=True, process=LAUNCH_LOG, limit=0)["size"])
+    return int(link.request(ReadLog(process=LAUNCH_LOG, limit=0), short=True)["size"])
 
 
 def _local_lines(path: Path, end: int | None, tail: int | None) -> Iterator[LogLine]:
@@ -184,8 +185,7 @@ def _remote_tail(link: Link, process: str, end: int | None, count: int) -> Itera
     """The last `count` lines of a log file on the session's machine, in one answer."""
     if count <= 0:
         return
-    page = link.request("read_log", short=True, process=process, end=end, limit=count,
-                        tail=True)
+    page = link.request(ReadLog(process=process, end=end, limit=count, tail=True), short=True)
     for stamp, stream, text in page["lines"]:
         yield LogLine(float(stamp), str(stream), str(text))
 
@@ -194,9 +194,9 @@ def remote_lines(link: Link, process: str, end: int | None) -> Iterator[LogLine]
     """A log file on the session's machine, page by page through `read_log`."""
     start = 0
     if end is None:
-        end = int(link.request("read_log", short=True, process=process, limit=0)["size"])
+        end = int(link.request(ReadLog(process=process, limit=0), short=True)["size"])
     while start < end:
-        page = link.request("read_log", short=True, process=process, start=start, end=end)
+        page = link.request(ReadLog(process=process, start=start, end=end), short=True)
         for stamp, stream, text in page["lines"]:
             yield LogLine(float(stamp), str(stream), str(text))
         if int(page["next"]) <= start:

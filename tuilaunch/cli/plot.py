@@ -23,6 +23,7 @@ from ..client.plot_series import Source, column_name, new_tag
 from ..client.plot_shapes import Asked, RowMerge, command_words
 from ..engine.errors import LaunchError
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.requests import PlotStart, Subscribe
 from .inspector import SLACK, streamed
 
 CSV_FLUSH_S = 0.1
@@ -49,13 +50,13 @@ def _csv(options: argparse.Namespace, asked: list[Asked]) -> int:
         for one in asked:
             if one.session not in links:
                 link = links[one.session] = open_link(one.session, timeout=SLACK)
-                link.request("subscribe", max_lines=1, kinds=["plot"])  # no output lines
+                link.request(Subscribe(max_lines=1, kinds=["plot"]))  # no output lines
         several = len(links) > 1
         header: list[str] = []
         widths: list[int] = []
         for index, one in enumerate(asked):
-            answer = links[one.session].request("plot", topic=one.topic, fields=one.fields,
-                                                raw=True, tag=index, stamp=stamp)
+            answer = links[one.session].request(PlotStart(topic=one.topic, fields=one.fields,
+                                                          raw=True, tag=index, stamp=stamp))
             header += [column_name(one.session, answer["topic"], f, several)
                        for f in answer["fields"]]
             widths.append(len(answer["fields"]))
@@ -147,7 +148,7 @@ def _screen(options: argparse.Namespace, asked: list[Asked]) -> int:
         for one in asked:  # each stream asked here: a wrong field is one line, status 2
             source = Source(one.session, one.topic, one.fields, new_tag())
             answer = engine.submit(ports[one.session].request(
-                "plot", topic=one.topic, fields=one.fields, tag=source.tag, stamp=stamp))\
+                PlotStart(topic=one.topic, fields=one.fields, tag=source.tag, stamp=stamp)))\
                 .result(timeout=SLACK * 3)
             source.topic, source.fields = str(answer["topic"]), list(answer["fields"])
             source.type_name, source.stamped = str(answer["type"]), bool(answer["stamped"])

@@ -19,6 +19,7 @@ from ..client.link import Link, open_link
 from ..engine.run.events import LIVE_STATES
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.requests import Find, Start, Status, Stop
 from .commands import await_stops, one_line, watch_ends
 from .suggest import close_matches, said_as_guess
 
@@ -44,7 +45,7 @@ def _act(options: argparse.Namespace, verb: str) -> int:
                            hint=f"tuilaunch {verb} HOST:NAME PROCESS ...")
     link = open_link(address, timeout=None)
     try:
-        status = link.request("status", short=True, resources=False)
+        status = link.request(Status(resources=False), short=True)
         before = {p["id"]: p["state"] for p in status["processes"]}
         targets = list(dict.fromkeys(find(link, status, word, verb)
                                      for word in options.process))
@@ -67,7 +68,7 @@ def find(link: Link, status: dict[str, Any], word: str, verb: str) -> str:
     node named by its own code as it reported itself); one line naming the word when it
     names none."""
     try:
-        found = str(link.request("find", short=True, process=word))
+        found = str(link.request(Find(process=word), short=True))
     except SessionError:
         if _names(status, word):
             raise  # it names several: the session's own line lists them
@@ -111,7 +112,7 @@ def neither(word: str, label: str, status: dict[str, Any], verb: str) -> Session
 def _stop(link: Link, targets: list[str]) -> dict[str, Any]:
     """Every stop asked at once, then waited for; each one's result (or error text)."""
     waiting = watch_ends(link) & set(targets)
-    asks = {link.send("stop", process=p): p for p in targets}
+    asks = {link.send(Stop(process=p)): p for p in targets}
     replies = await_stops(link, asks, waiting, f"tuilaunch stop: {link.label}: ")
     return {asks[i]: reply.replace("\n  hint: ", "; ") if isinstance(reply, str) else reply
             for i, reply in replies.items()}
@@ -121,7 +122,7 @@ def _start(link: Link, targets: list[str]) -> dict[str, Any]:
     results: dict[str, Any] = {}
     for process in targets:
         try:
-            results[process] = link.request("start", process=process)
+            results[process] = link.request(Start(process=process))
         except SessionError as exc:  # the others are still started, and said
             results[process] = one_line(exc)
     return results

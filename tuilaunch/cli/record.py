@@ -19,6 +19,13 @@ from typing import TYPE_CHECKING, Any
 from ..client.link import Link, open_link
 from ..engine.errors import LaunchError
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.requests import (
+    BlackBox,
+    BlackBoxWrite,
+    RecordStart,
+    RecordStop,
+    RecordTake,
+)
 from .inspector import SLACK
 
 if TYPE_CHECKING:
@@ -56,11 +63,11 @@ def cmd_record(options: argparse.Namespace) -> int:
             raise SessionError(f"topic {topic!r} is not a full name: write /{topic}")
     link = open_link(options.name, timeout=SLACK)
     try:
-        answer = link.request("record_start", topics=options.topic)
+        answer = link.request(RecordStart(topics=options.topic))
         try:
             record = RecordFile(options.output, options.name)
         except OSError as exc:
-            link.request("record_stop", recording=answer["recording"])
+            link.request(RecordStop(recording=answer["recording"]))
             raise SessionError(str(exc)) from None
         _record(link, answer, record, options.duration)
     finally:
@@ -79,12 +86,12 @@ def _record(link_: Link, answer: dict[str, Any], file: RecordFile,
     try:
         try:
             while end is None or time.monotonic() < end:
-                file.apply(link_.request("record_take", recording=ident))
+                file.apply(link_.request(RecordTake(recording=ident)))
         except KeyboardInterrupt:
             pass  # Ctrl+C ends the recording: what came is written, the file completed
         try:  # what the session took meanwhile, then the end of it there
-            file.apply(link_.request("record_take", recording=ident, wait=0))
-            link_.request("record_stop", recording=ident, short=True)
+            file.apply(link_.request(RecordTake(recording=ident, wait=0)))
+            link_.request(RecordStop(recording=ident), short=True)
         except (SessionError, OSError, KeyboardInterrupt):
             pass  # the link is gone: the file holds what came, and is completed below
     finally:
@@ -99,13 +106,13 @@ def _black_box(options: argparse.Namespace) -> int:
             if options.black_box_on < 0 or not options.black_box_size > 0:
                 raise SessionError("--black-box-on needs seconds >= 0 and a positive "
                                    "--black-box-size")
-            status = link.request("black_box", seconds=options.black_box_on,
-                                  size=int(options.black_box_size * (1 << 20)))
+            status = link.request(BlackBox(seconds=options.black_box_on,
+                                           size=int(options.black_box_size * (1 << 20))))
             state = f"on: the last {status['seconds']:g} s" if status["on"] else "off"
             print(f"black box {state}")
             if not options.black_box:
                 return 0
-        written = link.request("black_box_write")
+        written = link.request(BlackBoxWrite())
     finally:
         link.close()
     where = f"{link.host}:" if link.host else ""

@@ -5,9 +5,9 @@ from __future__ import annotations
 from typing import Any
 
 from ..engine.run.events import Event, Output
-from ..engine.run.process.output import screen_str
 from ..engine.run.session.log_reader import LogLine
 from ..engine.run.session.protocol import event_from_dict
+from ..engine.run.vocabulary.text import screen_str
 
 
 def merged(lines: dict[str, list[LogLine]], recent: list[dict[str, Any]]) -> list[Event]:

@@ -8,13 +8,16 @@ import socket
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import Address, open_remote_link, parse_address
 from ..engine.run.session import session_dir
 from ..engine.run.session.protocol import MAX_MESSAGE, check_hello, decode, encode
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.request import Request, to_message
+
+R = TypeVar("R")
 
 
 def resolve_name(name: str | None) -> str:
@@ -176,11 +179,11 @@ class Link:
             return SessionError(f"{self.host}: {reason.split('error: ', 1)[-1]}")
         return LinkLost(f"link to {self.host} lost: {reason}")
 
-    def send(self, op: str, **fields: Any) -> int:
+    def send(self, request: Request[Any]) -> int:
         """Asks without waiting for the reply (it comes among the messages, with this id):
         `stop` reads the stopping's events while the server works on the shutdown."""
         self._next_id += 1
-        self.sock.sendall(encode({"id": self._next_id, "op": op, **fields}))
+        self.sock.sendall(encode(to_message(request, self._next_id)))
         return self._next_id
 
     def receive_until(self, deadline: float | None) -> dict[str, Any] | None:
@@ -209,28 +212,29 @@ class Link:
         finally:
             self.sock.settimeout(waited)
 
-    def request(self, op: str, short: bool = False, **fields: Any) -> Any:
-        """The reply to `op`; `short`: an answer the server gives at once (status, find),
-        so waiting longer than `answer_timeout` means it is not answering."""
+    def request(self, request: Request[R], short: bool = False) -> R:
+        """The reply to `request`, as it reads it; `short`: an answer the server gives at
+        once (status, find), so waiting longer than `answer_timeout` means it is not
+        answering."""
         self._next_id += 1
         request_id = self._next_id
         waited = self.sock.gettimeout()
         if short:
             self.sock.settimeout(self.answer_timeout)
         try:
-            return self._reply(op, request_id, fields)
+            return request.reply(self._reply(request, request_id))
         except TimeoutError:
             raise not_answering(self.name, self.sock.gettimeout() or 0.0) from None
         finally:
             self.sock.settimeout(waited)
 
-    def _reply(self, op: str, request_id: int, fields: dict[str, Any]) -> Any:
-        self.sock.sendall(encode({"id": request_id, "op": op, **fields}))
+    def _reply(self, request: Request[Any], request_id: int) -> Any:
+        self.sock.sendall(encode(to_message(request, request_id)))
         while True:
             message = self.receive()
             if message is None:
                 raise self.lost() or SessionError(
-                    f"session {self.label} closed the connection during {op}")
+                    f"session {self.label} closed the connection during {request.op}")
             if message.get("type") == "reply" and message.get("id") == request_id:
                 if not message.get("ok"):
                     # named as typed (HOST:NAME): every command's errors say it
@@ -297,7 +301,7 @@ def open_link(address: str | None, timeout: float | None = ANSWER_TIMEOUT,
                           answer_timeout, on_close=remote.close, why_lost=remote.why_lost)
 
 
-def send_once(name: str, request: dict[str, Any]) -> bool:
+def send_once(name: str, request: Request[Any]) -> bool:
     """A request to a session on this machine from a thread without an event loop (the
     UI's teardown): sent, and the connection closed once the server greets; False when the
     server is there but does not answer (stopped or stuck)."""
@@ -305,7 +309,7 @@ def send_once(name: str, request: dict[str, Any]) -> bool:
         with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
             sock.settimeout(2.0)
             sock.connect(str(session_dir.socket_path(name)))
-            sock.sendall(encode(request))
+            sock.sendall(encode(to_message(request, 1)))
             sock.recv(4096)  # the hello: the request is read before we hang up
     except TimeoutError:
         return False

@@ -12,13 +12,21 @@ checks that it has every member here where a frontend is handed one.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Literal, Protocol
+from typing import Literal, Protocol, TypeVar
 
 from ..engine.plan.model import Plan, PlanDiff
 from ..engine.run.events import Consumer, Event
+from ..engine.run.vocabulary.request import Request
+from ..engine.run.vocabulary.requests import Restart, Start, Stop
+
+R = TypeVar("R")
 
 Verb = Literal["stop", "restart", "start"]
 """An operator's command on one process (s, r, t; `tuilaunch stop|restart|start`)."""
+
+VERBS: dict[Verb, type[Start | Stop | Restart]] = {"start": Start, "stop": Stop,
+                                                   "restart": Restart}
+"""Each command as the request that asks it."""
 
 
 class LifecyclePort(Protocol):
@@ -73,7 +81,10 @@ class LaunchPort(Protocol):
 
     async def replace_plan(self, plan: Plan) -> PlanDiff: ...
 
-    async def request(self, op: str, **fields: Any) -> Any: ...
+    async def request(self, request: Request[R]) -> R:
+        """Any request of the protocol (vocabulary/requests.py), its reply as the request
+        reads it; SessionError with the server's words when refused."""
+        ...
 
     async def show(self, process: str | None) -> None: ...
 

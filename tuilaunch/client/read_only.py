@@ -15,25 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..engine.run.session.session_dir import SessionError
-
-REFUSED_OPS: dict[str, str] = {
-    "start": "starting a process",
-    "stop": "stopping a process",
-    "restart": "restarting a process",
-    "shutdown": "stopping the launch",
-    "kill": "killing the launch",
-    "apply": "relaunching with other arguments",
-    "run_action": "running an action again",
-    "transition": "a lifecycle transition",
-    "typing": "typing into a node",
-    "input": "typing into a node",
-    "log_level": "setting a logger level",
-    "params_load": "loading parameters",
-    "call_service": "calling a service",  # the Services tab, through the session
-    "params_set": "setting a parameter",  # the Params tab, through the session
-}
-"""The session requests that change something, and how the refusal names them. A request
-not listed here only reads (status, subscribe, view, read_log, topics, echo, ...)."""
+from ..engine.run.vocabulary.request import Request
 
 REFUSED_BRIDGE: dict[str, str] = {
     "set_parameters": "setting a parameter",
@@ -43,7 +25,8 @@ REFUSED_BRIDGE: dict[str, str] = {
     "set_logger_level": "setting a logger level",
 }
 """The ROS bridge's calls that change a node, for a TUI that holds a bridge of its own
-(the Params and Services tabs of a session's TUI ask the session instead: REFUSED_OPS)."""
+(the Params and Services tabs of a session's TUI ask the session instead: a request's
+`changes`)."""
 
 
 class ReadOnlyError(SessionError):
@@ -54,11 +37,12 @@ def refusal(what: str) -> ReadOnlyError:
     return ReadOnlyError(f"read-only view: {what} is refused")
 
 
-def check_request(op: str) -> None:
-    """Raises ReadOnlyError for a session request that changes something."""
-    what = REFUSED_OPS.get(op)
-    if what is not None:
-        raise refusal(what)
+def check_request(request: Request[Any]) -> None:
+    """Raises ReadOnlyError for a session request that changes something: its class says
+    how the refusal names it (`changes`, vocabulary/requests.py); the others only read
+    (status, subscribe, view, read_log, topics, echo, ...)."""
+    if request.changes is not None:
+        raise refusal(request.changes)
 
 
 class ReadOnlyBridge:
@@ -77,4 +61,4 @@ class ReadOnlyBridge:
         return getattr(self._bridge, name)
 
 
-__all__ = ["REFUSED_OPS", "ReadOnlyBridge", "ReadOnlyError", "check_request", "refusal"]
+__all__ = ["ReadOnlyBridge", "ReadOnlyError", "check_request", "refusal"]

@@ -17,6 +17,7 @@ from typing import Any
 
 from ..engine.ros.record.mcap_out import McapOut, open_exact, open_new
 from ..engine.ros.record.tape import Channel
+from ..engine.run.vocabulary.requests import RecordStart, RecordStop, RecordTake
 
 
 def default_stem(name: str) -> str:
@@ -92,14 +93,14 @@ class LiveRecording:
         import asyncio
 
         try:
-            answer = await self.request("record_start", topics=self.topics)
+            answer = await self.request(RecordStart(topics=self.topics))
             ident = answer["recording"]
             while not self.stopping:
-                reply = await self.request("record_take", recording=ident)
+                reply = await self.request(RecordTake(recording=ident))
                 await asyncio.to_thread(self.file.apply, reply)
-            reply = await self.request("record_take", recording=ident, wait=0)
+            reply = await self.request(RecordTake(recording=ident, wait=0))
             await asyncio.to_thread(self.file.apply, reply)
-            await self.request("record_stop", recording=ident)
+            await self.request(RecordStop(recording=ident))
         except Exception as exc:  # the link or the session: the file is closed all the same
             self.error = str(exc)
         finally:

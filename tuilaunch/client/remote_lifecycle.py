@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 from collections.abc import Awaitable, Callable
-from typing import Any
+
+from ..engine.run.vocabulary.requests import Transition
 
 
 class RemoteLifecycle:
     """The lifecycle states of the session's nodes, as its server's events report them, and
     the operator's transitions, asked of the server (which asks the node) with `request`,
-    the supervisor's (op, **fields)."""
+    the supervisor's."""
 
-    def __init__(self, request: Callable[..., Awaitable[Any]]) -> None:
+    def __init__(self, request: Callable[[Transition], Awaitable[bool]]) -> None:
         self.request_server = request
         self.states: dict[str, str] = {}
 
@@ -22,6 +23,4 @@ class RemoteLifecycle:
             self.states.pop(process, None)  # the node is gone
 
     async def request(self, process: str, transition: str) -> bool:
-        result = await self.request_server("transition", process=process,
-                                           transition=transition)
-        return bool(result.get("done"))
+        return await self.request_server(Transition(process, transition))

@@ -27,7 +27,7 @@ import signal
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from ..engine.plan.model import Plan, PlanDiff
 from ..engine.plan.session import Session
@@ -59,16 +59,31 @@ from ..engine.run.session.protocol import (
     event_from_dict,
 )
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.supervisor.interacting import restart_fields
+from ..engine.run.vocabulary.request import Request, to_message
+from ..engine.run.vocabulary.requests import (
+    Apply,
+    GetPlan,
+    Kill,
+    ReadLog,
+    ReadStamps,
+    Restart,
+    RunAction,
+    SetView,
+    ShutdownLaunch,
+    Start,
+    Stop,
+    Subscribe,
+)
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering, send_once
-from .port import Verb
+from .port import VERBS, Verb
 from .read_only import check_request
 from .remote_lifecycle import RemoteLifecycle
 from .served_session import ServedSession
 from .watches import Watches
 
 Consumer = Callable[[Event], None]
+R = TypeVar("R")
 
 RETRY_FIRST = 1.0
 """Seconds before the first try to reconnect a dropped link; doubled after each failure."""
@@ -205,8 +220,7 @@ class RemoteSupervisor:
                 writer.close()
                 raise
             self = cls(name, session, reader, writer, info)
-            writer.write(encode({"id": 0, "op": "subscribe", "max_lines": max_lines,
-                                 "interval": interval}))
+            writer.write(encode(to_message(Subscribe(max_lines, interval), 0)))
             await asyncio.wait_for(writer.drain(), ANSWER_TIMEOUT)
             message = await asyncio.wait_for(_reply_to(reader, 0), ANSWER_TIMEOUT)
         except TimeoutError:
@@ -254,8 +268,8 @@ class RemoteSupervisor:
             self._adopt(result["arguments"])
             lines = {}
             for process, end in result["offsets"].items():
-                page = await self._call("read_log", process=process, end=end,
-                                        limit=scrollback, tail=True)
+                page = await self._call(ReadLog(process=process, end=end, limit=scrollback,
+                                                tail=True))
                 lines[process] = [LogLine(*line) for line in page["lines"]]
         except (TimeoutError, ProtocolError, ConnectionError) as exc:
             writer.close()
@@ -271,10 +285,10 @@ class RemoteSupervisor:
         """Subscribes on the current connection; from here on lines are counted from the
         log files' sizes it answers with."""
         # fair: with a screenful a second, a loud node must not hide the others' lines
-        result: dict[str, Any] = await self._call(
-            "subscribe", max_lines=self.max_lines, interval=self.interval, fair=True,
-            only=self.only, plain=True,  # the TUI shows no colour codes: none are sent
-            stamps=self.stamps_shown)
+        result: dict[str, Any] = await self._call(Subscribe(max_lines=self.max_lines,
+                                                            interval=self.interval, fair=True,
+                                                            only=self.only, plain=True,
+                                                            stamps=self.stamps_shown))
         self._lines_before += self._lines_here
         self._lines_here = 0
         self._from = dict(result["offsets"])
@@ -282,22 +296,22 @@ class RemoteSupervisor:
         self._usage = {}
         return result
 
-    async def _call(self, op: str, **fields: Any) -> Any:
+    async def _call(self, request: Request[R]) -> R:
         """A request answered before `run` reads the connection (opening, reconnecting):
         what the server sends meanwhile is kept for `run`, in order."""
         self._next_id += 1
         request_id = self._next_id
-        self._writer.write(encode({"id": request_id, "op": op, **fields}))
+        self._writer.write(encode(to_message(request, request_id)))
         await self._writer.drain()
         while True:
             line = await self._reader.readline()
             if not line:
-                raise ConnectionError(f"the link closed during {op}")
+                raise ConnectionError(f"the link closed during {request.op}")
             message = decode(line)
             if message.get("type") == "reply" and message.get("id") == request_id:
                 if not message.get("ok"):
                     raise SessionError(f"session {self.name}: {message.get('error')}")
-                return message.get("result")
+                return request.reply(message.get("result"))
             self._early.append(message)
 
     def _note_ends(self, events: list[Event]) -> None:
@@ -321,7 +335,7 @@ class RemoteSupervisor:
         """The plan the server runs, for a session whose file is read there (ServedSession);
         before `run` reads the connection, or from `run` itself."""
         assert isinstance(self.session, ServedSession)
-        self.session.adopt(await self._call("plan"))
+        self.session.adopt(await self._call(GetPlan()))
 
     def _adopt(self, arguments: dict[str, str], relaunched: bool = False) -> None:
         """Another client relaunched with these values: resolve the same plan here.
@@ -478,7 +492,7 @@ class RemoteSupervisor:
             return
         self.only = process
         if self.link_lost is None:
-            await self._request("view", only=process)
+            await self._request(SetView(only=process))
 
     def _shown(self, process: str, only: str | None) -> bool:
         return only is None or process == only
@@ -500,8 +514,8 @@ class RemoteSupervisor:
                 continue  # shown all along: its lines came as events
             begin = self._hidden.pop(process, 0)
             if end > begin:
-                page = await self._call("read_log", process=process, start=begin, end=end,
-                                        limit=self.scrollback, tail=True)
+                page = await self._call(ReadLog(process=process, start=begin, end=end,
+                                                limit=self.scrollback, tail=True))
                 lines[process] = [LogLine(*line) for line in page["lines"]]
                 if page.get("skipped"):
                     notes.append(Dropped(process, code=int(page["skipped"]),
@@ -546,8 +560,8 @@ class RemoteSupervisor:
             self._probed = now
             self._next_id += 1  # its reply is read and passed over like any other
             with contextlib.suppress(ConnectionError, OSError):
-                self._writer.write(encode({"id": self._next_id, "op": "read_log",
-                                           "process": LAUNCH_LOG, "limit": 0}))
+                self._writer.write(encode(to_message(ReadLog(LAUNCH_LOG, limit=0),
+                                                     self._next_id)))
 
     def retry_now(self) -> None:
         """Reconnect at once instead of at the next try (on the loop's thread)."""
@@ -641,8 +655,8 @@ class RemoteSupervisor:
             begin, skip = start.get(process, 0), received.get(process, 0)
             if not self._shown(process, self._stream_only) or end <= begin:
                 continue  # a pane not shown is read from its file when it is
-            page = await self._call("read_log", process=process, start=begin, skip=skip,
-                                    end=end, limit=self.scrollback, tail=True)
+            page = await self._call(ReadLog(process=process, start=begin, skip=skip, end=end,
+                                            limit=self.scrollback, tail=True))
             lines[process] = [LogLine(*line) for line in page["lines"]]
             if page.get("skipped"):  # read back only the last `scrollback` of them
                 notes.append(Dropped(process, code=int(page["skipped"]),
@@ -689,63 +703,63 @@ class RemoteSupervisor:
         connection are the server's no longer."""
         self.stamps_shown = shown
         before = self._lines_before
-        result = await self._request(
-            "stamps", on=shown, since=None if since is None else max(since - before, 0))
+        result = await self._request(ReadStamps(
+            on=shown, since=None if since is None else max(since - before, 0)))
         first = before + int(result.get("first") or 0)
         stamps = Stamps().decode(list(result.get("stamps") or []))
         return first, first + len(stamps), {
             first + index: ms for index, ms in enumerate(stamps) if ms is not None}
 
-    async def request(self, op: str, **fields: Any) -> Any:
-        """The result of any request of the protocol (engine/run/session/protocol.py): `topics`,
-        `watch_rates`, `echo`, ...; SessionError with the server's message when it fails."""
-        result = await self._request(op, **fields)
-        self.watches.note(op, fields)
+    async def request(self, request: Request[R]) -> R:
+        """The result of any request of the protocol (vocabulary/requests.py): `Topics`,
+        `WatchRates`, `EchoStart`, ...; SessionError with the server's message when it
+        fails."""
+        result = await self._request(request)
+        self.watches.note(request)
         return result
 
-    async def _request(self, op: str, **fields: Any) -> Any:
+    async def _request(self, request: Request[R]) -> R:
         if self.read_only:
-            check_request(op)
+            check_request(request)
         if self.link_lost is not None:
-            raise SessionError(f"{self.link_lost}: not sent ({op}); reconnecting")
+            raise SessionError(f"{self.link_lost}: not sent ({request.op}); reconnecting")
         self._next_id += 1
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         self._replies[self._next_id] = future
-        self._writer.write(encode({"id": self._next_id, "op": op, **fields}))
+        self._writer.write(encode(to_message(request, self._next_id)))
         await self._writer.drain()
         reply = await future
         if not reply.get("ok"):
             raise SessionError(f"session {self.name}: {reply.get('error')}")
-        return reply.get("result")
+        return request.reply(reply.get("result"))
 
     async def command(self, verb: Verb, process: str) -> None:
         """s, r, t (`tuilaunch stop|restart|start`): one request to the server."""
-        await self._request(verb, process=process)
+        await self._request(VERBS[verb](process))
 
     async def start(self, process_id: str) -> None:
-        await self._request("start", process=process_id)
+        await self._request(Start(process_id))
 
     async def stop(self, process_id: str) -> None:
-        await self._request("stop", process=process_id)
+        await self._request(Stop(process_id))
 
     async def restart(self, process_id: str, prefix: str | None = None,
                       log_level: str | None = None, terminal: bool = False) -> None:
         """As Supervisor.restart: `prefix` runs it under a tool, `terminal` gives it a
         terminal, until a plain restart."""
-        await self._request("restart", process=process_id,
-                            **restart_fields(prefix, log_level, terminal))
+        await self._request(Restart(process_id, prefix, log_level, terminal))
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         self._stopping = True
-        await self._request("shutdown", reason=reason)
+        await self._request(ShutdownLaunch(reason=reason))
 
     async def run_action(self, action_id: str) -> None:
-        await self._request("run_action", action=action_id)
+        await self._request(RunAction(action=action_id))
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """Relaunches with the session's accepted arguments (the plan was resolved from them);
         the server serialises relaunches and tells every client."""
-        result = await self._request("apply", arguments=self.session.arguments)
+        result = await self._request(Apply(arguments=self.session.arguments))
         stop, start = list(result["stop"]), list(result["start"])
         return PlanDiff([], stop, start)
 
@@ -764,13 +778,13 @@ class RemoteSupervisor:
         if self.host is not None:
             # over there: only the link reaches it, and only "kill now" is ours to send
             if self._stopping and self.link_lost is None and not self._writer.is_closing():
-                self._writer.write(encode({"id": 1, "op": "kill"}))
+                self._writer.write(encode(to_message(Kill(), 1)))
             return
         if self._stopping:
-            if not send_once(self.name, {"id": 1, "op": "kill"}):
+            if not send_once(self.name, Kill()):
                 self._kill_server()
         elif self.owner and not self.keep_on_hangup and not self.detached:
-            send_once(self.name, {"id": 1, "op": "shutdown", "reason": "the UI ended"})
+            send_once(self.name, ShutdownLaunch("the UI ended"))
 
     def _kill_server(self) -> None:
         """"Kill now" and the server does not answer: SIGKILL it; its watchdog then kills

@@ -15,10 +15,11 @@ from typing import Any
 from ..engine.plan.model import Plan, PlanDiff, TreeItem
 from ..engine.plan.plan_json import plan_from_json
 from ..engine.plan.session import Preview, Session
+from ..engine.run.vocabulary.requests import PreviewArguments
 from .link import ANSWER_TIMEOUT
 
-Requester = Callable[..., Coroutine[Any, Any, Any]]
-"""`await request(op, **fields)`: the server's result (RemoteSupervisor.request)."""
+Requester = Callable[[PreviewArguments], Coroutine[Any, Any, dict[str, Any]]]
+"""`await request(PreviewArguments(...))`: the server's result (RemoteSupervisor.request)."""
 
 
 class ServedSession(Session):
@@ -51,8 +52,8 @@ class ServedSession(Session):
         values = {**self.arguments, **edits}
         if self._request is None or self._loop is None:
             return Preview(values, None, None, "not connected to the session yet")
-        asked = self._request("preview", arguments=values,
-                              running=None if running is None else sorted(running))
+        asked = self._request(PreviewArguments(
+            values, None if running is None else sorted(running)))
         try:
             result: dict[str, Any] = asyncio.run_coroutine_threadsafe(asked, self._loop)\
                 .result(ANSWER_TIMEOUT * 3)

@@ -13,6 +13,15 @@ from typing import Any, Protocol
 
 from ..engine.ros.calls import ParameterInfo, SetResult
 from ..engine.ros.messages import FieldInfo
+from ..engine.run.vocabulary.requests import (
+    CallService,
+    Nodes,
+    ParamsDescribe,
+    ParamsGet,
+    ParamsSet,
+    ServiceFields,
+    Services,
+)
 
 
 class GraphCalls(Protocol):
@@ -40,46 +49,45 @@ class GraphCalls(Protocol):
 
 
 class SessionGraph:
-    """GraphCalls through a session's requests: `request(op, **fields)` is the client's
+    """GraphCalls through a session's requests: `request(request)` is the client's
     (RemoteSupervisor.request, run where the client's link lives)."""
 
     def __init__(self, request: Callable[..., Awaitable[Any]]) -> None:
         self.request = request
 
     async def list_nodes(self) -> list[str]:
-        return [str(name) for name in (await self.request("nodes"))["nodes"]]
+        return [str(name) for name in (await self.request(Nodes()))["nodes"]]
 
     async def list_services(self) -> list[tuple[str, list[str]]]:
         return [(str(name), [str(t) for t in types])
-                for name, types in (await self.request("services"))["services"]]
+                for name, types in (await self.request(Services()))["services"]]
 
     async def service_fields(self, type_name: str) -> list[FieldInfo]:
         return [field_info(f) for f in
-                (await self.request("service_fields", type=type_name))["fields"]]
+                (await self.request(ServiceFields(type=type_name)))["fields"]]
 
     async def call_service(self, name: str, request: dict[str, Any], timeout: float = 5.0,
                            wait: float | None = 0.0, service_type: str | None = None)\
             -> tuple[dict[str, Any], dict[str, Any]]:
-        result = await self.request("call_service", service=name, type=service_type,
-                                    request=request, timeout=timeout)
+        result = await self.request(CallService(service=name, type=service_type or "",
+                                                request=request, timeout=timeout))
         return result["request"], result["response"]
 
     async def describe_parameters(self, node: str, names: list[str] | None = None,
                                   timeout: float = 5.0) -> list[ParameterInfo]:
-        result = await self.request("params_describe", node=node)
+        result = await self.request(ParamsDescribe(node=node))
         return [ParameterInfo(**p) for p in result["parameters"]
                 if names is None or p["name"] in names]
 
     async def set_parameters(self, node: str, values: dict[str, Any], timeout: float = 5.0)\
             -> list[SetResult]:
-        result = await self.request("params_set", node=node, values=values)
+        result = await self.request(ParamsSet(node=node, values=values))
         return [SetResult(r["name"], bool(r["ok"]), str(r["reason"] or ""))
                 for r in result["results"]]
 
     async def get_parameters(self, node: str, names: list[str], timeout: float = 5.0)\
             -> dict[str, Any]:
-        values: dict[str, Any] = (await self.request("params_get", node=node,
-                                                     names=names))["values"]
+        values: dict[str, Any] = (await self.request(ParamsGet(node=node, names=names)))["values"]
         return values
 
 

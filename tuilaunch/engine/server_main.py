@@ -48,8 +48,8 @@ def main(argv: list[str]) -> int:
                                  command=command, arguments=arguments, session_name=name)
     server = SessionServer(name, session, Path(log_dir), command=command,
                            supervisor=supervisor)
-    for op, handler in plan_handlers(session).items():  # a client without the launch file
-        server.add_handler(op, handler)
+    for kind, handler in plan_handlers(session).items():  # a client without the launch file
+        server.add_handler(kind, handler)
     try:
         return asyncio.run(server.serve())
     except LaunchError as exc:

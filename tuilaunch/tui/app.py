@@ -31,8 +31,8 @@ from ..client.session_start import session_name_for, start_session
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import Placement
 from ..engine.plan.session import Session
-from ..engine.ros.lifecycle import available_transitions
 from ..engine.run.engine_thread import EngineThread
+from ..engine.run.vocabulary.lifecycle import available_transitions
 from .arguments import ArgsTab
 from .inspector import Inspector
 from .key_order import KeyOrder

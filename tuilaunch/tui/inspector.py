@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import re
 from collections import deque
-from typing import Any
+from typing import Any, TypeVar
 
 from textual import on
 from textual.timer import Timer
@@ -14,10 +14,14 @@ from textual.timer import Timer
 from ..client.session_graph import GraphCalls, SessionGraph
 from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.request import Request
+from ..engine.run.vocabulary.requests import PlotFields, WatchQos, WatchResources
 from .log_levels import LogLevels
 from .navigation import Navigation
 from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import LaunchTree
+
+R = TypeVar("R")
 
 FIGURES_SETTLE = 0.3
 """Seconds the selection rests before the server is told whose CPU and memory to send."""
@@ -48,9 +52,9 @@ class Inspector(Navigation):
         """The process whose node's topics `o` listed: the list follows the node when a
         relaunch or a restart moves it."""
 
-    async def inspect(self, op: str, **fields: Any) -> Any:
+    async def inspect(self, request: Request[R]) -> R:
         """A session request's result; raises SessionError with the server's message."""
-        return await self.engine.run(self.client().request(op, **fields))
+        return await self.engine.run(self.client().request(request))
 
     def graph(self) -> GraphCalls:
         """The Services and Params tabs' graph: the session's, where the nodes run (this
@@ -93,7 +97,7 @@ class Inspector(Navigation):
                             exit_on_error=False)
             # the QoS marks: the server checks the graph and says when they change, so
             # an ssh link carries no request for marks that rarely change
-            self.run_worker(self._watch(nodes, "watch_qos"), group="inspector",
+            self.run_worker(self._watch(WatchQos(on=nodes)), group="inspector",
                             exit_on_error=False)
 
     def qos_problems_by_process(self, topics: list[dict[str, Any]]) -> dict[str, list[str]]:
@@ -123,9 +127,8 @@ class Inspector(Navigation):
         selected = self.selected_process() if on else None
         self._trend_asked = selected
         try:
-            result = await self.inspect("watch_resources", on=on,
-                                        processes=self._figures_asked,
-                                        trend=[selected] if selected else [])
+            result = await self.inspect(WatchResources(on=on, processes=self._figures_asked,
+                                                       trend=[selected] if selected else []))
         except SessionError:
             return
         if on:
@@ -137,11 +140,11 @@ class Inspector(Navigation):
             self.launch_tree.set_usage({})  # figures that no longer move would mislead
         self.update_detail()
 
-    async def _watch(self, on: bool, op: str, **fields: Any) -> None:
-        """Starts or stops a stream of the server's (`watch_resources`, `watch_qos`); one
-        the server cannot give leaves the tree as it was."""
+    async def _watch(self, request: Request[Any]) -> None:
+        """Starts or stops a stream of the server's (`watch_qos`); one the server cannot
+        give leaves the tree as it was."""
         try:
-            await self.inspect(op, on=on, **fields)
+            await self.inspect(request)
         except SessionError:
             pass
 
@@ -176,7 +179,7 @@ class Inspector(Navigation):
     async def _open_plot(self, topic: str) -> None:
         """The plot of `topic`, its first numeric field chosen (`f` picks others)."""
         try:
-            info = await self.inspect("plot_fields", topic=topic)
+            info = await self.inspect(PlotFields(topic=topic))
         except SessionError as exc:
             self.notify(str(exc).split(": ", 1)[-1], severity="error", title="plot")
             return

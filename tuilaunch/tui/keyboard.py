@@ -18,6 +18,7 @@ from ..client.read_only import refusal
 from ..engine.errors import LaunchError
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.events import LIVE_STATES, Event, Failed, ProcessExited, Started, Typing
+from ..engine.run.vocabulary.requests import Input, Status, TakeKeys
 from .key_order import KeyHold, hold_keys
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
@@ -383,7 +384,7 @@ async def show_command_line(app: App[Any], engine: EngineThread, port: LaunchPor
 # --- the calls on the session's server ----------------------------------------------------
 
 async def take_keyboard(supervisor: LaunchPort, process: str) -> None:
-    await supervisor.request("typing", process=process, on=True)
+    await supervisor.request(TakeKeys(process=process, on=True))
 
 
 RAN = ("running", "exited", "failed")
@@ -397,13 +398,13 @@ async def had_terminal(supervisor: LaunchPort, process: str) -> bool | None:
 
 
 async def release_keyboard(supervisor: LaunchPort, process: str) -> None:
-    await supervisor.request("typing", process=process, on=False)
+    await supervisor.request(TakeKeys(process=process, on=False))
 
 
 async def type_keys(supervisor: LaunchPort, process: str, data: str) -> None:
-    await supervisor.request("input", process=process, data=data)
+    await supervisor.request(Input(process=process, data=data))
 
 
 async def command_of(supervisor: LaunchPort, process: str) -> dict[str, Any]:
-    status = await supervisor.request("status", resources=False)  # its command alone
+    status = await supervisor.request(Status(resources=False))  # its command alone
     return next((p for p in status["processes"] if p["id"] == process), {})

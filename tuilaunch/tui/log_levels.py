@@ -11,13 +11,14 @@ from typing import Any
 from textual.app import App
 
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.requests import LogLevel, Restart
 from .screens.dialogs import ChoiceScreen, ConfirmScreen
 
 LEVELS = ["debug", "info", "warn", "error", "fatal"]
 
 
 class LogLevels:
-    """`request(op, **fields)` asks the session (raises SessionError with why); `said`
+    """`request(request)` asks the session (raises SessionError with why); `said`
     starts each line (a fleet's session label); a stop it causes is noted in
     `asked_to_stop`, so the restart is not taken for a crash."""
 
@@ -42,7 +43,7 @@ class LogLevels:
 
     async def _set(self, process: str, node: str, level: str) -> None:
         try:
-            await self.request("log_level", node=node, level=level)
+            await self.request(LogLevel(node=node, level=level))
         except SessionError as exc:
             message = str(exc).split(": ", 1)[-1]
             if "logger service" not in message:
@@ -65,7 +66,7 @@ class LogLevels:
     async def _restart_at(self, process: str, level: str) -> None:
         self.asked_to_stop.add(process)
         try:
-            await self.request("restart", process=process, log_level=level)
+            await self.request(Restart(process=process, log_level=level))
         except SessionError as exc:
             self.asked_to_stop.discard(process)
             self.app.notify(f"{self.said}{exc}", severity="error", title="restart")

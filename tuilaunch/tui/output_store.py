@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 from ..engine.plan.model import Plan
-from ..engine.run.process.output import expand_tabs, screen_str, strip_ansi
-from ..engine.run.process.reported_names import ROS_LOG_PREFIX, ReportedNames, current_node_name
 from ..engine.run.session.protocol import with_stamp
+from ..engine.run.vocabulary.reported_names import ROS_LOG_PREFIX, ReportedNames, current_node_name
+from ..engine.run.vocabulary.text import expand_tabs, screen_str, strip_ansi
 
 LEVELS = ("DEBUG", "INFO", "WARN", "ERROR", "FATAL")
 INFO = 1

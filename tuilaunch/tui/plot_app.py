@@ -14,7 +14,7 @@ from collections import deque
 from collections.abc import Awaitable
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from textual.app import App
 
@@ -25,7 +25,10 @@ from ..engine.errors import LaunchError
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.events import Event, PlotSamples
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.request import Request
 from .screens.plot_screen import PlotScreen, SessionPlots
+
+R = TypeVar("R")
 
 DRAIN_S = 0.1
 """Seconds between handing the readings received to the screen."""
@@ -58,8 +61,8 @@ class PlotApp(App[int]):
         if isinstance(event, PlotSamples):
             self.readings.append(event.data or {})
 
-    def _request(self, port: LaunchPort, op: str, **fields: Any) -> Awaitable[Any]:
-        return self.engine.run(port.request(op, **fields))
+    def _request(self, port: LaunchPort, request: Request[R]) -> Awaitable[R]:
+        return self.engine.run(port.request(request))
 
     def on_mount(self) -> None:
         self.push_screen(self.plot_screen)

@@ -12,6 +12,7 @@ from typing import Any
 
 from ..client.recording import LiveRecording
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.requests import BlackBoxWrite
 
 
 class Recordings:
@@ -58,7 +59,7 @@ class Recordings:
 
     async def black_box_now(self) -> None:
         try:
-            written = await self.app.inspect("black_box_write")
+            written = await self.app.inspect(BlackBoxWrite())
         except SessionError as exc:
             self.app.notify(str(exc).split(": ", 1)[-1], severity="error", title="black box")
             return

@@ -14,6 +14,7 @@ from typing import Any
 
 from ..errors import LaunchError
 from ..run.events import Echo, Event
+from ..run.vocabulary.ros_requests import EchoStart, EchoStop
 from .graph import topic_of
 from .ros_errors import RosError
 
@@ -40,17 +41,16 @@ class EchoStreams:
         self._publisher_wait = publisher_wait
         self.streams: dict[tuple[int, str], asyncio.Task[None]] = {}
 
-    async def echo(self, message: dict[str, Any]) -> dict[str, Any]:
-        topic = topic_of(message)
-        client = int(message["client"])
+    async def echo(self, request: EchoStart, client: int) -> dict[str, Any]:
+        topic = topic_of(request.topic)
         if not self._subscribed(client):
             raise LaunchError("echo sends its messages as events: subscribe first")
-        count = message.get("count")
-        if count is not None and (not isinstance(count, int) or count < 1):
+        count = request.count
+        if count is not None and count < 1:
             raise ValueError(f"count {count!r} is not a positive number")
-        per_s = float(message.get("max_per_s", ECHO_DEFAULT_PER_S) or 0.0)
+        per_s = ECHO_DEFAULT_PER_S if request.max_per_s is None else request.max_per_s
         # `echo --timeout 3` waits 3 s for a publisher, not the usual 5
-        wait = min(float(message.get("wait") or self._publisher_wait), self._publisher_wait)
+        wait = min(request.wait or self._publisher_wait, self._publisher_wait)
         bridge = await self._bridge()
         try:
             stream = await bridge.start_echo(topic, wait=wait)
@@ -84,8 +84,8 @@ class EchoStreams:
             if self.streams.get((client, topic)) is asyncio.current_task():
                 del self.streams[(client, topic)]
 
-    async def echo_stop(self, message: dict[str, Any]) -> dict[str, Any]:
-        task = self.streams.pop((int(message["client"]), topic_of(message)), None)
+    async def echo_stop(self, request: EchoStop, client: int) -> dict[str, Any]:
+        task = self.streams.pop((client, topic_of(request.topic)), None)
         if task is not None:
             task.cancel()
         return {}

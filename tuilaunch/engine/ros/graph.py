@@ -18,10 +18,9 @@ def full_node_name(name: str, namespace: str) -> str:
     return namespace.rstrip("/") + "/" + name
 
 
-def topic_of(message: Mapping[str, Any]) -> str:
+def topic_of(topic: str) -> str:
     """The topic a request names, absolute as the graph names it."""
-    topic = message.get("topic")
-    if not isinstance(topic, str) or not topic:
+    if not topic:
         raise ValueError("a topic name is needed")
     return topic if topic.startswith("/") else "/" + topic
 

@@ -17,13 +17,29 @@ from __future__ import annotations
 import asyncio
 import contextlib
 from collections import deque
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..errors import LaunchError
 from ..run.events import Event, Hz, Output, Rates, Started
-from ..run.plugins import Clients, Handler, Plugin
-from ..run.process.reported_names import ReportedNames
+from ..run.plugins import Clients, Handlers, Plugin
+from ..run.vocabulary.reported_names import ReportedNames
+from ..run.vocabulary.ros_requests import (
+    EchoStart,
+    EchoStop,
+    HzMeasure,
+    HzRead,
+    HzWatch,
+    LogLevel,
+    ParamsDump,
+    ParamsLoad,
+    PlotFields,
+    PlotStart,
+    PlotStop,
+    Topics,
+    WatchQos,
+    WatchRates,
+)
 from .actions import RosActions
 from .echo_streams import EchoStreams
 from .graph import topic_of
@@ -104,15 +120,15 @@ class Inspector(Plugin):
     def serve(self, clients: Clients) -> None:
         self.clients = clients
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
         self.find_process = find_process
-        return {"topics": self.topics, "hz": self.hz, "watch_rates": self.watch_rates,
-                "hz_watch": self.hz_watch, "hz_read": self.hz_read,
-                "echo": self.echoes.echo, "echo_stop": self.echoes.echo_stop,
-                "params_dump": self.params_dump, "params_load": self.params_load,
-                "log_level": self.log_level, "watch_qos": self.qos.watch,
-                "plot": self.plots.plot, "plot_stop": self.plots.plot_stop,
-                "plot_fields": self.plots.plot_fields, **self.graph.handlers()}
+        return {Topics: self.topics, HzMeasure: self.hz, WatchRates: self.watch_rates,
+                HzWatch: self.hz_watch, HzRead: self.hz_read,
+                EchoStart: self.echoes.echo, EchoStop: self.echoes.echo_stop,
+                ParamsDump: self.params_dump, ParamsLoad: self.params_load,
+                LogLevel: self.log_level, WatchQos: self.qos.watch,
+                PlotStart: self.plots.plot, PlotStop: self.plots.plot_stop,
+                PlotFields: self.plots.plot_fields, **self.graph.handlers()}
 
     def client_gone(self, client: int) -> None:
         self.qos.client_gone(client)
@@ -248,14 +264,14 @@ class Inspector(Plugin):
 
     # --- topics and rates --------------------------------------------------------------------
 
-    async def topics(self, message: dict[str, Any]) -> dict[str, Any]:
-        node = message.get("node")
+    async def topics(self, request: Topics, client: int = 0) -> dict[str, Any]:
+        node = request.node
         only = await self.current_name(node) if node else None
         bridge = await self.bridge()
         if only is not None:
             await self.require_node(bridge, only)
         result: dict[str, Any] = await bridge.topics(self.node_processes(), only)
-        if message.get("problems_only"):  # the TUI's QoS check: a few bytes, not the graph
+        if request.problems_only:  # the TUI's QoS check: a few bytes, not the graph
             result["topics"] = [t for t in result.get("topics") or [] if t.get("qos_problems")]
         return result
 
@@ -264,14 +280,14 @@ class Inspector(Plugin):
         a node, for which ROS is not started."""
         if not any(p.kind in ("node", "container") for p in self.supervisor.plan.processes):
             return []
-        topics: Problems = (await self.topics({"problems_only": True})).get("topics") or []
+        topics: Problems = (await self.topics(Topics(problems_only=True))).get("topics") or []
         return topics
 
-    async def hz(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def hz(self, request: HzMeasure, client: int) -> dict[str, Any]:
         from .rates import RateMeter
 
-        topic = topic_of(message)
-        window = float(message.get("window") or 10.0)
+        topic = topic_of(request.topic)
+        window = request.window or 10.0
         if not 0 < window <= MAX_WINDOW:
             raise ValueError(f"window {window:g} s is out of range (0-{MAX_WINDOW:g} s)")
         bridge = await self.bridge()
@@ -288,20 +304,19 @@ class Inspector(Plugin):
         finally:
             meter.stop_all()
 
-    async def hz_watch(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def hz_watch(self, request: HzWatch, client: int) -> dict[str, Any]:
         """`tuilaunch hz`: the topic measured over its last `messages` messages (as ros2
         topic hz -w), its figures sent to the client as an "hz" event every `every` s until
         it leaves; `hz_read` gives them at once."""
         from .rates import RateMeter
 
-        topic = topic_of(message)
-        client = int(message["client"])
+        topic = topic_of(request.topic)
         if self.clients is None or not self.clients.subscribed(client):
             raise LaunchError("hz sends its figures as events: subscribe first")
-        messages = message.get("messages", 10000)
-        if not isinstance(messages, int) or messages < 1:
+        messages = request.messages
+        if messages < 1:
             raise ValueError(f"messages {messages!r} is not a positive number")
-        every = float(message.get("every") or 1.0)
+        every = request.every or 1.0
         bridge = await self.bridge()
         meter = RateMeter(bridge.node)
         try:
@@ -329,18 +344,18 @@ class Inspector(Plugin):
             if entry is not None and entry[0] is asyncio.current_task():
                 del self.hz_streams[(client, topic)]
 
-    async def hz_read(self, message: dict[str, Any]) -> dict[str, Any]:
-        entry = self.hz_streams.get((int(message["client"]), topic_of(message)))
+    async def hz_read(self, request: HzRead, client: int) -> dict[str, Any]:
+        topic = topic_of(request.topic)
+        entry = self.hz_streams.get((client, topic))
         if entry is None:
-            raise LaunchError(f"{topic_of(message)} is not measured for this client")
-        result: dict[str, Any] = entry[1].read(topic_of(message))[topic_of(message)]
+            raise LaunchError(f"{topic} is not measured for this client")
+        result: dict[str, Any] = entry[1].read(topic)[topic]
         return result
 
-    async def watch_rates(self, message: dict[str, Any]) -> dict[str, Any]:
-        topics = message.get("topics") or []
-        if not isinstance(topics, list) or not all(isinstance(t, str) for t in topics):
+    async def watch_rates(self, request: WatchRates, client: int) -> dict[str, Any]:
+        topics = request.topics
+        if not all(isinstance(t, str) for t in topics):
             raise ValueError("watch_rates needs topics as a list of names")
-        client = int(message["client"])
         if topics:
             self.rate_watch[client] = set(topics)
         else:
@@ -415,8 +430,8 @@ class Inspector(Plugin):
 
     # --- parameters and loggers --------------------------------------------------------------
 
-    async def params_dump(self, message: dict[str, Any]) -> dict[str, Any]:
-        node = await self.current_name(message.get("node"))
+    async def params_dump(self, request: ParamsDump, client: int) -> dict[str, Any]:
+        node = await self.current_name(request.node)
         bridge = await self.bridge()
         await self.require_node(bridge, node)
         try:
@@ -424,14 +439,11 @@ class Inspector(Plugin):
         except RosError as exc:
             raise LaunchError(f"{node} does not answer: {exc}") from None
 
-    async def params_load(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def params_load(self, request: ParamsLoad, client: int) -> dict[str, Any]:
         from .param_files import load_values, text_values
 
-        node = await self.current_name(message.get("node"))
-        text = message.get("yaml")
-        if not isinstance(text, str):
-            raise ValueError("params_load needs the file's text as yaml")
-        values = text_values(text, node, str(message.get("source") or "<yaml>"))
+        node = await self.current_name(request.node)
+        values = text_values(request.yaml, node, request.source or "<yaml>")
         bridge = await self.bridge()
         await self.require_node(bridge, node)
         try:
@@ -441,12 +453,12 @@ class Inspector(Plugin):
         return {"results": [{"name": r.name, "ok": r.successful, "reason": r.reason}
                             for r in results]}
 
-    async def log_level(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def log_level(self, request: LogLevel, client: int) -> dict[str, Any]:
         from .loggers import NoLoggerService, level_number
 
-        ref = message.get("node")
+        ref = request.node
         node = await self.current_name(ref)
-        level = str(message.get("level") or "")
+        level = request.level
         try:
             level_number(level)
         except RosError as exc:

@@ -20,16 +20,12 @@ from ..describe.lifecycle import STATES, TRANSITIONS, state_keys
 from ..errors import LaunchError
 from ..plan.model import ActionKind, ActionPlan, ProcessPlan
 from ..run.events import LifecycleChanged, Log
-from ..run.plugins import ActionRunner, Handler, Plugin
+from ..run.plugins import ActionRunner, Handlers, Plugin
 from ..run.supervisor.supervisor import Supervisor
+from ..run.vocabulary.lifecycle import AVAILABLE
+from ..run.vocabulary.requests import LifecycleState, Transition
 from .actions import RosActions
 
-# transitions an operator can ask for, by the state a node is in
-AVAILABLE: dict[str, list[str]] = {
-    "unconfigured": ["configure", "unconfigured_shutdown"],
-    "inactive": ["activate", "cleanup", "inactive_shutdown"],
-    "active": ["deactivate", "active_shutdown"],
-}
 TRANSITION_IDS = {label: number for number, label in TRANSITIONS.items()}
 # the state each transition ends in when the node makes it
 GOALS = {"configure": "inactive", "cleanup": "unconfigured", "activate": "active",
@@ -71,18 +67,18 @@ class LifecycleTracker(Plugin):
     def snapshot(self) -> dict[str, Any]:
         return {"lifecycle": dict(self.states)}
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
-        async def lifecycle(message: dict[str, Any]) -> Any:
-            return await self.node_state(find_process(str(message.get("process"))))
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
+        async def lifecycle(request: LifecycleState, client: int) -> Any:
+            return await self.node_state(find_process(request.process))
 
-        async def transition(message: dict[str, Any]) -> Any:
+        async def transition(request: Transition, client: int) -> Any:
             # an operator's transition from an attached TUI; the node's answer and its new
             # state reach every client as lifecycle and log events
-            process = find_process(str(message.get("process")))
-            done = await self.request(process, str(message.get("transition")))
+            process = find_process(request.process)
+            done = await self.request(process, request.transition)
             return {"process": process, "done": done}
 
-        return {"lifecycle": lifecycle, "transition": transition}
+        return {LifecycleState: lifecycle, Transition: transition}
 
     async def node_state(self, process: str) -> dict[str, Any]:
         """The node's own answer to `get_state` (not the state followed here)."""
@@ -340,9 +336,4 @@ class LifecycleTracker(Plugin):
         return True
 
 
-def available_transitions(state: str | None) -> list[str]:
-    """What an operator can ask of a node in this state."""
-    return list(AVAILABLE.get(state or "", []))
-
-
-__all__ = ["LifecycleTracker", "available_transitions"]
+__all__ = ["LifecycleTracker"]

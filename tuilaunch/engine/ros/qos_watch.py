@@ -17,6 +17,7 @@ from typing import Any
 
 from ..errors import LaunchError
 from ..run.events import Event, Qos
+from ..run.vocabulary.ros_requests import WatchQos
 from .ros_errors import RosError
 
 QOS_PERIOD = 5.0
@@ -38,10 +39,9 @@ class QosWatch:
         self._last: Problems | None = None  # the newest check's result
         self._task: asyncio.Task[None] | None = None
 
-    async def watch(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def watch(self, request: WatchQos, client: int) -> dict[str, Any]:
         """The `watch_qos {on}` request of a subscribed client."""
-        client = int(message["client"])
-        if not message.get("on", True):
+        if not request.on:
             self._sent.pop(client, None)
             return {}
         self._sent.setdefault(client, None)

@@ -7,17 +7,18 @@
 plugin only writes the hooks it needs. A plugin reports through the supervisor's public
 `emit(Event(...))` and reads its public `plan`, `states` and `shutting_down`.
 
-The session server takes the same plugins' `handlers()`: named requests clients can send
-(`{"op": "lifecycle", ...}`), each an async function of the request's message whose return
-value is the reply's result. A handler raises `LaunchError`, `ValueError` or `TypeError` for
-a request the client got wrong (the reply carries the message).
+The session server takes the same plugins' `handlers()`: the requests clients can send, by
+their class (vocabulary/requests.py: `{"op": "lifecycle", ...}` is a `LifecycleState`), each
+an async function of the decoded request and the asking client whose return value is the
+reply's result. A handler raises `LaunchError`, `ValueError` or `TypeError` for a request
+the client got wrong (the reply carries the message).
 
-Streams for one client (a topic's echo, the rates it watches): the message a handler gets
-carries `"client"`, the asking connection's id (set by the server, whatever the client
-sent); `serve(clients)` hands the plugin the server's `Clients`, whose `send` reaches one
-client or all, and `client_gone(id)` says a connection closed, so its streams can stop.
-Events sent that way are neither logged nor kept for late clients (a rate a second would
-crowd out the state changes a late client needs).
+Streams for one client (a topic's echo, the rates it watches): a handler is handed the
+asking connection's id (the server's, whatever the client sent); `serve(clients)` hands
+the plugin the server's `Clients`, whose `send` reaches one client or all, and
+`client_gone(id)` says a connection closed, so its streams can stop. Events sent that way
+are neither logged nor kept for late clients (a rate a second would crowd out the state
+changes a late client needs).
 """
 
 from __future__ import annotations
@@ -28,12 +29,17 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 if TYPE_CHECKING:
     from ..plan.model import ActionPlan, ProcessPlan
     from .events import Event
+    from .vocabulary.request import Request
 
 ActionRunner = Callable[["ActionPlan"], Awaitable[bool]]
 """Performs one action of the plan; True when it succeeded (the action is then `done`)."""
 
-Handler = Callable[[dict[str, Any]], Awaitable[Any]]
-"""Answers one request of a session client: the decoded message in, the result out."""
+Handler = Callable[[Any, int], Awaitable[Any]]
+"""Answers one request of a session client: the decoded request (of the class it is
+registered for) and the client's id in, the result out."""
+
+Handlers = Mapping[type["Request[Any]"], Handler]
+"""A plugin's requests: the handler of each request class."""
 
 
 class Clients(Protocol):
@@ -79,8 +85,8 @@ class SupervisorPlugin(Protocol):
         """The run is over: release what the plugin holds (a ROS node, subscriptions)."""
         ...
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
-        """Session requests this plugin answers, by op name. `find_process` turns what a
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
+        """Session requests this plugin answers, by class. `find_process` turns what a
         client typed (id, node name) into a process id, or raises LaunchError."""
         ...
 
@@ -119,7 +125,7 @@ class Plugin:
     async def close(self) -> None:
         return None
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
         return {}
 
     def snapshot(self) -> dict[str, Any]:
@@ -132,4 +138,4 @@ class Plugin:
         return None
 
 
-__all__ = ["ActionRunner", "Clients", "Handler", "Plugin", "SupervisorPlugin"]
+__all__ = ["ActionRunner", "Clients", "Handler", "Handlers", "Plugin", "SupervisorPlugin"]

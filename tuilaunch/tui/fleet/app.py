@@ -26,7 +26,7 @@ import sys
 import time
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from rich.text import Text
 from textual import events, on, work
@@ -40,6 +40,7 @@ from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervi
 from ...engine.errors import LaunchError
 from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.request import Request
 from ..app import LaunchTabs
 from ..key_order import KeyOrder
 from ..keyboard import remembered, restart_with, show_command_line
@@ -56,6 +57,8 @@ from .bindings import BINDINGS, FleetHelp
 from .member import Member
 from .plots import FleetPlots
 from .tabs import FleetTabs
+
+R = TypeVar("R")
 
 NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane",
                         "type_into", "run_under", "log_level", "node_topics"})
@@ -282,12 +285,12 @@ class FleetApp(KeyOrder):
 
     # --- the tabs ------------------------------------------------------------------------
 
-    async def member_request(self, member: Member, op: str, **fields: object) -> object:
+    async def member_request(self, member: Member, request: Request[R]) -> R:
         """A request to a member's session, from its panels (on the engine thread)."""
         why = member.unavailable()
         if why is not None or member.supervisor is None:
             raise SessionError(f"{member.label}: {why or 'not connected'}")
-        return await self.engine.run(member.supervisor.request(op, **fields))
+        return await self.engine.run(member.supervisor.request(request))
 
     def action_tab(self, tab: str) -> None:
         """1, 3, 4, 5: the tab, for the session of the selected row; the cursor where the

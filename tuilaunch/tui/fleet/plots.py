@@ -16,10 +16,11 @@ from typing import Any
 from textual.app import App
 
 from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.requests import PlotFields
 from .member import Member
 
 Request = Callable[..., Awaitable[Any]]
-"""`request(member, op, **fields)`: a request to a member's session (SessionError while it
+"""`request(member, request)`: a request to a member's session (SessionError while it
 cannot be reached)."""
 
 
@@ -41,7 +42,7 @@ class FleetPlots:
 
     async def _open(self, member: Member, topic: str) -> None:
         try:
-            info = await self.request(member, "plot_fields", topic=topic)
+            info = await self.request(member, PlotFields(topic=topic))
         except SessionError as exc:
             self.app.notify(f"{member.label}: {str(exc).split(': ', 1)[-1]}",
                             severity="error", title="plot")

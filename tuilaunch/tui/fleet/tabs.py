@@ -117,7 +117,7 @@ class SessionPanels:
 
 class FleetTabs:
     """The per-session tabs of a fleet TUI: which session's panels show, and what a tab
-    does when it comes on screen. `request(member, op, **fields)` asks a member's session
+    does when it comes on screen. `request(member, request)` asks a member's session
     (raises SessionError while it cannot be reached)."""
 
     def __init__(self, members: list[Member], request: Callable[..., Any],

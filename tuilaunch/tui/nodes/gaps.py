@@ -21,6 +21,7 @@ from typing import Any
 from ...client.port import LaunchPort
 from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.requests import ReadLog
 from ..output_store import Gap, Line, OutputStore
 from ..screens.output_panel import OutputPanel
 
@@ -49,9 +50,8 @@ class GapReader:
             # below
             skip = gap.skip + gap.count - take if reading_up else gap.skip
             try:
-                page = await self._engine().run(port.request(
-                    "read_log", process=marker.process, start=gap.start, skip=skip,
-                    limit=take))
+                page = await self._engine().run(port.request(ReadLog(
+                    process=marker.process, start=gap.start, skip=skip, limit=take)))
             except SessionError as exc:
                 self.pane.gap_not_read(marker)  # asked again when next on screen
                 self._notify(f"{marker.process}: the lines not drawn could not be read: "

@@ -19,6 +19,7 @@ from textual.widgets.option_list import Option
 from ...client.session_graph import GraphCalls
 from ...engine.plan.model import Plan
 from ...engine.ros.calls import ParameterInfo
+from ...engine.run.vocabulary.requests import ParamsDump, ParamsLoad
 from .dialogs import PathScreen
 from .fields import Field
 from .graph_listing import GraphListing
@@ -85,7 +86,7 @@ class ParamsPanel(GraphListing, Horizontal):
                  request: Callable[..., Awaitable[Any]] | None = None,
                  **kwargs: object) -> None:
         """`graph()`: where the nodes' parameters are read and set (the session's);
-        `request(op, **fields)`: a session request (params_dump, params_load), made where
+        `request(request)`: a session request (params_dump, params_load), made where
         the nodes run."""
         super().__init__(**kwargs)  # type: ignore[arg-type]
         self.graph = graph
@@ -302,7 +303,7 @@ class ParamsPanel(GraphListing, Horizontal):
     async def write_file(self, node: str, path: str) -> None:
         assert self.request is not None
         try:
-            dumped = await self.request("params_dump", node=node)
+            dumped = await self.request(ParamsDump(node=node))
         except Exception as exc:
             self.show_result(f"{node}: {_one_line(exc)}", ok=False)
             return
@@ -324,7 +325,7 @@ class ParamsPanel(GraphListing, Horizontal):
                              ok=False)
             return
         try:
-            loaded = await self.request("params_load", node=node, yaml=text)
+            loaded = await self.request(ParamsLoad(node=node, yaml=text))
         except Exception as exc:
             self.show_result(f"{path} into {node}: {_one_line(exc)}", ok=False)
             return

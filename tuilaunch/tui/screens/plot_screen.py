@@ -21,7 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Awaitable
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -34,7 +34,11 @@ from textual_plotext import PlotextPlot
 from ...client.plot_series import WINDOWS, PlotSeries, Source, rebinned
 from ...client.plot_shapes import panels, series_csv, xy_pairs
 from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.request import Request
+from ...engine.run.vocabulary.requests import PlotFields, PlotStart, PlotStop, Topics
 from .plot_pickers import FieldPicker, TopicPicker
+
+R = TypeVar("R")
 
 REPAINT_HZ = 2.0
 """Repaints a second at most: a curve needs no more, a terminal over ssh gets little."""
@@ -48,7 +52,7 @@ SIDE = 24
 
 class SessionPlots:
     """A PlotHost over sessions' requests: `requesters` by session name (`""` for the only
-    one), each `await requester(op, **fields)`, as the TUI's `inspect` and a port's
+    one), each `await requester(request)`, as the TUI's `inspect` and a port's
     `request` run on the engine thread are; `leave()` closes the screen."""
 
     def __init__(self, requesters: dict[str, Any], leave: Any) -> None:
@@ -56,11 +60,11 @@ class SessionPlots:
         self.sessions = list(requesters)
         self._leave = leave
 
-    def request(self, session: str, op: str, **fields: Any) -> Awaitable[Any]:
+    def request(self, session: str, request: Request[R]) -> Awaitable[R]:
         requester = self.requesters.get(session)
         if requester is None:
             raise SessionError(f"no session {session} on this plot")
-        result: Awaitable[Any] = requester(op, **fields)
+        result: Awaitable[R] = requester(request)
         return result
 
     def leave(self) -> None:
@@ -73,7 +77,7 @@ class PlotHost(Protocol):
     sessions: list[str]
     """The sessions it reaches, as the user names them (`""`: the only one)."""
 
-    def request(self, session: str, op: str, **fields: Any) -> Awaitable[Any]:
+    def request(self, session: str, request: Request[R]) -> Awaitable[R]:
         """A session request's result; SessionError with the session's one line."""
         ...
 
@@ -169,9 +173,8 @@ class PlotScreen(Screen[None]):
 
     async def _asking(self, source: Source) -> None:
         try:
-            answer = await self.host.request(source.session, "plot", topic=source.topic,
-                                             fields=source.fields, tag=source.tag,
-                                             stamp=self.stamp)
+            answer = await self.host.request(source.session, PlotStart(
+                topic=source.topic, fields=source.fields, tag=source.tag, stamp=self.stamp))
         except SessionError as exc:
             self.notify(str(exc), severity="error", title="plot")
             return
@@ -181,7 +184,7 @@ class PlotScreen(Screen[None]):
 
     async def _stopping(self, source: Source) -> None:
         try:
-            await self.host.request(source.session, "plot_stop", topic=source.topic)
+            await self.host.request(source.session, PlotStop(topic=source.topic))
         except SessionError:
             pass  # the session or its link went: the stream went with it
 
@@ -378,7 +381,7 @@ class PlotScreen(Screen[None]):
 
     async def _numeric(self, session: str, topic: str) -> list[str] | None:
         try:
-            answer = await self.host.request(session, "plot_fields", topic=topic)
+            answer = await self.host.request(session, PlotFields(topic=topic))
         except SessionError as exc:
             self.notify(str(exc), severity="error", title="plot")
             return None
@@ -406,7 +409,7 @@ class PlotScreen(Screen[None]):
         topics: list[tuple[str, str, str]] = []
         for session in self.host.sessions:
             try:
-                answer = await self.host.request(session, "topics")
+                answer = await self.host.request(session, Topics())
             except SessionError as exc:
                 self.notify(str(exc), severity="error", title="plot")
                 continue

@@ -20,6 +20,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
+from ...engine.run.vocabulary.requests import EchoStart, EchoStop, Topics, WatchRates
 from . import units
 from .fields import Field
 from .graph_listing import discovering
@@ -27,7 +28,7 @@ from .tree_panel import ascii_terminal
 from .units import bytes_text, rate_text
 
 Request = Callable[..., Awaitable[Any]]
-"""`await request(op, **fields)`: a session request's result, or an exception saying why."""
+"""`await request(request)`: a session request's result, or an exception saying why."""
 
 REFRESH_TICKS = 3
 """The topic list is asked for again every this many ticks (one a second) while shown."""
@@ -217,9 +218,8 @@ class TopicsPanel(Vertical):
 
     @work(group="topics-list", exclusive=True, exit_on_error=False)
     async def refresh_topics(self) -> None:
-        fields = {"node": self.node} if self.node else {}
         try:
-            result = await self.request("topics", **fields)
+            result = await self.request(Topics(node=self.node or None))
         except Exception as exc:  # a session without the inspector, a node that is gone
             self.note(f"cannot list topics: {_one_line(exc)}", ok=False)
             return
@@ -322,7 +322,7 @@ class TopicsPanel(Vertical):
     @work(group="topics-watch", exit_on_error=False)
     async def _send_watch(self, topics: list[str]) -> None:
         try:
-            result = await self.request("watch_rates", topics=topics)
+            result = await self.request(WatchRates(topics=topics))
         except Exception as exc:
             if topics:
                 self.note(f"cannot measure rates: {_one_line(exc)}", ok=False)
@@ -370,7 +370,7 @@ class TopicsPanel(Vertical):
     @work(group="topics-echo", exit_on_error=False)
     async def _start_echo(self, topic: str) -> None:
         try:
-            await self.request("echo", topic=topic, max_per_s=ECHO_PER_S)
+            await self.request(EchoStart(topic=topic, max_per_s=ECHO_PER_S))
         except Exception as exc:
             if self.echo_topic == topic:
                 self.echo_topic = None
@@ -387,7 +387,7 @@ class TopicsPanel(Vertical):
     @work(group="topics-echo", exit_on_error=False)
     async def _stop_echo(self, topic: str) -> None:
         try:
-            await self.request("echo_stop", topic=topic)
+            await self.request(EchoStop(topic=topic))
         except Exception:
             pass  # the echo ended by itself (its count, the topic gone): nothing to stop
 

@@ -13,7 +13,7 @@ from textual.widgets.tree import TreeNode
 
 from ...engine.plan.components import component_label
 from ...engine.plan.model import ActionKind, Plan, PlanDiff, TreeItem
-from ...engine.run.process.reported_names import current_node_name
+from ...engine.run.vocabulary.reported_names import current_node_name
 from .units import short_bytes, usage_text
 
 ALL = "__all__"

@@ -25,6 +25,7 @@ from typing import Any
 
 from ...errors import LaunchError
 from ...run.events import Event, PlotSamples
+from ...run.vocabulary.ros_requests import PlotFields, PlotStart, PlotStop
 from ..graph import topic_of
 from ..ros_errors import RosError
 
@@ -89,13 +90,13 @@ class PlotStreams:
                               f"(waited {wait:g} s)") from None
         return message_class(infos[0].topic_type), infos
 
-    async def plot_fields(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def plot_fields(self, request: PlotFields, client: int) -> dict[str, Any]:
         """`{"type", "fields", "stamped"}`: the topic's numeric fields by dotted path (the
         picker), each element of its sequences as a message received now has them."""
         from .fields import has_sequences, numeric_fields, stamp_reader, type_name
 
-        topic = topic_of(message)
-        cls, infos = await self._topic_type(topic, self._wait(message))
+        topic = topic_of(request.topic)
+        cls, infos = await self._topic_type(topic, self._wait(None))
         sample = None
         if has_sequences(cls):
             sample = await self._sample(topic, cls, infos)
@@ -119,31 +120,29 @@ class PlotStreams:
             if own:
                 await asyncio.to_thread(sampler.close)
 
-    def _wait(self, message: dict[str, Any]) -> float:
-        return min(float(message.get("wait") or self._publisher_wait), self._publisher_wait)
+    def _wait(self, asked: float | None) -> float:
+        return min(asked or self._publisher_wait, self._publisher_wait)
 
-    async def plot(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def plot(self, request: PlotStart, client: int) -> dict[str, Any]:
         from .buckets import POINTS_PER_S
         from .fields import FieldError, compile_path, numeric_fields, type_name
 
-        topic = topic_of(message)
-        client = int(message["client"])
+        topic = topic_of(request.topic)
         if not self._subscribed(client):
             raise LaunchError("plot sends its points as events: subscribe first")
-        paths = message.get("fields")
-        if not isinstance(paths, list) or not paths or \
-                not all(isinstance(p, str) for p in paths):
+        paths = request.fields
+        if not paths or not all(isinstance(p, str) for p in paths):
             raise ValueError("plot needs fields: a list of dotted paths (pose.position.x)")
-        cls, infos = await self._topic_type(topic, self._wait(message))
+        cls, infos = await self._topic_type(topic, self._wait(request.wait))
         try:
             fields = [compile_path(cls, path, topic) for path in dict.fromkeys(paths)]
         except FieldError as exc:
             raise LaunchError(str(exc)) from None
         async with self.lock:
-            stream = PlotStream(fields, bool(message.get("raw")), message.get("tag"))
+            stream = PlotStream(fields, request.raw, request.tag)
             self.streams[(client, topic)] = stream
             sampler = await self._sampler(topic, cls, infos)
-            stream.stamp = bool(message.get("stamp")) and sampler.stamp_of is not None
+            stream.stamp = request.stamp and sampler.stamp_of is not None
             self._update(topic)
             if stream.raw:
                 from .sampler import RawRows
@@ -182,8 +181,8 @@ class PlotStreams:
                   for f in s.fields}
         self.samplers[topic].set_fields(list(fields.values()))
 
-    async def plot_stop(self, message: dict[str, Any]) -> dict[str, Any]:
-        await self._end(int(message["client"]), topic_of(message))
+    async def plot_stop(self, request: PlotStop, client: int) -> dict[str, Any]:
+        await self._end(client, topic_of(request.topic))
         return {}
 
     async def _end(self, client: int, topic: str) -> None:

@@ -26,13 +26,20 @@ import base64
 import contextlib
 import os
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from ...errors import LaunchError
 from ...run.events import Event, Log, Output, ProcessExited, Started
-from ...run.plugins import Handler, Plugin
+from ...run.plugins import Handlers, Plugin
+from ...run.vocabulary.ros_requests import (
+    BlackBox,
+    BlackBoxWrite,
+    RecordStart,
+    RecordStop,
+    RecordTake,
+)
 
 if TYPE_CHECKING:
     from ...run.supervisor.supervisor import Supervisor
@@ -109,10 +116,10 @@ class Recorder(Plugin):
         if self.box is not None:
             self._follow()
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
-        return {"record_start": self.record_start, "record_take": self.record_take,
-                "record_stop": self.record_stop, "black_box": self.black_box,
-                "black_box_write": self.black_box_write}
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
+        return {RecordStart: self.record_start, RecordTake: self.record_take,
+                RecordStop: self.record_stop, BlackBox: self.black_box,
+                BlackBoxWrite: self.black_box_write}
 
     def client_gone(self, client: int) -> None:
         for recording in [r for r in self.recordings.values() if r.client == client]:
@@ -246,16 +253,14 @@ class Recorder(Plugin):
 
     # --- recordings ----------------------------------------------------------------------------
 
-    async def record_start(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def record_start(self, request: RecordStart, client: int) -> dict[str, Any]:
         from .tape import Tape
 
-        topics = message.get("topics") or []
-        if not isinstance(topics, list) or not all(isinstance(t, str) and t.startswith("/")
-                                                   for t in topics):
+        topics = request.topics
+        if not all(isinstance(t, str) and t.startswith("/") for t in topics):
             raise ValueError("record needs topics as a list of names starting with /")
         self.next_id += 1
-        client = message.get("client")
-        recording = Recording(self.next_id, None if client is None else int(client),
+        recording = Recording(self.next_id, client,
                               set(topics) or None, Tape(PENDING))
         self.recordings[recording.id] = recording
         try:
@@ -271,22 +276,23 @@ class Recorder(Plugin):
         return sorted(t for t in self.channels
                       if recording.topics is None or t in recording.topics)
 
-    def _recording(self, message: dict[str, Any]) -> Recording:
+    def _recording(self, ident: int) -> Recording:
         # not "id": a request's own id is the reply's
-        recording = self.recordings.get(int(message.get("recording") or 0))
+        recording = self.recordings.get(ident)
         if recording is None:
-            raise LaunchError(f"no recording {message.get('recording')!r} in this session")
+            raise LaunchError(f"no recording {ident!r} in this session")
         return recording
 
-    async def record_take(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def record_take(self, request: RecordTake, client: int) -> dict[str, Any]:
         """The messages since the last take (waiting TAKE_WAIT for some), the channels new
         to the client, the count dropped, the topics waited for."""
         from .tape import LOG_TYPE, OUTPUT_TOPIC, Channel
 
-        recording = self._recording(message)
+        recording = self._recording(request.recording)
         tape = recording.tape
         loop = asyncio.get_running_loop()
-        deadline = loop.time() + min(float(message.get("wait", TAKE_WAIT)), TAKE_WAIT)
+        wait = TAKE_WAIT if request.wait is None else request.wait
+        deadline = loop.time() + min(wait, TAKE_WAIT)
         while not tape.records and loop.time() < deadline:
             await asyncio.sleep(0.05)
         records, dropped = tape.take(TAKE_BYTES)
@@ -306,8 +312,8 @@ class Recorder(Plugin):
                              for t, n, d in records],
                 "waiting": {t: self.unrecorded.get(t, "no publisher yet") for t in waiting}}
 
-    async def record_stop(self, message: dict[str, Any]) -> dict[str, Any]:
-        self.recordings.pop(int(message.get("recording") or 0), None)
+    async def record_stop(self, request: RecordStop, client: int) -> dict[str, Any]:
+        self.recordings.pop(request.recording, None)
         return {}
 
     # --- the black box -------------------------------------------------------------------------
@@ -332,19 +338,19 @@ class Recorder(Plugin):
                 "messages": len(box.records) if box else 0,
                 "topics": sorted(self.channels), "files": list(self.files)}
 
-    async def black_box(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def black_box(self, request: BlackBox, client: int) -> dict[str, Any]:
         """`{"seconds": S, "size": B}` switches it on (or changes it), `{"seconds": 0}` off,
         nothing: how it is."""
-        if "seconds" in message:
-            seconds = float(message["seconds"])
+        if request.seconds is not None:
+            seconds = request.seconds
             if seconds == 0:
                 self.box = None
             else:
-                self._box_on(seconds, int(message.get("size") or DEFAULT_SIZE))
+                self._box_on(seconds, request.size or DEFAULT_SIZE)
                 self._follow()
         return self.status()
 
-    async def black_box_write(self, message: dict[str, Any]) -> dict[str, Any]:
+    async def black_box_write(self, request: BlackBoxWrite, client: int) -> dict[str, Any]:
         if self.box is None:
             raise LaunchError("the black box is off: start the launch with --black-box "
                               "SECONDS, or switch it on (tuilaunch record NAME --black-box-on "

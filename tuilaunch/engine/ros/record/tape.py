@@ -17,8 +17,8 @@ import threading
 from collections import deque
 from dataclasses import dataclass
 
-from ...run.process.output import strip_ansi
-from ...run.process.reported_names import ROS_LOG_PREFIX
+from ...run.vocabulary.reported_names import ROS_LOG_PREFIX
+from ...run.vocabulary.text import strip_ansi
 
 OUTPUT_TOPIC = "/tuilaunch/output"
 LOG_TYPE = "rcl_interfaces/msg/Log"

@@ -44,6 +44,16 @@ from ..session.protocol import ProtocolError, decode
 from ..session.session_dir import launch_stem
 from ..supervisor.placed import UNKNOWN
 from ..supervisor.supervisor import Supervisor
+from ..vocabulary.request import Request
+from ..vocabulary.requests import (
+    Apply,
+    ExternalEvent,
+    Restart,
+    ShutdownLaunch,
+    Start,
+    Stop,
+    Subscribe,
+)
 from .remote import RemoteError, open_remote_streams, run_remote
 from .share_link import REQUEST_IDS, Share
 from .share_mirror import ShareMirror
@@ -99,7 +109,7 @@ class MachinesCoordinator(Plugin):
                 machine = dataclasses.replace(
                     machine, env={"ROS_DOMAIN_ID": domain, **machine.env})
             self.shares[machine.name] = Share(machine, share_session_name(base, machine.name))
-        self.happened: dict[tuple[str, str], dict[str, Any]] = {}
+        self.happened: dict[tuple[str, str], ExternalEvent] = {}
         """The last start and exit of each process, told to each share (again on connect:
         what a node there waits for may have happened before)."""
         self._tasks: set[asyncio.Task[Any]] = set()
@@ -237,9 +247,9 @@ class MachinesCoordinator(Plugin):
         link, reader, writer = await open_remote_streams(
             share.machine, share.session, environ=self.environ)
         share.link, share.reader, share.writer = link, reader, writer
-        for message in list(self.happened.values()):
-            await share.send({"op": "external_event", **message})
-        await share.send({"op": "subscribe", "id": self._new_id()})
+        for happened in list(self.happened.values()):
+            await share.send(happened)
+        await share.send(Subscribe(), self._new_id())
         self.supervisor.log(f"{share.machine.name}: following session {share.session}")
         if self._closing or self.supervisor.shutting_down:  # stopped while it started
             await self._stop_share(share, "the launch ended")
@@ -331,12 +341,11 @@ class MachinesCoordinator(Plugin):
             except KeyError:
                 return
             on = "start" if isinstance(event, Started) else "exit"
-            message = {"process": event.process, "on": on, "pid": event.pid,
-                       "code": event.code}
-            self.happened[(event.process, on)] = message
+            happened = ExternalEvent(event.process, on, event.pid, event.code)
+            self.happened[(event.process, on)] = happened
             for share in self.shares.values():
                 if share.machine.name != machine and share.writer is not None:
-                    self._spawn(self._tell(share, {"op": "external_event", **message}))
+                    self._spawn(self._tell(share, happened))
         elif isinstance(event, Shutdown):
             for share in self.shares.values():
                 self._spawn(self._stop_share(share, event.reason or "shutdown"))
@@ -344,23 +353,24 @@ class MachinesCoordinator(Plugin):
             arguments = dict(line.split(":=", 1) for line in event.lines if ":=" in line)
             self.arguments = arguments
             for share in self.shares.values():
-                self._spawn(self._tell(share, {"op": "apply", "arguments": arguments,
-                                               "id": self._new_id()}))
+                self._spawn(self._tell(share, Apply(arguments), self._new_id()))
 
-    async def _tell(self, share: Share, message: dict[str, Any]) -> None:
+    async def _tell(self, share: Share, request: Request[Any],
+                    request_id: int | None = None) -> None:
         with contextlib.suppress(LaunchError, ConnectionError, OSError):
-            await share.send(message)
+            await share.send(request, request_id)
 
-    async def forward(self, op: str, process_id: str, **options: Any) -> None:
+    async def forward(self, request: Start | Stop | Restart) -> None:
+        process_id = request.process
         machine = self.supervisor.plan.process(process_id).machine
         share = self.shares.get(machine or "")
-        if share is not None and share.writer is None and op in ("start", "restart"):
+        if share is not None and share.writer is None and not isinstance(request, Stop):
             # its machine may be up by now (a computer that boots late): tried again
             fresh = await self.reach(share, process_id)
-            if fresh and not options:
+            if fresh and (isinstance(request, Start) or request == Restart(process_id)):
                 return  # its share was started anew, and this process with it
         share = self.requests.connected(process_id)
-        result = await share.ask({"op": op, "process": process_id, **options}, START_TIMEOUT)
+        result = await share.ask(request, START_TIMEOUT)
         state = result.get("state") if isinstance(result, dict) else None
         if isinstance(state, str):
             # as it is there once done (its events may still be on their way)
@@ -381,7 +391,7 @@ class MachinesCoordinator(Plugin):
     async def _stop_share(self, share: Share, reason: str) -> None:
         """Asks the share to stop; its `ended` closes the link."""
         if share.writer is not None:
-            await self._tell(share, {"op": "shutdown", "reason": reason, "id": self._new_id()})
+            await self._tell(share, ShutdownLaunch(reason), self._new_id())
 
     async def close(self) -> None:
         """The launch is over here: every share stops, and is waited for."""

@@ -26,6 +26,8 @@ from ...errors import LaunchError
 from ..session import session_dir
 from ..session.protocol import MAX_MESSAGE, check_hello, decode, encode
 from ..session.session_dir import SessionError
+from ..vocabulary.request import to_message
+from ..vocabulary.requests import Status
 
 CHUNK = 1 << 16
 LS_ANSWER_TIMEOUT = 3.0  # as `tuilaunch ls`: a stopped server costs this, once
@@ -155,7 +157,7 @@ def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> dict[str, A
         if not hello:
             raise SessionError(f"session {name} closed the connection")
         check_hello(decode(hello), name)  # another version's status may mean other things
-        sock.sendall(encode({"id": 1, "op": "status", "resources": False}))  # a listing
+        sock.sendall(encode(to_message(Status(resources=False), 1)))  # a listing
         while True:
             line = reader.readline(MAX_MESSAGE)
             if not line:

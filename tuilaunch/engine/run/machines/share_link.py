@@ -8,17 +8,20 @@ from __future__ import annotations
 import asyncio
 import collections
 import itertools
-from typing import Any
+from typing import Any, TypeVar
 
 from ...errors import LaunchError
 from ...plan.machines import Machine
 from ..process.logfiles import LogFile
 from ..session.protocol import encode
+from ..vocabulary.request import Request, to_message
 from .remote import RemoteLink
 
 REQUEST_IDS = itertools.count(1)
 """The ids of the launching side's requests to the shares (one count: a reply is matched
 to its request by id alone)."""
+R = TypeVar("R")
+
 ASK_TIMEOUT = 30.0
 """How long a request waits for its share's reply (a restart there stops, then starts)."""
 
@@ -62,24 +65,25 @@ class Share:
             if not waiter.done():
                 waiter.set_result(outcome)
 
-    async def send(self, message: dict[str, Any]) -> None:
+    async def send(self, request: Request[Any], request_id: int | None = None) -> None:
+        """A request whose reply nobody waits for (None: none is sent back)."""
         if self.writer is None:
             raise LaunchError(f"{self.machine.name} is not connected")
-        self.writer.write(encode(message))
+        self.writer.write(encode(to_message(request, request_id)))
         await self.writer.drain()
 
-    async def ask(self, message: dict[str, Any], timeout: float = ASK_TIMEOUT) -> Any:
+    async def ask(self, request: Request[R], timeout: float = ASK_TIMEOUT) -> R:
         """A request of the session protocol to the share; its result (LaunchError with the
         share's words when it refuses, or when the link is lost before it answers)."""
         request_id = next(REQUEST_IDS)
         future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
         self.replies[request_id] = future
         try:
-            await self.send({**message, "id": request_id})
-            return await asyncio.wait_for(future, timeout)
+            await self.send(request, request_id)
+            return request.reply(await asyncio.wait_for(future, timeout))
         except TimeoutError:
             raise LaunchError(f"{self.machine.name} did not answer within {timeout:g} s "
-                              f"({message.get('op')})") from None
+                              f"({request.op})") from None
         except (ConnectionError, OSError):
             raise LaunchError(f"lost the link to {self.machine.name}") from None
         finally:

@@ -15,12 +15,13 @@ from typing import Any
 
 from ..events import LIVE_STATES, Dropped, Event, Log, Output, Typing
 from ..process.logfiles import LogFile
-from ..process.output import screen_str
 from ..session.protocol import ProtocolError, encode, event_from_dict
 from ..supervisor.placed import UNKNOWN
 from ..supervisor.supervisor import Supervisor
+from ..vocabulary.request import to_message
+from ..vocabulary.requests import ShareLines
+from ..vocabulary.text import screen_str
 from .share_link import REQUEST_IDS, Share
-from .share_side import LINES_OP
 
 
 class ShareMirror:
@@ -74,9 +75,8 @@ class ShareMirror:
                 continue
             request_id = next(REQUEST_IDS)
             share.backfill[request_id] = proc.id
-            share.writer.write(encode({
-                "op": LINES_OP, "id": request_id, "process": proc.id, "start": start,
-                "end": end, "skip": skip}))
+            share.writer.write(encode(to_message(
+                ShareLines(proc.id, start, end, skip), request_id)))
 
     def backfilled(self, share: Share, process: str, result: dict[str, Any]) -> None:
         skipped = int(result.get("skipped") or 0)

@@ -17,6 +17,7 @@ from typing import Any
 
 from ...errors import LaunchError
 from ...plan.model import Plan
+from ..vocabulary.requests import Input, Status, TakeKeys
 from .share_link import Share
 
 COMMAND_FIELDS = ("command", "command_line", "env", "unset_env", "terminal")
@@ -48,8 +49,7 @@ class ShareRequests:
     async def commands(self) -> dict[str, dict[str, Any]]:
         async def one(share: Share) -> dict[str, dict[str, Any]]:
             try:
-                status = await share.ask({"op": "status", "resources": False},
-                                         STATUS_TIMEOUT)
+                status = await share.ask(Status(resources=False), STATUS_TIMEOUT)
             except LaunchError:
                 return {}  # not known now: the launching side says what it can
             return {str(p["id"]): {k: p[k] for k in COMMAND_FIELDS if k in p}
@@ -64,7 +64,7 @@ class ShareRequests:
 
     async def take_keys(self, process_id: str) -> None:
         share = self.connected(process_id)
-        await share.ask({"op": "typing", "process": process_id, "on": True})
+        await share.ask(TakeKeys(process_id, on=True))
         share.typing = process_id
 
     def give_keys(self, process_id: str) -> None:
@@ -78,7 +78,7 @@ class ShareRequests:
 
     async def _give_back(self, share: Share, process_id: str) -> None:
         try:
-            await share.ask({"op": "typing", "process": process_id, "on": False})
+            await share.ask(TakeKeys(process_id, on=False))
         except LaunchError:
             pass  # the link is gone, and with it the keyboard there
 
@@ -88,8 +88,7 @@ class ShareRequests:
             # the link was made again since the keyboard was taken: the share gave it
             # back when the old one closed; taken again, or refused in its words
             await self.take_keys(process_id)
-        result = await share.ask({"op": "input", "process": process_id,
-                                  "data": data.decode(errors="replace")})
+        result = await share.ask(Input(process_id, data.decode(errors="replace")))
         return int(result.get("dropped") or 0) if isinstance(result, dict) else 0
 
 

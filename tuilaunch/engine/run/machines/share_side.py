@@ -10,19 +10,17 @@ carry them (`share_lines`, read from its log files).
 from __future__ import annotations
 
 import collections
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from typing import Any
 
-from ..plugins import Handler, Plugin
+from ..plugins import Handlers, Plugin
 from ..session.log_reader import LogLine, read_lines
 from ..supervisor.supervisor import Supervisor
+from ..vocabulary.requests import ExternalEvent, ShareLines
 
 BACKFILL_LINES = 2000
 """Lines of a process sent at most per request (the newest); older ones stay in the log
 file there, and the launching side says how many."""
-LINES_OP = "share_lines"
-"""The share's request for lines of its log files: {process, start, end, skip}: from byte
-`start` to `end`, less the first `skip` (the lines the launching side already has)."""
 
 
 class ShareSide(Plugin):
@@ -33,20 +31,18 @@ class ShareSide(Plugin):
         self.seen: set[tuple[Any, ...]] = set()  # the coordinator repeats them on reconnect
         supervisor.set_placement(machine, None)
 
-    def handlers(self, find_process: Callable[[str], str]) -> Mapping[str, Handler]:
-        async def external_event(message: dict[str, Any]) -> Any:
-            process, on = str(message.get("process")), str(message.get("on"))
-            key = (process, on, message.get("pid"), message.get("code"))
+    def handlers(self, find_process: Callable[[str], str]) -> Handlers:
+        async def external_event(request: ExternalEvent, client: int) -> Any:
+            key = (request.process, request.on, request.pid, request.code)
             if key not in self.seen:
                 self.seen.add(key)
-                self.supervisor.external_event(process, on, message.get("pid"),
-                                               message.get("code"))
+                self.supervisor.external_event(request.process, request.on, request.pid,
+                                               request.code)
             return {}
 
-        async def share_lines(message: dict[str, Any]) -> Any:
-            process = find_process(str(message.get("process")))
-            start, end = int(message.get("start") or 0), int(message.get("end") or 0)
-            skip = int(message.get("skip") or 0)
+        async def share_lines(request: ShareLines, client: int) -> Any:
+            process = find_process(request.process)
+            start, end, skip = request.start, request.end, request.skip
             kept: collections.deque[LogLine] = collections.deque(maxlen=BACKFILL_LINES)
             count = 0
             for index, line in enumerate(
@@ -57,7 +53,7 @@ class ShareSide(Plugin):
             return {"lines": [[line.time, line.stream, line.text] for line in kept],
                     "skipped": count - len(kept)}
 
-        return {"external_event": external_event, LINES_OP: share_lines}
+        return {ExternalEvent: external_event, ShareLines: share_lines}
 
 
-__all__ = ["BACKFILL_LINES", "LINES_OP", "ShareSide"]
+__all__ = ["BACKFILL_LINES", "ShareSide"]

@@ -24,7 +24,9 @@ from typing import Any
 from ...errors import LaunchError
 from ..event_buffer import EventBuffer
 from ..events import Event, Output, View
-from ..process.output import strip_ansi
+from ..vocabulary.request import Request, UnknownRequest, from_message
+from ..vocabulary.requests import ReadStamps, SetView, Subscribe
+from ..vocabulary.text import strip_ansi
 from .protocol import MESSAGE_TEXT, ProtocolError, Stamps, decode, encode, event_to_dict
 
 CLIENT_MAX_LINES = 20_000
@@ -108,14 +110,15 @@ class ClientHub:
     """Every connection of a session server: reads requests, answers them, pumps events.
 
     `hello()`: what a client is told on connecting; `snapshot()`: what a subscriber gets
-    with its subscription (states and log sizes at that instant); `answer(message)`: the
-    result of one request (raising LaunchError/TypeError/ValueError for a refusal);
+    with its subscription (states and log sizes at that instant); `answer(request,
+    client)`: the result of one request, decoded (vocabulary/request.py), from that client
+    (raising LaunchError/TypeError/ValueError for a refusal);
     `states()`: the processes' states sent along with each batch; `gone(client)`: a client
     has disconnected (its keyboard, resource watch and plugins' streams are let go)."""
 
     def __init__(self, hello: Callable[[], dict[str, Any]],
                  snapshot: Callable[[], dict[str, Any]],
-                 answer: Callable[[dict[str, Any]], Awaitable[Any]],
+                 answer: Callable[[Request[Any], int], Awaitable[Any]],
                  states: Callable[[], dict[str, str]],
                  gone: Callable[[int], None],
                  offsets: Callable[[], dict[str, int]] | None = None) -> None:
@@ -201,23 +204,21 @@ class ClientHub:
                     return  # longer than MAX_MESSAGE, or the peer vanished
                 if not line:
                     return
+                message: dict[str, Any] = {}
                 try:
                     message = decode(line)
-                except ProtocolError as exc:
-                    await send_message(writer, lock, {"type": "reply", "id": None, "ok": False,
-                                                      "error": str(exc)})
+                    request = from_message(message)
+                except (ProtocolError, UnknownRequest) as exc:
+                    await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
+                                                      "ok": False, "error": str(exc)})
                     continue
-                message["client"] = client  # set here: a client cannot speak for another
-                if message.get("op") == "subscribe" and queue is None:
-                    kinds = message.get("kinds")
+                if isinstance(request, Subscribe) and queue is None:
+                    kinds = request.kinds
                     queue = ClientQueue(
-                        max(1, min(int(message.get("max_lines") or CLIENT_MAX_LINES),
-                                   CLIENT_MAX_LINES)),
-                        max(0.0, min(float(message.get("interval") or 0.0), 1.0)),
-                        writer.transport.abort,
-                        frozenset(map(str, kinds)) if isinstance(kinds, list) else None,
-                        bool(message.get("fair")), _only(message), bool(message.get("plain")),
-                        message.get("stamps") is not False)
+                        max(1, min(request.max_lines or CLIENT_MAX_LINES, CLIENT_MAX_LINES)),
+                        max(0.0, min(request.interval, 1.0)), writer.transport.abort,
+                        None if kinds is None else frozenset(map(str, kinds)),
+                        request.fair, request.only, request.plain, request.stamps)
                     # states and file sizes at the same instant as the subscription: the
                     # client reads the files up to these sizes, then gets events from here
                     result = self.snapshot()
@@ -228,23 +229,24 @@ class ClientHub:
                                                       "ok": True, "result": result})
                     self.spawn(self._pump(queue, writer, lock))
                     continue
-                if message.get("op") == "stamps" and queue is not None:
+                if isinstance(request, ReadStamps) and queue is not None:
                     # answered here, between two batches: the batches before it are
                     # already written (the lock is first come, first served), and the
                     # ones after it carry their stamps when `on`
-                    since = message.get("since")
-                    result = queue.stamps.since(since) if isinstance(since, int) else \
+                    since = request.since
+                    result = queue.stamps.since(since) if since is not None else \
                         {"first": 0, "stamps": []}
-                    queue.stamps.sending = bool(message.get("on"))
+                    queue.stamps.sending = request.on
                     await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
                                                       "ok": True, "result": result})
                     continue
-                if message.get("op") == "view" and queue is not None:
-                    self._view(queue, _only(message))
+                if isinstance(request, SetView) and queue is not None:
+                    self._view(queue, request.only)
                     await send_message(writer, lock, {"type": "reply", "id": message.get("id"),
                                                       "ok": True, "result": {}})
                     continue
-                self.spawn(self._answer(message, writer, lock))
+                # the client is the connection's: a client cannot speak for another
+                self.spawn(self._answer(request, client, message.get("id"), writer, lock))
         except (ConnectionError, OSError):
             return
         finally:
@@ -317,17 +319,16 @@ class ClientHub:
                 batch["states"] = touched
             await send_message(writer, lock, batch)
 
-    async def _answer(self, message: dict[str, Any], writer: asyncio.StreamWriter,
-                      lock: asyncio.Lock) -> None:
-        request_id = message.get("id")
+    async def _answer(self, request: Request[Any], client: int, request_id: Any,
+                      writer: asyncio.StreamWriter, lock: asyncio.Lock) -> None:
         try:
-            result = await self.answer(message)
+            result = await self.answer(request, client)
             reply = {"type": "reply", "id": request_id, "ok": True, "result": result}
         except (LaunchError, TypeError, ValueError) as exc:
             reply = {"type": "reply", "id": request_id, "ok": False, "error": str(exc)}
         except Exception as exc:  # one bad request must never take the session down
             reply = {"type": "reply", "id": request_id, "ok": False,
-                     "error": f"{op_name(message)} failed: {type(exc).__name__}: {exc}"}
+                     "error": f"{request.op} failed: {type(exc).__name__}: {exc}"}
         try:
             await send_message(writer, lock, reply)
         except (ConnectionError, OSError):
@@ -373,15 +374,6 @@ def shown_line(line: str) -> str:
     if "\x1b" in line:
         line = strip_ansi(line)
     return _ROS_STAMP.sub(r"\1]", line, count=1) if line.startswith("[") else line
-
-
-def _only(message: dict[str, Any]) -> str | None:
-    only = message.get("only")
-    return None if only is None else str(only)
-
-
-def op_name(message: dict[str, Any]) -> str:
-    return str(message.get("op"))
 
 
 async def send_message(writer: asyncio.StreamWriter, lock: asyncio.Lock,

@@ -12,8 +12,9 @@ from typing import Any
 
 from ...errors import LaunchError
 from ..events import LIVE_STATES, Typing
-from ..plugins import Handler
+from ..plugins import Handlers
 from ..supervisor.supervisor import Supervisor
+from ..vocabulary.requests import Input, TakeKeys
 
 
 class Keyboard:
@@ -28,8 +29,8 @@ class Keyboard:
         self.process: str | None = None
         """The process it types into."""
 
-    def handlers(self) -> dict[str, Handler]:
-        return {"typing": self.typing, "input": self.input}
+    def handlers(self) -> Handlers:
+        return {TakeKeys: self.typing, Input: self.input}
 
     def state(self) -> dict[str, Any] | None:
         """For `status`: who types into what, or None."""
@@ -37,12 +38,11 @@ class Keyboard:
             return None
         return {"client": self.client, "process": self.process}
 
-    async def typing(self, message: dict[str, Any]) -> dict[str, Any]:
-        client = message.get("client")
-        process = self.find(str(message.get("process")))
-        if not message.get("on"):
-            if client is not None and self.client == client:
-                self.release(int(client))
+    async def typing(self, request: TakeKeys, client: int) -> dict[str, Any]:
+        process = self.find(request.process)
+        if not request.on:
+            if self.client == client:
+                self.release(client)
             return {}
         if self.client is not None and self.client != client:
             raise LaunchError(f"another client (client {self.client}) is typing into "
@@ -54,19 +54,15 @@ class Keyboard:
         # a terminal here, or its keyboard on the machine that runs it taken for us
         await self.supervisor.take_keys(process)
         previous = self.process
-        self.client, self.process = int(client) if client is not None else None, process
+        self.client, self.process = client, process
         if previous is not None and previous != process:
             self.supervisor.give_keys(previous)
             self._tell(previous, None)
         self._tell(process, self.client)
         return {}
 
-    async def input(self, message: dict[str, Any]) -> dict[str, Any]:
-        client = message.get("client")
-        process = self.find(str(message.get("process")))
-        data = message.get("data")
-        if not isinstance(data, str):
-            raise ValueError("input needs data as a string")
+    async def input(self, request: Input, client: int) -> dict[str, Any]:
+        process, data = self.find(request.process), request.data
         if self.client != client or self.process != process:
             who = f"client {self.client} types into {self.process}" \
                 if self.client is not None else "nobody holds the keyboard"

@@ -10,7 +10,8 @@ from typing import Any
 
 from ...plan.model import Plan
 from ...plan.session import Session
-from ..plugins import Handler
+from ..plugins import Handlers
+from ..vocabulary.requests import GetPlan, PreviewArguments
 
 
 def plan_message(session: Session, plan: Plan | None = None) -> dict[str, Any]:
@@ -18,17 +19,14 @@ def plan_message(session: Session, plan: Plan | None = None) -> dict[str, Any]:
     return {"plan": (plan or session.plan).to_json(), "arguments": dict(session.arguments)}
 
 
-def plan_handlers(session: Session) -> dict[str, Handler]:
+def plan_handlers(session: Session) -> Handlers:
     """The `plan` and `preview` requests, answered from `session` (the server's)."""
 
-    async def plan(message: dict[str, Any]) -> Any:
+    async def plan(request: GetPlan, client: int) -> Any:
         return plan_message(session)
 
-    async def preview(message: dict[str, Any]) -> Any:
-        values = message.get("arguments")
-        if not isinstance(values, dict):
-            raise ValueError("preview needs arguments as an object")
-        running = message.get("running")
+    async def preview(request: PreviewArguments, client: int) -> Any:
+        values, running = request.arguments, request.running
         result = session.preview({str(k): str(v) for k, v in values.items()},
                                  None if running is None else {str(p) for p in running})
         if result.plan is None or result.diff is None:
@@ -41,4 +39,4 @@ def plan_handlers(session: Session) -> dict[str, Handler]:
                     "keep": edit.keep, "stop": edit.stop, "start": edit.start},
                 "edited": result.edited}
 
-    return {"plan": plan, "preview": preview}
+    return {GetPlan: plan, PreviewArguments: preview}

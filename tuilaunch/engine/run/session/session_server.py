@@ -30,12 +30,28 @@ from ..events import LIVE_STATES, Event, Log, Output, Relaunched, Started
 from ..plugins import Handler
 from ..supervisor.stopping import CTRL_C_REASON
 from ..supervisor.supervisor import Supervisor
+from ..vocabulary.request import Request
+from ..vocabulary.requests import (
+    Apply,
+    Find,
+    Kill,
+    ReadLog,
+    ReadStamps,
+    Restart,
+    RunAction,
+    SetView,
+    ShutdownLaunch,
+    Start,
+    Status,
+    Stop,
+    Subscribe,
+    WatchResources,
+)
 from . import session_dir
 from .clients import CLIENT_MAX_EVENTS as CLIENT_MAX_EVENTS
 from .clients import CLIENT_MAX_LINES as CLIENT_MAX_LINES
 from .clients import ClientHub
 from .clients import ClientQueue as ClientQueue
-from .clients import op_name as op_name
 from .keyboard import Keyboard
 from .launch_prints import LaunchPrints
 from .log_reader import LAUNCH_LOG, READ_LOG_LIMIT, read_log
@@ -47,9 +63,9 @@ from .session_socket import SessionSocket
 
 RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
-BUILTIN_OPS = frozenset({"subscribe", "status", "start", "stop", "restart", "shutdown",
-                         "apply", "kill", "run_action", "find", "read_log",
-                         "watch_resources"})
+BUILTIN_REQUESTS: frozenset[type[Request[Any]]] = frozenset({
+    Subscribe, ReadStamps, SetView, Status, Start, Stop, Restart, ShutdownLaunch, Apply, Kill,
+    RunAction, Find, ReadLog, WatchResources})
 """Requests the server answers itself; plugins add others with `add_handler`."""
 
 
@@ -67,18 +83,18 @@ class SessionServer:
             session.plan, log_dir, sigterm_timeout=sigterm_timeout,
             sigkill_timeout=sigkill_timeout)
         self.supervisor.subscribe(self._on_event)
-        self._handlers: dict[str, Handler] = {}
+        self._handlers: dict[type[Request[Any]], Handler] = {}
         self.hub = ClientHub(self.info, self._snapshot, self._perform,
                              lambda: self.supervisor.states, self._client_gone,
                              self._log_sizes)
         self.socket = SessionSocket(name, self.hub.serve, self.info, self._log)
         self.resources = ResourceWatch(self._running_pids, self.send)
         self.keyboard = Keyboard(self.supervisor, self.find_process)
-        for op, handler in self.keyboard.handlers().items():
-            self.add_handler(op, handler)
+        for kind, handler in self.keyboard.handlers().items():
+            self.add_handler(kind, handler)
         for plugin in self.supervisor.plugins:
-            for op, handler in plugin.handlers(self.find_process).items():
-                self.add_handler(op, handler)
+            for kind, handler in plugin.handlers(self.find_process).items():
+                self.add_handler(kind, handler)
             plugin.serve(self)
         self.started = time.time()
         self.pids: dict[str, int] = {}
@@ -89,18 +105,19 @@ class SessionServer:
         it too, as the log files hold only whole lines."""
         self.apply_lock = asyncio.Lock()  # argument edits from several clients, one at a time
 
-    def add_handler(self, op: str, handler: Handler) -> None:
-        """Answers the clients' requests `{"op": op, ...}` with `await handler(message)`.
+    def add_handler(self, kind: type[Request[Any]], handler: Handler) -> None:
+        """Answers the clients' requests of this class with `await handler(request,
+        client)`.
 
         For requests the server does not know itself (a plugin's: lifecycle states, ROS
         inspection); a plugin pushes events to the clients with `supervisor.emit`."""
-        if op in BUILTIN_OPS or op in self._handlers:
-            raise ValueError(f"session request {op!r} is already answered")
-        self._handlers[op] = handler
+        if kind in BUILTIN_REQUESTS or kind in self._handlers:
+            raise ValueError(f"session request {kind.op!r} is already answered")
+        self._handlers[kind] = handler
 
     @property
-    def handlers(self) -> Mapping[str, Handler]:
-        """The requests added with `add_handler`, by op."""
+    def handlers(self) -> Mapping[type[Request[Any]], Handler]:
+        """The requests added with `add_handler`, by class."""
         return dict(self._handlers)
 
     @property
@@ -294,68 +311,62 @@ class SessionServer:
                 continue
         return sizes
 
-    async def _perform(self, message: dict[str, Any]) -> Any:
-        op = message.get("op")
+    async def _perform(self, request: Request[Any], client: int) -> Any:
+        """One request's result, dispatched on its class; the plugins' by `add_handler`."""
         supervisor = self.supervisor
-        if op == "status":
-            # `ls` asks every session and needs no CPU figures: it can spare their 0.3 s
-            wanted = message.get("resources", True) is not False
-            usage, elsewhere = await asyncio.gather(
-                self.resources.current() if wanted else _nothing(),
-                self.supervisor.commands_elsewhere())
-            return self.status(usage, elsewhere)
-        if op == "watch_resources":
-            shown = message.get("processes")
-            client, on = int(message["client"]), bool(message.get("on", True))
-            self.resources.watch(client, on,
-                                 None if shown is None else [str(p) for p in shown])
-            trend = message.get("trend")  # the processes whose last minutes it draws
-            if trend is None or not on:
+        match request:
+            case Status(resources=wanted):
+                # `ls` asks every session and needs no CPU figures: it can spare their 0.3 s
+                usage, elsewhere = await asyncio.gather(
+                    self.resources.current() if wanted else _nothing(),
+                    self.supervisor.commands_elsewhere())
+                return self.status(usage, elsewhere)
+            case WatchResources(on=on, processes=shown, trend=trend):
+                self.resources.watch(client, on,
+                                     None if shown is None else [str(p) for p in shown])
+                if trend is None or not on:  # the processes whose last minutes it draws
+                    return {}
+                return {"history": self.resources.watch_trend(client,
+                                                              [str(p) for p in trend])}
+            case Start() | Stop() | Restart():
+                process = self.find_process(request.process)
+                if process not in {p.id for p in self.session.plan.processes}:
+                    raise LaunchError(f"{process} is an action, not a process: it cannot "
+                                      f"{request.op}")
+                if isinstance(request, Restart):
+                    await supervisor.restart(process, request.prefix or None,
+                                             request.log_level, request.terminal)
+                elif isinstance(request, Start):
+                    await supervisor.start(process)
+                else:
+                    await supervisor.stop(process)
+                return {"process": process, "state": supervisor.states.get(process)}
+            case ShutdownLaunch(reason=reason):
+                await supervisor.shutdown(reason or "stop requested")
                 return {}
-            return {"history": self.resources.watch_trend(client, [str(p) for p in trend])}
-        if op in ("start", "stop", "restart"):
-            process = self.find_process(str(message.get("process")))
-            if process not in {p.id for p in self.session.plan.processes}:
-                raise LaunchError(f"{process} is an action, not a process: it cannot {op}")
-            if op == "restart":
-                await supervisor.restart(process, message.get("prefix") or None,
-                                         message.get("log_level"),
-                                         bool(message.get("terminal")))
-            elif op == "start":
-                await supervisor.start(process)
-            else:
-                await supervisor.stop(process)
-            return {"process": process, "state": supervisor.states.get(process)}
-        if op == "shutdown":
-            await supervisor.shutdown(str(message.get("reason") or "stop requested"))
-            return {}
-        if op == "apply":
-            arguments = message.get("arguments")
-            if not isinstance(arguments, dict):
-                raise ValueError("apply needs arguments as an object")
-            return await self.apply({str(k): str(v) for k, v in arguments.items()})
-        if op == "kill":
-            supervisor.kill_all()  # the impatient second `q`: SIGKILL whatever is left
-            return {}
-        if op == "run_action":
-            await supervisor.run_action(self.find_process(str(message.get("action"))))
-            return {}
-        if op == "find":
-            return self.find_process(str(message.get("process")))
-        if op == "read_log":
-            # by id only: the file is the plan's own, never a path a client names; LAUNCH_LOG
-            # is launch.log, the processes' starts and ends (`tuilaunch logs`)
-            asked = str(message.get("process"))
-            process = "launch" if asked == LAUNCH_LOG else self.find_process(asked)
-            end = message.get("end")
-            return read_log(self.log_dir / f"{process}.log", int(message.get("start") or 0),
-                            None if end is None else int(end), int(message.get("skip") or 0),
-                            int(message.get("limit", READ_LOG_LIMIT)),
-                            bool(message.get("tail")))
-        handler = self._handlers.get(str(op))
+            case Apply(arguments=arguments):
+                return await self.apply({str(k): str(v) for k, v in arguments.items()})
+            case Kill():
+                supervisor.kill_all()  # the impatient second `q`: SIGKILL whatever is left
+                return {}
+            case RunAction(action=action):
+                await supervisor.run_action(self.find_process(action))
+                return {}
+            case Find(process=process):
+                return self.find_process(process)
+            case ReadLog():
+                # by id only: the file is the plan's own, never a path a client names;
+                # LAUNCH_LOG is launch.log, the processes' starts and ends (`tuilaunch logs`)
+                asked = request.process
+                process = "launch" if asked == LAUNCH_LOG else self.find_process(asked)
+                return read_log(self.log_dir / f"{process}.log", request.start, request.end,
+                                request.skip,
+                                READ_LOG_LIMIT if request.limit is None else request.limit,
+                                request.tail)
+        handler = self._handlers.get(type(request))
         if handler is not None:
-            return await handler(message)
-        raise ValueError(f"unknown request {op!r}")
+            return await handler(request, client)
+        raise ValueError(f"unknown request {request.op!r}")
 
     def find_process(self, ref: str) -> str:
         """A process by id (`talker-1`), full node name (`/r2/talker`) or unique node name."""

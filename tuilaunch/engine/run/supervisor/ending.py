@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..events import Log, Stopping
 from ..process.readers import Running
+from ..vocabulary.requests import Stop
 from .core import SupervisorCore
 from .plan_actions import PlanActions
 from .stopping import CTRL_C_REASON, kill_group
@@ -35,7 +36,7 @@ class Ending:
         core = self.core
         core.respawner.forget(process_id)
         if not core.runs_here(process_id):
-            await core.placing.forward(core.plan, "stop", process_id)
+            await core.placing.forward(core.plan, Stop(process_id))
             return
         running = core.running.get(process_id)
         if running is not None:

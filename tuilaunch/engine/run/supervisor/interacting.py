@@ -15,14 +15,6 @@ from .core import SupervisorCore
 from .starting import Starting
 
 
-def restart_fields(prefix: str | None = None, log_level: str | None = None,
-                   terminal: bool = False) -> dict[str, Any]:
-    """A restart's options as the fields of the protocol's `restart` request (the session's,
-    a machine's), the ones not given left out: what `restart` takes back."""
-    return {k: v for k, v in (("prefix", prefix), ("log_level", log_level),
-                              ("terminal", terminal or None)) if v is not None}
-
-
 class Interacting:
     """Typing into a process, restart options, and its command for `status`. What it would
     start with now is `starting`'s to say (starting.py), as it starts it."""

@@ -22,6 +22,7 @@ from typing import Any, Protocol
 
 from ...errors import LaunchError
 from ...plan.model import Plan
+from ..vocabulary.requests import Restart, Start, Stop
 
 ELSEWHERE = "elsewhere"
 """The state, in a share, of a process another machine runs."""
@@ -33,9 +34,10 @@ on there, or not; nobody here can say until the link is back."""
 class RemoteControl(Protocol):
     """What starts and stops a process on the machine it is placed on."""
 
-    async def forward(self, op: str, process_id: str, **options: Any) -> None:
-        """`op` is start, stop or restart (`options`: its prefix, log_level, terminal); raises
-        LaunchError when the machine cannot be asked."""
+    async def forward(self, request: Start | Stop | Restart) -> None:
+        """Asks the process's machine to start, stop or restart it (the session's own
+        request, a restart with its prefix, log_level, terminal); raises LaunchError when
+        the machine cannot be asked."""
         ...
 
     async def commands(self) -> dict[str, dict[str, Any]]:
@@ -93,13 +95,13 @@ class Placing:
         except KeyError:
             return True
 
-    async def forward(self, plan: Plan, op: str, process_id: str, **options: Any) -> None:
-        """Asks the process's machine to `op` it; LaunchError from a share (which cannot)."""
+    async def forward(self, plan: Plan, request: Start | Stop | Restart) -> None:
+        """Asks the process's machine to do it; LaunchError from a share (which cannot)."""
         if self.remote is None:
-            where = plan.process(process_id).machine or "the launching side"
-            raise LaunchError(f"{process_id} runs on {where}: {op} it from the launching "
-                              "side")
-        await self.remote.forward(op, process_id, **options)
+            where = plan.process(request.process).machine or "the launching side"
+            raise LaunchError(f"{request.process} runs on {where}: {request.op} it from the "
+                              "launching side")
+        await self.remote.forward(request)
 
     def keys_of(self, plan: Plan, process_id: str) -> RemoteControl:
         """Who types into `process_id`, run elsewhere: the launching side's remote control

@@ -21,6 +21,7 @@ from ..process.logfiles import LogFile
 from ..process.process_command import StartCommand, death_details, start_command
 from ..process.readers import ChannelReader, Running
 from ..process.spawn import spawn
+from ..vocabulary.requests import Start
 from .core import SupervisorCore
 from .placed import ELSEWHERE
 from .plan_actions import PlanActions
@@ -73,7 +74,7 @@ class Starting:
         elif core.placing.remote is None:
             core.states[process_id] = ELSEWHERE  # its own machine starts it
         else:
-            await core.placing.forward(core.plan, "start", process_id)
+            await core.placing.forward(core.plan, Start(process_id))
 
     def start_now(self, process_id: str) -> None:
         """From the check that the launch is not shutting down to the registration of the

@@ -33,9 +33,10 @@ from ...plan.model import ActionKind, Plan, PlanDiff, diff_plans
 from ..events import Consumer, Event, LaunchEvent, Output, ProcessExited, Started
 from ..plugins import SupervisorPlugin
 from ..process.readers import Running
+from ..vocabulary.requests import Restart
 from .core import SupervisorCore
 from .ending import Ending
-from .interacting import Interacting, restart_fields
+from .interacting import Interacting
 from .placed import ELSEWHERE, UNKNOWN, RemoteControl
 from .plan_actions import PlanActions
 from .starting import Starting
@@ -355,8 +356,8 @@ class Supervisor:
             if not core.runs_here(process_id) and core.placing.remote is not None:
                 # its machine restarts it, in one request: the tool is looked for on its
                 # PATH, and its end there says it comes back (`again`), as one here does
-                await core.placing.forward(core.plan, "restart", process_id,
-                                           **restart_fields(prefix, log_level, terminal))
+                await core.placing.forward(core.plan, Restart(process_id, prefix, log_level,
+                                                              terminal))
                 return
             self.hands.restart_options(process_id, prefix, log_level, terminal)
             await self.stop(process_id)

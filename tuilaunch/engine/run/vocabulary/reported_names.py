@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable
 
-from .output import strip_ansi
+from .text import strip_ansi
 
 ROS_LOG_PREFIX = re.compile(
     r"^\[(DEBUG|INFO|WARN|WARNING|ERROR|FATAL)\]\s*(?:\[(\d+(?:\.\d+)?)\]\s*)?"
