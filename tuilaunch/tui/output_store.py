@@ -193,8 +193,7 @@ class OutputStore:
         """The gap's lines read from the log file (`read_log`'s `[time, stream, text]`) in
         place of its marker, with a marker for the `rest` not read yet before them
         (`rest_first`) or after them; what replaces the marker."""
-        lines = [parse(marker.process, screen_str(str(text)), str(stream), float(at))[0]
-                 for at, stream, text in rows]
+        lines = read_back(marker.process, rows)
         if rest is not None:
             left = gap_line(marker.process, rest, marker.stamp)
             lines = [left, *lines] if rest_first else [*lines, left]
@@ -252,6 +251,12 @@ class Unstamped:
             line.text, line.stamp = text, ms / 1000
             filled += 1
         return filled
+
+
+def read_back(process: str, rows: list[list[Any]]) -> list[Line]:
+    """Lines of `process` read from its log file (`read_log`'s `[time, stream, text]`)."""
+    return [parse(process, screen_str(str(text)), str(stream), float(at))[0]
+            for at, stream, text in rows]
 
 
 def gap_line(process: str, gap: Gap, stamp: float) -> Line:

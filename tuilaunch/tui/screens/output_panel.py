@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
 import shlex
 import time
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 
 from rich.cells import cell_len
@@ -28,6 +29,24 @@ def plural(count: int, word: str) -> str:
 
 FOCUS_MARK = "▶"
 """Starts the pane's status line while the pane has the keys."""
+
+
+@dataclasses.dataclass
+class GapsRead:
+    """The lines of a pane's gaps read back for `w` and `y` (by the marker's identity), and
+    those left unread (how many, why)."""
+
+    lines: dict[int, list[Line]] = dataclasses.field(default_factory=dict)
+    unread: int = 0
+    why: str = ""
+
+
+GapSource = Callable[[list[Line]], Awaitable[GapsRead]]
+"""Reads every line of these gaps through the session (nodes/gaps.py's GapReader)."""
+
+GAPS_SAID = 2000
+"""Lines to read back for a save above which the pane says it reads them (a moment)."""
+
 
 class OutputPanel(Vertical):
     """Forwards nothing to the engine: the app feeds it lines from the OutputStore, and
@@ -76,6 +95,9 @@ class OutputPanel(Vertical):
         self._lines.on_move = self.update_status
         self._lines.on_gap = self._gap_shown
         self._partials_seen = -1  # the store's partials_changed when last shown
+        self.read_gaps: GapSource | None = None
+        """What reads the gaps' lines before a save or copy (set by the GapReader that
+        fills this pane's gaps; None: no session to read them from)."""
 
     def compose(self) -> ComposeResult:
         yield self._status
@@ -243,15 +265,21 @@ class OutputPanel(Vertical):
         full = len(lines.lines) >= (lines.lines.maxlen or 0) or lines.first > 0
         if not (full or self._not_drawn() or lines.skipped):
             return f"no line matches '{term}'"
+        command = self._logs_command()
+        where = f"; every line is in the log files: {command} | grep -F -- " \
+                f"{shlex.quote(term)}" if command else "; every line is in the log files"
+        return f"no line matches '{term}' in the {len(lines.lines)} lines this pane keeps{where}"
+
+    def _logs_command(self) -> str | None:
+        """`tuilaunch logs [HOST:]NAME [PROCESS]`: every line of this pane's view."""
         session = getattr(self.app, "session_name", None)
+        if not session:
+            return None
         host = getattr(self.app, "session_host", None)
         words = ["tuilaunch", "logs", f"{host}:{session}" if host else str(session)]
         if self.view.process is not None:
             words.append(self.view.process)
-        command = " ".join(shlex.quote(w) for w in words) + f" | grep -F -- {shlex.quote(term)}"
-        where = f"; every line is in the log files: {command}" if session else \
-            "; every line is in the log files"
-        return f"no line matches '{term}' in the {len(lines.lines)} lines this pane keeps{where}"
+        return " ".join(shlex.quote(w) for w in words)
 
     def action_clear_search(self) -> None:
         """Escape: closes an open field, else clears the search and the text filter."""
@@ -315,30 +343,76 @@ class OutputPanel(Vertical):
 
     # --- export --------------------------------------------------------------------------
 
-    def pane_lines(self) -> list[str]:
-        """The pane's lines in full, as the processes printed them."""
+    def pane_lines(self, read: GapsRead | None = None) -> list[str]:
+        """The pane's lines in full, as the processes printed them; a gap's lines in place
+        of its marker where `read` has them."""
         prefixed = self.view.process is None
-        return [line.formatted(prefixed) for line in (*self._lines.lines, *self._lines.newer)]
+        got = read.lines if read is not None else {}
+        lines: list[str] = []
+        for line in (*self._lines.lines, *self._lines.newer):
+            kept = got.get(id(line)) if line.gap is not None else None
+            lines += [line.formatted(prefixed)] if kept is None else \
+                [each.formatted(prefixed) for each in kept if self.view.accepts(each)]
+        return lines
 
-    def pane_text(self) -> str:
-        return "\n".join(self.pane_lines()) + "\n"
+    def pane_text(self, read: GapsRead | None = None) -> str:
+        return "\n".join(self.pane_lines(read)) + "\n"
+
+    def gaps(self) -> list[Line]:
+        """The markers of lines not drawn that the pane holds, oldest first."""
+        return [line for line in (*self._lines.lines, *self._lines.newer)
+                if line.gap is not None]
 
     def action_save(self) -> None:
-        self._with_stamps(self._save)
+        self._export(self._save)
 
-    def _save(self) -> None:
+    def action_copy(self) -> None:
+        self._export(self._copy)
+
+    def _export(self, then: Callable[[GapsRead], None]) -> None:
+        """`w`, `y`: the pane with every line it stands for. Its ROS stamps first, then
+        the lines a flood or a reconnection left in the log file (a marker in the pane)
+        are read through the session, so the file holds them, not the marker."""
+        def with_gaps() -> None:
+            markers, reader = self.gaps(), self.read_gaps
+            if not markers or reader is None:
+                then(GapsRead())
+                return
+            self.run_worker(self._read_then(reader, markers, then), group="export",
+                            exit_on_error=False)
+
+        self._with_stamps(with_gaps)
+
+    async def _read_then(self, reader: GapSource, markers: list[Line],
+                         then: Callable[[GapsRead], None]) -> None:
+        count = sum(line.gap.count for line in markers if line.gap is not None)
+        if count > GAPS_SAID:  # a moment over a slow link: said, so w seems not ignored
+            self.notify(f"reading {count} lines not drawn from the log files...")
+        then(await reader(markers))
+
+    def _not_read(self, read: GapsRead) -> None:
+        """Lines a save or copy could not read back: said, with where they are."""
+        if not read.unread:
+            return
+        command = self._logs_command()
+        where = f"; {command} has them" if command else ""
+        self.notify(f"{plural(read.unread, 'line')} not drawn could not be read "
+                    f"({read.why}): a line stands for them{where}", severity="warning",
+                    timeout=15)
+
+    def _save(self, read: GapsRead) -> None:
         self.save_dir.mkdir(parents=True, exist_ok=True)
         name = (self.view.process or "all") + time.strftime("-pane-%H%M%S.txt")
         path = self.save_dir / name
-        path.write_text(self.pane_text())
+        path.write_text(self.pane_text(read))
         self.notify(f"pane saved to {path}")
+        self._not_read(read)
 
-    def action_copy(self) -> None:
-        self._with_stamps(self._copy)
-
-    def _copy(self) -> None:
-        self.app.copy_to_clipboard(self.pane_text())
-        self.notify(f"copied {len(self.pane_lines())} lines (OSC 52 clipboard)")
+    def _copy(self, read: GapsRead) -> None:
+        lines = self.pane_lines(read)
+        self.app.copy_to_clipboard("\n".join(lines) + "\n")
+        self.notify(f"copied {len(lines)} lines (OSC 52 clipboard)")
+        self._not_read(read)
 
 
 class NodesView(Horizontal):
