@@ -94,6 +94,8 @@ class MemoryPort:
         self.shutdown_reason: str | None = None
         self.link_lost: str | None = None
         self.lost_reason: str | None = None
+        self.attempt = 0
+        self.attempt_since: float | None = None
         self.only: str | None = None
         self.stamps_shown = False
         self.silence = 0.0

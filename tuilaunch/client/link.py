@@ -83,6 +83,30 @@ def short_reason(reason: str, room: int) -> str:
     return tail if len(tail) <= room else "…" + last[len(last) - max(room - 1, 0):]
 
 
+def relink_words(attempt: int, trying_for: float | None) -> str:
+    """Where a lost link's reconnection is: `reconnecting` between tries, `retrying
+    (attempt 2, 12 s)` while one is under way (ssh takes up to 15 s to notice a host that
+    is gone, and a greeting up to 30: a reason older than that is not the news)."""
+    if trying_for is None:
+        return "reconnecting"
+    return f"retrying (attempt {attempt}, {trying_for:.0f} s)"
+
+
+def lost_link_line(host: str, name: str, reason: str, attempt: int,
+                   trying_for: float | None, room: int) -> str:
+    """A TUI's lost-link line in `room` columns, its reason's end kept (`short_reason`):
+    between tries `link to HOST lost · reconnecting · NAME · R: now · REASON`, during one
+    `link to HOST lost · retrying (attempt 2, 12 s) · NAME · last: REASON` (R does nothing
+    then; the name goes where 80 columns would cut the reason)."""
+    if trying_for is None:
+        said = f"link to {host} lost · reconnecting · {name} · R: now · "
+    else:
+        said = f"link to {host} lost · {relink_words(attempt, trying_for)} · "
+        named = f"{said}{name} · last: "
+        said = named if room - len(named) >= len("… Connection refused") else said + "last: "
+    return said + short_reason(reason, room - len(said))
+
+
 class Link:
     """A blocking connection for one-shot commands (status, stop, restart, wait, logs).
 

@@ -65,6 +65,8 @@ class LaunchPort(Protocol):
     # the ssh link, when one is between (host not None)
     link_lost: str | None
     lost_reason: str | None
+    attempt: int  # the reconnection's attempt under way, or the last one
+    attempt_since: float | None  # when the one under way began (monotonic; None: between)
     only: str | None  # the process whose lines the link carries (None: all)
     stamps_shown: bool
 

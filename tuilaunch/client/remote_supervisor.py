@@ -139,6 +139,12 @@ class RemoteSupervisor:
         """While the link to `host` is down: why ("link to HOST lost (reason)")."""
         self.lost_reason: str | None = None
         """While it is down: why, the latest attempt's reason (the first is the drop's)."""
+        self.attempt = 0
+        """While it is down: the attempt to reconnect under way (or the last), from 1."""
+        self.attempt_since: float | None = None
+        """When the attempt under way began (time.monotonic); None between attempts: one
+        that hangs (ssh's 15 s, then the greeting's 30) is said as under way, not as the
+        reason before it."""
         self.last_heard = time.monotonic()
         """When the other side last sent anything (a link's silence is shown from it)."""
         self._probed = 0.0  # when the last probe was sent
@@ -588,12 +594,15 @@ class RemoteSupervisor:
                           "there; reconnecting", level="ERROR"))
         delay = RETRY_FIRST
         said = ""
+        self.attempt = 0
         while not self.detached:
+            self.attempt_since = None
             self._retry.clear()
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._retry.wait(), delay)
             if self.detached:
                 return False
+            self.attempt, self.attempt_since = self.attempt + 1, time.monotonic()
             try:
                 link, self._reader, self._writer = await open_remote_streams(
                     self.host, self.name)
@@ -630,7 +639,7 @@ class RemoteSupervisor:
                 self._writer.close()
                 self._deliver(Log(reason=f"reconnecting: {exc}", level="WARN"))
                 continue
-            self.link_lost = self.lost_reason = None
+            self.link_lost = self.lost_reason = self.attempt_since = None
             self.last_heard = time.monotonic()
             self._deliver(Log(reason=f"link to {self.host} back: what happened "
                               "meanwhile follows"))

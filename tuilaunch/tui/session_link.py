@@ -24,7 +24,7 @@ from textual.timer import Timer
 from textual.widgets import Static, TabbedContent, Tree
 from textual.worker import Worker, WorkerState
 
-from ..client.link import short_reason
+from ..client.link import lost_link_line
 from ..client.port import LaunchPort
 from ..client.read_only import ReadOnlyError
 from ..engine.errors import LaunchError
@@ -423,10 +423,13 @@ class SessionLink(App[int]):
         link = self.over_link()
         if link is not None and link.link_lost:
             # what is shown is as it was when the link dropped; the short form first, so
-            # 80 columns show it whole, then the reason (the latest attempt's), its end kept
-            said = f"link to {link.host} lost · reconnecting · {self.session_name} · R: now · "
-            room = (self.status_bar.size.width or 78) - len(said)  # the reason's end kept
-            prefix = f"{said}{short_reason(link.lost_reason or '', room)}  {prefix}"
+            # 80 columns show it whole, then the reason (the latest attempt's), its end
+            # kept; an attempt under way says so, and how long it has taken
+            since = link.attempt_since
+            prefix = lost_link_line(
+                link.host or "", self.session_name, link.lost_reason or "", link.attempt,
+                None if since is None else time.monotonic() - since,
+                self.status_bar.size.width or 78) + f"  {prefix}"
             name = Path(self.session.plan.file).name
         elif link is not None and link.silent_for() >= SILENCE_SHOWN:
             prefix = f"no word from {link.host} for {link.silent_for():.0f} s · {prefix}"

@@ -10,11 +10,13 @@ relaunch, a stop or a lost link of one touches nothing of another.
 from __future__ import annotations
 
 import asyncio
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from rich.text import Text
 
+from ...client.link import relink_words
 from ...client.remote_supervisor import RemoteSupervisor
 from ...client.served_session import ServedSession
 from ...engine.run.event_buffer import EventBuffer
@@ -109,9 +111,10 @@ class Member:
             label.append(f" {why}  {self.counts_text()}", "italic")
             label.stylize("dim")
         elif why is not None:
-            # a link that dropped reconnects by itself; one never made says it retries
-            label.append(f" {why}" + ("; reconnecting (R: now)" if self.supervisor else ""),
-                         "italic")
+            # a link that dropped reconnects by itself (an attempt under way says so, with
+            # the latest reason); one never made says it retries
+            label.append(f" {why}" + (f"; {self._relinking(self.supervisor)}"
+                                      if self.supervisor else ""), "italic")
             label.stylize("dim")
         elif self.silence() is not None:
             # what it shows may be old: said first, before the counts it last sent
@@ -120,6 +123,15 @@ class Member:
         else:
             label.append(f"  {self.counts_text()}")
         return label
+
+    @staticmethod
+    def _relinking(port: RemoteSupervisor) -> str:
+        since = port.attempt_since
+        if since is None:
+            return "reconnecting (R: now)"
+        last = port.lost_reason or ""
+        return relink_words(port.attempt, time.monotonic() - since) + \
+            (f", last: {last}" if last and last not in (port.link_lost or "") else "")
 
     def refresh_root(self) -> None:
         label = self.root_label()
