@@ -272,6 +272,10 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
         self.run_worker(self.recordings.black_box_now(), group="recording",
                         exit_on_error=False)
 
+    def action_black_box_keep(self) -> None:
+        self.run_worker(self.recordings.black_box_keep(), group="recording",
+                        exit_on_error=False)
+
     def on_topics_panel_record_asked(self, message: TopicsPanel.RecordAsked) -> None:
         self.recordings.toggle(message.topic)
 
@@ -299,6 +303,11 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
                             self.action_apply)
         yield SystemCommand("Detach", "Leave the launch running (tuilaunch attach)",
                             self.action_detach)
+        if not self.read_only:  # it changes what the session keeps: a view asks nothing
+            yield SystemCommand("Black box: keep the last N s", "Switch the session's black "
+                                "box on (asks the seconds; 0: off)", self.action_black_box_keep)
+        yield SystemCommand("Black box: write now", "Write the last seconds kept into the "
+                            "session's log folder (b)", self.action_black_box)
         selected = self.selected() if self.supervisor is not None else []
         if len(selected) == 1 and self.supervisor is not None:
             process = selected[0]

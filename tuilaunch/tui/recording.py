@@ -12,7 +12,7 @@ from typing import Any
 
 from ..client.recording import LiveRecording
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.requests import BlackBoxWrite
+from ..engine.run.vocabulary.requests import BlackBox, BlackBoxWrite
 
 
 class Recordings:
@@ -56,6 +56,44 @@ class Recordings:
                             severity="error", title="record")
         else:
             self.app.notify(live.file.summary(), title="recorded")
+
+    async def black_box_keep(self) -> None:
+        """The palette's "Black box: keep the last N s": asks the seconds (offering what it
+        keeps now, 0 switches it off), then the request `tuilaunch record NAME
+        --black-box-on S` sends, its bound in bytes kept as it is."""
+        from .screens.dialogs import PathScreen
+
+        try:
+            status = await self.app.inspect(BlackBox())  # how it is: its seconds offered
+        except SessionError as exc:
+            self.app.notify(str(exc).split(": ", 1)[-1], severity="error", title="black box")
+            return
+        now = f"{status['seconds']:g}" if status.get("on") else ""
+        said = f"now the last {now} s" if now else "now off"
+        answer = await self.app.push_screen_wait(PathScreen(
+            f"Black box ({said}): keep the last how many seconds of every topic and line? "
+            "0 switches it off", now or "30"))
+        if answer is None:
+            return
+        try:
+            seconds = float(answer)
+        except ValueError:
+            seconds = -1.0
+        if not 0 <= seconds < float("inf"):
+            self.app.notify(f"black box: '{answer}' is not a number of seconds (0: off)",
+                            severity="warning")
+            return
+        fields: dict[str, Any] = {"seconds": seconds}
+        if status.get("size"):
+            fields["size"] = status["size"]  # the bound it has (--black-box-size) stays
+        try:
+            status = await self.app.inspect(BlackBox(**fields))
+        except SessionError as exc:
+            self.app.notify(str(exc).split(": ", 1)[-1], severity="error", title="black box")
+            return
+        self.app.notify(f"black box on: the last {status['seconds']:g} s of every topic and "
+                        f"line (at most {status['size'] >> 20} MB); b writes it now"
+                        if status.get("on") else "black box off", title="black box")
 
     async def black_box_now(self) -> None:
         try:
