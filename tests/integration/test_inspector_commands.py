@@ -480,10 +480,10 @@ def test_a_client_that_leaves_stops_its_rates_and_echo_measurements(session):
         # one bridge throughout: a new one would see an empty graph for a while
         link = await asyncio.to_thread(Link, session, 60)
         try:
-            await asyncio.to_thread(link.request, "subscribe", max_lines=1,
-                                    kinds=["echo", "rates"])
-            await asyncio.to_thread(link.request, "watch_rates", topics=["/insp/chatter"])
-            await asyncio.to_thread(link.request, "echo", topic="/insp/scan")
+            await asyncio.to_thread(link.request, Subscribe(max_lines=1,
+                                                            kinds=["echo", "rates"]))
+            await asyncio.to_thread(link.request, WatchRates(topics=["/insp/chatter"]))
+            await asyncio.to_thread(link.request, EchoStart(topic="/insp/scan"))
             await server_subscribes(bridge, topics, True)
         finally:
             link.close()  # no unwatch, no echo_stop: the connection just ends

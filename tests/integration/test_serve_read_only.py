@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from tuilaunch.client.read_only import REFUSED_OPS, ReadOnlyError
+from tuilaunch.client.read_only import ReadOnlyError
+from tuilaunch.engine.run.vocabulary.request import REQUESTS, from_message
 from tuilaunch.engine.run.vocabulary.requests import Find
 from tuilaunch.tui.app import make_app
 
@@ -41,9 +42,16 @@ def test_a_read_only_client_refuses_every_change_with_one_line(runtime, write): 
                 said.append(refusal)
             assert all("\n" not in text for text in said)  # one line each
             # every request that changes something, as the tabs and dialogs send them
-            for op in REFUSED_OPS:
+            for kind in REQUESTS.values():
+                if kind.changes is None:
+                    continue
+                asked = from_message({"op": kind.op, "process": "ticker-1", "action": "a",
+                                      "arguments": {}, "transition": "configure",
+                                      "data": "x", "node": "/ticker", "level": "info",
+                                      "yaml": "", "service": "/s", "type": "t",
+                                      "values": {"x": 1}})
                 with pytest.raises(ReadOnlyError):
-                    await app.engine.run(supervisor.request(op, process="ticker-1"))
+                    await app.engine.run(supervisor.request(asked))
             # the Params and Services tabs (through the session): nothing set, nothing called
             graph = app.graph()
             with pytest.raises(ReadOnlyError, match="setting a parameter is refused"):
