@@ -27,8 +27,12 @@ def test_an_attempt_under_way_is_said_with_its_number_and_time_and_the_last_reas
     # where there is room, the session's name and more of the reason
     assert lost_link_line("robot1", "far", REFUSED, 3, 12.4, 160) == \
         f"link to robot1 lost · retrying (attempt 3, 12 s) · far · last: {REFUSED}"
-    assert relink_words(2, 0.2) == "retrying (attempt 2, 0 s)"
+    assert relink_words(2, 1.2) == "retrying (attempt 2, 1 s)"
     assert relink_words(2, None) == "reconnecting"
+    # one refused at once does not flash the line at every try
+    assert relink_words(2, 0.3) == "reconnecting"
+    assert lost_link_line("robot1", "far", "ssh exit status 255", 2, 0.3, 80).startswith(
+        "link to robot1 lost · reconnecting · far · R: now · ")
 
 
 async def test_the_status_line_counts_the_attempt_under_way(tmp_path: Path) -> None:

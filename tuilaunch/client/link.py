@@ -83,11 +83,16 @@ def short_reason(reason: str, room: int) -> str:
     return tail if len(tail) <= room else "…" + last[len(last) - max(room - 1, 0):]
 
 
+ATTEMPT_SHOWN = 1.0
+"""Seconds an attempt to reconnect runs before the line says it: one refused at once (a
+machine off the network) does not flash the line at every try."""
+
+
 def relink_words(attempt: int, trying_for: float | None) -> str:
     """Where a lost link's reconnection is: `reconnecting` between tries, `retrying
     (attempt 2, 12 s)` while one is under way (ssh takes up to 15 s to notice a host that
     is gone, and a greeting up to 30: a reason older than that is not the news)."""
-    if trying_for is None:
+    if trying_for is None or trying_for < ATTEMPT_SHOWN:
         return "reconnecting"
     return f"retrying (attempt {attempt}, {trying_for:.0f} s)"
 
@@ -98,7 +103,7 @@ def lost_link_line(host: str, name: str, reason: str, attempt: int,
     between tries `link to HOST lost · reconnecting · NAME · R: now · REASON`, during one
     `link to HOST lost · retrying (attempt 2, 12 s) · NAME · last: REASON` (R does nothing
     then; the name goes where 80 columns would cut the reason)."""
-    if trying_for is None:
+    if trying_for is None or trying_for < ATTEMPT_SHOWN:
         said = f"link to {host} lost · reconnecting · {name} · R: now · "
     else:
         said = f"link to {host} lost · {relink_words(attempt, trying_for)} · "

@@ -127,11 +127,11 @@ class Member:
     @staticmethod
     def _relinking(port: RemoteSupervisor) -> str:
         since = port.attempt_since
-        if since is None:
+        words = relink_words(port.attempt, None if since is None else time.monotonic() - since)
+        if words == "reconnecting":  # between tries (or one just begun): R tries now
             return "reconnecting (R: now)"
         last = port.lost_reason or ""
-        return relink_words(port.attempt, time.monotonic() - since) + \
-            (f", last: {last}" if last and last not in (port.link_lost or "") else "")
+        return words + (f", last: {last}" if last and last not in (port.link_lost or "") else "")
 
     def refresh_root(self) -> None:
         label = self.root_label()
