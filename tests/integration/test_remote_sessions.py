@@ -26,7 +26,7 @@ from tuilaunch.engine.run.events import Event, Output, Resources
 from tuilaunch.tui import session_link
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
-from tuilaunch.tui.screens.dialogs import ConfirmScreen
+from tuilaunch.tui.screens.dialogs import QuitScreen
 
 from ..conftest import run_cli, wait_for
 from .sshd import Machine, Machines, alive, free_port, machines_fixture, proxies_on  # noqa: F401
@@ -230,10 +230,10 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
                 app.status_bar.render()) and len(ticks(app)) > seen + 3)
             shown = ticks(app)
             assert shown == [f"tick {i}" for i in range(1, len(shown) + 1)]
-            # quitting asks; "n" leaves the launch running there
+            # quitting asks; "d" detaches, the launch running on there
             await pilot.press("q")
-            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
-            await pilot.press("n")
+            await until(pilot, lambda: isinstance(app.screen, QuitScreen))
+            await pilot.press("d")
             await until(pilot, lambda: app.detached)
         assert app.detached
 
@@ -512,8 +512,8 @@ def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: M
                                 f"[logger-1] {printed(n).replace('] [far', '123456] [far')}")
                        for line, n in zip(lines, numbers, strict=True))
             await pilot.press("q")
-            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
-            await pilot.press("n")
+            await until(pilot, lambda: isinstance(app.screen, QuitScreen))
+            await pilot.press("d")
             await until(pilot, lambda: app.detached)
 
     asyncio.run(attached())
