@@ -15,7 +15,12 @@ With the demo (examples/bringup.py) running as a session on "robot1" (a real ssh
 3. Memory (RSS) of each served tab's process (`tuilaunch attach` under the web driver),
    beside the same attach in a terminal.
 
-    python bench/serve_bench.py
+With `--fleet`, instead: `tuilaunch serve robot1:fleet-1 ... robot1:fleet-N` (the fleet
+view at one URL, each session the demo over its own ssh link) for N = 2 and 4: the time to
+the first tree in chromium, the bytes per second of one page (TCP, idle, once settled) and
+the RSS of its tab's process, beside `tuilaunch attach` of the same sessions in a terminal.
+
+    python bench/serve_bench.py [--fleet]
 """
 
 from __future__ import annotations
@@ -48,12 +53,13 @@ MARKER = "talker-1"
 
 
 class Served:
-    """`tuilaunch serve NAME` with robot1's session folder; its URL."""
+    """`tuilaunch serve NAME ...` with robot1's session folder; its URL."""
 
-    def __init__(self, name: str, env: dict[str, str]) -> None:
+    def __init__(self, name: str, env: dict[str, str], *more: str) -> None:
         self.port = free_port()
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "tuilaunch", "serve", name, "--port", str(self.port)],
+            [sys.executable, "-m", "tuilaunch", "serve", name, *more, "--port",
+             str(self.port)],
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env,
             start_new_session=True)
         assert self.proc.stdout is not None
@@ -85,13 +91,14 @@ def page_to_tree(url: str) -> float:
         page.close()
 
 
-def terminal_to_tree(name: str, env: dict[str, str]) -> tuple[float, float]:
+def terminal_to_tree(name: str, env: dict[str, str], *more: str) -> tuple[float, float]:
     """Seconds to the first frame showing the tree, and the attach's RSS once settled."""
     saved = dict(os.environ)
     os.environ.update(env)
     try:
         start = time.perf_counter()
-        term = Terminal([sys.executable, "-m", "tuilaunch", "attach", name], size=(80, 24))
+        term = Terminal([sys.executable, "-m", "tuilaunch", "attach", name, *more],
+                        size=(80, 24))
     finally:
         os.environ.clear()
         os.environ.update(saved)
@@ -101,7 +108,7 @@ def terminal_to_tree(name: str, env: dict[str, str]) -> tuple[float, float]:
         term.settle(SETTLE)
         return elapsed, rss_mb(term.proc.pid)
     finally:
-        term.close(b"d")
+        term.close(b"q" if more else b"d")  # a fleet view leaves with q (its sessions run on)
 
 
 async def relay_bytes(port: int, ws_path: str) -> tuple[float, float, float]:
@@ -165,6 +172,47 @@ async def relay_bytes(port: int, ws_path: str) -> tuple[float, float, float]:
     return wire, payload / WINDOW, first
 
 
+def fleet(machines: Machines, env: dict[str, str], link: Link) -> None:
+    """`--fleet`: the fleet view served, of 2 and of 4 sessions over ssh (see the module)."""
+    bringup = ROOT / "examples" / "bringup.py"
+    names = [f"fleet-{i}" for i in range(1, 5)]
+    remote = f"{shlex.quote(sys.executable)} -m tuilaunch"
+    ssh_env = {**env, "TUILAUNCH_SSH_COMMAND": link.ssh("fleet"), "TUILAUNCH_REMOTE": remote}
+    rows = {}
+    try:
+        for name in names:
+            start_session(machines, bringup, name)
+        for count in (2, 4):
+            addresses = [f"robot1:{n}" for n in names[:count]]
+            served = Served(addresses[0], ssh_env, *addresses[1:])
+            try:
+                pages = [page_to_tree(served.url) for _ in range(3)]
+                terminals = [terminal_to_tree(addresses[0], ssh_env, *addresses[1:])
+                             for _ in range(3)]
+                wire, payload, _ = asyncio.run(relay_bytes(served.port, "/ws"))
+                rss = asyncio.run(tab_memory(served, served.url.rstrip("/")))
+            finally:
+                served.stop()
+            rows[count] = {"page_to_tree": statistics.median(pages),
+                           "terminal_to_tree": statistics.median(t[0] for t in terminals),
+                           "bytes_per_s_tcp": wire, "bytes_per_s_payload": payload,
+                           "tab_rss_mb": rss,
+                           "terminal_rss_mb": statistics.median(t[1] for t in terminals)}
+            print(count, rows[count], flush=True)
+    finally:
+        for name in names:
+            subprocess.run([sys.executable, "-m", "tuilaunch", "stop", name], env=env,
+                           capture_output=True)
+    print("the fleet view served (the demo, each session over its own ssh link), 80x24 tab")
+    print(f"  {'sessions':>8}{'page->tree':>12}{'attach->tree':>14}{'bytes/s idle':>14}"
+          f"{'tab RSS':>10}{'attach RSS':>12}")
+    for count, row in rows.items():
+        print(f"  {count:>8}{row['page_to_tree']:>11.2f}s{row['terminal_to_tree']:>13.2f}s"
+              f"{row['bytes_per_s_tcp']:>14,.0f}{row['tab_rss_mb']:>8.1f}MB"
+              f"{row['terminal_rss_mb']:>10.1f}MB")
+    print(json.dumps(rows))
+
+
 def main() -> None:
     from tuilaunch.engine.packages import ensure_environment
 
@@ -178,6 +226,12 @@ def main() -> None:
     remote = f"{shlex.quote(sys.executable)} -m tuilaunch"
     link = Link(machines, folder, robot.port)
     bringup = ROOT / "examples" / "bringup.py"
+    if "--fleet" in sys.argv[1:]:
+        try:
+            fleet(machines, env, link)
+        finally:
+            machines.stop()
+        return
     flood = folder / "flood_launch.py"
     flood.write_text(bringup.read_text().replace(
         "\n    return sl.launch_description()\n",
@@ -204,7 +258,7 @@ def main() -> None:
                 served.stop()
                 served = Served(session, env)
                 origin = served.url.rstrip("/")
-            wire, payload, first = asyncio.run(relay_bytes(served.port, "/ws"))
+            wire, payload, _first = asyncio.run(relay_bytes(served.port, "/ws"))
             marker = b"says hi" if session == "demo" else b"of the lidar"
             ours = measure([sys.executable, "-m", "tuilaunch", "attach", f"robot1:{session}"],
                            {"TUILAUNCH_SSH_COMMAND": link.ssh(f"ours-{name}"),
