@@ -13,7 +13,8 @@ from typing import Any, TypeVar
 from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import Address, open_remote_link, parse_address
 from ..engine.run.session import session_dir
-from ..engine.run.session.protocol import MAX_MESSAGE, check_hello, decode, encode
+from ..engine.run.session.connection import reply_result
+from ..engine.run.session.protocol import MAX_MESSAGE, ProtocolError, decode, encode, greet
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.vocabulary.request import Request, to_message
 
@@ -113,7 +114,9 @@ def lost_link_line(host: str, name: str, reason: str, attempt: int,
 
 
 class Link:
-    """A blocking connection for one-shot commands (status, stop, restart, wait, logs).
+    """A blocking connection for one-shot commands (status, stop, restart, wait, logs):
+    the synchronous twin of engine/run/session/connection.py's Connection, with the same
+    codec, greeting check (`greet`) and reading of a reply (`reply_result`).
 
     Connecting, the greeting and `request(..., short=True)` replies wait at most
     `answer_timeout`; `timeout` is what reading messages waits afterwards (None: as long as
@@ -142,16 +145,16 @@ class Link:
         self.ended = False  # the session said it ended (its last message)
         self._why_lost: Callable[[], str] | None = None
         try:
-            hello = self.receive()
+            # a server of another protocol version says so here, before any request
+            self.info: dict[str, Any] = greet(self._file.readline(MAX_MESSAGE), name)
         except TimeoutError:
             self.close()
             raise not_answering(name, answer_timeout) from None
-        try:
-            # a server of another protocol version says so here, before any request
-            self.info: dict[str, Any] = check_hello(hello or {}, name)
-        except SessionError:
+        except (SessionError, ProtocolError, ConnectionError) as exc:
             self.close()
-            raise
+            if isinstance(exc, SessionError):
+                raise
+            raise SessionError(f"session {name} did not greet ({exc})") from None
         self.sock.settimeout(timeout)
 
     @classmethod
@@ -265,10 +268,8 @@ class Link:
                 raise self.lost() or SessionError(
                     f"session {self.label} closed the connection during {request.op}")
             if message.get("type") == "reply" and message.get("id") == request_id:
-                if not message.get("ok"):
-                    # named as typed (HOST:NAME): every command's errors say it
-                    raise SessionError(f"session {self.label}: {message.get('error')}")
-                return message.get("result")
+                # named as typed (HOST:NAME): every command's errors say it
+                return reply_result(message, self.label)
             if message.get("type") == "events":
                 self.pending.append(message)
 

@@ -63,10 +63,23 @@ class LaunchPort(Protocol):
     killed_server: bool
     shutdown_reason: str | None
     # the ssh link, when one is between (host not None)
-    link_lost: str | None
-    lost_reason: str | None
-    attempt: int  # the reconnection's attempt under way, or the last one
-    attempt_since: float | None  # when the one under way began (monotonic; None: between)
+    # (read-only: a port's reconnector keeps them, engine/run/session/reconnector.py)
+    @property
+    def link_lost(self) -> str | None: ...
+
+    @property
+    def lost_reason(self) -> str | None: ...
+
+    @property
+    def attempt(self) -> int:
+        """The reconnection's attempt under way, or the last one."""
+        ...
+
+    @property
+    def attempt_since(self) -> float | None:
+        """When the one under way began (monotonic; None: between)."""
+        ...
+
     only: str | None  # the process whose lines the link carries (None: all)
     stamps_shown: bool
 

@@ -11,11 +11,12 @@ what happened meanwhile, from where it left off: the lines from the log files (c
 from the offsets of its last subscription, so none is seen twice or missed) and the state
 events the server kept, in time order.
 
-Over 500 lines on purpose: reconnecting (`_relink`, `_missed`) swaps this client's own
-connection and rewinds its counters, so it stays inside the class, not in a module that
-would reach into its private state. What keeps a state of its own lives next door:
-watches.py (the inspector's streams, asked again on a new connection) and
-remote_lifecycle.py; link.py sends the teardown's one request.
+A port over one Connection (engine/run/session/connection.py: the greeting, request
+numbers, replies matched), its Reconnector (the attempts and their pace) and its Gaps
+(gaps.py: where its view of each log file stands, and the lines a gap holds, read back
+through the server). What keeps a state of its own lives next door: watches.py (the
+inspector's streams, asked again on a new connection) and remote_lifecycle.py; link.py
+sends the teardown's one request.
 """
 
 from __future__ import annotations
@@ -45,21 +46,14 @@ from ..engine.run.events import (
     Started,
 )
 from ..engine.run.machines.proxy import SERVER_GONE_WORDS
-from ..engine.run.machines.remote import RemoteError, RemoteLink, link_streams, open_remote_streams
+from ..engine.run.machines.remote import RemoteError, RemoteLink, open_remote_link
 from ..engine.run.session import session_dir
+from ..engine.run.session.connection import Connection
 from ..engine.run.session.log_reader import LAUNCH_LOG, LogLine, tail_lines
-from ..engine.run.session.protocol import (
-    MAX_MESSAGE,
-    ProtocolError,
-    Stamps,
-    VersionMismatch,
-    check_hello,
-    decode,
-    encode,
-    event_from_dict,
-)
+from ..engine.run.session.protocol import ProtocolError, Stamps, VersionMismatch, event_from_dict
+from ..engine.run.session.reconnector import RETRY_FIRST, RETRY_MOST, Reconnector
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.request import Request, to_message
+from ..engine.run.vocabulary.request import Request
 from ..engine.run.vocabulary.requests import (
     Apply,
     GetPlan,
@@ -74,6 +68,7 @@ from ..engine.run.vocabulary.requests import (
     Stop,
     Subscribe,
 )
+from .gaps import Gaps
 from .history import merged
 from .link import ANSWER_TIMEOUT, not_answering, send_once
 from .port import VERBS, Verb
@@ -85,13 +80,9 @@ from .watches import Watches
 Consumer = Callable[[Event], None]
 R = TypeVar("R")
 
-RETRY_FIRST = 1.0
-"""Seconds before the first try to reconnect a dropped link; doubled after each failure."""
 LINK_INTERVAL = 1.0
 """Seconds between event batches for a display over an ssh link: its output pane repaints
 once a second anyway (tui PANE_FPS), and every batch costs the link a packet."""
-RETRY_MOST = 15.0
-"""The longest wait between tries: a robot back on the network is found within this."""
 PROBE_AFTER = 2.0
 """Seconds without a word over a link after which the other side is asked something that
 is answered at once (a quiet session sends nothing): a link that hangs (no bytes, no
@@ -110,15 +101,14 @@ def merged_usage(held: dict[str, Any], moved: dict[str, Any]) -> dict[str, Any]:
             or f.get("growing")}
 
 
-async def _reply_to(reader: asyncio.StreamReader, request_id: int) -> dict[str, Any]:
-    """The reply to a request, passing over what the server sends before it."""
-    while True:
-        line = await reader.readline()
-        if not line:
-            raise ProtocolError("the server closed the connection")
-        message = decode(line)
-        if message.get("type") == "reply" and message.get("id") == request_id:
-            return message
+async def ssh_connection(host: str, name: str, link: RemoteLink | None = None,
+                         ) -> tuple[RemoteLink, Connection]:
+    """A Connection over an ssh link to `host`'s session (`link`: one already open and
+    greeted, else a new one; RemoteError with one line when it cannot be made)."""
+    if link is None:
+        link = await asyncio.get_running_loop().run_in_executor(
+            None, lambda: open_remote_link(host, name))
+    return link, await Connection.on_socket(link.sock, link.info, name)
 
 
 class RemoteSupervisor:
@@ -128,56 +118,30 @@ class RemoteSupervisor:
     server's; `history` is what happened before this client came: the tail of each log file
     and recent state events, in time order, for the panes to show first."""
 
-    def __init__(self, name: str, session: Session, reader: asyncio.StreamReader,
-                 writer: asyncio.StreamWriter, info: dict[str, Any], host: str | None = None,
-                 link: RemoteLink | None = None) -> None:
+    def __init__(self, name: str, session: Session, connection: Connection,
+                 host: str | None = None, link: RemoteLink | None = None) -> None:
         """`host` and `link`: a session on another machine, over this ssh link."""
         self.name = name
         self.host = host
         self.link = link
-        self.link_lost: str | None = None
-        """While the link to `host` is down: why ("link to HOST lost (reason)")."""
-        self.lost_reason: str | None = None
-        """While it is down: why, the latest attempt's reason (the first is the drop's)."""
-        self.attempt = 0
-        """While it is down: the attempt to reconnect under way (or the last), from 1."""
-        self.attempt_since: float | None = None
-        """When the attempt under way began (time.monotonic); None between attempts: one
-        that hangs (ssh's 15 s, then the greeting's 30) is said as under way, not as the
-        reason before it."""
-        self.last_heard = time.monotonic()
-        """When the other side last sent anything (a link's silence is shown from it)."""
+        self.conn = connection
+        self.relink = Reconnector(RETRY_FIRST, RETRY_MOST)
         self._probed = 0.0  # when the last probe was sent
-        self.scrollback = 5000
         self.max_lines = 0
         self.interval = 0.0
-        self._early: list[dict[str, Any]] = []  # messages read while awaiting a reply
-        # where this client's view of each log file stands: the size at subscription,
-        # and the lines received (or dropped for it) since
-        self._from: dict[str, int] = {}
-        self._received: dict[str, int] = {}
-        self._last_event = 0.0  # the time of the latest state event received
+        self.gaps = Gaps()
         self.only: str | None = None
         """The process whose output this client's screen shows (None: all): the server
         sends no other process's lines, read from its log file when shown (`show`)."""
-        self._stream_only: str | None = None  # `only` as of the last event received
-        self._hidden: dict[str, int] = {}
-        """Processes not shown, and the byte of their log file from which their lines were
-        not sent: read from there when they are shown again."""
         self._usage: dict[str, Any] = {}  # the figures of `resources`, which sends changes
         self._stamps = Stamps()  # the current batch's output stamps
         self.stamps_shown = False
         """Whether the screen shows ROS stamps (time column, raw format): over a link,
         without them the server leaves them out and keeps them (`read_stamps`)."""
-        # output lines received on this connection, and on the ones before it: a line's
-        # number in the stream (its event's data "line"), by which its stamp is read
-        self._lines_here = 0
-        self._lines_before = 0
-        self._retry: asyncio.Event | None = None
         self.watches = Watches()  # the inspector's streams: a new connection asks again
         self.session = session
-        self.info = info
-        self.log_dir = Path(info["log_dir"])
+        self.info = connection.info
+        self.log_dir = Path(self.info["log_dir"])
         self.states: dict[str, str] = {}
         self.pids: dict[str, int] = {}  # from the started events, those replayed too
         self.exit_codes: dict[str, int] = {}
@@ -200,12 +164,31 @@ class RemoteSupervisor:
         self.read_only = False
         """A view that changes nothing: every request that would is refused here, with
         one line (client/read_only.py), before it is sent."""
-        self._reader = reader
-        self._writer = writer
-        self._replies: dict[int, asyncio.Future[Any]] = {}
-        self._next_id = 0
         self._stopping = False
         self.lifecycle = RemoteLifecycle(self.request)
+
+    # what a status line reads of a lost link (client/port.py), the reconnector's
+    @property
+    def link_lost(self) -> str | None:
+        """While the link to `host` is down: why ("link to HOST lost (reason)")."""
+        return self.relink.down
+
+    @property
+    def lost_reason(self) -> str | None:
+        """While it is down: the latest attempt's reason (the first is the drop's)."""
+        return self.relink.reason
+
+    @property
+    def attempt(self) -> int:
+        return self.relink.attempt
+
+    @property
+    def attempt_since(self) -> float | None:
+        return self.relink.attempt_since
+
+    @property
+    def scrollback(self) -> int:
+        return self.gaps.scrollback
 
     @classmethod
     async def open(cls, name: str, session: Session, scrollback: int = 5000,
@@ -213,29 +196,21 @@ class RemoteSupervisor:
         """Connects and subscribes; `max_lines` and `interval` bound what a display is sent
         (what it could not draw anyway is counted, not sent)."""
         try:
-            reader, writer = await asyncio.open_unix_connection(
-                str(session_dir.socket_path(name)), limit=MAX_MESSAGE)
-        except OSError as exc:
-            raise SessionError(f"session {name} does not answer ({exc.strerror or exc})")\
-                from None
-        try:
-            hello = decode(await asyncio.wait_for(reader.readline(), ANSWER_TIMEOUT))
-            try:
-                info = check_hello(hello, name)
-            except SessionError:
-                writer.close()
-                raise
-            self = cls(name, session, reader, writer, info)
-            writer.write(encode(to_message(Subscribe(max_lines, interval), 0)))
-            await asyncio.wait_for(writer.drain(), ANSWER_TIMEOUT)
-            message = await asyncio.wait_for(_reply_to(reader, 0), ANSWER_TIMEOUT)
+            conn = await Connection.open_unix(str(session_dir.socket_path(name)), name,
+                                              ANSWER_TIMEOUT)
         except TimeoutError:
-            writer.close()
             raise not_answering(name, ANSWER_TIMEOUT) from None
-        except ProtocolError as exc:
-            writer.close()
+        self = cls(name, session, conn)
+        self.gaps.scrollback, self.max_lines, self.interval = scrollback, max_lines, interval
+        try:
+            result = await asyncio.wait_for(conn.call(Subscribe(max_lines, interval)),
+                                            ANSWER_TIMEOUT)
+        except TimeoutError:
+            conn.close()
+            raise not_answering(name, ANSWER_TIMEOUT) from None
+        except (ProtocolError, ConnectionError) as exc:
+            conn.close()
             raise SessionError(f"session {name}: {exc}") from None
-        result = message["result"]
         self.states = dict(result["states"])
         self.lifecycle.states.update(result.get("lifecycle") or {})
         if isinstance(session, ServedSession):  # the plan that runs, not the file's
@@ -243,11 +218,13 @@ class RemoteSupervisor:
             try:
                 await asyncio.wait_for(self._fetch_plan(), ANSWER_TIMEOUT)
             except (TimeoutError, ProtocolError, ConnectionError) as exc:
-                writer.close()
+                conn.close()
                 raise SessionError(f"session {name} did not send its plan ({exc or 'timeout'})")\
                     from None
         self._adopt(result["arguments"])
-        self.history = self._replay(result["offsets"], result["recent"], scrollback)
+        self.history = merged({process: tail_lines(self.log_dir / f"{process}.log", end,
+                                                   scrollback)
+                               for process, end in result["offsets"].items()}, result["recent"])
         self._note_ends(self.history)
         return self
 
@@ -258,12 +235,9 @@ class RemoteSupervisor:
         """The same over an ssh link to `host` (`link`: one already open, else a new one;
         RemoteError with one line when it cannot be made); the replay is read through the
         server, the files being over there."""
-        if link is None:
-            link, reader, writer = await open_remote_streams(host, name)
-        else:
-            reader, writer = await link_streams(link)
-        self = cls(name, session, reader, writer, link.hello["info"], host, link)
-        self.scrollback, self.max_lines, self.interval = scrollback, max_lines, interval
+        link, conn = await ssh_connection(host, name, link)
+        self = cls(name, session, conn, host, link)
+        self.gaps.scrollback, self.max_lines, self.interval = scrollback, max_lines, interval
         try:
             result = await asyncio.wait_for(self._subscribe(), ANSWER_TIMEOUT * 3)
             self.states = dict(result["states"])
@@ -274,51 +248,29 @@ class RemoteSupervisor:
             self._adopt(result["arguments"])
             lines = {}
             for process, end in result["offsets"].items():
-                page = await self._call(ReadLog(process=process, end=end, limit=scrollback,
-                                                tail=True))
+                page = await conn.call(ReadLog(process=process, end=end, limit=scrollback,
+                                               tail=True))
                 lines[process] = [LogLine(*line) for line in page["lines"]]
         except (TimeoutError, ProtocolError, ConnectionError) as exc:
-            writer.close()
+            conn.close()
             await asyncio.get_running_loop().run_in_executor(None, link.close)
             raise RemoteError(f"{host}: session {name} did not answer ({exc or 'timeout'})")\
                 from None
         self.history = merged(lines, result["recent"])
         self._note_ends(self.history)
-        self._note_recent(result["recent"])
+        self.gaps.heard(result["recent"])
         return self
 
     async def _subscribe(self) -> dict[str, Any]:
         """Subscribes on the current connection; from here on lines are counted from the
         log files' sizes it answers with."""
         # fair: with a screenful a second, a loud node must not hide the others' lines
-        result: dict[str, Any] = await self._call(Subscribe(max_lines=self.max_lines,
-                                                            interval=self.interval, fair=True,
-                                                            only=self.only, plain=True,
-                                                            stamps=self.stamps_shown))
-        self._lines_before += self._lines_here
-        self._lines_here = 0
-        self._from = dict(result["offsets"])
-        self._received = {}
+        result: dict[str, Any] = await self.conn.call(Subscribe(
+            max_lines=self.max_lines, interval=self.interval, fair=True, only=self.only,
+            plain=True, stamps=self.stamps_shown))
+        self.gaps.subscribed(result["offsets"])
         self._usage = {}
         return result
-
-    async def _call(self, request: Request[R]) -> R:
-        """A request answered before `run` reads the connection (opening, reconnecting):
-        what the server sends meanwhile is kept for `run`, in order."""
-        self._next_id += 1
-        request_id = self._next_id
-        self._writer.write(encode(to_message(request, request_id)))
-        await self._writer.drain()
-        while True:
-            line = await self._reader.readline()
-            if not line:
-                raise ConnectionError(f"the link closed during {request.op}")
-            message = decode(line)
-            if message.get("type") == "reply" and message.get("id") == request_id:
-                if not message.get("ok"):
-                    raise SessionError(f"session {self.name}: {message.get('error')}")
-                return request.reply(message.get("result"))
-            self._early.append(message)
 
     def _note_ends(self, events: list[Event]) -> None:
         """How processes ended before this client came (the server's recent events)."""
@@ -329,10 +281,6 @@ class RemoteSupervisor:
             if isinstance(event, ProcessExited) and event.process:
                 self._note_crash(event)
 
-    def _note_recent(self, recent: list[dict[str, Any]]) -> None:
-        for data in recent:
-            self._last_event = max(self._last_event, float(data.get("time") or 0.0))
-
     @property
     def plan(self) -> Plan:
         return self.session.plan
@@ -341,7 +289,7 @@ class RemoteSupervisor:
         """The plan the server runs, for a session whose file is read there (ServedSession);
         before `run` reads the connection, or from `run` itself."""
         assert isinstance(self.session, ServedSession)
-        self.session.adopt(await self._call(GetPlan()))
+        self.session.adopt(await self.conn.call(GetPlan()))
 
     def _adopt(self, arguments: dict[str, str], relaunched: bool = False) -> None:
         """Another client relaunched with these values: resolve the same plan here.
@@ -354,11 +302,6 @@ class RemoteSupervisor:
         if preview.plan is not None:
             self.session.accept(preview)
 
-    def _replay(self, offsets: dict[str, int], recent: list[dict[str, Any]],
-                scrollback: int) -> list[Event]:
-        return merged({process: tail_lines(self.log_dir / f"{process}.log", end, scrollback)
-                        for process, end in offsets.items()}, recent)
-
     # --- the Supervisor's interface ----------------------------------------------------------
 
     def subscribe(self, consumer: Consumer) -> None:
@@ -368,7 +311,6 @@ class RemoteSupervisor:
         """Delivers the server's events until it ends (its status) or this client detaches;
         a dropped ssh link is reconnected meanwhile (see the module's docstring)."""
         status = 1
-        self._retry = asyncio.Event()
         probe = asyncio.ensure_future(self._probe()) if self.host is not None else None
         try:
             while True:
@@ -390,8 +332,8 @@ class RemoteSupervisor:
         finally:
             if probe is not None:
                 probe.cancel()
-            self._fail_replies(f"session {self.name} is gone")
-            self._writer.close()
+            self.conn.fail(f"session {self.name} is gone")
+            self.conn.close()
             if self.link is not None:
                 await asyncio.get_running_loop().run_in_executor(None, self.link.close)
         return 0 if self.detached else status
@@ -399,20 +341,9 @@ class RemoteSupervisor:
     async def _follow(self) -> int | None:
         """The server's messages until it ends (its status) or the connection closes."""
         while True:
-            if self._early:
-                message = self._early.pop(0)
-            else:
-                try:
-                    line = await self._reader.readline()
-                except (ConnectionError, ValueError):
-                    line = b""
-                if not line:
-                    return None
-                self.last_heard = time.monotonic()
-                try:
-                    message = decode(line)
-                except ProtocolError:
-                    continue
+            message = await self.conn.receive()
+            if message is None:
+                return None
             kind = message.get("type")
             if kind == "events" and isinstance(self.session, ServedSession) and any(
                     data.get("kind") == "relaunched" for data in message.get("events") or []):
@@ -445,10 +376,6 @@ class RemoteSupervisor:
                             self._deliver(Log(reason=str(exc), level="ERROR"))
                     else:
                         self._take({"events": [data]})
-            elif kind == "reply":
-                future = self._replies.pop(message.get("id", -1), None)
-                if future is not None and not future.done():
-                    future.set_result(message)
             elif kind == "ended":
                 return int(message.get("status") or 0)
 
@@ -459,17 +386,16 @@ class RemoteSupervisor:
                 self._stamps.unpack(data)
             event = event_from_dict(data)
             if isinstance(event, Output) and event.process:
-                self._count(event.process, len(event.lines))
+                self.gaps.count(event.process, len(event.lines))
                 if self.host is not None:  # only a link's stream leaves stamps out
                     event.data = {**(event.data or {}),
-                                  "line": self._lines_before + self._lines_here}
-                    self._lines_here += len(event.lines)
+                                  "line": self.gaps.number(len(event.lines))}
             elif isinstance(event, Dropped) and event.process:
                 # in the file, not sent to us: where, for a display to read them back
-                event.data = self._where(event.process)
-                self._count(event.process, event.code or 0)
+                event.data = self.gaps.where(event.process)
+                self.gaps.count(event.process, event.code or 0)
             else:
-                self._last_event = max(self._last_event, event.time)
+                self.gaps.last_event = max(self.gaps.last_event, event.time)
             if isinstance(event, Relaunched):
                 self._adopt(dict(item.split(":=", 1) for item in event.lines), True)
             self._note_pid(event)
@@ -500,50 +426,12 @@ class RemoteSupervisor:
         if self.link_lost is None:
             await self._request(SetView(only=process))
 
-    def _shown(self, process: str, only: str | None) -> bool:
-        return only is None or process == only
-
     async def _switched(self, only: str | None, offsets: dict[str, int]) -> None:
-        """A `view` event: from here the stream carries `only`'s lines; `offsets` are the
-        log files' sizes at that instant."""
-        before, self._stream_only = self._stream_only, only
-        processes = set(offsets) | {p.id for p in self.plan.processes}
-        lines: dict[str, list[LogLine]] = {}
-        notes: list[Event] = []
-        for process in sorted(processes):
-            end = offsets.get(process, 0)
-            if not self._shown(process, only):
-                if self._shown(process, before):
-                    self._hidden[process] = end  # its lines from here stay over there
-                continue
-            if self._shown(process, before) and process not in self._hidden:
-                continue  # shown all along: its lines came as events
-            begin = self._hidden.pop(process, 0)
-            if end > begin:
-                page = await self._call(ReadLog(process=process, start=begin, end=end,
-                                                limit=self.scrollback, tail=True))
-                lines[process] = [LogLine(*line) for line in page["lines"]]
-                if page.get("skipped"):
-                    notes.append(Dropped(process, code=int(page["skipped"]),
-                                         data={"start": begin, "skip": 0}))
-            # everything up to `end` is now here; its events from the stream come after it
-            self._from[process], self._received[process] = end, 0
+        """A `view` event: the lines of the pane now shown that were not sent (gaps.py)."""
+        lines, notes = await self.gaps.switched(
+            only, offsets, [p.id for p in self.plan.processes], self.conn.call)
         for event in notes + merged(lines, []):
             self._deliver(event)
-
-    def _count(self, process: str, lines: int) -> None:
-        self._received[process] = self._received.get(process, 0) + lines
-
-    def _where(self, process: str) -> dict[str, int]:
-        """Where the next lines of `process` are in its log file, as a `dropped` event's
-        data says (`read_log`'s start and skip): after what this client has been sent."""
-        return {"start": self._from.get(process, 0), "skip": self._received.get(process, 0)}
-
-    def _fail_replies(self, why: str) -> None:
-        for future in self._replies.values():
-            if not future.done():
-                future.set_exception(SessionError(why))
-        self._replies.clear()
 
     # --- a dropped link ----------------------------------------------------------------------
 
@@ -552,34 +440,31 @@ class RemoteSupervisor:
         or while it is down: then `link_lost` says more)."""
         if self.host is None or self.link_lost is not None:
             return 0.0
-        return max(0.0, time.monotonic() - self.last_heard)
+        return max(0.0, time.monotonic() - self.conn.last_heard)
 
     async def _probe(self) -> None:
         """Over a link: after PROBE_AFTER s of silence, asks what is answered at once (a
         log file's size), so a quiet session answers and a hung link stays silent."""
         while True:
             await asyncio.sleep(PROBE_AFTER / 2)
-            now = time.monotonic()
-            if self.link_lost is not None or self._writer.is_closing() or \
-                    now - self.last_heard < PROBE_AFTER or self._probed > self.last_heard:
+            now, heard = time.monotonic(), self.conn.last_heard
+            if self.link_lost is not None or self.conn.closing or \
+                    now - heard < PROBE_AFTER or self._probed > heard:
                 continue  # heard lately, or the last probe is still unanswered
             self._probed = now
-            self._next_id += 1  # its reply is read and passed over like any other
             with contextlib.suppress(ConnectionError, OSError):
-                self._writer.write(encode(to_message(ReadLog(LAUNCH_LOG, limit=0),
-                                                     self._next_id)))
+                self.conn.send(ReadLog(LAUNCH_LOG, limit=0))  # its reply is passed over
 
     def retry_now(self) -> None:
         """Reconnect at once instead of at the next try (on the loop's thread)."""
-        if self._retry is not None:
-            self._retry.set()
+        self.relink.now()
 
     async def _relink(self) -> bool:
         """The link to `host` dropped: reconnect with backoff, then deliver what was missed.
         False when there is nothing to reconnect to (detached, or the session ended)."""
-        assert self.host is not None and self.link is not None and self._retry is not None
+        assert self.host is not None and self.link is not None
         loop = asyncio.get_running_loop()
-        self._writer.close()
+        self.conn.close()
         why = await loop.run_in_executor(None, self.link.why_lost)
         if SERVER_GONE_WORDS in why:
             # the link was up: the proxy there saw the session's server die (kill -9)
@@ -587,60 +472,47 @@ class RemoteSupervisor:
             self._deliver(Log(reason=f"{self.host}: {why.split('error: ', 1)[-1]}",
                               level="ERROR"))
             return False
-        self.link_lost = f"link to {self.host} lost ({why})"
-        self.lost_reason = why
-        self._fail_replies(self.link_lost)
+        self.relink.lost(f"link to {self.host} lost ({why})", why, RETRY_FIRST)
+        self.conn.fail(f"link to {self.host} lost ({why})")
         self._deliver(Log(reason=f"{self.link_lost}; session {self.name} runs on "
                           "there; reconnecting", level="ERROR"))
-        delay = RETRY_FIRST
-        said = ""
-        self.attempt = 0
         while not self.detached:
-            self.attempt_since = None
-            self._retry.clear()
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._retry.wait(), delay)
+            await self.relink.next_attempt()
             if self.detached:
                 return False
-            self.attempt, self.attempt_since = self.attempt + 1, time.monotonic()
             try:
-                link, self._reader, self._writer = await open_remote_streams(
-                    self.host, self.name)
+                link, self.conn = await ssh_connection(self.host, self.name)
             except VersionMismatch as exc:
                 # another session of that name, of another tuilaunch: not ours to speak to
-                self.link_lost = None
+                self.relink.down = None
                 self._deliver(Log(reason=str(exc), level="ERROR"))
                 return False
             except RemoteError as exc:
                 if "no running session" in str(exc):
                     self.lost = not self._stopping  # unless it was asked to stop
-                    self.link_lost = None
+                    self.relink.down = None
                     self._deliver(Log(reason=f"session {self.name} ended on "
                                       f"{self.host} while the link was down", level="ERROR"))
                     return False
-                self.lost_reason = str(exc)  # the outage's reason now, not its first
-                if str(exc) != said:  # each new reason once, not every try
-                    said = str(exc)
+                if self.relink.failed(str(exc)):  # each new reason once, not every try
                     self._deliver(Log(reason=f"reconnecting: {exc}", level="WARN"))
-                delay = min(delay * 2, RETRY_MOST)
                 continue
             old, self.link = self.link, link
             await loop.run_in_executor(None, old.close)
-            start, received = self._from, self._received
+            start, received = self.gaps.start, self.gaps.received
             try:
                 missed = await asyncio.wait_for(self._missed(), ANSWER_TIMEOUT * 3)
-                await asyncio.wait_for(self.watches.ask_again(self._call, self._warn),
+                await asyncio.wait_for(self.watches.ask_again(self.conn.call, self._warn),
                                        ANSWER_TIMEOUT * 3)
             except (TimeoutError, ConnectionError, ProtocolError, SessionError) as exc:
                 # the link dropped again before the gap was read: it is read on the next
                 # one, from the same place; what this one sent meanwhile is in that gap
-                self._from, self._received = start, received
-                self._early.clear()
-                self._writer.close()
+                self.gaps.start, self.gaps.received = start, received
+                self.conn.forget_early()
+                self.conn.close()
                 self._deliver(Log(reason=f"reconnecting: {exc}", level="WARN"))
                 continue
-            self.link_lost = self.lost_reason = self.attempt_since = None
-            self.last_heard = time.monotonic()
+            self.relink.back()
             self._deliver(Log(reason=f"link to {self.host} back: what happened "
                               "meanwhile follows"))
             for event in missed:
@@ -651,28 +523,18 @@ class RemoteSupervisor:
     async def _missed(self) -> list[Event]:
         """Subscribes again; the lines each log file got since the last line received (the
         last `scrollback` of them), and the state events after the last one received."""
-        start, received = self._from, self._received
+        start, received = self.gaps.start, self.gaps.received
         result = await self._subscribe()
         self.states = dict(result["states"])
         self.lifecycle.states.update(result.get("lifecycle") or {})
         if isinstance(self.session, ServedSession):
             await self._fetch_plan()
         self._adopt(result["arguments"])
-        lines: dict[str, list[LogLine]] = {}
-        notes: list[Event] = []
-        for process, end in result["offsets"].items():
-            begin, skip = start.get(process, 0), received.get(process, 0)
-            if not self._shown(process, self._stream_only) or end <= begin:
-                continue  # a pane not shown is read from its file when it is
-            page = await self._call(ReadLog(process=process, start=begin, skip=skip, end=end,
-                                            limit=self.scrollback, tail=True))
-            lines[process] = [LogLine(*line) for line in page["lines"]]
-            if page.get("skipped"):  # read back only the last `scrollback` of them
-                notes.append(Dropped(process, code=int(page["skipped"]),
-                                     data={"start": begin, "skip": skip}))
+        lines, notes = await self.gaps.missed(start, received, result["offsets"],
+                                              self.conn.call)
         recent = [data for data in result["recent"]
-                  if float(data.get("time") or 0.0) > self._last_event]
-        self._note_recent(recent)
+                  if float(data.get("time") or 0.0) > self.gaps.last_event]
+        self.gaps.heard(recent)
         for data in recent:
             event = event_from_dict(data)
             if isinstance(event, ProcessExited) and event.process and event.code is not None:
@@ -711,7 +573,7 @@ class RemoteSupervisor:
         could be read, the line after the last, {line: ms}). Lines of an earlier
         connection are the server's no longer."""
         self.stamps_shown = shown
-        before = self._lines_before
+        before = self.gaps.lines_before
         result = await self._request(ReadStamps(
             on=shown, since=None if since is None else max(since - before, 0)))
         first = before + int(result.get("first") or 0)
@@ -732,15 +594,7 @@ class RemoteSupervisor:
             check_request(request)
         if self.link_lost is not None:
             raise SessionError(f"{self.link_lost}: not sent ({request.op}); reconnecting")
-        self._next_id += 1
-        future: asyncio.Future[Any] = asyncio.get_running_loop().create_future()
-        self._replies[self._next_id] = future
-        self._writer.write(encode(to_message(request, self._next_id)))
-        await self._writer.drain()
-        reply = await future
-        if not reply.get("ok"):
-            raise SessionError(f"session {self.name}: {reply.get('error')}")
-        return request.reply(reply.get("result"))
+        return await self.conn.ask(request)
 
     async def command(self, verb: Verb, process: str) -> None:
         """s, r, t (`tuilaunch stop|restart|start`): one request to the server."""
@@ -774,9 +628,8 @@ class RemoteSupervisor:
 
     async def detach(self) -> None:
         self.detached = True
-        self._writer.close()
-        if self._retry is not None:
-            self._retry.set()  # a reconnection waiting for its next try gives up
+        self.conn.close()
+        self.relink.now()  # a reconnection waiting for its next try gives up
 
     def kill_all(self) -> None:
         """While a shutdown runs: SIGKILL what is left, now. Otherwise the UI is being torn
@@ -786,8 +639,8 @@ class RemoteSupervisor:
             return  # it asked for no shutdown and owns nothing: nothing is its to kill
         if self.host is not None:
             # over there: only the link reaches it, and only "kill now" is ours to send
-            if self._stopping and self.link_lost is None and not self._writer.is_closing():
-                self._writer.write(encode(to_message(Kill(), 1)))
+            if self._stopping and self.link_lost is None and not self.conn.closing:
+                self.conn.send(Kill())
             return
         if self._stopping:
             if not send_once(self.name, Kill()):

@@ -24,7 +24,8 @@ from typing import Any
 
 from ...errors import LaunchError
 from ..session import session_dir
-from ..session.protocol import MAX_MESSAGE, check_hello, decode, encode
+from ..session.connection import reply_result
+from ..session.protocol import MAX_MESSAGE, ProtocolError, decode, encode, greet
 from ..session.session_dir import SessionError
 from ..vocabulary.request import to_message
 from ..vocabulary.requests import Status
@@ -153,10 +154,7 @@ def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> dict[str, A
     try:
         sock.connect(str(session_dir.socket_path(name)))
         reader = sock.makefile("rb")
-        hello = reader.readline(MAX_MESSAGE)
-        if not hello:
-            raise SessionError(f"session {name} closed the connection")
-        check_hello(decode(hello), name)  # another version's status may mean other things
+        greet(reader.readline(MAX_MESSAGE), name)  # another version's status may differ
         sock.sendall(encode(to_message(Status(resources=False), 1)))  # a listing
         while True:
             line = reader.readline(MAX_MESSAGE)
@@ -164,12 +162,12 @@ def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> dict[str, A
                 raise SessionError(f"session {name} closed the connection during status")
             message = decode(line)
             if message.get("type") == "reply" and message.get("id") == 1:
-                if not message.get("ok"):
-                    raise SessionError(f"session {name}: {message.get('error')}")
-                result: dict[str, Any] = message["result"]
+                result: dict[str, Any] = reply_result(message, name)
                 return result
     except TimeoutError:
         raise SessionError(f"session {name} did not answer within {timeout:g} s") from None
+    except ProtocolError as exc:
+        raise SessionError(f"session {name}: {exc}") from None
     except OSError as exc:
         raise SessionError(f"session {name} does not answer ({exc.strerror or exc})")\
             from None

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...plan.machines import Machine
-from ..session.protocol import MAX_MESSAGE, ProtocolError, VersionMismatch, check_hello, decode
+from ..session.protocol import MAX_MESSAGE, ProtocolError, VersionMismatch, decode, greet
 from ..session.session_dir import SessionError, check_name
 
 PROXY_COMMAND = "__proxy"
@@ -362,7 +362,7 @@ def open_remote_link(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
         sock.close()
         raise stderr.failure(target, f"session {name}", environ)
     try:
-        hello = decode(line)
+        greet(line, f"{host}:{name}")
     except ProtocolError as exc:
         sock.close()
         process.kill()
@@ -370,8 +370,6 @@ def open_remote_link(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
         raise RemoteError(f"{host}: the remote tuilaunch did not speak the session "
                           f"protocol ({exc})", hint="is TUILAUNCH_REMOTE a tuilaunch?")\
             from None
-    try:
-        check_hello(hello, f"{host}:{name}")
     except VersionMismatch:
         sock.close()
         process.kill()
@@ -383,7 +381,7 @@ def open_remote_link(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
         process.wait()
         raise RemoteError(f"{host}: session {name} did not greet") from None
     sock.settimeout(None)
-    return RemoteLink(host, name, sock, process, hello, stderr)
+    return RemoteLink(host, name, sock, process, decode(line), stderr)
 
 
 async def open_remote_streams(target: Target, name: str, timeout: float = HELLO_TIMEOUT,

@@ -171,10 +171,19 @@ def version_fields() -> dict[str, Any]:
             "tuilaunch": __version__}
 
 
+def greet(line: bytes, session: str) -> dict[str, Any]:
+    """The one check of a server's greeting, for every client (the CLI's Link, the TUI's
+    connection, an ssh link, `__ls`): its first line, read whole, as its info when it
+    speaks this client's protocol; else VersionMismatch saying both versions, or
+    SessionError "did not greet" (nothing, or not a hello), or ProtocolError (not JSON: not
+    a tuilaunch at all). `session` names it as the user wrote it (NAME or HOST:NAME)."""
+    if not line.strip():
+        raise SessionError(f"session {session} did not greet")
+    return check_hello(decode(line), session)
+
+
 def check_hello(hello: dict[str, Any], session: str) -> dict[str, Any]:
-    """A server's greeting, checked: its info when it speaks this client's protocol, else
-    VersionMismatch saying both versions. `session` names it as the user wrote it (NAME or
-    HOST:NAME)."""
+    """A greeting already decoded, checked as `greet` says."""
     if hello.get("type") != "hello" or not isinstance(hello.get("info"), dict):
         raise SessionError(f"session {session} did not greet")
     info: dict[str, Any] = hello["info"]
