@@ -138,7 +138,7 @@ async def test_topics_tab_lists_processes_rates_problems_and_echoes(demo):
 async def test_tree_shows_cpu_memory_and_qos_problems_while_the_nodes_tab_is_shown(demo):
     async with session_tui(demo) as (app, pilot):
         tree = app.query_one(LaunchTree)
-        assert app.watching_resources
+        assert app.inspector.watching_resources
         # the tree is too narrow for the figures: only the selected process's are sent,
         # for the detail line, and with the root selected none
         tree.move_cursor(tree.rows["lidar-1"])
@@ -169,7 +169,7 @@ async def test_tree_shows_cpu_memory_and_qos_problems_while_the_nodes_tab_is_sho
         # leaving the tab stops the sampling: no figures that no longer move
         await pilot.press("3")
         await until(pilot, lambda: not tree.usage)
-        assert not app.watching_resources
+        assert not app.inspector.watching_resources
         await pilot.press("escape", "1")  # out of the services filter, back to the tree
         await until(pilot, lambda: "lidar-1" in tree.usage)
 
@@ -182,7 +182,7 @@ async def test_log_level_key_sets_it_or_offers_a_restart(demo):
         await pilot.press("L")
         await until(pilot, lambda: isinstance(app.screen, ChoiceScreen))
         await pilot.press("d")  # debug
-        await until(pilot, lambda: app.log_levels.levels.get("chatter-3") == "debug")
+        await until(pilot, lambda: app.inspector.log_levels.levels.get("chatter-3") == "debug")
 
         # a node without the logger service: the restart with --log-level is offered
         tree.move_cursor(tree.rows["mapper-2"])
@@ -196,7 +196,8 @@ async def test_log_level_key_sets_it_or_offers_a_restart(demo):
         old_pid = status(app.session_name or "")
         before = next(p["pid"] for p in old_pid["processes"] if p["id"] == "mapper-2")
         await pilot.press("y")
-        await until(pilot, lambda: app.log_levels.levels.get("mapper-2") == "warn", limit=60)
+        await until(pilot, lambda: app.inspector.log_levels.levels.get("mapper-2") == "warn",
+                    limit=60)
 
         def restarted() -> bool:
             now = status(app.session_name or "")

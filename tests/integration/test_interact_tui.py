@@ -64,13 +64,13 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             assert "segv-3 has no terminal" in await terminal_offered(pilot, app, "segv-3")
             await pilot.press("n")
             await until(pilot, lambda: not isinstance(app.screen, ConfirmScreen))
-            assert app.typing_to is None
+            assert app.keyboard.typing_to is None
             assert process(name, "segv-3")["state"] == "failed"
 
             await select(pilot, app, "lines-1")
             await pilot.pause()
             await pilot.press("i")
-            await until(pilot, lambda: app.typing_to == "lines-1")
+            await until(pilot, lambda: app.keyboard.typing_to == "lines-1")
             await pilot.press(*"hi robot")
             # the partial line shows before the node's echo, which comes at Enter
             assert "typing to lines-1: hi robot" in str(app.status_bar.render())
@@ -78,14 +78,14 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             await until(pilot, lambda: "got: hi robo" in pane(app, "lines-1"))
             assert status(name)["typing"]["process"] == "lines-1"
             await pilot.press("ctrl+right_square_bracket")
-            assert app.typing_to is None
+            assert app.keyboard.typing_to is None
             await until(pilot, lambda: status(name)["typing"] is None)
 
             # the raw reader: arrows as escape sequences, ctrl+c as a key, not a quit
             await select(pilot, app, "keys-2")
             await pilot.pause()
             await pilot.press("i")
-            await until(pilot, lambda: app.typing_to == "keys-2")
+            await until(pilot, lambda: app.keyboard.typing_to == "keys-2")
             await pilot.press("w", "up", "ctrl+c")
             await until(pilot, lambda: "key: '\\x03'" in pane(app, "keys-2"))
             assert "key: 'w'" in pane(app, "keys-2")
@@ -97,10 +97,10 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             await select(pilot, app, "lines-1")
             await pilot.pause()
             await pilot.press("i")
-            await until(pilot, lambda: app.typing_to == "lines-1")
+            await until(pilot, lambda: app.keyboard.typing_to == "lines-1")
             await pilot.press("ctrl+c")
             await until(pilot, lambda: app.supervisor.states.get("lines-1") == "exited")
-            await until(pilot, lambda: app.typing_to is None)
+            await until(pilot, lambda: app.keyboard.typing_to is None)
             assert "interrupted by SIGINT" in logs(name, "lines-1")
             assert not app.quitting
             await pilot.press("d")
@@ -129,11 +129,11 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
             await pilot.pause(0.5)  # a question `i` opens takes a key typed once it shows
             await pilot.press("y")
-            await until(pilot, lambda: app.typing_to == "lines-1")
+            await until(pilot, lambda: app.keyboard.typing_to == "lines-1")
             await pilot.press(*"hello", "enter")
             await until(pilot, lambda: "got: hello" in pane(app, "lines-1"))
             await pilot.press("ctrl+right_square_bracket")
-            assert app.typing_to is None
+            assert app.keyboard.typing_to is None
             assert process(name, "lines-1")["terminal"] is True
             # a node that runs with pipes: the question says restart
             assert "Restart it with a terminal" in await terminal_offered(pilot, app, "nap-2")
@@ -149,7 +149,7 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await pilot.pause(0.5)
             burst(app, "y", *"hello rs", "enter")
             await until(pilot, lambda: "got: hello rs" in pane(app, "slow-3"))
-            assert app.typing_to == "slow-3"
+            assert app.keyboard.typing_to == "slow-3"
             assert pane(app, "slow-3").count("stopped slowly") == 1
             await pilot.press("ctrl+right_square_bracket")
 
@@ -181,13 +181,13 @@ def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
             await until(pilot, lambda: any("not a program on PATH" in n.message
                                            for n in app._notifications))
             assert process(name, "keys-2")["pid"] == before
-            assert app.prefix_history == []
+            assert app.keyboard.prefix_history == []
             # a real tool: env is on PATH and runs the node as it was
             await pilot.press("g")
             await until(pilot, lambda: isinstance(app.screen, PrefixPrompt))
             app.screen.query_one(Input).value = "env TL_UNDER=1"
             await pilot.press("enter")
-            await until(pilot, lambda: app.prefix_history == ["env TL_UNDER=1"])
+            await until(pilot, lambda: app.keyboard.prefix_history == ["env TL_UNDER=1"])
             assert process(name, "keys-2")["command"][:2] == ["env", "TL_UNDER=1"]
             # the prompt remembers it first
             await pilot.press("g")
@@ -213,11 +213,11 @@ async def test_i_types_into_a_node_of_the_tuis_own_launch(tmp_path, write):
         await select(pilot, app, "lines-1")
         await pilot.pause()
         await pilot.press("i")
-        await until(pilot, lambda: app.typing_to == "lines-1")
+        await until(pilot, lambda: app.keyboard.typing_to == "lines-1")
         await pilot.press(*"hello", "enter")
         await until(pilot, lambda: "got: hello" in pane(app, "lines-1"))
         await pilot.press("ctrl+right_square_bracket")
-        assert app.typing_to is None
+        assert app.keyboard.typing_to is None
         await pilot.press("c")
         await until(pilot, lambda: isinstance(app.screen, CommandScreen))
         assert "line_reader.py" in app.screen.line

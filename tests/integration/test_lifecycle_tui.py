@@ -34,7 +34,7 @@ async def test_lifecycle_state_is_live_and_keys_step_it(tmp_path: Path):
         await pilot.press("left_square_bracket")  # down: clean up
         await until(pilot, lambda: "· unconfigured" in row_text(app, "lc-1"))
         # nothing below unconfigured: the key does not apply
-        assert app.check_action("lifecycle", ("down",)) is None
+        assert app.check_action("command", ("lifecycle", "down")) is None
         await pilot.press("right_square_bracket", "right_square_bracket")
         await until(pilot, lambda: "· active" in row_text(app, "lc-1"))
         commands = [c.title for c in app.get_system_commands(app.screen)]

@@ -272,7 +272,7 @@ async def test_typing_into_a_prompt_without_a_newline(write, tmp_path):
         # gdb's `(gdb) ` waits without a newline: shown as it stands, before any Enter
         await until(pilot, lambda: rows(app)[-2:] == ["I ready", "I (gdb)"])
         await pilot.press("i")
-        await until(pilot, lambda: app.typing_to == "prompt_reader-1")
+        await until(pilot, lambda: app.keyboard.typing_to == "prompt_reader-1")
         await until(pilot, lambda: footer_keys(app) == ["ctrl+] Give the keys back"])
         # the terminal's echo shows as it comes; a backspace erases, it leaves no space
         await pilot.press(*"abc", "backspace")
@@ -290,7 +290,7 @@ async def test_typing_into_a_prompt_without_a_newline(write, tmp_path):
         assert app.supervisor.states["prompt_reader-1"] == "exited"
         assert app.launch_tree.states["prompt_reader-1"] == "exited"
         assert "failed" not in str(app.status_bar.render())
-        await until(pilot, lambda: app.typing_to is None)
+        await until(pilot, lambda: app.keyboard.typing_to is None)
         await until(pilot, lambda: "ctrl+] Give the keys back" not in footer_keys(app)
                     and any("Stop" in key for key in footer_keys(app)))
 
@@ -308,7 +308,7 @@ def test_a_client_attaching_to_a_session_sees_the_waiting_prompt(write, runtime)
             await select(app, pilot, "prompt_reader-1")
             await until(pilot, lambda: rows(app)[-2:] == ["I ready", "I (gdb)"])
             await pilot.press("i")
-            await until(pilot, lambda: app.typing_to == "prompt_reader-1")
+            await until(pilot, lambda: app.keyboard.typing_to == "prompt_reader-1")
             await pilot.press(*"bt", "enter")
             await until(pilot, lambda: rows(app)[-3:] == ["I (gdb) bt", "I answer: bt",
                                                          "I (gdb)"])

@@ -301,9 +301,9 @@ async def test_the_selected_node_detail_line_draws_its_cpu_and_memory_trend(sess
 
     async with app.run_test(size=(140, 30)) as pilot:
         await until(pilot, lambda: "wave-1" in app.launch_tree.rows)
-        while app.selected_process() != "wave-1":
+        while app.nodes.selected_process() != "wave-1":
             await pilot.press("down")
-        await until(pilot, lambda: len(app.trends.get("wave-1", ())) >= 3)
+        await until(pilot, lambda: len(app.inspector.trends.get("wave-1", ())) >= 3)
         await until(pilot, lambda: " cpu " in line() and " mem " in line())
         drawn = line()
         assert drawn.startswith("wave-1 (/wave): running")
@@ -315,7 +315,7 @@ async def test_the_selected_node_detail_line_draws_its_cpu_and_memory_trend(sess
         assert cpu.split()[1].endswith("%") and memory.split()[1][-1] in "KMG", drawn
         await pilot.press("down")  # another node: its own trend, its minutes before too
         await until(pilot, lambda: line().startswith("fast-2 (/fast)") and " cpu " in line())
-        assert len(app.trends["fast-2"]) >= 3
+        assert len(app.inspector.trends["fast-2"]) >= 3
 
 
 # --- on screen -------------------------------------------------------------------------------

@@ -522,7 +522,7 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
             await pilot.press("f5")
             await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
             tl("wait", name, "extra-2", "running", "--timeout", "60")
-            app.action_detach()
+            app.leaving.detach()
             await until(pilot, lambda: app.detached)
     finally:
         tl("stop", name, check=False)

@@ -23,8 +23,8 @@ from textual.widgets import Input
 from tuilaunch.client import remote_supervisor
 from tuilaunch.engine.run.event_buffer import EventBuffer
 from tuilaunch.engine.run.events import Event, Output, Resources
-from tuilaunch.tui import session_link
-from tuilaunch.tui.app import make_app
+from tuilaunch.tui import status_line
+from tuilaunch.tui.app import make_app, pane_save_dir
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import QuitScreen
 
@@ -303,7 +303,7 @@ def test_attach_without_the_launch_file_here_draws_the_servers_plan(machines: Ma
             await pilot.press("f5")
             await until(pilot, lambda: "Applied." in str(preview.render()))
             assert app.session.arguments == {"nap": "601"}
-            app.action_detach()  # "d" would be typed into the focused field
+            app.leaving.detach()  # "d" would be typed into the focused field
             await until(pilot, lambda: app.detached)
 
     asyncio.run(attached())
@@ -500,7 +500,8 @@ def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: M
                                            if n > seen) >= 5)
             assert all(row.startswith("I line ") for row in rows(app))
             await pilot.press("w")
-            saved = app.pane_save_dir()  # on this computer (the log folder is over there)
+            # on this computer (the log folder is over there)
+            saved = pane_save_dir(app.log_dir, app.session_host, app.session_name)
             await until(pilot, lambda: list(saved.glob("*-pane-*.txt")))
             lines = [line for line in next(saved.glob("*-pane-*.txt")).read_text()
                      .splitlines() if "line " in line]
@@ -622,7 +623,7 @@ def test_a_lost_link_fits_80_columns_says_each_attempt_and_a_hung_link_its_silen
     monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)  # only R reconnects
     # the silence said after 2.5 s, not 5: still past the probe (remote_supervisor's
     # PROBE_AFTER), which a hung link leaves unanswered
-    monkeypatch.setattr(session_link, "SILENCE_SHOWN", remote_supervisor.PROBE_AFTER + 0.5)
+    monkeypatch.setattr(status_line, "SILENCE_SHOWN", remote_supervisor.PROBE_AFTER + 0.5)
     config = machines.ssh_config.read_text()
 
     async def attached() -> None:

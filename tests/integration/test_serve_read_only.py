@@ -32,7 +32,7 @@ def test_a_read_only_client_refuses_every_change_with_one_line(runtime, write): 
             assert supervisor is not None and supervisor.read_only
             assert f"[{name} read-only]" in str(app.status_bar.render())
             await pilot.press("down", "down")
-            await until(pilot, lambda: app.selected() == ["ticker-1"])
+            await until(pilot, lambda: app.nodes.commands.selected() == ["ticker-1"])
             said = []
             for key, what in (("s", "stopping"), ("r", "restarting")):
                 await pilot.press(key)
@@ -53,7 +53,7 @@ def test_a_read_only_client_refuses_every_change_with_one_line(runtime, write): 
                 with pytest.raises(ReadOnlyError):
                     await app.engine.run(supervisor.request(asked))
             # the Params and Services tabs (through the session): nothing set, nothing called
-            graph = app.graph()
+            graph = app.inspector.graph
             with pytest.raises(ReadOnlyError, match="setting a parameter is refused"):
                 await app.engine.run(graph.set_parameters("/ticker", {"x": 1}))
             with pytest.raises(ReadOnlyError, match="calling a service is refused"):

@@ -112,7 +112,7 @@ async def test_keys_after_i_reach_the_node_in_order(write, tmp_path):
         # i, then a line with s, r, t, q and a digit in it, Enter: one read
         burst(app, "i", *"start 1 q", "enter")
         await until(pilot, lambda: "got: start 1 q" in pane(app, "lines-1"))
-        assert app.typing_to == "lines-1" and not app.quitting
+        assert app.keyboard.typing_to == "lines-1" and not app.quitting
         assert pids(app) == before
         burst(app, "ctrl+right_square_bracket", "q")  # the keys are back: q asks to quit
         await until(pilot, lambda: type(app.screen).__name__ == "QuitScreen")

@@ -1,8 +1,11 @@
 """The Textual app: lays out the panels and wires them to the engine.
 
-The app keeps the session's link and the screens, with one mixin per concern of the app's
-keys, all built on SessionLink (the state and the engine link): keyboard (typing into a
-node, tools), navigation, quitting, inspector. The tabs are widgets that own
+The app keeps the session's link (session_link.py) and the screens; each concern of its
+keys is an object it holds, over the app as its host: `keyboard` (typing into a node,
+tools, the command line), `inspector` (the session's readings, plots, log levels,
+recordings), `navigation` (tabs and focus), `leaving` (quit, detach, SIGTERM, SIGHUP),
+`status` (the status line), `starting` (the session's server, `tuilaunch FILE`). A key
+names the object and its verb (`keyboard('type_into')`). The tabs are widgets that own
 their state, the app their host: the Nodes tab (nodes/tab.py's NodesTab: the tree, the
 detail line and the pane, sent the session's events as messages) and the Args tab
 (arguments.py's ArgsTab), as the graph tabs in screens/.
@@ -19,6 +22,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from textual import events, on
 from textual.app import ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.screen import Screen
@@ -34,24 +38,23 @@ from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.vocabulary.lifecycle import available_transitions
 from .arguments import ArgsTab
-from .inspector import Inspector
+from .inspector import INSPECTOR_BINDINGS, Inspector
 from .key_order import KeyOrder
-from .keyboard import NodeKeyboard
+from .keyboard import KEYBOARD_BINDINGS, NodeKeyboard
 from .navigation import Navigation
 from .nodes.tab import NodesTab
-from .quitting import Quitting
-from .recording import Recordings
+from .quitting import LEAVING_BINDINGS, QUIT_BINDINGS, Quitting
 from .screens.params_panel import ParamsPanel
 from .screens.services_panel import ServicesPanel
 from .screens.topics_panel import TopicsPanel
-from .screens.tree_panel import ascii_terminal
-from .session_link import DRAIN_HZ, PANE_CHROME
-from .toasts import OnceToasts
+from .screens.tree_panel import LaunchTree, ascii_terminal
+from .server_start import ServerStarted
+from .session_link import DRAIN_HZ, PANE_CHROME, SessionLink
+from .status_line import StatusLine
 
-NODE_COMMANDS = frozenset({"stop", "restart", "start", "lifecycle", "all_output"})
-"""The app's keys that act on the Nodes tab's selection."""
-
-READ_ONLY_REFUSES = frozenset({"stop", "restart", "start", "lifecycle", "apply", "log_level"})
+READ_ONLY_REFUSES = frozenset({("command", "stop"), ("command", "restart"),
+                               ("command", "start"), ("command", "lifecycle"), ("apply", ""),
+                               ("inspector", "log_level")})
 """The app's keys whose every request a read-only client refuses: its footer hides them."""
 
 
@@ -66,11 +69,12 @@ class LaunchTabs(TabbedContent):
         event.stop()
 
 
-class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, KeyOrder):
-    """The launcher's UI: the panels laid out, wired to the engine on mount; what each
-    concern does lives in its mixin (session_link, navigation, quitting, inspector,
-    keyboard) or its tab's widget (nodes, arguments); key_order hands the keys out one
-    after the other."""
+class TuiLaunchApp(SessionLink, KeyOrder):
+    """The launcher's UI: the panels laid out, wired to the engine on mount. What each
+    concern does lives in an object it holds (`keyboard`, `inspector`, `navigation`,
+    `leaving`) or its tab's widget (nodes, arguments); its keys name the object and the
+    verb (`keyboard('type_into')`), handed over by `action_keyboard` and the like;
+    key_order hands the keys out one after the other."""
 
     CSS_PATH = "screens/app.tcss"
     TITLE = "tuilaunch"
@@ -81,43 +85,50 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
     `i`), as `i` on its row."""
 
     BINDINGS = [
-        Binding("1", "tab('nodes')", "Nodes", tooltip="The group tree and node output"),
-        Binding("2", "tab('args')", "Args", tooltip="Edit launch arguments"),
-        Binding("3", "tab('services')", "Services", tooltip="Call a service"),
-        Binding("4", "tab('params')", "Params", tooltip="Get and set parameters"),
-        Binding("5", "tab('topics')", "Topics", show=False,
+        *KEYBOARD_BINDINGS,
+        Binding("1", "navigation('tab', 'nodes')", "Nodes",
+                tooltip="The group tree and node output"),
+        Binding("2", "navigation('tab', 'args')", "Args", tooltip="Edit launch arguments"),
+        Binding("3", "navigation('tab', 'services')", "Services", tooltip="Call a service"),
+        Binding("4", "navigation('tab', 'params')", "Params",
+                tooltip="Get and set parameters"),
+        Binding("5", "navigation('tab', 'topics')", "Topics", show=False,
                 tooltip="Topics, rates, QoS problems, echo"),
-        Binding("s", "stop", "Stop", tooltip="Stop the selected node or group"),
-        Binding("r", "restart", "Restart", tooltip="Restart the selected node or group"),
-        Binding("t", "start", "Start", tooltip="Start the selected node or group"),
-        Binding("a", "all_output", "All", show=False, tooltip="Output of all nodes"),
-        Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up",
+        Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
+        Binding("r", "command('restart')", "Restart",
+                tooltip="Restart the selected node or group"),
+        Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+        Binding("a", "command('all_output')", "All", show=False, tooltip="Output of all nodes"),
+        Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up",
                 tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
-        Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down",
+        Binding("left_square_bracket", "command('lifecycle', 'down')", "Lifecycle down",
                 tooltip="Deactivate an active, clean up an inactive lifecycle node"),
         Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
-        Binding("o", "node_topics", "Topics of node", show=False,
-                tooltip="The selected node's topics, in the Topics tab"),
-        Binding("L", "log_level", "Log level", show=False,
-                tooltip="Set the selected node's log level"),
-        Binding("b", "black_box", "Black box", show=False,
-                tooltip="Write the session's black box now (its log folder)"),
-        Binding("d", "detach", "Detach", tooltip="Leave the launch running; tuilaunch attach "
-                "opens it again"),
-        Binding("R", "reconnect", "Reconnect", show=False,
-                tooltip="Reconnect a dropped link to the session's machine now"),
+        *INSPECTOR_BINDINGS,
+        *LEAVING_BINDINGS,
         # named here, ctrl+p too: Textual adds its own only when no binding opens the palette
         Binding("ctrl+p", "command_palette", "palette", show=False, priority=True,
                 tooltip="Open the command palette"),
         Binding("colon", "command_palette", "Commands", show=False,
                 tooltip="The command palette, as ctrl+p (as in vim, k9s)"),
-        Binding("question_mark", "help", "Help"),
-        Binding("f1", "help", "Help", show=False, tooltip="The keys"),
-        Binding("slash", "find", "Filter", show=False,
+        Binding("question_mark", "navigation('help')", "Help"),
+        Binding("f1", "navigation('help')", "Help", show=False, tooltip="The keys"),
+        Binding("slash", "navigation('find')", "Filter", show=False,
                 tooltip="Services, Params: into the list's filter field"),
-        Binding("q", "request_quit", "Quit"),
-        Binding("ctrl+c", "request_quit", "Quit", show=False, priority=True),
+        *QUIT_BINDINGS,
     ]
+
+    keyboard: NodeKeyboard
+    inspector: Inspector
+    status: StatusLine
+
+    def __init__(self, *args: Any, **options: Any) -> None:
+        super().__init__(*args, **options)
+        self.keyboard = NodeKeyboard(self)
+        self.inspector = Inspector(self, lambda tab: self.navigation.tab(tab))
+        self.navigation = Navigation(self, self.inspector.tab_shown)
+        self.leaving = Quitting(self)
+        self.status = StatusLine(self)
 
     # --- layout ----------------------------------------------------------------------
 
@@ -125,19 +136,19 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
         yield Static("", id="status")
         with LaunchTabs(initial="nodes"):
             with TabPane("1 Nodes", id="nodes"):
-                yield NodesTab(self, self.store, self.pane_save_dir(),
-                               max_lines=self.scrollback, max_fps=self.pane_fps,
-                               id="nodes-tab")
+                save_dir = pane_save_dir(self.log_dir, self.session_host, self.session_name)
+                yield NodesTab(self, self.store, save_dir, max_lines=self.scrollback,
+                               max_fps=self.pane_fps, id="nodes-tab")
             with TabPane("2 Args", id="args"):
                 yield ArgsTab(self, id="args-tab")
             with TabPane("3 Services", id="services"):
-                yield ServicesPanel(self.graph, id="services-panel")
+                yield ServicesPanel(lambda: self.inspector.graph, id="services-panel")
             with TabPane("4 Params", id="params"):
-                yield ParamsPanel(self.graph, lambda: self.session.plan,
+                yield ParamsPanel(lambda: self.inspector.graph, lambda: self.session.plan,
                                   reported=lambda: self.store.reported_names,
-                                  request=self.inspect, id="params-panel")
+                                  request=self.inspector.inspect, id="params-panel")
             with TabPane("5 Topics", id="topics"):
-                yield TopicsPanel(self.inspect, id="topics-panel")
+                yield TopicsPanel(self.inspector.inspect, id="topics-panel")
         yield Footer()
 
     def on_mount(self) -> None:
@@ -147,21 +158,20 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
         # the tab's widgets, as the keys and the inspector act on them
         self.launch_tree, self.output_panel = self.nodes.launch_tree, self.nodes.pane
         self.detail_bar = self.nodes.detail
-        self.nodes.trend_of = self.trend_of
+        self.nodes.trend_of = self.inspector.trend_of
         self.args_tab = self.query_one(ArgsTab)
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
         self.topics_panel = self.query_one(TopicsPanel)
-        self.recordings = Recordings(self)  # w in the Topics tab, b
         if ascii_terminal():  # app.tcss draws ASCII lines for this class
             self.add_class("-ascii")
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner
         sys.setswitchinterval(0.001)
         self.engine = EngineThread()
         loop = asyncio.get_running_loop()
-        loop.add_signal_handler(signal.SIGTERM, self.terminated)
-        loop.add_signal_handler(signal.SIGHUP, self.terminal_hung_up)
-        if self.start_server is not None:
+        loop.add_signal_handler(signal.SIGTERM, self.leaving.terminated)
+        loop.add_signal_handler(signal.SIGHUP, self.leaving.terminal_hung_up)
+        if self.starting is not None:
             # nothing runs yet: the tree shows the plan, every process waiting, and the
             # launch starts once it is on screen (on_ready)
             self.nodes.events.show_plan()
@@ -172,8 +182,23 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
 
     def on_ready(self) -> None:
         """The first frame is on the terminal."""
-        if self.start_server is not None:
-            self.start_launch()
+        if self.starting is not None:
+            self.starting.start()
+
+    def on_server_started(self, message: ServerStarted) -> None:
+        if message.error is not None:
+            self.start_error = message.error
+            self.exit(2, return_code=2)
+        elif not self.quit_before_start:
+            self.wire_supervisor()
+
+    def on_unmount(self) -> None:
+        if self.starting is not None:
+            self.starting.abandon()
+        # any exit path that skipped the graceful shutdown still leaves no process behind
+        if self.supervisor is not None:
+            self.leaving.kill_all()
+            self.engine.stop()
 
     def wire_supervisor(self) -> None:
         """Follows the launch: the session's server, through its client, wired to the
@@ -221,67 +246,91 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
         self.run_supervisor()
         self.drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         self.update_status()
-        self.say_plan_warnings()
+        self.status.plan_warnings()
         # a tab picked while the server came up (3 pressed at once) stays on screen: the
         # tree takes the focus only where it shows (a focus in a hidden tab switches to it)
         if self.tabs.active == "nodes":
             tree.focus()
-        self.tab_shown(self.tabs.active or "nodes")
+        self.navigation.shown(self.tabs.active or "nodes")
         if self.first_tab != "nodes":  # `attach --tab`
-            self.call_after_refresh(self.action_tab, self.first_tab)
+            self.call_after_refresh(self.navigation.tab, self.first_tab)
         elif self.first_typing is not None:  # `attach --type`: once the tree is laid out
-            self.call_after_refresh(self._type_first, self.first_typing)
+            self.call_after_refresh(self.keyboard.type_first, self.first_typing)
 
-    def _type_first(self, process: str) -> None:
-        tree = self.launch_tree
-        if process in tree.rows:
-            tree.move_cursor(tree.rows[process])
-            self.action_type_into()
-
-    # --- the Nodes tab's selection: its commands (nodes/commands.py) ------------------------
+    # --- the keys: each handed to the object it names -------------------------------------
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        allowed = super().check_action(action, parameters)  # none while typing into a node
-        if self.read_only and action in READ_ONLY_REFUSES:
+        if self.keyboard.typing_to is not None:
+            # every key is the node's while typing (ctrl+c, ctrl+p too): the footer offers
+            # only ctrl+], not tuilaunch's stop or restart
             return False
-        if allowed is not True or action not in NODE_COMMANDS:
-            return allowed
+        name = str(parameters[0]) if parameters else ""
+        if self.read_only and (action, name) in READ_ONLY_REFUSES:
+            return False
+        if action == "keyboard":
+            return self.keyboard.applies(name, parameters[1:])
+        if action == "inspector":
+            return self.inspector.applies(name, parameters[1:])
+        if action == "navigation" and name == "find":
+            # `/` into a list's filter: the tabs whose panel has no `/` of its own
+            return self.tabs.active in ("services", "params")
+        if action != "command":
+            return True
         if self.supervisor is None or self.tabs.active != "nodes":
             return False
-        return self.nodes.commands.applies(action, parameters)
+        return self.nodes.commands.applies(name, parameters[1:])
 
-    def selected(self) -> list[str]:
-        return self.nodes.commands.selected()
+    def action_command(self, verb: str, *parameters: str) -> None:
+        """s, r, t, ], [, a: the Nodes tab's selection's commands (nodes/commands.py)."""
+        commands = self.nodes.commands
+        if verb in ("stop", "restart", "start"):
+            commands.command(verb)  # type: ignore[arg-type]
+        elif verb == "lifecycle":
+            commands.lifecycle(parameters[0])
+        else:
+            self.nodes.show_all()
 
-    def action_stop(self) -> None:
-        self.nodes.commands.command("stop")
+    def action_keyboard(self, action: str, *parameters: str) -> None:
+        self.keyboard.act(action, *parameters)
 
-    def action_restart(self) -> None:
-        self.nodes.commands.command("restart")
+    def action_inspector(self, action: str) -> None:
+        self.inspector.act(action)
 
-    def action_start(self) -> None:
-        self.nodes.commands.command("start")
+    def action_navigation(self, action: str, *parameters: str) -> None:
+        if action == "tab":
+            self.navigation.tab(*parameters)
+        elif action == "help":
+            self.navigation.help()
+        else:
+            self.navigation.find()
 
-    def action_lifecycle(self, direction: str) -> None:
-        self.nodes.commands.lifecycle(direction)
+    def action_leaving(self, action: str) -> None:
+        self.leaving.act(action)
 
-    def action_all_output(self) -> None:
-        self.nodes.show_all()
+    async def action_quit(self) -> None:
+        """Textual's quit (ctrl+q): as q."""
+        self.leaving.request_quit()
 
-    def action_black_box(self) -> None:
-        self.run_worker(self.recordings.black_box_now(), group="recording",
-                        exit_on_error=False)
+    def action_leave_field(self) -> None:
+        """Escape in a text field (screens/fields.py): back where the user was."""
+        self.navigation.leave_field()
 
-    def action_black_box_keep(self) -> None:
-        self.run_worker(self.recordings.black_box_keep(), group="recording",
-                        exit_on_error=False)
+    def on_descendant_focus(self, event: events.DescendantFocus) -> None:
+        self.navigation.focused(event.widget)
+
+    @on(TabbedContent.TabActivated)
+    def _tab_changed(self, event: TabbedContent.TabActivated) -> None:
+        self.navigation.tab_activated(event.pane.id or "nodes")
+
+    @on(LaunchTree.FiguresShown)
+    def _figures_follow(self) -> None:
+        self.inspector.figures_follow()
+
+    def on_topics_panel_plot_asked(self, message: TopicsPanel.PlotAsked) -> None:
+        self.inspector.plot(message.topic)
 
     def on_topics_panel_record_asked(self, message: TopicsPanel.RecordAsked) -> None:
-        self.recordings.toggle(message.topic)
-
-    def tab_shown(self, pane: str) -> None:
-        super().tab_shown(pane)
-        self.args_tab.set_shown(pane == "args")
+        self.inspector.recordings.toggle(message.topic)
 
     def action_apply(self) -> None:
         """F5, from any tab: the form's values and the file as it is on disk now."""
@@ -293,22 +342,24 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
         for command in super().get_system_commands(screen):
             if command.title != "Keys":  # Textual's side panel took 30 of 80 columns
                 yield command
-        yield SystemCommand("Keys", "All the keys (F1, ?); esc closes", self.action_help)
-        yield SystemCommand("Stop selected", "Stop the selected node or group", self.action_stop)
+        yield SystemCommand("Keys", "All the keys (F1, ?); esc closes", self.navigation.help)
+        yield SystemCommand("Stop selected", "Stop the selected node or group",
+                            lambda: self.action_command("stop"))
         yield SystemCommand("Restart selected", "Restart the selected node or group",
-                            self.action_restart)
+                            lambda: self.action_command("restart"))
         yield SystemCommand("Start selected", "Start the selected node or group",
-                            self.action_start)
+                            lambda: self.action_command("start"))
         yield SystemCommand("Apply arguments", "Relaunch with the edited arguments",
                             self.action_apply)
         yield SystemCommand("Detach", "Leave the launch running (tuilaunch attach)",
-                            self.action_detach)
+                            self.leaving.detach)
         if not self.read_only:  # it changes what the session keeps: a view asks nothing
             yield SystemCommand("Black box: keep the last N s", "Switch the session's black "
-                                "box on (asks the seconds; 0: off)", self.action_black_box_keep)
+                                "box on (asks the seconds; 0: off)",
+                                lambda: self.inspector.act("black_box_keep"))
         yield SystemCommand("Black box: write now", "Write the last seconds kept into the "
-                            "session's log folder (b)", self.action_black_box)
-        selected = self.selected() if self.supervisor is not None else []
+                            "session's log folder (b)", lambda: self.inspector.act("black_box"))
+        selected = self.nodes.commands.selected() if self.supervisor is not None else []
         if len(selected) == 1 and self.supervisor is not None:
             process = selected[0]
             state = self.supervisor.lifecycle.states.get(process)
@@ -320,13 +371,13 @@ class TuiLaunchApp(NodeKeyboard, Inspector, Navigation, Quitting, OnceToasts, Ke
                         p, t))
         if len(selected) == 1:
             yield SystemCommand("Topics of selected node", "The node's topics, rates and QoS",
-                                self.action_node_topics)
+                                self.inspector.node_topics)
             yield SystemCommand("Log level of selected node", "debug, info, warn, error, "
-                                "fatal (asks)", self.action_log_level)
+                                "fatal (asks)", self.inspector.log_level)
         for tab, title in (("nodes", "Nodes"), ("args", "Arguments"), ("services", "Services"),
                            ("params", "Parameters"), ("topics", "Topics")):
             yield SystemCommand(f"Open {title}", f"Show the {title} tab",
-                                lambda tab=tab: self.action_tab(tab))
+                                lambda tab=tab: self.navigation.tab(tab))
 
 
 def launch_app(path: str, arguments: dict[str, str], log_dir: Path, name: str | None = None,
@@ -360,3 +411,14 @@ def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any
     if served or (options.get("session_host") is not None and not os.access(path, os.R_OK)):
         return TuiLaunchApp(ServedSession(path, arguments), log_dir, **options)
     return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)
+
+
+def pane_save_dir(log_dir: Path, host: str | None, name: str) -> Path:
+    """Where `w` writes a pane: the launch's log folder, which is on this computer, unless
+    the session runs on another machine (its log folder is there; a pane is saved here, in
+    a folder named after that machine and session)."""
+    if host is None:
+        return log_dir
+    base = os.environ.get("ROS_LOG_DIR") or os.path.join(
+        os.environ.get("ROS_HOME") or os.path.expanduser("~/.ros"), "log")
+    return Path(base) / f"tuilaunch-{host}-{name}"

@@ -6,20 +6,20 @@ from __future__ import annotations
 
 import re
 from collections import deque
+from collections.abc import Callable
 from typing import Any, TypeVar
 
-from textual import on
+from textual.binding import Binding
 from textual.timer import Timer
 
-from ..client.session_graph import GraphCalls, SessionGraph
+from ..client.session_graph import SessionGraph
 from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.vocabulary.request import Request
 from ..engine.run.vocabulary.requests import PlotFields, WatchQos, WatchResources
 from .log_levels import LogLevels
-from .navigation import Navigation
-from .screens.topics_panel import TopicsPanel
-from .screens.tree_panel import LaunchTree
+from .recording import Recordings
+from .session_link import SessionLink
 
 R = TypeVar("R")
 
@@ -29,20 +29,34 @@ TREND_KEEP = 300
 """CPU and memory samples kept for the selected node's sparklines: one a second, 5 min."""
 
 
-class Inspector(Navigation):
+INSPECTOR_BINDINGS = [
+    Binding("o", "inspector('node_topics')", "Topics of node", show=False,
+            tooltip="The selected node's topics, in the Topics tab"),
+    Binding("L", "inspector('log_level')", "Log level", show=False,
+            tooltip="Set the selected node's log level"),
+    Binding("b", "inspector('black_box')", "Black box", show=False,
+            tooltip="Write the session's black box now (its log folder)"),
+]
+"""The inspector's keys, bound on the app (`action_inspector` hands them over by name)."""
+
+
+class Inspector:
     """Topics, rates, echo, CPU and memory, log levels: all asked of the session server
-    (where the nodes run) through the supervisor's `request`, on the engine thread."""
+    (where the nodes run) through the supervisor's `request`, on the engine thread. An
+    object the app holds (`app.inspector`); `show_tab` shows a tab (`o`)."""
 
-    topics_panel: TopicsPanel  # set in on_mount
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
+    def __init__(self, app: SessionLink, show_tab: Callable[[str], None]) -> None:
+        self.app = app
+        self.show_tab = show_tab
         self.watching_resources = False
         self._figures_asked: list[str] | None = None
         """The processes the server sends CPU and memory of (None: all), last asked."""
         self._figures_timer: Timer | None = None
-        self.log_levels = LogLevels(self, self.inspect, self.asked_to_stop)
-        self.session_graph = SessionGraph(self.inspect)
+        self.log_levels = LogLevels(app, self.inspect, app.asked_to_stop)
+        self.graph = SessionGraph(self.inspect)
+        """The Services and Params tabs' graph: the session's, where the nodes run (this
+        process never loads rclpy)."""
+        self.recordings = Recordings(app, self.inspect)  # w in the Topics tab, b
         self.trends: dict[str, deque[tuple[float, float]]] = {}
         """The selected process's (CPU%, RSS) a second, the server's last minutes first."""
         self._trend_asked: str | None = None
@@ -54,25 +68,23 @@ class Inspector(Navigation):
 
     async def inspect(self, request: Request[R]) -> R:
         """A session request's result; raises SessionError with the server's message."""
-        return await self.engine.run(self.client().request(request))
+        return await self.app.engine.run(self.app.client().request(request))
 
-    def graph(self) -> GraphCalls:
-        """The Services and Params tabs' graph: the session's, where the nodes run (this
-        process never loads rclpy)."""
-        return self.session_graph
-
-    def inspector_event(self, event: Event) -> None:
+    def show(self, event: Event) -> None:
+        """A reading the session sent (rates, echo, plot samples, CPU and memory, QoS
+        problems) to the widget that asked for it."""
         data = event.data or {}
+        topics_panel = self.app.topics_panel
         if isinstance(event, Rates):
-            self.topics_panel.show_rates(data)
+            topics_panel.show_rates(data)
         elif isinstance(event, Echo):
-            self.topics_panel.show_echo(data)
+            topics_panel.show_echo(data)
         elif isinstance(event, PlotSamples):
             if self.plot_screen is not None:
                 self.plot_screen.add(data)
         elif isinstance(event, Resources):
             if self.watching_resources:  # one sent before the server heard "off" is stale
-                self.launch_tree.set_usage(data)
+                self.app.launch_tree.set_usage(data)
         elif isinstance(event, Trend):
             if self.watching_resources:
                 for process, (cpu, rss) in data.items():
@@ -81,28 +93,27 @@ class Inspector(Navigation):
         elif isinstance(event, Qos):
             # the server says when the problems change (watch_qos): the tree marks both
             # nodes of each pair that cannot talk, the line above it says why
-            self.launch_tree.set_qos_problems(self.qos_problems_by_process(
+            self.app.launch_tree.set_qos_problems(self.qos_problems_by_process(
                 data.get("topics") or []))
-            self.update_detail()
+            self.app.update_detail()
 
     def tab_shown(self, pane: str) -> None:
         """Measures what the tab on screen shows, and only that: rates and echo for the
         Topics tab, CPU and memory for the Nodes tab."""
-        super().tab_shown(pane)
-        self.topics_panel.set_shown(pane == "topics")
+        self.app.topics_panel.set_shown(pane == "topics")
         nodes = pane == "nodes"
-        if nodes != self.watching_resources and self.supervisor is not None:
+        if nodes != self.watching_resources and self.app.supervisor is not None:
             self.watching_resources = nodes
-            self.run_worker(self._watch_resources(nodes), group="inspector",
-                            exit_on_error=False)
+            self.app.run_worker(self._watch_resources(nodes), group="inspector",
+                                exit_on_error=False)
             # the QoS marks: the server checks the graph and says when they change, so
             # an ssh link carries no request for marks that rarely change
-            self.run_worker(self._watch(WatchQos(on=nodes)), group="inspector",
-                            exit_on_error=False)
+            self.app.run_worker(self._watch(WatchQos(on=nodes)), group="inspector",
+                                exit_on_error=False)
 
     def qos_problems_by_process(self, topics: list[dict[str, Any]]) -> dict[str, list[str]]:
         """Each launch process's node, and the QoS sentences that name it."""
-        by_name = {self.node_name(p.id): p.id for p in self.session.plan.processes}
+        by_name = {self.node_name(p.id): p.id for p in self.app.session.plan.processes}
         found: dict[str, list[str]] = {}
         for topic in topics:
             problems = topic.get("qos_problems") or []
@@ -123,8 +134,9 @@ class Inspector(Navigation):
     async def _watch_resources(self, on: bool) -> None:
         # no CPU column without it; of the processes whose figures are on screen only; and
         # the selected one's last minutes, for the sparklines of the detail line
-        self._figures_asked = self.launch_tree.figures_shown()
-        selected = self.selected_process() if on else None
+        tree = self.app.launch_tree
+        self._figures_asked = tree.figures_shown()
+        selected = self.app.nodes.selected_process() if on else None
         self._trend_asked = selected
         try:
             result = await self.inspect(WatchResources(on=on, processes=self._figures_asked,
@@ -137,8 +149,8 @@ class Inspector(Navigation):
                                     maxlen=TREND_KEEP) for p, samples in kept.items()}
         else:
             self.trends = {}
-            self.launch_tree.set_usage({})  # figures that no longer move would mislead
-        self.update_detail()
+            tree.set_usage({})  # figures that no longer move would mislead
+        self.app.update_detail()
 
     async def _watch(self, request: Request[Any]) -> None:
         """Starts or stops a stream of the server's (`watch_qos`); one the server cannot
@@ -148,100 +160,110 @@ class Inspector(Navigation):
         except SessionError:
             pass
 
-    @on(LaunchTree.FiguresShown)
-    def _figures_follow(self) -> None:
+    def figures_follow(self) -> None:
         """The figures on screen are another process's (the selection moved), or every
         process's (the tree grew wide enough for its column): the server is told once the
         selection rests, so running down the tree is one request, not one a row."""
-        if not self.watching_resources or (self.launch_tree.figures_shown() ==
-                                           self._figures_asked and
-                                           self.selected_process() == self._trend_asked):
+        if not self.watching_resources or not self._figures_moved():
             return
         if self._figures_timer is not None:
             self._figures_timer.stop()
-        self._figures_timer = self.set_timer(FIGURES_SETTLE, self._ask_figures)
+        self._figures_timer = self.app.set_timer(FIGURES_SETTLE, self._ask_figures)
+
+    def _figures_moved(self) -> bool:
+        return self.app.launch_tree.figures_shown() != self._figures_asked or \
+            self.app.nodes.selected_process() != self._trend_asked
 
     def _ask_figures(self) -> None:
         self._figures_timer = None
-        if self.watching_resources and (self.launch_tree.figures_shown() !=
-                                        self._figures_asked or
-                                        self.selected_process() != self._trend_asked):
-            self.run_worker(self._watch_resources(True), group="inspector",
-                            exit_on_error=False)
+        if self.watching_resources and self._figures_moved():
+            self.app.run_worker(self._watch_resources(True), group="inspector",
+                                exit_on_error=False)
 
     # --- plots ------------------------------------------------------------------------------
 
-    @on(TopicsPanel.PlotAsked)
-    def _plot_asked(self, message: TopicsPanel.PlotAsked) -> None:
-        self.run_worker(self._open_plot(message.topic), group="inspector",
-                        exit_on_error=False)
+    def plot(self, topic: str) -> None:
+        self.app.run_worker(self._open_plot(topic), group="inspector", exit_on_error=False)
 
     async def _open_plot(self, topic: str) -> None:
         """The plot of `topic`, its first numeric field chosen (`f` picks others)."""
+        app = self.app
         try:
             info = await self.inspect(PlotFields(topic=topic))
         except SessionError as exc:
-            self.notify(str(exc).split(": ", 1)[-1], severity="error", title="plot")
+            app.notify(str(exc).split(": ", 1)[-1], severity="error", title="plot")
             return
         numeric = list(info.get("fields") or [])
         if not numeric:
-            self.notify(f"{topic} ({info.get('type')}) has no numeric field to plot",
-                        severity="warning", title="plot")
+            app.notify(f"{topic} ({info.get('type')}) has no numeric field to plot",
+                       severity="warning", title="plot")
             return
         from ..client.plot_series import Source
         from .screens.plot_screen import PlotScreen, SessionPlots  # plotext: once shown
 
         def leave() -> None:
             self.plot_screen = None
-            self.pop_screen()
+            app.pop_screen()
 
         # the screen asks its streams of the session itself (plot, plot_fields, topics,
         # plot_stop), as `tuilaunch plot` and the fleet's do: this app hands it the events
         self.plot_screen = PlotScreen(SessionPlots({"": self.inspect}, leave),
                                       [Source("", topic, numeric[:1])])
-        self.push_screen(self.plot_screen)
+        app.push_screen(self.plot_screen)
 
     # --- from the Nodes tab ------------------------------------------------------------------
 
     def node_name(self, process: str) -> str:
         """The ROS name of a process's node: the plan's, else the one it reports."""
-        return self.store.node_name(self.session.plan, process)
+        return self.app.store.node_name(self.app.session.plan, process)
 
     def trend_of(self, process: str) -> deque[tuple[float, float]] | None:
         """A process's CPU and memory trend, while the Nodes tab measures them."""
         return self.trends.get(process) if self.watching_resources else None
 
-    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+    def applies(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """As Textual's check_action for the inspector's keys (`action` its name here)."""
         if action in ("node_topics", "log_level"):
-            if self.supervisor is None or self.tabs.active != "nodes":
+            if self.app.supervisor is None or self.app.tabs.active != "nodes":
                 return False
-            return True if self.selected_process() is not None else None
-        return super().check_action(action, parameters)
+            return True if self.app.nodes.selected_process() is not None else None
+        return True
 
-    def action_node_topics(self) -> None:
-        process = self.selected_process()
+    def act(self, action: str) -> None:
+        {"node_topics": self.node_topics, "log_level": self.log_level,
+         "black_box": lambda: self.app.run_worker(
+             self.recordings.black_box_now(), group="recording", exit_on_error=False),
+         "black_box_keep": lambda: self.app.run_worker(
+             self.recordings.black_box_keep(), group="recording", exit_on_error=False),
+         }[action]()
+
+    def node_topics(self) -> None:
+        process = self.app.nodes.selected_process()
         if process is None:
             return
         self.topics_process = process
-        self.topics_panel.show_node(self.node_name(process))
-        self.action_tab("topics")
+        self.app.topics_panel.show_node(self.node_name(process))
+        self.show_tab("topics")
 
-    def update_detail(self) -> None:
-        super().update_detail()
+    def detail_shown(self) -> None:
+        """The detail line drew the selection again: what follows it follows."""
         self._follow_topics_node()
-        self._figures_follow()  # the selection may have moved
+        self.figures_follow()  # the selection may have moved
 
     def _follow_topics_node(self) -> None:
         """After events: the node `o` listed may now be elsewhere (robot:=r1 -> r2)."""
-        process, panel = self.topics_process, self.topics_panel
-        if process is None or panel.node is None:
+        process = self.topics_process
+        if process is None:
+            return
+        panel = self.app.topics_panel
+        if panel.node is None:
             self.topics_process = None  # `x` listed all topics: nothing to follow
             return
         name = self.node_name(process)
         if name not in (panel.node, process):  # known again, and somewhere else
             panel.show_node(name)
 
-    def action_log_level(self) -> None:
-        process = self.selected_process()
+    def log_level(self) -> None:
+        process = self.app.nodes.selected_process()
         if process is not None:
             self.log_levels.ask(process, self.node_name(process))

@@ -22,36 +22,39 @@ from ..engine.run.vocabulary.requests import Input, Status, TakeKeys
 from .key_order import KeyHold, hold_keys
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
+from .screens.tree_panel import LaunchTree
 from .session_link import SessionLink
 
 RECENT_PREFIXES = 10
 """Tools remembered for the prompt, most recent first (in memory, for this TUI)."""
 
 
-class NodeKeyboard(SessionLink):
-    """Typing into the selected node, running it under a tool, its command line."""
+KEYBOARD_BINDINGS = [
+    Binding("i", "keyboard('type_into')", "Type", tooltip="Send the keys to the node's "
+            "terminal until ctrl+] (a node started with pipes is offered a terminal first)"),
+    Binding("g", "keyboard('run_under')", "Debug", tooltip="Restart the node under a tool "
+            "(gdb, valgrind...) until its next plain restart"),
+    Binding("c", "keyboard('command_line')", "Command", show=False,
+            tooltip="The exact command line the node was started with, to copy"),
+    # where `i` or `g` cannot act (a row that is not a node, a read-only view), these
+    # take the key: the keys typed with it are dropped and one line says why, where
+    # they would otherwise run as commands (`istop` Enter on a group stopped it)
+    Binding("i", "keyboard('keys_not_here', 'i')", show=False),
+    Binding("g", "keyboard('keys_not_here', 'g')", show=False),
+]
+"""The keyboard's keys, bound on the app (`action_keyboard` hands them to NodeKeyboard)."""
 
-    BINDINGS = [
-        Binding("i", "type_into", "Type", tooltip="Send the keys to the node's terminal "
-                "until ctrl+] (a node started with pipes is offered a terminal first)"),
-        Binding("g", "run_under", "Debug", tooltip="Restart the node under a tool (gdb, "
-                "valgrind...) until its next plain restart"),
-        Binding("c", "command_line", "Command", show=False,
-                tooltip="The exact command line the node was started with, to copy"),
-        # where `i` or `g` cannot act (a row that is not a node, a read-only view), these
-        # take the key: the keys typed with it are dropped and one line says why, where
-        # they would otherwise run as commands (`istop` Enter on a group stopped it)
-        Binding("i", "keys_not_here('i')", show=False),
-        Binding("g", "keys_not_here('g')", show=False),
-    ]
 
-    typing_to: str | None = None
-    """The node the keys go to, while typing."""
-    typed_line: str = ""
-    """What was typed since the last Enter: shown before the node's echo arrives."""
+class NodeKeyboard:
+    """Typing into the selected node, running it under a tool, its command line: an object
+    the app holds (`app.keyboard`), its keys handed to it by name (`act`)."""
 
-    def __init__(self, *args: Any, **options: Any) -> None:
-        super().__init__(*args, **options)
+    def __init__(self, app: SessionLink) -> None:
+        self.app = app
+        self.typing_to: str | None = None
+        """The node the keys go to, while typing."""
+        self.typed_line = ""
+        """What was typed since the last Enter: shown before the node's echo arrives."""
         self.prefix_history: list[str] = []
         self.other_typists: dict[str, int] = {}
         """Processes another client types into, and that client's number."""
@@ -64,63 +67,64 @@ class NodeKeyboard(SessionLink):
 
     # --- which keys apply -----------------------------------------------------------------
 
-    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        if self.typing_to is not None:
-            # every key is the node's while typing (ctrl+c, ctrl+p too): the footer offers
-            # only ctrl+], not tuilaunch's stop or restart
-            return False
-        if action == "find":  # `/` into a list's filter: the tabs whose panel has no `/`
-            return self.tabs.active in ("services", "params")
+    def applies(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """As Textual's check_action for the keyboard's keys (`action` its name here)."""
+        app = self.app
         if action in ("type_into", "run_under", "command_line"):
-            if self.supervisor is None or self.tabs.active != "nodes" or (
-                    self.read_only and action != "command_line"):
+            if app.supervisor is None or app.tabs.active != "nodes" or (
+                    app.read_only and action != "command_line"):
                 return False  # a read-only footer offers nothing it refuses
-            return True if self.selected_process() else None
-        if action == "keys_not_here":  # reached only when the key's own action cannot run
-            return self.tabs.active == "nodes"
-        return super().check_action(action, parameters)
+            return True if app.nodes.selected_process() else None
+        # keys_not_here: reached only when the key's own action cannot run
+        return app.tabs.active == "nodes"
 
-    def action_keys_not_here(self, key: str) -> None:
+    def act(self, action: str, *parameters: str) -> None:
+        {"type_into": self.type_into, "run_under": self.run_under,
+         "command_line": self.command_line,
+         "keys_not_here": lambda: self.keys_not_here(*parameters)}[action]()
+
+    def keys_not_here(self, key: str) -> None:
         """`i` or `g` where it cannot act: said at once, and the rest of its burst dropped
         (never commands)."""
-        self._refused(hold_keys(self), self._why_not_here(key), key)
+        self._refused(hold_keys(self.app), self._why_not_here(key), key)
 
     def _why_not_here(self, key: str) -> str:
-        if self.read_only:
+        app = self.app
+        if app.read_only:
             return refusal("typing into a node" if key == "i" else
                            "running a node under a tool").args[0]
-        if self.supervisor is None:
+        if app.supervisor is None:
             return "the session is not followed yet"
-        node = self.launch_tree.cursor_node
-        kind = node.data.kind if node is not None and node.data is not None else ""
-        label = str(node.label) if node is not None else ""
-        label = label if len(label) <= 40 else label[:39] + "…"
-        what = {"all": "every node's output", "action": "an action",
-                "component": "a component (its container is the process)"}.get(
-                    kind, "the launch" if node is self.launch_tree.root else "a group")
-        verb = "types into" if key == "i" else "runs under a tool"
-        return f"{label!r} is {what}, not a node: {key} {verb} a node (select its row)"
+        return not_a_node(app.launch_tree, key)
 
     # --- typing ---------------------------------------------------------------------------
 
-    def action_type_into(self) -> None:
-        process = self.selected_process()
-        if process is None or self.supervisor is None:
+    def type_first(self, process: str) -> None:
+        """`attach --type`: the process's row selected and typed into, as `i` on it."""
+        tree = self.app.launch_tree
+        if process in tree.rows:
+            tree.move_cursor(tree.rows[process])
+            self.type_into()
+
+    def type_into(self) -> None:
+        process = self.app.nodes.selected_process()
+        if process is None or self.app.supervisor is None:
             return
         # the keys typed right after `i` are for the node (they wait for its typing line),
         # or answer the question whether to give it a terminal
-        hold = hold_keys(self)
-        self.run_worker(self._take_keyboard(process, hold), group="typing",
-                        exit_on_error=False)
+        hold = hold_keys(self.app)
+        self.app.run_worker(self._take_keyboard(process, hold), group="typing",
+                            exit_on_error=False)
 
     async def _take_keyboard(self, process: str, hold: KeyHold) -> None:
         """Types into the node, or offers what would let `i` type (a terminal, a start);
         where nothing can, the keys typed with `i` are dropped: a key typed for a node
         never becomes one of tuilaunch's commands (`s` stop, `q` quit, `d` detach)."""
-        assert self.supervisor is not None
-        state = self.supervisor.states.get(process)
+        app = self.app
+        assert app.supervisor is not None
+        state = app.supervisor.states.get(process)
         try:
-            terminal = await self.engine.run(had_terminal(self.supervisor, process)) \
+            terminal = await app.engine.run(had_terminal(app.supervisor, process)) \
                 if state in RAN else None
         except LaunchError as exc:
             self._refused(hold, str(exc))
@@ -130,7 +134,7 @@ class NodeKeyboard(SessionLink):
                                  piped=terminal is False)
             # the question waits for a key typed once it is shown: the keys typed with
             # `i` were for the node, and a `y` among them (`iyes`) must not answer it
-            hold.drop(said=lambda: self.notify(
+            hold.drop(said=lambda: app.notify(
                 "The keys typed with i were not sent: answer the question with a key "
                 "typed now", severity="warning"))
         elif state != "running":
@@ -140,12 +144,12 @@ class NodeKeyboard(SessionLink):
             await self._start_typing(process, hold)
 
     def _refused(self, hold: KeyHold, why: str, key: str = "i") -> None:
-        hold.drop()
-        self.notify(f"{why}. The keys typed with {key} were not sent", severity="warning")
+        refuse_keys(self.app, hold, why, key)
 
     async def _start_typing(self, process: str, hold: KeyHold) -> None:
+        app = self.app
         try:
-            await self.engine.run(take_keyboard(self.client(), process))
+            await app.engine.run(take_keyboard(app.client(), process))
         except LaunchError as exc:
             self._refused(hold, str(exc))  # another client types into it, it just ended
             return
@@ -157,12 +161,12 @@ class NodeKeyboard(SessionLink):
             self.typed_line = ""
             line = TypingLine(self._typed, id="typing-line")
             self._typing_line = line
-            await self.query_one("#nodes-tab").mount(line, before="#nodes-split")
-            self.screen.set_focus(line)
+            await app.nodes.mount(line, before="#nodes-split")
+            app.screen.set_focus(line)
         finally:
             hold.release()  # the keys typed after `i` go to the line
         self._show_typing()
-        self.refresh_bindings()
+        app.refresh_bindings()
 
     def _offer_terminal(self, process: str, verb: str, piped: bool) -> None:
         """Asks to start (or restart) the node with a terminal; `y` does it and types."""
@@ -171,21 +175,22 @@ class NodeKeyboard(SessionLink):
                 # the keys typed after `y` (held since it was answered) are the node's:
                 # they wait out the restart (a node slow to stop takes seconds) for its
                 # typing line, where tuilaunch's own keys would otherwise get them
-                self.run_worker(self._restart_with_terminal(process, question.hold),
-                                group="typing", exit_on_error=False)
+                self.app.run_worker(self._restart_with_terminal(process, question.hold),
+                                    group="typing", exit_on_error=False)
             else:
                 question.hold.drop()  # no: the rest of the burst was for the node too
 
-        assert self.supervisor is not None
+        supervisor = self.app.supervisor
+        assert supervisor is not None
         if piped:
             why = (f"{process} has no terminal to type into: its file gives it pipes, as "
                    "ros2 launch does without emulate_tty=True.")
         else:
-            why = f"{process} is not running ({self.supervisor.states.get(process)})."
+            why = f"{process} is not running ({supervisor.states.get(process)})."
         question = TerminalQuestion(
             f"{why} {verb} it with a terminal (until its next plain restart) and type "
             "into it?", f"{verb} it (y)")
-        self.push_screen(question, answered)
+        self.app.push_screen(question, answered)
 
     async def _restart_with_terminal(self, process: str, hold: KeyHold) -> None:
         try:
@@ -197,9 +202,10 @@ class NodeKeyboard(SessionLink):
     async def _restart_with(self, process: str, **options: Any) -> bool:
         """Restarts the node with `options` (a tool, a terminal); False, said, when the
         restart was refused."""
-        assert self.supervisor is not None
-        return await restart_with(self, self.engine, self.supervisor, process,
-                                  self.asked_to_stop, **options)
+        app = self.app
+        assert app.supervisor is not None
+        return await restart_with(app, app.engine, app.supervisor, process,
+                                  app.asked_to_stop, **options)
 
     def _typed(self, key: str, character: str | None) -> None:
         """A key pressed while typing: to the node, or ctrl+] back to tuilaunch."""
@@ -215,8 +221,8 @@ class NodeKeyboard(SessionLink):
         self._keys_out.append(data)
         if not self._sending:
             self._sending = True
-            self.run_worker(self._send_keys(self.typing_to), group="typing-keys",
-                            exit_on_error=False)
+            self.app.run_worker(self._send_keys(self.typing_to), group="typing-keys",
+                                exit_on_error=False)
         self._show_typing()
 
     async def _send_keys(self, process: str) -> None:
@@ -225,10 +231,10 @@ class NodeKeyboard(SessionLink):
             while self._keys_out:
                 data = "".join(self._keys_out)
                 self._keys_out.clear()
-                await self.engine.run(type_keys(self.client(), process, data))
+                await self.app.engine.run(type_keys(self.app.client(), process, data))
         except LaunchError as exc:
             self._keys_out.clear()
-            self.notify(str(exc), severity="error")
+            self.app.notify(str(exc), severity="error")
         finally:
             self._sending = False
 
@@ -237,22 +243,22 @@ class NodeKeyboard(SessionLink):
         process = self.typing_to
         if process is None:
             return
+        app = self.app
         self.typing_to = None
         self.typed_line = ""
         if self._typing_line is not None:
             self._typing_line.remove()
             self._typing_line = None
-        self.launch_tree.focus()
-        self.run_worker(self._release(process), group="typing", exit_on_error=False)
+        app.launch_tree.focus()
+        app.run_worker(self._release(process), group="typing", exit_on_error=False)
         if why:
-            self.notify(why)
-        self._status_text = ""  # the line is drawn again without the typing part
-        self.update_status()
-        self.refresh_bindings()
+            app.notify(why)
+        app.update_status()
+        app.refresh_bindings()
 
     async def _release(self, process: str) -> None:
         try:
-            await self.engine.run(release_keyboard(self.client(), process))
+            await self.app.engine.run(release_keyboard(self.app.client(), process))
         except LaunchError:
             pass  # the session is gone, and with it the keyboard
 
@@ -263,25 +269,20 @@ class NodeKeyboard(SessionLink):
                              " (ctrl+] gives the keys back): ", self.typed_line, "▏")
         if self._typing_line is not None:
             self._typing_line.update(text)
-        self.update_status()
+        self.app.update_status()
 
-    def update_status(self) -> None:
-        super().update_status()
-        if self.supervisor is None or self.ended_elsewhere is not None or \
-                not hasattr(self, "status_bar"):
-            return
-        notes = [f"client {client} types into {process}"
-                 for process, client in self.other_typists.items()]
-        link = self.over_link()
-        if link is not None and link.link_lost:
-            notes = []  # not known while the link is down: the line says that, whole
+    def status_notes(self, link_lost: bool) -> list[str]:
+        """What the status line says before the rest: typing, and who else types where
+        (not known while the link is down: the line says that, whole)."""
+        notes = [] if link_lost else [f"client {client} types into {process}"
+                                      for process, client in self.other_typists.items()]
         if self.typing_to is not None:
             notes.insert(0, f"typing to {self.typing_to}: {self.typed_line}")
-        if notes:
-            self.status_bar.update(Text(f"{'  '.join(notes)}  |  {self._status_text}"))
-            self._status_text = ""  # the plain line is drawn again when the notes go
+        return notes
 
-    def show_events(self, events: list[Event], replaying: bool = False) -> None:
+    def take_events(self, events: list[Event]) -> list[Event]:
+        """The keyboard's news in a batch (who types where, restarts under way); the rest,
+        for the tabs."""
         rest = []
         for event in events:
             if isinstance(event, (ProcessExited, Started, Failed)) and event.process:
@@ -298,51 +299,77 @@ class NodeKeyboard(SessionLink):
                 self.other_typists.pop(process, None)  # ours, or given back
             else:
                 self.other_typists[process] = int(client)
-        super().show_events(rest, replaying)
-        # a node stopped to start again keeps the keys: typing began once its restart
-        # with a terminal was answered, and the news of its stop may come only now
-        if self.typing_to is not None and self.supervisor is not None and \
-                self.supervisor.states.get(self.typing_to) not in LIVE_STATES and \
+        return rest
+
+    def events_shown(self, events: list[Event]) -> None:
+        """After a batch: a node stopped to start again keeps the keys (typing began once
+        its restart with a terminal was answered, and the news of its stop may come only
+        now); one that ended gives them back."""
+        supervisor = self.app.supervisor
+        if self.typing_to is not None and supervisor is not None and \
+                supervisor.states.get(self.typing_to) not in LIVE_STATES and \
                 self.typing_to not in self._coming_back:
             self.stop_typing(f"{self.typing_to} is no longer running: the keys are back")
         elif any(isinstance(e, Typing) for e in events):
-            self.update_status()
+            self.app.update_status()
 
     # --- a tool, the command line ---------------------------------------------------------
 
-    def action_run_under(self) -> None:
-        process = self.selected_process()
+    def run_under(self) -> None:
+        process = self.app.nodes.selected_process()
         if process is None:
             return
 
         def chosen(prefix: str | None) -> None:
             if prefix:  # cancelled: nothing changes
-                self.run_worker(self._restart_under(process, prefix), group="commands",
-                                exit_on_error=False)
+                self.app.run_worker(self._restart_under(process, prefix), group="commands",
+                                    exit_on_error=False)
 
-        self.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
+        self.app.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
 
     async def _restart_under(self, process: str, prefix: str) -> None:
         if not await self._restart_with(process, prefix=prefix):
             return
         self.prefix_history = remembered(self.prefix_history, prefix)
-        self.notify(f"{process} runs under {prefix}: i types into it; r restarts it plain")
+        self.app.notify(f"{process} runs under {prefix}: i types into it; r restarts it plain")
 
-    def action_command_line(self) -> None:
-        process = self.selected_process()
+    def command_line(self) -> None:
+        process = self.app.nodes.selected_process()
         if process is not None:
             # `c y` typed together copies the command: the y waits for its dialog
-            release = hold_keys(self)
-            self.run_worker(self._show_command(process, release), group="commands",
-                            exit_on_error=False)
+            release = hold_keys(self.app)
+            self.app.run_worker(self._show_command(process, release), group="commands",
+                                exit_on_error=False)
 
     async def _show_command(self, process: str, release: Callable[[], None]) -> None:
         try:
-            await show_command_line(self, self.engine, self.client(), process)
+            await show_command_line(self.app, self.app.engine, self.app.client(), process)
         except LaunchError as exc:  # not following the session yet
-            self.notify(str(exc), severity="error")
+            self.app.notify(str(exc), severity="error")
         finally:
             release()
+
+
+def not_a_node(tree: LaunchTree, key: str) -> str:
+    """Why `i` or `g` cannot act on the tree's selected row (a group, an action, the
+    launch: a fleet's session), in one line (the single TUI's, each session's of a fleet)."""
+    node = tree.cursor_node
+    kind = node.data.kind if node is not None and node.data is not None else ""
+    label = str(node.label) if node is not None else ""
+    label = label if len(label) <= 40 else label[:39] + "…"
+    what = {"all": "every node's output", "action": "an action",
+            "component": "a component (its container is the process)"}.get(
+                kind, "the launch" if node is tree.root else "a group")
+    verb = "types into" if key == "i" else "runs under a tool"
+    return f"{label!r} is {what}, not a node: {key} {verb} a node (select its row)"
+
+
+def refuse_keys(app: App[Any], hold: KeyHold, why: str, key: str = "i") -> None:
+    """`key` (i, g) cannot act: the keys typed with it are dropped with the rest of their
+    burst (a key typed for a node never becomes a command: `istop` on a group stops
+    nothing), and one line says why (the single TUI and the fleet view alike)."""
+    hold.drop()
+    app.notify(f"{why}. The keys typed with {key} were not sent", severity="warning")
 
 
 async def restart_with(app: App[Any], engine: EngineThread, port: LaunchPort, process: str,

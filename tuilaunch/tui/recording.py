@@ -8,6 +8,7 @@ The recording is pulled from the session as `tuilaunch record` pulls it
 
 from __future__ import annotations
 
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from ..client.recording import LiveRecording
@@ -16,10 +17,12 @@ from ..engine.run.vocabulary.requests import BlackBox, BlackBoxWrite
 
 
 class Recordings:
-    """One recording at a time, and the black box's key, for an app with `inspect`."""
+    """One recording at a time, and the black box's key, for an app; `inspect` asks its
+    session."""
 
-    def __init__(self, app: Any) -> None:
+    def __init__(self, app: Any, inspect: Callable[[Any], Awaitable[Any]]) -> None:
         self.app = app
+        self.inspect = inspect
         self.live: LiveRecording | None = None
         self.timer: Any = None
 
@@ -30,7 +33,7 @@ class Recordings:
         if topic is None:
             return
         try:
-            self.live = LiveRecording(self.app.inspect, self.app.session_name or "session",
+            self.live = LiveRecording(self.inspect, self.app.session_name or "session",
                                       [topic])
         except OSError as exc:
             self.app.notify(str(exc), severity="error", title="record")
@@ -64,7 +67,7 @@ class Recordings:
         from .screens.dialogs import PathScreen
 
         try:
-            status = await self.app.inspect(BlackBox())  # how it is: its seconds offered
+            status = await self.inspect(BlackBox())  # how it is: its seconds offered
         except SessionError as exc:
             self.app.notify(str(exc).split(": ", 1)[-1], severity="error", title="black box")
             return
@@ -87,7 +90,7 @@ class Recordings:
         if status.get("size"):
             fields["size"] = status["size"]  # the bound it has (--black-box-size) stays
         try:
-            status = await self.app.inspect(BlackBox(**fields))
+            status = await self.inspect(BlackBox(**fields))
         except SessionError as exc:
             self.app.notify(str(exc).split(": ", 1)[-1], severity="error", title="black box")
             return
@@ -97,7 +100,7 @@ class Recordings:
 
     async def black_box_now(self) -> None:
         try:
-            written = await self.app.inspect(BlackBoxWrite())
+            written = await self.inspect(BlackBoxWrite())
         except SessionError as exc:
             self.app.notify(str(exc).split(": ", 1)[-1], severity="error", title="black box")
             return

@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 from rich.text import Text
 
 from ...client.link import relink_words
-from ...client.remote_supervisor import RemoteSupervisor
+from ...client.port import LaunchPort
 from ...client.served_session import ServedSession
+from ...engine.plan.session import Session
 from ...engine.run.event_buffer import EventBuffer
 from ...engine.run.events import (
     Event,
@@ -29,7 +30,7 @@ from ..nodes.events import NodeEvents
 from ..output_store import OutputStore
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree
-from ..session_link import SILENCE_SHOWN
+from ..status_line import SILENCE_SHOWN
 
 COUNTED = ("running", "pending", "stopping", "exited", "failed", "respawning")
 
@@ -44,9 +45,10 @@ class Member:
     tree: LaunchTree
     pane: OutputPanel
     store: OutputStore
-    session: ServedSession = field(default_factory=lambda: ServedSession("?", {}))
+    session: Session = field(default_factory=lambda: ServedSession("?", {}))
+    """Its plan: the one its server runs, sent over the link (a test hands its own)."""
     buffer: EventBuffer = field(default_factory=lambda: EventBuffer(max_lines=2500))
-    supervisor: RemoteSupervisor | None = None
+    supervisor: LaunchPort | None = None
     problem: str | None = None
     """Why the member is not followed now: cannot be reached (retrying), or ended."""
     ended: bool = False
@@ -125,7 +127,7 @@ class Member:
         return label
 
     @staticmethod
-    def _relinking(port: RemoteSupervisor) -> str:
+    def _relinking(port: LaunchPort) -> str:
         since = port.attempt_since
         words = relink_words(port.attempt, None if since is None else time.monotonic() - since)
         if words == "reconnecting":  # between tries (or one just begun): R tries now
