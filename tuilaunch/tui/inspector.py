@@ -16,8 +16,9 @@ from ..client.session_graph import SessionGraph
 from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.vocabulary.request import Request
-from ..engine.run.vocabulary.requests import PlotFields, WatchQos, WatchResources
+from ..engine.run.vocabulary.requests import WatchQos, WatchResources
 from .log_levels import LogLevels
+from .plots import open_plot
 from .recording import Recordings
 from .session_link import SessionLink
 
@@ -186,30 +187,15 @@ class Inspector:
         self.app.run_worker(self._open_plot(topic), group="inspector", exit_on_error=False)
 
     async def _open_plot(self, topic: str) -> None:
-        """The plot of `topic`, its first numeric field chosen (`f` picks others)."""
-        app = self.app
-        try:
-            info = await self.inspect(PlotFields(topic=topic))
-        except SessionError as exc:
-            app.notify(str(exc).split(": ", 1)[-1], severity="error", title="plot")
-            return
-        numeric = list(info.get("fields") or [])
-        if not numeric:
-            app.notify(f"{topic} ({info.get('type')}) has no numeric field to plot",
-                       severity="warning", title="plot")
-            return
-        from ..client.plot_series import Source
-        from .screens.plot_screen import PlotScreen, SessionPlots  # plotext: once shown
-
+        """The plot of `topic`; the screen asks its streams of the session itself (plot,
+        plot_fields, topics, plot_stop), as `tuilaunch plot` and the fleet's do: this app
+        hands it the events."""
         def leave() -> None:
             self.plot_screen = None
-            app.pop_screen()
+            self.app.pop_screen()
 
-        # the screen asks its streams of the session itself (plot, plot_fields, topics,
-        # plot_stop), as `tuilaunch plot` and the fleet's do: this app hands it the events
-        self.plot_screen = PlotScreen(SessionPlots({"": self.inspect}, leave),
-                                      [Source("", topic, numeric[:1])])
-        app.push_screen(self.plot_screen)
+        self.plot_screen = await open_plot(self.app, self.inspect, topic, {"": self.inspect},
+                                           "", leave)
 
     # --- from the Nodes tab ------------------------------------------------------------------
 

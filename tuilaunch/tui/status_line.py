@@ -5,11 +5,14 @@ session says once (the plan's warnings, a relaunch by another client)."""
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from pathlib import Path
 
 from rich.text import Text
 
 from ..client.link import lost_link_line
+from ..client.port import LaunchPort
+from ..engine.plan.model import Plan
 from .output_store import WARN, Line
 from .session_link import SessionLink
 
@@ -62,15 +65,8 @@ class StatusLine:
         """The status line drawn again, if it changed."""
         if self.app.supervisor is None or self.app.ended_elsewhere is not None:
             return  # the line says the session ended elsewhere until the TUI leaves
-        counts: dict[str, int] = {}
-        shown = self.app.launch_tree.states
-        for proc in self.app.session.plan.processes:
-            state = shown.get(proc.id) or self.app.supervisor.states.get(proc.id, "pending")
-            counts[state] = counts.get(state, 0) + 1
-        order = ("running", "unknown", "pending", "stopping", "exited", "failed", "respawning",
-                 "skipped")  # unknown: placed on a machine whose link is lost
-        text = "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in order
-                         if counts.get(s))
+        text = counts_words(self.app.session.plan, self.app.launch_tree.states,
+                            self.app.supervisor.states)
         undeclared = self.app.session.undeclared()
         args = " ".join(f"{k}:={v}" for k, v in self.app.session.arguments.items()
                         if k not in undeclared)
@@ -97,8 +93,8 @@ class StatusLine:
                 None if since is None else time.monotonic() - since,
                 self.app.status_bar.size.width or 78) + f"  {prefix}"
             name = Path(self.app.session.plan.file).name
-        elif link is not None and link.silent_for() >= SILENCE_SHOWN:
-            prefix = f"no word from {link.host} for {link.silent_for():.0f} s · {prefix}"
+        elif link is not None and silence_words(link) is not None:
+            prefix = f"{silence_words(link)} · {prefix}"
         line = f"{prefix}{name}  {text}  {args}"
         # typing, another client typing: said first
         notes = self.app.keyboard.status_notes(link is not None and bool(link.link_lost))
@@ -133,3 +129,29 @@ class StatusLine:
         return (max(w[0] for w in waits), max(w[1] for w in waits)) if waits else \
             (self.app.sigterm_timeout, self.app.sigkill_timeout)
 
+
+COUNTED = ("running", "unknown", "pending", "stopping", "exited", "failed", "respawning",
+           "skipped")
+"""The states a session's counts say, in this order (unknown: placed on a machine whose
+link is lost)."""
+
+
+def counts_words(plan: Plan, shown: Mapping[str, str], states: Mapping[str, str]) -> str:
+    """`5 running  1 failed`: a session's processes by state, as its tree shows them (else as
+    its port says), on the single TUI's status line and on each fleet session's root."""
+    counts: dict[str, int] = {}
+    for proc in plan.processes:
+        state = shown.get(proc.id) or states.get(proc.id, "pending")
+        counts[state] = counts.get(state, 0) + 1
+    return "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}" for s in COUNTED
+                     if counts.get(s))
+
+
+def silence_words(port: LaunchPort) -> str | None:
+    """`no word from arm for 7 s`: a link that has said nothing (probed meanwhile) for
+    SILENCE_SHOWN s or more, on the single TUI's status line and on a fleet session's root;
+    a hung link is said lost only after ssh's 15 s. None: no link, or it speaks."""
+    if port.host is None:
+        return None
+    silent = port.silent_for()  # 0 while the link is down: its lost line says that
+    return f"no word from {port.host} for {silent:.0f} s" if silent >= SILENCE_SHOWN else None

@@ -24,6 +24,7 @@ import contextlib
 import subprocess
 import sys
 import time
+from collections.abc import Sequence
 from functools import partial
 from pathlib import Path
 from typing import Any, TypeVar
@@ -32,18 +33,20 @@ from rich.text import Text
 from textual import events, on, work
 from textual.app import ComposeResult, SuspendNotSupported
 from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.notifications import SeverityLevel
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Footer, Static, TabbedContent, TabPane, Tree
 
 from ...client.port import LaunchPort, Verb
 from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
 from ...engine.errors import LaunchError
+from ...engine.plan.session import Session
 from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
 from ...engine.run.vocabulary.request import Request
 from ..app import LaunchTabs
-from ..key_order import KeyOrder
-from ..keyboard import remembered, restart_with, show_command_line
+from ..key_order import KeyOrder, hold_keys
+from ..keyboard import not_a_node, refuse_keys, remembered, restart_with, show_command_line
 from ..log_levels import LogLevels
 from ..nodes.commands import SelectionCommands
 from ..nodes.gaps import GapReader
@@ -53,6 +56,7 @@ from ..screens.output_panel import OutputPanel
 from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree, RowData
 from ..session_link import DRAIN_HZ, PANE_CHROME
+from ..toasts import OnceToasts
 from .bindings import BINDINGS, FleetHelp
 from .member import Member
 from .plots import FleetPlots
@@ -109,9 +113,12 @@ class FleetApp(KeyOrder):
     BINDINGS = BINDINGS
 
     def __init__(self, addresses: list[tuple[str | None, str]], scrollback: int = 5000,
-                 read_only: bool = False) -> None:
+                 read_only: bool = False,
+                 ports: Sequence[tuple[Session, LaunchPort]] | None = None) -> None:
         """`addresses`: (host or None for here, session name), in the order shown;
-        `read_only`: every session's client refuses what would change it (a wall screen)."""
+        `read_only`: every session's client refuses what would change it (a wall screen);
+        `ports`: each session's plan and port handed in (an in-memory one, in tests/unit),
+        followed as its client would be, without opening one."""
         super().__init__()
         self.read_only = read_only
         self.animation_level = "none"  # every frame is bytes over ssh
@@ -125,6 +132,10 @@ class FleetApp(KeyOrder):
             pane = OutputPanel(store, Path.cwd(), max_lines=scrollback, id=f"fleet-pane-{i}")
             self.members.append(Member(label, host, name, tree, pane, store))
         self.current = self.members[0]
+        self.given: dict[int, LaunchPort] = {}
+        for member, (session, port) in zip(self.members, ports or (), strict=False):
+            member.session = session
+            self.given[id(member)] = port
         self.plots = FleetPlots(self, self.members, self.member_request)
         self.session_tabs = FleetTabs(self.members, self.member_request, lambda: self.engine,
                                       self.update_status, self.plots)
@@ -139,8 +150,19 @@ class FleetApp(KeyOrder):
         self.detached = False
         self.prefix_history: list[str] = []
         self._resumed_at = 0.0
+        self.toasts = OnceToasts()
         """When this screen came back from a TUI it waited for (o, i, p): keys read before
         then were typed for that TUI, never for this one."""
+
+    def notify(self, message: str, *, title: str = "",
+               severity: SeverityLevel = "information", timeout: float | None = None,
+               markup: bool = True) -> None:
+        """A toast, unless the same one is on screen (toasts.py, as the single TUI's): a
+        group's command failing on four nodes of an unreachable robot says it once."""
+        shown_for = self.NOTIFICATION_TIMEOUT if timeout is None else timeout
+        if self.toasts.new(message, title, severity, shown_for):
+            super().notify(message, title=title, severity=severity, timeout=timeout,
+                           markup=markup)
 
     # --- layout ------------------------------------------------------------------------
 
@@ -216,9 +238,11 @@ class FleetApp(KeyOrder):
         if all(m.ended for m in self.members):
             self.exit(0)
 
-    async def _open(self, member: Member) -> RemoteSupervisor:
+    async def _open(self, member: Member) -> LaunchPort:
         """On the engine thread: the member's RemoteSupervisor, subscribed; the plan drawn
         is the one its server runs (the file may be on the robot only)."""
+        if id(member) in self.given:
+            return self.given[id(member)]
         lines = max(12, self.size.height - PANE_CHROME)
         if member.host is None:
             return await RemoteSupervisor.open(member.name, member.session, self.scrollback,
@@ -516,12 +540,19 @@ class FleetApp(KeyOrder):
         None, said in one line, when the selection is not one node or the session is
         out of reach."""
         member = self.current
+        typing = key in ("i", "g")  # the keys typed with it were for a node, or a tool
         if not self._keys_reach(member):
+            if typing:
+                hold_keys(self).drop()
             return None
         selected = self.selected()
         if len(selected) != 1:
-            self.notify(f"{member.label}: {key} {what} one node: select it",
-                        severity="warning")
+            if typing:  # as the single TUI: the rest of the burst is dropped, and said
+                refuse_keys(self, hold_keys(self),
+                            f"{member.label}: {not_a_node(member.tree, key)}", key)
+            else:
+                self.notify(f"{member.label}: {key} {what} one node: select it",
+                            severity="warning")
             return None
         return selected[0]
 

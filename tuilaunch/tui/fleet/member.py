@@ -30,9 +30,7 @@ from ..nodes.events import NodeEvents
 from ..output_store import OutputStore
 from ..screens.output_panel import OutputPanel
 from ..screens.tree_panel import LaunchTree
-from ..status_line import SILENCE_SHOWN
-
-COUNTED = ("running", "pending", "stopping", "exited", "failed", "respawning")
+from ..status_line import counts_words, silence_words
 
 
 @dataclass(eq=False)
@@ -79,30 +77,15 @@ class Member:
         return self.supervisor.link_lost
 
     def silence(self) -> str | None:
-        """`no word from arm for 7 s`: a link that says nothing, probed meanwhile, for
-        SILENCE_SHOWN s or more (as the single TUI's header says it); a hung link is said
-        lost only after ssh's 15 s."""
+        """`no word from arm for 7 s`, as the single TUI's status line says it."""
         supervisor = self.supervisor
-        if supervisor is None or self.ended or supervisor.host is None:
-            return None
-        silent = supervisor.silent_for()  # 0 while the link is down: link_lost says it
-        return f"no word from {supervisor.host} for {silent:.0f} s" \
-            if silent >= SILENCE_SHOWN else None
-
-    def counts(self) -> dict[str, int]:
-        counts: dict[str, int] = {}
-        if self.supervisor is None:
-            return counts
-        for process in self.session.plan.processes:
-            state = self.tree.states.get(process.id) or \
-                self.supervisor.states.get(process.id, "pending")
-            counts[state] = counts.get(state, 0) + 1
-        return counts
+        return None if supervisor is None or self.ended else silence_words(supervisor)
 
     def counts_text(self) -> str:
-        counts = self.counts()
-        return "  ".join(f"{counts[s]} {'waiting' if s == 'pending' else s}"
-                         for s in COUNTED if counts.get(s))
+        """Its processes by state, as the single TUI's status line counts them."""
+        if self.supervisor is None:
+            return ""
+        return counts_words(self.session.plan, self.tree.states, self.supervisor.states)
 
     def root_label(self) -> Text:
         """The session's root row: its address and live counts; greyed, with why,

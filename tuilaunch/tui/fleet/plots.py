@@ -15,8 +15,7 @@ from typing import Any
 
 from textual.app import App
 
-from ...engine.run.session.session_dir import SessionError
-from ...engine.run.vocabulary.requests import PlotFields
+from ..plots import open_plot
 from .member import Member
 
 Request = Callable[..., Awaitable[Any]]
@@ -41,25 +40,9 @@ class FleetPlots:
             self.screen.add(data)
 
     async def _open(self, member: Member, topic: str) -> None:
-        try:
-            info = await self.request(member, PlotFields(topic=topic))
-        except SessionError as exc:
-            self.app.notify(f"{member.label}: {str(exc).split(': ', 1)[-1]}",
-                            severity="error", title="plot")
-            return
-        numeric = list(info.get("fields") or [])
-        if not numeric:
-            self.app.notify(f"{member.label}: {topic} ({info.get('type')}) has no numeric "
-                            "field to plot", severity="warning", title="plot")
-            return
-        # plotext: imported only once a plot is shown
-        from ...client.plot_series import Source
-        from ..screens.plot_screen import PlotScreen, SessionPlots
-
         requesters = {m.label: partial(self.request, m) for m in self.members}
-        self.screen = PlotScreen(SessionPlots(requesters, self._leave),
-                                 [Source(member.label, topic, numeric[:1])])
-        self.app.push_screen(self.screen)
+        self.screen = await open_plot(self.app, partial(self.request, member), topic,
+                                      requesters, member.label, self._leave, f"{member.label}: ")
 
     def _leave(self) -> None:
         self.screen = None
