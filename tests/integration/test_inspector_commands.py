@@ -23,7 +23,7 @@ from typing import Any
 import pytest
 
 from tuilaunch.client.link import Link
-from tuilaunch.client.remote_supervisor import merged_usage
+from tuilaunch.client.session_state import merged_usage
 from tuilaunch.engine.ros.bridge import RosBridge
 from tuilaunch.engine.ros.graph import full_node_name
 from tuilaunch.engine.run.session.session_dir import SessionError

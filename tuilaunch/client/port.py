@@ -47,21 +47,42 @@ class LaunchPort(Protocol):
     name: str
     host: str | None  # the machine the session runs on (None: this one)
     log_dir: Path  # the session's log folder, on its machine
-    states: dict[str, str]
-    pids: dict[str, int]  # the running processes' pids
-    reasons: dict[str, str]  # how each process last ended ("exit code 1", "SIGSEGV")
-    crashed: dict[str, str]  # ended with nobody asking: the run's exit status is 1
-    history: list[Event]
+
+    # what the events told (read-only: RemoteSupervisor's client/session_state.py keeps them)
+    @property
+    def states(self) -> dict[str, str]: ...
+
+    @property
+    def pids(self) -> dict[str, int]:
+        """The running processes' pids."""
+        ...
+
+    @property
+    def reasons(self) -> dict[str, str]:
+        """How each process last ended ("exit code 1", "SIGSEGV")."""
+        ...
+
+    @property
+    def crashed(self) -> dict[str, str]:
+        """Ended with nobody asking: the run's exit status is 1."""
+        ...
+
+    @property
+    def history(self) -> list[Event]: ...
 
     @property
     def lifecycle(self) -> LifecyclePort: ...
+
+    @property
+    def shutdown_reason(self) -> str | None:
+        """Why it began to stop, as its server said (None: it did not)."""
+        ...
 
     read_only: bool
     # how following it ended: left on purpose, lost, killed, or stopped (why)
     detached: bool
     lost: bool
     killed_server: bool
-    shutdown_reason: str | None
     # the ssh link, when one is between (host not None)
     # (read-only: a port's reconnector keeps them, engine/run/session/reconnector.py)
     @property
