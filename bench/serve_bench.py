@@ -43,7 +43,12 @@ sys.path.insert(0, str(ROOT))
 from remote_bench import FLOOD_CODE, FLOODER, Link, measure, start_session  # noqa: E402
 from tui_bench import Terminal  # noqa: E402  (bench/ is on sys.path as a script)
 
-from tests.integration.browser import Page, free_port, need_chromium  # noqa: E402
+from tests.integration.browser import (  # noqa: E402
+    Page,
+    free_port,
+    need_chromium,
+    process_name,
+)
 from tests.integration.proc_tree import cmdline, descendants  # noqa: E402
 from tests.integration.sshd import Machines  # noqa: E402
 
@@ -66,7 +71,8 @@ class Served:
         self.url = self.proc.stdout.readline().strip()
 
     def tabs(self) -> list[int]:
-        return [p for p in descendants(self.proc.pid) if b"\0attach\0" in cmdline(p)]
+        return [p for p in descendants(self.proc.pid) if b"\0attach\0" in cmdline(p)
+                or process_name(p) == "tuilaunch-tab"]  # not the one waiting
 
     def stop(self) -> None:
         self.proc.send_signal(signal.SIGINT)

@@ -193,10 +193,20 @@ class Serving:
         self.err.unlink(missing_ok=True)
 
 
-def tab_processes(runtime: Path) -> list[int]:
+def tab_processes(runtime: Path, waiting: bool = False) -> list[int]:
     """The `tuilaunch attach` processes serve runs for its tabs, of this test's sessions
-    (their XDG_RUNTIME_DIR is the test's): found even once serve is gone."""
+    (their XDG_RUNTIME_DIR is the test's): found even once serve is gone. A tab's process
+    started ahead (cli/serve_tab.py) is named `tuilaunch-tab` once a page took it, and
+    `tuilaunch-warm` while it waits (counted with `waiting`)."""
     mark = f"XDG_RUNTIME_DIR={runtime}".encode()
+    names = ("tuilaunch-tab", "tuilaunch-warm") if waiting else ("tuilaunch-tab",)
     return [pid for pid in proc_tree.pids() if alive(pid)
-            and b"\0attach\0" in proc_tree.cmdline(pid)
+            and (b"\0attach\0" in proc_tree.cmdline(pid) or process_name(pid) in names)
             and mark in proc_tree.environ(pid).split(b"\0")]
+
+
+def process_name(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/comm").read_text().strip()
+    except OSError:
+        return ""

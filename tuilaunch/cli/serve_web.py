@@ -16,10 +16,7 @@ import asyncio
 import html
 import json
 import logging
-import os
-import shlex
 import signal
-import sys
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
@@ -27,42 +24,18 @@ from urllib.parse import urlencode
 
 import textual_serve
 from aiohttp import WSMsgType, web
-from textual_serve.app_service import AppService
 from textual_serve.download_manager import DownloadManager
 
 from ..engine.run.session import session_dir
 from .serve_guard import Guard
+from .serve_tabs import Early, TabService, Warm, tab_words
 
 STATIC = Path(textual_serve.__file__).parent / "static"
+FONT = "fonts/RobotoMono-VariableFont_wght.ttf"
 STOP_GRACE = 5.0
 """Seconds a tab's TUI has to leave once asked (serve stopping), before it is killed."""
 
 log = logging.getLogger("tuilaunch.serve")
-
-
-class TabService(AppService):
-    """One browser tab's TUI process (textual-serve's AppService). When the TUI leaves (`q`,
-    or it could not start), the page is told by closing its websocket: it then says the
-    session runs on, and offers to open it again."""
-
-    async def run(self) -> None:
-        try:
-            await super().run()
-        finally:
-            await self.remote_close()
-
-    @property
-    def pid(self) -> int | None:
-        # textual-serve keeps the process to itself; serve kills a stuck one at its end
-        process = getattr(self, "_process", None)
-        return None if process is None or process.returncode is not None else process.pid
-
-
-def tab_command(sessions: list[str], read_only: bool) -> str:
-    """The shell command textual-serve runs for a tab: attach (of several sessions, or of
-    `HOST:`, the fleet view), under the web driver."""
-    return shlex.join([sys.executable, "-m", "tuilaunch", "attach", *sessions,
-                       *(["--read-only"] if read_only else [])])
 
 
 class ServeApp:
@@ -79,16 +52,22 @@ class ServeApp:
         self.tabs: set[TabService] = set()
         self.sockets: set[web.WebSocketResponse] = set()
         self.downloads = DownloadManager()
+        self.warm = Warm()
+        self.early = Early(self._make_tab)
 
     def make(self) -> web.Application:
         app = web.Application(middlewares=[self._guard])
         app.add_routes([
             web.get("/", self.index),
             web.get("/ws", self.websocket),
+            web.get("/ws/{ticket}", self.websocket),
             web.get("/s/{name}/", self.session_page),
             web.get("/s/{name}/ws", self.websocket),
+            web.get("/s/{name}/ws/{ticket}", self.websocket),
             web.get("/fleet/", self.fleet_page),
             web.get("/fleet/ws", self.fleet_websocket),
+            web.get("/fleet/ws/{ticket}", self.fleet_websocket),
+            web.get("/download/{key}", self.download),
             web.static("/static", STATIC),
         ])
         app.on_shutdown.append(self._close_tabs)
@@ -126,7 +105,10 @@ class ServeApp:
         response.headers["X-Frame-Options"] = "DENY"
         response.headers["Content-Security-Policy"] = "frame-ancestors 'none'"
         response.headers["Referrer-Policy"] = "no-referrer"
-        response.headers.setdefault("Cache-Control", "no-store")
+        # textual-serve's script and font (700 KB) are kept an hour by the browser: a
+        # page opened again loads at once
+        response.headers.setdefault("Cache-Control", "private, max-age=3600" if
+                                    "/static/" in request.path else "no-store")
         return response
 
     # --- pages -----------------------------------------------------------------------------
@@ -137,17 +119,19 @@ class ServeApp:
             if len(self.sessions) == 1 and gone:  # a fleet view says an ended one itself
                 raise web.HTTPNotFound(text=f"tuilaunch serve: session {gone[0]} is not "
                                        "running (any more)\n")
-            return self._tui_page(request, " ".join(self.sessions), "static/")
+            return await self._tui_page(request, " ".join(self.sessions), "static/",
+                                        self.sessions)
         sessions = await asyncio.get_running_loop().run_in_executor(None, self.list_sessions)
         return web.Response(text=sessions_page(sessions, self.read_only),
                             content_type="text/html")
 
     async def session_page(self, request: web.Request) -> web.Response:
         name = self._listed(request)
-        return self._tui_page(request, name, "../../static/")
+        return await self._tui_page(request, name, "../../static/", [name])
 
     async def fleet_page(self, request: web.Request) -> web.Response:
-        return self._tui_page(request, "every session", "../static/")
+        return await self._tui_page(request, "every session", "../static/",
+                                    await self._fleet())
 
     async def _fleet(self) -> list[str]:
         """`/fleet/`: every session of this machine that answers, in one fleet view."""
@@ -166,11 +150,41 @@ class ServeApp:
             raise web.HTTPNotFound(text=f"tuilaunch serve: no session {name} here\n")
         return name
 
-    def _tui_page(self, request: web.Request, name: str, static: str) -> web.Response:
+    async def _tui_page(self, request: web.Request, name: str, static: str,
+                        sessions: list[str]) -> web.Response:
+        """The page; its TUI starts now (serve_tabs.py), its websocket names it."""
         font = request.rel_url.query.get("fontsize", "16")
         size = int(font) if font.isdigit() and 6 <= int(font) <= 64 else 16
-        return web.Response(text=tui_page(name, static, size, self.read_only),
+        ticket = await self.early.start(tab_words(sessions, self.read_only))
+        return web.Response(text=tui_page(name, static, size, self.read_only, ticket),
                             content_type="text/html")
+
+    def _make_tab(self, words: list[str], **writers: Any) -> TabService:
+        tab = TabService(words, self.warm, download_manager=self.downloads, **writers)
+        self.tabs.add(tab)
+        return tab
+
+    async def download(self, request: web.Request) -> web.StreamResponse:
+        """A file a tab's TUI hands the browser (`w` on the output pane: Textual's
+        deliver_text), by its single-use key; the page opens this address."""
+        key = request.match_info["key"]
+        try:
+            meta = await self.downloads.get_download_metadata(key)
+        except KeyError:
+            raise web.HTTPNotFound(text="tuilaunch serve: no such download (each is "
+                                   "fetched once)\n") from None
+        response = web.StreamResponse()
+        response.content_type = meta.mime_type
+        if meta.encoding:
+            response.charset = meta.encoding
+        disposition = "inline" if meta.open_method == "browser" else "attachment"
+        file_name = meta.file_name.replace('"', "")
+        response.headers["Content-Disposition"] = f'{disposition}; filename="{file_name}"'
+        await response.prepare(request)
+        async for chunk in self.downloads.download(key):
+            await response.write(chunk)
+        await response.write_eof()
+        return response
 
     # --- a tab ------------------------------------------------------------------------------
 
@@ -191,17 +205,23 @@ class ServeApp:
         async def close() -> None:
             await websocket.close()
 
-        tab = TabService(tab_command(sessions, self.read_only), write_bytes=websocket.send_bytes,
-                         write_str=websocket.send_str, close=close,
-                         download_manager=self.downloads)
-        self.tabs.add(tab)
+        words = tab_words(sessions, self.read_only)
+        writers: dict[str, Any] = {"write_bytes": websocket.send_bytes,
+                                   "write_str": websocket.send_str, "close": close}
+        tab = await self.early.claim(request.match_info.get("ticket", ""), words,
+                                     websocket.send_bytes, websocket.send_str, close)
         try:
-            await tab.start(width, height)
+            if tab is None:  # no TUI started with the page (or another's ticket)
+                tab = self._make_tab(words, **writers)
+                await tab.start(width, height)
+            else:
+                await tab.set_terminal_size(width, height)
             await self._relay(websocket, tab)
         finally:
             # the tab closed, or serve stops: the TUI leaves (the launch runs on)
-            await self._stop_tab(tab)
-            self.tabs.discard(tab)
+            if tab is not None:
+                await self._stop_tab(tab)
+                self.tabs.discard(tab)
             self.sockets.discard(websocket)
         return websocket
 
@@ -231,12 +251,7 @@ class ServeApp:
             await asyncio.wait_for(tab.stop(), STOP_GRACE)
         except (TimeoutError, ConnectionError, RuntimeError):
             pass
-        pid = tab.pid
-        if pid is not None:  # asked to quit and still there: it goes, the session stays
-            try:
-                os.kill(pid, signal.SIGKILL)
-            except OSError:
-                pass
+        tab.kill()  # asked to quit and still there: it goes, the session stays
 
     async def _close_tabs(self, app: web.Application) -> None:
         """serve stops: each tab's page is told (its websocket closes), each TUI leaves."""
@@ -253,7 +268,7 @@ def _number(value: Any, default: int) -> int:
 
 PAGE_STYLE = """
 @font-face { font-family: 'Roboto Mono';
-             src: url('{static}fonts/RobotoMono-VariableFont_wght.ttf'); }
+             src: url('{static}{font}'); }
 body { background: #0c181f; color: #e0e0e0; margin: 0; font-family: 'Roboto Mono', monospace; }
 .textual-terminal { opacity: 0; }
 body.-first-byte .textual-terminal { opacity: 1; }
@@ -268,22 +283,28 @@ h1 { font-size: 1.2em; margin: 2em 2em 0; }
 
 
 def _head(title: str, static: str) -> str:
-    style = PAGE_STYLE.replace("{static}", static)
+    style = PAGE_STYLE.replace("{static}", static).replace("{font}", FONT)
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'>"
             f"<meta name='viewport' content='width=device-width, initial-scale=1'>"
             f"<title>{html.escape(title)}</title><style>{style}</style>")
 
 
-def tui_page(name: str, static: str, font_size: int, read_only: bool) -> str:
+def tui_page(name: str, static: str, font_size: int, read_only: bool,
+             ticket: str = "") -> str:
     """A session's TUI in the page: textual-serve's client reads the websocket's address
-    from the terminal element. The static files and the websocket (`ws` beside the page)
-    are addressed relative to the page, so a reverse proxy's prefix carries over."""
+    from the terminal element. The static files and the websocket (`ws` beside the page,
+    `ws/TICKET` for the TUI started with the page) are addressed relative to the page, so
+    a reverse proxy's prefix carries over. The font is asked for with the script, not
+    once the script has run (it is the page's last file otherwise)."""
     title = f"{name}{' (read-only)' if read_only else ''} - tuilaunch"
-    script = ("<script>(function(){var u=new URL('ws', location.href);"
+    socket = f"ws/{ticket}" if ticket else "ws"
+    script = (f"<script>(function(){{var u=new URL('{socket}', location.href);"
               "u.protocol=location.protocol==='https:'?'wss:':'ws:';u.search='';u.hash='';"
               "document.getElementById('terminal').dataset.sessionWebsocketUrl=u.href;})();"
               "</script>")
     return (_head(title, static)
+            + f"<link rel='preload' href='{static}{FONT}' as='font' type='font/ttf' "
+            + "crossorigin>"
             + f"<link rel='stylesheet' href='{static}css/xterm.css'>"
             + f"<script src='{static}js/textual.js'></script></head><body>"
             + f"<div id='terminal' class='textual-terminal' data-font-size='{font_size}'>"
@@ -329,6 +350,7 @@ async def serve_until_stopped(app: ServeApp, host: str, port: int,
     try:
         site = web.TCPSite(runner, host, port)
         await site.start()
+        await app.warm.start()  # importing while the URL is said and opened
         await ready()
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
@@ -336,13 +358,11 @@ async def serve_until_stopped(app: ServeApp, host: str, port: int,
             loop.add_signal_handler(number, stop.set)
         await stop.wait()
     finally:
+        app.warm.stop()
+        app.early.stop()
         await runner.cleanup()
         for tab in list(app.tabs):  # a TUI that did not leave in time
-            if tab.pid is not None:
-                try:
-                    os.kill(tab.pid, signal.SIGKILL)
-                except OSError:
-                    pass
+            tab.kill()
 
 
-__all__ = ["ServeApp", "serve_until_stopped", "sessions_page", "tab_command", "tui_page"]
+__all__ = ["ServeApp", "serve_until_stopped", "sessions_page", "tab_words", "tui_page"]

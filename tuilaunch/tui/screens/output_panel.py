@@ -405,7 +405,11 @@ class OutputPanel(Vertical):
         name = (self.view.process or "all") + time.strftime("-pane-%H%M%S.txt")
         path = self.save_dir / name
         path.write_text(self.pane_text(read))
-        self.notify(f"pane saved to {path}")
+        if self.app.is_web:  # in a browser (tuilaunch serve): the file is its download too
+            self.app.deliver_text(path, save_filename=name)
+            self.notify(f"pane saved to {path}; the browser downloads it as {name}")
+        else:
+            self.notify(f"pane saved to {path}")
         self._not_read(read)
 
     def _copy(self, read: GapsRead) -> None:

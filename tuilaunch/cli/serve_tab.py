@@ -1,0 +1,79 @@
+"""A browser tab's TUI started ahead of its tab (`tuilaunch serve`'s warm process).
+
+Opening a served page used to wait for a whole Python start: the interpreter, then Textual,
+the TUI and the client (about 1.3 s of a tab's first 2 to 4 s on a busy machine), before
+the TUI even asked the session for its tree. serve_web.py keeps one process of this module
+started ahead: it has imported all of that and waits on stdin for one line, the tab's
+`attach` words and its size as JSON (`[["attach", "base"], 80, 24]`); then it is that
+tab's `tuilaunch attach ...`, as textual-serve would have started it (the web driver named
+in its environment). Nothing is connected before the line: a waiting process is no client
+of any session, and sees nothing.
+
+The line is read byte by byte straight from the descriptor, so the packets after it are
+left whole for the web driver's reader.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+
+
+def _warm() -> None:
+    """What a tab's attach imports (python -X importtime), loaded while no tab waits."""
+    import rich._emoji_codes  # noqa: F401
+    import textual.drivers.web_driver
+    import textual.layouts.factory
+    import textual.layouts.horizontal
+    import textual.layouts.stream
+    import textual.scrollbar  # noqa: F401
+
+    from ..tui import app  # noqa: F401
+    from ..tui.fleet import app as fleet_app  # noqa: F401
+    from . import commands, dispatch, fleet  # noqa: F401
+
+
+def _go_line() -> bytes:
+    line = bytearray()
+    while not line.endswith(b"\n"):
+        byte = os.read(0, 1)
+        if not byte:  # serve went away before a tab came: nothing to do
+            raise SystemExit(0)
+        line += byte
+    return bytes(line)
+
+
+def name_process(name: bytes) -> None:
+    """The name ps and /proc/PID/comm show (a waiting process is no tab yet: tests and
+    an operator's ps tell them apart)."""
+    try:
+        import ctypes
+
+        ctypes.CDLL(None).prctl(PR_SET_NAME, ctypes.c_char_p(name[:15]), 0, 0, 0)
+    except (OSError, AttributeError):
+        pass  # not Linux: the name is only a help
+
+
+PR_SET_NAME = 15
+WAITING, TAB = b"tuilaunch-warm", b"tuilaunch-tab"
+
+
+def main() -> int:
+    name_process(WAITING)
+    _warm()
+    try:
+        words, width, height = json.loads(_go_line())
+        words = [str(w) for w in words]
+        os.environ["COLUMNS"], os.environ["ROWS"] = str(int(width)), str(int(height))
+        name_process(TAB)
+    except (ValueError, TypeError):
+        print("tuilaunch serve: a warm tab got no attach line", file=sys.stderr)
+        return 2
+    from .dispatch import main as tuilaunch_main
+
+    return tuilaunch_main(words)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
