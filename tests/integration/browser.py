@@ -120,6 +120,36 @@ class Page:
         for key in keys:
             ActionChains(self.driver).send_keys(key).perform()
 
+    def tap(self, text: str, row: int | None = None) -> None:
+        """A click (a tap on a tablet) on the middle of `text` where the screen shows it
+        (the first row holding it, or `row`), at the cell's place on the page."""
+        from selenium.webdriver.common.action_chains import ActionChains
+
+        rows = self.screen().splitlines()
+        at = row if row is not None else next(
+            (i for i, line in enumerate(rows) if text in line), None)
+        assert at is not None and text in rows[at], f"no {text!r} on the screen:\n" + \
+            "\n".join(rows)
+        column = rows[at].index(text) + len(text) / 2
+        cols, lines, width, height = self.driver.execute_script(
+            "var t = window.__terminals[0], r = document.querySelector('.xterm-screen')"
+            ".getBoundingClientRect(); return [t.cols, t.rows, r.width, r.height];")
+        screen = self.driver.find_element("css selector", ".xterm-screen")
+        # offsets from the element's centre (Selenium 4)
+        ActionChains(self.driver).move_to_element_with_offset(
+            screen, int(column * width / cols - width / 2),
+            int((at + 0.5) * height / lines - height / 2)).click().perform()
+
+    def catch_downloads(self) -> None:
+        """The page's downloads (window.open of serve's /download/KEY) kept in
+        window.__opened instead of opening a tab: read with `opened`."""
+        self.driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {
+            "source": "window.__opened = []; window.open = function (u) "
+                      "{ window.__opened.push(String(u)); return null; };"})
+
+    def opened(self) -> list[str]:
+        return list(self.driver.execute_script("return window.__opened || []"))
+
     def body_classes(self) -> str:
         return str(self.driver.execute_script("return document.body.className"))
 

@@ -1,10 +1,15 @@
 """`tuilaunch serve A B`: the fleet view of two sessions at one URL, in a real browser
 (Debian's chromium, driven by Selenium): both roots on the page at 1100x700, 1024x768 and
-390x844; `}` reaches the second session's root and `s` on a node there stops it alone; the
-page of `serve` alone links each session and the whole fleet.
+390x844; `}` reaches the second session's root and `s` on a node there stops it alone; at
+1024x768 a tap (a click at the cell) on a row selects it, a tap on the footer's Stop stops
+it, and w hands the pane to the browser as a download (fetched once); the page of `serve`
+alone links each session and the whole fleet.
 """
 
 from __future__ import annotations
+
+import urllib.error
+import urllib.request
 
 import pytest
 
@@ -42,6 +47,33 @@ def test_serve_of_two_sessions_is_one_fleet_page(runtime, write):  # noqa: F811
             browser.type("s")
             wait_for(lambda: states(second)["ticker-1"] == "exited", what="arm's ticker stopped")
             assert states(first)["ticker-1"] == "running"  # nuc's: untouched
+        # a tablet: a tap on a row selects it, a tap on the footer's Stop stops it, and w
+        # hands the pane to the browser as a download
+        with page() as browser:
+            browser.catch_downloads()
+            browser.driver.set_window_size(1024, 768)
+            browser.open(serving.url)
+            text = browser.wait_screen(lambda t: "local:nuc" in t and "echo-3" in t,
+                                       "both trees at 1024x768")
+            row = next(i for i, line in enumerate(text.splitlines()) if "echo-3" in line)
+            browser.tap("echo-3", row)  # nuc's echo-3: the first tree's
+            browser.wait_screen(lambda t: t.splitlines()[3].strip().startswith("echo-3") and
+                                "[local:nuc]" in t, "nuc's echo-3 selected by a tap")
+            footer = browser.wait_screen(lambda t: "Stop" in t.splitlines()[-1],
+                                         "Stop in the footer")
+            browser.tap("Stop", len(footer.splitlines()) - 1)
+            wait_for(lambda: states(first)["echo-3"] == "exited",
+                     what="nuc's echo-3 stopped by a tap on Stop")
+            assert states(second)["echo-3"] == "running"
+            browser.type("w")
+            wait_for(lambda: browser.opened(), what="the pane handed to the browser")
+            with urllib.request.urlopen(browser.opened()[0], timeout=30) as got:
+                # the selected node's pane, as w saves it in a terminal
+                assert 'attachment; filename="echo-3-pane-' in \
+                    got.headers["Content-Disposition"]
+                assert got.read().decode().endswith("\n")
+            with pytest.raises(urllib.error.HTTPError):  # each is fetched once
+                urllib.request.urlopen(browser.opened()[0], timeout=30)
     finally:
         serving.close()
     # serve alone: a page linking each session and all of them together
