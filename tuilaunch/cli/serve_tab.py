@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from typing import Any
 
 
 def _warm() -> None:
@@ -32,6 +33,22 @@ def _warm() -> None:
     from ..tui import app  # noqa: F401
     from ..tui.fleet import app as fleet_app  # noqa: F401
     from . import commands, dispatch, fleet  # noqa: F401
+
+
+def compact_footers() -> None:
+    """In a browser every footer is Textual's compact one (no blank around each key): at
+    1024x768, a tablet's 113 columns, the Nodes view's keys then fit where Restart and
+    Start were cut off, so a tap reaches them. Only this process (a browser's tab) does it:
+    a terminal's footer is unchanged."""
+    from textual.widgets import Footer
+
+    made = Footer.__init__
+
+    def compact_init(self: Footer, *args: Any, **kwargs: Any) -> None:
+        kwargs["compact"] = True
+        made(self, *args, **kwargs)
+
+    Footer.__init__ = compact_init  # type: ignore[method-assign]
 
 
 def _go_line() -> bytes:
@@ -70,6 +87,7 @@ def main() -> int:
     except (ValueError, TypeError):
         print("tuilaunch serve: a warm tab got no attach line", file=sys.stderr)
         return 2
+    compact_footers()
     from .dispatch import main as tuilaunch_main
 
     return tuilaunch_main(words)

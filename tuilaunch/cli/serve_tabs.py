@@ -46,7 +46,9 @@ class TabService(AppService):
 
     def __init__(self, words: list[str], warm: Warm | None = None,
                  **kwargs: Any) -> None:
-        super().__init__(shlex.join([sys.executable, "-m", "tuilaunch", *words]), **kwargs)
+        # serve_tab.py, as the warm one is: the tab's words on its first line
+        super().__init__(shlex.join([sys.executable, "-m", "tuilaunch.cli.serve_tab"]),
+                         **kwargs)
         self.words = words
         self.warm = warm
 
@@ -74,11 +76,12 @@ class TabService(AppService):
                 await super().set_terminal_size(*self.size)
 
     async def _open_app_process(self, width: int = 80, height: int = 24) -> Process:
-        """The warm process when one waits (its imports done), told its words and size;
-        else a new one, as textual-serve starts it."""
+        """The warm process when one waits (its imports done), else a new one as
+        textual-serve starts it; told its words and size."""
         process = await self.warm.take() if self.warm is not None else None
         if process is None or process.stdin is None:
-            return await super()._open_app_process(width, height)
+            process = await super()._open_app_process(width, height)
+        assert process.stdin is not None
         process.stdin.write(json.dumps([self.words, width, height]).encode() + b"\n")
         self._process, self._stdin = process, process.stdin
         return process
