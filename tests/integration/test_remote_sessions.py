@@ -600,12 +600,13 @@ def test_a_stream_whose_link_drops_says_so_and_the_session_runs_on(machines: Mac
     status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
     assert {p["id"]: p["state"] for p in status["processes"]} == {
         "ticker-1": "running", "talker-2": "running"}
-    # and a session that does end is still told apart: exit 2, "session far ended"
+    # and a session that does end is still told apart: exit 2, "session robot1:far ended"
+    # (the session named as typed, e875fad)
     rate = Streaming("hz", "robot1:far", "/chatter")
     rate.read_until("average rate")
     assert run_cli("stop", "robot1:far").returncode == 0
     code, said = rate.ended()
-    assert code == 2 and "session far ended" in said, (code, said)
+    assert code == 2 and "session robot1:far ended" in said, (code, said)
 
 
 def status_row(app) -> str:
