@@ -42,6 +42,7 @@ from tuilaunch.engine.run.supervisor.respawn import MAX_DELAY, Respawner
 from tuilaunch.engine.run.supervisor.starting import Starting
 from tuilaunch.engine.run.supervisor.stopping import Stopper
 from tuilaunch.engine.run.supervisor.triggers import TriggerBook
+from tuilaunch.engine.run.vocabulary.requests import Stop
 
 from .terminal_harness import PROGRAMS
 
@@ -133,7 +134,7 @@ def test_placing_says_which_side_runs_each_process_and_refuses_to_forward_from_a
     assert share.place("robot", None, plan) == ["here", "a0"]  # a share runs no action
     assert share.runs_here(plan, "there") and not share.runs_actions()
     with pytest.raises(LaunchError, match="here runs on the launching side"):
-        asyncio.run(share.forward(plan, "stop", "here"))
+        asyncio.run(share.forward(plan, Stop("here")))  # a typed request (8e86397)
 
 
 STUBBORN = ("import signal, sys, time\n"
