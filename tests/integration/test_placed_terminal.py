@@ -155,18 +155,23 @@ class Tmux:
         key names are not read in it: `ic` is not Insert)."""
         self.tmux("send-keys", "-t", "tl", "-l", text)
 
-    def select(self, process: str) -> None:
-        """Down the tree until `process` is the selected row (its detail line on top)."""
-        self.wait_for(f"{process}]")
-        def detail() -> str:
-            return (self.screen().splitlines()[3:4] or [""])[0].strip()
+    def selected(self) -> str:
+        """The selected row, as its detail line (on top) names it: `lines-1 (/lines)`,
+        `all nodes` (the words before the state, not the CPU and memory after it)."""
+        return (self.screen().splitlines()[3:4] or [""])[0].strip().split(":", 1)[0]
 
+    def select(self, process: str) -> None:
+        """Down the tree, one row at a time, until `process` is the selected row. Each Down
+        waits for the selected row to change, not the detail line's text: a running row's
+        CPU and memory change that every second, and a Down sent on such a change would be
+        a second one in flight, landing a row past `process` once it was seen selected."""
+        self.wait_for(f"{process}]")
         for _ in range(20):
-            top = detail()
-            if top.startswith(f"{process} ("):
+            row = self.selected()
+            if row.startswith(f"{process} ("):
                 return
             self.keys("Down")
-            wait_for(lambda before=top: detail() != before, 10, "the next row")
+            wait_for(lambda before=row: self.selected() != before, 30, "the next row")
         raise AssertionError(f"{process} never selected:\n{self.screen()}")
 
     def close(self) -> None:
@@ -272,6 +277,7 @@ def test_a_node_on_a_machine_whose_link_is_lost_is_not_shown_running(placed: Pla
         tui.wait_for("3 running")
         tui.select("lines-1")
         there.wait_for(f"[robot1:{share}]")  # robot1's share itself, over ssh, at 80x24
+        assert tui.selected() == "lines-1 (/lines)", tui.screen()  # no Down left in flight
         robot1_off(placed)
         try:
             # its lost-link line keeps the latest attempt's reason's end at 80 columns
