@@ -227,6 +227,9 @@ def test_bash_offers_a_sessions_processes_after_it_not_the_hosts(bash):
     for command in ("stop", "start", "logs"):
         bash.tab(f"tuilaunch {command} cmpdemo ", ["talker-1", "/cmp/talker"],
                  absent=("nuc:",))
+    # a word no process starts may be another session (logs A B, stop A B): a host's too
+    for command in ("stop", "logs"):
+        bash.completes(f"tuilaunch {command} cmpdemo nu", f"tuilaunch {command} cmpdemo nuc:")
     # stop and start take several processes
     bash.completes("tuilaunch stop cmpdemo /cmp/talker tal",
                    "tuilaunch stop cmpdemo /cmp/talker talker-1 ")

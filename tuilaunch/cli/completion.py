@@ -11,7 +11,8 @@ it here before anything heavy is imported. What is completed:
 - session names for every session command, local ones and `HOST:` for each host of the
   ssh config, and after `HOST:`, that host's sessions (one ssh round trip, time-limited);
 - process ids and node names (restart, wait, start, and after a session logs and stop;
-  not the hosts there), topics (hz, echo), nodes (params, log-level), states (wait), log
+  there the sessions and hosts too once the word typed starts one, as `logs A B` of several
+  sessions is valid), topics (hz, echo), nodes (params, log-level), states (wait), log
   levels, shells.
 
 A completion never prints into the user's shell: the shell code sends our stdout and stderr
@@ -294,9 +295,11 @@ def session_names(prefix: str, **_: Any) -> list[str]:
 
 def sessions_or_processes(prefix: str, parsed_args: argparse.Namespace, several: bool,
                           **kwargs: Any) -> list[str]:
-    """`logs` and `stop`: sessions (and hosts); after one session, its processes, not the
-    hosts (`stop NAME PROCESS ...`, `logs NAME PROCESS`); after several, more sessions (the
-    form over a fleet); after a process, `several` (stop) more of them, else nothing."""
+    """`logs` and `stop`: sessions (and hosts); after one session, its processes, and the
+    sessions and hosts the typed prefix starts (`logs A B` of several sessions is valid
+    too: `logs base robot2<Tab>` is `robot2:`); after several, more sessions (the form
+    over a fleet; `logs A B PROCESS` too: the first one's processes); after a process,
+    `several` (stop) more of them, else nothing."""
     from ..engine.run.session import session_dir
 
     given = list(getattr(parsed_args, "name", None) or [])
@@ -306,11 +309,18 @@ def sessions_or_processes(prefix: str, parsed_args: argparse.Namespace, several:
     sessions = [word for word in given if ":" in word or word in here]
     if given[0] not in sessions:
         return []  # no session to ask
-    if len(sessions) == len(given) > 1:
-        return session_names(prefix)
-    if len(sessions) < len(given) and not several:
-        return []  # logs takes one process, the last word
-    return processes(prefix, parsed_args)
+    if len(sessions) < len(given):  # a process given: the first word is the session
+        return processes(prefix, parsed_args) if several else []  # logs takes one
+    if len(sessions) > 1 and several:
+        return session_names(prefix)  # stop A B PROCESS is no form: sessions alone
+    try:
+        found = processes(prefix, parsed_args)
+    except Exception:
+        found = []  # gone, or its host unreachable: the sessions still are offered
+    if prefix or not found or len(sessions) > 1:
+        # a bare Tab after one session offers its processes alone, not every host
+        found += session_names(prefix)
+    return found
 
 
 def ssh_hosts() -> list[str]:
