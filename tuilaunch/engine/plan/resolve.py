@@ -15,10 +15,8 @@ include / event handler -> walk -> visit); its visits call each other and stay t
 
 from __future__ import annotations
 
-import atexit
 import os
 import re
-import shutil
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -30,7 +28,6 @@ from ..describe.entities import (
     CallService,
     DeclareLaunchArgument,
     DslOpaque,
-    Entity,
     EnvironmentStack,
     ExecuteProcess,
     Group,
@@ -54,13 +51,10 @@ from ..describe.entities import (
     Shutdown,
     StopProcess,
     TimerAction,
-    TriggerOn,
     UnsetEnvironmentVariable,
     UnsetLaunchConfiguration,
-    entity_list,
 )
 from ..describe.environ import EnvironView
-from ..describe.events import When
 from ..describe.lifecycle import ChangeStateAction, LifecycleTransition
 from ..describe.python.loader import (
     LoadedFile,
@@ -72,7 +66,6 @@ from ..describe.substitutions import (
     perform,
 )
 from ..errors import (
-    ArgumentError,
     LaunchError,
     PackageError,
 )
@@ -83,9 +76,11 @@ from .command_line import LAUNCH_CONFIGURATIONS, ProcessPlanner
 from .components import interfaces_warning
 from .model import ActionKind, ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .opaque import is_custom_action, perform_opaque
+from .params import default_params_dir, remove_default_params_dir
 from .prefix import LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER
 from .scope import (
     Deferred,
+    EventScopes,
     Scope,
     apply_scope_action,
     group_label,
@@ -106,6 +101,7 @@ class Resolver:
         self.entity_ids: dict[int, str] = {} if entity_ids is None else entity_ids
         self.lifecycle_entities: dict[str, Any] = {}  # process id -> LifecycleNode
         self.triggers: list[Trigger] = []
+        self.events = EventScopes(self)  # what waits for an event, a timer, an exit
         self.warnings: list[str] = []
         self._include_stack: list[str] = []
         self._counter = counter
@@ -235,7 +231,7 @@ class Resolver:
         safe = _UNSAFE_ID.sub("_", base).lstrip(".") or "process"
         return f"{safe}-{self._counter}"
 
-    def _gate(self, entity: Any, scope: Scope) -> tuple[bool, ConditionOutcome | None]:
+    def gate(self, entity: Any, scope: Scope) -> tuple[bool, ConditionOutcome | None]:
         """Whether an entity runs, and the condition that stops it if it does not."""
         enabled, skipped, _ = self._gate_outcome(entity, scope)
         return enabled, skipped
@@ -267,7 +263,7 @@ class Resolver:
         elif isinstance(entity, IncludeLaunchDescription):
             self.include(entity, scope, parent)
         elif isinstance(entity, PushRosNamespace):
-            if self._gate(entity, scope)[0]:
+            if self.gate(entity, scope)[0]:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
                 scope.namespace_pushed = True
@@ -277,32 +273,32 @@ class Resolver:
                         | LifecycleTransition):
             self.action(entity, scope, parent)
         elif isinstance(entity, TimerAction):
-            self.timer(entity, scope, parent)
+            self.events.timer(entity, scope, parent)
         elif isinstance(entity, RegisterEventHandler):
-            self.event_handler(entity, scope, parent)
+            self.events.event_handler(entity, scope, parent)
         elif isinstance(entity, DslOpaque | OpaqueFunction) or is_custom_action(entity):
             self.opaque(entity, scope, parent)
         elif isinstance(entity, SetEnvironmentVariable | SetLaunchConfiguration):
-            if self._gate(entity, scope)[0]:
+            if self.gate(entity, scope)[0]:
                 ctx = scope.context()
                 into: dict[str, Any] = scope.env if isinstance(entity, SetEnvironmentVariable) \
                     else scope.configurations
                 into[perform(entity.name, ctx)] = perform(entity.value, ctx)
         elif isinstance(entity, UnsetEnvironmentVariable):
-            if self._gate(entity, scope)[0]:
+            if self.gate(entity, scope)[0]:
                 scope.env[perform(entity.name, scope.context())] = None
         elif isinstance(entity, SetParameter):
-            if self._gate(entity, scope)[0]:
+            if self.gate(entity, scope)[0]:
                 scope.global_parameters.append((entity.name, entity.value))
         elif isinstance(entity, SetParametersFromFile):
-            if self._gate(entity, scope)[0]:
+            if self.gate(entity, scope)[0]:
                 scope.global_parameters.append((None, entity.filename))
         elif isinstance(entity, SetRemap):
-            if self._gate(entity, scope)[0]:
+            if self.gate(entity, scope)[0]:
                 scope.remaps.append((entity.src, entity.dst))
         elif isinstance(entity, AppendEnvironmentVariable | EnvironmentStack
                         | UnsetLaunchConfiguration):
-            if self._gate(entity, scope)[0]:
+            if self.gate(entity, scope)[0]:
                 apply_scope_action(entity, scope)
         else:
             where = getattr(entity, "origin", None)
@@ -339,7 +335,7 @@ class Resolver:
             scope.namespace = join_namespace(scope.namespace, perform(group.namespace, ctx))
             scope.namespace_pushed = True
         if group.when is not None:
-            scope.trigger = self.when_trigger(group.when, scope)
+            scope.trigger = self.events.when_trigger(group.when, scope)
         item = TreeItem("group", group_label(group, scope, outcome), enabled, scope.namespace,
                         outcome, scope.trigger if group.when is not None else None)
         if group.label in ("root", "opaque"):
@@ -351,83 +347,11 @@ class Resolver:
         if not group.scoped and enabled:
             leak_back(scope, outer)
 
-    def when_trigger(self, when: When, scope: Scope) -> Trigger:
-        delay = 0.0
-        if when.delay is not None and scope.enabled:
-            text = perform(when.delay, scope.context())
-            try:
-                delay = float(text)
-            except ValueError:
-                raise ArgumentError(f"When(delay=...) gave {text!r}, which is not a number",
-                                    when.origin, hint="a delay is in seconds") from None
-        trigger = Trigger(when.on, None, delay, when.io, scope.trigger, when.target)
-        self.triggers.append(trigger)
-        return trigger
-
-    def timer(self, timer: TimerAction, outer: Scope, parent: TreeItem) -> None:
-        enabled, skipped = self._gate(timer, outer)
-        scope = outer.child(False)
-        scope.enabled, scope.skipped_by = enabled, skipped
-        delay = 0.0
-        if enabled:
-            text = perform(timer.period, scope.context())
-            try:
-                delay = float(text)
-            except ValueError:
-                raise ArgumentError(f"TimerAction period {text!r} is not a number",
-                                    timer.origin) from None
-        scope.trigger = Trigger(TriggerOn.TIMER, None, delay, None, outer.trigger)
-        item = TreeItem("group", f"timer {delay:g} s", enabled, scope.namespace, None,
-                        scope.trigger)
-        parent.children.append(item)
-        self.walk(timer.actions, scope, item)
-
-    def event_handler(self, register: RegisterEventHandler, outer: Scope, parent: TreeItem)\
-            -> None:
-        handler = register.handler
-        enabled, skipped = self._gate(register, outer)
-        scope = outer.child(False)
-        scope.enabled, scope.skipped_by = enabled, skipped
-        io = handler.io
-        if handler.on == TriggerOn.STATE:
-            io = lifecycle_plan.state_trigger_io(handler, outer.context())  # type: ignore[arg-type]
-        # a state handler without a target node applies to every lifecycle node: "*"
-        target = "*" if handler.on == TriggerOn.STATE and handler.target is None else None
-        scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target,
-                                repeat=handler.on == TriggerOn.STATE and
-                                not getattr(handler, "handle_once", False))
-        self.triggers.append(scope.trigger)
-        item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
-                        scope.trigger)
-        parent.children.append(item)
-        self.handler_body(handler.handler, handler.target is None and handler.on in
-                          (TriggerOn.START, TriggerOn.EXIT, TriggerOn.IO), scope, item)
-
-    def handler_body(self, body: Any, every_process: bool, scope: Scope, item: TreeItem)\
-            -> None:
-        if callable(body) and not isinstance(body, Entity):
-            self.action(IoCallbacks([body]), scope, item)
-        elif every_process:
-            # performed again for each process's event, as launch does
-            self.defer(entity_list(body), scope, item, "performed for every process's event")
-        else:
-            self.walk(entity_list(body), scope, item)
-
-    def on_exit(self, entity: Node | ExecuteProcess, outer: Scope, parent: TreeItem) -> None:
-        """`Node(on_exit=...)`: a handler for this process's exit."""
-        scope = outer.child(False)
-        scope.trigger = Trigger(TriggerOn.EXIT, None, 0.0, None, outer.trigger, entity)
-        self.triggers.append(scope.trigger)
-        item = TreeItem("group", "on exit", scope.enabled, scope.namespace, None,
-                        scope.trigger)
-        parent.children.append(item)
-        self.handler_body(entity.on_exit, False, scope, item)
-
     # --- includes and opaque functions -----------------------------------------------------
 
     def include(self, include: IncludeLaunchDescription, outer: Scope, parent: TreeItem)\
             -> None:
-        enabled, skipped = self._gate(include, outer)
+        enabled, skipped = self.gate(include, outer)
         ctx = outer.context()
         try:
             path = perform(include.location, ctx)
@@ -481,7 +405,7 @@ class Resolver:
 
     def opaque(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
         """OpaqueFunctions, SimpleLauncher's opaque mode, and third-party actions' execute()."""
-        if not self._gate(entity, scope)[0]:
+        if not self.gate(entity, scope)[0]:
             return
         produced, environ = perform_opaque(entity, scope.context())
         scope.env.update(environ)
@@ -490,7 +414,7 @@ class Resolver:
     # --- processes -------------------------------------------------------------------------
 
     def process(self, entity: Node | ExecuteProcess, scope: Scope, parent: TreeItem) -> None:
-        enabled, skipped = self._gate(entity, scope)
+        enabled, skipped = self.gate(entity, scope)
         counter = self._counter
         try:
             plan = self.process_planner.plan(entity, scope, enabled, skipped)
@@ -509,72 +433,17 @@ class Resolver:
         parent.children.append(TreeItem("process", plan.label, enabled, plan.namespace,
                                         skipped, scope.trigger, plan.id))
         if entity.on_exit is not None:
-            self.on_exit(entity, scope, parent)
+            self.events.on_exit(entity, scope, parent)
 
     # --- actions ---------------------------------------------------------------------------
 
     def action(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
-        enabled, skipped = self._gate(entity, scope)
+        enabled, skipped = self.gate(entity, scope)
         plan, label = self.action_planner.plan(entity, scope, enabled, skipped)
         self.actions.append(plan)
         self.entity_ids[id(entity)] = plan.id
         parent.children.append(TreeItem("action", label, enabled, scope.namespace, skipped,
                                         scope.trigger, plan.id))
-
-
-_params_dir: Path | None = None
-
-
-def default_params_dir() -> Path:
-    """One private folder per tuilaunch process (mkdtemp: 0700, a name nobody can guess)."""
-    global _params_dir
-    # made anew when a finished run removed it (a launcher may plan several runs)
-    if _params_dir is None or not _params_dir.is_dir():
-        # on the first plan: every plan has its folder (made before any file is written),
-        # the commands that plan nothing (ls, stop, logs...) do not import tempfile
-        import tempfile
-
-        _params_dir = Path(tempfile.mkdtemp(prefix=f"tuilaunch-{os.getpid()}-params-"))
-        atexit.register(shutil.rmtree, _params_dir, True)
-        remove_stale_params_dirs(_params_dir.parent)
-    return _params_dir
-
-
-_PARAMS_DIR_NAME = re.compile(r"^tuilaunch-(\d+)-params-")
-
-
-def remove_stale_params_dirs(folder: Path) -> None:
-    """The folders of tuilaunch processes that died without their atexit (a session
-    server killed with SIGKILL) are removed by the next one that plans: ours, named after
-    a pid that no longer runs."""
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return
-    for entry in entries:
-        match = _PARAMS_DIR_NAME.match(entry.name)
-        if match is None or not entry.is_dir(follow_symlinks=False):
-            continue
-        try:
-            if entry.stat(follow_symlinks=False).st_uid != os.getuid():
-                continue
-            with open(f"/proc/{int(match.group(1))}/stat", "rb") as stat:
-                state = stat.read().rsplit(b")", 1)[1].split()[0]
-        except FileNotFoundError:
-            state = b"X"  # no such process
-        except (OSError, IndexError):
-            continue
-        if state in (b"X", b"Z"):  # gone, or a zombie nobody reaped yet
-            shutil.rmtree(entry.path, True)
-
-
-def remove_default_params_dir() -> None:
-    """What the atexit hook does, for a process that leaves with os._exit (a TUI whose
-    terminal hung up cannot run Textual's teardown), so no folder is left in $TMPDIR."""
-    global _params_dir
-    if _params_dir is not None:
-        shutil.rmtree(_params_dir, True)
-        _params_dir = None
 
 
 def declared_arguments(loaded: LoadedFile, arguments: Mapping[str, str] | None = None)\
@@ -614,4 +483,5 @@ def undeclared_warning(name: str, declared: set[str], path: str) -> str:
             f"includes{guess} (declared: {', '.join(sorted(declared)) or 'none'})")
 
 
-__all__ = ["Resolver", "declared_arguments", "join_namespace", "resolve"]
+__all__ = ["Resolver", "declared_arguments", "default_params_dir", "join_namespace",
+           "remove_default_params_dir", "resolve"]

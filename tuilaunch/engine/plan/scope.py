@@ -6,18 +6,28 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Protocol
 
 from ..describe.conditions import ConditionOutcome
 from ..describe.entities import (
     AppendEnvironmentVariable,
+    Entity,
     EnvironmentStack,
+    ExecuteProcess,
     Group,
+    IoCallbacks,
+    Node,
+    RegisterEventHandler,
+    TimerAction,
+    TriggerOn,
     UnsetLaunchConfiguration,
+    entity_list,
 )
+from ..describe.events import When
 from ..describe.substitutions import PerformContext, perform, text_to_bool
-from ..errors import LaunchError
-from .model import Trigger
+from ..errors import ArgumentError, LaunchError
+from . import lifecycle as lifecycle_plan
+from .model import TreeItem, Trigger
 
 _NAME_CHAR = re.compile(r"[^A-Za-z0-9_]")
 _NAME_RULE = "letters, digits and _, not starting with a digit"
@@ -156,3 +166,100 @@ def group_label(group: Group, scope: Scope, outcome: ConditionOutcome | None) ->
     if group.condition is not None:
         parts.append(group.condition.describe())
     return ", ".join(parts) or group.label or "group"
+
+
+class WalkHost(Protocol):
+    """What the scopes of events need of the resolver walking the file."""
+
+    triggers: list[Trigger]
+
+    def gate(self, entity: Any, scope: Scope) -> tuple[bool, ConditionOutcome | None]: ...
+
+    def walk(self, entities: list[Any], scope: Scope, parent: TreeItem) -> None: ...
+
+    def defer(self, entities: list[Any], scope: Scope, parent: TreeItem, reason: str) -> None:
+        ...
+
+    def action(self, entity: Any, scope: Scope, parent: TreeItem) -> None: ...
+
+
+class EventScopes:
+    """The scopes that wait for something: a `When` group, a TimerAction, a registered event
+    handler, a process's `on_exit`. Each opens a scope whose Trigger says what it waits for
+    (kept in the host's `triggers`, linked to their targets once the file is walked), and a
+    row of the tree; the host walks what it holds."""
+
+    def __init__(self, host: WalkHost) -> None:
+        self.host = host
+
+    def when_trigger(self, when: When, scope: Scope) -> Trigger:
+        delay = 0.0
+        if when.delay is not None and scope.enabled:
+            text = perform(when.delay, scope.context())
+            try:
+                delay = float(text)
+            except ValueError:
+                raise ArgumentError(f"When(delay=...) gave {text!r}, which is not a number",
+                                    when.origin, hint="a delay is in seconds") from None
+        trigger = Trigger(when.on, None, delay, when.io, scope.trigger, when.target)
+        self.host.triggers.append(trigger)
+        return trigger
+
+    def timer(self, timer: TimerAction, outer: Scope, parent: TreeItem) -> None:
+        enabled, skipped = self.host.gate(timer, outer)
+        scope = outer.child(False)
+        scope.enabled, scope.skipped_by = enabled, skipped
+        delay = 0.0
+        if enabled:
+            text = perform(timer.period, scope.context())
+            try:
+                delay = float(text)
+            except ValueError:
+                raise ArgumentError(f"TimerAction period {text!r} is not a number",
+                                    timer.origin) from None
+        scope.trigger = Trigger(TriggerOn.TIMER, None, delay, None, outer.trigger)
+        item = TreeItem("group", f"timer {delay:g} s", enabled, scope.namespace, None,
+                        scope.trigger)
+        parent.children.append(item)
+        self.host.walk(timer.actions, scope, item)
+
+    def event_handler(self, register: RegisterEventHandler, outer: Scope, parent: TreeItem)\
+            -> None:
+        handler = register.handler
+        enabled, skipped = self.host.gate(register, outer)
+        scope = outer.child(False)
+        scope.enabled, scope.skipped_by = enabled, skipped
+        io = handler.io
+        if handler.on == TriggerOn.STATE:
+            io = lifecycle_plan.state_trigger_io(handler, outer.context())  # type: ignore[arg-type]
+        # a state handler without a target node applies to every lifecycle node: "*"
+        target = "*" if handler.on == TriggerOn.STATE and handler.target is None else None
+        scope.trigger = Trigger(handler.on, target, 0.0, io, outer.trigger, handler.target,
+                                repeat=handler.on == TriggerOn.STATE and
+                                not getattr(handler, "handle_once", False))
+        self.host.triggers.append(scope.trigger)
+        item = TreeItem("group", f"on {handler.on}", enabled, scope.namespace, None,
+                        scope.trigger)
+        parent.children.append(item)
+        self.handler_body(handler.handler, handler.target is None and handler.on in
+                          (TriggerOn.START, TriggerOn.EXIT, TriggerOn.IO), scope, item)
+
+    def handler_body(self, body: Any, every_process: bool, scope: Scope, item: TreeItem)\
+            -> None:
+        if callable(body) and not isinstance(body, Entity):
+            self.host.action(IoCallbacks([body]), scope, item)
+        elif every_process:
+            # performed again for each process's event, as launch does
+            self.host.defer(entity_list(body), scope, item, "performed for every process's event")
+        else:
+            self.host.walk(entity_list(body), scope, item)
+
+    def on_exit(self, entity: Node | ExecuteProcess, outer: Scope, parent: TreeItem) -> None:
+        """`Node(on_exit=...)`: a handler for this process's exit."""
+        scope = outer.child(False)
+        scope.trigger = Trigger(TriggerOn.EXIT, None, 0.0, None, outer.trigger, entity)
+        self.host.triggers.append(scope.trigger)
+        item = TreeItem("group", "on exit", scope.enabled, scope.namespace, None,
+                        scope.trigger)
+        parent.children.append(item)
+        self.handler_body(entity.on_exit, False, scope, item)
