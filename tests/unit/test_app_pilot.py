@@ -45,7 +45,7 @@ async def until(pilot: Pilot[int], check: Callable[[], object], what: str) -> No
 async def following(tmp_path: Path, launch: Path = BRINGUP,
                     arguments: dict[str, str] | None = None, *, started: bool = True,
                     size: tuple[int, int] = (80, 24), host: str | None = None,
-                    name: str = "bringup") -> AsyncIterator[
+                    name: str = "bringup", read_only: bool = False) -> AsyncIterator[
         tuple[TuiLaunchApp, Pilot[int], MemoryPort]]:
     """The TUI following an in-memory session of `launch`, as a client attaching to it:
     every enabled process already started (`started`; the session's history, replayed)
@@ -56,7 +56,8 @@ async def following(tmp_path: Path, launch: Path = BRINGUP,
     enabled = session.plan.enabled_processes()
     if started:
         port.happened(*(Started(p.id, pid=1000 + n) for n, p in enumerate(enabled)))
-    app = TuiLaunchApp(session, tmp_path, session_name=name, port=port, session_host=host)
+    app = TuiLaunchApp(session, tmp_path, session_name=name, port=port, session_host=host,
+                       read_only=read_only)
     async with app.run_test(size=size) as pilot:
         await until(pilot, lambda: app.supervisor is port and (
             not started or not enabled or

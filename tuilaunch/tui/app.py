@@ -29,6 +29,7 @@ from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
 from ..client.port import LaunchPort
+from ..client.read_only import refusal
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
 from ..client.served_session import ServedSession
 from ..client.session_start import session_name_for, start_session
@@ -37,6 +38,8 @@ from ..engine.plan.machines import Placement
 from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.vocabulary.lifecycle import available_transitions
+from ..engine.run.vocabulary.requests import Apply, Restart, Start, Stop, Transition
+from ..engine.run.vocabulary.ros_requests import LogLevel
 from .arguments import ArgsTab
 from .inspector import INSPECTOR_BINDINGS, Inspector
 from .key_order import KeyOrder
@@ -56,6 +59,14 @@ READ_ONLY_REFUSES = frozenset({("command", "stop"), ("command", "restart"),
                                ("command", "start"), ("command", "lifecycle"), ("apply", ""),
                                ("inspector", "log_level")})
 """The app's keys whose every request a read-only client refuses: its footer hides them."""
+
+READ_ONLY_BINDINGS = [
+    Binding(key, f"refused({request.changes!r})", show=False)
+    for key, request in (("s", Stop), ("r", Restart), ("t", Start),
+                         ("right_square_bracket", Transition),
+                         ("left_square_bracket", Transition), ("f5", Apply), ("L", LogLevel))]
+"""The same keys in a read-only view, hidden: each says its refusal in one line (the footer
+offers none of them, but a key typed out of habit is answered, not silently dropped)."""
 
 
 class LaunchTabs(TabbedContent):
@@ -116,6 +127,7 @@ class TuiLaunchApp(SessionLink, KeyOrder):
         Binding("slash", "navigation('find')", "Filter", show=False,
                 tooltip="Services, Params: into the list's filter field"),
         *QUIT_BINDINGS,
+        *READ_ONLY_BINDINGS,  # after the keys they stand for: only where those are off
     ]
 
     keyboard: NodeKeyboard
@@ -265,6 +277,8 @@ class TuiLaunchApp(SessionLink, KeyOrder):
             # only ctrl+], not tuilaunch's stop or restart
             return False
         name = str(parameters[0]) if parameters else ""
+        if action == "refused":
+            return self.read_only
         if self.read_only and (action, name) in READ_ONLY_REFUSES:
             return False
         if action == "keyboard":
@@ -279,6 +293,10 @@ class TuiLaunchApp(SessionLink, KeyOrder):
         if self.supervisor is None or self.tabs.active != "nodes":
             return False
         return self.nodes.commands.applies(name, parameters[1:])
+
+    def action_refused(self, what: str) -> None:
+        """A key a read-only view refuses: one line, nothing sent."""
+        self.notify(str(refusal(what)), severity="warning")
 
     def action_command(self, verb: str, *parameters: str) -> None:
         """s, r, t, ], [, a: the Nodes tab's selection's commands (nodes/commands.py)."""
