@@ -46,7 +46,7 @@ class TabService(AppService):
 
     def __init__(self, words: list[str], warm: Warm | None = None,
                  **kwargs: Any) -> None:
-        # serve_tab.py, as the warm one is: the tab's words on its first line
+        # serve_tab.py, as the warm one is (start_tab_process): its words on its first line
         super().__init__(shlex.join([sys.executable, "-m", "tuilaunch.cli.serve_tab"]),
                          **kwargs)
         self.words = words
@@ -80,7 +80,8 @@ class TabService(AppService):
         textual-serve starts it; told its words and size."""
         process = await self.warm.take() if self.warm is not None else None
         if process is None or process.stdin is None:
-            process = await super()._open_app_process(width, height)
+            # not through a shell (textual-serve's way): the pid killed is the TUI's
+            process = await start_tab_process(self._build_environment(width, height))
         assert process.stdin is not None
         process.stdin.write(json.dumps([self.words, width, height]).encode() + b"\n")
         self._process, self._stdin = process, process.stdin
@@ -118,10 +119,8 @@ class Warm:
         if self.stopped or (self.process is not None and self.process.returncode is None):
             return
         # textual-serve's environment (the web driver, its colours and frame rate)
-        environment = AppService._build_environment(cast(AppService, _NoDebug()))
-        self.process = await asyncio.create_subprocess_exec(
-            sys.executable, "-m", "tuilaunch.cli.serve_tab", stdin=asyncio.subprocess.PIPE,
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE, env=environment)
+        self.process = await start_tab_process(
+            AppService._build_environment(cast(AppService, _NoDebug())))
 
     async def take(self) -> Process | None:
         """The waiting process (None: none alive); another is started in its place once
@@ -135,6 +134,13 @@ class Warm:
         self.stopped = True
         if self.process is not None and self.process.returncode is None:
             self.process.kill()
+
+
+async def start_tab_process(environment: dict[str, str]) -> Process:
+    """serve_tab.py, waiting for its tab's words on its first line."""
+    return await asyncio.create_subprocess_exec(
+        sys.executable, "-m", "tuilaunch.cli.serve_tab", stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE, env=environment)
 
 
 class _NoDebug:
