@@ -5,6 +5,7 @@ gives them back; `g` restarts a node under a tool from a prompt; `c` shows its c
 from __future__ import annotations
 
 import asyncio
+import time
 
 import pytest
 from textual.widgets import Input
@@ -47,6 +48,8 @@ async def terminal_offered(pilot, app, process_id: str) -> str:
     await pilot.pause()
     await pilot.press("i")
     await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
+    # the question takes a key typed once it shows: after the keys typed with `i`
+    await until(pilot, lambda: time.monotonic() >= app.dropping_until)
     return app.screen.question
 
 
@@ -127,7 +130,8 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await pilot.pause()
             await pilot.press("i")
             await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
-            await pilot.pause(0.5)  # a question `i` opens takes a key typed once it shows
+            # a question `i` opens takes a key typed once it shows, after i's burst
+            await until(pilot, lambda: time.monotonic() >= app.dropping_until)
             await pilot.press("y")
             await until(pilot, lambda: app.keyboard.typing_to == "lines-1")
             await pilot.press(*"hello", "enter")
@@ -146,7 +150,7 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await pilot.pause()
             burst(app, "i")
             await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
-            await pilot.pause(0.5)
+            await until(pilot, lambda: time.monotonic() >= app.dropping_until)
             burst(app, "y", *"hello rs", "enter")
             await until(pilot, lambda: "got: hello rs" in pane(app, "slow-3"))
             assert app.keyboard.typing_to == "slow-3"

@@ -87,7 +87,8 @@ def test_keys_typed_with_i_are_dropped_while_another_client_types(write):
                 burst(app, "i", *"abc", "s")
                 await until(pilot, lambda: any(
                     "were not sent" in str(n.message) for n in app._notifications))
-                await pilot.pause(0.5)
+                # the whole burst read and dropped
+                await until(pilot, lambda: time.monotonic() >= app.dropping_until)
                 assert app.keyboard.typing_to is None
                 assert app.output_panel.view == shown  # `a` did not switch to all output
                 assert not app.screen_stack[1:]  # `c` opened no command dialog

@@ -5,6 +5,7 @@ key acts on the focused session alone."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -77,7 +78,7 @@ async def test_i_on_a_group_drops_the_keys_typed_with_it(tmp_path: Path) -> None
             app.post_message(events.Key(key, None if key == "enter" else key))
         await until(pilot, lambda: any("were not sent" in str(n.message)
                                        for n in app._notifications), "the refusal said")
-        await pilot.pause(0.5)
+        await until(pilot, lambda: time.monotonic() >= app.dropping_until, "the burst over")
         assert not isinstance(app.screen, ConfirmScreen)
         assert app.tabs.active == "nodes"
         said = [str(n.message) for n in app._notifications]

@@ -29,7 +29,6 @@ from textual.screen import Screen
 from textual.widgets import Footer, Static, TabbedContent, TabPane
 
 from ..client.port import LaunchPort
-from ..client.read_only import refusal
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
 from ..client.served_session import ServedSession
 from ..client.session_start import session_name_for, start_session
@@ -61,7 +60,7 @@ READ_ONLY_REFUSES = frozenset({("command", "stop"), ("command", "restart"),
 """The app's keys whose every request a read-only client refuses: its footer hides them."""
 
 READ_ONLY_BINDINGS = [
-    Binding(key, f"refused({request.changes!r})", show=False)
+    Binding(key, f"keyboard('refused', {request.changes!r})", show=False)
     for key, request in (("s", Stop), ("r", Restart), ("t", Start),
                          ("right_square_bracket", Transition),
                          ("left_square_bracket", Transition), ("f5", Apply), ("L", LogLevel))]
@@ -277,7 +276,7 @@ class TuiLaunchApp(SessionLink, KeyOrder):
             # only ctrl+], not tuilaunch's stop or restart
             return False
         name = str(parameters[0]) if parameters else ""
-        if action == "refused":
+        if action == "keyboard" and name == "refused":
             return self.read_only
         if self.read_only and (action, name) in READ_ONLY_REFUSES:
             return False
@@ -293,10 +292,6 @@ class TuiLaunchApp(SessionLink, KeyOrder):
         if self.supervisor is None or self.tabs.active != "nodes":
             return False
         return self.nodes.commands.applies(name, parameters[1:])
-
-    def action_refused(self, what: str) -> None:
-        """A key a read-only view refuses: one line, nothing sent."""
-        self.notify(str(refusal(what)), severity="warning")
 
     def action_command(self, verb: str, *parameters: str) -> None:
         """s, r, t, ], [, a: the Nodes tab's selection's commands (nodes/commands.py)."""

@@ -174,8 +174,9 @@ class KeyOrder(App[int]):
         self._key_holds = 0
         self._stuck_timer: Any = None
         self._settling: asyncio.Task[None] | None = None
-        self._dropping_until = 0.0
-        """Until when a key read belongs to a burst being dropped (`_drop_burst`)."""
+        self.dropping_until = 0.0
+        """Until when (time.monotonic) a key read belongs to a burst being dropped
+        (`_drop_burst`): a question `i` opened takes the keys typed after it."""
         self._say_dropped: Callable[[], None] | None = None
         """Says that the burst being dropped was: once, at its first key dropped."""
 
@@ -275,15 +276,15 @@ class KeyOrder(App[int]):
             self._keys_waiting.clear()
             self._tell_dropped()
         self._first_in_line = 0
-        self._dropping_until = time.monotonic() + BURST_GAP
+        self.dropping_until = time.monotonic() + BURST_GAP
 
     def _dropped(self, event: events.Key | events.Paste) -> bool:
         """A key of a burst being dropped: it goes nowhere, and the burst goes on."""
         now = time.monotonic()
-        if now >= self._dropping_until:
+        if now >= self.dropping_until:
             self._say_dropped = None
             return False
-        self._dropping_until = now + BURST_GAP
+        self.dropping_until = now + BURST_GAP
         self._tell_dropped()
         return True
 

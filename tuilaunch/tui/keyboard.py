@@ -81,7 +81,10 @@ class NodeKeyboard:
     def act(self, action: str, *parameters: str) -> None:
         {"type_into": self.type_into, "run_under": self.run_under,
          "command_line": self.command_line,
-         "keys_not_here": lambda: self.keys_not_here(*parameters)}[action]()
+         "keys_not_here": lambda: self.keys_not_here(*parameters),
+         # a key a read-only view refuses (s, r, t, F5...): one line, nothing sent
+         "refused": lambda: self.app.notify(str(refusal(parameters[0])),
+                                            severity="warning")}[action]()
 
     def keys_not_here(self, key: str) -> None:
         """`i` or `g` where it cannot act: said at once, and the rest of its burst dropped

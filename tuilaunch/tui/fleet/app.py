@@ -44,7 +44,7 @@ from ...engine.plan.session import Session
 from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
 from ...engine.run.vocabulary.request import Request
-from ..app import LaunchTabs
+from ..app import LaunchTabs, pane_save_dir
 from ..key_order import KeyOrder, hold_keys
 from ..keyboard import not_a_node, refuse_keys, remembered, restart_with, show_command_line
 from ..log_levels import LogLevels
@@ -221,6 +221,9 @@ class FleetApp(KeyOrder):
         if supervisor is None:
             return
         member.problem = None
+        # `w` writes where the single TUI would for this session (its log folder here, or a
+        # folder named after its machine), not into the folder the fleet was started in
+        member.pane.save_dir = pane_save_dir(supervisor.log_dir, member.host, member.name)
         supervisor.read_only = self.read_only  # refused by the client, said in one line
         supervisor.subscribe(member.buffer)
         member.show_plan()
