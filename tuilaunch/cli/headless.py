@@ -226,7 +226,7 @@ async def _run(plan: Plan, log_dir: Path, placement: Placement | None = None,
                command: list[str] | None = None,
                arguments: dict[str, str] | None = None) -> int:
     supervisor = make_supervisor(plan, log_dir, placement=placement, command=command,
-                                 arguments=arguments)
+                                 arguments=arguments, served=False)
     printer = Printer(sys.stdout, log_dir, plan)
     supervisor.subscribe(printer)
     loop = asyncio.get_running_loop()

@@ -18,11 +18,69 @@ from __future__ import annotations
 import dataclasses
 import types
 import typing
+from collections.abc import Callable, Iterator
 from typing import Any, ClassVar, Generic, TypeVar
 
 R = TypeVar("R")
 
-REQUESTS: dict[str, type[Request[Any]]] = {}
+class _Registry(dict[str, "type[Request[Any]]"]):
+    """The request classes by op, complete whenever it is read: a module of requests made
+    on demand (requests.py's ROS inspector's requests, `later`) is imported on the first
+    read, so that a launch nobody inspects does not pay for their classes at start."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._pending: list[Callable[[], object]] = []
+
+    def later(self, load: Callable[[], object]) -> None:
+        """`load` imports more requests (they register themselves): run before a read."""
+        self._pending.append(load)
+
+    def _load(self) -> None:
+        while self._pending:
+            self._pending.pop()()
+
+    def register(self, op: str, cls: type[Request[Any]]) -> None:
+        if dict.__contains__(self, op):
+            known = dict.__getitem__(self, op)
+            raise TypeError(f"two requests with op {op!r}: {known.__name__}, {cls.__name__}")
+        dict.__setitem__(self, op, cls)
+
+    def __getitem__(self, op: str) -> type[Request[Any]]:
+        self._load()
+        return super().__getitem__(op)
+
+    def get(self, op: str, default: Any = None) -> Any:
+        self._load()
+        return super().get(op, default)
+
+    def __contains__(self, op: object) -> bool:
+        self._load()
+        return super().__contains__(op)
+
+    def __iter__(self) -> Iterator[str]:
+        self._load()
+        return super().__iter__()
+
+    def __len__(self) -> int:
+        self._load()
+        return super().__len__()
+
+    def keys(self) -> Any:
+        self._load()
+        return super().keys()
+
+    def values(self) -> Any:
+        self._load()
+        return super().values()
+
+    def items(self) -> Any:
+        self._load()
+        return super().items()
+
+
+REGISTRY = _Registry()
+REQUESTS: dict[str, type[Request[Any]]] = REGISTRY
 """Every request class, by its op."""
 
 
@@ -43,12 +101,9 @@ class Request(Generic[R]):
         super().__init_subclass__(**kwargs)
         if not op:
             return
-        if op in REQUESTS:
-            raise TypeError(f"two requests with op {op!r}: {REQUESTS[op].__name__}, "
-                            f"{cls.__name__}")
+        REGISTRY.register(op, cls)
         cls.op = op
         cls.changes = changes
-        REQUESTS[op] = cls
 
     def reply(self, result: Any) -> R:
         """The reply's result, as this request's answer is read."""

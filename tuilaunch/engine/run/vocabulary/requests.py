@@ -1,7 +1,7 @@
 """The session's requests, one frozen dataclass each: what a client may ask of a session
 server (the fields and their meaning: session/protocol.py's docstring), and of a machine's
-share. The ROS inspector's requests are in ros_requests.py, re-exported here, so importing
-this module knows every request (`from_message` finds them all).
+share. The ROS inspector's requests are in ros_requests.py, re-exported here as they are
+first asked for; `from_message` and REQUESTS find them all whatever was imported.
 
 A field's default is what the server does when the field is absent; None: the server's
 own default. `changes`: how a read-only client names the refusal (client/read_only.py).
@@ -10,37 +10,39 @@ own default. `changes`: how a read-only client names the refusal (client/read_on
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .request import REQUESTS, Request, UnknownRequest, from_message, to_message
-from .ros_requests import (
-    BlackBox,
-    BlackBoxWrite,
-    CallService,
-    EchoStart,
-    EchoStop,
-    HzMeasure,
-    HzRead,
-    HzWatch,
-    LogLevel,
-    Nodes,
-    ParamsDescribe,
-    ParamsDump,
-    ParamsGet,
-    ParamsLoad,
-    ParamsSet,
-    PlotFields,
-    PlotStart,
-    PlotStop,
-    RecordStart,
-    RecordStop,
-    RecordTake,
-    ServiceFields,
-    Services,
-    Topics,
-    WatchQos,
-    WatchRates,
-)
+from .request import REGISTRY, REQUESTS, Request, UnknownRequest, from_message, to_message
+
+if TYPE_CHECKING:
+    from .ros_requests import (
+        BlackBox,
+        BlackBoxWrite,
+        CallService,
+        EchoStart,
+        EchoStop,
+        HzMeasure,
+        HzRead,
+        HzWatch,
+        LogLevel,
+        Nodes,
+        ParamsDescribe,
+        ParamsDump,
+        ParamsGet,
+        ParamsLoad,
+        ParamsSet,
+        PlotFields,
+        PlotStart,
+        PlotStop,
+        RecordStart,
+        RecordStop,
+        RecordTake,
+        ServiceFields,
+        Services,
+        Topics,
+        WatchQos,
+        WatchRates,
+    )
 
 Json = dict[str, Any]
 
@@ -229,6 +231,27 @@ class ShareLines(Request[Json], op="share_lines"):
     start: int = 0
     end: int = 0
     skip: int = 0
+
+
+def _ros_requests() -> Any:
+    from . import ros_requests
+
+    return ros_requests
+
+
+REGISTRY.later(_ros_requests)
+
+
+def __getattr__(name: str) -> Any:
+    """The ROS inspector's requests, re-exported as they are first asked for: a launch that
+    serves no inspector (a plain `--headless` run) does not build their 26 classes at start
+    (request.py's REQUESTS loads them the same way on first read)."""
+    if name.startswith("__"):  # the import system asks for __path__ and such
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    try:
+        return getattr(_ros_requests(), name)
+    except AttributeError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
 
 
 __all__ = [
