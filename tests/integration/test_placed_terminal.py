@@ -123,7 +123,10 @@ class Tmux:
         self.socket = f"tl{os.getpid()}-{id(self)}"
         command = " ".join([sys.executable, "-m", "tuilaunch", *args])
         self.tmux("new-session", "-d", "-s", "tl", "-x", str(size[0]), "-y", str(size[1]),
-                  f"cd {folder} && TERM=xterm-256color {command}; sleep 600")
+                  # the size is the pane's: a COLUMNS or LINES inherited from the run (CI
+                  # sets them) would be Textual's instead
+                  f"cd {folder} && env -u COLUMNS -u LINES TERM=xterm-256color {command}; "
+                  "sleep 600")
 
     def tmux(self, *args: str) -> str:
         return subprocess.run(["tmux", "-L", self.socket, "-f", "/dev/null", *args],
