@@ -32,8 +32,10 @@ def test_a_recording_over_ssh_is_written_here(machines: Machines, write, tmp_pat
     try:
         assert run_cli("wait", "farrec", "wave-1", "running", "--timeout", "60",
                        env=there(robot)).returncode == 0
+        # 10 s: on a loaded machine the link and the subscription's discovery take seconds
+        # of it before the first message (one run got 50 messages of a 4 s recording)
         recorded = run_cli("record", "robot1:farrec", "/ssh/rec", "-o", str(out),
-                           "--duration", "4")
+                           "--duration", "10")
         assert recorded.returncode == 0, recorded.stderr
         again = run_cli("record", "robot1:farrec", "/ssh/rec", "-o", str(out),
                         "--duration", "1")
