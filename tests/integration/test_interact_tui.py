@@ -142,6 +142,9 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             # a node that runs with pipes: the question says restart
             assert "Restart it with a terminal" in await terminal_offered(pilot, app, "nap-2")
             await pilot.press("escape")
+            # no: the keys of escape's burst are dropped (they were for the node); the `i`
+            # below is a burst of its own, typed after a pause
+            await until(pilot, lambda: time.monotonic() >= app.dropping_until)
             # `i y` and a line in one read, as ssh delivers them, to a node that takes a
             # second to stop: the keys after `y` wait out the restart, and are the node's,
             # not tuilaunch's (its `s` would stop the node, its `r` restart it)
