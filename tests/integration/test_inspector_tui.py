@@ -26,7 +26,7 @@ from tuilaunch.tui.screens.tree_panel import LaunchTree
 from .inspector_helpers import NODE_SCRIPT
 from .launch_world import make_package
 from .test_sessions import runtime, status, tl  # noqa: F401
-from .test_tui import row_text, until
+from .test_tui import row_text, tab_panel, until
 
 # the package's executable: inspector_node.py, as a launch file's node runs it
 WRAPPER = f"""#!{sys.executable}
@@ -90,9 +90,7 @@ def cell(app: TuiLaunchApp, topic: str, column: str) -> str:
 
 async def test_topics_tab_lists_processes_rates_problems_and_echoes(demo):
     async with session_tui(demo) as (app, pilot):
-        panel = app.query_one(TopicsPanel)
-        await pilot.press("5")
-        assert app.tabs.active == "topics"
+        panel = await tab_panel(pilot, app, "5", TopicsPanel)
         await until(pilot, lambda: {"/scan_tui", "/chat_tui"} <= set(panel.shown))
         # the publishing process is named, with the QoS it offers
         panel.table.move_cursor(row=panel.shown.index("/scan_tui"))
@@ -214,8 +212,7 @@ async def test_log_level_key_sets_it_or_offers_a_restart(demo):
 async def test_params_tab_writes_and_loads_a_params_file(demo, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     async with session_tui(demo) as (app, pilot):
-        panel = app.query_one(ParamsPanel)
-        await pilot.press("4")
+        panel = await tab_panel(pilot, app, "4", ParamsPanel)
         panel.load_node("/lidar")
         await until(pilot, lambda: "gains.p" in panel.params, every=None)
         app.screen.set_focus(panel.query_one("#prm-nodes"))

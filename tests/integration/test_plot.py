@@ -329,13 +329,12 @@ async def test_p_in_the_topics_tab_plots_the_topic_with_its_figures(session):
     from tuilaunch.tui.screens.topics_panel import TopicsPanel
 
     from .test_sessions import status
-    from .test_tui import until
+    from .test_tui import tab_panel, until
 
     info = status(session)
     app = make_app(info["file"], {}, Path(info["log_dir"]), session_name=session)
     async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.press("5")
-        panel = app.query_one(TopicsPanel)
+        panel = await tab_panel(pilot, app, "5", TopicsPanel)
         await until(pilot, lambda: WAVE in panel.shown)
         table = panel.query_one(DataTable)
         table.move_cursor(row=panel.shown.index(WAVE))

@@ -85,9 +85,9 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         assert "/rl1/" not in detail(app)
 
         # o: the Topics tab lists the moved node's topics
-        await pilot.press("o")
+        await pilot.press("o")  # the Topics tab's panel is made as it first shows
+        await until(pilot, lambda: app.tabs.active == "topics")
         panel = app.query_one(TopicsPanel)
-        assert app.tabs.active == "topics"
         assert panel.node == "/rl2/talker"
         await until(pilot, lambda: "/rl2/chatter" in panel.shown)
         assert not any(topic.startswith("/rl1/") for topic in panel.shown)

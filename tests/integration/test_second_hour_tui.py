@@ -239,6 +239,7 @@ async def test_a_service_typed_with_the_tab_key_before_the_list_came_is_picked(t
     async with tui(tmp_path, "robot:=tui6", "listener:=false") as (app, pilot):
         await until(pilot, lambda: states(app).get("service_server-4") == "running")
         burst(app, "3", "slash", *"tui6/enable", "enter")
+        await until(pilot, lambda: app.query_one(ServicesPanel))  # made as the tab shows
         panel = app.query_one(ServicesPanel)
         await until(pilot, lambda: panel.selected is not None, limit=60)
         assert panel.selected == ("/tui6/enable", "std_srvs/srv/SetBool")

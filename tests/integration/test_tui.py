@@ -12,11 +12,12 @@ import time
 from collections.abc import AsyncIterator, Callable, Iterator
 from contextlib import asynccontextmanager, contextmanager
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, TypeVar, cast
 
 import pytest
 from textual.css.query import NoMatches
 from textual.pilot import Pilot
+from textual.widget import Widget
 from textual.widgets import Checkbox, DataTable, Input
 
 from tuilaunch.client.link import send_once
@@ -37,6 +38,7 @@ from ..conftest import EXAMPLES, session_folders
 from .proc_tree import end, servers_of
 
 BRINGUP = str(EXAMPLES / "bringup.py")
+W = TypeVar("W", bound=Widget)
 
 
 async def until(pilot: Pilot, check: Callable[[], object], limit: float = 60.0,
@@ -52,6 +54,15 @@ async def until(pilot: Pilot, check: Callable[[], object], limit: float = 60.0,
             every()
         await pilot.pause(0.05)
         waited += 0.05
+
+
+async def tab_panel(pilot: Pilot, app: TuiLaunchApp, key: str, kind: type[W]) -> W:
+    """Tab `key` (3, 4, 5) opened as a user opens it, and its panel, made the first time the
+    tab shows (tui/tab_panels.py): the tab switches once it is there."""
+    await pilot.press(key)
+    tab = {"3": "services", "4": "params", "5": "topics"}[key]
+    await until(pilot, lambda: app.tabs.active == tab)
+    return app.tabs.query_one(kind)
 
 
 def holds(check: Callable[[], object]) -> bool:
@@ -247,8 +258,7 @@ async def test_a_bad_argument_value_shows_its_error_and_applies_nothing(tmp_path
 async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
     async with tui(tmp_path, "robot:=tui3", "listener:=false") as (app, pilot):
         await until(pilot, lambda: states(app).get("service_server-4") == "running")
-        await pilot.press("3")
-        panel = app.query_one(ServicesPanel)
+        panel = await tab_panel(pilot, app, "3", ServicesPanel)
         await until(pilot, lambda: "/tui3/enable" in dict(panel.services),
                     every=panel.refresh_listing)
         await pilot.press("slash", *"tui3/enable")  # the tab shows the list; / filters it
@@ -291,8 +301,7 @@ async def test_service_panel_calls_a_real_service_and_shows_errors(tmp_path):
 async def test_parameter_panel_sets_and_reads_back_a_real_parameter(tmp_path):
     async with tui(tmp_path, "robot:=tui4", "listener:=false", "services:=false") as (app, pilot):
         await until(pilot, lambda: states(app).get("set_parameters-1") == "done")
-        await pilot.press("4")
-        panel = app.query_one(ParamsPanel)
+        panel = await tab_panel(pilot, app, "4", ParamsPanel)
         await until(pilot, lambda: "/tui4/control/configurable" in panel.nodes,
                     every=panel.refresh_listing)
         await pilot.press("slash", *"tui4/control")  # the tab shows the list; / filters it
@@ -338,9 +347,8 @@ async def test_the_first_look_at_params_or_services_lists_the_running_nodes(tmp_
         await until(pilot, lambda: any("Publishing" in line
                                        for line in app.store.text(View("talker-1"))))
         await until(pilot, lambda: states(app).get("service_server-4") == "running")
-        await pilot.press(tab)
         if tab == "4":
-            params = app.query_one(ParamsPanel)
+            params = await tab_panel(pilot, app, tab, ParamsPanel)
             await until(pilot, lambda: "/tui7/talker" in params.nodes)
             # and the list keeps up while it shows: the talker stopped leaves it, started
             # again it comes back, no Refresh pressed
@@ -351,7 +359,7 @@ async def test_the_first_look_at_params_or_services_lists_the_running_nodes(tmp_
             await pilot.press("1", "t", "4")
             await until(pilot, lambda: "/tui7/talker" in params.nodes)
         else:
-            services = app.query_one(ServicesPanel)
+            services = await tab_panel(pilot, app, tab, ServicesPanel)
             await until(pilot, lambda: "/tui7/reset" in dict(services.services))
             await pilot.press("slash", *"tui7/reset")
             listing = services.query_one("#svc-list")
@@ -366,8 +374,7 @@ async def test_an_empty_graph_reads_as_still_discovering_not_as_nothing_there(wr
             return LaunchDescription([ExecuteProcess(name='plain', cmd=['sleep', '600'])])
         """)
     async with tui(tmp_path, path=str(path)) as (app, pilot):
-        await pilot.press("3")
-        services = app.query_one(ServicesPanel)
+        services = await tab_panel(pilot, app, "3", ServicesPanel)
         listing = services.query_one("#svc-list")
         # no node of the launch has a service: the list says discovery goes on
         await until(pilot, lambda: services.answered)

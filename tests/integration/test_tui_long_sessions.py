@@ -27,7 +27,7 @@ from tuilaunch.tui.screens.params_panel import ParamsPanel
 from tuilaunch.tui.screens.tree_panel import LaunchTree
 
 from .proc_tree import end, servers_of
-from .test_tui import launched, pids, row_text, states, tui, until
+from .test_tui import launched, pids, row_text, states, tab_panel, tui, until
 
 COUNTER = """
 from launch import LaunchDescription
@@ -549,8 +549,7 @@ async def test_params_launch_column_matches_a_node_by_the_name_it_reports(tmp_pa
         # configurable has no name in the launch file (plan full_name is None)
         assert app.session.plan.process("configurable-3").full_name is None
         await until(pilot, lambda: states(app).get("set_parameters-1") == "done")
-        await pilot.press("4")
-        panel = app.query_one(ParamsPanel)
+        panel = await tab_panel(pilot, app, "4", ParamsPanel)
         await until(pilot, lambda: "/tuip/control/configurable" in panel.nodes,
                     every=panel.refresh_listing)
         panel.load_node("/tuip/control/configurable")

@@ -20,7 +20,7 @@ import subprocess
 import sys
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from textual import events, on
 from textual.app import ComposeResult, SystemCommand
@@ -46,13 +46,14 @@ from .keyboard import KEYBOARD_BINDINGS, NodeKeyboard
 from .navigation import Navigation
 from .nodes.tab import NodesTab
 from .quitting import LEAVING_BINDINGS, QUIT_BINDINGS, Quitting
-from .screens.params_panel import ParamsPanel
-from .screens.services_panel import ServicesPanel
-from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import LaunchTree, ascii_terminal
 from .server_start import ServerStarted
 from .session_link import DRAIN_HZ, PANE_CHROME, SessionLink
 from .status_line import StatusLine
+from .tab_panels import TabPanels
+
+if TYPE_CHECKING:
+    from .screens.topics_panel import TopicsPanel
 
 READ_ONLY_REFUSES = frozenset({("command", "stop"), ("command", "restart"),
                                ("command", "start"), ("command", "lifecycle"), ("apply", ""),
@@ -137,7 +138,9 @@ class TuiLaunchApp(SessionLink, KeyOrder):
         super().__init__(*args, **options)
         self.keyboard = NodeKeyboard(self)
         self.inspector = Inspector(self, lambda tab: self.navigation.tab(tab))
-        self.navigation = Navigation(self, self.inspector.tab_shown)
+        # the Services, Params and Topics panels: made the first time their tab shows
+        panels = TabPanels(self, lambda: self.inspector.graph, self.inspector.inspect)
+        self.navigation = Navigation(self, self.inspector.tab_shown, panels)
         self.leaving = Quitting(self)
         self.status = StatusLine(self)
 
@@ -152,14 +155,10 @@ class TuiLaunchApp(SessionLink, KeyOrder):
                                max_fps=self.pane_fps, id="nodes-tab")
             with TabPane("2 Args", id="args"):
                 yield ArgsTab(self, id="args-tab")
-            with TabPane("3 Services", id="services"):
-                yield ServicesPanel(lambda: self.inspector.graph, id="services-panel")
-            with TabPane("4 Params", id="params"):
-                yield ParamsPanel(lambda: self.inspector.graph, lambda: self.session.plan,
-                                  reported=lambda: self.store.reported_names,
-                                  request=self.inspector.inspect, id="params-panel")
-            with TabPane("5 Topics", id="topics"):
-                yield TopicsPanel(self.inspector.inspect, id="topics-panel")
+            # empty until first shown: most sessions never open them (tab_panels.py)
+            yield TabPane("3 Services", id="services")
+            yield TabPane("4 Params", id="params")
+            yield TabPane("5 Topics", id="topics")
         yield Footer()
 
     def on_mount(self) -> None:
@@ -173,7 +172,6 @@ class TuiLaunchApp(SessionLink, KeyOrder):
         self.args_tab = self.query_one(ArgsTab)
         self.tabs = self.query_one(TabbedContent)
         self.status_bar = self.query_one("#status", Static)
-        self.topics_panel = self.query_one(TopicsPanel)
         if ascii_terminal():  # app.tcss draws ASCII lines for this class
             self.add_class("-ascii")
         # the engine thread reads floods; a shorter GIL slice lets keypresses through sooner

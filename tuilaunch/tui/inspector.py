@@ -7,12 +7,11 @@ from __future__ import annotations
 import re
 from collections import deque
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from textual.binding import Binding
 from textual.timer import Timer
 
-from ..client.session_graph import SessionGraph
 from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.vocabulary.request import Request
@@ -21,6 +20,9 @@ from .log_levels import LogLevels
 from .plots import open_plot
 from .recording import Recordings
 from .session_link import SessionLink
+
+if TYPE_CHECKING:
+    from ..client.session_graph import GraphCalls
 
 R = TypeVar("R")
 
@@ -54,9 +56,7 @@ class Inspector:
         """The processes the server sends CPU and memory of (None: all), last asked."""
         self._figures_timer: Timer | None = None
         self.log_levels = LogLevels(app, self.inspect, app.asked_to_stop)
-        self.graph = SessionGraph(self.inspect)
-        """The Services and Params tabs' graph: the session's, where the nodes run (this
-        process never loads rclpy)."""
+        self._graph: GraphCalls | None = None
         self.recordings = Recordings(app, self.inspect)  # w in the Topics tab, b
         self.trends: dict[str, deque[tuple[float, float]]] = {}
         """The selected process's (CPU%, RSS) a second, the server's last minutes first."""
@@ -66,6 +66,19 @@ class Inspector:
         self.topics_process: str | None = None
         """The process whose node's topics `o` listed: the list follows the node when a
         relaunch or a restart moves it."""
+        self._node_to_list: str | None = None
+        """The node `o` asked for before the Topics tab was first shown: listed once its
+        panel is there (tab_panels.py)."""
+
+    @property
+    def graph(self) -> GraphCalls:
+        """The Services and Params tabs' graph: the session's, where the nodes run (this
+        process never loads rclpy); made, and its module imported, when first used."""
+        if self._graph is None:
+            from ..client.session_graph import SessionGraph
+
+            self._graph = SessionGraph(self.inspect)
+        return self._graph
 
     async def inspect(self, request: Request[R]) -> R:
         """A session request's result; raises SessionError with the server's message."""
@@ -75,11 +88,14 @@ class Inspector:
         """A reading the session sent (rates, echo, plot samples, CPU and memory, QoS
         problems) to the widget that asked for it."""
         data = event.data or {}
+        # the Topics tab's, once it was shown: before, it asked for none of them
         topics_panel = self.app.topics_panel
         if isinstance(event, Rates):
-            topics_panel.show_rates(data)
+            if topics_panel is not None:
+                topics_panel.show_rates(data)
         elif isinstance(event, Echo):
-            topics_panel.show_echo(data)
+            if topics_panel is not None:
+                topics_panel.show_echo(data)
         elif isinstance(event, PlotSamples):
             if self.plot_screen is not None:
                 self.plot_screen.add(data)
@@ -101,7 +117,12 @@ class Inspector:
     def tab_shown(self, pane: str) -> None:
         """Measures what the tab on screen shows, and only that: rates and echo for the
         Topics tab, CPU and memory for the Nodes tab."""
-        self.app.topics_panel.set_shown(pane == "topics")
+        topics_panel = self.app.topics_panel
+        if topics_panel is not None:  # made the first time its tab shows
+            if pane == "topics" and self._node_to_list is not None:
+                topics_panel.show_node(self._node_to_list)  # `o` before it was made
+                self._node_to_list = None
+            topics_panel.set_shown(pane == "topics")
         nodes = pane == "nodes"
         if nodes != self.watching_resources and self.app.supervisor is not None:
             self.watching_resources = nodes
@@ -228,7 +249,11 @@ class Inspector:
         if process is None:
             return
         self.topics_process = process
-        self.app.topics_panel.show_node(self.node_name(process))
+        panel = self.app.topics_panel
+        if panel is None:  # listed once the tab is first shown (`tab_shown`)
+            self._node_to_list = self.node_name(process)
+        else:
+            panel.show_node(self.node_name(process))
         self.show_tab("topics")
 
     def detail_shown(self) -> None:
@@ -242,6 +267,8 @@ class Inspector:
         if process is None:
             return
         panel = self.app.topics_panel
+        if panel is None or self._node_to_list is not None:
+            return  # its tab not shown yet: the node is listed when it is
         if panel.node is None:
             self.topics_process = None  # `x` listed all topics: nothing to follow
             return

@@ -9,9 +9,8 @@ from textual.widgets import Button, Input, OptionList, TabPane
 
 from .screens.dialogs import HelpScreen
 from .screens.fields import Field
-from .screens.params_panel import ParamsPanel
-from .screens.services_panel import ServicesPanel
 from .session_link import SessionLink
+from .tab_panels import TabPanels
 
 OPENED_BY_KEY = frozenset({"search-input", "filter-input", "tpc-filter", "svc-filter",
                            "prm-filter"})
@@ -21,24 +20,36 @@ OPENED_BY_KEY = frozenset({"search-input", "filter-input", "tpc-filter", "svc-fi
 class Navigation:
     """Tabs and focus, keyboard first: the tab keys, escape out of a field, and where each
     tab puts the cursor. An object the app holds (`app.navigation`); `tab_shown` (the
-    inspector's) is told of each tab that comes on screen."""
+    inspector's) is told of each tab that comes on screen; `panels` makes the Services,
+    Params and Topics panels the first time their tab is shown (tab_panels.py)."""
 
     FILTERS = {"services": "#svc-filter", "params": "#prm-filter"}
     """The tabs whose list has a filter field that `/` opens (Nodes and Topics bind `/`)."""
 
-    def __init__(self, app: SessionLink, tab_shown: Callable[[str], None]) -> None:
+    def __init__(self, app: SessionLink, tab_shown: Callable[[str], None],
+                 panels: TabPanels) -> None:
         self.app = app
         self.tab_shown = tab_shown
+        self.panels = panels
         self.left_for_field: Widget | None = None
         """The widget the user was on before going into a text field: escape and enter in a
         search or filter field go back there."""
 
     def tab(self, tab: str) -> None:
+        """A tab key (1-5), `o`, the palette: the tab on screen once its panel is there (made
+        now the first time: the tab switches when it is mounted, the keys typed meanwhile
+        wait for it), where its work starts."""
+        app = self.app
+        if app.tabs.active != tab:
+            self.panels.make(tab, lambda: self._switch(tab))
+        app.refresh_bindings()
+
+    def _switch(self, tab: str) -> None:
         app = self.app
         if app.tabs.active != tab:
             app.tabs.active = tab
             self._enter_tab(tab)
-        app.refresh_bindings()
+            app.refresh_bindings()
 
     def focused(self, widget: Widget) -> None:
         """A widget took the focus (the app's DescendantFocus)."""
@@ -72,20 +83,30 @@ class Navigation:
         """Where a tab's work starts: never a text field, so that the tab keys, q and the
         tab's own keys work as soon as the tab is shown (a field is entered with tab, `/`
         or a click)."""
-        app = self.app
+        # in the tabs, not the screen on top: a dialog may have come up while a panel was made
+        tabs = self.app.tabs
         if pane == "args":
-            return app.query_one("#apply", Button)
+            return tabs.query_one("#apply", Button)
         if pane == "services":
-            return app.query_one("#svc-list", OptionList)
+            return tabs.query_one("#svc-list", OptionList)
         if pane == "params":
-            return app.query_one("#prm-nodes", OptionList)
+            return tabs.query_one("#prm-nodes", OptionList)
         if pane == "topics":
-            return app.query_one("#tpc-table")
-        return app.launch_tree
+            return tabs.query_one("#tpc-table")
+        return self.app.launch_tree
 
     def tab_activated(self, pane: str) -> None:
         """A tab came on screen (TabbedContent.TabActivated: a key's, or a click's)."""
         self.app.refresh_bindings()
+        if not self.panels.ready(pane):  # a click on a tab never shown: its panel first
+            self.panels.make(pane, lambda: self._now_shown(pane))
+            return
+        self._now_shown(pane)
+
+    def _now_shown(self, pane: str) -> None:
+        """The tab is on screen with its panel: what it measures starts, the cursor in it."""
+        if self.app.tabs.active != pane:
+            return  # another tab was picked while this one's panel was made
         self.shown(pane)
         focused = self.app.focused
         if not (isinstance(focused, Widget) and pane_of(focused) == pane):
@@ -100,12 +121,10 @@ class Navigation:
         """Keyboard first: each tab puts the cursor where work starts, at once, so keys
         typed right after the tab key go there; again once the tab is laid out."""
         app = self.app
-        if pane == "services":
-            app.query_one(ServicesPanel).refresh_listing()
-        elif pane == "params":
-            app.query_one(ParamsPanel).refresh_listing()
+        if pane in ("services", "params"):
+            self.panels.refresh_listing(pane)
         target = self._home(pane)
-        app.screen.set_focus(target)
+        app.tabs.screen.set_focus(target)
         app.call_after_refresh(self._refocus, pane, target)
 
     def _refocus(self, pane: str, target: Widget) -> None:

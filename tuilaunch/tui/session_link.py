@@ -14,7 +14,7 @@ import subprocess
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from rich.text import Text
 from textual import on, work
@@ -36,10 +36,12 @@ from .arguments import ArgsTab
 from .nodes.tab import NodesTab, SessionEvents
 from .output_store import OutputStore
 from .screens.output_panel import OutputPanel
-from .screens.topics_panel import TopicsPanel
 from .screens.tree_panel import LaunchTree, RowData
 from .server_start import ServerStart, leave_now
 from .toasts import OnceToasts
+
+if TYPE_CHECKING:
+    from .screens.topics_panel import TopicsPanel
 
 # the UI's tick: events are taken from the engine this often; the output pane repaints at
 # most PANE_FPS times a second and only when what it shows changed, so a terminal over ssh
@@ -100,7 +102,6 @@ class SessionLink(App[int]):
     tabs: TabbedContent
     status_bar: Static
     detail_bar: Static
-    topics_panel: TopicsPanel
     engine: EngineThread
     drain_timer: Timer
     keyboard: KeyboardNews
@@ -167,6 +168,8 @@ class SessionLink(App[int]):
         self.start_error: str | None = None  # why the server did not start (said on exit)
         self.quit_before_start = False  # left before following the launch: it is stopped
         self.toasts = OnceToasts()
+        self.topics_panel: TopicsPanel | None = None
+        """The Topics tab's panel, once the tab was shown (tab_panels.py)."""
 
     def notify(self, message: str, *, title: str = "",
                severity: SeverityLevel = "information", timeout: float | None = None,
