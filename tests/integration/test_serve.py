@@ -18,7 +18,7 @@ from selenium.webdriver.common.keys import Keys
 
 from ..conftest import wait_for
 from .browser import Serving, free_port, page, tab_processes
-from .test_sessions import Terminal, runtime, start_detached, status  # noqa: F401
+from .test_sessions import Terminal, runtime, start_detached, status, tl  # noqa: F401
 
 # the first test may install chromium (apt-get, a few minutes on a slow mirror)
 pytestmark = pytest.mark.timeout(900)
@@ -300,10 +300,57 @@ def test_a_resized_window_lays_the_app_out_again(served):
     name, serving = served()
     with page() as browser:
         browser.open(serving.url)
+        # 1100 px: about 122 columns, the tree a third of them (its first frames may come
+        # at the page's size before its font loaded: narrower)
         wide = tree_width(browser.wait_screen(
-            lambda t: tree_shown(t) and tree_width(t) > 0, "the session's tree"))
-        browser.driver.set_window_size(640, 480)
+            lambda t: tree_shown(t) and tree_width(t) >= 38, "the session's tree, wide"))
+        # 800 px: about 88 columns, the tree beside the pane still (below 70 it goes above)
+        browser.driver.set_window_size(800, 600)
         narrow = browser.wait_screen(
             lambda t: tree_shown(t) and 0 < tree_width(t) < wide * 0.8,
             "the app laid out for the narrower window")
         assert f"[{name}] test_launch.py" in narrow
+
+
+LONG = "a_very_long_node_name_of_30_ch"
+
+
+def test_a_phone_has_the_tree_above_the_pane_and_the_nodes_keys(runtime, write):  # noqa: F811
+    """390x844, a phone held upright (about 43 columns): a 30-character name whole on its
+    row, the tree above the pane; the footer's two rows offer Stop, Restart, Start, Type,
+    Search and the palette; a tap on the row selects it, a tap on Stop stops it."""
+    path = write(f"""
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([ExecuteProcess(name='ticker', cmd=['sleep', '600']),
+                              ExecuteProcess(name='{LONG}', cmd=['sleep', '600'])])
+""", "phone_launch.py")
+    name = tl(str(path), "--detach").stdout.strip()
+    tl("wait", name, f"{LONG}-2", "running", "--timeout", "60")
+    serving = Serving(name, "--port", str(free_port()))
+    try:
+        with page() as browser:
+            browser.driver.set_window_size(390, 844)
+            browser.open(serving.url)
+            text = browser.wait_screen(lambda t: f"● {LONG} [" in t, "the long name whole")
+            rows = text.splitlines()
+            at = next(i for i, row in enumerate(rows) if LONG in row)
+            # the tree is the whole width (no pane's edge beside it); the pane's own
+            # status line comes below it, at the left edge
+            assert "▎" not in "".join(rows[4:at + 1])
+            assert any(row.startswith("all nodes") for row in rows[at + 1:])
+            footer = browser.wait_screen(lambda t: all(
+                key in "\n".join(t.splitlines()[-2:]) for key in (
+                    "s Stop", "r Restart", "t Start", "i Type", "/ Search", "^p palette")),
+                "the node's keys in the footer's two rows")
+            browser.tap(LONG, at)
+            browser.wait_screen(lambda t: t.splitlines()[3].strip().startswith(f"{LONG}-2"),
+                                "the long row selected by a tap")
+            browser.tap("Stop", len(footer.splitlines()) - 2)
+            wait_for(lambda: states(name)[f"{LONG}-2"] == "exited",
+                     what="the long-named node stopped by a tap on Stop")
+            assert states(name)["ticker-1"] == "running"  # only the selection
+    finally:
+        serving.close()
+    wait_for(lambda: not tab_processes(runtime), what="no tab's TUI left")

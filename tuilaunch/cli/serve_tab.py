@@ -43,12 +43,60 @@ def compact_footers() -> None:
     from textual.widgets import Footer
 
     made = Footer.__init__
+    # the palette's key is docked at the right end: the gap after each key, after it,
+    # showed the last column of the keys scrolled under it ("^p palettet")
+    Footer.DEFAULT_CSS += "Footer.-compact FooterKey.-command-palette { margin-right: 0; }\n"
 
     def compact_init(self: Footer, *args: Any, **kwargs: Any) -> None:
         kwargs["compact"] = True
         made(self, *args, **kwargs)
 
     Footer.__init__ = compact_init  # type: ignore[method-assign]
+
+
+PHONE = 70
+"""Columns below which a browser's footer is a phone's (390 px wide: about 42 columns)."""
+PHONE_FIRST = ("Stop", "Restart", "Start", "Type", "Search")
+"""What an operator taps most, first in a phone's footer (the palette, ^p at its right
+end, reaches every other key)."""
+PHONE_CSS = """
+Footer.-phone { layout: grid; grid-columns: auto; grid-rows: 1; height: 2; }
+"""
+
+
+def phone_footers() -> None:
+    """In a browser narrower than PHONE columns the footer is two rows of three keys, the
+    node's keys first (PHONE_FIRST): in one row, a phone showed Search, Level, Filter and
+    half of Type, and no Stop, Restart or Start to tap. Wider, as it was."""
+    from textual import events
+    from textual.app import ComposeResult
+    from textual.widget import Widget
+    from textual.widgets import Footer
+    from textual.widgets._footer import FooterKey
+
+    composed = Footer.compose
+
+    def rank(widget: Widget) -> int:
+        description = widget.description if isinstance(widget, FooterKey) else ""
+        return PHONE_FIRST.index(description) if description in PHONE_FIRST else \
+            len(PHONE_FIRST)
+
+    def phone_compose(self: Footer) -> ComposeResult:
+        widgets = list(composed(self))
+        phone = self.app.size.width < PHONE
+        self.set_class(phone, "-phone")
+        if phone:
+            widgets.sort(key=rank)  # stable: the others keep their order
+            self.styles.grid_size_columns = 3  # compose set one column per key
+        yield from widgets
+
+    def on_resize(self: Footer, event: events.Resize) -> None:
+        if (self.app.size.width < PHONE) != self.has_class("-phone"):
+            self.call_after_refresh(self.recompose)
+
+    Footer.compose = phone_compose  # type: ignore[method-assign]
+    Footer.on_resize = on_resize  # type: ignore[attr-defined]
+    Footer.DEFAULT_CSS += PHONE_CSS
 
 
 def _go_line() -> bytes:
@@ -88,6 +136,7 @@ def main() -> int:
         print("tuilaunch serve: a warm tab got no attach line", file=sys.stderr)
         return 2
     compact_footers()
+    phone_footers()
     from .dispatch import main as tuilaunch_main
 
     return tuilaunch_main(words)

@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from rich.text import Text
-from textual import on
+from textual import events, on
 from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.message import Message
@@ -36,6 +36,9 @@ TREND_WIDTH = 10
 """Columns of each sparkline (CPU, memory) at the end of the detail line."""
 SCALE_WIDTH = 6
 """Columns of each sparkline's scale after it (its max: ` 12%`, ` 66M`)."""
+NARROW = 70
+"""Columns below which the tree goes above the pane (a phone's browser: about 42), as the
+fleet's trees do (app.tcss: NodesTab.-narrow)."""
 
 
 class SessionEvents(Message, bubble=False):
@@ -103,6 +106,14 @@ class NodesTab(Vertical):
         self.gaps = GapReader(self.store, self.pane, lambda: host.engine,
                               lambda: host.supervisor, self.app.notify)
         self.commands = SelectionCommands(self, host, self.launch_tree, self.store)
+
+    def on_resize(self, event: events.Resize) -> None:
+        """Below NARROW columns the tree goes above the pane, each half the height: beside
+        it, a phone's 42 columns cut a node's name at about 15."""
+        narrow = event.size.width < NARROW
+        if narrow != self.has_class("-narrow"):
+            self.set_class(narrow, "-narrow")
+            self.query_one(NodesView).stack(narrow)
 
     # --- events ------------------------------------------------------------------------------
 

@@ -443,9 +443,16 @@ class NodesView(Horizontal):
     ]
 
     tree_width: int | None = None  # None: adapts to the terminal's width
+    stacked = False
+    """The tree above the pane (NodesTab's narrow layout): its width is then the CSS's."""
 
     def action_pane(self, name: str) -> None:
         getattr(self.query_one(OutputPanel), f"action_{name}")()
+
+    def stack(self, stacked: bool) -> None:
+        """The tree above the pane (its width left to the CSS) or beside it."""
+        self.stacked = stacked
+        self._apply_width()
 
     def on_resize(self) -> None:
         self._apply_width()
@@ -457,9 +464,12 @@ class NodesView(Horizontal):
     def _apply_width(self) -> None:
         from .tree_panel import LaunchTree
 
+        tree = self.query_one(LaunchTree)
+        if self.stacked:
+            tree.styles.width = None
+            return
         width = self.tree_width if self.tree_width is not None else self.adaptive_width()
         width = max(12, min(width, max(self.size.width - 20, 12)))
-        tree = self.query_one(LaunchTree)
         if tree.styles.width is None or tree.styles.width.value != width:
             tree.styles.width = width
 
