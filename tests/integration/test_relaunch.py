@@ -506,11 +506,11 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
     try:
         tl("wait", name, "echo-1", "running", "--timeout", "60")
         info = status(name)
-        assert not edited_since(info)
+        assert not edited_since(info["file"], info["file_stamp"])
         path.write_text(EDITABLE.format(said="said", extra=EXTRA))
-        assert edited_since(info)
-        app = make_app(str(path), info["arguments"], Path(info["log_dir"]),
-                       session_name=name, served=edited_since(info))
+        assert edited_since(info["file"], info["file_stamp"])
+        app = make_app(str(path), info["arguments"], Path(info["log_dir"]), session_name=name,
+                       served=edited_since(info["file"], info["file_stamp"]))
         async with app.run_test(size=(120, 36)) as pilot:
             assert isinstance(app.session, ServedSession)
             await until(pilot, lambda: "echo-1" in app.launch_tree.rows)

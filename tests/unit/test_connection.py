@@ -22,7 +22,7 @@ from tuilaunch.engine.run.session.protocol import (
 )
 from tuilaunch.engine.run.session.reconnector import Reconnector
 from tuilaunch.engine.run.session.session_dir import SessionError
-from tuilaunch.engine.run.vocabulary.requests import Find, Status
+from tuilaunch.engine.run.vocabulary.requests import Find, Status, StatusReply
 
 HELLO = {"type": "hello", "info": {"protocol": PROTOCOL_VERSION, "log_dir": "/tmp"}}
 
@@ -92,7 +92,7 @@ async def test_replies_are_matched_by_id_out_of_order_and_events_reach_the_follo
                {"type": "events", "events": [{"kind": "started", "process": "talker-1"}]},
                {"type": "reply", "id": 1, "ok": True, "result": {"processes": []}})
     assert await asyncio.wait_for(find, 5) == "talker-1"
-    assert await asyncio.wait_for(status, 5) == {"processes": []}
+    assert await asyncio.wait_for(status, 5) == StatusReply()  # read as its reply type
     refused = asyncio.ensure_future(conn.ask(Find("nobody")))
     await loop.run_in_executor(None, server.heard)
     server.say({"type": "reply", "id": 3, "ok": False, "error": "no process nobody"})

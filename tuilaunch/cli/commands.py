@@ -42,6 +42,7 @@ from ..engine.run.vocabulary.requests import (
     Restart,
     ShutdownLaunch,
     Status,
+    StatusReply,
     Subscribe,
 )
 from . import inspector
@@ -120,14 +121,13 @@ def report_end(app: TuiLaunchApp, name: str) -> None:
         report_failures(supervisor)
 
 
-def edited_since(info: dict[str, Any]) -> bool:
-    """The session's launch file was edited (or removed) since its plan was read from it:
-    the TUI then draws the plan that runs, sent by the server, and its preview says what
-    the edit would change."""
+def edited_since(file: str, read: Sequence[int] | None) -> bool:
+    """The session's launch file was edited (or removed) since its plan was read from it
+    (`read`: its stamp then, status's `file_stamp`): the TUI then draws the plan that runs,
+    sent by the server, and its preview says what the edit would change."""
     from ..engine.plan.session import file_stamp
 
-    read = info.get("file_stamp")
-    now = file_stamp(info["file"])
+    now = file_stamp(file)
     return read is not None and (now is None or list(now) != list(read))
 
 
@@ -164,12 +164,11 @@ LS_ANSWER_TIMEOUT = 3.0  # `ls` asks every session in turn: a stopped one costs 
 
 
 def session_status(name: str | None, answer_timeout: float = ANSWER_TIMEOUT,
-            resources: bool = True) -> dict[str, Any]:
+            resources: bool = True) -> StatusReply:
     """`resources`: with each process's CPU, memory and threads (0.3 s more)."""
     link = open_link(name, answer_timeout=answer_timeout)
     try:
-        result: dict[str, Any] = link.request(Status(resources=resources), short=True)
-        return result
+        return link.request(Status(resources=resources), short=True)
     finally:
         link.close()
 
@@ -196,8 +195,8 @@ def local_sessions() -> list[dict[str, Any]]:
     sessions: list[dict[str, Any]] = []
     for name in session_dir.live_sessions():
         try:
-            sessions.append({**session_status(name, LS_ANSWER_TIMEOUT, resources=False),
-                             "answering": True})
+            sessions.append({**session_status(name, LS_ANSWER_TIMEOUT,
+                                              resources=False).listing(), "answering": True})
         except SessionError as exc:
             # a stopped or stuck server is listed as such; one that ended meanwhile is not
             silent = _silent_session(name, exc)
@@ -271,14 +270,14 @@ def cmd_attach(options: argparse.Namespace) -> int:
     from ..tui.app import make_app
 
     try:
-        set_command_line(info.get("command") or [info["file"]], info["arguments"])
-        placed = info.get("placement")  # --machines: the same placement as the session's
-        placement = placement_from_text(placed["text"], placed["path"], placed.get("share")) \
+        set_command_line(info.command or [info.file], info.arguments)
+        placed = info.placement  # --machines: the same placement as the session's
+        placement = placement_from_text(placed.text, placed.path, placed.share) \
             if placed else None
-        app = make_app(info["file"], info["arguments"], Path(info["log_dir"]),
-                       scrollback=options.scrollback, session_name=info["name"],
+        app = make_app(info.file, info.arguments, Path(info.log_dir),
+                       scrollback=options.scrollback, session_name=info.name,
                        session_host=host, remote_link=remote, placement=placement,
-                       served=host is None and edited_since(info),
+                       served=host is None and edited_since(info.file, info.file_stamp),
                        read_only=options.read_only)
         app.first_tab = options.tab
         app.first_typing = typed
@@ -389,28 +388,28 @@ def await_stops(link: Link, asks: dict[int, str], waiting: set[str], said: str,
 def cmd_status(options: argparse.Namespace) -> int:
     status = session_status(options.name)
     if options.json:
-        print(json.dumps(status, indent=2))
+        print(json.dumps(status.to_json(), indent=2))
         return 0
     print_status(status)
     return 0
 
 
-def print_status(status: dict[str, Any], label: str | None = None) -> None:
+def print_status(status: StatusReply, label: str | None = None) -> None:
     """`status`'s text: the session (named `label` when given: HOST:NAME), then a row per
     process."""
-    print(f"session {label or status['name']}  pid {status['pid']}  since "
-          f"{_clock(status['started'])}")
-    print(f"  {status['file']} {argument_line(status['arguments'])}")
-    print(f"  logs: {status['log_dir']}")
+    print(f"session {label or status.name}  pid {status.pid}  since "
+          f"{_clock(status.started)}")
+    print(f"  {status.file} {argument_line(status.arguments)}")
+    print(f"  logs: {status.log_dir}")
     rows = [("PROCESS", "STATE", "PID", "CPU%", "RSS", "THREADS", "NODE", "")]
-    for p in status["processes"]:
-        cpu, rss, threads = p.get("cpu_percent"), p.get("rss_bytes"), p.get("threads")
-        where = f"@{p['machine']}" if p.get("machine") else ""  # placed on another machine
-        rows.append((p["id"] + where, p["state"], str(p["pid"] or ""),
+    for p in status.processes:
+        cpu, rss, threads = p.cpu_percent, p.rss_bytes, p.threads
+        where = f"@{p.machine}" if p.machine else ""  # placed on another machine
+        rows.append((p.id + where, p.state, str(p.pid or ""),
                      "" if cpu is None else f"{cpu:.1f}",
                      "" if rss is None else _megabytes(rss),
-                     "" if threads is None else str(threads), p["name"] or "",
-                     p["detail"] if p["state"] != "running" and p["detail"] else ""))
+                     "" if threads is None else str(threads), p.name or "",
+                     p.detail if p.state != "running" and p.detail else ""))
     _table(rows, indent="  ")
 
 
@@ -419,8 +418,8 @@ def cmd_restart(options: argparse.Namespace) -> int:
     try:
         status = link.request(Status(resources=False), short=True)
         process = link.request(Find(process=options.process), short=True)
-        machine = next((p.get("machine") for p in status["processes"] if p["id"] == process),
-                       None)
+        found = status.process(process)
+        machine = None if found is None else found.machine
         restart = Restart(process, options.prefix, options.log_level, options.terminal)
         if machine:
             result = _restart_placed(link, restart, machine)

@@ -30,7 +30,7 @@ from functools import partial
 from typing import Any
 
 from ..engine.run.vocabulary.request import Request
-from ..engine.run.vocabulary.requests import Status, Topics
+from ..engine.run.vocabulary.requests import Status, StatusReply, Topics
 from .parsers import (
     COMMANDS,
     LEVELS,
@@ -367,20 +367,20 @@ def _ask(parsed_args: argparse.Namespace, request: Request[Any],
 
 
 def processes(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
-    status = _ask(parsed_args, Status(resources=False))
+    status: StatusReply = _ask(parsed_args, Status(resources=False))
     found = []
-    for process in status["processes"]:
-        found.append(process["id"])
-        if process.get("name"):
-            found.append(process["name"])
+    for process in status.processes:
+        found.append(process.id)
+        if process.name:
+            found.append(process.name)
     return _starting(dict.fromkeys(found), prefix)
 
 
 def nodes(prefix: str, parsed_args: argparse.Namespace, **_: Any) -> list[str]:
     """Node names first (what ros2 param takes); a process id also names its node."""
-    status = _ask(parsed_args, Status(resources=False))
-    named = [p["name"] for p in status["processes"] if p.get("name")]
-    ids = [p["id"] for p in status["processes"] if p.get("name")]
+    status: StatusReply = _ask(parsed_args, Status(resources=False))
+    named = [p.name for p in status.processes if p.name]
+    ids = [p.id for p in status.processes if p.name]
     return _starting(dict.fromkeys(named + ids), prefix)
 
 

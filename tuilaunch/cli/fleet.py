@@ -189,7 +189,7 @@ def status_many(options: argparse.Namespace) -> int:
             say("status", result)
             failed = True
         elif options.json:
-            listed.append({"session": address, **result})
+            listed.append({"session": address, **result.to_json()})
         else:
             commands.print_status(result, address)
     if options.json:

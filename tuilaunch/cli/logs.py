@@ -68,9 +68,9 @@ def show_logs(options: argparse.Namespace, address: str | None, out: Lines | Non
     link = open_link(address, timeout=None)
     try:
         status = link.request(Status(resources=False), short=True)
-        log_dir = Path(status["log_dir"])
-        wanted = [p["id"] for p in status["processes"] if p["state"] != "skipped"]
-        processes = {p["id"] for p in status["processes"]}
+        log_dir = Path(status.log_dir)
+        wanted = [p.id for p in status.processes if p.state != "skipped"]
+        processes = {p.id for p in status.processes}
         if options.process:
             wanted = [link.request(Find(process=options.process), short=True)]
         prefixed = len(wanted) > 1 or not options.process

@@ -19,7 +19,7 @@ from ..client.link import Link, open_link
 from ..engine.run.events import LIVE_STATES
 from ..engine.run.session import session_dir
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.requests import Find, Start, Status, Stop
+from ..engine.run.vocabulary.requests import Find, Start, Status, StatusReply, Stop
 from .commands import await_stops, one_line, watch_ends
 from .suggest import close_matches, said_as_guess
 
@@ -46,7 +46,7 @@ def _act(options: argparse.Namespace, verb: str) -> int:
     link = open_link(address, timeout=None)
     try:
         status = link.request(Status(resources=False), short=True)
-        before = {p["id"]: p["state"] for p in status["processes"]}
+        before = {p.id: p.state for p in status.processes}
         targets = list(dict.fromkeys(find(link, status, word, verb)
                                      for word in options.process))
         if verb == "start":
@@ -63,7 +63,7 @@ def _act(options: argparse.Namespace, verb: str) -> int:
     return _report(verb, targets, before, results, options.json)
 
 
-def find(link: Link, status: dict[str, Any], word: str, verb: str) -> str:
+def find(link: Link, status: StatusReply, word: str, verb: str) -> str:
     """The process id a word names in the session (an id, a full or unique node name, a
     node named by its own code as it reported itself); one line naming the word when it
     names none."""
@@ -73,7 +73,7 @@ def find(link: Link, status: dict[str, Any], word: str, verb: str) -> str:
         if _names(status, word):
             raise  # it names several: the session's own line lists them
         found = ""
-    if found in {p["id"] for p in status["processes"]}:
+    if found in {p.id for p in status.processes}:
         return found
     if found:
         raise SessionError(f"{word} is an action of session {link.label}, not a process: "
@@ -87,20 +87,20 @@ def find(link: Link, status: dict[str, Any], word: str, verb: str) -> str:
     raise neither(word, link.label, status, verb)
 
 
-def _names(status: dict[str, Any], word: str) -> bool:
+def _names(status: StatusReply, word: str) -> bool:
     """Whether a word is a process's id, full node name or last part of it."""
-    return any(word in (p["id"], p.get("name"), (p.get("name") or "").rsplit("/", 1)[-1])
-               for p in status["processes"])
+    return any(word in (p.id, p.name, (p.name or "").rsplit("/", 1)[-1])
+               for p in status.processes)
 
 
-def neither(word: str, label: str, status: dict[str, Any], verb: str) -> SessionError:
+def neither(word: str, label: str, status: StatusReply, verb: str) -> SessionError:
     """A word that is no process of `label`'s, nor a session, in one line: the processes
     (by id) or sessions it resembles, else the processes there are."""
-    ids = [p["id"] for p in status["processes"]]
-    named = {p["id"]: p["id"] for p in status["processes"]}
-    for p in status["processes"]:  # a node's full name, and its last part, say its id
-        for name in (p.get("name") or "", (p.get("name") or "").rsplit("/", 1)[-1]):
-            named.setdefault(name, p["id"])
+    ids = [p.id for p in status.processes]
+    named = {p.id: p.id for p in status.processes}
+    for p in status.processes:  # a node's full name, and its last part, say its id
+        for name in (p.name or "", (p.name or "").rsplit("/", 1)[-1]):
+            named.setdefault(name, p.id)
     named.update({s: s for s in session_dir.live_sessions(clean=False)})
     close = said_as_guess(list(dict.fromkeys(
         named[c] for c in close_matches(word, [n for n in named if n]))))

@@ -28,7 +28,7 @@ from ..session.connection import reply_result
 from ..session.protocol import MAX_MESSAGE, ProtocolError, decode, encode, greet
 from ..session.session_dir import SessionError
 from ..vocabulary.request import to_message
-from ..vocabulary.requests import Status
+from ..vocabulary.requests import Status, StatusReply
 
 CHUNK = 1 << 16
 LS_ANSWER_TIMEOUT = 3.0  # as `tuilaunch ls`: a stopped server costs this, once
@@ -147,7 +147,7 @@ def _write_all(fd: int, data: bytes) -> None:
 LS_KEYS = ("name", "file", "arguments", "pid", "started", "log_dir", "counts", "answering")
 
 
-def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> dict[str, Any]:
+def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> StatusReply:
     """A session's `status` reply, asked over its socket."""
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     sock.settimeout(timeout)
@@ -155,15 +155,15 @@ def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> dict[str, A
         sock.connect(str(session_dir.socket_path(name)))
         reader = sock.makefile("rb")
         greet(reader.readline(MAX_MESSAGE), name)  # another version's status may differ
-        sock.sendall(encode(to_message(Status(resources=False), 1)))  # a listing
+        asked = Status(resources=False)  # a listing
+        sock.sendall(encode(to_message(asked, 1)))
         while True:
             line = reader.readline(MAX_MESSAGE)
             if not line:
                 raise SessionError(f"session {name} closed the connection during status")
             message = decode(line)
             if message.get("type") == "reply" and message.get("id") == 1:
-                result: dict[str, Any] = reply_result(message, name)
-                return result
+                return asked.reply(reply_result(message, name))
     except TimeoutError:
         raise SessionError(f"session {name} did not answer within {timeout:g} s") from None
     except ProtocolError as exc:
@@ -181,7 +181,7 @@ def list_sessions() -> list[dict[str, Any]]:
     rows = []
     for name in session_dir.live_sessions():
         try:
-            rows.append({**session_status(name), "answering": True})
+            rows.append({**session_status(name).listing(), "answering": True})
         except SessionError:
             info = session_dir.read_info(name)
             if info is None or not session_dir.pid_alive(int(info.get("pid") or 0)):

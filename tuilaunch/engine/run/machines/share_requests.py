@@ -20,8 +20,6 @@ from ...plan.model import Plan
 from ..vocabulary.requests import Input, Status, TakeKeys
 from .share_link import Share
 
-COMMAND_FIELDS = ("command", "command_line", "env", "unset_env", "terminal")
-"""What a share's `status` says of how a process was started."""
 STATUS_TIMEOUT = 2.0
 """How long the launching side's `status` waits for a share's (`ls` waits 3 s for it)."""
 
@@ -52,9 +50,8 @@ class ShareRequests:
                 status = await share.ask(Status(resources=False), STATUS_TIMEOUT)
             except LaunchError:
                 return {}  # not known now: the launching side says what it can
-            return {str(p["id"]): {k: p[k] for k in COMMAND_FIELDS if k in p}
-                    for p in status.get("processes") or []
-                    if isinstance(p, dict) and p.get("machine") == share.machine.name}
+            return {p.id: p.started_with() for p in status.processes
+                    if p.machine == share.machine.name}
 
         found: dict[str, dict[str, Any]] = {}
         linked = [share for share in self.shares.values() if share.writer is not None]
@@ -92,4 +89,4 @@ class ShareRequests:
         return int(result.get("dropped") or 0) if isinstance(result, dict) else 0
 
 
-__all__ = ["COMMAND_FIELDS", "ShareRequests"]
+__all__ = ["ShareRequests"]

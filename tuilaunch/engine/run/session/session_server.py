@@ -30,7 +30,7 @@ from ..events import LIVE_STATES, Event, Log, Output, Relaunched, Started
 from ..plugins import Handler
 from ..supervisor.stopping import CTRL_C_REASON
 from ..supervisor.supervisor import Supervisor
-from ..vocabulary.request import Request
+from ..vocabulary.request import Request, reply_to_json
 from ..vocabulary.requests import (
     Apply,
     Find,
@@ -47,6 +47,7 @@ from ..vocabulary.requests import (
     Subscribe,
     WatchResources,
 )
+from ..vocabulary.status import ActionStatus, PlacementInfo, ProcessStatus, StatusReply, Typing
 from . import session_dir
 from .clients import CLIENT_MAX_EVENTS as CLIENT_MAX_EVENTS
 from .clients import CLIENT_MAX_LINES as CLIENT_MAX_LINES
@@ -55,6 +56,7 @@ from .clients import ClientQueue as ClientQueue
 from .keyboard import Keyboard
 from .launch_prints import LaunchPrints
 from .log_reader import LAUNCH_LOG, READ_LOG_LIMIT, read_log
+from .owner_gate import OwnerGate, PlanShown
 from .protocol import event_to_dict, version_fields
 from .resource_watch import ResourceWatch, usage_fields
 from .resources import Usage
@@ -65,7 +67,7 @@ RECENT_EVENTS = 2000
 """Non-output events kept for late clients (states' details and the launch pane)."""
 BUILTIN_REQUESTS: frozenset[type[Request[Any]]] = frozenset({
     Subscribe, ReadStamps, SetView, Status, Start, Stop, Restart, ShutdownLaunch, Apply, Kill,
-    RunAction, Find, ReadLog, WatchResources})
+    RunAction, Find, ReadLog, WatchResources, PlanShown})
 """Requests the server answers itself; plugins add others with `add_handler`."""
 
 
@@ -104,6 +106,8 @@ class SessionServer:
         """Each stream's unfinished line (a prompt waiting): a client that attaches now sees
         it too, as the log files hold only whole lines."""
         self.apply_lock = asyncio.Lock()  # argument edits from several clients, one at a time
+        self.owner_gate = OwnerGate.from_environment()
+        """Started by its owner's TUI: the processes wait for it to show the plan."""
 
     def add_handler(self, kind: type[Request[Any]], handler: Handler) -> None:
         """Answers the clients' requests of this class with `await handler(request,
@@ -222,7 +226,7 @@ class SessionServer:
                               "share": placement.share}}
 
     def status(self, usage: Mapping[str, Usage] | None = None,
-               elsewhere: Mapping[str, dict[str, Any]] | None = None) -> dict[str, Any]:
+               elsewhere: Mapping[str, dict[str, Any]] | None = None) -> StatusReply:
         """Each process's state; with `usage` (ResourceWatch.current), its CPU%, resident
         memory and threads (None when it is not running). `elsewhere`: how the processes
         placed on other machines were started, as those machines say (a terminal there is
@@ -234,28 +238,45 @@ class SessionServer:
         processes = []
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
+            # its `growing` is left out: a trend needs watching, status is one look
             fields = usage_fields((usage or {}).get(proc.id))
-            del fields["growing"]  # a trend needs watching; status is one look
-            processes.append({
-                "id": proc.id, "name": proc.full_name or proc.label, "state": state,
-                "pid": self.pids.get(proc.id) if state in LIVE_STATES else None,
+            # the exact start (argv, paste-ready line, env changes); a placed one's terminal
+            # is its machine's to say
+            started = self.supervisor.command_of(proc.id)
+            if proc.id in placed:
+                started = {**started, "terminal": None, **(elsewhere or {}).get(proc.id, {})}
+            # a crash's signal and core
+            death = self.supervisor.deaths.get(proc.id, {}) if state == "failed" else {}
+            processes.append(ProcessStatus(
+                id=proc.id, name=proc.full_name or proc.label, state=state,
+                pid=self.pids.get(proc.id) if state in LIVE_STATES else None,
                 # the last end's code, until the process starts again
-                "exit_code": None if state in (*LIVE_STATES, "pending") else
+                exit_code=None if state in (*LIVE_STATES, "pending") else
                 self.supervisor.exit_codes.get(proc.id),
-                "detail": self.details.get(proc.id), "machine": proc.machine, **fields,
-                # the exact start (argv, paste-ready line, env changes); a crash's signal/core
-                **self.supervisor.command_of(proc.id),
-                **({"terminal": None, **(elsewhere or {}).get(proc.id, {})}
-                   if proc.id in placed else {}),
-                **(self.supervisor.deaths.get(proc.id, {}) if state == "failed" else {})})
+                detail=self.details.get(proc.id), machine=proc.machine,
+                cpu_percent=fields["cpu_percent"], rss_bytes=fields["rss_bytes"],
+                threads=fields["threads"], command=started.get("command"),
+                command_line=started.get("command_line"), env=started.get("env"),
+                unset_env=started.get("unset_env"), terminal=started.get("terminal"),
+                signal=death.get("signal"), core=death.get("core")))
         counts: dict[str, int] = {}
         for proc in self.session.plan.processes:
             state = states.get(proc.id, "pending")
             counts[state] = counts.get(state, 0) + 1
-        actions = [{"id": a.id, "kind": a.kind, "state": states.get(a.id, "pending")}
+        actions = [ActionStatus(id=a.id, kind=a.kind, state=states.get(a.id, "pending"))
                    for a in self.session.plan.actions]
-        return {**self.info(), "counts": counts, "processes": processes, "actions": actions,
-                "dropped_clients": self.dropped_clients, "typing": self.keyboard.state()}
+        info = self.info()
+        placement, stamp = info.get("placement"), info["file_stamp"]
+        typing = self.keyboard.state()
+        return StatusReply(
+            name=info["name"], file=info["file"], command=info["command"],
+            arguments=info["arguments"], pid=info["pid"], started=info["started"],
+            log_dir=info["log_dir"], file_stamp=None if stamp is None else list(stamp),
+            protocol=info.get("protocol"), tuilaunch=info.get("tuilaunch"),
+            placement=None if placement is None else PlacementInfo(**placement),
+            counts=counts, processes=processes, actions=actions,
+            dropped_clients=self.dropped_clients,
+            typing=None if typing is None else Typing(**typing))
 
     # --- serving ---------------------------------------------------------------------------
 
@@ -271,6 +292,10 @@ class SessionServer:
         printed = sys.stdout
         sys.stdout = LaunchPrints(self.supervisor.log, printed, loop)
         try:
+            await self.owner_gate.passed()  # the owner's tree drawn before the first start
+            if self.owner_gate.timed_out:
+                self._log(f"its owner did not show the plan within {self.owner_gate.wait:g} s: "
+                          "the launch starts", "INFO")
             status = await self.supervisor.run(keep_alive=True)
         finally:
             sys.stdout = printed
@@ -285,6 +310,7 @@ class SessionServer:
 
     def _signalled(self, sig: signal.Signals) -> None:
         reason = CTRL_C_REASON if sig == signal.SIGINT else f"received {sig.name}"
+        self.owner_gate.open()  # nothing starts after a stop: the run ends at once
         self.hub.spawn(self.supervisor.shutdown(reason))  # ros2 launch's words for SIGINT
 
     def _snapshot(self) -> dict[str, Any]:
@@ -320,7 +346,7 @@ class SessionServer:
                 usage, elsewhere = await asyncio.gather(
                     self.resources.current() if wanted else _nothing(),
                     self.supervisor.commands_elsewhere())
-                return self.status(usage, elsewhere)
+                return reply_to_json(self.status(usage, elsewhere))
             case WatchResources(on=on, processes=shown, trend=trend):
                 self.resources.watch(client, on,
                                      None if shown is None else [str(p) for p in shown])
@@ -342,7 +368,11 @@ class SessionServer:
                     await supervisor.stop(process)
                 return {"process": process, "state": supervisor.states.get(process)}
             case ShutdownLaunch(reason=reason):
+                self.owner_gate.open()  # the owner left before it showed the plan
                 await supervisor.shutdown(reason or "stop requested")
+                return {}
+            case PlanShown():
+                self.owner_gate.open()
                 return {}
             case Apply(arguments=arguments):
                 return await self.apply({str(k): str(v) for k, v in arguments.items()})

@@ -2,7 +2,7 @@
 back: `to_message` (what a client writes), `from_message` (what a server reads).
 
 Each request is a frozen dataclass (requests.py, ros_requests.py) that names its op once,
-`class Status(Request[dict[str, Any]], op="status")`: the class is registered under its op
+`class Status(Request[StatusReply], op="status")`: the class is registered under its op
 here, as events.py's `event_of` finds an event's class by its kind, and a server dispatches
 on the class. The wire stays JSON lines, `{"id": n, "op": ..., field: value, ...}`: a field
 left at its default is not written (the server reads an absent field as that default; a
@@ -10,7 +10,10 @@ default of None means "the server's own"), so the messages are those of the prot
 earlier, untyped clients.
 
 `Request[R]`: R is what the reply's result is read as (`reply(result)`): JSON for most, a
-`str` for `find`, a bool for `transition`.
+`str` for `find`, a bool for `transition`, and when R is a dataclass (`status`'s
+StatusReply, status.py), that dataclass: the server writes it with `reply_to_json` and a
+client reads it with `reply_from_json`, both here. A key the reply's class does not know
+(a newer server's) is left out, a field the reply lacks takes its default.
 """
 
 from __future__ import annotations
@@ -21,7 +24,11 @@ import typing
 from collections.abc import Callable, Iterator
 from typing import Any, ClassVar, Generic, TypeVar
 
+from ...errors import LaunchError
+
 R = TypeVar("R")
+T = TypeVar("T")
+
 
 class _Registry(dict[str, "type[Request[Any]]"]):
     """The request classes by op, complete whenever it is read: a module of requests made
@@ -95,6 +102,8 @@ class Request(Generic[R]):
 
     op: ClassVar[str]
     changes: ClassVar[str | None] = None
+    reply_type: ClassVar[type | None] = None
+    """R when it is a dataclass: the reply is read as one (`reply_from_json`)."""
 
     def __init_subclass__(cls, op: str = "", changes: str | None = None,
                           **kwargs: Any) -> None:
@@ -104,10 +113,24 @@ class Request(Generic[R]):
         REGISTRY.register(op, cls)
         cls.op = op
         cls.changes = changes
+        cls.reply_type = _dataclass_reply(cls)
 
     def reply(self, result: Any) -> R:
         """The reply's result, as this request's answer is read."""
+        if self.reply_type is not None:
+            return typing.cast(R, reply_from_json(self.reply_type, result))
         return typing.cast(R, result)
+
+
+def _dataclass_reply(cls: type) -> type | None:
+    """The R of `class X(Request[R], ...)` when R is a dataclass (the bases are evaluated
+    as the class is made, whatever `from __future__ import annotations` says)."""
+    for base in getattr(cls, "__orig_bases__", ()):
+        if typing.get_origin(base) is Request:
+            (reply,) = typing.get_args(base)
+            return reply if isinstance(reply, type) and dataclasses.is_dataclass(reply) \
+                else None
+    return None
 
 
 def to_message(request: Request[Any], request_id: int | None = None) -> dict[str, Any]:
@@ -187,4 +210,90 @@ def _coerced(op: str, name: str, hint: Any, value: Any) -> Any:
     return value
 
 
-__all__ = ["REQUESTS", "Request", "UnknownRequest", "from_message", "to_message"]
+# --- replies -------------------------------------------------------------------------------
+
+
+class MalformedReply(LaunchError):
+    """A reply that cannot be read as its request's reply type: one line saying why."""
+
+
+ABSENT_WHEN_NONE = "absent_when_none"
+
+
+def absent_when_none(unless: Callable[[Any], bool] | None = None) -> dict[str, Any]:
+    """A reply field's metadata, `field(default=None, metadata=absent_when_none())`: the
+    field is left out of the JSON while None (as the untyped server wrote it only when it
+    knew it), unless `unless(reply)`."""
+    return {ABSENT_WHEN_NONE: unless or (lambda _reply: False)}
+
+
+def reply_to_json(reply: Any) -> Any:
+    """A reply as the wire writes it: a dataclass as an object of its fields in their order
+    (one `absent_when_none` left out while None), its lists and dicts item by item."""
+    if dataclasses.is_dataclass(reply) and not isinstance(reply, type):
+        written: dict[str, Any] = {}
+        for field in dataclasses.fields(reply):
+            value = getattr(reply, field.name)
+            unless = field.metadata.get(ABSENT_WHEN_NONE)
+            if value is None and unless is not None and not unless(reply):
+                continue
+            written[field.name] = reply_to_json(value)
+        return written
+    if isinstance(reply, list | tuple):
+        return [reply_to_json(item) for item in reply]
+    if isinstance(reply, dict):
+        return {key: reply_to_json(item) for key, item in reply.items()}
+    return reply
+
+
+def reply_from_json(cls: type[T], data: Any) -> T:
+    """A reply's JSON read as the dataclass `cls`: each field by its name, a nested
+    dataclass (also in a list, a dict's values or as an optional field) read the same way,
+    anything else taken as sent. A key `cls` does not know (a newer server's) is ignored; a
+    field the JSON lacks takes its default; MalformedReply when it has none, or when the
+    JSON is not an object."""
+    name = cls.__name__
+    if not isinstance(data, dict):
+        raise MalformedReply(f"a {name} must be an object, not {data!r}")
+    hints = _reply_hints(cls)
+    values: dict[str, Any] = {}
+    for field in dataclasses.fields(cls):  # type: ignore[arg-type]
+        if field.name in data:
+            values[field.name] = _read(hints[field.name], data[field.name], name)
+        elif field.default is dataclasses.MISSING and \
+                field.default_factory is dataclasses.MISSING:
+            raise MalformedReply(f"a {name} needs {field.name}")
+    return cls(**values)
+
+
+_REPLY_HINTS: dict[type, dict[str, Any]] = {}
+
+
+def _reply_hints(cls: type) -> dict[str, Any]:
+    """Each field's annotation, evaluated once per reply class."""
+    hints = _REPLY_HINTS.get(cls)
+    if hints is None:
+        hints = _REPLY_HINTS[cls] = typing.get_type_hints(cls)
+    return hints
+
+
+def _read(hint: Any, value: Any, reply: str) -> Any:
+    """One value of a reply as its annotation says, where that is a dataclass's."""
+    if value is None:
+        return None
+    args = typing.get_args(hint)
+    if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
+        kinds = [a for a in args if a is not type(None)]
+        return _read(kinds[0], value, reply) if len(kinds) == 1 else value
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        return reply_from_json(hint, value)
+    origin = typing.get_origin(hint)
+    if origin is list and args and isinstance(value, list):
+        return [_read(args[0], item, reply) for item in value]
+    if origin is dict and len(args) == 2 and isinstance(value, dict):
+        return {key: _read(args[1], item, reply) for key, item in value.items()}
+    return value
+
+
+__all__ = ["REQUESTS", "MalformedReply", "Request", "UnknownRequest", "absent_when_none",
+           "from_message", "reply_from_json", "reply_to_json", "to_message"]

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from .request import REGISTRY, REQUESTS, Request, UnknownRequest, from_message, to_message
+from .status import ProcessStatus, StatusReply
 
 if TYPE_CHECKING:
     from .ros_requests import (
@@ -80,8 +81,9 @@ class SetView(Request[Json], op="view"):
 
 
 @dataclass(frozen=True)
-class Status(Request[Json], op="status"):
-    """Each process's state, command and figures; `resources=False` spares the sampling."""
+class Status(Request[StatusReply], op="status"):
+    """Each process's state, command and figures (status.py); `resources=False` spares the
+    sampling."""
 
     resources: bool = True
 
@@ -259,9 +261,9 @@ __all__ = [
     "ExternalEvent", "Find", "GetPlan", "HzMeasure", "HzRead", "HzWatch", "Input", "Json",
     "Kill", "LifecycleState", "LogLevel", "Nodes", "ParamsDescribe", "ParamsDump",
     "ParamsGet", "ParamsLoad", "ParamsSet", "PlotFields", "PlotStart", "PlotStop",
-    "PreviewArguments", "ReadLog", "ReadStamps", "RecordStart", "RecordStop", "RecordTake",
-    "Request", "Restart", "RunAction", "ServiceFields", "Services", "SetView", "ShareLines",
-    "ShutdownLaunch", "Start", "Status", "Stop", "Subscribe", "TakeKeys", "Topics", "Transition",
-    "UnknownRequest", "WatchQos", "WatchRates", "WatchResources", "from_message",
-    "to_message",
+    "PreviewArguments", "ProcessStatus", "ReadLog", "ReadStamps", "RecordStart",
+    "RecordStop", "RecordTake", "Request", "Restart", "RunAction", "ServiceFields",
+    "Services", "SetView", "ShareLines", "ShutdownLaunch", "Start", "Status", "StatusReply",
+    "Stop", "Subscribe", "TakeKeys", "Topics", "Transition", "UnknownRequest", "WatchQos",
+    "WatchRates", "WatchResources", "from_message", "to_message",
 ]
