@@ -18,7 +18,7 @@ from ...engine.plan.model import ActionKind
 from ..lifecycle_steps import LifecycleSteps
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen
-from ..screens.tree_panel import LaunchTree
+from ..screens.tree_panel import LaunchTree, RowKind
 from .host import NodesHost
 
 
@@ -39,7 +39,7 @@ class SelectionCommands:
         node = self.tree.cursor_node
         if node is None or node.data is None:
             return []
-        if node.data.kind == "all":
+        if node.data.kind == RowKind.ALL:
             return [p.id for p in self.host.session.plan.enabled_processes()]
         return list(node.data.processes)
 
@@ -125,13 +125,13 @@ class SelectionCommands:
         """The enabled one-off actions of the selected group, or for one node those of its
         group that wait for it or address it by name."""
         node = self.tree.cursor_node
-        if node is None or node.data is None or node.data.kind == "action":
+        if node is None or node.data is None or node.data.kind == RowKind.ACTION:
             return []
         plan = self.host.session.plan
         enabled = {a.id: a for a in plan.actions if a.enabled and a.kind in (
             ActionKind.SET_PARAMETERS, ActionKind.CALL_SERVICE) and (
                 a.trigger is None or a.trigger.on not in ("io", "shutdown"))}
-        if node.data.kind in ("group", "all"):
+        if node.data.kind in (RowKind.GROUP, RowKind.ALL):
             return [ref for ref in _action_refs(node) if ref in enabled]
         process = node.data.ref
         parent = node.parent
@@ -184,7 +184,7 @@ def _action_refs(node: Any) -> list[str]:
     refs = []
     for child in node.children:
         data = child.data
-        if data is not None and data.kind == "action" and data.ref:
+        if data is not None and data.kind == RowKind.ACTION and data.ref:
             refs.append(data.ref)
         refs += _action_refs(child)
     return refs

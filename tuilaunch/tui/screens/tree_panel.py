@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any
 
 from rich.text import Text
@@ -55,11 +56,25 @@ def ascii_terminal() -> bool:
     return os.environ.get("TERM", "") in ("linux", "vt100", "vt102", "vt220", "ansi")
 
 
+class RowKind(StrEnum):
+    """What a tree row stands for (a StrEnum: it still equals its word, which other
+    modules may compare with)."""
+
+    PROCESS = "process"
+    ALL = "all"
+    """The `all nodes` row: every process's output."""
+    GROUP = "group"
+    """A group (a namespace, an include, a condition...), or the launch: the tree's root."""
+    ACTION = "action"
+    COMPONENT = "component"
+    """A composable node loaded into its container (whose row is the process)."""
+
+
 @dataclass
 class RowData:
     """What a tree row stands for: a process or action id, a group's processes, or all."""
 
-    kind: str  # "all" | "process" | "action" | "group" | "component"
+    kind: RowKind
     ref: str | None
     processes: list[str]
 
@@ -70,7 +85,7 @@ class LaunchTree(Tree[RowData]):
     """
 
     def __init__(self, **kwargs: object) -> None:
-        super().__init__("launch", data=RowData("group", None, []), **kwargs)  # type: ignore
+        super().__init__("launch", data=RowData(RowKind.GROUP, None, []), **kwargs)  # type: ignore
         self.guide_depth = 2  # narrow indents: the names keep the width
         self.ascii = ascii_terminal()
         if self.ascii:
@@ -102,27 +117,27 @@ class LaunchTree(Tree[RowData]):
         self.rows = {}
         self.component_rows = {}
         self.root.set_label(plan.file.rsplit("/", 1)[-1])
-        self.root.data = RowData("group", None, [p.id for p in plan.enabled_processes()])
-        self.root.add_leaf("all nodes", RowData("all", ALL, []))
+        self.root.data = RowData(RowKind.GROUP, None, [p.id for p in plan.enabled_processes()])
+        self.root.add_leaf("all nodes", RowData(RowKind.ALL, ALL, []))
         for child in plan.tree.children:
             self._add(self.root, child)
         self.root.expand_all()
 
     def _add(self, parent: TreeNode[RowData], item: TreeItem) -> list[str]:
-        if item.kind == "process" and item.ref:
+        if item.kind == RowKind.PROCESS and item.ref:
             components = self.plan.process(item.ref).components if self.plan else []
-            data = RowData("process", item.ref, [item.ref])
+            data = RowData(RowKind.PROCESS, item.ref, [item.ref])
             node = parent.add(item.ref, data) if components else parent.add_leaf(item.ref, data)
             self.rows[item.ref] = node
             self.refresh_row(item.ref)
             self._add_components(node, components if item.enabled else [])
             return [item.ref]
-        if item.kind == "action" and item.ref:
+        if item.kind == RowKind.ACTION and item.ref:
             action = next((a for a in self.plan.actions if a.id == item.ref), None) \
                 if self.plan else None
             components = list(action.data or []) if action is not None and \
                 action.kind == ActionKind.LOAD_COMPONENTS else []
-            data = RowData("action", item.ref, [])
+            data = RowData(RowKind.ACTION, item.ref, [])
             node = parent.add(item.label, data) if components else \
                 parent.add_leaf(item.label, data)
             self.rows[item.ref] = node
@@ -130,7 +145,7 @@ class LaunchTree(Tree[RowData]):
             self.refresh_row(item.ref)
             self._add_components(node, components)
             return []
-        node = parent.add(self._group_label(item), RowData("group", None, []))
+        node = parent.add(self._group_label(item), RowData(RowKind.GROUP, None, []))
         processes: list[str] = []
         for child in item.children:
             processes += self._add(node, child)
@@ -146,7 +161,7 @@ class LaunchTree(Tree[RowData]):
             self.component_labels[ref] = component_label(component)
             state = "waiting" if component.get("enabled", True) else "skipped"
             self.component_rows[ref] = parent.add_leaf(
-                "", RowData("component", ref, []))
+                "", RowData(RowKind.COMPONENT, ref, []))
             self.set_component(ref, state, "")
 
     def set_component(self, ref: str, state: str, text: str) -> None:
@@ -224,7 +239,7 @@ class LaunchTree(Tree[RowData]):
         if self.size.width >= USAGE_WIDTH:
             return None
         node = self.cursor_node
-        if node is None or node.data is None or node.data.kind != "process":
+        if node is None or node.data is None or node.data.kind != RowKind.PROCESS:
             return []
         return [node.data.ref] if node.data.ref else []
 
@@ -242,7 +257,7 @@ class LaunchTree(Tree[RowData]):
         icon, style, word = STATE_LOOK.get(state, ("?", "", state))
         if self.ascii:
             icon = ASCII_ICONS.get(state, "?")
-        if node.data is not None and node.data.kind == "action":
+        if node.data is not None and node.data.kind == RowKind.ACTION:
             word = ACTION_WORDS.get(state, word)
         label = Text()
         if self.preview is not None:
@@ -257,7 +272,7 @@ class LaunchTree(Tree[RowData]):
             label.append("^mem " if self.ascii else "↑mem ", "bold yellow")
         if self.qos_problems.get(ref) and state == "running":
             label.append("xqos " if self.ascii else "✗qos ", "bold red")
-        if node.data is not None and node.data.kind == "process":
+        if node.data is not None and node.data.kind == RowKind.PROCESS:
             proc = self.plan.process(ref)
             label.append(proc.name or ref, "bold" if state == "running" else "")
             label.append(f" [{ref}]" if proc.name else "", "dim")
@@ -282,9 +297,9 @@ class LaunchTree(Tree[RowData]):
         data = node.data
         if data is None or self.plan is None:
             return ""
-        if data.kind == "all":
+        if data.kind == RowKind.ALL:
             return "all nodes: every process's output, with its id"
-        if data.kind == "group":
+        if data.kind == RowKind.GROUP:
             label = node.label.plain if isinstance(node.label, Text) else str(node.label)
             states = [self.states.get(p, "pending") for p in data.processes]
             text = f"{label}: {states.count('running')} of {len(states)} processes running"
@@ -296,10 +311,10 @@ class LaunchTree(Tree[RowData]):
         ref = data.ref or ""
         state = self.states.get(ref, "pending")
         word = STATE_LOOK.get(state, ("", "", state))[2]
-        if data.kind == "component":
+        if data.kind == RowKind.COMPONENT:
             # a component's row says it all: plugin, name, load result
             return node.label.plain if isinstance(node.label, Text) else str(node.label)
-        if data.kind == "action":
+        if data.kind == RowKind.ACTION:
             word = ACTION_WORDS.get(state, word)
             text = f"{self.action_labels.get(ref, ref)} [{ref}]: {word}"
         else:
@@ -316,7 +331,7 @@ class LaunchTree(Tree[RowData]):
         if problems:
             more = f" (+{len(problems) - 1} more, Topics tab)" if len(problems) > 1 else ""
             detail += f" · QoS: {problems[0]}{more}"
-        machine = self.plan.process(ref).machine if data.kind == "process" else None
+        machine = self.plan.process(ref).machine if data.kind == RowKind.PROCESS else None
         if machine and state == "failed":
             # it may be its machine that failed: r (or t) tries that machine again
             detail += f" · r: try {machine} again"
