@@ -1,24 +1,33 @@
 """The fleet view's rules under Pilot, over two in-memory sessions (memory_port.py): the
 single TUI's rules hold on each session of a fleet (a group's stop asks, naming the
 session; `i` on a group drops its burst; a lost link is said on its own root only), and a
-key acts on the focused session alone."""
+key acts on the focused session alone. `i` types into a node right in the fleet view (the
+single TUI's keyboard, one per session: a browser's page cannot hand its terminal to
+another TUI), the keys typed with it held for the node; a node started with pipes is
+offered a terminal first, the question naming its session."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from functools import partial
 from pathlib import Path
 
 from textual import events
 from textual.pilot import Pilot
 
 from tests.unit.memory_port import MemoryPort
-from tests.unit.test_app_pilot import BRINGUP, until
+from tests.unit.test_app_pilot import BRINGUP, _walk, footer, until
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.events import Started
+from tuilaunch.tui.fleet import app as fleet_app
 from tuilaunch.tui.fleet.app import FleetApp
+from tuilaunch.tui.fleet.bindings import BINDINGS
+from tuilaunch.tui.inspector import INSPECTOR_BINDINGS
+from tuilaunch.tui.keyboard import KEYBOARD_BINDINGS
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
+from tuilaunch.tui.screens.interact_dialogs import TerminalQuestion, TypingLine
 
 
 @asynccontextmanager
@@ -69,22 +78,137 @@ async def test_a_group_stop_asks_first_naming_the_session(tmp_path: Path) -> Non
         assert "stop" not in ports[0].ops() and "stop" not in ports[1].ops()
 
 
+def burst(app: FleetApp, keys: str | list[str]) -> None:
+    """Keys read at once from the terminal (as ssh delivers a line typed fast)."""
+    for key in keys:
+        app.post_message(events.Key(key, "\r" if key == "enter" else key))
+
+
+def said(app: FleetApp) -> list[str]:
+    return [str(n.message) for n in app._notifications]
+
+
+def refusal_said(app: FleetApp, label: str) -> bool:
+    return any(m.startswith(f"{label}: ") and "were not sent" in m for m in said(app))
+
+
+async def on_row(pilot: Pilot[int], app: FleetApp, index: int, row: str) -> str:
+    """The cursor on the row of session `index` whose process id or label starts with
+    `row` (`talker`, `ns /r1/control`); its id, or its label."""
+    tree = app.members[index].tree
+    tree.focus()
+    await pilot.pause()
+    node = next(n for n in _walk(tree.root) if n is not tree.root and any(
+        text.startswith(row) for text in (n.data.ref or "", str(n.label), str(n.label)[2:])))
+    tree.move_cursor(node)
+    await until(pilot, lambda: app.current is app.members[index] and
+                tree.cursor_node is node, "the row selected")
+    return node.data.ref or str(node.label)
+
+
 async def test_i_on_a_group_drops_the_keys_typed_with_it(tmp_path: Path) -> None:
-    """`istop` Enter typed at once (as ssh delivers it) on a session's root: one line says
-    why, and no key of it becomes a command (no question to stop, no tab switched)."""
+    """`istop` Enter typed at once (as ssh delivers it) on a session's root, and on a group
+    of the other session: one line says why, and no key of it becomes a command (no
+    question to stop, no tab switched)."""
     async with fleet() as (app, pilot, ports):
-        await on_root(pilot, app, 0)
-        for key in ["i", "s", "t", "o", "p", "enter", "2"]:  # one read of the terminal
-            app.post_message(events.Key(key, None if key == "enter" else key))
-        await until(pilot, lambda: any("were not sent" in str(n.message)
-                                       for n in app._notifications), "the refusal said")
+        for index, label in ((0, "robot-one:one"), (1, "robot-two:two")):
+            if index == 0:
+                await on_root(pilot, app, 0)
+            else:
+                await on_row(pilot, app, 1, "ns /r1")
+            burst(app, ["i", "s", "t", "o", "p", "enter", "2"])
+            await until(pilot, partial(refusal_said, app, label), "the refusal said")
+            await until(pilot, lambda: time.monotonic() >= app.dropping_until,
+                        "the burst over")
+            assert not isinstance(app.screen, ConfirmScreen)
+            assert app.tabs.active == "nodes"
+            assert any(m.startswith(f"{label}: ") and "not a node: i types into" in m
+                       for m in said(app)), said(app)
+            for port in ports:
+                assert not {"stop", "start", "typing", "input"} & set(port.ops())
+
+
+async def test_i_types_into_a_node_of_the_second_session_in_the_fleet_view(
+        tmp_path: Path, monkeypatch) -> None:
+    """`i` on robot-two's talker: a typing line in the fleet's own screen (no other TUI
+    run: nothing suspends, as a browser's page cannot), the keys typed with `i` in one
+    burst held for the node and sent to it (`stop` Enter stops nothing), the footer
+    offering only ctrl+] meanwhile; ctrl+] gives the keys back to the fleet."""
+    ran: list[object] = []
+    monkeypatch.setattr(fleet_app.subprocess, "run", lambda *a, **k: ran.append(a))
+    async with fleet() as (app, pilot, ports):
+        talker = await on_row(pilot, app, 1, "talker")
+        burst(app, ["i", "s", "t", "o", "p", "enter"])
+        keyboard = app.members[1].keyboard
+        await until(pilot, lambda: keyboard.typing_to == talker, "typing into the talker")
+        assert ("typing", {"on": True, "process": talker}) in ports[1].asked
+        await until(pilot, lambda: "".join(f["data"] for op, f in ports[1].asked
+                                           if op == "input") == "stop\r",
+                    "the keys typed with i sent to the node")
+        line = app.screen.query_one(TypingLine)
+        assert app.focused is line
+        assert f"typing to {talker} of robot-two:two" in str(line.render())
+        assert list(footer(app)) == ["Give the keys back"]  # s, q... are the node's now
+        await pilot.press("q", "s")
+        await until(pilot, lambda: "".join(f["data"] for op, f in ports[1].asked
+                                           if op == "input") == "stop\rqs", "q and s typed")
+        assert not app.detached and "stop" not in ports[1].ops()
+        await pilot.press("ctrl+right_square_bracket")
+        await until(pilot, lambda: keyboard.typing_to is None, "the keys given back")
+        await until(pilot, lambda: ("typing", {"process": talker})
+                    in ports[1].asked, "the node's keyboard given back")
+        await until(pilot, lambda: not app.screen.query(TypingLine), "the line gone")
+        assert app.focused is app.members[1].tree
+        assert not {"typing", "input", "stop"} & set(ports[0].ops())  # robot-one: untouched
+        assert ran == []
+
+
+async def test_a_node_with_pipes_is_offered_a_terminal_naming_its_session(
+        tmp_path: Path) -> None:
+    """`i` on a node its file started with pipes: the question names the session, No
+    focused; a `y` typed with the `i` never answers it (dropped, said); `n` leaves the node
+    as it is; `y` restarts it with a terminal on its own session and types into it."""
+    async with fleet() as (app, pilot, ports):
+        talker = await on_row(pilot, app, 1, "talker")
+        ports[1].answers["status"] = lambda **_: {"processes": [
+            {"id": talker, "state": "running", "terminal": False}]}
+        burst(app, ["i", "y", "s"])
+        await until(pilot, lambda: isinstance(app.screen, TerminalQuestion), "the question")
+        question = app.screen.question  # type: ignore[attr-defined]
+        assert question.startswith(f"{talker} of robot-two:two has no terminal to type into")
+        assert question.endswith("Restart it with a terminal (until its next plain "
+                                 "restart) and type into it?")
+        await until(pilot, lambda: app.focused is not None and app.focused.id == "no",
+                    "No focused")
+        await until(pilot, lambda: any("answer the question with a key typed now" in m
+                                       for m in said(app)), "the y typed with i dropped")
         await until(pilot, lambda: time.monotonic() >= app.dropping_until, "the burst over")
-        assert not isinstance(app.screen, ConfirmScreen)
-        assert app.tabs.active == "nodes"
-        said = [str(n.message) for n in app._notifications]
-        assert any(m.startswith("robot-one:one: ") and "not a node: i types into" in m
-                   for m in said), said
-        assert "stop" not in ports[0].ops() and "start" not in ports[0].ops()
+        assert isinstance(app.screen, TerminalQuestion)  # the y answered nothing
+        await pilot.press("n")
+        await until(pilot, lambda: not isinstance(app.screen, TerminalQuestion), "answered")
+        assert not {"restart", "stop", "typing"} & set(ports[1].ops())
+        # the keys of the burst that answered no are dropped with it: an `i` typed after it
+        await until(pilot, lambda: time.monotonic() >= app.dropping_until, "its burst over")
+        await pilot.press("i")
+        await until(pilot, lambda: isinstance(app.screen, TerminalQuestion), "asked again")
+        # a key of the burst of that `i` would be dropped with it: `y` is typed after it
+        await until(pilot, lambda: time.monotonic() >= app.dropping_until, "its burst over")
+        await pilot.press("y")
+        await until(pilot, lambda: app.members[1].keyboard.typing_to == talker,
+                    "typing once restarted with a terminal")
+        assert ("restart", {"process": talker, "terminal": True}) in ports[1].asked
+        assert talker in app.members[1].asked_to_stop  # its exit is no failure
+        assert not {"restart", "typing"} & set(ports[0].ops())
+
+
+def test_the_fleet_binds_the_single_tuis_keyboard_and_inspector_keys() -> None:
+    """One list of keys for both views: the fleet's i, g, c, o, L, b are the single TUI's
+    bindings themselves, and FleetApp stays within its budget of methods."""
+    for binding in [*KEYBOARD_BINDINGS, *INSPECTOR_BINDINGS]:
+        assert binding in BINDINGS
+    methods = [name for name, value in vars(FleetApp).items() if callable(value)
+               and not isinstance(value, type)]
+    assert len(methods) <= 50, sorted(methods)
 
 
 async def test_a_lost_link_is_said_on_its_own_root_only(tmp_path: Path) -> None:

@@ -1,8 +1,11 @@
-"""The operator's hands on one node from the TUI: `i` types into its terminal until ctrl+]
-(for a node started with pipes, as launch's default is, it offers to restart it with a
-terminal first), `g` restarts it under a tool (gdb, valgrind...), `c` shows the exact
-command it was started with. Through the session server when there is one (one client
-types at a time), else the in-process supervisor."""
+"""The operator's hands on one node: `i` types into its terminal until ctrl+] (for a node
+started with pipes, as launch's default is, it offers to restart it with a terminal
+first), `g` restarts it under a tool (gdb, valgrind...), `c` shows the exact command it was
+started with. Through the session's server (one client types at a time).
+
+The keyboard acts on one session through a small host (keyboard_host.py): the single TUI
+holds one keyboard over itself, a fleet view one per session (fleet/host.py), so `i` types
+into a node of any session of a fleet in the fleet's own screen, a browser's page too."""
 
 from __future__ import annotations
 
@@ -10,19 +13,19 @@ from collections.abc import Callable
 from typing import Any
 
 from rich.text import Text
-from textual.app import App
 from textual.binding import Binding
 
 from ..client.port import LaunchPort
 from ..client.read_only import refusal
 from ..engine.errors import LaunchError
-from ..engine.run.engine_thread import EngineThread
 from ..engine.run.events import LIVE_STATES, Event, Failed, ProcessExited, Started, Typing
 from ..engine.run.vocabulary.requests import Input, Status, TakeKeys
+from ..engine.run.vocabulary.status import ProcessStatus
 from .key_order import KeyHold, hold_keys
+from .keyboard_host import AppHost, KeyboardHost
 from .keys import edit_line, is_release, key_bytes
 from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
-from .screens.tree_panel import LaunchTree
+from .screens.tree_panel import LaunchTree, RowKind
 from .session_link import SessionLink
 
 RECENT_PREFIXES = 10
@@ -36,21 +39,24 @@ KEYBOARD_BINDINGS = [
             "(gdb, valgrind...) until its next plain restart"),
     Binding("c", "keyboard('command_line')", "Command", show=False,
             tooltip="The exact command line the node was started with, to copy"),
-    # where `i` or `g` cannot act (a row that is not a node, a read-only view), these
-    # take the key: the keys typed with it are dropped and one line says why, where
-    # they would otherwise run as commands (`istop` Enter on a group stopped it)
+    # where `i` or `g` cannot act (a row that is not a node, a read-only view, a session out
+    # of reach), these take the key: the keys typed with it are dropped and one line says
+    # why, where they would otherwise run as commands (`istop` Enter on a group stopped it)
     Binding("i", "keyboard('keys_not_here', 'i')", show=False),
     Binding("g", "keyboard('keys_not_here', 'g')", show=False),
 ]
-"""The keyboard's keys, bound on the app (`action_keyboard` hands them to NodeKeyboard)."""
+"""The keyboard's keys, bound on the app (the single TUI's and the fleet's alike:
+`action_keyboard` hands them to the NodeKeyboard of the selected session)."""
 
 
 class NodeKeyboard:
-    """Typing into the selected node, running it under a tool, its command line: an object
-    the app holds (`app.keyboard`), its keys handed to it by name (`act`)."""
+    """Typing into the selected node, running it under a tool, its command line, on one
+    session (its `host`): an object the app holds (the single TUI's `app.keyboard`, each
+    fleet member's `keyboard`), its keys handed to it by name (`act`)."""
 
-    def __init__(self, app: SessionLink) -> None:
-        self.app = app
+    def __init__(self, host: KeyboardHost | SessionLink) -> None:
+        # the single TUI hands itself: its host is the app's session
+        self.host: KeyboardHost = AppHost(host) if isinstance(host, SessionLink) else host
         self.typing_to: str | None = None
         """The node the keys go to, while typing."""
         self.typed_line = ""
@@ -69,65 +75,66 @@ class NodeKeyboard:
 
     def applies(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         """As Textual's check_action for the keyboard's keys (`action` its name here)."""
-        app = self.app
+        host = self.host
         if action in ("type_into", "run_under", "command_line"):
-            if app.supervisor is None or app.tabs.active != "nodes" or (
-                    app.read_only and action != "command_line"):
-                return False  # a read-only footer offers nothing it refuses
-            return True if app.nodes.selected_process() else None
+            if host.supervisor is None or not host.nodes_shown():
+                return False
+            if action != "command_line" and (host.read_only or
+                                              host.unavailable() is not None):
+                return False  # a footer offers nothing it refuses (keys_not_here says why)
+            return True if host.selected_process() else None
         # keys_not_here: reached only when the key's own action cannot run
-        return app.tabs.active == "nodes"
+        return host.nodes_shown()
 
     def act(self, action: str, *parameters: str) -> None:
         {"type_into": self.type_into, "run_under": self.run_under,
          "command_line": self.command_line,
          "keys_not_here": lambda: self.keys_not_here(*parameters),
          # a key a read-only view refuses (s, r, t, F5...): one line, nothing sent
-         "refused": lambda: self.app.notify(str(refusal(parameters[0])),
-                                            severity="warning")}[action]()
+         "refused": lambda: self.host.notify(str(refusal(parameters[0])),
+                                             severity="warning")}[action]()
 
     def keys_not_here(self, key: str) -> None:
         """`i` or `g` where it cannot act: said at once, and the rest of its burst dropped
         (never commands)."""
-        self._refused(hold_keys(self.app), self._why_not_here(key), key)
+        self._refused(hold_keys(self.host.app), self._why_not_here(key), key)
 
     def _why_not_here(self, key: str) -> str:
-        app = self.app
-        if app.read_only:
+        host = self.host
+        if host.read_only:
             return refusal("typing into a node" if key == "i" else
                            "running a node under a tool").args[0]
-        if app.supervisor is None:
-            return "the session is not followed yet"
-        return not_a_node(app.launch_tree, key)
+        return host.unavailable() or not_a_node(host.launch_tree, key)
 
     # --- typing ---------------------------------------------------------------------------
 
     def type_first(self, process: str) -> None:
         """`attach --type`: the process's row selected and typed into, as `i` on it."""
-        tree = self.app.launch_tree
+        tree = self.host.launch_tree
         if process in tree.rows:
             tree.move_cursor(tree.rows[process])
             self.type_into()
 
     def type_into(self) -> None:
-        process = self.app.nodes.selected_process()
-        if process is None or self.app.supervisor is None:
+        process = self.host.selected_process()
+        if process is None or self.host.supervisor is None:
             return
         # the keys typed right after `i` are for the node (they wait for its typing line),
         # or answer the question whether to give it a terminal
-        hold = hold_keys(self.app)
-        self.app.run_worker(self._take_keyboard(process, hold), group="typing",
-                            exit_on_error=False)
+        hold = hold_keys(self.host.app)
+        self.host.app.run_worker(self._take_keyboard(process, hold), group="typing",
+                                 exit_on_error=False)
 
     async def _take_keyboard(self, process: str, hold: KeyHold) -> None:
         """Types into the node, or offers what would let `i` type (a terminal, a start);
         where nothing can, the keys typed with `i` are dropped: a key typed for a node
         never becomes one of tuilaunch's commands (`s` stop, `q` quit, `d` detach)."""
-        app = self.app
-        assert app.supervisor is not None
-        state = app.supervisor.states.get(process)
+        host = self.host
+        supervisor = host.supervisor
+        assert supervisor is not None
+        state = supervisor.states.get(process)
         try:
-            terminal = await app.engine.run(had_terminal(app.supervisor, process)) \
+            terminal = await host.engine.run(had_terminal(supervisor, process)) \
                 if state in RAN else None
         except LaunchError as exc:
             self._refused(hold, str(exc))
@@ -137,7 +144,7 @@ class NodeKeyboard:
                                  piped=terminal is False)
             # the question waits for a key typed once it is shown: the keys typed with
             # `i` were for the node, and a `y` among them (`iyes`) must not answer it
-            hold.drop(said=lambda: app.notify(
+            hold.drop(said=lambda: host.notify(
                 "The keys typed with i were not sent: answer the question with a key "
                 "typed now", severity="warning"))
         elif state != "running":
@@ -147,12 +154,17 @@ class NodeKeyboard:
             await self._start_typing(process, hold)
 
     def _refused(self, hold: KeyHold, why: str, key: str = "i") -> None:
-        refuse_keys(self.app, hold, why, key)
+        """`key` (i, g) cannot act: the keys typed with it are dropped with the rest of
+        their burst (a key typed for a node never becomes a command: `istop` on a group
+        stops nothing), and one line says why."""
+        hold.drop()
+        self.host.notify(f"{why}. The keys typed with {key} were not sent",
+                         severity="warning")
 
     async def _start_typing(self, process: str, hold: KeyHold) -> None:
-        app = self.app
+        host = self.host
         try:
-            await app.engine.run(take_keyboard(app.client(), process))
+            await host.engine.run(take_keyboard(host.client(), process))
         except LaunchError as exc:
             self._refused(hold, str(exc))  # another client types into it, it just ended
             return
@@ -164,12 +176,12 @@ class NodeKeyboard:
             self.typed_line = ""
             line = TypingLine(self._typed, id="typing-line")
             self._typing_line = line
-            await app.nodes.mount(line, before="#nodes-split")
-            app.screen.set_focus(line)
+            await host.show_typing_line(line)
+            host.app.screen.set_focus(line)
         finally:
             hold.release()  # the keys typed after `i` go to the line
         self._show_typing()
-        app.refresh_bindings()
+        host.app.refresh_bindings()
 
     def _offer_terminal(self, process: str, verb: str, piped: bool) -> None:
         """Asks to start (or restart) the node with a terminal; `y` does it and types."""
@@ -178,22 +190,29 @@ class NodeKeyboard:
                 # the keys typed after `y` (held since it was answered) are the node's:
                 # they wait out the restart (a node slow to stop takes seconds) for its
                 # typing line, where tuilaunch's own keys would otherwise get them
-                self.app.run_worker(self._restart_with_terminal(process, question.hold),
-                                    group="typing", exit_on_error=False)
+                self.host.app.run_worker(
+                    self._restart_with_terminal(process, question.hold), group="typing",
+                    exit_on_error=False)
             else:
                 question.hold.drop()  # no: the rest of the burst was for the node too
 
-        supervisor = self.app.supervisor
+        supervisor = self.host.supervisor
         assert supervisor is not None
+        who = self._named(process)
         if piped:
-            why = (f"{process} has no terminal to type into: its file gives it pipes, as "
+            why = (f"{who} has no terminal to type into: its file gives it pipes, as "
                    "ros2 launch does without emulate_tty=True.")
         else:
-            why = f"{process} is not running ({supervisor.states.get(process)})."
+            why = f"{who} is not running ({supervisor.states.get(process)})."
         question = TerminalQuestion(
             f"{why} {verb} it with a terminal (until its next plain restart) and type "
             "into it?", f"{verb} it (y)")
-        self.app.push_screen(question, answered)
+        self.host.app.push_screen(question, answered)
+
+    def _named(self, process: str) -> str:
+        """The process as a question or the typing line names it: in a fleet, with its
+        session (`talker-1 of nuc:base`)."""
+        return f"{process} of {self.host.who}" if self.host.who else process
 
     async def _restart_with_terminal(self, process: str, hold: KeyHold) -> None:
         try:
@@ -203,12 +222,19 @@ class NodeKeyboard:
             hold.drop()  # refused, or it ended at once: the keys were the node's
 
     async def _restart_with(self, process: str, **options: Any) -> bool:
-        """Restarts the node with `options` (a tool, a terminal); False, said, when the
-        restart was refused."""
-        app = self.app
-        assert app.supervisor is not None
-        return await restart_with(app, app.engine, app.supervisor, process,
-                                  app.asked_to_stop, **options)
+        """Restarts the node with `options` (a tool, a terminal), its stop noted as asked
+        for; False, said in one line, when the session refused it."""
+        host = self.host
+        supervisor = host.supervisor
+        assert supervisor is not None
+        host.asked_to_stop.add(process)
+        try:
+            await host.engine.run(supervisor.restart(process, **options))
+        except LaunchError as exc:
+            host.asked_to_stop.discard(process)
+            host.notify(str(exc), severity="error")
+            return False
+        return True
 
     def _typed(self, key: str, character: str | None) -> None:
         """A key pressed while typing: to the node, or ctrl+] back to tuilaunch."""
@@ -224,8 +250,8 @@ class NodeKeyboard:
         self._keys_out.append(data)
         if not self._sending:
             self._sending = True
-            self.app.run_worker(self._send_keys(self.typing_to), group="typing-keys",
-                                exit_on_error=False)
+            self.host.app.run_worker(self._send_keys(self.typing_to), group="typing-keys",
+                                     exit_on_error=False)
         self._show_typing()
 
     async def _send_keys(self, process: str) -> None:
@@ -234,10 +260,10 @@ class NodeKeyboard:
             while self._keys_out:
                 data = "".join(self._keys_out)
                 self._keys_out.clear()
-                await self.app.engine.run(type_keys(self.app.client(), process, data))
+                await self.host.engine.run(type_keys(self.host.client(), process, data))
         except LaunchError as exc:
             self._keys_out.clear()
-            self.app.notify(str(exc), severity="error")
+            self.host.notify(str(exc), severity="error")
         finally:
             self._sending = False
 
@@ -246,33 +272,33 @@ class NodeKeyboard:
         process = self.typing_to
         if process is None:
             return
-        app = self.app
+        host = self.host
         self.typing_to = None
         self.typed_line = ""
         if self._typing_line is not None:
             self._typing_line.remove()
             self._typing_line = None
-        app.launch_tree.focus()
-        app.run_worker(self._release(process), group="typing", exit_on_error=False)
+        host.launch_tree.focus()
+        host.app.run_worker(self._release(process), group="typing", exit_on_error=False)
         if why:
-            app.notify(why)
-        app.update_status()
-        app.refresh_bindings()
+            host.notify(why)
+        host.update_status()
+        host.app.refresh_bindings()
 
     async def _release(self, process: str) -> None:
         try:
-            await self.app.engine.run(release_keyboard(self.app.client(), process))
+            await self.host.engine.run(release_keyboard(self.host.client(), process))
         except LaunchError:
             pass  # the session is gone, and with it the keyboard
 
     def _show_typing(self) -> None:
         if self.typing_to is None:
             return
-        text = Text.assemble((f"typing to {self.typing_to}", "bold"),
+        text = Text.assemble((f"typing to {self._named(self.typing_to)}", "bold"),
                              " (ctrl+] gives the keys back): ", self.typed_line, "▏")
         if self._typing_line is not None:
             self._typing_line.update(text)
-        self.app.update_status()
+        self.host.update_status()
 
     def status_notes(self, link_lost: bool) -> list[str]:
         """What the status line says before the rest: typing, and who else types where
@@ -308,107 +334,77 @@ class NodeKeyboard:
         """After a batch: a node stopped to start again keeps the keys (typing began once
         its restart with a terminal was answered, and the news of its stop may come only
         now); one that ended gives them back."""
-        supervisor = self.app.supervisor
+        supervisor = self.host.supervisor
         if self.typing_to is not None and supervisor is not None and \
                 supervisor.states.get(self.typing_to) not in LIVE_STATES and \
                 self.typing_to not in self._coming_back:
             self.stop_typing(f"{self.typing_to} is no longer running: the keys are back")
         elif any(isinstance(e, Typing) for e in events):
-            self.app.update_status()
+            self.host.update_status()
 
     # --- a tool, the command line ---------------------------------------------------------
 
     def run_under(self) -> None:
-        process = self.app.nodes.selected_process()
+        process = self.host.selected_process()
         if process is None:
             return
 
         def chosen(prefix: str | None) -> None:
             if prefix:  # cancelled: nothing changes
-                self.app.run_worker(self._restart_under(process, prefix), group="commands",
-                                    exit_on_error=False)
+                self.host.app.run_worker(self._restart_under(process, prefix),
+                                         group="commands", exit_on_error=False)
 
-        self.app.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
+        self.host.app.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
 
     async def _restart_under(self, process: str, prefix: str) -> None:
         if not await self._restart_with(process, prefix=prefix):
             return
         self.prefix_history = remembered(self.prefix_history, prefix)
-        self.app.notify(f"{process} runs under {prefix}: i types into it; r restarts it plain")
+        self.host.notify(f"{process} runs under {prefix}: i types into it; r restarts it "
+                         "plain")
 
     def command_line(self) -> None:
-        process = self.app.nodes.selected_process()
+        process = self.host.selected_process()
         if process is not None:
             # `c y` typed together copies the command: the y waits for its dialog
-            release = hold_keys(self.app)
-            self.app.run_worker(self._show_command(process, release), group="commands",
-                                exit_on_error=False)
+            release = hold_keys(self.host.app)
+            self.host.app.run_worker(self._show_command(process, release), group="commands",
+                                     exit_on_error=False)
 
     async def _show_command(self, process: str, release: Callable[[], None]) -> None:
+        """The process's exact command line in a dialog, or one line saying why not."""
+        host = self.host
         try:
-            await show_command_line(self.app, self.app.engine, self.app.client(), process)
-        except LaunchError as exc:  # not following the session yet
-            self.app.notify(str(exc), severity="error")
+            status = await host.engine.run(command_of(host.client(), process))
+            line = None if status is None else status.command_line
+            if line:
+                host.app.push_screen(CommandScreen(process, line))
+            else:
+                host.notify(f"{process} has no command line (it could not be resolved)",
+                            severity="warning")
+        except LaunchError as exc:  # not following the session yet, a link lost
+            host.notify(str(exc), severity="error")
         finally:
-            release()
+            release()  # after the dialog is pushed: the keys held go to it
 
 
 def not_a_node(tree: LaunchTree, key: str) -> str:
     """Why `i` or `g` cannot act on the tree's selected row (a group, an action, the
-    launch: a fleet's session), in one line (the single TUI's, each session's of a fleet)."""
+    launch: a fleet's session), in one line."""
     node = tree.cursor_node
-    kind = node.data.kind if node is not None and node.data is not None else ""
+    kind = node.data.kind if node is not None and node.data is not None else RowKind.GROUP
     label = str(node.label) if node is not None else ""
     label = label if len(label) <= 40 else label[:39] + "…"
-    what = {"all": "every node's output", "action": "an action",
-            "component": "a component (its container is the process)"}.get(
+    what = {RowKind.ALL: "every node's output", RowKind.ACTION: "an action",
+            RowKind.COMPONENT: "a component (its container is the process)"}.get(
                 kind, "the launch" if node is tree.root else "a group")
     verb = "types into" if key == "i" else "runs under a tool"
     return f"{label!r} is {what}, not a node: {key} {verb} a node (select its row)"
 
 
-def refuse_keys(app: App[Any], hold: KeyHold, why: str, key: str = "i") -> None:
-    """`key` (i, g) cannot act: the keys typed with it are dropped with the rest of their
-    burst (a key typed for a node never becomes a command: `istop` on a group stops
-    nothing), and one line says why (the single TUI and the fleet view alike)."""
-    hold.drop()
-    app.notify(f"{why}. The keys typed with {key} were not sent", severity="warning")
-
-
-async def restart_with(app: App[Any], engine: EngineThread, port: LaunchPort, process: str,
-                       asked_to_stop: set[str], said: str = "", **options: Any) -> bool:
-    """Restarts the process with `options` (a tool, a terminal), its stop noted as asked
-    for; False, and one line starting with `said` (a fleet's session label), when the
-    session refused it (here and in a fleet's view)."""
-    asked_to_stop.add(process)
-    try:
-        await engine.run(port.restart(process, **options))
-    except LaunchError as exc:
-        asked_to_stop.discard(process)
-        app.notify(f"{said}{exc}", severity="error")
-        return False
-    return True
-
-
 def remembered(history: list[str], prefix: str) -> list[str]:
     """The tools the prompt offers, `prefix` first."""
     return [prefix, *[p for p in history if p != prefix]][:RECENT_PREFIXES]
-
-
-async def show_command_line(app: App[Any], engine: EngineThread, port: LaunchPort,
-                            process: str, said: str = "") -> None:
-    """`c` (here and in a fleet's view): the process's exact command line in a dialog, or
-    one line saying why not, which starts with `said` (a fleet's session label)."""
-    try:
-        line = (await engine.run(command_of(port, process))).get("command_line")
-    except LaunchError as exc:
-        app.notify(f"{said}{exc}", severity="error")
-        return
-    if not line:
-        app.notify(f"{said}{process} has no command line (it could not be resolved)",
-                   severity="warning")
-        return
-    app.push_screen(CommandScreen(process, line))
 
 
 # --- the calls on the session's server ----------------------------------------------------
@@ -424,7 +420,8 @@ RAN = ("running", "exited", "failed")
 async def had_terminal(supervisor: LaunchPort, process: str) -> bool | None:
     """Whether the process's last start gave it a terminal; None when that is not known
     here (run by another machine: taking its keyboard says what it can)."""
-    return (await command_of(supervisor, process)).get("terminal")
+    status = await command_of(supervisor, process)
+    return None if status is None else status.terminal
 
 
 async def release_keyboard(supervisor: LaunchPort, process: str) -> None:
@@ -435,6 +432,6 @@ async def type_keys(supervisor: LaunchPort, process: str, data: str) -> None:
     await supervisor.request(Input(process=process, data=data))
 
 
-async def command_of(supervisor: LaunchPort, process: str) -> dict[str, Any]:
-    status = await supervisor.request(Status(resources=False))  # its command alone
-    return next((p for p in status["processes"] if p["id"] == process), {})
+async def command_of(supervisor: LaunchPort, process: str) -> ProcessStatus | None:
+    """The process as the session's status says it, with its command (None: no such)."""
+    return (await supervisor.request(Status(resources=False))).process(process)

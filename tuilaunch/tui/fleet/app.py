@@ -12,7 +12,9 @@ robot unreachable at start is a root that says why and retries.
 The Args, Services, Params and Topics tabs (`2`-`5`) are here, each session with its own
 panels (tabs.py), showing the session of the selected row; F5 relaunches that session. The
 keys on a tree's selection are the single TUI's SelectionCommands, one per session (its
-questions name the session); `p` in Topics is the single TUI's plot screen (plots.py); `O`
+questions name the session); so are its keyboard's (`i` types into the node here, `g`,
+`c`: keyboard.py's NodeKeyboard, one per session, over fleet/host.py's MemberHost), which
+work in a browser's page too; `p` in Topics is the single TUI's plot screen (plots.py); `O`
 is the session in the single-session TUI (this screen suspended meanwhile; `q`, `d` there
 come back here). A fleet TUI never stops a session by leaving: `q` detaches from all.
 """
@@ -45,16 +47,14 @@ from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
 from ...engine.run.vocabulary.request import Request
 from ..app import LaunchTabs, pane_save_dir
-from ..key_order import KeyOrder, hold_keys
-from ..keyboard import not_a_node, refuse_keys, remembered, restart_with, show_command_line
+from ..key_order import KeyOrder
 from ..log_levels import LogLevels
 from ..nodes.commands import SelectionCommands
 from ..nodes.gaps import GapReader
 from ..output_store import OutputStore
-from ..screens.interact_dialogs import PrefixPrompt
 from ..screens.output_panel import OutputPanel
 from ..screens.topics_panel import TopicsPanel
-from ..screens.tree_panel import LaunchTree, RowData
+from ..screens.tree_panel import LaunchTree, RowData, RowKind
 from ..session_link import DRAIN_HZ, PANE_CHROME
 from ..toasts import OnceToasts
 from .bindings import BINDINGS, FleetHelp
@@ -64,8 +64,7 @@ from .tabs import FleetTabs
 
 R = TypeVar("R")
 
-NODES_ONLY = frozenset({"command", "all_output", "command_line", "lifecycle", "pane",
-                        "type_into", "run_under", "log_level", "node_topics"})
+NODES_ONLY = frozenset({"command", "all_output", "lifecycle", "pane", "inspector"})
 """The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
@@ -137,8 +136,7 @@ class FleetApp(KeyOrder):
             member.session = session
             self.given[id(member)] = port
         self.plots = FleetPlots(self, self.members, self.member_request)
-        self.session_tabs = FleetTabs(self.members, self.member_request, lambda: self.engine,
-                                      self.update_status, self.plots)
+        self.session_tabs = FleetTabs(self.members, self.member_request, self, self.plots)
         self.gap_readers = {id(m): self._gap_reader(m) for m in self.members}
         self.log_levels = {id(m): LogLevels(self, partial(self.member_request, m),
                                             m.asked_to_stop, f"{m.label}: ")
@@ -148,7 +146,6 @@ class FleetApp(KeyOrder):
         self._status_text = ""
         self._detail_text = ""
         self.detached = False
-        self.prefix_history: list[str] = []
         self._resumed_at = 0.0
         self.toasts = OnceToasts()
         """When this screen came back from a TUI it waited for (o, i, p): keys read before
@@ -188,6 +185,7 @@ class FleetApp(KeyOrder):
         self.status_bar = self.query_one("#status", Static)
         self.detail_bar = self.query_one("#detail", Static)
         self.switcher = self.query_one("#fleet-panes", ContentSwitcher)
+        self.nodes_tab = self.query_one("#nodes-tab", Vertical)
         self.tabs = self.query_one(LaunchTabs)
         self.engine = EngineThread()
         for member in self.members:
@@ -295,9 +293,9 @@ class FleetApp(KeyOrder):
         if member is None:
             return
         data = event.node.data
-        if data is not None and data.kind == "process":
+        if data is not None and data.kind == RowKind.PROCESS:
             member.pane.show_view(data.ref)
-        elif data is not None and data.kind == "all":
+        elif data is not None and data.kind == RowKind.ALL:
             member.pane.show_view(None)
         self.update_detail()
         self.refresh_bindings()  # the keys that apply follow the row
@@ -348,9 +346,17 @@ class FleetApp(KeyOrder):
             self.session_tabs.of(member).args.apply()
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        if action in NODES_ONLY and self.tabs.active != "nodes":
+        if any(m.keyboard.typing_to is not None for m in self.members):
+            # every key is the node's while typing (ctrl+c too): the footer offers ctrl+]
+            return False
+        name = str(parameters[0]) if parameters else ""
+        if action == "keyboard":
+            return self.current.keyboard.applies(name, parameters[1:])
+        if action in NODES_ONLY and self.tabs.active != "nodes" and name != "black_box":
             # `/` into the tab's filter; the Nodes tab's other keys are not this tab's
-            return action == "pane" and parameters[:1] == ("search",)
+            return action == "pane" and name == "search"
+        if action == "inspector" and name != "black_box":
+            return True if self.current.keyboard.host.selected_process() else None
         if action == "command" and self.current.unavailable() is None:
             # greyed as in the single TUI (nothing to stop); a session out of reach keeps
             # them, to say why in one line
@@ -424,17 +430,9 @@ class FleetApp(KeyOrder):
             self.commands(member).command(verb)
             self.update_detail()
 
-    def action_command_line(self) -> None:
-        """c: the selected node's exact command line, as its session started it."""
-        process = self._one_row("c", "shows the command line of")
-        member = self.current
-        if process is not None and member.supervisor is not None:
-            self._show_command(member, member.supervisor, process)
-
-    @work(group="commands", exit_on_error=False)
-    async def _show_command(self, member: Member, supervisor: LaunchPort,
-                            process: str) -> None:
-        await show_command_line(self, self.engine, supervisor, process, f"{member.label}: ")
+    def action_keyboard(self, action: str, *parameters: str) -> None:
+        """i, g, c: the single TUI's keyboard, on the selected session (keyboard.py)."""
+        self.current.keyboard.act(action, *parameters)
 
     def action_lifecycle(self, direction: str) -> None:
         """`]` (up), `[` (down) on the selected lifecycle node of the selected session, from
@@ -538,76 +536,27 @@ class FleetApp(KeyOrder):
             return  # read before the other TUI took the terminal: typed for it
         await super().on_event(event)
 
-    def _one_row(self, key: str, what: str) -> str | None:
-        """The selected node of the selected session, for a key that acts on one node;
-        None, said in one line, when the selection is not one node or the session is
-        out of reach."""
+    def action_inspector(self, action: str) -> None:
+        """o, L, b: the single TUI's inspector keys (inspector.py), on the selected
+        session: its node's topics in its Topics tab, its node's log level, its black
+        box written."""
         member = self.current
-        typing = key in ("i", "g")  # the keys typed with it were for a node, or a tool
         if not self._keys_reach(member):
-            if typing:
-                hold_keys(self).drop()
-            return None
-        selected = self.selected()
-        if len(selected) != 1:
-            if typing:  # as the single TUI: the rest of the burst is dropped, and said
-                refuse_keys(self, hold_keys(self),
-                            f"{member.label}: {not_a_node(member.tree, key)}", key)
-            else:
-                self.notify(f"{member.label}: {key} {what} one node: select it",
-                            severity="warning")
-            return None
-        return selected[0]
-
-    def action_type_into(self) -> None:
-        """i: typing into the selected node, in its session's own TUI (every key of the
-        single TUI's typing: a terminal offered to a node started with pipes, ctrl+]);
-        `d` there comes back here."""
-        process = self._one_row("i", "types into")
-        if process is not None:
-            self._run_elsewhere("attach", self.current.address, "--type", process)
-
-    def action_node_topics(self) -> None:
-        """o: the selected node's topics in the Topics tab, as in the single TUI."""
-        process = self._one_row("o", "lists the topics of")
-        if process is None:
             return
-        self.session_tabs.of(self.current).topics.show_node(self._node_name(process))
-        self.action_tab("topics")
+        panels = self.session_tabs.of(member)
+        process = panels.host.selected_process()
+        if action == "black_box":
+            self.run_worker(panels.recordings.black_box_now(), group="recording",
+                            exit_on_error=False)
+        elif process is not None and action == "node_topics":
+            panels.topics.show_node(self._node_name(process))
+            self.action_tab("topics")
+        elif process is not None:
+            self.log_levels[id(member)].ask(process, self._node_name(process))
 
     def _node_name(self, process: str) -> str:
         """The ROS name of a process's node in the selected session."""
         return self.current.store.node_name(self.current.session.plan, process)
-
-    def action_log_level(self) -> None:
-        """L: the selected node's ROS log level, as in the single TUI."""
-        process = self._one_row("L", "sets the log level of")
-        if process is None:
-            return
-        self.log_levels[id(self.current)].ask(process, self._node_name(process))
-
-    def action_run_under(self) -> None:
-        """g: the selected node restarted under a tool, as in the single TUI."""
-        process = self._one_row("g", "restarts")
-        member = self.current
-        if process is None or member.supervisor is None:
-            return
-        supervisor = member.supervisor
-
-        def chosen(prefix: str | None) -> None:
-            if prefix:  # cancelled: nothing changes
-                self._restart_under(member, supervisor, process, prefix)
-
-        self.push_screen(PrefixPrompt(process, self.prefix_history), chosen)
-
-    @work(group="commands", exit_on_error=False)
-    async def _restart_under(self, member: Member, supervisor: LaunchPort, process: str,
-                             prefix: str) -> None:
-        if await restart_with(self, self.engine, supervisor, process, member.asked_to_stop,
-                              f"{member.label}: ", prefix=prefix):
-            self.prefix_history = remembered(self.prefix_history, prefix)
-            self.notify(f"{member.label}: {process} runs under {prefix}: i types into it; "
-                        "r restarts it plain")
 
     def action_quit_fleet(self) -> None:
         """Leaves every session running: a fleet view is a watcher, each robot's launch its

@@ -11,9 +11,12 @@ from textual.binding import Binding, BindingType
 from textual.containers import VerticalScroll
 from textual.widgets import Static
 
+from ..inspector import INSPECTOR_BINDINGS
+from ..keyboard import KEYBOARD_BINDINGS
 from ..screens.dialogs import HelpScreen
 
 BINDINGS: list[BindingType] = [
+    *KEYBOARD_BINDINGS,  # i, g, c: the selected session's keyboard (FleetApp.action_keyboard)
     Binding("1", "tab('nodes')", "Nodes", show=False,
             tooltip="The sessions' trees and the selected node's output"),
     Binding("2", "tab('args')", "Args", show=False,
@@ -33,22 +36,11 @@ BINDINGS: list[BindingType] = [
     Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
             tooltip="The previous session's root"),
     Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
-    Binding("c", "command_line", "Command", show=False,
-            tooltip="The exact command line the selected node was started with, to copy"),
     Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up", show=False,
             tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
     Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
             tooltip="Deactivate an active, clean up an inactive lifecycle node"),
-    Binding("i", "type_into", "Type", show=False,
-            tooltip="Type into the selected node, in its session's TUI (ctrl+] there "
-            "gives the keys back, d comes back here)"),
-    Binding("g", "run_under", "Debug", show=False,
-            tooltip="Restart the selected node under a tool (gdb, valgrind...) until "
-            "its next plain restart"),
-    Binding("L", "log_level", "Log level", show=False,
-            tooltip="Set the selected node's ROS log level"),
-    Binding("o", "node_topics", "Topics of node", show=False,
-            tooltip="The selected node's topics, in the Topics tab"),
+    *INSPECTOR_BINDINGS,  # o, L, b: on the selected session (FleetApp.action_inspector)
     Binding("O", "open_session", "Open",
             tooltip="The selected session in the single-session TUI, with every key of "
             "one session (d there comes back)"),
@@ -91,6 +83,8 @@ class FleetHelp(HelpScreen):
                 "than one running node ask first, naming the session.", ""]
         for binding in BINDINGS:
             assert isinstance(binding, Binding)
+            if not binding.description:
+                continue  # a key's stand-in where it cannot act (keyboard.py's i, g)
             keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
                 "question_mark", "?").replace("right_square_bracket", "]").replace(
                 "left_square_bracket", "[").replace(",", ", ")

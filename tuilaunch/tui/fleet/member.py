@@ -26,6 +26,7 @@ from ...engine.run.events import (
     Reading,
     Relaunched,
 )
+from ..keyboard import NodeKeyboard
 from ..nodes.events import NodeEvents
 from ..output_store import OutputStore
 from ..screens.output_panel import OutputPanel
@@ -57,6 +58,9 @@ class Member:
     """Where the events for its tabs go (readings, relaunches): fleet/tabs.py."""
     events: NodeEvents = field(init=False)
     """How its events show in its tree and pane."""
+    keyboard: NodeKeyboard = field(init=False)
+    """`i`, `g`, `c` on its nodes: the single TUI's keyboard over this session (set with
+    its host, fleet/tabs.py)."""
 
     def __post_init__(self) -> None:
         self.events = NodeEvents(
@@ -129,6 +133,8 @@ class Member:
         """The events of a drain into this member's tree and pane, as the single TUI's
         Nodes tab shows them (the same NodeEvents); the readings and the relaunches to its
         tabs (`on_event`)."""
+        kept = events
+        events = self.keyboard.take_events(events)  # who types where: the keyboard's
         shown = self.events.show([e for e in events if not isinstance(e, Reading)])
         if self.on_event is not None:
             for event in events:
@@ -141,6 +147,7 @@ class Member:
             self.events.count_down()
         if events:
             self.refresh_root()
+        self.keyboard.events_shown(kept)  # a node typed into that ended gives the keys back
 
     def show_plan(self) -> None:
         """The session's plan as the tree's children, its root the session."""

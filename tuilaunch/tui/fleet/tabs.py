@@ -21,18 +21,17 @@ from textual.app import ComposeResult
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher
 
-from ...client.port import LaunchPort
 from ...client.session_graph import SessionGraph
-from ...engine.plan.session import Session
-from ...engine.run.engine_thread import EngineThread
 from ...engine.run.events import Echo, Event, PlotSamples, Rates, Relaunched
 from ..arguments import ArgsTab
+from ..keyboard import NodeKeyboard
 from ..nodes.commands import SelectionCommands
+from ..recording import Recordings
 from ..screens.fields import Field
 from ..screens.params_panel import ParamsPanel
 from ..screens.services_panel import ServicesPanel
 from ..screens.topics_panel import TopicsPanel
-from ..screens.tree_panel import LaunchTree
+from .host import FleetScreen, MemberHost
 from .member import Member
 from .plots import FleetPlots
 
@@ -44,56 +43,11 @@ HOMES = {"args": "#apply", "services": "#svc-list", "params": "#prm-nodes",
 """Where each tab's work starts: never a text field, so the tab keys and q work at once."""
 
 
-class MemberHost:
-    """A member as the host of the single TUI's pieces: its Args tab's (arguments.py's
-    ArgsHost) and its tree's commands' (nodes/host.py's NodesHost): its session, its link,
-    its tree, the stops it asked; the app's engine thread and header."""
-
-    quitting = False
-    """A fleet view never stops its sessions by leaving."""
-
-    def __init__(self, member: Member, engine: Callable[[], EngineThread],
-                 update_status: Callable[[], None]) -> None:
-        self.member = member
-        self._engine = engine
-        self.update_status = update_status
-        self.own_relaunch: list[str] | None = None
-
-    @property
-    def session(self) -> Session:
-        return self.member.session
-
-    @property
-    def supervisor(self) -> LaunchPort | None:
-        return self.member.supervisor
-
-    @property
-    def engine(self) -> EngineThread:
-        return self._engine()
-
-    @property
-    def launch_tree(self) -> LaunchTree:
-        return self.member.tree
-
-    @property
-    def asked_to_stop(self) -> set[str]:
-        return self.member.asked_to_stop
-
-    def over_link(self) -> LaunchPort | None:
-        supervisor = self.member.supervisor
-        return supervisor if supervisor is not None and supervisor.host is not None else None
-
-    def drain(self) -> None:
-        self.member.show_events(self.member.buffer.drain())
-
-    def describe_waiting(self) -> None:
-        self.member.refresh_root()  # the new plan's counts
-
-
 class SessionPanels:
-    """One member's Args, Services, Params and Topics panels and its tree's commands (`s`,
-    `r`, `t`, `]`, `[`: the questions the single TUI asks, naming the session), acting on
-    its session alone."""
+    """One member's Args, Services, Params and Topics panels, its tree's commands (`s`,
+    `r`, `t`, `]`, `[`: the questions the single TUI asks, naming the session) and its
+    keyboard (`i`, `g`, `c`: the single TUI's, the member's `keyboard`), acting on its
+    session alone."""
 
     def __init__(self, member: Member, index: int, request: Callable[..., Any],
                  host: MemberHost) -> None:
@@ -109,6 +63,8 @@ class SessionPanels:
         self.topics = TopicsPanel(ask, id=f"topics-{index}")
         self.commands = SelectionCommands(member.tree, host, member.tree, member.store,
                                           who=member.label)
+        member.keyboard = NodeKeyboard(host)
+        self.recordings = Recordings(host, ask)  # `b`: its black box written
 
     def panel(self, tab: str) -> Widget:
         return {"args": self.args, "services": self.services, "params": self.params,
@@ -121,11 +77,9 @@ class FleetTabs:
     (raises SessionError while it cannot be reached)."""
 
     def __init__(self, members: list[Member], request: Callable[..., Any],
-                 engine: Callable[[], EngineThread], update_status: Callable[[], None],
-                 plots: FleetPlots) -> None:
+                 fleet: FleetScreen, plots: FleetPlots) -> None:
         self.plots = plots
-        self.panels = {id(m): SessionPanels(m, i, request,
-                                            MemberHost(m, engine, update_status))
+        self.panels = {id(m): SessionPanels(m, i, request, MemberHost(m, fleet))
                        for i, m in enumerate(members)}
         self.members = members
         self.active = "nodes"
