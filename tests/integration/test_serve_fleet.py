@@ -1,9 +1,12 @@
 """`tuilaunch serve A B`: the fleet view of two sessions at one URL, in a real browser
 (Debian's chromium, driven by Selenium): both roots on the page at 1100x700, 1024x768 and
 390x844; `}` reaches the second session's root and `s` on a node there stops it alone; at
-1024x768 a tap (a click at the cell) on a row selects it, a tap on the footer's Stop stops
-it, and w hands the pane to the browser as a download (fetched once); the page of `serve`
-alone links each session and the whole fleet.
+1024x768 a tap (a click at the cell) on a row selects it, the footer shows the single TUI's
+node keys whole (Type, Debug, the tabs, Stop, Restart, Start, Search), a tap on its Stop
+stops the node, w hands the pane to the browser as a download (fetched once), and a tap on
+its Type asks, in the page itself, to start the stopped node (run with pipes) with a
+terminal, naming its session (No leaves it); the page of `serve` alone links each session
+and the whole fleet.
 """
 
 from __future__ import annotations
@@ -19,6 +22,12 @@ from .test_serve import states
 from .test_sessions import runtime, start_detached, tl  # noqa: F401
 
 pytestmark = pytest.mark.timeout(900)
+
+TABLET_KEYS = (("i", "Type"), ("g", "Debug"), ("1", "Nodes"), ("2", "Args"),
+               ("3", "Services"), ("4", "Params"), ("s", "Stop"), ("r", "Restart"),
+               ("t", "Start"), ("/", "Search"))
+"""The keys a tablet's footer (1024x768) shows whole in the fleet view, as the single
+TUI's does."""
 
 
 def test_serve_of_two_sessions_is_one_fleet_page(runtime, write):  # noqa: F811
@@ -59,11 +68,11 @@ def test_serve_of_two_sessions_is_one_fleet_page(runtime, write):  # noqa: F811
             browser.tap("echo-3", row)  # nuc's echo-3: the first tree's
             browser.wait_screen(lambda t: t.splitlines()[3].strip().startswith("echo-3") and
                                 "[local:nuc]" in t, "nuc's echo-3 selected by a tap")
-            # a browser's footer is compact (cli/serve_tab.py): Start is no longer cut off
+            # a browser's footer is compact (cli/serve_tab.py): the single TUI's keys whole,
+            # each a tap away
             footer = browser.wait_screen(lambda t: all(
-                f"{key} {word} " in t.splitlines()[-1]
-                for key, word in (("s", "Stop"), ("r", "Restart"), ("t", "Start"))),
-                "Stop, Restart and Start whole in the footer")
+                f"{key} {word} " in t.splitlines()[-1] for key, word in TABLET_KEYS),
+                "the node's keys and the tabs whole in the footer")
             browser.tap("Stop", len(footer.splitlines()) - 1)
             wait_for(lambda: states(first)["echo-3"] == "exited",
                      what="nuc's echo-3 stopped by a tap on Stop")
@@ -77,6 +86,17 @@ def test_serve_of_two_sessions_is_one_fleet_page(runtime, write):  # noqa: F811
                 assert got.read().decode().endswith("\n")
             with pytest.raises(urllib.error.HTTPError):  # each is fetched once
                 urllib.request.urlopen(browser.opened()[0], timeout=30)
+            # a tap on Type: the fleet types into the node itself (a page cannot hand its
+            # terminal to another TUI); the stopped echo-3 is offered a start with one
+            browser.tap("Type", len(footer.splitlines()) - 1)
+            browser.wait_screen(lambda t: "echo-3 of local:nuc has no terminal to type "
+                                "into" in " ".join(t.split()) and "Start it with a terminal"
+                                in " ".join(t.split()),
+                                "the question, in the page, naming the session")
+            browser.tap("No (n)")
+            browser.wait_screen(lambda t: "Start it with" not in t and "[local:nuc]" in t,
+                                "the question answered")
+            assert states(first)["echo-3"] == "exited"  # no: left as it was
     finally:
         serving.close()
     # serve alone: a page linking each session and all of them together

@@ -28,6 +28,7 @@ from tuilaunch.tui.inspector import INSPECTOR_BINDINGS
 from tuilaunch.tui.keyboard import KEYBOARD_BINDINGS
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.interact_dialogs import TerminalQuestion, TypingLine
+from tuilaunch.tui.screens.output_panel import PANE_BINDINGS, NodesView
 
 
 @asynccontextmanager
@@ -201,11 +202,13 @@ async def test_a_node_with_pipes_is_offered_a_terminal_naming_its_session(
         assert not {"restart", "typing"} & set(ports[0].ops())
 
 
-def test_the_fleet_binds_the_single_tuis_keyboard_and_inspector_keys() -> None:
-    """One list of keys for both views: the fleet's i, g, c, o, L, b are the single TUI's
-    bindings themselves, and FleetApp stays within its budget of methods."""
-    for binding in [*KEYBOARD_BINDINGS, *INSPECTOR_BINDINGS]:
+def test_the_fleet_binds_the_single_tuis_keyboard_inspector_and_pane_keys() -> None:
+    """One list of keys for both views: the fleet's i, g, c, o, L, b and the pane's keys
+    are the single TUI's bindings themselves, and FleetApp stays within its budget of
+    methods."""
+    for binding in [*KEYBOARD_BINDINGS, *INSPECTOR_BINDINGS, *PANE_BINDINGS]:
         assert binding in BINDINGS
+    assert NodesView.BINDINGS is PANE_BINDINGS
     methods = [name for name, value in vars(FleetApp).items() if callable(value)
                and not isinstance(value, type)]
     assert len(methods) <= 50, sorted(methods)
@@ -236,3 +239,22 @@ async def test_keys_act_on_the_focused_session_only(tmp_path: Path) -> None:
         await until(pilot, lambda: "stop" in ports[1].ops(), "two's talker stopped")
         assert ports[1].asked[-1] == ("stop", {"process": talker})
         assert "stop" not in ports[0].ops()
+
+
+async def test_the_footer_offers_the_node_keys_first_and_the_tree_column_resizes(
+        tmp_path: Path) -> None:
+    """On a node, the footer starts with the single TUI's keys (a tablet's browser shows
+    them whole: tests/integration/test_serve_fleet.py); `>` and `<` widen and narrow the
+    trees' column, as they do the single TUI's tree."""
+    async with fleet() as (app, pilot, _ports):
+        await on_row(pilot, app, 1, "talker")
+        await until(pilot, lambda: footer(app).get("Type") is True, "Type offered")
+        shown = list(footer(app))
+        assert shown[:10] == ["Type", "Debug", "Nodes", "Args", "Services", "Params", "Stop",
+                              "Restart", "Start", "Search"], shown
+        trees = app.query_one("#fleet-trees")
+        width = trees.outer_size.width
+        await pilot.press("greater_than_sign")
+        await until(pilot, lambda: trees.outer_size.width == width + 4, "wider")
+        await pilot.press("less_than_sign", "less_than_sign")
+        await until(pilot, lambda: trees.outer_size.width == width - 4, "narrower")

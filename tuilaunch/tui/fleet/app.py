@@ -29,7 +29,7 @@ import time
 from collections.abc import Sequence
 from functools import partial
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TypeVar
 
 from rich.text import Text
 from textual import events, on, work
@@ -64,7 +64,7 @@ from .tabs import FleetTabs
 
 R = TypeVar("R")
 
-NODES_ONLY = frozenset({"command", "all_output", "lifecycle", "pane", "inspector"})
+NODES_ONLY = frozenset({"command", "all_output", "lifecycle", "pane", "inspector", "resize"})
 """The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
@@ -137,7 +137,6 @@ class FleetApp(KeyOrder):
             self.given[id(member)] = port
         self.plots = FleetPlots(self, self.members, self.member_request)
         self.session_tabs = FleetTabs(self.members, self.member_request, self, self.plots)
-        self.gap_readers = {id(m): self._gap_reader(m) for m in self.members}
         self.log_levels = {id(m): LogLevels(self, partial(self.member_request, m),
                                             m.asked_to_stop, f"{m.label}: ")
                            for m in self.members}
@@ -147,9 +146,9 @@ class FleetApp(KeyOrder):
         self._detail_text = ""
         self.detached = False
         self._resumed_at = 0.0
-        self.toasts = OnceToasts()
-        """When this screen came back from a TUI it waited for (o, i, p): keys read before
+        """When this screen came back from the TUI it waited for (O): keys read before
         then were typed for that TUI, never for this one."""
+        self.toasts = OnceToasts()
 
     def notify(self, message: str, *, title: str = "",
                severity: SeverityLevel = "information", timeout: float | None = None,
@@ -195,7 +194,10 @@ class FleetApp(KeyOrder):
         self.update_status()
 
     def on_resize(self, event: events.Resize) -> None:
-        self.set_class(event.size.width < self.NARROW, "-narrow")
+        narrow = event.size.width < self.NARROW
+        self.set_class(narrow, "-narrow")
+        if narrow:  # the trees above the panes take the whole width, whatever `<` `>` set
+            self.query_one("#fleet-trees").styles.width = None
 
     # --- the members' links ------------------------------------------------------------
 
@@ -259,21 +261,11 @@ class FleetApp(KeyOrder):
             member.show_events(member.buffer.drain())
             # a link lost, back, or silent for one more second: the root says it
             member.refresh_root()
-            self._tell_pane_shown(member)
+            telling = member.tell_shown()  # the lines of its pane's node, over a link
+            if telling is not None:
+                self.engine.submit(telling)
         self.update_status()
         self.update_detail()
-
-    def _tell_pane_shown(self, member: Member) -> None:
-        """The session sends only the lines of its pane's node (all for all nodes)."""
-        supervisor = member.supervisor
-        # as the single TUI: only over a link (a session here sends its lines to a screen
-        # at its drain rate, which costs no link)
-        if supervisor is None or supervisor.host is None or member.ended or \
-                supervisor.link_lost is not None:
-            return
-        shown = member.pane.view.process
-        if shown != supervisor.only:
-            self.engine.submit(supervisor.show(shown))
 
     # --- the selection -------------------------------------------------------------------
 
@@ -456,14 +448,6 @@ class FleetApp(KeyOrder):
             return
         commands.lifecycle_transition(*step)
 
-    def _gap_reader(self, member: Member) -> GapReader:
-        """What reads back what the member's link did not send; says so naming it."""
-        def notify(text: str, **options: Any) -> None:
-            self.notify(f"{member.label}: {text}", **options)
-
-        return GapReader(member.store, member.pane, lambda: self.engine,
-                         lambda: member.supervisor, notify)
-
     @on(OutputPanel.StampsWanted)
     def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
         """T, f: the ROS stamps of the lines a link sent without them, read first (the
@@ -471,7 +455,7 @@ class FleetApp(KeyOrder):
         member = self.current  # the keys reach the selected session's pane alone
         supervisor = member.supervisor
         port = supervisor if supervisor is not None and supervisor.host is not None else None
-        gaps = self.gap_readers[id(member)]
+        gaps = self.session_tabs.of(member).gaps
         if port is None or gaps.stamps_known(port, message.shown):
             message.then()
             return
@@ -500,6 +484,13 @@ class FleetApp(KeyOrder):
             return
         getattr(self.current.pane, f"action_{name}")()
 
+    def action_resize(self, step: int) -> None:
+        """`<`, `>`: the trees' column narrower or wider (the panes keep the rest)."""
+        trees = self.query_one("#fleet-trees")
+        if not self.has_class("-narrow"):  # above the panes, the trees are full width
+            trees.styles.width = max(12, min(trees.outer_size.width + step,
+                                             max(self.size.width - 20, 12)))
+
     def action_reconnect(self) -> None:
         """Now, rather than at the next try: a dropped link, or a session never reached."""
         supervisor = self.current.supervisor
@@ -515,10 +506,7 @@ class FleetApp(KeyOrder):
         if member.unavailable() is not None:
             self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
             return
-        self._run_elsewhere("attach", member.address, "--tab", tab)
-
-    def _run_elsewhere(self, *args: str) -> None:
-        """`tuilaunch ARGS` on this terminal, this screen suspended until it ends."""
+        args = ("attach", member.address, "--tab", tab)
         try:
             with self.suspend():
                 subprocess.run([sys.executable, "-m", "tuilaunch", *args])
@@ -548,15 +536,15 @@ class FleetApp(KeyOrder):
         if action == "black_box":
             self.run_worker(panels.recordings.black_box_now(), group="recording",
                             exit_on_error=False)
-        elif process is not None and action == "node_topics":
-            panels.topics.show_node(self._node_name(process))
+            return
+        if process is None:
+            return
+        node = member.store.node_name(member.session.plan, process)  # its ROS name
+        if action == "node_topics":
+            panels.topics.show_node(node)
             self.action_tab("topics")
-        elif process is not None:
-            self.log_levels[id(member)].ask(process, self._node_name(process))
-
-    def _node_name(self, process: str) -> str:
-        """The ROS name of a process's node in the selected session."""
-        return self.current.store.node_name(self.current.session.plan, process)
+        else:
+            self.log_levels[id(member)].ask(process, node)
 
     def action_quit_fleet(self) -> None:
         """Leaves every session running: a fleet view is a watcher, each robot's launch its

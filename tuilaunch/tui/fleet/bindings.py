@@ -14,16 +14,17 @@ from textual.widgets import Static
 from ..inspector import INSPECTOR_BINDINGS
 from ..keyboard import KEYBOARD_BINDINGS
 from ..screens.dialogs import HelpScreen
+from ..screens.output_panel import PANE_BINDINGS
 
 BINDINGS: list[BindingType] = [
     *KEYBOARD_BINDINGS,  # i, g, c: the selected session's keyboard (FleetApp.action_keyboard)
-    Binding("1", "tab('nodes')", "Nodes", show=False,
+    Binding("1", "tab('nodes')", "Nodes",
             tooltip="The sessions' trees and the selected node's output"),
-    Binding("2", "tab('args')", "Args", show=False,
+    Binding("2", "tab('args')", "Args",
             tooltip="The selected session's launch arguments: edit, F5 applies"),
-    Binding("3", "tab('services')", "Services", show=False,
+    Binding("3", "tab('services')", "Services",
             tooltip="The selected session's services: call one"),
-    Binding("4", "tab('params')", "Params", show=False,
+    Binding("4", "tab('params')", "Params",
             tooltip="The selected session's nodes' parameters: get and set them"),
     Binding("5", "tab('topics')", "Topics", show=False,
             tooltip="The selected session's topics, rates and QoS, echo"),
@@ -31,6 +32,7 @@ BINDINGS: list[BindingType] = [
     Binding("r", "command('restart')", "Restart",
             tooltip="Restart the selected node or group"),
     Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+    *PANE_BINDINGS,  # the single TUI's pane keys, on the selected session's pane
     Binding("right_curly_bracket", "jump(1)", "Next session", show=False,
             tooltip="The next session's root (as k9s switches context)"),
     Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
@@ -41,7 +43,9 @@ BINDINGS: list[BindingType] = [
     Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
             tooltip="Deactivate an active, clean up an inactive lifecycle node"),
     *INSPECTOR_BINDINGS,  # o, L, b: on the selected session (FleetApp.action_inspector)
-    Binding("O", "open_session", "Open",
+    # not in the footer: the header says it (`O: this one in full`), and the single TUI's
+    # keys come first there (a tablet's browser shows Type to Filter whole)
+    Binding("O", "open_session", "Open", show=False,
             tooltip="The selected session in the single-session TUI, with every key of "
             "one session (d there comes back)"),
     Binding("f5", "apply", "Apply", show=False,
@@ -49,23 +53,6 @@ BINDINGS: list[BindingType] = [
             "file as it is now"),
     Binding("R", "reconnect", "Reconnect", show=False,
             tooltip="Try the selected session's link again now"),
-    # the pane's keys, as the single-session TUI's NodesView binds them
-    Binding("slash", "pane('search')", "Search", show=False,
-            tooltip="Highlight a text in the pane; n / N jump"),
-    Binding("l", "pane('cycle_level')", "Level", show=False,
-            tooltip="Show only lines from this ROS level up"),
-    Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
-    Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
-    Binding("backslash", "pane('filter')", "Filter", show=False,
-            tooltip="Show only lines containing a text"),
-    Binding("n", "pane('next_match')", "Next", show=False),
-    Binding("N", "pane('previous_match')", "Prev", show=False),
-    Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
-    Binding("f", "pane('raw')", "Format", show=False,
-            tooltip="Lines as printed, or compact"),
-    Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
-    Binding("escape", "pane('clear_search')", "Clear", show=False,
-            tooltip="Clear the search"),
     Binding("question_mark,f1", "help", "Help", tooltip="These keys"),
     Binding("q", "quit_fleet", "Quit (detach)",
             tooltip="Leave: every session runs on (tuilaunch stop stops them)"),
@@ -88,7 +75,9 @@ class FleetHelp(HelpScreen):
             keys = binding.key.replace("backslash", "\\").replace("slash", "/").replace(
                 "question_mark", "?").replace("right_square_bracket", "]").replace(
                 "left_square_bracket", "[").replace(",", ", ")
-            keys = keys.replace("right_curly_bracket", "}").replace("left_curly_bracket", "{")
+            keys = keys.replace("right_curly_bracket", "}").replace(
+                "left_curly_bracket", "{").replace("less_than_sign", "<").replace(
+                "greater_than_sign", ">")
             rows.append(f"  {keys:<9} {binding.tooltip or binding.description}")
         with VerticalScroll():
             yield Static("\n".join(rows))

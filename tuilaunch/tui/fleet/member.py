@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
 from dataclasses import dataclass, field
+from typing import Any
 
 from rich.text import Text
 
@@ -121,6 +122,17 @@ class Member:
             return "reconnecting (R: now)"
         last = port.lost_reason or ""
         return words + (f", last: {last}" if last and last not in (port.link_lost or "") else "")
+
+    def tell_shown(self) -> Coroutine[Any, Any, None] | None:
+        """The call telling the session whose lines its pane shows (all for all nodes),
+        when it must be told: as the single TUI, only over a link (a session here sends
+        its lines to a screen at its drain rate, which costs no link)."""
+        supervisor = self.supervisor
+        if supervisor is None or supervisor.host is None or self.ended or \
+                supervisor.link_lost is not None:
+            return None
+        shown = self.pane.view.process
+        return None if shown == supervisor.only else supervisor.show(shown)
 
     def refresh_root(self) -> None:
         label = self.root_label()

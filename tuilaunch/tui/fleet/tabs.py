@@ -26,6 +26,7 @@ from ...engine.run.events import Echo, Event, PlotSamples, Rates, Relaunched
 from ..arguments import ArgsTab
 from ..keyboard import NodeKeyboard
 from ..nodes.commands import SelectionCommands
+from ..nodes.gaps import GapReader
 from ..recording import Recordings
 from ..screens.fields import Field
 from ..screens.params_panel import ParamsPanel
@@ -65,6 +66,9 @@ class SessionPanels:
                                           who=member.label)
         member.keyboard = NodeKeyboard(host)
         self.recordings = Recordings(host, ask)  # `b`: its black box written
+        # what its link did not send (`T`, `f`: stamps), read back; said naming it
+        self.gaps = GapReader(member.store, member.pane, lambda: host.engine,
+                              lambda: member.supervisor, host.notify)
 
     def panel(self, tab: str) -> Widget:
         return {"args": self.args, "services": self.services, "params": self.params,

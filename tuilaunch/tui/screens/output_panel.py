@@ -12,7 +12,7 @@ from rich.cells import cell_len
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
-from textual.binding import Binding
+from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import Static
@@ -419,28 +419,33 @@ class OutputPanel(Vertical):
         self._not_read(read)
 
 
+PANE_BINDINGS: list[BindingType] = [
+    Binding("slash", "pane('search')", "Search", tooltip="Highlight a text; n / N jump"),
+    Binding("n", "pane('next_match')", "Next", show=False),
+    Binding("N", "pane('previous_match')", "Prev", show=False),
+    Binding("l", "pane('cycle_level')", "Level",
+            tooltip="Show only lines from this ROS level up"),
+    Binding("backslash", "pane('filter')", "Filter",
+            tooltip="Show only lines containing a text"),
+    Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
+    Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
+    Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
+    Binding("f", "pane('raw')", "Format", show=False,
+            tooltip="Lines as printed, or compact"),
+    Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
+    Binding("y", "pane('copy')", "Copy", show=False, tooltip="Copy this pane to the clipboard"),
+    Binding("escape", "pane('clear_search')", "Clear", show=False),
+    Binding("less_than_sign", "resize(-4)", "Narrower tree", show=False),
+    Binding("greater_than_sign", "resize(4)", "Wider tree", show=False),
+]
+"""The output pane's keys, wherever the focus is in the Nodes view: NodesView binds them, the
+fleet view too (each on the selected session's pane)."""
+
+
 class NodesView(Horizontal):
     """The tree beside the output pane: the pane's keys work wherever the focus is."""
 
-    BINDINGS = [
-        Binding("slash", "pane('search')", "Search", tooltip="Highlight a text; n / N jump"),
-        Binding("n", "pane('next_match')", "Next", show=False),
-        Binding("N", "pane('previous_match')", "Prev", show=False),
-        Binding("l", "pane('cycle_level')", "Level",
-                tooltip="Show only lines from this ROS level up"),
-        Binding("backslash", "pane('filter')", "Filter",
-                tooltip="Show only lines containing a text"),
-        Binding("G", "pane('follow')", "Follow", show=False, tooltip="Back to the newest line"),
-        Binding("z", "pane('wrap')", "Wrap", show=False, tooltip="Wrap long lines"),
-        Binding("T", "pane('time')", "Time", show=False, tooltip="Show timestamps"),
-        Binding("f", "pane('raw')", "Format", show=False,
-                tooltip="Lines as printed, or compact"),
-        Binding("w", "pane('save')", "Save", show=False, tooltip="Write this pane to a file"),
-        Binding("y", "pane('copy')", "Copy", show=False, tooltip="Copy this pane to the clipboard"),
-        Binding("escape", "pane('clear_search')", "Clear", show=False),
-        Binding("less_than_sign", "resize(-4)", "Narrower tree", show=False),
-        Binding("greater_than_sign", "resize(4)", "Wider tree", show=False),
-    ]
+    BINDINGS = PANE_BINDINGS
 
     tree_width: int | None = None  # None: adapts to the terminal's width
     stacked = False
