@@ -25,7 +25,7 @@ from ...client.port import LaunchPort
 from ...engine.run.events import Event
 from ..output_store import Line, OutputStore
 from ..screens.output_panel import NodesView, OutputPanel
-from ..screens.tree_panel import LaunchTree, RowData
+from ..screens.tree_panel import LaunchTree, RowData, RowKind
 from ..screens.units import short_bytes, spark
 from .commands import SelectionCommands
 from .events import Batch, NodeEvents
@@ -149,7 +149,7 @@ class NodesTab(Vertical):
 
     def selected_process(self) -> str | None:
         node = self.launch_tree.cursor_node
-        if node is None or node.data is None or node.data.kind != "process":
+        if node is None or node.data is None or node.data.kind != RowKind.PROCESS:
             return None
         return node.data.ref
 
@@ -165,9 +165,9 @@ class NodesTab(Vertical):
         apply change with it)."""
         data = event.node.data
         self.update_detail()
-        if data is not None and data.kind == "all":
+        if data is not None and data.kind == RowKind.ALL:
             self.pane.show_view(None)
-        elif data is not None and data.kind == "process":
+        elif data is not None and data.kind == RowKind.PROCESS:
             self.pane.show_view(data.ref)
 
     def update_detail(self) -> None:
