@@ -1,16 +1,16 @@
 """The output panes as a user reads them, against real processes: tabs line up as in a
-terminal, a scrolled-back view holds still under a flood, the pane's habits (follow, Esc,
-an empty result, a status that fits), and typing into a node that prompts without a
-newline."""
+terminal, a scrolled-back view holds still under a flood, a respawn called off, typing into
+a node that prompts without a newline, long lines kept whole.
+
+The pane's habits over a given stream of lines (an empty result, Esc, a group's stop said)
+are tested over an in-memory session in tests/unit/test_app_output_habits.py, and a long
+failure reason read whole at 80 columns in tests/unit/test_app_tree.py."""
 
 from __future__ import annotations
 
-import os
 import re
-import signal
 
 from tuilaunch.tui.app import TuiLaunchApp, make_app
-from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.output_panel import OutputPanel
 
 from .terminal_harness import PROGRAMS
@@ -47,10 +47,17 @@ def rows(app: TuiLaunchApp) -> list[str]:
 
 
 async def select(app: TuiLaunchApp, pilot, process: str) -> None:
+    """The process's row selected, its pane shown; selected again should the tree be drawn
+    anew meanwhile (its rows come with the plan the session's server sends)."""
     tree = app.launch_tree
-    await until(pilot, lambda: process in tree.rows)
-    tree.move_cursor(tree.rows[process])
-    await until(pilot, lambda: panel_of(app).view.process == process)
+
+    def on_its_row() -> bool:
+        node = tree.rows.get(process)
+        if node is not None and tree.cursor_node is not node:
+            tree.move_cursor(node)
+        return panel_of(app).view.process == process
+
+    await until(pilot, on_its_row)
 
 
 # --- tabs ---------------------------------------------------------------------------------
@@ -105,7 +112,8 @@ async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp
         assert all("line " in r for r in held)
         # more than two scrollbacks' worth arrive below: what the user reads stays
         await until(pilot, lambda: panel.unseen > 1200)
-        await pilot.pause(0.6)  # past a repaint
+        arrived = panel.unseen
+        await until(pilot, lambda: panel.unseen > arrived + 500)  # past a repaint or two
         assert rows(app) == held
         status = str(panel._status.render())
         assert " new" in status and "(G" in status
@@ -121,8 +129,8 @@ async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp
         assert on_screen
         for step in range(2, 5):
             await pilot.press("n")
-            await pilot.pause(0.3)
-            assert f"/00 of {step}/{count}" in str(panel._status.render())
+            await until(pilot, lambda step=step: f"/00 of {step}/{count}"
+                        in str(panel._status.render()))
         # down past the last held line: what came meanwhile follows on, after a line
         # saying how many did not fit aside
         await pilot.press("escape")
@@ -151,88 +159,7 @@ async def test_a_scrolled_back_view_holds_still_under_a_flood_until_g(write, tmp
         await until(pilot, lambda: number_of(rows(app)[-1]) > newest)
 
 
-# --- the pane's habits ---------------------------------------------------------------------
-
-
-async def test_an_empty_filter_says_so_and_esc_shows_all_again(write, tmp_path):
-    path = launch(write, ("tab_printer", []))
-    async with launched(path, {}, tmp_path, (80, 24)) as (app, pilot):
-        await select(app, pilot, "tab_printer-1")
-        await until(pilot, lambda: any("end" in r for r in rows(app)))
-        panel = panel_of(app)
-        await pilot.press("backslash", *"zzz", "enter")
-        await until(pilot, lambda: rows(app)[0] == "no line matches 'zzz' (esc: show all)")
-        assert "only 'zzz'" in str(panel._status.render())
-        await pilot.press("escape")
-        await until(pilot, lambda: any("PID" in r for r in rows(app)))
-        assert "only" not in str(panel._status.render())
-        # the level filter says its own word; a search that finds nothing says so too
-        await pilot.press("l", "l", "l")
-        await until(pilot, lambda: rows(app)[0] == "no line at ERROR or above (l: next level)")
-        await pilot.press("l", "l")
-        await until(pilot, lambda: any("PID" in r for r in rows(app)))
-        await pilot.press("slash", *"qqq", "enter")
-        await until(pilot, lambda: "/qqq no line matches" in str(panel._status.render()))
-        assert any("no line matches 'qqq'" in n.message for n in app._notifications)
-        assert any("PID" in r for r in rows(app))  # a search hides nothing
-
-
-async def test_a_long_failure_reason_is_read_whole_at_80_columns(write, tmp_path):
-    missing = "no-such-program-" + "x" * 60
-    path = write(f"""
-        from launch import LaunchDescription
-        from launch.actions import ExecuteProcess
-        def generate_launch_description():
-            return LaunchDescription([ExecuteProcess(name='absent', cmd=[{missing!r}])])
-        """)
-    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
-        await select(app, pilot, "absent-1")
-        await until(pilot, lambda: app.supervisor is not None
-                    and app.supervisor.states.get("absent-1") == "failed")
-        # the detail line wraps instead of cutting the reason at the screen's edge
-        detail = app.query_one("#detail")
-        await until(pilot, lambda: missing in str(detail.render()))
-        await until(pilot, lambda: detail.size.height >= 2)  # once the layout follows
-        # so does tuilaunch's own line in the pane: every part of it is on screen
-        await until(pilot, lambda: "failed:" in "".join(rows(app)))
-        assert missing in "".join(r.strip() for r in rows(app))
-
-
-STUBBORN = ("import signal, time\n"
-            "signal.signal(signal.SIGINT, signal.SIG_IGN)\n"
-            "print('ready', flush=True)\n"
-            "time.sleep(600)\n")
-
-
-async def test_a_group_being_stopped_says_its_nodes_are_stopping(write, tmp_path):
-    path = write(f"""
-        import sys
-        from launch import LaunchDescription
-        from launch.actions import ExecuteProcess
-        def generate_launch_description():
-            return LaunchDescription([
-                ExecuteProcess(name=name, cmd=[sys.executable, '-c', {STUBBORN!r}],
-                               sigterm_timeout='600') for name in ('left', 'right')])
-        """)
-    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
-        tree = app.launch_tree
-        await until(pilot, lambda: app.supervisor is not None and list(
-            app.supervisor.states.values()) == ["running", "running"])
-        tree.move_cursor(tree.root)
-        detail = app.query_one("#detail")
-        await until(pilot, lambda: "2 of 2 processes running" in str(detail.render()))
-        await pilot.press("s")
-        await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
-        await pilot.press("y")
-        # they ignore SIGINT: the stop lasts, and the row says so rather than "0 running"
-        await until(pilot, lambda: "0 of 2 processes running, 2 stopping"
-                    in str(detail.render()))
-        assert app.supervisor is not None
-        for pid in list(app.supervisor.pids.values()):
-            os.kill(pid, signal.SIGTERM)  # what the stop's next step sends
-        await until(pilot, lambda: not app.supervisor.pids)
-        await until(pilot, lambda: "0 of 2 processes running" in str(detail.render())
-                    and "stopping" not in str(detail.render()))
+# --- a respawn called off -----------------------------------------------------------------
 
 
 async def test_s_on_a_node_waiting_to_respawn_keeps_it_down(write, tmp_path):

@@ -1,12 +1,16 @@
-"""The TUI over long sessions and slow links: panes never freeze, the terminal gets only what
-changed, typed keys are applied in order, values the plan cannot use are refused, 80x24 stays
-readable, process events reach the panes, follow holds, and the keys work from everywhere."""
+"""The TUI over long sessions and slow links, where it takes real processes: floods keep the
+panes moving, the terminal gets only what changed, keys written to a real terminal in one
+write keep their order, a relaunch's exit and a group's restart as the session runs them,
+the Params tab over a node's own parameters, a stubborn process killed at once.
+
+The App's own side of these (a scrollback, repaints, keys in one read, refused values,
+80x24, process events in the panes, follow, the tab keys) is tested over an in-memory
+session in tests/unit/test_app_long_sessions.py."""
 
 from __future__ import annotations
 
 import os
 import pty
-import re
 import select
 import subprocess
 import sys
@@ -15,7 +19,6 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from textual import events
 from textual.widgets import DataTable
 
 from tuilaunch.tui.app import TuiLaunchApp
@@ -58,51 +61,7 @@ def last_number(app: TuiLaunchApp) -> int:
     return int(rows[-1].rsplit("line ", 1)[1]) if rows else -1
 
 
-def burst(app: TuiLaunchApp, *keys: str) -> None:
-    """Keys as one read from the terminal delivers them: posted together, nothing run in
-    between (Pilot.press waits after each key, which hides ordering faults)."""
-    for key in keys:
-        char = key if len(key) == 1 else None
-        app.post_message(events.Key(key, char))
-
-
 # --- 1. the pane never freezes ---------------------------------------------------------
-
-
-async def test_soak_a_small_scrollback_keeps_showing_the_newest_lines(write, tmp_path):
-    """scrollback 100 and 1500 lines: the pane must show the newest line all along, not
-    stop at the 100th."""
-    # 7.5 s of output: the pane repaints about once a second while lines pour in, so even
-    # on a loaded machine it is seen to move several times after it is full
-    path = counter_file(write, 1500, 0.005)
-    async with launched(str(path), {}, tmp_path, (80, 24), scrollback=100) as (app, pilot):
-        await pilot.press("down", "down")  # the counter's own pane
-        assert panel_of(app).view.process == "counter0-1"
-        seen = []
-        deadline = time.monotonic() + 60
-        while len(app.store.lines(View("counter0-1"))) < 100 or last_number(app) < 1499:
-            assert time.monotonic() < deadline, f"pane stuck at {last_number(app)}"
-            await pilot.pause(0.2)
-            seen.append(last_number(app))
-        # it kept moving past the scrollback, and shows the very last line
-        assert max(seen) == 1499 and len({n for n in seen if n > 100}) >= 3
-        assert len(panel_of(app).line_view.lines) == 100
-        assert panel_of(app).line_view.following
-
-
-async def test_a_search_past_the_scrollback_says_where_the_older_lines_are(write, tmp_path):
-    """A search for a line the pane no longer holds does not just say "no line matches":
-    it says how many lines the pane keeps and that the log files have them all."""
-    path = counter_file(write, 300, 0)
-    async with launched(str(path), {}, tmp_path, (80, 24), scrollback=100) as (app, pilot):
-        await pilot.press("down", "down")  # the counter's own pane
-        await until(pilot, lambda: last_number(app) == 299)
-        assert len(panel_of(app).line_view.lines) == 100  # lines 200 to 299
-        panel_of(app).set_search("line 3")  # lines 3 and 30-39: only in the log file now
-        await pilot.pause()
-        said = [n.message for n in app._notifications]
-        assert said[-1].startswith("no line matches 'line 3' in the 100 lines this pane "
-                                   "keeps; every line is in the log files")
 
 
 async def test_four_flooders_keep_the_all_nodes_pane_moving(write, tmp_path):
@@ -206,40 +165,7 @@ def test_an_unchanging_screen_sends_almost_nothing_to_the_terminal(write, tmp_pa
         stop_pty(proc, master)
 
 
-async def test_the_pane_repaints_only_when_its_lines_change(write, tmp_path):
-    path = counter_file(write, 3, 0.01)
-    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
-        await until(pilot, lambda: last_number(app) == 2)
-        await pilot.pause(1.5)
-        view = panel_of(app).line_view
-        before = view.repaints
-        await pilot.pause(2.0)
-        assert view.repaints == before  # nothing new: nothing drawn
-
-
 # --- 3. keys that arrive together --------------------------------------------------------
-
-
-async def test_keys_in_one_read_are_applied_in_order_and_f5_applies_what_was_typed(tmp_path):
-    async with tui(tmp_path, "robot:=tuik", "services:=false", "listener:=false",
-                   size=(80, 24)) as (app, pilot):
-        await until(pilot, lambda: states(app).get("talker-1") == "running")
-        talker = pids(app)["talker-1"]
-        await pilot.press("2")
-        field = app.query_one("#arg-rate", Field)
-        field.focus()
-        await pilot.pause()
-        # 26 backspace+letter pairs in one read: every letter replaces the one before
-        burst(app, "end", *[k for letter in "abcdefghijklmnopqrstuvwxyz" for k in ("backspace",
-                                                                               letter)])
-        await until(pilot, lambda: field.value == "2.z")
-        # ctrl+u, 3, F5 in one read: the node gets rate 3, not an empty value
-        burst(app, "ctrl+u", "3", "f5")
-        await until(pilot, lambda: app.session.arguments.get("rate") == "3")
-        await until(pilot, lambda: states(app)["talker-1"] == "running"
-                    and pids(app).get("talker-1") != talker)
-        await until(pilot, lambda: any('"rate": 3' in line for line in
-                                       app.store.text(View("talker-1"))))
 
 
 def test_keys_written_to_a_real_terminal_in_one_write_keep_their_order(write, tmp_path):
@@ -272,50 +198,6 @@ def test_keys_written_to_a_real_terminal_in_one_write_keep_their_order(write, tm
 # --- 4. values the plan cannot use -------------------------------------------------------
 
 
-async def test_the_preview_refuses_bad_names_and_f5_applies_nothing(tmp_path):
-    async with tui(tmp_path, "robot:=tuin", "services:=false") as (app, pilot):
-        await until(pilot, lambda: states(app).get("talker-1") == "running")
-        talker = pids(app)["talker-1"]
-        await pilot.press("2")
-        preview = app.query_one("#args-preview")
-        for name, value, why in (("robot", "bad ns!", "namespace '/bad ns!'"),
-                                 ("robot", "9lives", "namespace '/9lives'")):
-            field = app.query_one(f"#arg-{name}", Field)
-            field.value = value
-            await pilot.pause()
-            assert preview.has_class("error") and why in str(preview.render()), value
-            await pilot.press("f5")
-            await pilot.pause(0.3)
-            assert app.session.arguments == {"robot": "tuin", "services": "false"}
-            assert pids(app)["talker-1"] == talker
-            field.value = app.session.arguments.get(name, "2.0")
-            await pilot.pause()
-
-
-async def test_an_int_field_warns_of_a_fraction_and_applies_it_as_ros2_launch_would(
-        write, tmp_path):
-    path = write("""
-        from simple_launch import SimpleLauncher
-        def generate_launch_description():
-            sl = SimpleLauncher()
-            sl.declare_arg('copies', 1, description='how many')
-            sl.node('tuilaunch_demos', 'talker', name='t')
-            return sl.launch_description()
-        """)
-    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
-        await pilot.press("2")
-        field = app.query_one("#arg-copies", Field)
-        field.focus()
-        await pilot.press("end", "backspace", *"1.5")
-        assert field.value == "1.5"  # not 15: the point is kept
-        preview = app.query_one("#args-preview")
-        assert "Warning: argument 'copies' = '1.5' is not a whole number like its default 1" \
-            in str(preview.render())
-        assert not preview.has_class("error")
-        await pilot.press("f5")  # launch arguments are strings: ros2 launch takes copies:=1.5
-        await until(pilot, lambda: app.session.arguments.get("copies") == "1.5")
-
-
 async def test_a_node_that_exits_1_after_a_relaunch_shows_failed_with_its_code(write, tmp_path):
     path = write("""
         from launch import LaunchDescription
@@ -338,167 +220,7 @@ async def test_a_node_that_exits_1_after_a_relaunch_shows_failed_with_its_code(w
         assert "1 failed" in str(app.query_one("#status").render())
 
 
-# --- 5. readable at 80x24 ------------------------------------------------------------------
-
-
-async def test_at_80x24_the_message_is_on_screen_and_the_split_adapts(tmp_path):
-    async with tui(tmp_path, "robot:=tuiw", "services:=false", size=(80, 24)) as (app, pilot):
-        tree = app.query_one(LaunchTree)
-        assert 22 <= tree.outer_size.width <= 30
-        await pilot.press("down", "down", "down")
-        assert panel_of(app).view.process == "talker-1"
-        await until(pilot, lambda: any(r.startswith('I Publishing: "tuiw says hi')
-                                       for r in panel_of(app).line_view.visible_text()))
-        width = tree.outer_size.width
-        await pilot.press("greater_than_sign")
-        await pilot.pause()
-        assert tree.outer_size.width == width + 4
-        await pilot.press("less_than_sign", "less_than_sign")
-        await pilot.pause()
-        assert tree.outer_size.width == width - 4
-        # timestamps on a toggle, the full line as printed on another
-        await pilot.press("T")
-        await until(pilot, lambda: re.match(r"\d\d:\d\d:\d\d\.\d{3} I Publishing",
-                                            panel_of(app).line_view.visible_text()[-1]))
-        await pilot.press("T", "f")
-        await until(pilot, lambda: panel_of(app).line_view.visible_text()[-1].startswith(
-            "[INFO] ["))
-
-
-async def test_the_split_is_wider_on_a_wider_terminal(write, tmp_path):
-    async with launched(str(write(QUIET)), {}, tmp_path, (120, 40)) as (app, pilot):
-        await pilot.pause()
-        assert app.query_one(LaunchTree).outer_size.width == 42
-
-
-async def test_wrap_shows_a_long_line_whole(write, tmp_path):
-    path = write("""
-        from launch import LaunchDescription
-        from launch.actions import ExecuteProcess
-        def generate_launch_description():
-            return LaunchDescription([ExecuteProcess(name='long', cmd=[
-                'sh', '-c', 'echo start-' + 'x' * 150 + '-end; sleep 600'])])
-        """)
-    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
-        await pilot.press("down", "down")
-        view = panel_of(app).line_view
-        await until(pilot, lambda: any("start-" in r for r in view.visible_text()))
-        assert not any("-end" in r for r in view.visible_text())
-        await pilot.press("z")
-        rows = view.visible_text()
-        assert any("-end" in r for r in rows) and "wrap" in str(
-            app.query_one("#output-status").render())
-
-
-# --- 6. process events in the panes ---------------------------------------------------------
-
-
-async def test_a_failed_nodes_pane_says_how_it_died_and_its_reason_is_on_screen(write,
-                                                                              tmp_path):
-    path = write("""
-        from launch import LaunchDescription
-        from launch.actions import ExecuteProcess
-        def generate_launch_description():
-            return LaunchDescription([
-                ExecuteProcess(name='crash', cmd=['sh', '-c', 'sleep 0.2; exit 3']),
-                ExecuteProcess(name='absent', cmd=['no-such-command-tui']),
-                ExecuteProcess(name='fine', cmd=['sleep', '600'])])
-        """)
-    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
-        await until(pilot, lambda: "failed" in row_text(app, "crash-1"))
-        crash = app.store.text(View("crash-1"))
-        assert any(re.search(r"process started with pid \[\d+\]", line) for line in crash)
-        assert any(re.search(r"process has died \[pid \d+, exit code 3\]", line)
-                   for line in crash)
-        everyone = app.store.text(View())
-        assert any("[crash-1] process has died" in line for line in everyone)
-        await pilot.press("down", "down")  # all nodes, then the crash
-        assert panel_of(app).view.process == "crash-1"
-        await until(pilot, lambda: any("process has died" in r
-                                       for r in panel_of(app).line_view.visible_text()))
-        detail = str(app.query_one("#detail").render())
-        assert "failed" in detail and "exit code 3" in detail
-        await pilot.press("down")
-        await until(pilot, lambda: "not found" in str(app.query_one("#detail").render()))
-        assert any("failed:" in line for line in app.store.text(View("absent-2")))
-        await pilot.press("down", "s")  # the operator stops `fine`: a stop, not a death
-        await until(pilot, lambda: any("process stopped [pid" in line
-                                       for line in app.store.text(View("fine-3"))))
-        assert not any("process has died" in line for line in app.store.text(View("fine-3")))
-        assert "failed" not in row_text(app, "fine-3")
-
-
-async def test_action_rows_never_read_pid_none(tmp_path):
-    async with tui(tmp_path, "robot:=tuia", "listener:=false") as (app, pilot):
-        await until(pilot, lambda: states(app).get("set_parameters-1") == "done")
-        await until(pilot, lambda: "done" in row_text(app, "set_parameters-1"))
-        assert "pid None" not in row_text(app, "set_parameters-1")
-
-
-# --- 7. tab keys from fields --------------------------------------------------------------
-
-
-async def test_escape_leaves_any_field_and_digits_then_switch_tabs(tmp_path):
-    async with tui(tmp_path, "robot:=tuit", "services:=false", size=(80, 24)) as (app, pilot):
-        await pilot.press("2")
-        field = app.query_one("#arg-rate", Field)
-        field.focus()
-        await pilot.pause()
-        burst(app, "end", "1")
-        await until(pilot, lambda: field.value == "2.01")
-        assert app.tabs.active == "args"  # a digit is typed
-        field.value = "2.0"
-        burst(app, "escape", "3")
-        await until(pilot, lambda: app.tabs.active == "services")
-        assert field.value == "2.0"
-        # the tab shows its list, not a text field: the tab keys and q work at once
-        assert app.focused is app.query_one("#svc-list")
-        burst(app, "escape", "4")
-        await until(pilot, lambda: app.tabs.active == "params")
-        burst(app, "escape", "1")
-        await until(pilot, lambda: app.tabs.active == "nodes")
-        assert isinstance(app.focused, LaunchTree), app.focused
-        await pilot.press("slash", *"abc")
-        burst(app, "escape", "2")
-        await until(pilot, lambda: app.tabs.active == "args")
-        assert panel_of(app).search == ""
-
-
-# --- 8. follow ----------------------------------------------------------------------------
-
-
-async def test_follow_holds_across_node_switches_resizes_and_a_cancelled_search(tmp_path):
-    async with tui(tmp_path, "robot:=tuif", "services:=false", "rate:=10",
-                   size=(80, 24)) as (app, pilot):
-        panel = panel_of(app)
-        await until(pilot, lambda: len(app.store.lines(View("talker-1"))) > 40)
-        view = panel.line_view
-
-        def at_newest() -> bool:
-            return view.visible_text()[-1].endswith(view.lines[-1].message)
-
-        await pilot.press("down", "down", "down")  # talker
-        assert view.following and panel.unseen == 0
-        await until(pilot, at_newest)
-        await pilot.press("up", "up")  # all nodes
-        assert view.following and panel.unseen == 0
-        await until(pilot, at_newest)
-        await pilot.press("slash", "escape")
-        assert view.following
-        await pilot.resize_terminal(100, 30)
-        await pilot.pause(1.2)
-        assert view.following and panel.unseen == 0
-        await until(pilot, at_newest)
-        # scrolled up: exact count of what arrived below, "1 new line" singular
-        view.focus()
-        await pilot.press("pageup")
-        assert not view.following
-        await until(pilot, lambda: panel.unseen > 0)
-        await pilot.press("G")
-        assert view.following and panel.unseen == 0
-
-
-# --- 9. group restart re-runs its actions; root stop asks ------------------------------------
+# --- 9. group restart re-runs its actions -------------------------------------------------
 
 
 async def test_restarting_a_group_reruns_its_set_parameters(tmp_path):
@@ -524,20 +246,6 @@ async def test_restarting_a_group_reruns_its_set_parameters(tmp_path):
 
 def _last_start(lines: list[str]) -> int:
     return max(i for i, line in enumerate(lines) if "process started" in line)
-
-
-async def test_stop_on_the_root_asks_first(tmp_path):
-    async with tui(tmp_path, "robot:=tuis", "services:=false") as (app, pilot):
-        await until(pilot, lambda: len(pids(app)) >= 3)
-        app.query_one(LaunchTree).focus()
-        await pilot.press("home")  # the root row
-        await pilot.press("s")
-        assert isinstance(app.screen, ConfirmScreen)
-        await pilot.press("n")
-        await pilot.pause(0.3)
-        assert len(pids(app)) >= 3
-        await pilot.press("s", "y")
-        await until(pilot, lambda: not pids(app))
 
 
 # --- 10. params "launch file" column for nodes named by their code --------------------------
@@ -593,23 +301,6 @@ async def test_lines_not_drawn_are_counted_in_the_status_not_written_as_warnings
 # --- 12. smaller things -----------------------------------------------------------------------
 
 
-async def test_descriptions_keep_brackets_and_the_current_match_stands_out(tmp_path):
-    async with tui(tmp_path, "robot:=tuim", "services:=false", "rate:=20") as (app, pilot):
-        await pilot.press("2")
-        helps = [str(s.render()) for s in app.query(".arg-help")]
-        assert any("talker publishing rate [Hz]" in h for h in helps)
-        await pilot.press("escape", "1")
-        await until(pilot, lambda: len(app.store.lines(View("talker-1"))) > 10)
-        await pilot.press("down", "down", "down", "slash", *"says", "enter")
-        view = panel_of(app).line_view
-        assert view.current_match is not None
-        current = view._text(view.current_match)
-        other = view._text(view.matches()[0] if view.matches()[0] != view.current_match
-                           else view.matches()[1])
-        assert any("yellow" in str(span.style) for span in current.spans)
-        assert not any("yellow" in str(span.style) for span in other.spans)
-
-
 async def test_a_second_q_while_a_stubborn_process_stops_offers_to_kill_it(write, tmp_path):
     path = write("""
         from launch import LaunchDescription
@@ -629,57 +320,6 @@ async def test_a_second_q_while_a_stubborn_process_stops_offers_to_kill_it(write
         await pilot.press("y")
         # well before the 30 s SIGTERM/SIGKILL timeouts: the kill was immediate
         await until(pilot, lambda: not pids(app), limit=25)
-
-
-def test_a_linux_console_gets_ascii_state_icons(monkeypatch, write, tmp_path):
-    import asyncio
-
-    monkeypatch.setenv("TERM", "linux")
-
-    async def scenario() -> None:
-        async with launched(str(write(QUIET)), {}, tmp_path, (80, 24)) as (app, pilot):
-            await until(pilot, lambda: "running" in row_text(app, "quiet-1"))
-            label = row_text(app, "quiet-1")
-            assert label.startswith("* ") and "●" not in label
-
-    asyncio.run(scenario())
-
-
-GATED = """
-from launch import LaunchDescription
-from launch.actions import ExecuteProcess
-def generate_launch_description():
-    code = ('import os, sys, time\\n'
-            'for i in range(31):\\n'
-            '    print(f"[INFO] [0.0] [counter]: line {{i}}", flush=True)\\n'
-            'while not os.path.exists("{gate}"):\\n'
-            '    time.sleep(0.05)\\n'
-            'print("[INFO] [0.0] [counter]: line 31", flush=True)\\n'
-            'time.sleep(600)\\n')
-    return LaunchDescription([ExecuteProcess(name='counter0', cmd=[{python!r}, '-c', code])])
-"""
-
-
-async def test_focus_shows_in_reverse_video_and_one_new_line_is_singular(write, tmp_path):
-    # the next line comes when the test says so: what the status counts is never a race
-    gate = tmp_path / "more"
-    path = write(GATED.format(gate=str(gate), python=sys.executable), "gated.py")
-    async with launched(str(path), {}, tmp_path, (80, 24)) as (app, pilot):
-        tree = app.query_one(LaunchTree)
-        await pilot.pause()
-        # the focused tree's cursor row is drawn in reverse video: visible with 8 colours
-        assert any(seg.style is not None and seg.style.reverse
-                   for seg in tree.render_line(0)._segments)
-        await pilot.press("down", "down")
-        await until(pilot, lambda: last_number(app) >= 30)
-        view = panel_of(app).line_view
-        view.focus()
-        await pilot.press("up")  # one line up: the newest is just below the pane
-        assert not view.following
-        status = app.query_one("#output-status")
-        assert "1 new line (G: follow)" in str(status.render())
-        gate.touch()  # one more arrives below
-        await until(pilot, lambda: "2 new lines (G: follow)" in str(status.render()))
 
 
 ONE_ARGUMENT = """
