@@ -147,7 +147,7 @@ def test_a_read_only_client_refuses_what_changes_and_asks_what_reads():
     changing = {op for op, cls in REQUESTS.items() if cls.changes is not None}
     assert changing == {"start", "stop", "restart", "shutdown", "kill", "apply",
                         "run_action", "transition", "typing", "input", "log_level",
-                        "params_load", "call_service", "params_set"}
+                        "params_load", "call_service", "params_set", "plan_shown"}
     for op in sorted(changing):
         with pytest.raises(ReadOnlyError, match=r"^read-only view: .* is refused$"):
             check_request(filled(REQUESTS[op]))

@@ -35,6 +35,7 @@ from ..vocabulary.requests import (
     Apply,
     Find,
     Kill,
+    PlanShown,
     ReadLog,
     ReadStamps,
     Restart,
@@ -56,7 +57,7 @@ from .clients import ClientQueue as ClientQueue
 from .keyboard import Keyboard
 from .launch_prints import LaunchPrints
 from .log_reader import LAUNCH_LOG, READ_LOG_LIMIT, read_log
-from .owner_gate import OwnerGate, PlanShown
+from .owner_gate import OwnerGate
 from .protocol import event_to_dict, version_fields
 from .resource_watch import ResourceWatch, usage_fields
 from .resources import Usage

@@ -170,6 +170,12 @@ class GetPlan(Request[Json], op="plan"):
 
 
 @dataclass(frozen=True)
+class PlanShown(Request[Json], op="plan_shown", changes="starting the launch"):
+    """The session's owner (the TUI of `tuilaunch FILE`) shows the plan the server sent: the
+    server starts the launch's processes now (session/owner_gate.py)."""
+
+
+@dataclass(frozen=True)
 class PreviewArguments(Request[Json], op="preview"):
     """What `apply` with these values would do."""
 
@@ -260,8 +266,8 @@ __all__ = [
     "REQUESTS", "Apply", "BlackBox", "BlackBoxWrite", "CallService", "EchoStart", "EchoStop",
     "ExternalEvent", "Find", "GetPlan", "HzMeasure", "HzRead", "HzWatch", "Input", "Json",
     "Kill", "LifecycleState", "LogLevel", "Nodes", "ParamsDescribe", "ParamsDump",
-    "ParamsGet", "ParamsLoad", "ParamsSet", "PlotFields", "PlotStart", "PlotStop",
-    "PreviewArguments", "ProcessStatus", "ReadLog", "ReadStamps", "RecordStart",
+    "ParamsGet", "ParamsLoad", "ParamsSet", "PlanShown", "PlotFields", "PlotStart",
+    "PlotStop", "PreviewArguments", "ProcessStatus", "ReadLog", "ReadStamps", "RecordStart",
     "RecordStop", "RecordTake", "Request", "Restart", "RunAction", "ServiceFields",
     "Services", "SetView", "ShareLines", "ShutdownLaunch", "Start", "Status", "StatusReply",
     "Stop", "Subscribe", "TakeKeys", "Topics", "Transition", "UnknownRequest", "WatchQos",
