@@ -1,7 +1,11 @@
-"""What a second hour of demanding use found in the TUI: a key typed for a node never
-becomes one of tuilaunch's commands when `i` cannot type; a stop or restart of many asks
-first; a respawn's wait counts down; a progress line rewritten with `\\r` shows as it
-stands."""
+"""What a second hour of demanding use found in the TUI, where it takes a real terminal or
+real processes: a line typed with `i` into a stopped node quits nothing; an operator's
+restart backs off from the file's delay again; a progress line rewritten with `\\r` shows
+as it stands.
+
+The App's own side (keys dropped while another client types, a respawn's countdown and a
+root restart's question, a service typed before the list came, the quit question at 40x10)
+is tested over an in-memory session in tests/unit/test_app_later_hours.py."""
 
 from __future__ import annotations
 
@@ -10,19 +14,13 @@ import os
 import time
 
 import pytest
-from textual.widgets import Input
 
-from tuilaunch.client.link import open_link
-from tuilaunch.engine.run.vocabulary.requests import TakeKeys
 from tuilaunch.tui.app import make_app
-from tuilaunch.tui.screens.dialogs import ConfirmScreen
-from tuilaunch.tui.screens.services_panel import ServicesPanel
 
-from .test_interact import LAUNCH, PROGRAMS, process
+from .test_interact import PROGRAMS
 from .test_interact_tui import pane, select
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
-from .test_tui import launched, states, tui, until
-from .test_tui_keys import burst
+from .test_tui import until
 from .test_tui_long_sessions import read_until, start_on_pty, stop_pty
 
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
@@ -68,41 +66,6 @@ def test_a_line_typed_with_i_into_a_stopped_node_quits_nothing(write, tmp_path):
         stop_pty(proc, master)
 
 
-def test_keys_typed_with_i_are_dropped_while_another_client_types(write):
-    """Another client has the node's keyboard: `i` is refused, and the keys typed with it
-    (`abc`: a is all nodes' output, c the command line) go nowhere, with one line."""
-    path = str(write(LAUNCH))
-    name, log_dir = detached_with(path, "lines-1")
-    other = open_link(name)
-    try:
-        other.request(TakeKeys(process="lines-1", on=True))
-
-        async def scenario() -> None:
-            app = make_app(path, {}, log_dir, session_name=name)
-            async with app.run_test(size=(120, 32)) as pilot:
-                await until(pilot, lambda: "ready" in pane(app, "lines-1"))
-                await select(pilot, app, "lines-1")
-                await pilot.pause()
-                shown = app.output_panel.view
-                burst(app, "i", *"abc", "s")
-                await until(pilot, lambda: any(
-                    "were not sent" in str(n.message) for n in app._notifications))
-                # the whole burst read and dropped
-                await until(pilot, lambda: time.monotonic() >= app.dropping_until)
-                assert app.keyboard.typing_to is None
-                assert app.output_panel.view == shown  # `a` did not switch to all output
-                assert not app.screen_stack[1:]  # `c` opened no command dialog
-                assert app.supervisor is not None
-                assert app.supervisor.states["lines-1"] == "running"  # `s` stopped nothing
-                await pilot.press("d")
-
-        asyncio.run(scenario())
-        assert process(name, "lines-1")["state"] == "running"
-    finally:
-        other.close()
-        tl("stop", name)
-
-
 RESPAWNING = """
 from launch import LaunchDescription
 from launch.actions import ExecuteProcess
@@ -114,40 +77,6 @@ def generate_launch_description():
         ExecuteProcess(name='quiet2', cmd=['sleep', '600']),
     ])
 """
-
-
-def test_a_respawn_wait_counts_down_and_r_on_the_root_asks(write):
-    path = str(write(RESPAWNING))
-    name, log_dir = detached_with(path, "quiet-2")
-
-    async def scenario() -> None:
-        app = make_app(path, {}, log_dir, session_name=name)
-        async with app.run_test(size=(120, 32)) as pilot:
-            tree = app.launch_tree
-            await until(pilot, lambda: tree.states.get("flaky-1") == "respawning")
-            await until(pilot, lambda: tree.details.get("flaky-1", "").startswith("(try "))
-            first = tree.details["flaky-1"]
-            # the row counts down: a later second shows fewer seconds left
-            await until(pilot, lambda: tree.states.get("flaky-1") == "respawning"
-                        and tree.details["flaky-1"] != first
-                        and tree.details["flaky-1"].startswith("(try "))
-            # r on the root asks, as s does; n restarts nothing
-            quiet = status(name)
-            before = {p["id"]: p["pid"] for p in quiet["processes"] if p["id"] != "flaky-1"}
-            tree.focus()
-            await pilot.press("home")
-            await pilot.press("r")
-            await until(pilot, lambda: isinstance(app.screen, ConfirmScreen))
-            assert "Restart all 3 processes" in app.screen.question
-            await pilot.press("n")
-            await until(pilot, lambda: not isinstance(app.screen, ConfirmScreen))
-            after = {p["id"]: p["pid"] for p in status(name)["processes"]
-                     if p["id"] != "flaky-1"}
-            assert after == before
-            await pilot.press("d")
-
-    asyncio.run(scenario())
-    tl("stop", name)
 
 
 def eventually(read, test, limit: float = 60.0):
@@ -233,21 +162,6 @@ def test_a_progress_line_shows_as_it_stands_while_it_is_rewritten(write, tmp_pat
     assert all(len(line) < 4000 for line in log.split(b"\n"))
 
 
-async def test_a_service_typed_with_the_tab_key_before_the_list_came_is_picked(tmp_path):
-    """`3/ena` Enter in one read, the first time the tab opens: the Enter waits for the
-    list (discovery takes a moment) and picks the first match, rather than being lost."""
-    async with tui(tmp_path, "robot:=tui6", "listener:=false") as (app, pilot):
-        await until(pilot, lambda: states(app).get("service_server-4") == "running")
-        burst(app, "3", "slash", *"tui6/enable", "enter")
-        await until(pilot, lambda: app.query_one(ServicesPanel))  # made as the tab shows
-        panel = app.query_one(ServicesPanel)
-        await until(pilot, lambda: panel.selected is not None, limit=60)
-        assert panel.selected == ("/tui6/enable", "std_srvs/srv/SetBool")
-        # the form is mounted after the pick: its field has the focus once it is there
-        await until(pilot, lambda: isinstance(app.focused, Input)
-                    and app.focused.id == "field-data")
-
-
 def test_f_shows_a_programs_own_colours_and_not_a_loggers_level_colour():
     from tuilaunch.tui.output_store import parse
     from tuilaunch.tui.screens.line_view import display_text
@@ -263,15 +177,3 @@ def test_f_shows_a_programs_own_colours_and_not_a_loggers_level_colour():
     assert logged.colored is None and logged.message == "hi"
 
 
-async def test_the_quit_dialog_fits_a_40_by_10_terminal(write, tmp_path):
-    async with launched(str(write(TYPED_TWO)), {}, tmp_path, (40, 10)) as (app, pilot):
-        await until(pilot, lambda: app.supervisor is not None
-                    and app.supervisor.states.get("quiet-2") == "running")
-        await pilot.press("q")
-        await until(pilot, lambda: type(app.screen).__name__ == "QuitScreen")
-        await pilot.pause()
-        for button in ("#stop", "#keep"):
-            region = app.screen.query_one(button).region
-            assert region.right <= 40 and region.bottom <= 10, (button, region)
-        await pilot.press("y")
-        await until(pilot, lambda: not app.supervisor.pids, limit=60)
