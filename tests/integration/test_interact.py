@@ -14,7 +14,8 @@ import os
 import signal
 import subprocess
 import sys
-import time
+from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -22,7 +23,7 @@ from tuilaunch.client.link import Link
 from tuilaunch.engine.run.session.session_dir import SessionError
 from tuilaunch.engine.run.vocabulary.requests import Input, Stop, Subscribe, TakeKeys
 
-from ..conftest import run_cli, run_headless, wait_for
+from ..conftest import run_cli, run_headless, session_folders, wait_for
 from .gdb_support import requires_gdb
 from .terminal_harness import PROGRAMS
 from .test_sessions import Terminal, runtime, status, tl  # noqa: F401  (runtime: a fixture)
@@ -55,11 +56,39 @@ def process(name: str, process_id: str) -> dict:
 
 
 def start(write) -> str:
-    name = tl(str(write(LAUNCH)), "--detach").stdout.strip()
+    return start_file(write(LAUNCH))
+
+
+def start_file(path: Path) -> str:
+    """A session of LAUNCH at `path`, once both readers are ready."""
+    name = tl(str(path), "--detach").stdout.strip()
     tl("wait", name, "lines-1", "running", "--timeout", "60")
     tl("wait", name, "keys-2", "running", "--timeout", "60")
     wait_for(lambda: "ready" in logs(name, "lines-1") and "ready" in logs(name, "keys-2"),
              what="both readers ready")
+    return name
+
+
+@pytest.fixture(scope="module")
+def shared_session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
+    """One session of LAUNCH for the tests that leave it as they found it (a refused
+    restart, a status read, a line typed and the keys given back): its name and folder."""
+    root = tmp_path_factory.mktemp("interact")
+    path = root / "test_launch.py"
+    path.write_text(LAUNCH)
+    with session_folders(root / "log") as folder:
+        name = start_file(path)
+        try:
+            yield name, folder
+        finally:
+            tl("stop", name, check=False)
+
+
+@pytest.fixture
+def shared(shared_session: tuple[str, Path], runtime, monkeypatch) -> str:  # noqa: F811
+    """The shared session's name, its folder this test's (in place of `runtime`'s)."""
+    name, folder = shared_session
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(folder))
     return name
 
 
@@ -155,8 +184,8 @@ def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_pla
     tl("stop", name)
 
 
-def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(write):
-    name = start(write)
+def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(shared):
+    name = shared
     tl("wait", name, "segv-3", "failed", "--timeout", "60")
     crashed = process(name, "segv-3")
     assert crashed["state"] == "failed"
@@ -173,7 +202,6 @@ def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(write):
                              text=True, timeout=60)
     assert by_hand.returncode == -11 or by_hand.returncode == 139
     assert "about to crash" in by_hand.stdout
-    tl("stop", name)
 
 
 def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
@@ -246,8 +274,8 @@ def test_a_respawning_node_left_under_a_tool_with_status_0_is_not_brought_back(w
     assert not process(name, "keeps-1")["command"][0] == "true"
     tl("stop", name)
 
-def test_a_prefix_that_is_not_a_program_changes_nothing(write):
-    name = start(write)
+def test_a_prefix_that_is_not_a_program_changes_nothing(shared):
+    name = shared
     before = process(name, "keys-2")
     done = run_cli("restart", name, "keys-2", "--prefix", "no-such-debugger --args")
     assert done.returncode == 2
@@ -258,7 +286,6 @@ def test_a_prefix_that_is_not_a_program_changes_nothing(write):
     bad_level = run_cli("restart", name, "keys-2", "--log-level", "loud")
     assert bad_level.returncode == 2 and "keys-2 is not a ROS node" in bad_level.stderr
     assert process(name, "keys-2")["pid"] == before["pid"]
-    tl("stop", name)
 
 
 NODES = """
@@ -271,6 +298,15 @@ def generate_launch_description():
         Node(executable='tl_listener', name='own', prefix='nice -n 1'),
     ])
 """
+
+TALKER = """
+from launch import LaunchDescription
+from launch_ros.actions import Node
+def generate_launch_description():
+    return LaunchDescription([Node(executable='tl_talker', name='talker')])
+"""
+"""One rclpy node: what the tests of a node's own command line need."""
+LISTENER = TALKER.replace("'tl_talker', name='talker'", "'tl_listener', name='listener'")
 
 NODE_PROGRAM = """\
 import sys
@@ -317,7 +353,7 @@ def test_launch_prefix_with_a_filter_shows_in_print_as_ros2_launch_would(write, 
 
 
 def test_log_level_is_appended_as_ros_args_and_kept_until_changed(write, nodes):
-    name = tl(str(write(NODES)), "--detach").stdout.strip()
+    name = tl(str(write(TALKER)), "--detach").stdout.strip()
     tl("wait", name, "talker-1", "running", "--timeout", "60")
     tl("restart", name, "talker-1", "--log-level", "DEBUG")
     command = process(name, "talker-1")["command"]
@@ -330,23 +366,31 @@ def test_log_level_is_appended_as_ros_args_and_kept_until_changed(write, nodes):
     tl("stop", name)
 
 
+PROBE = """
+import sys, time, rclpy
+rclpy.init()
+node = rclpy.create_node('probe')
+end = time.monotonic() + float(sys.argv[1])
+names = []
+while '/listener' not in names and time.monotonic() < end:
+    time.sleep(0.1)
+    names = [ns.rstrip('/') + '/' + nm for nm, ns in node.get_node_names_and_namespaces()]
+print(names)
+"""
+"""Prints the nodes it discovers once /listener is among them (or its time is up)."""
+
+
 def test_status_command_line_of_a_node_runs_it_by_hand(write, nodes):
-    name = tl(str(write(NODES)), "--detach").stdout.strip()
-    tl("wait", name, "listener-2", "running", "--timeout", "60")
-    line = process(name, "listener-2")["command_line"]
+    name = tl(str(write(LISTENER)), "--detach").stdout.strip()
+    tl("wait", name, "listener-1", "running", "--timeout", "60")
+    line = process(name, "listener-1")["command_line"]
     assert "__node:=listener" in line
     tl("stop", name)
     by_hand = subprocess.Popen(["sh", "-c", line], stdout=subprocess.DEVNULL,
                                stderr=subprocess.STDOUT, start_new_session=True)
     try:
-        deadline = time.monotonic() + 60
-        node_list = ""
-        while "/listener" not in node_list and time.monotonic() < deadline:
-            node_list = subprocess.run([sys.executable, "-c", (
-                "import rclpy, time; rclpy.init(); n = rclpy.create_node('probe'); "
-                "time.sleep(1.0); print([ns.rstrip('/') + '/' + nm for nm, ns in "
-                "n.get_node_names_and_namespaces()])")], capture_output=True, text=True,
-                timeout=60).stdout
+        node_list = subprocess.run([sys.executable, "-c", PROBE, "60"], capture_output=True,
+                                   text=True, timeout=120).stdout
         assert "/listener" in node_list
     finally:
         os.killpg(by_hand.pid, signal.SIGKILL)
@@ -361,10 +405,10 @@ def test_headless_keyboard_nodes_get_a_terminal_and_a_crash_is_an_error(write):
     assert "[ERROR] [segv-3]: process has died" in out
 
 
-def test_attach_type_opens_the_tui_typing_into_the_process(write):
+def test_attach_type_opens_the_tui_typing_into_the_process(shared):
     """`attach NAME --type PROCESS` (what a fleet's `i` runs): the TUI opens typing into
     it, by its name as by its id; ctrl+] gives the keys back."""
-    name = start(write)
+    name = shared
     terminal = Terminal("attach", name, "--type", "lines")
     try:
         terminal.read_until(b"typing to lines-1")
@@ -375,4 +419,4 @@ def test_attach_type_opens_the_tui_typing_into_the_process(write):
     finally:
         terminal.close()
     assert process(name, "lines-1")["state"] == "running"  # d left it running
-    tl("stop", name)
+    wait_for(lambda: status(name)["typing"] is None, what="the keyboard given back")

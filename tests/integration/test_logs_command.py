@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -44,18 +45,30 @@ def tl(*args: str) -> str:
     return done.stdout
 
 
-@pytest.fixture
-def session(tmp_path: Path) -> Iterator[str]:
-    (tmp_path / "life.launch.py").write_text(LAUNCH)
-    with session_folders(tmp_path / "log"):
-        name = tl(str(tmp_path / "life.launch.py"), "--detach", "--name", "life").strip()
-        for process, state in (("three-1", "failed"), ("segv-2", "failed"),
-                               ("counter-4", "running")):
-            tl("wait", name, process, state, "--timeout", "60")
-        wait_for(lambda: "respawn gives up" in tl("logs", name, "again-3"), what="2 tries")
-        wait_for(lambda: "line 50" in tl("logs", name, "counter-4"), what="50 lines")
+@contextmanager
+def life_session(root: Path) -> Iterator[str]:
+    """LAUNCH in a session of its own under `root`, once its story is told: three-1 and
+    segv-2 failed, again-3 respawned and gave up, counter-4 printed its 50 lines."""
+    (root / "life.launch.py").write_text(LAUNCH)
+    with session_folders(root / "log"):
+        name = tl(str(root / "life.launch.py"), "--detach", "--name", "life").strip()
+        try:
+            for process, state in (("three-1", "failed"), ("segv-2", "failed"),
+                                   ("counter-4", "running")):
+                tl("wait", name, process, state, "--timeout", "60")
+            wait_for(lambda: "respawn gives up" in tl("logs", name, "again-3"),
+                     what="2 tries")
+            wait_for(lambda: "line 50" in tl("logs", name, "counter-4"), what="50 lines")
+            yield name
+        finally:
+            run_cli("stop", name)
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
+    """One session for the tests that only read it (logs, wait): none changes it."""
+    with life_session(tmp_path_factory.mktemp("life")) as name:
         yield name
-        run_cli("stop", name)
 
 
 def test_logs_tell_starts_exits_signals_and_respawns(session):
@@ -81,27 +94,55 @@ def test_logs_tell_starts_exits_signals_and_respawns(session):
     assert "[counter-4] [INFO] [counter-4]" not in everything
 
 
-def test_a_restart_is_a_stop_asked_for_then_a_start(session):
-    tl("restart", session, "counter-4")
-    wait_for(lambda: tl("logs", session, "counter-4").count("process started") == 2,
-             what="the second start")
-    story = [line for line in tl("logs", session, "counter-4").splitlines()
-             if not line.startswith("line ")]
-    assert story[0].startswith("[INFO] [counter-4]: process started with pid [")
-    # launch's words for the signal sent, then the end it caused
-    assert story[1] == "[INFO] [counter-4]: sending signal 'SIGINT' to process[counter-4]"
-    assert story[2].startswith("[INFO] [counter-4]: process stopped [pid ")
-    assert "killed by SIGINT" in story[2]
-    assert story[3].startswith("[INFO] [counter-4]: process started with pid [")
-    assert "counter-4" not in tl("logs", session, "--level", "WARN")  # no crash
-    # status no longer tells the end before the restart as the process's current story
-    counter = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
-                   if p["id"] == "counter-4")
-    assert counter["state"] == "running"
-    assert counter["exit_code"] is None and counter["detail"] is None
-    three = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
-                 if p["id"] == "three-1")
-    assert three["exit_code"] == 3 and three["detail"] == "exit code 3"
+def test_a_restart_is_a_stop_asked_for_then_a_start_in_logs_and_in_logs_f(tmp_path):
+    """The restart of counter-4, as `logs -f -n 2` shows it as it happens (the last 2
+    lines, then the stop and the new start) and as `logs` and `status` tell it after."""
+    with life_session(tmp_path) as session:
+        follower = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", session,
+                                     "counter-4", "-f", "-n", "2"], stdout=subprocess.PIPE,
+                                    stderr=subprocess.PIPE, text=True)
+        try:
+            assert follower.stdout is not None
+            assert [follower.stdout.readline().rstrip("\n") for _ in range(2)] == [
+                "line 49", "line 50"]
+            tl("restart", session, "counter-4")
+            seen = []
+            end = time.monotonic() + 60
+            while "line 1" not in seen:
+                assert time.monotonic() < end, seen
+                seen.append(follower.stdout.readline().rstrip("\n"))
+            assert seen[0] == \
+                "[INFO] [counter-4]: sending signal 'SIGINT' to process[counter-4]"
+            assert seen[1].startswith("[INFO] [counter-4]: process stopped [pid ")
+            assert seen[2].startswith("[INFO] [counter-4]: process started with pid [")
+            assert seen[3] == "line 1"
+            follower.send_signal(signal.SIGINT)
+            _, errors = follower.communicate(timeout=30)
+            assert follower.returncode == 130
+            assert errors == "tuilaunch: interrupted\n"
+        finally:
+            if follower.poll() is None:
+                follower.kill()
+                follower.wait()
+        wait_for(lambda: tl("logs", session, "counter-4").count("process started") == 2,
+                 what="the second start")
+        story = [line for line in tl("logs", session, "counter-4").splitlines()
+                 if not line.startswith("line ")]
+        assert story[0].startswith("[INFO] [counter-4]: process started with pid [")
+        # launch's words for the signal sent, then the end it caused
+        assert story[1] == "[INFO] [counter-4]: sending signal 'SIGINT' to process[counter-4]"
+        assert story[2].startswith("[INFO] [counter-4]: process stopped [pid ")
+        assert "killed by SIGINT" in story[2]
+        assert story[3].startswith("[INFO] [counter-4]: process started with pid [")
+        assert "counter-4" not in tl("logs", session, "--level", "WARN")  # no crash
+        # status no longer tells the end before the restart as the process's current story
+        counter = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
+                       if p["id"] == "counter-4")
+        assert counter["state"] == "running"
+        assert counter["exit_code"] is None and counter["detail"] is None
+        three = next(p for p in json.loads(tl("status", session, "--json"))["processes"]
+                     if p["id"] == "three-1")
+        assert three["exit_code"] == 3 and three["detail"] == "exit code 3"
 
 
 def test_waiting_for_a_process_that_ended_for_good_says_so_at_once(session):
@@ -145,34 +186,6 @@ def test_lines_keeps_the_last_n_as_tail(session):
     bad = run_cli("logs", session, "-n", "-2")
     assert bad.returncode == 2 and "--lines -2 is not a number of lines" in bad.stderr
     assert "Traceback" not in bad.stderr
-
-
-def test_lines_with_follow_prints_the_last_n_then_the_new_ones(session):
-    follower = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", session,
-                                 "counter-4", "-f", "-n", "2"], stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True)
-    try:
-        assert follower.stdout is not None
-        assert [follower.stdout.readline().rstrip("\n") for _ in range(2)] == [
-            "line 49", "line 50"]
-        tl("restart", session, "counter-4")
-        seen = []
-        end = time.monotonic() + 60
-        while "line 1" not in seen:
-            assert time.monotonic() < end, seen
-            seen.append(follower.stdout.readline().rstrip("\n"))
-        assert seen[0] == "[INFO] [counter-4]: sending signal 'SIGINT' to process[counter-4]"
-        assert seen[1].startswith("[INFO] [counter-4]: process stopped [pid ")
-        assert seen[2].startswith("[INFO] [counter-4]: process started with pid [")
-        assert seen[3] == "line 1"
-        follower.send_signal(signal.SIGINT)
-        _, errors = follower.communicate(timeout=30)
-        assert follower.returncode == 130
-        assert errors == "tuilaunch: interrupted\n"
-    finally:
-        if follower.poll() is None:
-            follower.kill()
-            follower.wait()
 
 
 STUBBORN = """
