@@ -7,6 +7,8 @@ through Textual's pilot, and the command line run as a user types it."""
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import threading
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -112,12 +114,9 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         await until(pilot, lambda: "/rl5/chatter" in panel.shown)
         assert not any(topic.startswith("/rl2/") for topic in panel.shown)
 
-    # the command line, after the relaunch, finds the node by its process id too
-    async with session_tui(BRINGUP, "robot:=rl3", "listener:=false", "services:=false",
-                           wait=("talker-1",)) as (app, pilot, name):
-        await until(pilot, lambda: "talker-1" in app.launch_tree.rows)
-        # the talker reported its name in its first line: the server learnt /rl3/talker
-        await until(pilot, lambda: "/rl3/chatter" in tl("topics", name, "--node",
+        # the command line, after a relaunch, finds the node by its process id too: the
+        # talker reported its name in its first line, the server learnt /rl5/talker
+        await until(pilot, lambda: "/rl5/chatter" in tl("topics", name, "--node",
                                                         "talker-1", check=False).stdout,
                     every=lambda: None)
         await pilot.press("2")
@@ -128,11 +127,11 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         # at once: the server waits a moment for the restarted talker to say its name
         topics = tl("topics", name, "--node", "talker-1", check=False)
         assert topics.returncode == 0, topics.stderr
-        assert "/rl4/chatter" in topics.stdout and "/rl3/" not in topics.stdout
+        assert "/rl4/chatter" in topics.stdout and "/rl5/" not in topics.stdout
         dumped = tl("params", name, "talker-1", "--dump")
         assert dumped.stdout.startswith("/rl4/talker:")
         level = tl("log-level", name, "talker-1", "debug", check=False)
-        assert "/rl3/talker" not in level.stdout + level.stderr
+        assert "/rl5/talker" not in level.stdout + level.stderr
 
 
 EDITABLE = """
@@ -192,6 +191,31 @@ async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_lo
         assert {p: pid_of(name, p) for p in running} == running
         assert status(name)["arguments"] == {"word": "beta"}
 
+        # another client (or a TUI whose preview came before the edit) asks the server to
+        # apply: the server reads the file again and refuses, with the file's line
+        path.write_text(EDITABLE.format(said="said", extra="raise RuntimeError('oops')"))
+        message = refused_elsewhere(name, word="gamma")
+        assert "cannot apply: the launch file no longer loads" in message
+        assert f"{path}:9" in message and "RuntimeError: oops" in message
+        assert {p: pid_of(name, p) for p in running} == running
+        assert status(name)["arguments"] == {"word": "beta"}
+
+
+def refused_elsewhere(name: str, **arguments: str) -> str:
+    """What the session says to another client asking it to apply `arguments`, which it
+    must refuse."""
+    from tuilaunch.client.link import open_link
+    from tuilaunch.engine.run.session.session_dir import SessionError
+
+    link = open_link(name)
+    try:
+        link.request(Apply(arguments=arguments))
+    except SessionError as exc:
+        return str(exc)
+    finally:
+        link.close()
+    raise AssertionError("the relaunch was applied")
+
 
 async def test_the_args_tab_follows_the_file_saved_while_it_shows(runtime, write):  # noqa: F811
     """The operator keeps the Args tab open beside an editor: each save is previewed with
@@ -216,36 +240,6 @@ async def test_the_args_tab_follows_the_file_saved_while_it_shows(runtime, write
         await until(pilot, lambda: "changed on disk: word's default alpha -> gamma; "
                     "changes: echo-1" in preview_text(app))
         assert status(name)["arguments"] == {}  # nothing was applied meanwhile
-
-
-async def test_the_session_refuses_a_relaunch_of_a_file_that_no_longer_loads(
-        runtime, write):  # noqa: F811
-    """Another client (or a TUI whose preview came before the edit) asks the server to
-    apply: the server reads the file again and refuses, with the file's line."""
-    from tuilaunch.client.link import open_link
-    from tuilaunch.engine.run.session.session_dir import SessionError
-
-    path = write(EDITABLE.format(said="word", extra=""))
-    name = tl(str(path), "--detach").stdout.strip()
-    try:
-        tl("wait", name, "echo-1", "running", "--timeout", "60")
-        before = pid_of(name, "echo-1")
-        path.write_text(EDITABLE.format(said="word", extra="raise RuntimeError('oops')"))
-        link = open_link(name)
-        try:
-            try:
-                link.request(Apply(arguments={"word": "gamma"}))
-                raise AssertionError("the relaunch was applied")
-            except SessionError as exc:
-                message = str(exc)
-        finally:
-            link.close()
-        assert "cannot apply: the launch file no longer loads" in message
-        assert f"{path}:9" in message and "RuntimeError: oops" in message
-        assert pid_of(name, "echo-1") == before
-        assert status(name)["arguments"] == {}
-    finally:
-        tl("stop", name, check=False)
 
 
 TYPO = """
@@ -384,7 +378,7 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
 
     owner = Terminal(str(path))
     try:
-        owner.read_until(b"bad-2")  # the tree is drawn before the session's server is up
+        owner.read_until(b"bad-2")  # the tree, drawn from the plan the session's server sent
 
         def sessions() -> list[str]:
             return [line.split()[0] for line in tl("ls").stdout.splitlines()[1:] if line]
@@ -528,20 +522,24 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
         tl("stop", name, check=False)
 
 
-# `slow` is deaf to SIGINT in its first run (word alpha): the relaunch stops it with SIGTERM,
-# 5 s later (launch's default); the run the relaunch starts (beta) stops at once at the end
+# `slow`, in its first run (word alpha), saves its state on SIGINT until the test releases it
+# (RELEASE, a file): the relaunch that stops it waits meanwhile, echo-1 stopped; the run the
+# relaunch starts (beta) stops at once
 SLOW_STOP = EDITABLE.format(said="quick", extra=(
-    "sl.add_action(ExecuteProcess(name='slow', cmd=['sh', '-c', "
-    "'if [ \"$0\" = alpha ]; then trap \"\" INT; fi; "
-    "echo slow \"$0\"; while true; do sleep 0.1; done', sl.arg('word')]))"))
+    "sl.add_action(ExecuteProcess(name='slow', sigterm_timeout='120', cmd=['sh', '-c', "
+    "'if [ \"$0\" = alpha ]; then trap \"while [ ! -e RELEASE ]; do sleep 0.05; done; "
+    "exit 0\" INT; fi; echo slow \"$0\"; while true; do sleep 0.1; done', sl.arg('word')]))"))
 
 
 def test_wait_running_waits_through_a_relaunch_that_stopped_the_process(
-        runtime, write):  # noqa: F811
+        runtime, write, tmp_path):  # noqa: F811
     """A script relaunches, then waits for a node to run again: the node the relaunch
     stopped to start it with the new values is not an end (seen in CI as `talker-1
     exited, not running`, when the wait came between the stop and the start)."""
-    name = tl(str(write(SLOW_STOP)), "--detach").stdout.strip()
+    from .test_logs_command import _has_socket
+
+    release = tmp_path / "release"
+    name = tl(str(write(SLOW_STOP.replace("RELEASE", str(release)))), "--detach").stdout.strip()
     try:
         for process in ("echo-1", "slow-2"):
             tl("wait", name, process, "running", "--timeout", "60")
@@ -549,13 +547,28 @@ def test_wait_running_waits_through_a_relaunch_that_stopped_the_process(
         relaunch = threading.Thread(target=apply_elsewhere, args=(name,),
                                     kwargs={"word": "beta"})
         relaunch.start()
-        # echo is stopped; the slow one holds the relaunch for seconds
+        # echo is stopped; the slow one holds the relaunch until released
         wait_for(lambda: {p["id"]: p["state"] for p in status(name)["processes"]}
                  == {"echo-1": "exited", "slow-2": "stopping"}, timeout=60)
-        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        waiting = subprocess.Popen([sys.executable, "-m", "tuilaunch", "wait", name, "echo-1",
+                                    "running", "--timeout", "60"], stdout=subprocess.PIPE,
+                                   stderr=subprocess.PIPE, text=True)
+        try:
+            # asked while echo-1 is stopped: it waits, connected, for the start
+            wait_for(lambda: waiting.poll() is not None or _has_socket(waiting.pid),
+                     what="the wait connected")
+            assert waiting.poll() is None, waiting.communicate()
+            release.touch()
+            _, errors = waiting.communicate(timeout=90)
+            assert waiting.returncode == 0, errors
+        finally:
+            if waiting.poll() is None:
+                waiting.kill()
+                waiting.wait()
         relaunch.join(60)
         echo = next(p for p in status(name)["processes"] if p["id"] == "echo-1")
         assert echo["state"] == "running" and echo["pid"] != old_pid
         assert "quick beta" in tl("logs", name, "echo-1").stdout
     finally:
+        release.touch()  # a failed test's relaunch is not held up
         tl("stop", name, check=False)
