@@ -185,7 +185,8 @@ def test_print_shows_where_each_process_runs(setup) -> None:
     assert "placement rule '/nobody/**' -> r1 places no process" in printed.stdout
 
 
-def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, machines):
+def test_a_node_on_robot1_runs_there_shows_here_starts_a_node_here_and_outlives_its_link(
+        setup, machines):
     launch, placement = setup
     with Headless(str(launch), "--machines", str(placement)) as run:
         started = run.wait_for(r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]")
@@ -202,12 +203,28 @@ def test_a_node_on_robot1_runs_there_shows_here_and_starts_a_node_here(setup, ma
         shares = remote_sessions(machines, "robot1")
         assert len(shares) == 1 and shares[0]["name"].endswith("-r1")
         assert alive(far_pid)  # a process of robot1's share (same pid space here)
+
+        # a dropped link stops nothing and is made again
+        links = [pid for pid in descendants(run.proc.pid) if b"__proxy" in cmdline(pid)]
+        assert links, "no ssh link to robot1's share"
+        for pid in links:
+            os.kill(pid, signal.SIGKILL)  # the link dies as a cable pulled out would
+        lost = run.wait_for(r"\[WARN\] \[launch.user\]: r1: (.*); its share runs on there; "
+                            r"connecting again in 1 s")
+        assert "lost the link to robot1" in lost.group(1)
+        assert alive(far_pid)  # the share ran on
+        after = len(run.text)
+        wait_for(lambda: "r1: following session" in run.text[after:] and
+                 "[far-1@r1] far tick" in run.text[after:].split("following session", 1)[-1])
         code = run.stop()
     # stopping the launch stopped everything on robot1
     assert code == 0, run.text
     assert "[INFO] [far-1@r1]: process stopped" in run.text
     assert not alive(far_pid)
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
+    # what it printed while the link was down was shown once it was back: no gap, no twice
+    ticks = [int(n) for n in re.findall(r"\[far-1@r1\] far tick (\d+)\n", run.text)]
+    assert ticks == list(range(1, len(ticks) + 1)), ticks
 
 
 def test_status_on_the_launching_side_shows_each_process_and_its_machine(setup, machines):
@@ -323,32 +340,6 @@ def test_a_node_on_robot1_waits_for_a_node_here(setup, machines):
         code = run.stop()
     assert code == 0, run.text
     wait_for(lambda: remote_sessions(machines, "robot1") == [])
-
-
-def test_a_dropped_link_stops_nothing_and_is_made_again(setup, machines):
-    launch, placement = setup
-    with Headless(str(launch), "--machines", str(placement)) as run:
-        far_pid = int(run.wait_for(
-            r"\[INFO\] \[far-1@r1\]: process started with pid \[(\d+)\]").group(1))
-        run.wait_for(r"\[far-1@r1\] far tick")
-        links = [pid for pid in descendants(run.proc.pid) if b"__proxy" in cmdline(pid)]
-        assert links, "no ssh link to robot1's share"
-        for pid in links:
-            os.kill(pid, signal.SIGKILL)  # the link dies as a cable pulled out would
-        lost = run.wait_for(r"\[WARN\] \[launch.user\]: r1: (.*); its share runs on there; "
-                            r"connecting again in 1 s")
-        assert "lost the link to robot1" in lost.group(1)
-        assert alive(far_pid)  # the share ran on
-        after = len(run.text)
-        wait_for(lambda: "r1: following session" in run.text[after:] and
-                 "[far-1@r1] far tick" in run.text[after:].split("following session", 1)[-1])
-        code = run.stop()
-    assert code == 0, run.text
-    assert not alive(far_pid)
-    wait_for(lambda: remote_sessions(machines, "robot1") == [])
-    # what it printed while the link was down was shown once it was back: no gap, no twice
-    ticks = [int(n) for n in re.findall(r"\[far-1@r1\] far tick (\d+)\n", run.text)]
-    assert ticks == list(range(1, len(ticks) + 1)), ticks
 
 
 def assert_far_node_fails_alone(launch: Path, placement: Path, says: str) -> None:

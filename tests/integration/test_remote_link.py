@@ -15,6 +15,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -37,15 +38,7 @@ from tuilaunch.engine.run.vocabulary.request import Request, to_message
 from tuilaunch.engine.run.vocabulary.requests import Status
 
 from ..conftest import run_cli, wait_for
-from .sshd import (  # noqa: F401
-    Machine,
-    Machines,
-    alive,
-    free_port,
-    keygen,
-    machines_fixture,
-    proxies_on,
-)
+from .sshd import Machine, Machines, alive, free_port, keygen, proxies_on
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -58,15 +51,39 @@ def generate_launch_description():
 """
 
 
-def start_on(machine: Machine, write, name: str) -> None:
-    """A session started on `machine` (its session folder), as a user there would."""
-    path = write(LAUNCH)
+def start_on(machine: Machine, path: Path, name: str) -> None:
+    """A session of the launch file `path` started on `machine` (its session folder), as a
+    user there would."""
     env = {"XDG_RUNTIME_DIR": str(machine.runtime),
            "ROS_LOG_DIR": str(machine.folder / "roslog")}
     done = run_cli(str(path), "--detach", "--name", name, env=env)
     assert done.returncode == 0, done.stderr
     wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=env)
     assert wait.returncode == 0, wait.stderr
+
+
+@pytest.fixture(name="machines", scope="module")
+def machines_fixture(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Machines]:
+    """robot1 and robot2 for the whole module, reachable through `TUILAUNCH_SSH_COMMAND`:
+    the tests ask them and leave them as they were (a session a test starts, it stops)."""
+    fleet = Machines(tmp_path_factory.mktemp("link") / "ssh")
+    try:
+        with pytest.MonkeyPatch.context() as patch:
+            for key, value in fleet.env().items():
+                patch.setenv(key, value)
+            yield fleet
+    finally:
+        fleet.stop()  # whatever runs under robot1 and robot2 ends with them
+
+
+@pytest.fixture(scope="module")
+def far(machines: Machines, tmp_path_factory: pytest.TempPathFactory) -> str:
+    """The session "far" on robot1, for the tests that only talk to it (and their links):
+    the only session there."""
+    path = tmp_path_factory.mktemp("far") / "test_launch.py"
+    path.write_text(LAUNCH)
+    start_on(machines["robot1"], path, "far")
+    return "far"
 
 
 def request(sock, asked: Request, request_id: int = 1) -> dict:
@@ -129,8 +146,7 @@ def test_remote_words_reach_the_remote_program_intact(machines):
 # --- the link ---------------------------------------------------------------------------------
 
 def test_a_session_on_robot1_answers_over_ssh_and_closing_the_link_stops_nothing(
-        machines, write):
-    start_on(machines["robot1"], write, "far")
+        machines, far):
     link = open_remote_link("robot1", "far")
     try:
         assert link.info["name"] == "far"
@@ -151,8 +167,7 @@ def test_a_session_on_robot1_answers_over_ssh_and_closing_the_link_stops_nothing
         again.close()
 
 
-async def test_events_stream_over_the_link(machines, write):
-    start_on(machines["robot1"], write, "far")
+async def test_events_stream_over_the_link(machines, far):
     link, reader, writer = await open_remote_streams("robot1", "far")
     try:
         writer.write(encode({"id": 1, "op": "subscribe"}))
@@ -169,8 +184,7 @@ async def test_events_stream_over_the_link(machines, write):
         await asyncio.get_running_loop().run_in_executor(None, link.close)
 
 
-def test_sessions_are_listed_per_machine_as_ls_json(machines, write):
-    start_on(machines["robot1"], write, "far")
+def test_sessions_are_listed_per_machine_as_ls_json(machines, far):
     listed = list_remote("robot1")
     local = json.loads(run_cli("ls", "--json", env={
         "XDG_RUNTIME_DIR": str(machines["robot1"].runtime)}).stdout)
@@ -180,9 +194,8 @@ def test_sessions_are_listed_per_machine_as_ls_json(machines, write):
     assert list_remote("robot2") == []
 
 
-def test_the_relay_is_ssh_and_the_proxy_alone(machines, write):
+def test_the_relay_is_ssh_and_the_proxy_alone(machines, far):
     """What the TUI will run, by hand: `ssh robot1 <tuilaunch> __proxy NAME`."""
-    start_on(machines["robot1"], write, "far")
     argv = [*shlex.split(machines.ssh_command), "robot1",
             f"{os.environ['TUILAUNCH_REMOTE']} __proxy far"]
     proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE)
@@ -245,8 +258,9 @@ def test_a_missing_remote_tuilaunch_is_said(machines):
     assert "tuilaunch not found there" in str(caught.value)
 
 
-def test_an_unknown_session_is_said_with_the_ones_there(machines, write):
-    start_on(machines["robot1"], write, "far")
+def test_an_unknown_session_is_said_with_the_ones_there(machines, far):
+    # the links earlier tests closed are gone: none is left for the check at the end
+    wait_for(lambda: not proxies_on(machines["robot1"]))
     with pytest.raises(RemoteError) as caught:
         open_remote_link("robot1", "near")
     assert _one_line(caught.value) == "robot1: no running session named near"
@@ -283,8 +297,7 @@ def test_a_machine_is_named_in_its_failures(machines, tmp_path):
         "nuc (robot1): its setup file cannot be sourced"), str(caught.value)
 
 
-def test_a_dropped_link_stops_nothing_and_says_why(machines, write):
-    start_on(machines["robot1"], write, "far")
+def test_a_dropped_link_stops_nothing_and_says_why(machines, far):
     link = open_remote_link("robot1", "far")
     try:
         server = link.info["pid"]
@@ -368,10 +381,19 @@ def generate_launch_description():
 
 
 async def test_a_message_larger_than_the_relay_chunk_crosses_whole(machines, write):
+    """Another session on robot1 beside "far", stopped at the end."""
     path = write(BIG, "big_launch.py")
     env = {"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)}
     done = run_cli(str(path), "--detach", "--name", "big", env=env)
     assert done.returncode == 0, done.stderr
+    try:
+        await big_line_crosses_whole()
+    finally:
+        stopped = run_cli("stop", "big", env=env)  # robot1 runs "far" alone again
+        assert stopped.returncode == 0, stopped.stderr
+
+
+async def big_line_crosses_whole() -> None:
     link, reader, writer = await open_remote_streams("robot1", "big")
     try:
         writer.write(encode({"id": 1, "op": "subscribe"}))
