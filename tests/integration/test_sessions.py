@@ -20,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -33,7 +34,7 @@ from tuilaunch.engine.run.session import session_dir
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import LEVELS, View
 
-from ..conftest import run_cli, wait_for
+from ..conftest import run_cli, session_folders, wait_for
 from .proc_tree import alive as _alive
 from .proc_tree import end, servers_of
 from .test_tui import until
@@ -68,6 +69,30 @@ def runtime(monkeypatch, tmp_path):
     # found by its log folder, which is this test's
     end(servers_of(tmp_path))
     shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def shared_session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
+    """One session of LAUNCH (default arguments, as start_detached starts it) for the tests
+    that only read it: its name and its session folder."""
+    root = tmp_path_factory.mktemp("shared")
+    path = root / "test_launch.py"
+    path.write_text(LAUNCH)
+    with session_folders(root / "log") as folder:
+        name = tl(str(path), "--detach").stdout.strip()
+        try:
+            tl("wait", name, "echo-3", "running", "--timeout", "60")
+            tl("wait", name, "early-2", "exited", "--timeout", "60")
+            yield name, folder
+        finally:
+            tl("stop", name, check=False)
+
+
+@pytest.fixture
+def shared(shared_session: tuple[str, Path], runtime, monkeypatch) -> tuple[str, Path]:
+    """The shared session, its folder this test's (in place of `runtime`'s)."""
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(shared_session[1]))
+    return shared_session
 
 
 def tl(*args: str, check: bool = True) -> subprocess.CompletedProcess[str]:
@@ -410,7 +435,8 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
 
 
 def test_a_client_that_stops_reading_never_holds_up_the_launch(runtime, write):
-    path = write(LAUNCH.replace("sleep 0.1; done", "done"))  # ticker floods
+    # ticker floods, in lines long enough that the megabytes are written in seconds
+    path = write(LAUNCH.replace("echo tick $i; sleep 0.1; done", f"echo tick $i {'x' * 200}; done"))
     name = tl(str(path), "--detach").stdout.strip()
     log = Path(status(name)["log_dir"]) / "ticker-1.log"
     stalled = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -449,16 +475,18 @@ def test_hangup_of_a_foreground_tui_stops_all_unless_keep_on_hangup(runtime, wri
     finally:
         terminal.close()
     # a TUI that only attached leaves the launch running when its terminal goes or when
-    # it is told to terminate
-    for how in (signal.SIGHUP, signal.SIGTERM):
-        terminal = Terminal("attach", "kept")
-        try:
+    # it is told to terminate (two such TUIs, attached at once)
+    attached = {how: Terminal("attach", "kept") for how in (signal.SIGHUP, signal.SIGTERM)}
+    try:
+        for how, terminal in attached.items():
             terminal.read_until(b"2 running")
             os.kill(terminal.proc.pid, how)
+        for terminal in attached.values():
             assert terminal.wait_exit() == 0
-        finally:
+    finally:
+        for terminal in attached.values():
             terminal.close()
-        assert pids("kept") == children
+    assert pids("kept") == children
     tl("stop", "kept")
 
 
@@ -549,8 +577,8 @@ def test_logs_follow_joins_the_file_and_the_live_stream_without_gap(runtime, wri
     assert run_cli("logs", name).returncode == 2  # gone: nothing to read from
 
 
-def test_logs_filters_by_time_and_level(runtime, write):
-    name = start_detached(write)
+def test_logs_filters_by_time_and_level(shared):
+    name, _ = shared
     everything = tl("logs", name).stdout.splitlines()
     assert "[early-2] early bird" in everything and "[echo-3] word alpha" in everything
     assert tl("logs", name, "--level", "warn").stdout.splitlines() == [
@@ -560,12 +588,11 @@ def test_logs_filters_by_time_and_level(runtime, write):
     assert "[early-2] early bird" in tl("logs", name, "--since", "1h").stdout
     bad = run_cli("logs", name, "--since", "yesterday-ish")
     assert bad.returncode == 2 and "--since 'yesterday-ish' is not a time" in bad.stderr
-    tl("stop", name)
 
 
 @pytest.mark.skipif(os.getuid() != 0, reason="needs root to connect as another user")
-def test_the_server_refuses_another_users_connection(runtime, write):
-    name = start_detached(write)
+def test_the_server_refuses_another_users_connection(shared):
+    name, runtime = shared
     # the session folder stays 0700 (each session command makes it so again, the server's
     # too): to reach the uid check, the socket is linked into a folder anyone may enter
     opened = Path(tempfile.mkdtemp(prefix="tlopen", dir=runtime.parent))
@@ -585,7 +612,6 @@ def test_the_server_refuses_another_users_connection(runtime, write):
         assert status(name)["name"] == name  # its owner is still served
     finally:
         shutil.rmtree(opened, ignore_errors=True)
-        tl("stop", name)
 
 
 def test_a_client_queue_is_bounded_and_cuts_loose_a_client_that_reads_nothing():
@@ -833,48 +859,45 @@ def test_a_stop_asked_elsewhere_is_not_shown_as_a_crash(runtime, write):
     asyncio.run(scenario())
 
 
-def test_a_session_whose_files_were_removed_puts_them_back(runtime, write):
+def test_a_session_whose_files_were_removed_puts_them_back_and_outlives_a_logout(
+        runtime, write, monkeypatch):
     """logind removes $XDG_RUNTIME_DIR when the user's last login ends (the ssh logout after
-    --detach); a tmp cleaner or an rm removes a socket. The session stays reachable."""
-    name = start_detached(write)
-    before = pids(name)
-    shutil.rmtree(runtime / "tuilaunch")
-    wait_for(lambda: run_cli("status", name).returncode == 0)
-    assert pids(name) == before
-    assert stat.S_IMODE(os.stat(runtime / "tuilaunch").st_mode) == 0o700
-    assert stat.S_IMODE(os.stat(runtime / "tuilaunch" / f"{name}.sock").st_mode) == 0o600
-    assert tl("ls").stdout.count(name) == 1
-    (runtime / "tuilaunch" / f"{name}.sock").unlink()  # only the socket, this time
-    wait_for(lambda: run_cli("status", name).returncode == 0)
-    tl("stop", name)
-    assert not any(_alive(pid) for pid in before.values())
-    assert not list((runtime / "tuilaunch").iterdir())  # and it cleans up after itself
-
-
-def test_a_session_outlives_the_logout_that_removes_the_runtime_folder(runtime, write,
-                                                                     monkeypatch, tmp_path):
-    """The ssh logout after --detach: logind unmounts $XDG_RUNTIME_DIR and makes it anew,
-    empty, at the next login. The session is found there again."""
-    # the fallback in between; short: a socket path must fit in 108 bytes (pytest-xdist's
-    # tmp_path is longer)
+    --detach); a tmp cleaner or an rm removes a socket. The session stays reachable. At the
+    logout logind unmounts $XDG_RUNTIME_DIR and makes it anew, empty, at the next login:
+    the session is found there again."""
+    # the fallback while the folder is away; short: a socket path must fit in 108 bytes
+    # (pytest-xdist's tmp_path is longer)
     ros_home = Path(tempfile.mkdtemp(prefix="tlh"))
     monkeypatch.setenv("ROS_HOME", str(ros_home))
-    name = start_detached(write)
-    before = pids(name)
-    shutil.rmtree(runtime)
-    # the server looks while the folder is away, too: it listens in the fallback meanwhile
-    wait_for(lambda: (ros_home / "tuilaunch" / f"{name}.sock").exists(),
-             what="the socket put back in the fallback folder")
-    runtime.mkdir(mode=0o700)  # the next login
-    wait_for(lambda: run_cli("status", name).returncode == 0)
-    assert pids(name) == before
-    assert tl("ls").stdout.count(name) == 1
-    # nothing left there once the server has moved back (it tidies up just after)
-    wait_for(lambda: not list((ros_home / "tuilaunch").iterdir()),
-             what="the fallback folder emptied")
-    tl("stop", name)
-    shutil.rmtree(ros_home, ignore_errors=True)
-    assert not any(_alive(pid) for pid in before.values())
+    try:
+        name = start_detached(write)
+        before = pids(name)
+        shutil.rmtree(runtime / "tuilaunch")
+        wait_for(lambda: run_cli("status", name).returncode == 0)
+        assert pids(name) == before
+        assert stat.S_IMODE(os.stat(runtime / "tuilaunch").st_mode) == 0o700
+        assert stat.S_IMODE(os.stat(runtime / "tuilaunch" / f"{name}.sock").st_mode) == 0o600
+        assert tl("ls").stdout.count(name) == 1
+        (runtime / "tuilaunch" / f"{name}.sock").unlink()  # only the socket, this time
+        wait_for(lambda: run_cli("status", name).returncode == 0)
+
+        # the logout: the whole folder goes
+        shutil.rmtree(runtime)
+        # the server looks while the folder is away, too: it listens in the fallback
+        wait_for(lambda: (ros_home / "tuilaunch" / f"{name}.sock").exists(),
+                 what="the socket put back in the fallback folder")
+        runtime.mkdir(mode=0o700)  # the next login
+        wait_for(lambda: run_cli("status", name).returncode == 0)
+        assert pids(name) == before
+        assert tl("ls").stdout.count(name) == 1
+        # nothing left there once the server has moved back (it tidies up just after)
+        wait_for(lambda: not list((ros_home / "tuilaunch").iterdir()),
+                 what="the fallback folder emptied")
+        tl("stop", name)
+        assert not any(_alive(pid) for pid in before.values())
+        assert not list((runtime / "tuilaunch").iterdir())  # and it cleans up after itself
+    finally:
+        shutil.rmtree(ros_home, ignore_errors=True)
 
 
 TWO_PANES = """
