@@ -328,7 +328,7 @@ def test_log_level_through_the_logger_service_or_says_how_to_restart(session):
 def events_until(link: Link, kind: str, check: Callable[[dict[str, Any]], bool],
                  limit: float = 60.0) -> dict[str, Any]:
     end = time.monotonic() + limit
-    link.sock.settimeout(limit)
+    link.timeout = limit
     for message in link.messages():
         for event in message.get("events") or []:
             if event["kind"] == kind and check(event["data"]):

@@ -255,6 +255,7 @@ def cmd_attach(options: argparse.Namespace) -> int:
             if options.type_into:  # a process that is not there: one line, no TUI
                 typed = link.request(Find(process=options.type_into))
         except BaseException:
+            link.release()  # the link's copy of the socket first: ssh ends once both close
             remote.close()
             raise
         link.release()
@@ -495,7 +496,7 @@ def cmd_wait(options: argparse.Namespace) -> int:
                 print(f"tuilaunch wait: {process} is {current}, not {state}, after "
                       f"{options.timeout:g} s", file=sys.stderr)
                 return 1
-            link.sock.settimeout(remaining)
+            link.timeout = remaining
             try:
                 message = link.receive()
             except TimeoutError:

@@ -162,7 +162,7 @@ def hz_block(result: dict[str, Any]) -> str:
 def streamed(link: Link, kind: str, end: float | None) -> Iterator[dict[str, Any]]:
     """The data of the session's `kind` events (hz, echo) as they come, until `end` (a
     monotonic time; None: until Ctrl+C); the session's end is an error."""
-    link.sock.settimeout(None)
+    link.timeout = None
     while True:
         try:
             message = link.receive_until(end)

@@ -3,22 +3,27 @@ by name; what to say of a server that does not answer."""
 
 from __future__ import annotations
 
-import select
+import asyncio
+import collections
+import concurrent.futures
+import contextlib
 import socket
+import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Coroutine, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
 from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import Address, open_remote_link, parse_address
 from ..engine.run.session import session_dir
-from ..engine.run.session.connection import reply_result
-from ..engine.run.session.protocol import MAX_MESSAGE, ProtocolError, decode, encode, greet
+from ..engine.run.session.connection import Connection
+from ..engine.run.session.protocol import encode
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.vocabulary.request import Request, to_message
 
 R = TypeVar("R")
+T = TypeVar("T")
 
 
 def resolve_name(name: str | None) -> str:
@@ -114,48 +119,31 @@ def lost_link_line(host: str, name: str, reason: str, attempt: int,
 
 
 class Link:
-    """A blocking connection for one-shot commands (status, stop, restart, wait, logs):
-    the synchronous twin of engine/run/session/connection.py's Connection, with the same
-    codec, greeting check (`greet`) and reading of a reply (`reply_result`).
+    """A blocking connection for one-shot commands (status, stop, restart, wait, logs): a
+    synchronous face over one Connection (engine/run/session/connection.py: the greeting,
+    the requests' numbers, the replies matched), which runs on an event loop of the link's
+    own, in the calling thread, for each call.
 
     Connecting, the greeting and `request(..., short=True)` replies wait at most
-    `answer_timeout`; `timeout` is what reading messages waits afterwards (None: as long as
-    the session runs, for `stop`, `logs -f` and `wait`)."""
+    `answer_timeout`; `timeout` is what reading each message waits afterwards (None: as long
+    as the session runs, for `stop`, `logs -f` and `wait`), changed between reads at will.
+    A read that times out (TimeoutError) or is interrupted (Ctrl+C) leaves the link usable:
+    `hz` asks for its last figures after either."""
 
     def __init__(self, name: str, timeout: float | None = ANSWER_TIMEOUT,
                  answer_timeout: float = ANSWER_TIMEOUT) -> None:
-        self.name = name
-        self.host: str | None = None
-        self._on_close: Callable[[], None] | None = None
-        self.answer_timeout = answer_timeout
-        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self.sock.settimeout(answer_timeout)
-        try:
-            self.sock.connect(str(session_dir.socket_path(name)))
-        except TimeoutError:
-            self.sock.close()
-            raise not_answering(name, answer_timeout) from None
-        except OSError as exc:
-            self.sock.close()
-            raise SessionError(f"session {name} does not answer ({exc.strerror or exc})",
-                               hint="tuilaunch ls lists the running sessions") from None
-        self._file = self.sock.makefile("rb")
-        self._next_id = 0
-        self.pending: list[dict[str, Any]] = []  # event batches that came before a reply
-        self.ended = False  # the session said it ended (its last message)
-        self._why_lost: Callable[[], str] | None = None
+        self._start(name, None, timeout, answer_timeout)
+        path = str(session_dir.socket_path(name))
         try:
             # a server of another protocol version says so here, before any request
-            self.info: dict[str, Any] = greet(self._file.readline(MAX_MESSAGE), name)
+            self.connection = self._run(Connection.open_unix(
+                path, name, answer_timeout, hint="tuilaunch ls lists the running sessions"))
         except TimeoutError:
-            self.close()
+            self._end()
             raise not_answering(name, answer_timeout) from None
-        except (SessionError, ProtocolError, ConnectionError) as exc:
-            self.close()
-            if isinstance(exc, SessionError):
-                raise
-            raise SessionError(f"session {name} did not greet ({exc})") from None
-        self.sock.settimeout(timeout)
+        except BaseException:
+            self._end()
+            raise
 
     @classmethod
     def connected(cls, name: str, sock: socket.socket, hello: dict[str, Any], host: str,
@@ -165,34 +153,122 @@ class Link:
                   why_lost: Callable[[], str] | None = None) -> Link:
         """A Link on a socket already connected and greeted: the ssh link to `host`'s
         session (engine/run/machines/remote.py). `on_close` ends what carries it (ssh);
-        `why_lost` says why it closed (ssh's last words)."""
+        `why_lost` says why it closed (ssh's last words). The link reads a copy of `sock`:
+        `release` leaves `sock` itself open (`attach` hands it to the TUI)."""
         self = cls.__new__(cls)
-        self.name = name
-        self.ended = False
-        self._why_lost = why_lost
-        self.answer_timeout = answer_timeout
-        self.sock = sock
-        self._file = sock.makefile("rb")
-        self._next_id = 0
-        self.pending = []
-        self.info = hello["info"]
-        self.host = host
-        self._on_close = on_close
-        sock.settimeout(timeout)
+        self._start(name, host, timeout, answer_timeout)
+        self._on_close, self._why_lost, self._given = on_close, why_lost, sock
+        try:
+            self.connection = self._run(Connection.on_socket(sock.dup(), hello["info"],
+                                                             self.label))
+        except BaseException:
+            self._end()
+            raise
         return self
 
-    def receive(self) -> dict[str, Any] | None:
-        """The next message, or None when the server closed the connection."""
+    def _start(self, name: str, host: str | None, timeout: float | None,
+               answer_timeout: float) -> None:
+        self.name, self.host = name, host
+        self.timeout, self.answer_timeout = timeout, answer_timeout
+        self._on_close: Callable[[], None] | None = None
+        self._why_lost: Callable[[], str] | None = None
+        self._given: socket.socket | None = None
+        self._loop = asyncio.new_event_loop()
+        # one thread at a time runs the loop; `close` may come from another (plot --csv
+        # reads each session in a thread and closes the links from the main one)
+        self._turn = threading.Lock()
+        self._closing = False
+
+    @property
+    def info(self) -> dict[str, Any]:
+        """What the session said of itself in its hello (name, pid, log_dir...)."""
+        return self.connection.info
+
+    @property
+    def ended(self) -> bool:
+        """The session said it ended (its last message)."""
+        return self.connection.ended
+
+    @property
+    def pending(self) -> collections.deque[dict[str, Any]]:
+        """The messages that came before a reply, in order: the next `receive` gives them."""
+        return self.connection.early
+
+    # --- running the connection's coroutines ------------------------------------------------
+
+    def _run(self, coro: Coroutine[Any, Any, T]) -> T:
+        return self._blocking(lambda: self._run_here(coro))
+
+    @staticmethod
+    def _blocking(work: Callable[[], T]) -> T:
+        """`work` here; in a thread of its own when this thread runs an event loop already
+        (a coroutine that calls a command waits for it, as on a blocking socket)."""
         try:
-            line = self._file.readline(MAX_MESSAGE)
-        except ConnectionError:
+            asyncio.get_running_loop()
+        except RuntimeError:
+            return work()
+        with concurrent.futures.ThreadPoolExecutor(1) as pool:
+            return pool.submit(work).result()
+
+    def _run_here(self, coro: Coroutine[Any, Any, T]) -> T:
+        with self._turn:
+            if self._closing or self._loop.is_closed():  # closed by another thread
+                coro.close()
+                self._shut()
+                raise ConnectionResetError("the link is closed")
+            task = self._loop.create_task(coro)
+            try:
+                return self._loop.run_until_complete(task)
+            except BaseException:
+                # Ctrl+C (in the loop's wait, or in the task: then retrieved, never logged):
+                # the read is given up and the link stays usable
+                if not task.done():
+                    task.cancel()
+                    with contextlib.suppress(BaseException):
+                        self._loop.run_until_complete(task)
+                elif not task.cancelled():
+                    task.exception()
+                raise
+            finally:
+                if self._closing:
+                    self._shut()
+
+    def _shut(self) -> None:
+        """The connection closed and its socket with it, then the loop (under `_turn`)."""
+        if self._loop.is_closed():
+            return
+        connection: Connection | None = getattr(self, "connection", None)
+        if connection is not None:
+            connection.close()
+        # the transport closes its socket on the loop's next turn
+        with contextlib.suppress(BaseException):
+            self._loop.run_until_complete(asyncio.sleep(0))
+        self._loop.close()
+
+    def _end(self) -> None:
+        """Closes the connection and the loop, or has the thread reading close them."""
+        self._closing = True
+        if self._turn.acquire(blocking=False):
+            try:
+                self._blocking(self._shut)
+            finally:
+                self._turn.release()
+        else:  # another thread is in a read: it ends with the stream, and closes the loop
+            with contextlib.suppress(RuntimeError):  # that thread closed it meanwhile
+                self._loop.call_soon_threadsafe(self.connection.close)
+
+    # --- reading and asking -----------------------------------------------------------------
+
+    def receive(self) -> dict[str, Any] | None:
+        """The next message (what came before a reply first), waiting `timeout` at most
+        (then TimeoutError); None when the server closed the connection."""
+        return self._next(self.timeout)
+
+    def _next(self, idle: float | None) -> dict[str, Any] | None:
+        try:
+            return self._run(self.connection.next_message(idle))
+        except ConnectionError:  # closed by `close` from another thread
             return None
-        if not line:
-            return None
-        message = decode(line)
-        if message.get("type") == "ended":
-            self.ended = True
-        return message
 
     def lost(self) -> SessionError | None:
         """Once the connection closed: LinkLost when it was the ssh link to a session that
@@ -214,69 +290,38 @@ class Link:
     def send(self, request: Request[Any]) -> int:
         """Asks without waiting for the reply (it comes among the messages, with this id):
         `stop` reads the stopping's events while the server works on the shutdown."""
-        self._next_id += 1
-        self.sock.sendall(encode(to_message(request, self._next_id)))
-        return self._next_id
+        request_id = self.connection.send(request)
+        try:
+            self._run(self.connection.writer.drain())
+        except ConnectionError:
+            raise self.lost() or SessionError(
+                f"session {self.label} closed the connection during {request.op}") from None
+        return request_id
 
     def receive_until(self, deadline: float | None) -> dict[str, Any] | None:
         """The next message (events that came with a reply first), waiting until
-        `deadline` (time.monotonic) at most, then TimeoutError. Unlike a socket timeout,
-        which leaves the reader unusable, the link can be read and asked again after it:
-        `hz --duration` asks for the final figures, `echo --timeout` says what came."""
-        if self.pending:
-            return self.pending.pop(0)
-        while deadline is not None and not self._buffered():
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                raise TimeoutError
-            if select.select([self.sock], [], [], remaining)[0]:
-                break
-        return self.receive()
-
-    def _buffered(self) -> bool:
-        """Whether a message is already read from the socket, in the reader's buffer."""
-        waited = self.sock.gettimeout()
-        self.sock.settimeout(0.0)  # peek returns what it holds instead of waiting
-        try:
-            return bool(self._file.peek(1))
-        except OSError:
-            return False
-        finally:
-            self.sock.settimeout(waited)
+        `deadline` (time.monotonic) at most, then TimeoutError; the link can be read and
+        asked again after it: `hz --duration` asks for the final figures, `echo --timeout`
+        says what came."""
+        if deadline is None:
+            return self._next(self.timeout)
+        return self._next(max(deadline - time.monotonic(), 0.0))
 
     def request(self, request: Request[R], short: bool = False) -> R:
         """The reply to `request`, as it reads it; `short`: an answer the server gives at
         once (status, find), so waiting longer than `answer_timeout` means it is not
         answering."""
-        self._next_id += 1
-        request_id = self._next_id
-        waited = self.sock.gettimeout()
-        if short:
-            self.sock.settimeout(self.answer_timeout)
+        idle = self.answer_timeout if short else self.timeout
         try:
-            return request.reply(self._reply(request, request_id))
+            return self._run(self.connection.call(request, idle))
         except TimeoutError:
-            raise not_answering(self.name, self.sock.gettimeout() or 0.0) from None
-        finally:
-            self.sock.settimeout(waited)
-
-    def _reply(self, request: Request[Any], request_id: int) -> Any:
-        self.sock.sendall(encode(to_message(request, request_id)))
-        while True:
-            message = self.receive()
-            if message is None:
-                raise self.lost() or SessionError(
-                    f"session {self.label} closed the connection during {request.op}")
-            if message.get("type") == "reply" and message.get("id") == request_id:
-                # named as typed (HOST:NAME): every command's errors say it
-                return reply_result(message, self.label)
-            if message.get("type") == "events":
-                self.pending.append(message)
+            raise not_answering(self.name, idle or 0.0) from None
+        except ConnectionError:
+            raise self.lost() or SessionError(
+                f"session {self.label} closed the connection during {request.op}") from None
 
     def messages(self) -> Iterator[dict[str, Any]]:
         """Messages as they come (after `subscribe`), until the server closes."""
-        while self.pending:
-            yield self.pending.pop(0)
         while True:
             message = self.receive()
             if message is None:
@@ -291,13 +336,15 @@ class Link:
             pass
 
     def release(self) -> None:
-        """Done with the blocking reads; the socket stays open for another client of the
-        same connection (nothing unasked is sent before a subscribe, so none is lost)."""
-        self._file.close()
+        """Done with the link: the socket given to `connected` stays open for another
+        client of the same link (nothing unasked is sent before a subscribe, so none is
+        lost)."""
+        self._end()
+        if self._given is not None:  # blocking again, as it was given: the copy's mode
+            self._given.settimeout(self._given.gettimeout())  # is the same file's
 
     def close(self) -> None:
-        self._file.close()
-        self.sock.close()
+        self._end()
         if self._on_close is not None:
             self._on_close()
 

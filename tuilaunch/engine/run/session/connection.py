@@ -1,16 +1,17 @@
 """One connection to a session server, asyncio: greeted once (protocol.greet), requests
 numbered, replies matched to them by id, the other messages handed to whoever follows it.
 
-Every asyncio client speaks through it (the TUI's and the fleet's RemoteSupervisor, plots,
+Every client speaks through it (the TUI's and the fleet's RemoteSupervisor, plots,
 `attach`), over a session's unix socket or an ssh link's socket alike; the CLI's one-shot
-commands use its blocking twin, client/link.py's Link, which shares the codec, the greeting
-check and `reply_result`. A lost link is reconnected by a new Connection, paced by a
+commands too, through client/link.py's Link, a blocking face that runs one Connection on an
+event loop of its own. A lost link is reconnected by a new Connection, paced by a
 Reconnector (reconnector.py).
 
 Two ways to be answered, as a client needs: `ask` waits for its reply while another task
 `receive`s the stream (the reply is matched there); `call` reads the stream itself until
 its reply (opening, reconnecting, a step that must happen before the next message is
-handled), keeping what came meanwhile for `receive`, in order.
+handled, every request of a one-shot command), keeping what came meanwhile for `receive`
+and `next_message`, in order.
 """
 
 from __future__ import annotations
@@ -47,9 +48,13 @@ class Connection:
         self.label = label
         self.last_heard = time.monotonic()
         """When the other side last sent anything (a link's silence is shown from it)."""
+        self.ended = False
+        """The session said it ended (its last message), read here or by `call`."""
         self._next_id = 0
         self._replies: dict[int, asyncio.Future[dict[str, Any]]] = {}
-        self._early: collections.deque[dict[str, Any]] = collections.deque()
+        self.early: collections.deque[dict[str, Any]] = collections.deque()
+        """What `call` read before its reply, in order: the next messages `receive` and
+        `next_message` give."""
 
     @classmethod
     async def greeted(cls, reader: asyncio.StreamReader, writer: asyncio.StreamWriter,
@@ -59,7 +64,7 @@ class Connection:
         try:
             line = await asyncio.wait_for(reader.readline(), timeout)
             return cls(reader, writer, greet(line, label), label)
-        except ProtocolError as exc:
+        except (ProtocolError, ConnectionError) as exc:  # not a tuilaunch; reset
             writer.close()
             raise SessionError(f"session {label} did not greet ({exc})") from None
         except BaseException:
@@ -67,13 +72,19 @@ class Connection:
             raise
 
     @classmethod
-    async def open_unix(cls, path: str, label: str, timeout: float) -> Connection:
-        """A session's socket on this machine, greeted within `timeout` s."""
+    async def open_unix(cls, path: str, label: str, timeout: float,
+                        hint: str | None = None) -> Connection:
+        """A session's socket on this machine, connected and greeted within `timeout` s
+        each (a stopped server's full backlog holds the connect); `hint`: what the error of
+        a socket nobody listens on adds."""
         try:
-            reader, writer = await asyncio.open_unix_connection(path, limit=MAX_MESSAGE)
+            async with asyncio.timeout(timeout):
+                reader, writer = await asyncio.open_unix_connection(path, limit=MAX_MESSAGE)
+        except TimeoutError:  # an OSError too, but the caller's to say: not answering
+            raise
         except OSError as exc:
-            raise SessionError(f"session {label} does not answer ({exc.strerror or exc})")\
-                from None
+            raise SessionError(f"session {label} does not answer ({exc.strerror or exc})",
+                               hint=hint) from None
         return await cls.greeted(reader, writer, label, timeout)
 
     @classmethod
@@ -105,20 +116,35 @@ class Connection:
         finally:
             self._replies.pop(request_id, None)
 
-    async def call(self, request: Request[R]) -> R:
+    async def call(self, request: Request[R], idle: float | None = None) -> R:
         """The reply to `request`, read here: for a step taken while nobody `receive`s.
-        ConnectionError when the stream closes first."""
+        ConnectionError when the stream closes first; TimeoutError when nothing at all came
+        for `idle` s (a session streaming events meanwhile is answering)."""
         request_id = self.send(request)
         await self.writer.drain()
         while True:
-            line = await self.reader.readline()
+            line = await self._line(idle)
             if not line:
                 raise ConnectionError(f"the link closed during {request.op}")
-            self.last_heard = time.monotonic()
-            message = decode(line)
+            message = self._heard(decode(line))
             if message.get("type") == "reply" and message.get("id") == request_id:
                 return request.reply(reply_result(message, self.label))
-            self._early.append(message)
+            self.early.append(message)
+
+    async def _line(self, idle: float | None) -> bytes:
+        if idle is None:  # the TUI's stream: no timer per line
+            line = await self.reader.readline()
+        else:
+            async with asyncio.timeout(idle):
+                line = await self.reader.readline()
+        if line:
+            self.last_heard = time.monotonic()
+        return line
+
+    def _heard(self, message: dict[str, Any]) -> dict[str, Any]:
+        if message.get("type") == "ended":
+            self.ended = True
+        return message
 
     # --- following ----------------------------------------------------------------------------
 
@@ -126,29 +152,31 @@ class Connection:
         """The next message that is not a reply (events, ended), what `call` kept first;
         replies go to their `ask`. None once the stream closed."""
         while True:
-            if self._early:
-                message = self._early.popleft()
-            else:
-                try:
-                    line = await self.reader.readline()
-                except (ConnectionError, ValueError):  # ValueError: past MAX_MESSAGE
-                    line = b""
-                if not line:
-                    return None
-                self.last_heard = time.monotonic()
-                try:
-                    message = decode(line)
-                except ProtocolError:
-                    continue
-            if message.get("type") != "reply":
+            message = await self.next_message()
+            if message is None or message.get("type") != "reply":
                 return message
             future = self._replies.pop(message.get("id", -1), None)
             if future is not None and not future.done():
                 future.set_result(message)
 
+    async def next_message(self, idle: float | None = None) -> dict[str, Any] | None:
+        """The next message whatever it is, replies too (a request `send` without waiting
+        is answered among the events), what `call` kept first; None once the stream closed,
+        TimeoutError after `idle` s of silence (the connection stays usable)."""
+        while not self.early:
+            try:
+                line = await self._line(idle)
+            except (ConnectionError, ValueError):  # ValueError: past MAX_MESSAGE
+                line = b""
+            if not line:
+                return None
+            with contextlib.suppress(ProtocolError):
+                return self._heard(decode(line))
+        return self.early.popleft()
+
     def forget_early(self) -> None:
         """Drops what `call` kept: a reconnection that failed midway reads it again."""
-        self._early.clear()
+        self.early.clear()
 
     def fail(self, why: str) -> None:
         """Every `ask` waiting is told `why` (the stream is gone)."""
