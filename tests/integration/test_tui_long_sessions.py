@@ -15,13 +15,15 @@ import select
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
+from collections.abc import AsyncIterator, Iterator
+from contextlib import asynccontextmanager, contextmanager
 from pathlib import Path
 
+import pytest
+from textual.pilot import Pilot
 from textual.widgets import DataTable
 
-from tuilaunch.tui.app import TuiLaunchApp
+from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.fields import Field
@@ -29,8 +31,10 @@ from tuilaunch.tui.screens.output_panel import OutputPanel
 from tuilaunch.tui.screens.params_panel import ParamsPanel
 from tuilaunch.tui.screens.tree_panel import LaunchTree
 
+from ..conftest import session_folders
 from .proc_tree import end, servers_of
-from .test_tui import launched, pids, row_text, states, tab_panel, tui, until
+from .test_sessions import status, tl
+from .test_tui import BRINGUP, launched, pids, row_text, states, tab_panel, until
 
 COUNTER = """
 from launch import LaunchDescription
@@ -127,7 +131,7 @@ def read_until(master: int, marker: bytes, limit: float = 60) -> bytes:
     out = b""
     end = time.monotonic() + limit
     while marker not in out:
-        assert time.monotonic() < end, f"{marker!r} never shown"
+        assert time.monotonic() < end, f"{marker!r} never shown; the TUI wrote: {out[-3000:]!r}"
         if select.select([master], [], [], 0.1)[0]:
             try:
                 out += os.read(master, 65536)
@@ -220,12 +224,42 @@ async def test_a_node_that_exits_1_after_a_relaunch_shows_failed_with_its_code(w
         assert "1 failed" in str(app.query_one("#status").render())
 
 
-# --- 9. group restart re-runs its actions -------------------------------------------------
+# --- 9. group restart re-runs its actions; 10. the Params tab -----------------------------
+
+BRINGUP_ARGUMENTS = {"robot": "tuig", "services": "false", "listener": "false",
+                     "mode": "dock"}
 
 
-async def test_restarting_a_group_reruns_its_set_parameters(tmp_path):
-    async with tui(tmp_path, "robot:=tuig", "services:=false", "listener:=false",
-                   "mode:=dock") as (app, pilot):
+@pytest.fixture(scope="module")
+def bringup(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
+    """One session of examples/bringup.py (BRINGUP_ARGUMENTS) for the tests that attach a
+    TUI to it to look at one thing: its name and its log folder. A test may restart its
+    nodes (their pids change), nothing else of it; it is stopped at the end of the module."""
+    root = tmp_path_factory.mktemp("bringup")
+    with session_folders(root / "log"):
+        name = tl(BRINGUP, *(f"{k}:={v}" for k, v in BRINGUP_ARGUMENTS.items()),
+                  "--detach").stdout.strip()
+        try:
+            tl("wait", name, "configurable-3", "running", "--timeout", "60")
+            yield name, Path(status(name)["log_dir"])
+        finally:
+            tl("stop", name, check=False)
+            end(servers_of(root / "log"))
+
+
+@asynccontextmanager
+async def attached_to(bringup: tuple[str, Path]) -> AsyncIterator[tuple[TuiLaunchApp, Pilot]]:
+    """A TUI attached to the module's session, as `tuilaunch attach` opens it; it detaches
+    at the end (the session runs on)."""
+    name, log_dir = bringup
+    app = make_app(BRINGUP, BRINGUP_ARGUMENTS, log_dir, session_name=name)
+    async with app.run_test(size=(100, 32)) as pilot:
+        yield app, pilot
+        await pilot.press("d")
+
+
+async def test_restarting_a_group_reruns_its_set_parameters(bringup):
+    async with attached_to(bringup) as (app, pilot):
         await until(pilot, lambda: states(app).get("set_parameters-1") == "done")
         log = View("configurable-3")
         await until(pilot, lambda: any("mode set to 'dock'" in line
@@ -248,19 +282,15 @@ def _last_start(lines: list[str]) -> int:
     return max(i for i, line in enumerate(lines) if "process started" in line)
 
 
-# --- 10. params "launch file" column for nodes named by their code --------------------------
-
-
-async def test_params_launch_column_matches_a_node_by_the_name_it_reports(tmp_path):
-    async with tui(tmp_path, "robot:=tuip", "services:=false", "listener:=false") \
-            as (app, pilot):
+async def test_params_launch_column_matches_a_node_by_the_name_it_reports(bringup):
+    async with attached_to(bringup) as (app, pilot):
         # configurable has no name in the launch file (plan full_name is None)
         assert app.session.plan.process("configurable-3").full_name is None
         await until(pilot, lambda: states(app).get("set_parameters-1") == "done")
         panel = await tab_panel(pilot, app, "4", ParamsPanel)
-        await until(pilot, lambda: "/tuip/control/configurable" in panel.nodes,
+        await until(pilot, lambda: "/tuig/control/configurable" in panel.nodes,
                     every=panel.refresh_listing)
-        panel.load_node("/tuip/control/configurable")
+        panel.load_node("/tuig/control/configurable")
         table = app.query_one("#prm-table", DataTable)
         await until(pilot, lambda: "mode" in panel.params and table.row_count > 0)
         assert table.get_cell("mode", "launch") == "idle"  # the node's own parameters
