@@ -16,6 +16,7 @@ import time
 import pytest
 
 from tuilaunch.tui.app import make_app
+from tuilaunch.tui.key_order import BURST_GAP
 
 from .test_interact import PROGRAMS
 from .test_interact_tui import pane, select
@@ -54,7 +55,9 @@ def test_a_line_typed_with_i_into_a_stopped_node_quits_nothing(write, tmp_path):
         read_until(master, b"process stopped [pid")
         os.write(master, b"iquit yes\r")
         screen = read_until(master, b"is not running (exited)")  # what `i` asked
-        time.sleep(1.0)  # the next burst: typed once the question shows
+        # the next burst, typed once the question shows: a person's pause, as a key within
+        # key_order.BURST_GAP of the dropped burst would be dropped with it
+        time.sleep(3 * BURST_GAP)
         os.write(master, b"yes\r")
         screen += read_until(master, b"got: es")
         assert b"still run" not in screen  # no quit question

@@ -187,7 +187,6 @@ def test_keys_written_to_a_real_terminal_in_one_write_keep_their_order(write, tm
         read_until(master, b"1 running")
         os.write(master, b"2")
         read_until(master, b"how many")
-        read_for(master, 0.3)
         # into the field (one tab past Apply and Defaults), erase it, type 42, erase one,
         # type 3
         os.write(master, b"\t" + b"\x15" + b"42" + b"\x7f" + b"3")
@@ -370,7 +369,6 @@ def arguments_tab_on_a_pty(write, tmp_path) -> Iterator[int]:
         read_until(master, b"1 running")
         os.write(master, b"2")
         read_until(master, b"Apply (F5)")
-        read_for(master, 0.3)
         yield master
     finally:
         stop_pty(proc, master)
@@ -389,7 +387,6 @@ def test_escape_and_a_letter_in_one_write_leave_the_field_then_act(write, tmp_pa
     the field, then `/` opens the search, instead of typing `/` into the field."""
     with arguments_tab_on_a_pty(write, tmp_path) as master:
         os.write(master, b"\t")  # into the label field (one tab past Apply, Defaults)
-        read_for(master, 0.3)
         os.write(master, b"y\x1bq")  # type y, then escape and q together: leave, then quit
         screen = read_until(master, b"and quit?")
         assert b"yq" not in screen  # the q was not typed into the field
