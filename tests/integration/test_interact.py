@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -152,13 +153,17 @@ def generate_launch_description():
 """
 
 
+PIPED_TWO = re.sub(r"        ExecuteProcess\(name='slow'.*?\]\),\n", "", PIPED, flags=re.S)
+"""PIPED without the node slow to stop (which only test_interact_tui's restarts need)."""
+
+
 def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_plain_restart(
         write):
     """As ros2 launch, a process without emulate_tty gets pipes: a keyboard node refuses
     them, as teleop_twist_keyboard does, and one that runs cannot be typed into. `restart
     --terminal` (what the TUI's `i` offers) gives it a terminal; a plain restart takes it
     back."""
-    name = tl(str(write(PIPED)), "--detach").stdout.strip()
+    name = tl(str(write(PIPED_TWO)), "--detach").stdout.strip()
     tl("wait", name, "lines-1", "failed", "--timeout", "60")
     assert "stdin is not a terminal" in logs(name, "lines-1")
     assert process(name, "lines-1")["terminal"] is False
@@ -229,26 +234,38 @@ def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
     tl("stop", name)
 
 
+SEGV = f"""
+import sys
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess
+def generate_launch_description():
+    return LaunchDescription([
+        ExecuteProcess(name='segv', cmd=[sys.executable, {str(PROGRAMS)!r} + '/segv.py'],
+                       output='screen'),
+    ])
+"""
+"""The crashing program alone: what the restarts under a tool need."""
+
+
 @requires_gdb
 def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
         write, monkeypatch):
     monkeypatch.setenv("DEBUGINFOD_URLS", "")  # no network look-up of debug symbols
-    name = start(write)
-    tl("wait", name, "segv-3", "failed", "--timeout", "60")
-    tl("restart", name, "segv-3", "--prefix", "gdb -q -batch -nx -ex run -ex bt --args",
+    name = tl(str(write(SEGV)), "--detach").stdout.strip()
+    tl("wait", name, "segv-1", "failed", "--timeout", "60")
+    tl("restart", name, "segv-1", "--prefix", "gdb -q -batch -nx -ex run -ex bt --args",
        check=False)
-    wait_for(lambda: "#1 " in logs(name, "segv-3"), what="gdb's backtrace in the log")
-    text = logs(name, "segv-3")
+    wait_for(lambda: "#1 " in logs(name, "segv-1"), what="gdb's backtrace in the log")
+    text = logs(name, "segv-1")
     assert "Program received signal SIGSEGV" in text
-    assert process(name, "segv-3")["command"][0].endswith("gdb")
+    assert process(name, "segv-1")["command"][0].endswith("gdb")
     # the next plain restart runs it as the file says
-    tl("restart", name, "segv-3", check=False)
-    wait_for(lambda: process(name, "segv-3")["state"] == "failed" and
-             not process(name, "segv-3")["command"][0].endswith("gdb"),
+    tl("restart", name, "segv-1", check=False)
+    wait_for(lambda: process(name, "segv-1")["state"] == "failed" and
+             not process(name, "segv-1")["command"][0].endswith("gdb"),
              what="a plain run that crashes again")
-    assert process(name, "segv-3")["signal"] == "SIGSEGV"
+    assert process(name, "segv-1")["signal"] == "SIGSEGV"
     tl("stop", name)
-
 
 
 def test_a_respawning_node_left_under_a_tool_with_status_0_is_not_brought_back(write):

@@ -74,7 +74,8 @@ def runtime(monkeypatch, tmp_path):
 @pytest.fixture(scope="module")
 def shared_session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
     """One session of LAUNCH (default arguments, as start_detached starts it) for the tests
-    that only read it: its name and its session folder."""
+    that leave it as they found it (they read it, or stop and continue its server): its
+    name and its session folder."""
     root = tmp_path_factory.mktemp("shared")
     path = root / "test_launch.py"
     path.write_text(LAUNCH)
@@ -245,10 +246,11 @@ def test_a_dead_server_leaves_no_node_and_ls_cleans_its_socket(runtime, write):
     assert missing.returncode == 2 and f"no running session named {name}" in missing.stderr
 
 
-def test_a_stopped_server_makes_no_command_hang(runtime, write):
+def test_a_stopped_server_makes_no_command_hang(shared):
     """A stray Ctrl+Z or `kill -STOP` on the server: its socket still accepts, nothing
-    answers. `ls` lists it as not answering, the others say so in one line; none hangs."""
-    name = start_detached(write)
+    answers. `ls` lists it as not answering, the others say so in one line; none hangs.
+    Once continued, it answers again."""
+    name, _ = shared
     server = status(name)["pid"]
     os.kill(server, signal.SIGSTOP)
     try:
@@ -271,7 +273,6 @@ def test_a_stopped_server_makes_no_command_hang(runtime, write):
     finally:
         os.kill(server, signal.SIGCONT)
     assert json.loads(tl("ls", "--json").stdout)[0]["answering"] is True
-    tl("stop", name)
 
 
 def test_kill_now_on_a_server_that_does_not_answer_kills_it_and_so_the_launch(runtime,
