@@ -27,7 +27,14 @@ from tuilaunch.engine.run.vocabulary.requests import Input, Stop, Subscribe, Tak
 from ..conftest import run_cli, run_headless, session_folders, wait_for
 from .gdb_support import requires_gdb
 from .terminal_harness import PROGRAMS
-from .test_sessions import Terminal, runtime, status, tl  # noqa: F401  (runtime: a fixture)
+from .test_sessions import (  # noqa: F401  (runtime: a fixture)
+    Terminal,
+    cli_status,
+    runtime,
+    status,
+    tl,
+    wait_state,
+)
 
 pytestmark = pytest.mark.usefixtures("runtime")  # a private session folder per test
 
@@ -63,8 +70,8 @@ def start(write) -> str:
 def start_file(path: Path) -> str:
     """A session of LAUNCH at `path`, once both readers are ready."""
     name = tl(str(path), "--detach").stdout.strip()
-    tl("wait", name, "lines-1", "running", "--timeout", "60")
-    tl("wait", name, "keys-2", "running", "--timeout", "60")
+    wait_state(name, "lines-1", "running")
+    wait_state(name, "keys-2", "running")
     wait_for(lambda: "ready" in logs(name, "lines-1") and "ready" in logs(name, "keys-2"),
              what="both readers ready")
     return name
@@ -118,7 +125,7 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(write):
         # the line reader: ctrl+c is SIGINT, as in a terminal
         typist.request(TakeKeys(process="lines-1", on=True))
         typist.request(Input(process="lines-1", data="\u0003"))
-        tl("wait", name, "lines-1", "exited", "--timeout", "60")
+        wait_state(name, "lines-1", "exited")
         assert "interrupted by SIGINT" in logs(name, "lines-1")
         # typing into a node that is not running: one line, nothing else changes
         with pytest.raises(SessionError, match="lines-1 is not running"):
@@ -133,7 +140,7 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(write):
     wait_for(lambda: status(name)["typing"] is None, what="the keyboard given back")
     other.request(TakeKeys(process="keys-2", on=True))
     other.request(Input(process="keys-2", data="q"))
-    tl("wait", name, "keys-2", "exited", "--timeout", "60")
+    wait_state(name, "keys-2", "exited")
     other.close()
     tl("stop", name)
 
@@ -164,10 +171,10 @@ def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_pla
     --terminal` (what the TUI's `i` offers) gives it a terminal; a plain restart takes it
     back."""
     name = tl(str(write(PIPED_TWO)), "--detach").stdout.strip()
-    tl("wait", name, "lines-1", "failed", "--timeout", "60")
+    wait_state(name, "lines-1", "failed")
     assert "stdin is not a terminal" in logs(name, "lines-1")
     assert process(name, "lines-1")["terminal"] is False
-    tl("wait", name, "nap-2", "running", "--timeout", "60")
+    wait_state(name, "nap-2", "running")
     typist = Link(name)
     try:
         with pytest.raises(SessionError, match="nap-2 cannot be typed into: it has no "
@@ -181,7 +188,7 @@ def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_pla
         wait_for(lambda: "got: hello robot" in logs(name, "lines-1"), what="the typed line")
         typist.request(TakeKeys(process="lines-1", on=False))
         tl("restart", name, "lines-1", check=False)
-        tl("wait", name, "lines-1", "failed", "--timeout", "60")
+        wait_state(name, "lines-1", "failed")
         assert process(name, "lines-1")["terminal"] is False
         assert logs(name, "lines-1").count("stdin is not a terminal") == 2
     finally:
@@ -191,8 +198,8 @@ def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_pla
 
 def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(shared):
     name = shared
-    tl("wait", name, "segv-3", "failed", "--timeout", "60")
-    crashed = process(name, "segv-3")
+    wait_state(name, "segv-3", "failed")
+    crashed = next(p for p in cli_status(name)["processes"] if p["id"] == "segv-3")
     assert crashed["state"] == "failed"
     assert crashed["signal"] == "SIGSEGV"
     assert "killed by SIGSEGV" in crashed["detail"]
@@ -220,17 +227,17 @@ def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
                 ExecuteProcess(name='stays', cmd=['sleep', '600']),
             ])
         """)), "--detach").stdout.strip()
-    tl("wait", name, "quits-1", "failed", "--timeout", "60")
+    wait_state(name, "quits-1", "failed")
     quits = process(name, "quits-1")
     assert quits["state"] == "failed" and quits["exit_code"] == 3
     assert "signal" not in quits  # an exit status, not a signal
-    tl("wait", name, "stays-2", "running", "--timeout", "60")
+    wait_state(name, "stays-2", "running")
     link = Link(name)
     try:
         link.request(Stop(process="stays-2"))
     finally:
         link.close()
-    tl("wait", name, "stays-2", "exited", "--timeout", "60")  # asked for: not a failure
+    wait_state(name, "stays-2", "exited")  # asked for: not a failure
     tl("stop", name)
 
 
@@ -252,7 +259,7 @@ def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
         write, monkeypatch):
     monkeypatch.setenv("DEBUGINFOD_URLS", "")  # no network look-up of debug symbols
     name = tl(str(write(SEGV)), "--detach").stdout.strip()
-    tl("wait", name, "segv-1", "failed", "--timeout", "60")
+    wait_state(name, "segv-1", "failed")
     tl("restart", name, "segv-1", "--prefix", "gdb -q -batch -nx -ex run -ex bt --args",
        check=False)
     wait_for(lambda: "#1 " in logs(name, "segv-1"), what="gdb's backtrace in the log")
@@ -279,7 +286,7 @@ def test_a_respawning_node_left_under_a_tool_with_status_0_is_not_brought_back(w
                 ExecuteProcess(name='keeps', respawn=True, respawn_delay=0.2,
                                cmd=['sh', '-c', 'echo keeps up; exec sleep 600'])])
         """)), "--detach").stdout.strip()
-    tl("wait", name, "keeps-1", "running", "--timeout", "60")
+    wait_state(name, "keeps-1", "running")
     # `true` stands for the tool the operator leaves: it ends at once, status 0
     tl("restart", name, "keeps-1", "--prefix", "true", check=False)
     wait_for(lambda: "ended under 'true' with status 0: not respawned" in logs(name, "keeps-1"),
@@ -287,7 +294,7 @@ def test_a_respawning_node_left_under_a_tool_with_status_0_is_not_brought_back(w
     assert process(name, "keeps-1")["state"] == "exited"
     # a plain restart runs it as the file says, and respawns it again as the file says
     tl("restart", name, "keeps-1", check=False)
-    tl("wait", name, "keeps-1", "running", "--timeout", "60")
+    wait_state(name, "keeps-1", "running")
     assert not process(name, "keeps-1")["command"][0] == "true"
     tl("stop", name)
 
@@ -371,7 +378,7 @@ def test_launch_prefix_with_a_filter_shows_in_print_as_ros2_launch_would(write, 
 
 def test_log_level_is_appended_as_ros_args_and_kept_until_changed(write, nodes):
     name = tl(str(write(TALKER)), "--detach").stdout.strip()
-    tl("wait", name, "talker-1", "running", "--timeout", "60")
+    wait_state(name, "talker-1", "running")
     tl("restart", name, "talker-1", "--log-level", "DEBUG")
     command = process(name, "talker-1")["command"]
     assert command[-3:] == ["--ros-args", "--log-level", "debug"]
@@ -399,8 +406,9 @@ print(names)
 
 def test_status_command_line_of_a_node_runs_it_by_hand(write, nodes):
     name = tl(str(write(LISTENER)), "--detach").stdout.strip()
-    tl("wait", name, "listener-1", "running", "--timeout", "60")
-    line = process(name, "listener-1")["command_line"]
+    wait_state(name, "listener-1", "running")
+    line = next(p for p in cli_status(name)["processes"]
+                if p["id"] == "listener-1")["command_line"]
     assert "__node:=listener" in line
     tl("stop", name)
     by_hand = subprocess.Popen(["sh", "-c", line], stdout=subprocess.DEVNULL,

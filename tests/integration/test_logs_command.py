@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from ..conftest import run_cli, session_folders, wait_for
+from .test_sessions import wait_state
 
 LAUNCH = """
 from launch import LaunchDescription
@@ -55,7 +56,7 @@ def life_session(root: Path) -> Iterator[str]:
         try:
             for process, state in (("three-1", "failed"), ("segv-2", "failed"),
                                    ("counter-4", "running")):
-                tl("wait", name, process, state, "--timeout", "60")
+                wait_state(name, process, state)
             wait_for(lambda: "respawn gives up" in tl("logs", name, "again-3"),
                      what="2 tries")
             wait_for(lambda: "line 50" in tl("logs", name, "counter-4"), what="50 lines")

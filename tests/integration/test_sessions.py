@@ -23,14 +23,18 @@ import time
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import TypeVar
 
 import pytest
 from textual.widgets import Input
 
+from tuilaunch.client.link import open_link
 from tuilaunch.client.remote_supervisor import RemoteSupervisor
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.events import ProcessExited, Started, Stopping
 from tuilaunch.engine.run.session import session_dir
+from tuilaunch.engine.run.vocabulary.request import Request
+from tuilaunch.engine.run.vocabulary.requests import Status
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import LEVELS, View
 
@@ -38,6 +42,8 @@ from ..conftest import run_cli, session_folders, wait_for
 from .proc_tree import alive as _alive
 from .proc_tree import end, servers_of
 from .test_tui import until
+
+R = TypeVar("R")
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -82,8 +88,8 @@ def shared_session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[s
     with session_folders(root / "log") as folder:
         name = tl(str(path), "--detach").stdout.strip()
         try:
-            tl("wait", name, "echo-3", "running", "--timeout", "60")
-            tl("wait", name, "early-2", "exited", "--timeout", "60")
+            wait_state(name, "echo-3", "running")
+            wait_state(name, "early-2", "exited")
             yield name, folder
         finally:
             tl("stop", name, check=False)
@@ -110,7 +116,32 @@ def run_cli_together(*commands: tuple[str, ...]) -> list[subprocess.CompletedPro
         return list(pool.map(lambda args: run_cli(*args), commands))
 
 
+def asked(name: str, request: Request[R]) -> R:
+    """The session's reply to `request`, read as a command reads it, from this process: a
+    command's own start costs a quarter of a second of CPU, which the tests' many looks at
+    a session's state need not pay. In a thread of its own (a Link runs its own event
+    loop, and a test's may be running here)."""
+
+    def ask() -> R:
+        link = open_link(name)
+        try:
+            return link.request(request, short=True)
+        finally:
+            link.close()
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        return pool.submit(ask).result()
+
+
 def status(name: str) -> dict:
+    """What `tuilaunch status NAME --json` says of the session, but each process's CPU and
+    memory (which take the server 0.3 s to measure), read from this process. A test of the
+    command itself runs it: cli_status."""
+    return json.loads(json.dumps(asked(name, Status(resources=False)).to_json()))
+
+
+def cli_status(name: str) -> dict:
+    """`tuilaunch status NAME --json`, the command as a user runs it."""
     return json.loads(tl("status", name, "--json").stdout)
 
 
@@ -118,20 +149,30 @@ def pids(name: str) -> dict[str, int]:
     return {p["id"]: p["pid"] for p in status(name)["processes"] if p["pid"]}
 
 
+def wait_state(name: str, process: str, state: str, timeout: float = 60) -> None:
+    """Returns once the process (its id) is in `state`, as `tuilaunch wait` would, looking
+    from this process: for a test's own steps, where the command is not what is tested."""
+    def now() -> str | None:
+        return next((p["state"] for p in status(name)["processes"] if p["id"] == process),
+                    None)
+
+    wait_for(lambda: now() == state, timeout, f"{process} {state} in {name}")
+
+
 def detached_with(path: str, process: str) -> tuple[str, Path]:
     """A session of `path` started detached, once `process` runs: its name and its log
     folder, for a TUI to attach to."""
     name = tl(path, "--detach").stdout.strip()
-    tl("wait", name, process, "running", "--timeout", "60")
+    wait_state(name, process, "running")
     return name, Path(status(name)["log_dir"])
 
 
 def start_detached(write, *args: str) -> str:
     path = write(LAUNCH)
     name = tl(str(path), "--detach", *args).stdout.strip()
-    tl("wait", name, "echo-3", "running", "--timeout", "60")
+    wait_state(name, "echo-3", "running")
     # started before echo, but a busy machine may run it later: its end is part of the start
-    tl("wait", name, "early-2", "exited", "--timeout", "60")
+    wait_state(name, "early-2", "exited")
     return name
 
 
@@ -354,7 +395,7 @@ def test_stop_leaves_nothing_behind(runtime, write):
         "    sl.add_action(ExecuteProcess(name='family', cmd=[\n"
         "        'sh', '-c', 'sleep 600; echo never']))"))
     name = tl(str(path), "--detach").stdout.strip()
-    tl("wait", name, "family-1", "running", "--timeout", "60")
+    wait_state(name, "family-1", "running")
     info = status(name)
     group = [int(p) for p in subprocess.run(
         ["pgrep", "-g", str(info["processes"][0]["pid"])], capture_output=True,
@@ -552,7 +593,7 @@ def test_wait_for_a_lifecycle_state_asks_the_node(runtime, write, tmp_path):
 
 def test_logs_follow_joins_the_file_and_the_live_stream_without_gap(runtime, write):
     name = start_detached(write)
-    tl("wait", name, "ticker-1", "running", "--timeout", "60")
+    wait_state(name, "ticker-1", "running")
     follower = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", name, "ticker",
                                  "-f"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 text=True)
@@ -648,7 +689,7 @@ def generate_launch_description():
 def test_kill_during_a_shutdown_sends_sigkill_at_once(runtime, write):
     path = str(write(STUBBORN))
     name = tl(path, "--detach").stdout.strip()
-    tl("wait", name, "stubborn-1", "running", "--timeout", "60")
+    wait_state(name, "stubborn-1", "running")
 
     async def scenario() -> list:
         client = await RemoteSupervisor.open(name, Session(path, {}))
@@ -722,7 +763,7 @@ def test_two_launches_of_one_file_started_at_once_take_two_names(runtime, write)
         assert [(code, out.strip(), err) for code, out, err in results] == [
             (0, f"{stem}-3", ""), (0, f"{stem}-4", "")]
         for name in (f"{stem}-3", f"{stem}-4"):
-            tl("wait", name, "echo-3", "running", "--timeout", "60")
+            wait_state(name, "echo-3", "running")
             tl("stop", name)
     finally:
         for terminal in terminals:
@@ -740,7 +781,7 @@ def test_a_session_loads_its_file_with_the_command_line_ros2_launch_would_give(
                 'echo', ' '.join(sys.argv[2:])])])
         """)
     name = tl(str(path), "--detach", "robots:=r1;r2").stdout.strip()
-    tl("wait", name, "argv-1", "exited", "--timeout", "60")
+    wait_state(name, "argv-1", "exited")
     assert f"\n{path} robots:=r1;r2\n" in tl("logs", name, "argv-1").stdout
     tl("stop", name)
 
@@ -805,7 +846,7 @@ def generate_launch_description():
         'load 10%%\\\\rload 50%%\\\\rload 100%%\\\\n\\\\377bad\\\\000byte\\\\ndone\\\\n'])])
 """)
     name = tl(str(path), "--detach").stdout.strip()
-    tl("wait", name, "bar-1", "exited", "--timeout", "60")
+    wait_state(name, "bar-1", "exited")
     log_dir = Path(status(name)["log_dir"])
     logged = (log_dir / "bar-1.log").read_bytes()
     assert b" load 100%\n" in logged and b"load 10%" not in logged
@@ -920,7 +961,7 @@ def test_a_client_is_sent_only_the_pane_it_shows_and_reads_the_others_when_shown
     pane shown has every line, in order, none twice."""
     path = str(write(TWO_PANES))
     name = tl(path, "--detach").stdout.strip()
-    tl("wait", name, "right-2", "running", "--timeout", "60")
+    wait_state(name, "right-2", "running")
 
     def numbers(seen: list, process: str) -> list[int]:
         return [int(line.split()[1]) for e in seen if e.kind == "output"
@@ -1002,7 +1043,7 @@ def test_a_stop_in_progress_is_stopping_for_every_client_and_for_status(runtime,
         waited = await asyncio.to_thread(tl, "wait", name, "slow-1", "stopping",
                                          "--timeout", "60")
         assert waited.returncode == 0
-        now = {p["id"]: p for p in (await asyncio.to_thread(status, name))["processes"]}
+        now = {p["id"]: p for p in (await asyncio.to_thread(cli_status, name))["processes"]}
         assert (now["slow-1"]["state"], now["slow-1"]["pid"]) == ("stopping", old)
         for _ in range(600):
             if other.states.get("slow-1") == "stopping":
