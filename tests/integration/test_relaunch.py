@@ -23,7 +23,7 @@ from tuilaunch.tui.screens.dialogs import ChoiceScreen
 from tuilaunch.tui.screens.topics_panel import TopicsPanel
 
 from ..conftest import run_cli, wait_for
-from .test_sessions import runtime, status, tl  # noqa: F401
+from .test_sessions import runtime, status, tl, wait_state  # noqa: F401
 from .test_tui import BRINGUP, until
 
 
@@ -36,7 +36,7 @@ async def session_tui(path: str, *args: str, wait: tuple[str, ...] = (),
     name = tl(path, "--detach", *args).stdout.strip()
     try:
         for process in wait:
-            tl("wait", name, process, "running", "--timeout", "60")
+            wait_state(name, process, "running")
         info = status(name)
         app = make_app(path, info["arguments"], Path(info["log_dir"]), session_name=name,
                        owner=owner)
@@ -89,7 +89,8 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         await pilot.press("o")  # the Topics tab's panel is made as it first shows
         await until(pilot, lambda: app.tabs.active == "topics")
         panel = app.query_one(TopicsPanel)
-        assert panel.node == "/rl2/talker"
+        # the node o asked for, listed once the panel is there (a loaded machine: later)
+        await until(pilot, lambda: panel.node == "/rl2/talker")
         await until(pilot, lambda: "/rl2/chatter" in panel.shown)
         assert not any(topic.startswith("/rl1/") for topic in panel.shown)
 
@@ -122,7 +123,7 @@ async def test_names_follow_a_relaunch_that_moves_the_nodes(runtime):  # noqa: F
         app.query_one("#arg-robot", Input).focus()
         await pilot.press("ctrl+u", *"rl4", "f5")
         await until(pilot, lambda: status(name)["arguments"].get("robot") == "rl4")
-        tl("wait", name, "talker-1", "running", "--timeout", "60")
+        wait_state(name, "talker-1", "running")
         # at once: the server waits a moment for the restarted talker to say its name
         topics = tl("topics", name, "--node", "talker-1", check=False)
         assert topics.returncode == 0, topics.stderr
@@ -168,8 +169,8 @@ async def test_a_relaunch_runs_the_edited_file_and_refuses_one_that_no_longer_lo
         app.query_one("#arg-word", Input).focus()
         await pilot.press("ctrl+u", *"beta", "f5")
         await until(pilot, lambda: status(name)["arguments"] == {"word": "beta"})
-        tl("wait", name, "extra-2", "running", "--timeout", "60")
-        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        wait_state(name, "extra-2", "running")
+        wait_state(name, "echo-1", "running")
         assert pid_of(name, "echo-1") != first
         await until(pilot, lambda: "said beta" in tl("logs", name, "echo-1").stdout,
                     every=lambda: None)
@@ -264,9 +265,9 @@ async def test_an_attached_client_says_when_the_session_is_stopped_elsewhere(
     path = write(SHELL)
     # a relaunch made by another client before this one attached
     name = tl(str(path), "--detach").stdout.strip()
-    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    wait_state(name, "echo-1", "running")
     apply_elsewhere(name, word="beta")
-    tl("wait", name, "echo-1", "running", "--timeout", "60")
+    wait_state(name, "echo-1", "running")
     info = status(name)
     app = make_app(str(path), info["arguments"], Path(info["log_dir"]), session_name=name)
     try:
@@ -319,8 +320,8 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
 
     path = write(SHELL)
     name = tl(str(path), "--detach").stdout.strip()
-    tl("wait", name, "echo-1", "running", "--timeout", "60")
-    tl("wait", name, "bad-2", "failed", "--timeout", "60")  # before the stop, not raced by it
+    wait_state(name, "echo-1", "running")
+    wait_state(name, "bad-2", "failed")  # before the stop, not raced by it
     attached = Terminal("attach", name)
     try:
         attached.read_until(b"echo-1")
@@ -340,7 +341,7 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
 
         wait_for(sessions, what="the TUI's session in tuilaunch ls")
         names = sessions()
-        tl("wait", names[-1], "bad-2", "failed", "--timeout", "60")
+        wait_state(names[-1], "bad-2", "failed")
         log_dir = status(names[-1])["log_dir"]
         text = quit_after_a_failure(owner)
         assert f"tuilaunch: bad-2 failed (exit code 3); its output: {log_dir}/bad-2.log" in text
@@ -409,7 +410,7 @@ async def test_an_edited_included_file_is_previewed_and_applied_by_f5(
             "a file main_launch.py includes changed on disk: changes: part-1.")
         await pilot.press("f5")
         await until(pilot, lambda: "Applied." in preview_text(app))
-        tl("wait", name, "part-1", "running", "--timeout", "60")
+        wait_state(name, "part-1", "running")
         assert pid_of(name, "part-1") != first
         await until(pilot, lambda: "second" in tl("logs", name, "part-1").stdout,
                     every=lambda: None)
@@ -453,7 +454,7 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
     path = write(EDITABLE.format(said="word", extra=""))
     name = tl(str(path), "--detach").stdout.strip()
     try:
-        tl("wait", name, "echo-1", "running", "--timeout", "60")
+        wait_state(name, "echo-1", "running")
         info = status(name)
         assert not edited_since(info["file"], info["file_stamp"])
         path.write_text(EDITABLE.format(said="said", extra=EXTRA))
@@ -470,7 +471,7 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
                 "changes: echo-1" in preview_text(app)
             await pilot.press("f5")
             await until(pilot, lambda: "extra-2" in app.launch_tree.rows)
-            tl("wait", name, "extra-2", "running", "--timeout", "60")
+            wait_state(name, "extra-2", "running")
             app.leaving.detach()
             await until(pilot, lambda: app.detached)
     finally:
@@ -497,7 +498,7 @@ def test_wait_running_waits_through_a_relaunch_that_stopped_the_process(
     name = tl(str(write(SLOW_STOP.replace("RELEASE", str(release)))), "--detach").stdout.strip()
     try:
         for process in ("echo-1", "slow-2"):
-            tl("wait", name, process, "running", "--timeout", "60")
+            wait_state(name, process, "running")
         old_pid = next(p["pid"] for p in status(name)["processes"] if p["id"] == "echo-1")
         relaunch = threading.Thread(target=apply_elsewhere, args=(name,),
                                     kwargs={"word": "beta"})

@@ -16,8 +16,11 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
+import pytest
 from textual.widgets import Input
 
 from tuilaunch.client import remote_supervisor
@@ -30,7 +33,7 @@ from tuilaunch.tui.screens.dialogs import QuitScreen
 
 from ..conftest import run_cli, wait_for
 from .sshd import Machine, Machines, alive, free_port, machines_fixture, proxies_on  # noqa: F401
-from .test_sessions import Terminal, run_cli_together
+from .test_sessions import Terminal, run_cli_together, status, wait_state
 from .test_tui import until
 
 LAUNCH = """
@@ -51,13 +54,29 @@ def there(machine: Machine) -> dict[str, str]:
             "ROS_LOG_DIR": str(machine.folder / "roslog")}
 
 
+@contextmanager
+def logged_in(machine: Machine) -> Iterator[None]:
+    """This process's environment is that of a user logged in on `machine` meanwhile."""
+    with pytest.MonkeyPatch.context() as patch:
+        for key, value in there(machine).items():
+            patch.setenv(key, value)
+        yield
+
+
+def status_there(machine: Machine, name: str) -> dict:
+    """The session's status as `tuilaunch status NAME --json` says it on `machine` (read
+    from this process; for a test's own steps, where the command is not what is tested)."""
+    with logged_in(machine):
+        return status(name)
+
+
 def start_on(machine: Machine, write, name: str) -> int:
     """A session started on `machine`; its server's pid."""
     path = write(LAUNCH)
     done = run_cli(str(path), "--detach", "--name", name, env=there(machine))
     assert done.returncode == 0, done.stderr
-    wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=there(machine))
-    assert wait.returncode == 0, wait.stderr
+    with logged_in(machine):
+        wait_state(name, "ticker-1", "running")
     return machine.server_pid(name)
 
 
@@ -165,7 +184,7 @@ def test_attach_through_ssh_survives_a_dropped_link(machines: Machines, write, m
     once back shows what happened meanwhile, nothing twice and nothing missed."""
     robot = machines["robot1"]
     server = start_on(robot, write, "far")
-    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    status = status_there(robot, "far")
     before = {p["id"]: p["pid"] for p in status["processes"]}
     # reconnect only when asked (R), so what happens meanwhile surely happens meanwhile
     monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)
@@ -276,9 +295,9 @@ def test_attach_without_the_launch_file_here_draws_the_servers_plan(machines: Ma
     path.write_text(ARGUED)
     started = run_cli(str(path), "--detach", "--name", "far", env=there(robot))
     assert started.returncode == 0, started.stderr
-    assert run_cli("wait", "far", "quiet-2", "running", "--timeout", "30",
-                   env=there(robot)).returncode == 0
-    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    with logged_in(robot):
+        wait_state("far", "quiet-2", "running")
+    status = status_there(robot, "far")
     quiet_pid = {p["id"]: p["pid"] for p in status["processes"]}["quiet-2"]
     files.rename(tmp_path / "moved-away")  # not readable here at that path any more
     elsewhere = tmp_path / "operator"
@@ -467,9 +486,9 @@ def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: M
     monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "here"))
     path = write(STAMPED)
     assert run_cli(str(path), "--detach", "--name", "stamped", env=there(robot)).returncode == 0
-    assert run_cli("wait", "stamped", "logger-1", "running", "--timeout", "30",
-                   env=there(robot)).returncode == 0
-    status = json.loads(run_cli("status", "robot1:stamped", "--json").stdout)
+    with logged_in(robot):
+        wait_state("stamped", "logger-1", "running")
+    status = status_there(robot, "stamped")
 
     def held(app) -> list[tuple[int, str]]:
         return [(int(line.text.rsplit(" ", 1)[1]), line.text)
@@ -585,10 +604,9 @@ def test_a_stream_whose_link_drops_says_so_and_the_session_runs_on(machines: Mac
     robot1 = machines["robot1"]
     done = run_cli(str(write(STREAMED)), "--detach", "--name", "far", env=there(robot1))
     assert done.returncode == 0, done.stderr
-    wait = run_cli("wait", "far", "talker-2", "running", "--timeout", "60", env=there(robot1))
-    assert wait.returncode == 0, wait.stderr
-    server = int(json.loads(run_cli("status", "far", "--json", env=there(robot1)).stdout)
-                 ["pid"])
+    with logged_in(robot1):
+        wait_state("far", "talker-2", "running")
+    server = int(status_there(robot1, "far")["pid"])
     lost = re.compile(r"^tuilaunch (logs|hz): link to robot1 lost: \S.*\n\Z")
 
     # the proxy on robot1 dies (the far end of the link)
@@ -633,7 +651,7 @@ def test_a_lost_link_fits_80_columns_says_each_attempt_and_a_hung_link_its_silen
     attempt's; a link that hangs (no bytes, no error) shows how long it has been silent."""
     robot = machines["robot1"]
     start_on(robot, write, "far")
-    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    status = status_there(robot, "far")
     monkeypatch.setattr(remote_supervisor, "RETRY_FIRST", 600.0)  # only R reconnects
     # the silence said after 2.5 s, not 5: still past the probe (remote_supervisor's
     # PROBE_AFTER), which a hung link leaves unanswered
@@ -683,7 +701,7 @@ def test_a_server_killed_there_is_its_end_not_a_lost_link(machines: Machines, wr
     session's end (no "while the link was down", no reconnecting), by `logs -f` too."""
     robot = machines["robot1"]
     server = start_on(robot, write, "far")
-    status = json.loads(run_cli("status", "robot1:far", "--json").stdout)
+    status = status_there(robot, "far")
     follow = Streaming("logs", "robot1:far", "ticker-1", "-f")
     follow.read_until("tick")
     said: list[str] = []
