@@ -25,7 +25,7 @@ import pytest
 from tuilaunch.client.link import Link
 from tuilaunch.client.session_state import merged_usage
 from tuilaunch.engine.ros.bridge import RosBridge
-from tuilaunch.engine.ros.graph import full_node_name
+from tuilaunch.engine.ros.graph.topic_graph import full_node_name
 from tuilaunch.engine.run.session.session_dir import SessionError
 from tuilaunch.engine.run.vocabulary.requests import (
     EchoStart,

@@ -95,7 +95,7 @@ def test_deadline_and_liveliness_incompatibilities_as_dds_defines_them():
     from rclpy.duration import Duration
     from rclpy.qos import LivelinessPolicy, QoSProfile
 
-    from tuilaunch.engine.ros.graph import pair_problem
+    from tuilaunch.engine.ros.graph.topic_graph import pair_problem
 
     slow = QoSProfile(depth=10, deadline=Duration(seconds=2))
     fast = QoSProfile(depth=10, deadline=Duration(seconds=1))

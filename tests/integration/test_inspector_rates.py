@@ -11,9 +11,9 @@ from typing import Any
 import pytest
 
 from tuilaunch.engine.ros.bridge import RosBridge, RosError
-from tuilaunch.engine.ros.echo import Throttle, message_yaml
+from tuilaunch.engine.ros.graph.echo import Throttle, message_yaml
+from tuilaunch.engine.ros.graph.rates import message_class
 from tuilaunch.engine.ros.messages import MessageError
-from tuilaunch.engine.ros.rates import message_class
 
 from .inspector_helpers import eventually, ros_nodes, run
 
@@ -168,7 +168,7 @@ def test_a_transient_local_history_is_not_counted_as_messages_published_now():
     Counted, 50 kept messages inflate a 2 Hz topic's rate tenfold; the Topics tab's windows
     and `hz`'s message windows count only what is published after they matched, as ros2
     topic hz does."""
-    from tuilaunch.engine.ros.rates import RateMeter
+    from tuilaunch.engine.ros.graph.rates import RateMeter
 
     topic = f"{NS}/kept"
 

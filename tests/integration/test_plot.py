@@ -29,7 +29,7 @@ from typing import Any
 
 import pytest
 
-from tuilaunch.cli.inspector import streamed
+from tuilaunch.cli.inspect.inspector import streamed
 from tuilaunch.client.link import Link, open_link
 from tuilaunch.engine.run.vocabulary.requests import (
     PlotStart,

@@ -12,7 +12,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState, LaserScan
 from std_msgs.msg import Bool, String
 
-from tuilaunch.client.plot_series import PlotSeries, Source, rebinned
+from tuilaunch.client.inspect.plot_series import PlotSeries, Source, rebinned
 from tuilaunch.engine.ros.plot.buckets import FieldBuckets
 from tuilaunch.engine.ros.plot.fields import (
     FieldError,

@@ -9,8 +9,8 @@ import inspect
 from textual.binding import Binding
 
 from tuilaunch.tui.app import TuiLaunchApp
-from tuilaunch.tui.inspector import Inspector
-from tuilaunch.tui.keyboard import NodeKeyboard
+from tuilaunch.tui.inspect.inspector import Inspector
+from tuilaunch.tui.keys.keyboard import NodeKeyboard
 from tuilaunch.tui.navigation import Navigation
 from tuilaunch.tui.quitting import Quitting
 

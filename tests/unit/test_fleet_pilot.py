@@ -24,8 +24,8 @@ from tuilaunch.engine.run.events import Started
 from tuilaunch.tui.fleet import app as fleet_app
 from tuilaunch.tui.fleet.app import FleetApp
 from tuilaunch.tui.fleet.bindings import BINDINGS
-from tuilaunch.tui.inspector import INSPECTOR_BINDINGS
-from tuilaunch.tui.keyboard import KEYBOARD_BINDINGS
+from tuilaunch.tui.inspect.inspector import INSPECTOR_BINDINGS
+from tuilaunch.tui.keys.keyboard import KEYBOARD_BINDINGS
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.interact_dialogs import TerminalQuestion, TypingLine
 from tuilaunch.tui.screens.output_panel import PANE_BINDINGS, NodesView

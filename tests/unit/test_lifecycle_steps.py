@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import asyncio
 
-from tuilaunch.tui.lifecycle_steps import LifecycleSteps
+from tuilaunch.tui.nodes.lifecycle_steps import LifecycleSteps
 
 
 def test_two_steps_up_from_unconfigured_configure_then_activate_one_after_the_other():

@@ -9,8 +9,8 @@ import io
 
 import pytest
 
-from tuilaunch.client.plot_series import PlotSeries, Source
-from tuilaunch.client.plot_shapes import (
+from tuilaunch.client.inspect.plot_series import PlotSeries, Source
+from tuilaunch.client.inspect.plot_shapes import (
     RowMerge,
     command_words,
     panels,

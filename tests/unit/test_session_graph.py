@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from tuilaunch.client.session_graph import field_info
+from tuilaunch.client.inspect.session_graph import field_info
 from tuilaunch.engine.ros.messages import describe_fields, import_type
 from tuilaunch.engine.run.session.protocol import decode, encode
 

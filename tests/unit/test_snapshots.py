@@ -13,10 +13,10 @@ from textual.app import App, ComposeResult
 from textual.screen import Screen
 from textual.widget import Widget
 
-from tuilaunch.client.session_graph import field_info
+from tuilaunch.client.inspect.session_graph import field_info
 from tuilaunch.engine.run.vocabulary.request import Request
 from tuilaunch.engine.run.vocabulary.requests import Topics
-from tuilaunch.tui.log_levels import LEVELS
+from tuilaunch.tui.inspect.log_levels import LEVELS
 from tuilaunch.tui.screens.dialogs import (
     ChoiceScreen,
     ConfirmScreen,

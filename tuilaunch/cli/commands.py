@@ -45,7 +45,7 @@ from ..engine.run.vocabulary.requests import (
     StatusReply,
     Subscribe,
 )
-from . import inspector
+from .inspect import inspector
 from .logs import cmd_logs as cmd_logs  # found by name in main
 from .parsers import COMMANDS as COMMANDS
 from .parsers import LIFECYCLE_STATES, PROCESS_STATES, commands_parser
@@ -87,7 +87,7 @@ def run(options: argparse.Namespace, handler: Callable[[argparse.Namespace], int
 
 
 def _plot_command(function: str) -> Any:
-    from . import plot  # its screen's imports only when a plot is asked for
+    from .inspect import plot
 
     return getattr(plot, function)
 
@@ -581,7 +581,7 @@ def _table(rows: Sequence[tuple[str, ...]], indent: str = "") -> None:
 
 
 def cmd_serve(options: argparse.Namespace) -> int:
-    from .serve import serve  # its web side is loaded only here
+    from .serve.command import serve  # its web side is loaded only here
 
     return serve(options, local_sessions)
 

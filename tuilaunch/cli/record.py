@@ -26,10 +26,10 @@ from ..engine.run.vocabulary.requests import (
     RecordStop,
     RecordTake,
 )
-from .inspector import SLACK
+from .inspect.inspector import SLACK
 
 if TYPE_CHECKING:
-    from ..client.recording import RecordFile
+    from ..client.inspect.recording import RecordFile
 
 
 def main(argv: list[str]) -> int:
@@ -56,7 +56,7 @@ def cmd_record(options: argparse.Namespace) -> int:
                            "seconds")
     if options.black_box or options.black_box_on is not None:
         return _black_box(options)
-    from ..client.recording import RecordFile
+    from ..client.inspect.recording import RecordFile
 
     for topic in options.topic:
         if not topic.startswith("/"):

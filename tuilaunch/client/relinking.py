@@ -21,9 +21,9 @@ from ..engine.run.session.protocol import ProtocolError, VersionMismatch
 from ..engine.run.session.reconnector import Reconnector
 from ..engine.run.session.session_dir import SessionError
 from .gaps import Gaps
+from .inspect.watches import Watches
 from .link import ANSWER_TIMEOUT
 from .session_state import SessionState
-from .watches import Watches
 
 
 async def ssh_connection(host: str, name: str, link: RemoteLink | None = None,

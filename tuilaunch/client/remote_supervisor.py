@@ -56,6 +56,7 @@ from ..engine.run.vocabulary.requests import (
 )
 from .gaps import Gaps
 from .history import merged
+from .inspect.watches import Watches
 from .link import ANSWER_TIMEOUT, not_answering, send_once
 from .port import VERBS, Verb
 from .read_only import check_request
@@ -63,7 +64,6 @@ from .relinking import relink, ssh_connection
 from .remote_lifecycle import RemoteLifecycle
 from .served_session import ServedSession
 from .session_state import Consumer, SessionState
-from .watches import Watches
 
 R = TypeVar("R")
 

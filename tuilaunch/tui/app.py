@@ -40,9 +40,9 @@ from ..engine.run.vocabulary.lifecycle import available_transitions
 from ..engine.run.vocabulary.requests import Apply, Restart, Start, Stop, Transition
 from ..engine.run.vocabulary.ros_requests import LogLevel
 from .arguments import ArgsTab
-from .inspector import INSPECTOR_BINDINGS, Inspector
+from .inspect.inspector import INSPECTOR_BINDINGS, Inspector
 from .key_order import KeyOrder
-from .keyboard import KEYBOARD_BINDINGS, NodeKeyboard
+from .keys.keyboard import KEYBOARD_BINDINGS, NodeKeyboard
 from .navigation import Navigation
 from .nodes.tab import NodesTab
 from .quitting import LEAVING_BINDINGS, QUIT_BINDINGS, Quitting

@@ -21,7 +21,7 @@ from .key_order import hold_keys
 from .session_link import SessionLink
 
 if TYPE_CHECKING:
-    from ..client.session_graph import GraphCalls
+    from ..client.inspect.session_graph import GraphCalls
     from .screens.topics_panel import TopicsPanel
 
 LAZY_TABS = ("services", "params", "topics")

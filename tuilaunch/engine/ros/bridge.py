@@ -270,13 +270,13 @@ class RosBridge:
     async def topics(self, processes: dict[str, str] | None = None,
                      node: str | None = None) -> dict[str, Any]:
         """`{"topics": [...]}` (see graph.topics_graph); `node` keeps that node's topics."""
-        from .graph import topics_graph
+        from .graph.topic_graph import topics_graph
 
         return await asyncio.to_thread(topics_graph, self.node, processes, node)
 
     def rate_meter(self) -> Any:
         """The bridge's one RateMeter, made on first use."""
-        from .rates import RateMeter
+        from .graph.rates import RateMeter
 
         # made here rather than in __init__: most sessions never measure a rate
         meter = getattr(self, "inspector_rates", None)
@@ -302,12 +302,12 @@ class RosBridge:
 
     async def start_echo(self, topic: str, wait: float = 5.0, keep: int = 100) -> Any:
         """An EchoSubscription (echo.py): `take()` / `take_yaml()` its messages."""
-        from .echo import start_echo
+        from .graph.echo import start_echo
 
         return await start_echo(self.node, topic, wait, keep)
 
     async def stop_echo(self, echo: Any) -> None:
-        from .echo import stop_echo
+        from .graph.echo import stop_echo
 
         stop_echo(self.node, echo)
 

@@ -41,11 +41,11 @@ from ..run.vocabulary.ros_requests import (
     WatchRates,
 )
 from .actions import RosActions
-from .echo_streams import EchoStreams
-from .graph import topic_of
-from .graph_requests import GraphRequests
+from .graph.echo_streams import EchoStreams
+from .graph.graph_requests import GraphRequests
+from .graph.qos_watch import Problems, QosWatch
+from .graph.topic_graph import topic_of
 from .plot.streams import PlotStreams
-from .qos_watch import Problems, QosWatch
 from .ros_errors import RosError
 
 if TYPE_CHECKING:
@@ -284,7 +284,7 @@ class Inspector(Plugin):
         return topics
 
     async def hz(self, request: HzMeasure, client: int) -> dict[str, Any]:
-        from .rates import RateMeter
+        from .graph.rates import RateMeter
 
         topic = topic_of(request.topic)
         window = request.window or 10.0
@@ -308,7 +308,7 @@ class Inspector(Plugin):
         """`tuilaunch hz`: the topic measured over its last `messages` messages (as ros2
         topic hz -w), its figures sent to the client as an "hz" event every `every` s until
         it leaves; `hz_read` gives them at once."""
-        from .rates import RateMeter
+        from .graph.rates import RateMeter
 
         topic = topic_of(request.topic)
         if self.clients is None or not self.clients.subscribed(client):

@@ -47,8 +47,8 @@ from ...engine.run.engine_thread import EngineThread
 from ...engine.run.session.session_dir import SessionError
 from ...engine.run.vocabulary.request import Request
 from ..app import LaunchTabs, pane_save_dir
+from ..inspect.log_levels import LogLevels
 from ..key_order import KeyOrder
-from ..log_levels import LogLevels
 from ..nodes.commands import SelectionCommands
 from ..nodes.gaps import GapReader
 from ..output_store import OutputStore

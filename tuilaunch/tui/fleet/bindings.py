@@ -11,8 +11,8 @@ from textual.binding import Binding, BindingType
 from textual.containers import VerticalScroll
 from textual.widgets import Static
 
-from ..inspector import INSPECTOR_BINDINGS
-from ..keyboard import KEYBOARD_BINDINGS
+from ..inspect.inspector import INSPECTOR_BINDINGS
+from ..keys.keyboard import KEYBOARD_BINDINGS
 from ..screens.dialogs import HelpScreen
 from ..screens.output_panel import PANE_BINDINGS
 

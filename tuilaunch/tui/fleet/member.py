@@ -27,7 +27,7 @@ from ...engine.run.events import (
     Reading,
     Relaunched,
 )
-from ..keyboard import NodeKeyboard
+from ..keys.keyboard import NodeKeyboard
 from ..nodes.events import NodeEvents
 from ..output_store import OutputStore
 from ..screens.output_panel import OutputPanel

@@ -15,7 +15,7 @@ from typing import Any
 
 from textual.app import App
 
-from ..plots import open_plot
+from ..inspect.plots import open_plot
 from .member import Member
 
 Request = Callable[..., Awaitable[Any]]

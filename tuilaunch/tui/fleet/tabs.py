@@ -21,13 +21,13 @@ from textual.app import ComposeResult
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher
 
-from ...client.session_graph import SessionGraph
+from ...client.inspect.session_graph import SessionGraph
 from ...engine.run.events import Echo, Event, PlotSamples, Rates, Relaunched
 from ..arguments import ArgsTab
-from ..keyboard import NodeKeyboard
+from ..inspect.recording import Recordings
+from ..keys.keyboard import NodeKeyboard
 from ..nodes.commands import SelectionCommands
 from ..nodes.gaps import GapReader
-from ..recording import Recordings
 from ..screens.fields import Field
 from ..screens.params_panel import ParamsPanel
 from ..screens.services_panel import ServicesPanel

@@ -15,11 +15,11 @@ from textual.widget import Widget
 
 from ...client.port import Verb
 from ...engine.plan.model import ActionKind
-from ..lifecycle_steps import LifecycleSteps
 from ..output_store import OutputStore
 from ..screens.dialogs import ConfirmScreen
 from ..screens.tree_panel import LaunchTree, RowKind
 from .host import NodesHost
+from .lifecycle_steps import LifecycleSteps
 
 
 class SelectionCommands:

@@ -15,7 +15,7 @@ from textual import work
 from textual.timer import Timer
 from textual.widget import Widget
 
-from ...client.session_graph import GraphCalls
+from ...client.inspect.session_graph import GraphCalls
 
 RELIST_S = 2.0
 """While the Services or Params tab shows, its list is asked of the graph this often (a

@@ -16,7 +16,7 @@ from textual.containers import Horizontal, Vertical
 from textual.widgets import Button, DataTable, Input, OptionList, Static
 from textual.widgets.option_list import Option
 
-from ...client.session_graph import GraphCalls
+from ...client.inspect.session_graph import GraphCalls
 from ...engine.plan.model import Plan
 from ...engine.ros.calls import ParameterInfo
 from ...engine.run.vocabulary.requests import ParamsDump, ParamsLoad

@@ -31,8 +31,8 @@ from textual.screen import Screen
 from textual.widgets import Footer, Static
 from textual_plotext import PlotextPlot
 
-from ...client.plot_series import WINDOWS, PlotSeries, Source, rebinned
-from ...client.plot_shapes import panels, series_csv, xy_pairs
+from ...client.inspect.plot_series import WINDOWS, PlotSeries, Source, rebinned
+from ...client.inspect.plot_shapes import panels, series_csv, xy_pairs
 from ...engine.run.session.session_dir import SessionError
 from ...engine.run.vocabulary.request import Request
 from ...engine.run.vocabulary.requests import PlotFields, PlotStart, PlotStop, Topics

@@ -14,7 +14,7 @@ from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Input, Label, OptionList, Static
 from textual.widgets.option_list import Option
 
-from ...client.session_graph import GraphCalls
+from ...client.inspect.session_graph import GraphCalls
 from ...engine.describe.parameter_files import dotted
 from ...engine.errors import LaunchError
 from ...engine.ros.messages import FieldInfo

@@ -18,7 +18,7 @@ from collections import deque
 from contextlib import ExitStack
 from typing import Any
 
-from ..rates import IDLE_WAIT_NS, NotByExecutor
+from ..graph.rates import IDLE_WAIT_NS, NotByExecutor
 from .buckets import FieldBuckets
 from .fields import FieldPath, stamp_reader
 

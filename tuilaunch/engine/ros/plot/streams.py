@@ -26,7 +26,7 @@ from typing import Any
 from ...errors import LaunchError
 from ...run.events import Event, PlotSamples
 from ...run.vocabulary.ros_requests import PlotFields, PlotStart, PlotStop
-from ..graph import topic_of
+from ..graph.topic_graph import topic_of
 from ..ros_errors import RosError
 
 SEND_PERIOD = 0.25
@@ -80,7 +80,7 @@ class PlotStreams:
 
     async def _topic_type(self, topic: str, wait: float) -> tuple[Any, list[Any]]:
         """The topic's message class and its publishers' infos, once one publishes."""
-        from ..rates import message_class, wait_for_publishers
+        from ..graph.rates import message_class, wait_for_publishers
 
         bridge = await self._bridge()
         try:
@@ -166,7 +166,7 @@ class PlotStreams:
         return sampler
 
     async def _new_sampler(self, topic: str, cls: Any, infos: list[Any]) -> Any:
-        from ..rates import matching_qos
+        from ..graph.rates import matching_qos
         from .fields import small
         from .sampler import PlotSampler
 

@@ -228,8 +228,8 @@ class Recorder(Plugin):
             await self._subscribe(node, topic, infos)
 
     async def _subscribe(self, node: Any, topic: str, infos: list[Any]) -> None:
+        from ..graph.rates import matching_qos, message_class
         from ..messages import MessageError
-        from ..rates import matching_qos, message_class
         from .definitions import full_definition
         from .mcap_out import qos_yaml
         from .tape import Channel

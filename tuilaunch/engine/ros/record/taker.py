@@ -17,7 +17,7 @@ from collections.abc import Callable
 from contextlib import ExitStack
 from typing import Any
 
-from ..rates import IDLE_WAIT_NS, NotByExecutor
+from ..graph.rates import IDLE_WAIT_NS, NotByExecutor
 
 Sink = Callable[[str, int, bytes], None]
 DEPTH = 100

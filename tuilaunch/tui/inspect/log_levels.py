@@ -10,9 +10,9 @@ from typing import Any
 
 from textual.app import App
 
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.requests import LogLevel, Restart
-from .screens.dialogs import ChoiceScreen, ConfirmScreen
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.requests import LogLevel, Restart
+from ..screens.dialogs import ChoiceScreen, ConfirmScreen
 
 LEVELS = ["debug", "info", "warn", "error", "fatal"]
 

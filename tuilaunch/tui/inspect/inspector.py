@@ -12,17 +12,17 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from textual.binding import Binding
 from textual.timer import Timer
 
-from ..engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.request import Request
-from ..engine.run.vocabulary.requests import WatchQos, WatchResources
+from ...engine.run.events import Echo, Event, PlotSamples, Qos, Rates, Resources, Trend
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.request import Request
+from ...engine.run.vocabulary.requests import WatchQos, WatchResources
+from ..session_link import SessionLink
 from .log_levels import LogLevels
 from .plots import open_plot
 from .recording import Recordings
-from .session_link import SessionLink
 
 if TYPE_CHECKING:
-    from ..client.session_graph import GraphCalls
+    from ...client.inspect.session_graph import GraphCalls
 
 R = TypeVar("R")
 
@@ -75,7 +75,7 @@ class Inspector:
         """The Services and Params tabs' graph: the session's, where the nodes run (this
         process never loads rclpy); made, and its module imported, when first used."""
         if self._graph is None:
-            from ..client.session_graph import SessionGraph
+            from ...client.inspect.session_graph import SessionGraph
 
             self._graph = SessionGraph(self.inspect)
         return self._graph

@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from ..client.recording import LiveRecording
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.requests import BlackBox, BlackBoxWrite
+from ...client.inspect.recording import LiveRecording
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.requests import BlackBox, BlackBoxWrite
 
 
 class Recordings:
@@ -64,7 +64,7 @@ class Recordings:
         """The palette's "Black box: keep the last N s": asks the seconds (offering what it
         keeps now, 0 switches it off), then the request `tuilaunch record NAME
         --black-box-on S` sends, its bound in bytes kept as it is."""
-        from .screens.dialogs import PathScreen
+        from ..screens.dialogs import PathScreen
 
         try:
             status = await self.inspect(BlackBox())  # how it is: its seconds offered

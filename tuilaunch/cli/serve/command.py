@@ -26,11 +26,11 @@ from collections.abc import Callable
 from typing import Any
 from urllib.parse import quote, urlsplit
 
-from ..client.link import resolve_name
-from ..engine.errors import LaunchError
-from ..engine.run.machines.remote import check_host, parse_address
-from ..engine.run.session.session_dir import SessionError
-from .serve_guard import Guard
+from ...client.link import resolve_name
+from ...engine.errors import LaunchError
+from ...engine.run.machines.remote import check_host, parse_address
+from ...engine.run.session.session_dir import SessionError
+from .guard import Guard
 
 LAUNCH_SUFFIXES = (".py", ".xml", ".yaml", ".yml")
 
@@ -45,11 +45,11 @@ def serve(options: argparse.Namespace,
     sessions, launch = _target(options.items)
     if options.name and launch is None:
         raise LaunchError("--name names the session a launch file starts: give FILE too")
-    from ..engine.packages import ensure_environment
+    from ...engine.packages import ensure_environment
 
     ensure_environment()
     try:
-        from . import serve_web
+        from . import web as serve_web
     except ImportError as exc:  # installed without its dependencies
         raise LaunchError(f"tuilaunch serve needs textual-serve ({exc})",
                           hint="pip install textual-serve") from None

@@ -15,9 +15,9 @@ from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
-from ..engine.ros.record.mcap_out import McapOut, open_exact, open_new
-from ..engine.ros.record.tape import Channel
-from ..engine.run.vocabulary.requests import RecordStart, RecordStop, RecordTake
+from ...engine.ros.record.mcap_out import McapOut, open_exact, open_new
+from ...engine.ros.record.tape import Channel
+from ...engine.run.vocabulary.requests import RecordStart, RecordStop, RecordTake
 
 
 def default_stem(name: str) -> str:

@@ -18,15 +18,15 @@ from typing import Any, TypeVar
 
 from textual.app import App
 
-from ..client.link import LinkLost, parse_session
-from ..client.plot_series import Source
-from ..client.port import LaunchPort
-from ..engine.errors import LaunchError
-from ..engine.run.engine_thread import EngineThread
-from ..engine.run.events import Event, PlotSamples
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.request import Request
-from .screens.plot_screen import PlotScreen, SessionPlots
+from ...client.inspect.plot_series import Source
+from ...client.link import LinkLost, parse_session
+from ...client.port import LaunchPort
+from ...engine.errors import LaunchError
+from ...engine.run.engine_thread import EngineThread
+from ...engine.run.events import Event, PlotSamples
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.request import Request
+from ..screens.plot_screen import PlotScreen, SessionPlots
 
 R = TypeVar("R")
 

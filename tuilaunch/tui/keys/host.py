@@ -12,10 +12,10 @@ from textual.app import App
 from textual.notifications import SeverityLevel
 from textual.widget import Widget
 
-from ..client.port import LaunchPort
-from ..engine.run.engine_thread import EngineThread
-from .screens.tree_panel import LaunchTree
-from .session_link import SessionLink
+from ...client.port import LaunchPort
+from ...engine.run.engine_thread import EngineThread
+from ..screens.tree_panel import LaunchTree
+from ..session_link import SessionLink
 
 
 class KeyboardHost(Protocol):

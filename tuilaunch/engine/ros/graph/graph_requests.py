@@ -19,9 +19,9 @@ import dataclasses
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from ..errors import LaunchError
-from ..run.plugins import Handlers
-from ..run.vocabulary.ros_requests import (
+from ...errors import LaunchError
+from ...run.plugins import Handlers
+from ...run.vocabulary.ros_requests import (
     CallService,
     Nodes,
     ParamsDescribe,
@@ -30,7 +30,7 @@ from ..run.vocabulary.ros_requests import (
     ServiceFields,
     Services,
 )
-from .ros_errors import RosError
+from ..ros_errors import RosError
 
 CALL_TIMEOUT = 5.0
 """A service call's answer is waited for this long unless the client says otherwise."""
@@ -64,7 +64,7 @@ class GraphRequests:
 
     async def service_fields(self, request: ServiceFields, client: int) -> dict[str, Any]:
         # imported on the first form: a launch that never shows one never loads them
-        from .messages import describe_fields, import_type
+        from ..messages import describe_fields, import_type
 
         # MessageError (a type not installed where the session runs) is the refusal
         fields = describe_fields(import_type(_text(request.type, "service_fields", "type"))

@@ -12,7 +12,7 @@ from typing import Any
 
 import yaml
 
-from .messages import to_plain
+from ..messages import to_plain
 from .rates import matching_qos, message_class, wait_for_publishers
 
 TRUNCATE_LENGTH = 128

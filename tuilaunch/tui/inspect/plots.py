@@ -9,8 +9,8 @@ from typing import Any
 
 from textual.app import App
 
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.requests import PlotFields
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.requests import PlotFields
 
 Ask = Callable[[Any], Awaitable[Any]]
 """A session's request, answered (SessionError: the session's refusal, or no link)."""
@@ -34,8 +34,8 @@ async def open_plot(app: App[Any], ask: Ask, topic: str, requesters: Mapping[str
                    severity="warning", title="plot")
         return None
     # plotext: imported only once a plot is shown
-    from ..client.plot_series import Source
-    from .screens.plot_screen import PlotScreen, SessionPlots
+    from ...client.inspect.plot_series import Source
+    from ..screens.plot_screen import PlotScreen, SessionPlots
 
     screen = PlotScreen(SessionPlots(dict(requesters), leave),
                         [Source(label, topic, numeric[:1])])

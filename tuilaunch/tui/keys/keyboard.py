@@ -15,18 +15,18 @@ from typing import Any
 from rich.text import Text
 from textual.binding import Binding
 
-from ..client.port import LaunchPort
-from ..client.read_only import refusal
-from ..engine.errors import LaunchError
-from ..engine.run.events import LIVE_STATES, Event, Failed, ProcessExited, Started, Typing
-from ..engine.run.vocabulary.requests import Input, Status, TakeKeys
-from ..engine.run.vocabulary.status import ProcessStatus
-from .key_order import KeyHold, hold_keys
-from .keyboard_host import AppHost, KeyboardHost
-from .keys import edit_line, is_release, key_bytes
-from .screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
-from .screens.tree_panel import LaunchTree, RowKind
-from .session_link import SessionLink
+from ...client.port import LaunchPort
+from ...client.read_only import refusal
+from ...engine.errors import LaunchError
+from ...engine.run.events import LIVE_STATES, Event, Failed, ProcessExited, Started, Typing
+from ...engine.run.vocabulary.requests import Input, Status, TakeKeys
+from ...engine.run.vocabulary.status import ProcessStatus
+from ..key_order import KeyHold, hold_keys
+from ..screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
+from ..screens.tree_panel import LaunchTree, RowKind
+from ..session_link import SessionLink
+from .host import AppHost, KeyboardHost
+from .key_bytes import edit_line, is_release, key_bytes
 
 RECENT_PREFIXES = 10
 """Tools remembered for the prompt, most recent first (in memory, for this TUI)."""

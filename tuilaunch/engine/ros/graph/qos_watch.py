@@ -15,10 +15,10 @@ import contextlib
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from ..errors import LaunchError
-from ..run.events import Event, Qos
-from ..run.vocabulary.ros_requests import WatchQos
-from .ros_errors import RosError
+from ...errors import LaunchError
+from ...run.events import Event, Qos
+from ...run.vocabulary.ros_requests import WatchQos
+from ..ros_errors import RosError
 
 QOS_PERIOD = 5.0
 """Seconds between two checks of the graph while a client watches."""

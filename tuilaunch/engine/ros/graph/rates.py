@@ -34,8 +34,8 @@ from typing import Any
 
 from rclpy.callback_groups import CallbackGroup
 
-from .calls import RosError
-from .messages import MessageError, import_type
+from ..calls import RosError
+from ..messages import MessageError, import_type
 
 
 def message_class(type_name: str) -> Any:

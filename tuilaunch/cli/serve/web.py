@@ -26,9 +26,9 @@ import textual_serve
 from aiohttp import WSMsgType, web
 from textual_serve.download_manager import DownloadManager
 
-from ..engine.run.session import session_dir
-from .serve_guard import Guard
-from .serve_tabs import Early, TabService, Warm, tab_words
+from ...engine.run.session import session_dir
+from .guard import Guard
+from .tabs import Early, TabService, Warm, tab_words
 
 STATIC = Path(textual_serve.__file__).parent / "static"
 FONT = "fonts/RobotoMono-VariableFont_wght.ttf"

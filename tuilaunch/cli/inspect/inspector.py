@@ -18,11 +18,11 @@ import time
 from collections.abc import Iterator
 from typing import Any, TypeVar
 
-from ..client.link import Link, open_link
-from ..engine.run.session.protocol import ProtocolError
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.request import Request
-from ..engine.run.vocabulary.requests import (
+from ...client.link import Link, open_link
+from ...engine.run.session.protocol import ProtocolError
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.request import Request
+from ...engine.run.vocabulary.requests import (
     EchoStart,
     Find,
     HzRead,

@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any, Protocol
 
-from ..engine.ros.calls import ParameterInfo, SetResult
-from ..engine.ros.messages import FieldInfo
-from ..engine.run.vocabulary.requests import (
+from ...engine.ros.calls import ParameterInfo, SetResult
+from ...engine.ros.messages import FieldInfo
+from ...engine.run.vocabulary.requests import (
     CallService,
     Nodes,
     ParamsDescribe,

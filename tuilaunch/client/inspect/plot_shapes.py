@@ -12,7 +12,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from ..engine.run.session.session_dir import SessionError
+from ...engine.run.session.session_dir import SessionError
 from .plot_series import PlotSeries, Point
 
 READABLE = 10.0

@@ -7,9 +7,9 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.request import Request
-from ..engine.run.vocabulary.requests import (
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.request import Request
+from ...engine.run.vocabulary.requests import (
     EchoStart,
     EchoStop,
     PlotStart,

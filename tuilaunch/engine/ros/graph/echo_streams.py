@@ -12,11 +12,11 @@ import contextlib
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from ..errors import LaunchError
-from ..run.events import Echo, Event
-from ..run.vocabulary.ros_requests import EchoStart, EchoStop
-from .graph import topic_of
-from .ros_errors import RosError
+from ...errors import LaunchError
+from ...run.events import Echo, Event
+from ...run.vocabulary.ros_requests import EchoStart, EchoStop
+from ..ros_errors import RosError
+from .topic_graph import topic_of
 
 ECHO_DEFAULT_PER_S = 5.0
 """Messages a second an echo stream sends by default: what a screen can show."""

@@ -18,12 +18,12 @@ import threading
 import time
 from typing import Any
 
-from ..client.link import Link, open_link, parse_session, resolve_name
-from ..client.plot_series import Source, column_name, new_tag
-from ..client.plot_shapes import Asked, RowMerge, command_words
-from ..engine.errors import LaunchError
-from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.requests import PlotStart, Subscribe
+from ...client.inspect.plot_series import Source, column_name, new_tag
+from ...client.inspect.plot_shapes import Asked, RowMerge, command_words
+from ...client.link import Link, open_link, parse_session, resolve_name
+from ...engine.errors import LaunchError
+from ...engine.run.session.session_dir import SessionError
+from ...engine.run.vocabulary.requests import PlotStart, Subscribe
 from .inspector import SLACK, streamed
 
 CSV_FLUSH_S = 0.1
@@ -120,10 +120,10 @@ def _read(link: Link, end: float | None, out: queue.Queue[Any]) -> None:
 def _screen(options: argparse.Namespace, asked: list[Asked]) -> int:
     if not (sys.stdout.isatty() and sys.stdin.isatty()):
         raise SessionError("the plot needs a terminal: --csv prints its values instead")
-    from ..client.remote_supervisor import RemoteSupervisor
-    from ..client.served_session import ServedSession
-    from ..engine.run.engine_thread import EngineThread
-    from ..tui.plot_app import run_plot_app
+    from ...client.remote_supervisor import RemoteSupervisor
+    from ...client.served_session import ServedSession
+    from ...engine.run.engine_thread import EngineThread
+    from ...tui.inspect.plot_app import run_plot_app
 
     stamp = bool(getattr(options, "stamp", False))
     engine = EngineThread()
