@@ -149,7 +149,9 @@ async def test_i_types_into_a_node_of_the_second_session_in_the_fleet_view(
         line = app.screen.query_one(TypingLine)
         assert app.focused is line
         assert f"typing to {talker} of robot-two:two" in str(line.render())
-        assert list(footer(app)) == ["Give the keys back"]  # s, q... are the node's now
+        # s, q... are the node's now (the footer is drawn anew for the typing line: wait for it)
+        await until(pilot, lambda: list(footer(app)) == ["Give the keys back"],
+                    "a footer offering only ctrl+]")
         await pilot.press("q", "s")
         await until(pilot, lambda: "".join(f["data"] for op, f in ports[1].asked
                                            if op == "input") == "stop\rqs", "q and s typed")
