@@ -75,7 +75,10 @@ class TabPanels:
                 for callback in waiting:
                     callback()
             finally:
-                hold.release()  # after the focus moved: the keys typed meanwhile go there
+                # after the tab is laid out, its cursor placed (`_refocus`, after the refresh
+                # too): a panel just mounted is not focusable before, and a key let go then
+                # would reach the widget left (the tree's `/` searches the pane)
+                self.app.call_after_refresh(hold.release)
 
         self.app.run_worker(when_mounted(), group="tab-panels", exit_on_error=False)
 
