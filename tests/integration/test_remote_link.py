@@ -26,8 +26,8 @@ from tuilaunch.engine.run.machines.remote import (
     Address,
     RemoteError,
     list_remote,
+    open_remote_connection,
     open_remote_link,
-    open_remote_streams,
     parse_address,
     run_remote,
     ssh_argv,
@@ -168,7 +168,8 @@ def test_a_session_on_robot1_answers_over_ssh_and_closing_the_link_stops_nothing
 
 
 async def test_events_stream_over_the_link(machines, far):
-    link, reader, writer = await open_remote_streams("robot1", "far")
+    link, conn = await open_remote_connection("robot1", "far")
+    reader, writer = conn.reader, conn.writer  # the raw lines, read here
     try:
         writer.write(encode({"id": 1, "op": "subscribe"}))
         await writer.drain()
@@ -394,7 +395,8 @@ async def test_a_message_larger_than_the_relay_chunk_crosses_whole(machines, wri
 
 
 async def big_line_crosses_whole() -> None:
-    link, reader, writer = await open_remote_streams("robot1", "big")
+    link, conn = await open_remote_connection("robot1", "big")
+    reader, writer = conn.reader, conn.writer  # the raw lines, read here
     try:
         writer.write(encode({"id": 1, "op": "subscribe"}))
         await writer.drain()

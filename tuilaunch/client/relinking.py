@@ -15,7 +15,7 @@ from typing import Protocol
 
 from ..engine.run.events import Event
 from ..engine.run.machines.proxy import SERVER_GONE_WORDS
-from ..engine.run.machines.remote import RemoteError, RemoteLink, open_remote_link
+from ..engine.run.machines.remote import RemoteError, RemoteLink, open_remote_connection
 from ..engine.run.session.connection import Connection
 from ..engine.run.session.protocol import ProtocolError, VersionMismatch
 from ..engine.run.session.reconnector import Reconnector
@@ -31,9 +31,8 @@ async def ssh_connection(host: str, name: str, link: RemoteLink | None = None,
     """A Connection over an ssh link to `host`'s session (`link`: one already open and
     greeted, else a new one; RemoteError with one line when it cannot be made)."""
     if link is None:
-        link = await asyncio.get_running_loop().run_in_executor(
-            None, lambda: open_remote_link(host, name))
-    return link, await Connection.on_socket(link.sock, link.info, name)
+        return await open_remote_connection(host, name)
+    return link, await Connection.on_socket(link.sock, link.info, f"{host}:{name}")
 
 
 class LinkedClient(Protocol):

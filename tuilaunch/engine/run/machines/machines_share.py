@@ -2,13 +2,14 @@
 
 For each other machine that has processes to run, the coordinator starts that machine's
 share as a session of its own there (`ssh HOST tuilaunch FILE args... --detach --name NAME
---share MACHINE --machines-text YAML`), then follows it through the session protocol over
-ssh (`open_remote_streams`): the share's events of its own processes are mirrored into this
-supervisor (`Supervisor.mirror`), so the one tree, the panes, the log files and the triggers here
-see them as local ones. What happens here (and on the other shares) to processes a share
-waits for is sent to it (`external_event`); a start, stop or restart of a process placed
-there is sent as the protocol's request; a relaunch is applied there too; the launch's
-shutdown stops every share and waits until each has ended.
+--share MACHINE --machines-text YAML`), then follows it over ssh through a Connection, as
+every client does (`open_remote_connection`; its Reconnector paces a new link): the share's
+events of its own processes are mirrored into this supervisor (`Supervisor.mirror`), so the
+one tree, the panes, the log files and the triggers here see them as local ones. What
+happens here (and on the other shares) to processes a share waits for is sent to it
+(`external_event`); a start, stop or restart of a process placed there is sent as the
+protocol's request; a relaunch is applied there too; the launch's shutdown stops every
+share and waits until each has ended.
 
 A machine that cannot be reached, refuses the login, or lacks tuilaunch or the launch
 file: every process placed there fails with one line naming the machine and why; the rest
@@ -40,8 +41,8 @@ from ..events import (
     Started,
 )
 from ..plugins import Plugin
-from ..session.protocol import ProtocolError, decode
-from ..session.session_dir import launch_stem
+from ..session.connection import Connection
+from ..session.session_dir import SessionError, launch_stem
 from ..supervisor.placed import UNKNOWN
 from ..supervisor.supervisor import Supervisor
 from ..vocabulary.request import Request
@@ -49,13 +50,14 @@ from ..vocabulary.requests import (
     Apply,
     ExternalEvent,
     Restart,
+    ShareLines,
     ShutdownLaunch,
     Start,
     Stop,
     Subscribe,
 )
-from .remote import RemoteError, open_remote_streams, run_remote
-from .share_link import REQUEST_IDS, Share
+from .remote import RemoteError, open_remote_connection, run_remote
+from .share_link import Share
 from .share_mirror import ShareMirror
 from .share_requests import ShareRequests
 from .share_side import ShareSide
@@ -64,9 +66,8 @@ SHARE_OPTION = "--share"
 MACHINES_TEXT_OPTION = "--machines-text"
 START_TIMEOUT = 120.0
 """An ssh login, a Python start and the share's own load and resolve of the file."""
-RECONNECT_DELAYS = (1.0, 2.0, 5.0, 10.0)
-"""Seconds between attempts to reach a share again after its link dropped (the last
-repeats)."""
+SUBSCRIBE_TIMEOUT = 30.0
+"""How long a new link waits for its share's subscription (answered at once)."""
 END_TIMEOUT = 60.0
 """How long the launch's end waits for a share to stop its processes (they escalate to
 SIGKILL well within it)."""
@@ -149,17 +150,21 @@ class MachinesCoordinator(Plugin):
             if "already running" not in str(exc):  # else: it runs there, from before
                 self._fail_share(share, str(exc))
                 return
-        delays = iter(RECONNECT_DELAYS)
-        said = ""
+        relink = share.relink
+        relink.back()
         while not share.ended.is_set():
+            if relink.down is not None:
+                await relink.next_attempt()  # its backoff, cut short by `reach`
             try:
                 await self._connect(share)
-                delays, said = iter(RECONNECT_DELAYS), ""
-                reason = await self._read(share)  # told once subscribed (_answered)
+                relink.back()
+                reason = await self._read(share)  # told once subscribed (_connect)
                 if not share.ended.is_set():
                     self.mirror.lost(share, reason)
+                relink.lost(f"link to {share.machine.name} lost", reason)
+                new = True
             except (LaunchError, OSError) as exc:
-                reason = str(exc)
+                reason = str(exc) or f"{share.machine.name} did not answer"
                 if "no running session named" in reason:
                     # reached, but its session is gone: stopped as asked, or killed there
                     if self._closing or self.supervisor.shutting_down:
@@ -168,17 +173,17 @@ class MachinesCoordinator(Plugin):
                     self._fail_share(share, f"{share.machine.name}: its share (session "
                                      f"{share.session}) ended without being asked")
                     return
+                if relink.down is None:  # the first link not made
+                    relink.lost(f"{share.machine.name} not reached", reason)
+                    new = True
+                else:
+                    new = relink.failed(reason)
             share.tell(reason)
             if share.ended.is_set():
                 return
-            delay = next(delays, RECONNECT_DELAYS[-1])
-            if reason != said:  # each new reason once: a machine off for an hour is one line
-                said = reason
+            if new:  # each new reason once: a machine off for an hour is one line
                 self.supervisor.log(f"{share.machine.name}: {reason}; its share runs on "
-                                    f"there; connecting again in {delay:g} s", "WARN")
-            share.wake.clear()
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(share.wake.wait(), delay)
+                                    f"there; connecting again in {relink.delay:g} s", "WARN")
 
     async def reach(self, share: Share, process_id: str) -> bool:
         """A start or restart of `process_id` while its machine is not reached: tries it
@@ -207,7 +212,7 @@ class MachinesCoordinator(Plugin):
             share.ended = asyncio.Event()
             self._spawn(self._follow(share))
         else:
-            share.wake.set()  # the next attempt now, not after its back-off
+            share.relink.now()  # the next attempt now, not after its back-off
         outcome = await waiter
         if outcome is not None:
             # this attempt's end, whichever way it came (the share's start failed, or a
@@ -244,92 +249,82 @@ class MachinesCoordinator(Plugin):
                 self.supervisor.mirror(Failed(proc.id, reason=reason), "failed")
 
     async def _connect(self, share: Share) -> None:
-        link, reader, writer = await open_remote_streams(
+        """Links to the share, tells it what happened here, and subscribes: what it did
+        before (or while the link was down) is mirrored, its missed lines asked for."""
+        share.link, conn = await open_remote_connection(
             share.machine, share.session, environ=self.environ)
-        share.link, share.reader, share.writer = link, reader, writer
-        for happened in list(self.happened.values()):
-            await share.send(happened)
-        await share.send(Subscribe(), self._new_id())
+        share.conn = conn
+        try:
+            for happened in list(self.happened.values()):
+                conn.send(happened, reply=False)
+            result = await conn.call(Subscribe(), SUBSCRIBE_TIMEOUT)
+        except BaseException:
+            await self._unlink(share)
+            raise
         self.supervisor.log(f"{share.machine.name}: following session {share.session}")
+        self.mirror.events(share, result.get("recent") or [], {}, result.get("states") or {})
+        self.mirror.back(share)
+        for request in self.mirror.missed_lines(share, result.get("offsets") or {}):
+            self._spawn(self._backfill(share, conn, request))
+        share.tell(None)  # reached, and its processes' states known here
         if self._closing or self.supervisor.shutting_down:  # stopped while it started
             await self._stop_share(share, "the launch ended")
 
-    def _new_id(self) -> int:
-        return next(REQUEST_IDS)
-
     async def _read(self, share: Share) -> str:
-        """Mirrors the share's messages until its link closes; why it closed."""
-        reader = share.reader
-        assert reader is not None
-        try:
-            while True:
-                try:
-                    line = await reader.readline()
-                except (ValueError, ConnectionError):
-                    line = b""
-                if not line:
-                    break
-                try:
-                    message = decode(line)
-                except ProtocolError:
-                    continue
-                kind = message.get("type")
-                if kind == "reply":
-                    self._answered(share, message)
-                elif kind == "events" and share.backfill:
-                    share.held.append(message)  # after the earlier lines, in order
-                elif kind == "events":
-                    self.mirror.events(share, message.get("events") or [],
-                                 message.get("states") or {})
-                elif kind == "ended":
-                    share.ended.set()
-                    return "ended"
-        finally:
-            writer, share.writer = share.writer, None
-            share.typing = None  # its keyboard there is given back with the link
-            if writer is not None:
-                writer.close()
-            for future in share.replies.values():
-                if not future.done():
-                    future.set_exception(LaunchError(f"lost the link to {share.machine.name}"))
-            share.replies.clear()
-            share.backfill.clear()
-            for held in share.held:
-                self.mirror.events(share, held.get("events") or [], held.get("states") or {})
-            share.held.clear()
-            link = share.link
-            share.link = None
+        """Mirrors the share's messages until its link closes; why it closed. Replies
+        reach their `ask` here (Connection.receive)."""
+        conn = share.conn
+        assert conn is not None
+        while (message := await conn.receive()) is not None:
+            kind = message.get("type")
+            if kind == "events" and share.backfill:
+                share.held.append(message)  # after the earlier lines, in order
+            elif kind == "events":
+                self.mirror.events(share, message.get("events") or [],
+                                   message.get("states") or {})
+            elif kind == "ended":
+                share.ended.set()
+                await self._unlink(share)
+                return "ended"
+        return await self._unlink(share)
+
+    async def _unlink(self, share: Share) -> str:
+        """The link is gone: what waited on it is told, the lines held shown; why it
+        went (ssh's last words)."""
+        conn, share.conn = share.conn, None
+        link, share.link = share.link, None
+        share.typing = None  # its keyboard there is given back with the link
+        if conn is not None:
+            conn.fail(f"lost the link to {share.machine.name}")
+            conn.close()
+        self._show_held(share)
         if link is None:
             return f"lost the link to {share.machine.host}"
         loop = asyncio.get_running_loop()
-        return await loop.run_in_executor(None, link.lost_reason)
+        reason = await loop.run_in_executor(None, link.lost_reason)
+        await loop.run_in_executor(None, link.close)
+        return reason
 
-    def _answered(self, share: Share, message: dict[str, Any]) -> None:
-        result = message.get("result")
-        if isinstance(result, dict) and "states" in result and "recent" in result:
-            # the subscription: what happened there before (or while the link was down)
-            self.mirror.events(share, result.get("recent") or [], {},
-                               result.get("states") or {})
-            self.mirror.back(share)
-            self.mirror.ask_lines(share, result.get("offsets") or {})
-            share.tell(None)  # reached, and its processes' states known here
-        request_id = int(message.get("id") or 0)
-        if request_id in share.backfill:
-            process = share.backfill.pop(request_id)
-            if message.get("ok") and isinstance(result, dict):
-                self.mirror.backfilled(share, process, result)
-            if not share.backfill:
-                held, share.held = share.held, []
-                for batch in held:
-                    self.mirror.events(share, batch.get("events") or [],
-                                       batch.get("states") or {})
-        future = share.replies.pop(int(message.get("id") or 0), None)
-        if future is not None and not future.done():
-            if message.get("ok"):
-                future.set_result(result)
-            else:
-                future.set_exception(LaunchError(
-                    f"{share.machine.name}: {message.get('error')}"))
+    async def _backfill(self, share: Share, conn: Connection, request: ShareLines) -> None:
+        """The lines a process printed that the link missed, shown before the events that
+        came after them (held meanwhile)."""
+        try:
+            result = await conn.ask(request)
+        except SessionError:  # refused: its lines stay in its log file there
+            result = None
+        if share.conn is not conn:
+            return  # the link went meanwhile: what was held is shown already
+        if isinstance(result, dict):
+            self.mirror.backfilled(share, request.process, result)
+        share.backfill.discard(request.process)
+        if not share.backfill:
+            self._show_held(share)
+
+    def _show_held(self, share: Share) -> None:
+        share.backfill.clear()
+        held, share.held = share.held, []
+        for batch in held:
+            self.mirror.events(share, batch.get("events") or [], batch.get("states") or {})
 
     # --- what happens here, and requests -----------------------------------------------------
 
@@ -344,8 +339,8 @@ class MachinesCoordinator(Plugin):
             happened = ExternalEvent(event.process, on, event.pid, event.code)
             self.happened[(event.process, on)] = happened
             for share in self.shares.values():
-                if share.machine.name != machine and share.writer is not None:
-                    self._spawn(self._tell(share, happened))
+                if share.machine.name != machine and share.conn is not None:
+                    self._spawn(self._tell(share, happened, reply=False))
         elif isinstance(event, Shutdown):
             for share in self.shares.values():
                 self._spawn(self._stop_share(share, event.reason or "shutdown"))
@@ -353,18 +348,18 @@ class MachinesCoordinator(Plugin):
             arguments = dict(line.split(":=", 1) for line in event.lines if ":=" in line)
             self.arguments = arguments
             for share in self.shares.values():
-                self._spawn(self._tell(share, Apply(arguments), self._new_id()))
+                self._spawn(self._tell(share, Apply(arguments)))
 
-    async def _tell(self, share: Share, request: Request[Any],
-                    request_id: int | None = None) -> None:
+    async def _tell(self, share: Share, request: Request[Any], reply: bool = True) -> None:
+        """A request whose reply is passed over (`reply` False: none comes back)."""
         with contextlib.suppress(LaunchError, ConnectionError, OSError):
-            await share.send(request, request_id)
+            await share.send(request, reply)
 
     async def forward(self, request: Start | Stop | Restart) -> None:
         process_id = request.process
         machine = self.supervisor.plan.process(process_id).machine
         share = self.shares.get(machine or "")
-        if share is not None and share.writer is None and not isinstance(request, Stop):
+        if share is not None and share.conn is None and not isinstance(request, Stop):
             # its machine may be up by now (a computer that boots late): tried again
             fresh = await self.reach(share, process_id)
             if fresh and (isinstance(request, Start) or request == Restart(process_id)):
@@ -390,8 +385,8 @@ class MachinesCoordinator(Plugin):
 
     async def _stop_share(self, share: Share, reason: str) -> None:
         """Asks the share to stop; its `ended` closes the link."""
-        if share.writer is not None:
-            await self._tell(share, ShutdownLaunch(reason), self._new_id())
+        if share.conn is not None:
+            await self._tell(share, ShutdownLaunch(reason))
 
     async def close(self) -> None:
         """The launch is over here: every share stops, and is waited for."""
@@ -413,6 +408,8 @@ class MachinesCoordinator(Plugin):
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
         for share in self.shares.values():
+            if share.link is not None:  # one that did not end: its ssh ends here
+                await self._unlink(share)
             for log in share.logs.values():
                 log.close()
 

@@ -24,10 +24,9 @@ from typing import Any
 
 from ...errors import LaunchError
 from ..session import session_dir
-from ..session.connection import reply_result
-from ..session.protocol import MAX_MESSAGE, ProtocolError, decode, encode, greet
+from ..session.connection import Connection, run_blocking
+from ..session.protocol import ProtocolError
 from ..session.session_dir import SessionError
-from ..vocabulary.request import to_message
 from ..vocabulary.requests import Status, StatusReply
 
 CHUNK = 1 << 16
@@ -148,31 +147,21 @@ LS_KEYS = ("name", "file", "arguments", "pid", "started", "log_dir", "counts", "
 
 
 def session_status(name: str, timeout: float = LS_ANSWER_TIMEOUT) -> StatusReply:
-    """A session's `status` reply, asked over its socket."""
-    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    sock.settimeout(timeout)
+    """A session's `status` reply, asked over its socket (a Connection: another version's
+    greeting is refused, as its status may differ); blocking."""
+    async def ask() -> StatusReply:
+        conn = await Connection.open_unix(str(session_dir.socket_path(name)), name, timeout)
+        try:
+            return await conn.call(Status(resources=False), timeout)  # a listing
+        finally:
+            conn.close()
+
     try:
-        sock.connect(str(session_dir.socket_path(name)))
-        reader = sock.makefile("rb")
-        greet(reader.readline(MAX_MESSAGE), name)  # another version's status may differ
-        asked = Status(resources=False)  # a listing
-        sock.sendall(encode(to_message(asked, 1)))
-        while True:
-            line = reader.readline(MAX_MESSAGE)
-            if not line:
-                raise SessionError(f"session {name} closed the connection during status")
-            message = decode(line)
-            if message.get("type") == "reply" and message.get("id") == 1:
-                return asked.reply(reply_result(message, name))
+        return run_blocking(ask)
     except TimeoutError:
         raise SessionError(f"session {name} did not answer within {timeout:g} s") from None
-    except ProtocolError as exc:
+    except (ConnectionError, ProtocolError) as exc:
         raise SessionError(f"session {name}: {exc}") from None
-    except OSError as exc:
-        raise SessionError(f"session {name} does not answer ({exc.strerror or exc})")\
-            from None
-    finally:
-        sock.close()
 
 
 def list_sessions() -> list[dict[str, Any]]:

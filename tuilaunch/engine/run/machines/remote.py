@@ -29,7 +29,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...plan.machines import Machine
-from ..session.protocol import MAX_MESSAGE, ProtocolError, VersionMismatch, decode, greet
+from ..session.connection import Connection, NoGreeting, run_blocking
+from ..session.protocol import MAX_MESSAGE, VersionMismatch
 from ..session.session_dir import SessionError, check_name
 
 PROXY_COMMAND = "__proxy"
@@ -320,87 +321,93 @@ def start_ssh(target: Target, args: list[str], environ: Mapping[str, str] | None
     return ours, process
 
 
-def _read_line(sock: socket.socket) -> bytes:
-    """One line, and not a byte more: what follows it stays in the socket for whoever
-    reads the link next (a buffered reader would keep it)."""
-    data = b""
-    while True:
-        peeked = sock.recv(65536, socket.MSG_PEEK)
-        if not peeked:
-            return data
-        end = peeked.find(b"\n")
-        take = len(peeked) if end < 0 else end + 1
-        data += sock.recv(take)
-        if end >= 0:
-            return data
-        if len(data) > MAX_MESSAGE:
-            raise ProtocolError("a message longer than the protocol allows")
-
-
 def open_remote_link(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
                      environ: Mapping[str, str] | None = None) -> RemoteLink:
-    """Blocking: the link to session `name` on `host`, once the session greeted us.
+    """Blocking: the link to session `name` on `host`, once the session greeted us (for a
+    blocking face: client/link.py's Link reads a copy of its socket).
 
     Raises RemoteError with one line (and a hint) saying whether the machine could not be
     reached, refused the key, has no tuilaunch, or has no such session."""
     check_name(name)
-    host = _host(target)
     sock, process = start_ssh(target, [PROXY_COMMAND, name], environ)
     stderr = _StderrTail(process)
-    sock.settimeout(timeout)
+
+    async def greeting() -> dict[str, Any]:
+        # read through a copy of the socket, which is closed after: the session says
+        # nothing more until it is asked, so nothing is left in that copy's buffer
+        reader, writer = await asyncio.open_connection(sock=sock.dup(), limit=MAX_MESSAGE)
+        conn = await _greeted(target, name, timeout, environ, reader, writer, sock, stderr)
+        conn.close()
+        await asyncio.sleep(0)  # the transport closes its copy on the loop's next turn
+        return conn.info
+
+    info = run_blocking(greeting)
+    sock.settimeout(None)  # blocking again (the copy's mode is the same file's)
+    return RemoteLink(_host(target), name, sock, process, {"type": "hello", "info": info},
+                      stderr)
+
+
+async def open_remote_connection(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
+                                 environ: Mapping[str, str] | None = None,
+                                 ) -> tuple[RemoteLink, Connection]:
+    """The asyncio form: the link, and the greeted Connection over it (labelled HOST:NAME),
+    for the TUI's RemoteSupervisor and the placed machines' shares. RemoteError as
+    `open_remote_link` says."""
+    check_name(name)
+    loop = asyncio.get_running_loop()
+    # ssh's start forks a process: not on the loop's thread
+    sock, process = await loop.run_in_executor(
+        None, lambda: start_ssh(target, [PROXY_COMMAND, name], environ))
+    stderr = _StderrTail(process)
+    sock.setblocking(False)
+    reader, writer = await asyncio.open_connection(sock=sock, limit=MAX_MESSAGE)
+    conn = await _greeted(target, name, timeout, environ, reader, writer, sock, stderr)
+    return RemoteLink(_host(target), name, sock, process,
+                      {"type": "hello", "info": conn.info}, stderr), conn
+
+
+async def _greeted(target: Target, name: str, timeout: float,
+                   environ: Mapping[str, str] | None, reader: asyncio.StreamReader,
+                   writer: asyncio.StreamWriter, sock: socket.socket,
+                   stderr: _StderrTail) -> Connection:
+    """The session's greeting over a new ssh link, checked by the Connection; what failed
+    (ssh, the remote tuilaunch, the session) said in one line, ssh ended."""
+    host = _host(target)
+    process = stderr.process
     try:
-        line = _read_line(sock)
+        return await Connection.greeted(reader, writer, f"{host}:{name}", timeout)
+    except NoGreeting as exc:
+        sock.close()
+        if exc.garbled is None:  # ssh ended first: its status and words say why
+            failure = await asyncio.get_running_loop().run_in_executor(
+                None, lambda: stderr.failure(target, f"session {name}", environ))
+            raise failure from None
+        await _ended(process)
+        raise RemoteError(f"{host}: the remote tuilaunch did not speak the session "
+                          f"protocol ({exc.garbled})", hint="is TUILAUNCH_REMOTE a tuilaunch?")\
+            from None
     except TimeoutError:
         sock.close()
-        process.kill()
-        process.wait()
+        await _ended(process)
         raise RemoteError(f"{host}: session {name} did not answer within {timeout:g} s")\
-            from None
-    except (OSError, ProtocolError):
-        line = b""
-    if not line.endswith(b"\n"):
-        sock.close()
-        raise stderr.failure(target, f"session {name}", environ)
-    try:
-        greet(line, f"{host}:{name}")
-    except ProtocolError as exc:
-        sock.close()
-        process.kill()
-        process.wait()
-        raise RemoteError(f"{host}: the remote tuilaunch did not speak the session "
-                          f"protocol ({exc})", hint="is TUILAUNCH_REMOTE a tuilaunch?")\
             from None
     except VersionMismatch:
         sock.close()
-        process.kill()
-        process.wait()
+        await _ended(process)
         raise
-    except SessionError:
+    except SessionError:  # a line of the protocol, but no hello
         sock.close()
-        process.kill()
-        process.wait()
+        await _ended(process)
         raise RemoteError(f"{host}: session {name} did not greet") from None
-    sock.settimeout(None)
-    return RemoteLink(host, name, sock, process, decode(line), stderr)
+    except BaseException:
+        sock.close()
+        await _ended(process)
+        raise
 
 
-async def open_remote_streams(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
-                              environ: Mapping[str, str] | None = None,
-                              ) -> tuple[RemoteLink, asyncio.StreamReader,
-                                         asyncio.StreamWriter]:
-    """The asyncio form (for the TUI's RemoteSupervisor): the link, and streams on its
-    socket with the session protocol's line limit. The greeting is `link.hello`."""
-    link = await asyncio.get_running_loop().run_in_executor(
-        None, lambda: open_remote_link(target, name, timeout, environ))
-    reader, writer = await link_streams(link)
-    return link, reader, writer
-
-
-async def link_streams(link: RemoteLink) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
-    """asyncio streams on an open link's socket (one already used by a blocking client
-    that read all it was sent: `attach` asks the status first on the same link)."""
-    link.sock.setblocking(False)
-    return await asyncio.open_connection(sock=link.sock, limit=MAX_MESSAGE)
+async def _ended(process: subprocess.Popen[bytes]) -> None:
+    process.kill()
+    await asyncio.get_running_loop().run_in_executor(None, process.wait)
 
 
 def run_remote(target: Target, args: list[str], timeout: float = HELLO_TIMEOUT,

@@ -15,13 +15,12 @@ from typing import Any
 
 from ..events import LIVE_STATES, Dropped, Event, Log, Output, Typing
 from ..process.logfiles import LogFile
-from ..session.protocol import ProtocolError, encode, event_from_dict
+from ..session.protocol import ProtocolError, event_from_dict
 from ..supervisor.placed import UNKNOWN
 from ..supervisor.supervisor import Supervisor
-from ..vocabulary.request import to_message
 from ..vocabulary.requests import ShareLines
 from ..vocabulary.text import screen_str
-from .share_link import REQUEST_IDS, Share
+from .share_link import Share
 
 
 class ShareMirror:
@@ -58,12 +57,11 @@ class ShareMirror:
                     "there", data={"detail": f"pid {pids[process]}" if process in pids and
                                    state in LIVE_STATES else ""}), state)
 
-    def ask_lines(self, share: Share, offsets: dict[str, int]) -> None:
+    def missed_lines(self, share: Share, offsets: dict[str, int]) -> list[ShareLines]:
         """What its processes printed before this subscription and was not seen here
-        (before the first link, or while the link was down): asked for, and shown before
-        the events that follow."""
-        if share.writer is None:
-            return
+        (before the first link, or while the link was down): the requests that ask for
+        it, to be shown before the events that follow (held until then)."""
+        asked = []
         for proc in self.supervisor.plan.processes:
             end = offsets.get(proc.id)
             if proc.machine != share.machine.name or end is None:
@@ -73,10 +71,9 @@ class ShareMirror:
             skip = share.received.pop(proc.id, 0)
             if end <= start:
                 continue
-            request_id = next(REQUEST_IDS)
-            share.backfill[request_id] = proc.id
-            share.writer.write(encode(to_message(
-                ShareLines(proc.id, start, end, skip), request_id)))
+            share.backfill.add(proc.id)
+            asked.append(ShareLines(proc.id, start, end, skip))
+        return asked
 
     def backfilled(self, share: Share, process: str, result: dict[str, Any]) -> None:
         skipped = int(result.get("skipped") or 0)

@@ -37,7 +37,7 @@ class ShareRequests:
         """The share that runs `process_id`, linked now; LaunchError saying why not."""
         machine = self.plan().process(process_id).machine
         share = self.shares.get(machine or "")
-        if share is None or share.writer is None:
+        if share is None or share.conn is None:
             why = share.failure if share is not None and share.failure else \
                 f"the link to {machine} is lost; connecting again" \
                 if share is not None and share.unknown else "not connected"
@@ -54,7 +54,7 @@ class ShareRequests:
                     if p.machine == share.machine.name}
 
         found: dict[str, dict[str, Any]] = {}
-        linked = [share for share in self.shares.values() if share.writer is not None]
+        linked = [share for share in self.shares.values() if share.conn is not None]
         for part in await asyncio.gather(*(one(share) for share in linked)):
             found.update(part)
         return found
@@ -70,7 +70,7 @@ class ShareRequests:
         if share is None or share.typing != process_id:
             return
         share.typing = None
-        if share.writer is not None:
+        if share.conn is not None:
             self.spawn(self._give_back(share, process_id))
 
     async def _give_back(self, share: Share, process_id: str) -> None:

@@ -18,8 +18,10 @@ from __future__ import annotations
 
 import asyncio
 import collections
+import concurrent.futures
 import contextlib
 import time
+from collections.abc import Callable, Coroutine
 from typing import Any, TypeVar
 
 from ..vocabulary.request import Request, to_message
@@ -29,12 +31,33 @@ from .session_dir import SessionError
 R = TypeVar("R")
 
 
+def run_blocking(work: Callable[[], Coroutine[Any, Any, R]]) -> R:
+    """`work` run to its end on a loop of its own, for a blocking caller: in this thread,
+    or in one of its own when this thread runs a loop already."""
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        return asyncio.run(work())
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        return pool.submit(lambda: asyncio.run(work())).result()
+
+
 def reply_result(message: dict[str, Any], label: str) -> Any:
     """A reply's result; SessionError naming the session (NAME or HOST:NAME) with the
     server's words when it refused."""
     if not message.get("ok"):
         raise SessionError(f"session {label}: {message.get('error')}")
     return message.get("result")
+
+
+class NoGreeting(SessionError):
+    """The server's first line was no greeting: `garbled` says what it was instead (not
+    JSON: no tuilaunch speaks there), None when the stream closed before a whole line (what
+    carries the link failed: an ssh link's own words say why)."""
+
+    def __init__(self, message: str, garbled: str | None) -> None:
+        super().__init__(message)
+        self.garbled = garbled
 
 
 class Connection:
@@ -60,13 +83,19 @@ class Connection:
     async def greeted(cls, reader: asyncio.StreamReader, writer: asyncio.StreamWriter,
                       label: str, timeout: float | None = None) -> Connection:
         """Reads the server's greeting (at most `timeout` s: TimeoutError) and checks it:
-        VersionMismatch or SessionError in one line, the writer then closed."""
+        VersionMismatch, NoGreeting or SessionError in one line, the writer then closed.
+        The one place a client checks a greeting (ssh links too: remote.py)."""
         try:
-            line = await asyncio.wait_for(reader.readline(), timeout)
-            return cls(reader, writer, greet(line, label), label)
-        except (ProtocolError, ConnectionError) as exc:  # not a tuilaunch; reset
-            writer.close()
-            raise SessionError(f"session {label} did not greet ({exc})") from None
+            try:
+                line = await asyncio.wait_for(reader.readline(), timeout)
+            except (ConnectionError, ValueError) as exc:  # reset; a line past MAX_MESSAGE
+                raise NoGreeting(f"session {label} did not greet ({exc})", None) from None
+            if not line.endswith(b"\n"):  # closed before a whole line
+                raise NoGreeting(f"session {label} did not greet", None)
+            try:
+                return cls(reader, writer, greet(line, label), label)
+            except ProtocolError as exc:  # not a tuilaunch
+                raise NoGreeting(f"session {label} did not greet ({exc})", str(exc)) from None
         except BaseException:
             writer.close()
             raise

@@ -39,7 +39,8 @@ class Reconnector:
         """The link dropped: attempts count from here, the first after `first` s (None:
         the reconnector's own)."""
         self.down, self.reason = down, reason
-        self.attempt, self.attempt_since, self._said = 0, None, ""
+        # the drop's reason is said with the drop: an attempt failing alike is not news
+        self.attempt, self.attempt_since, self._said = 0, None, reason
         self.delay = self.first if first is None else first
 
     async def next_attempt(self) -> None:
