@@ -17,10 +17,10 @@ from typing import Any, TypeVar
 from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import Address, open_remote_link, parse_address
 from ..engine.run.session import session_dir
-from ..engine.run.session.connection import Connection
-from ..engine.run.session.protocol import encode
+from ..engine.run.session.connection import Connection, run_blocking
+from ..engine.run.session.forward import Forward
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.request import Request, to_message
+from ..engine.run.vocabulary.request import Request
 
 R = TypeVar("R")
 T = TypeVar("T")
@@ -179,20 +179,12 @@ class Link:
         self._turn = threading.Lock()
         self._closing = False
 
-    @property
-    def info(self) -> dict[str, Any]:
-        """What the session said of itself in its hello (name, pid, log_dir...)."""
-        return self.connection.info
-
-    @property
-    def ended(self) -> bool:
-        """The session said it ended (its last message)."""
-        return self.connection.ended
-
-    @property
-    def pending(self) -> collections.deque[dict[str, Any]]:
-        """The messages that came before a reply, in order: the next `receive` gives them."""
-        return self.connection.early
+    info = Forward[dict[str, Any]](
+        "connection", doc="What the session said of itself in its hello (name, pid, log_dir...).")
+    ended = Forward[bool]("connection", doc="The session said it ended (its last message).")
+    pending = Forward[collections.deque[dict[str, Any]]](
+        "connection", "early", "The messages that came before a reply, in order: the next "
+        "`receive` gives them.")
 
     # --- running the connection's coroutines ------------------------------------------------
 
@@ -379,17 +371,22 @@ def open_link(address: str | None, timeout: float | None = ANSWER_TIMEOUT,
 
 
 def send_once(name: str, request: Request[Any]) -> bool:
-    """A request to a session on this machine from a thread without an event loop (the
-    UI's teardown): sent, and the connection closed once the server greets; False when the
-    server is there but does not answer (stopped or stuck)."""
+    """A request to a session on this machine from the UI's teardown (a thread without an
+    event loop, or one whose loop is ending): sent once the server greets, and the
+    connection closed; False when the server is there but does not answer (stopped or
+    stuck)."""
+    async def once() -> None:
+        conn = await Connection.open_unix(str(session_dir.socket_path(name)), name, 2.0)
+        try:
+            conn.send(request, reply=False)
+            await conn.writer.drain()
+        finally:
+            conn.close()
+
     try:
-        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
-            sock.settimeout(2.0)
-            sock.connect(str(session_dir.socket_path(name)))
-            sock.sendall(encode(to_message(request, 1)))
-            sock.recv(4096)  # the hello: the request is read before we hang up
+        run_blocking(once)
     except TimeoutError:
         return False
-    except OSError:
+    except (SessionError, OSError):
         pass  # the server is gone, and with it what the request was about
     return True

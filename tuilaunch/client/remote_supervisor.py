@@ -36,6 +36,7 @@ from ..engine.run.events import Event
 from ..engine.run.machines.remote import RemoteError, RemoteLink
 from ..engine.run.session import session_dir
 from ..engine.run.session.connection import Connection
+from ..engine.run.session.forward import Forward
 from ..engine.run.session.log_reader import LAUNCH_LOG
 from ..engine.run.session.protocol import ProtocolError, Stamps
 from ..engine.run.session.reconnector import RETRY_FIRST, RETRY_MOST, Reconnector
@@ -120,64 +121,25 @@ class RemoteSupervisor:
         self.stopping = False  # asked the session to stop: its end is no loss
 
     # what a frontend reads of the session (client/port.py), as the events told it
-    @property
-    def states(self) -> dict[str, str]:
-        return self.state.states
-
-    @property
-    def pids(self) -> dict[str, int]:
-        return self.state.pids
-
-    @property
-    def exit_codes(self) -> dict[str, int]:
-        return self.state.exit_codes
-
-    @property
-    def reasons(self) -> dict[str, str]:
-        return self.state.reasons
-
-    @property
-    def crashed(self) -> dict[str, str]:
-        return self.state.crashed
-
-    @property
-    def shutdown_reason(self) -> str | None:
-        return self.state.shutdown_reason
-
-    @property
-    def history(self) -> list[Event]:
-        return self.state.history
-
-    @property
-    def lifecycle(self) -> RemoteLifecycle:
-        return self.state.lifecycle
-
-    @property
-    def plan(self) -> Plan:
-        return self.session.plan
+    states = Forward[dict[str, str]]("state")
+    pids = Forward[dict[str, int]]("state")
+    exit_codes = Forward[dict[str, int]]("state")
+    reasons = Forward[dict[str, str]]("state")
+    crashed = Forward[dict[str, str]]("state")
+    shutdown_reason = Forward[str | None]("state")
+    history = Forward[list[Event]]("state")
+    lifecycle = Forward[RemoteLifecycle]("state")
+    plan = Forward[Plan]("session")
+    scrollback = Forward[int]("gaps")
 
     # what a status line reads of a lost link (client/port.py), the reconnector's
-    @property
-    def link_lost(self) -> str | None:
-        """While the link to `host` is down: why ("link to HOST lost (reason)")."""
-        return self.relink.down
-
-    @property
-    def lost_reason(self) -> str | None:
-        """While it is down: the latest attempt's reason (the first is the drop's)."""
-        return self.relink.reason
-
-    @property
-    def attempt(self) -> int:
-        return self.relink.attempt
-
-    @property
-    def attempt_since(self) -> float | None:
-        return self.relink.attempt_since
-
-    @property
-    def scrollback(self) -> int:
-        return self.gaps.scrollback
+    link_lost = Forward[str | None](
+        "relink", "down", "While the link to `host` is down: why (\"link to HOST lost (reason)\").")
+    lost_reason = Forward[str | None](
+        "relink", "reason", "While it is down: the latest attempt's reason (the first is the "
+        "drop's).")
+    attempt = Forward[int]("relink")
+    attempt_since = Forward[float | None]("relink")
 
     @classmethod
     async def open(cls, name: str, session: Session, scrollback: int = 5000,
