@@ -323,36 +323,31 @@ def start_ssh(target: Target, args: list[str], environ: Mapping[str, str] | None
 
 def open_remote_link(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
                      environ: Mapping[str, str] | None = None) -> RemoteLink:
-    """Blocking: the link to session `name` on `host`, once the session greeted us (for a
-    blocking face: client/link.py's Link reads a copy of its socket).
+    """Blocking: the link to session `name` on `host`, once the session greeted us, its
+    socket blocking (for a blocking face: client/link.py's Link reads a copy of it).
 
     Raises RemoteError with one line (and a hint) saying whether the machine could not be
     reached, refused the key, has no tuilaunch, or has no such session."""
-    check_name(name)
-    sock, process = start_ssh(target, [PROXY_COMMAND, name], environ)
-    stderr = _StderrTail(process)
-
-    async def greeting() -> dict[str, Any]:
-        # read through a copy of the socket, which is closed after: the session says
-        # nothing more until it is asked, so nothing is left in that copy's buffer
-        reader, writer = await asyncio.open_connection(sock=sock.dup(), limit=MAX_MESSAGE)
-        conn = await _greeted(target, name, timeout, environ, reader, writer, sock, stderr)
+    async def opened() -> RemoteLink:
+        link, conn = await open_remote_connection(target, name, timeout, environ)
+        # the link keeps a copy of the socket; the connection closes its own: the session
+        # says nothing more until it is asked, so nothing is left in that one's buffer
+        link.sock = link.sock.dup()
         conn.close()
-        await asyncio.sleep(0)  # the transport closes its copy on the loop's next turn
-        return conn.info
+        await asyncio.sleep(0)  # the transport closes its socket on the loop's next turn
+        return link
 
-    info = run_blocking(greeting)
-    sock.settimeout(None)  # blocking again (the copy's mode is the same file's)
-    return RemoteLink(_host(target), name, sock, process, {"type": "hello", "info": info},
-                      stderr)
+    link = run_blocking(opened)
+    link.sock.settimeout(None)  # blocking again (the copy's mode is the same file's)
+    return link
 
 
 async def open_remote_connection(target: Target, name: str, timeout: float = HELLO_TIMEOUT,
                                  environ: Mapping[str, str] | None = None,
                                  ) -> tuple[RemoteLink, Connection]:
-    """The asyncio form: the link, and the greeted Connection over it (labelled HOST:NAME),
-    for the TUI's RemoteSupervisor and the placed machines' shares. RemoteError as
-    `open_remote_link` says."""
+    """The link to session `name` on `host`, and the greeted Connection over it (labelled
+    HOST:NAME), for the TUI's RemoteSupervisor and the placed machines' shares. RemoteError
+    as `open_remote_link` says."""
     check_name(name)
     loop = asyncio.get_running_loop()
     # ssh's start forks a process: not on the loop's thread
@@ -373,41 +368,27 @@ async def _greeted(target: Target, name: str, timeout: float,
     """The session's greeting over a new ssh link, checked by the Connection; what failed
     (ssh, the remote tuilaunch, the session) said in one line, ssh ended."""
     host = _host(target)
-    process = stderr.process
     try:
         return await Connection.greeted(reader, writer, f"{host}:{name}", timeout)
-    except NoGreeting as exc:
+    except BaseException as exc:
         sock.close()
-        if exc.garbled is None:  # ssh ended first: its status and words say why
-            failure = await asyncio.get_running_loop().run_in_executor(
-                None, lambda: stderr.failure(target, f"session {name}", environ))
-            raise failure from None
-        await _ended(process)
-        raise RemoteError(f"{host}: the remote tuilaunch did not speak the session "
-                          f"protocol ({exc.garbled})", hint="is TUILAUNCH_REMOTE a tuilaunch?")\
-            from None
-    except TimeoutError:
-        sock.close()
-        await _ended(process)
-        raise RemoteError(f"{host}: session {name} did not answer within {timeout:g} s")\
-            from None
-    except VersionMismatch:
-        sock.close()
-        await _ended(process)
+        loop = asyncio.get_running_loop()
+        if isinstance(exc, NoGreeting) and exc.garbled is None:
+            # ssh ended before a whole line: its status and words say why
+            raise await loop.run_in_executor(
+                None, lambda: stderr.failure(target, f"session {name}", environ)) from None
+        stderr.process.kill()
+        await loop.run_in_executor(None, stderr.process.wait)
+        if isinstance(exc, TimeoutError):
+            raise RemoteError(f"{host}: session {name} did not answer within {timeout:g} s")\
+                from None
+        if isinstance(exc, NoGreeting):
+            raise RemoteError(f"{host}: the remote tuilaunch did not speak the session "
+                              f"protocol ({exc.garbled})",
+                              hint="is TUILAUNCH_REMOTE a tuilaunch?") from None
+        if isinstance(exc, SessionError) and not isinstance(exc, VersionMismatch):
+            raise RemoteError(f"{host}: session {name} did not greet") from None  # no hello
         raise
-    except SessionError:  # a line of the protocol, but no hello
-        sock.close()
-        await _ended(process)
-        raise RemoteError(f"{host}: session {name} did not greet") from None
-    except BaseException:
-        sock.close()
-        await _ended(process)
-        raise
-
-
-async def _ended(process: subprocess.Popen[bytes]) -> None:
-    process.kill()
-    await asyncio.get_running_loop().run_in_executor(None, process.wait)
 
 
 def run_remote(target: Target, args: list[str], timeout: float = HELLO_TIMEOUT,
