@@ -21,24 +21,10 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import LaunchError
 from ..run.events import Event, Output, Started
-from ..run.plugins import Clients, Handlers, Plugin
+from ..run.plugins import Clients, Handler, Handlers, Plugin
 from ..run.vocabulary.reported_names import ReportedNames
-from ..run.vocabulary.ros_requests import (
-    EchoStart,
-    EchoStop,
-    HzMeasure,
-    HzRead,
-    HzWatch,
-    LogLevel,
-    ParamsDump,
-    ParamsLoad,
-    PlotFields,
-    PlotStart,
-    PlotStop,
-    Topics,
-    WatchQos,
-    WatchRates,
-)
+from ..run.vocabulary.request import Request
+from ..run.vocabulary.ros_requests import LogLevel, ParamsDump, ParamsLoad, Topics
 from .actions import RosActions
 from .graph.echo_streams import EchoStreams
 from .graph.graph_requests import GraphRequests
@@ -110,13 +96,12 @@ class Inspector(Plugin):
 
     def handlers(self, find_process: Callable[[str], str]) -> Handlers:
         self.find_process = find_process
-        return {Topics: self.topics, HzMeasure: self.hz.hz, WatchRates: self.rates.watch_rates,
-                HzWatch: self.hz.hz_watch, HzRead: self.hz.hz_read,
-                EchoStart: self.echoes.echo, EchoStop: self.echoes.echo_stop,
-                ParamsDump: self.params_dump, ParamsLoad: self.params_load,
-                LogLevel: self.log_level, WatchQos: self.qos.watch,
-                PlotStart: self.plots.plot, PlotStop: self.plots.plot_stop,
-                PlotFields: self.plots.plot_fields, **self.graph.handlers()}
+        handlers: dict[type[Request[Any]], Handler] = {
+            Topics: self.topics, ParamsDump: self.params_dump, ParamsLoad: self.params_load,
+            LogLevel: self.log_level}
+        for part in (self.hz, self.rates, self.echoes, self.plots, self.qos, self.graph):
+            handlers.update(part.handlers())
+        return handlers
 
     def client_gone(self, client: int) -> None:
         for streams in (self.qos, self.echoes, self.plots, self.hz, self.rates):

@@ -8,14 +8,14 @@ the last marked done. It ends with its client (`client_gone`), and with the sess
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from typing import Any
 
 from ...errors import LaunchError
 from ...run.events import Echo
+from ...run.plugins import Handlers
 from ...run.vocabulary.ros_requests import EchoStart, EchoStop
 from ..ros_errors import RosError
-from .stream_hooks import StreamHooks
+from .stream_hooks import StreamHooks, stopped
 from .topic_graph import topic_of
 
 ECHO_DEFAULT_PER_S = 5.0
@@ -30,6 +30,9 @@ class EchoStreams:
     def __init__(self, hooks: StreamHooks) -> None:
         self.hooks = hooks
         self.streams: dict[tuple[int, str], asyncio.Task[None]] = {}
+
+    def handlers(self) -> Handlers:
+        return {EchoStart: self.echo, EchoStop: self.echo_stop}
 
     async def echo(self, request: EchoStart, client: int) -> dict[str, Any]:
         topic = topic_of(request.topic)
@@ -84,10 +87,7 @@ class EchoStreams:
             self.streams.pop(key).cancel()
 
     async def close(self) -> None:
-        for task in list(self.streams.values()):
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
+        await stopped(*self.streams.values())
         self.streams.clear()
 
 

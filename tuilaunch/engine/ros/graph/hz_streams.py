@@ -8,14 +8,14 @@ Each client has its own meter: a client watching the same topic keeps its own wi
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from typing import Any
 
 from ...errors import LaunchError
 from ...run.events import Hz
+from ...run.plugins import Handlers
 from ...run.vocabulary.ros_requests import HzMeasure, HzRead, HzWatch
 from ..ros_errors import RosError
-from .stream_hooks import StreamHooks
+from .stream_hooks import StreamHooks, stopped
 from .topic_graph import topic_of
 
 MAX_WINDOW = 600.0
@@ -29,6 +29,9 @@ class HzStreams:
     def __init__(self, hooks: StreamHooks) -> None:
         self.hooks = hooks
         self.streams: dict[tuple[int, str], tuple[asyncio.Task[None], Any]] = {}
+
+    def handlers(self) -> Handlers:
+        return {HzMeasure: self.hz, HzWatch: self.hz_watch, HzRead: self.hz_read}
 
     async def _meter(self, topic: str, **how: Any) -> Any:
         """A meter of its own measuring `topic`, once it has a publisher."""
@@ -100,8 +103,5 @@ class HzStreams:
             self.streams.pop(key)[0].cancel()
 
     async def close(self) -> None:
-        for task, _ in list(self.streams.values()):
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
+        await stopped(*(task for task, _ in self.streams.values()))
         self.streams.clear()

@@ -10,15 +10,15 @@ installed) is said so, and tried again each second.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from collections import deque
 from collections.abc import Callable
 from typing import Any
 
 from ...run.events import Rates
+from ...run.plugins import Handlers
 from ...run.vocabulary.ros_requests import WatchRates
 from ..ros_errors import RosError
-from .stream_hooks import StreamHooks
+from .stream_hooks import StreamHooks, in_background, stopped
 
 RATES_PERIOD = 1.0
 """Seconds between `rates` events to a watching client."""
@@ -39,6 +39,9 @@ class RateWatch:
         client that starts watching it is sent the minutes before (`watch_rates`)."""
         self.task: asyncio.Task[None] | None = None
         self.pending: set[asyncio.Task[None]] = set()
+
+    def handlers(self) -> Handlers:
+        return {WatchRates: self.watch_rates}
 
     async def watch_rates(self, request: WatchRates, client: int) -> dict[str, Any]:
         topics = request.topics
@@ -108,15 +111,10 @@ class RateWatch:
 
     def client_gone(self, client: int) -> None:
         if self.watching.pop(client, None) is not None:
-            task = asyncio.ensure_future(self.update())
-            self.pending.add(task)  # kept until done: a bare task may be collected
-            task.add_done_callback(self.pending.discard)
+            in_background(self.pending, self.update())
 
     async def close(self) -> None:
-        if self.task is not None:
-            self.task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self.task
+        await stopped(self.task)
         self.watching.clear()
         bridge = self._made()
         if bridge is not None:

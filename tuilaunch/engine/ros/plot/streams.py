@@ -18,14 +18,14 @@ a topic ends with its last stream.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from dataclasses import dataclass, field
 from typing import Any
 
 from ...errors import LaunchError
 from ...run.events import PlotSamples
+from ...run.plugins import Handlers
 from ...run.vocabulary.ros_requests import PlotFields, PlotStart, PlotStop
-from ..graph.stream_hooks import StreamHooks
+from ..graph.stream_hooks import StreamHooks, in_background, stopped
 from ..graph.topic_graph import topic_of
 from ..ros_errors import RosError
 
@@ -79,6 +79,9 @@ class PlotStreams:
         except RosError:
             raise await self.hooks.no_publisher(bridge, topic, wait) from None
         return message_class(infos[0].topic_type), infos
+
+    def handlers(self) -> Handlers:
+        return {PlotStart: self.plot, PlotStop: self.plot_stop, PlotFields: self.plot_fields}
 
     async def plot_fields(self, request: PlotFields, client: int) -> dict[str, Any]:
         """`{"type", "fields", "stamped"}`: the topic's numeric fields by dotted path (the
@@ -190,16 +193,11 @@ class PlotStreams:
 
     def client_gone(self, client: int) -> None:
         for key in [k for k in self.streams if k[0] == client]:
-            task = asyncio.ensure_future(self._end(*key))
-            self.pending.add(task)  # kept until done: a bare task may be collected
-            task.add_done_callback(self.pending.discard)
+            in_background(self.pending, self._end(*key))
 
     async def close(self) -> None:
-        if self.task is not None:
-            self.task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self.task
-            self.task = None
+        await stopped(self.task)
+        self.task = None
         self.streams.clear()
         samplers, self.samplers = list(self.samplers.values()), {}
         for sampler in samplers:
