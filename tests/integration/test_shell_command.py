@@ -8,7 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from tuilaunch.engine.plan.shell_command import env_changes, shell_command
+from tuilaunch.engine.plan.command.shell_command import env_changes, shell_command
 
 SHOW = ("import json, os, sys; print(json.dumps({'argv': sys.argv[1:], 'cwd': os.getcwd(), "
         "'A': os.environ.get('TL_A'), 'GONE': os.environ.get('TL_GONE'), "

@@ -15,7 +15,12 @@ import sys
 import pytest
 
 from tuilaunch.engine.errors import LaunchError
-from tuilaunch.engine.plan.prefix import final_cmd, prefix_applies, prefix_arguments, with_prefix
+from tuilaunch.engine.plan.command.prefix import (
+    final_cmd,
+    prefix_applies,
+    prefix_arguments,
+    with_prefix,
+)
 
 TALKER = ["/opt/ros/jazzy/lib/demo_nodes_cpp/talker", "--ros-args", "-r", "__node:=talker"]
 

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 from ..engine.describe.python.loader import LoadedFile, load_file, set_command_line
 from ..engine.errors import LaunchError, PackageError
 from ..engine.packages import ensure_environment, find_launch_file_in_share
-from ..engine.plan.prefix import prefix_arguments
+from ..engine.plan.command.prefix import prefix_arguments
 from ..engine.plan.resolve import declared_arguments, resolve
 from ..engine.run.lean_asyncio import asyncio_without_tls
 

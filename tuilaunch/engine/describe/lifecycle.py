@@ -200,20 +200,6 @@ def state_keys(transition: str, start_state: str, goal_state: str) -> list[str]:
 # EmitEvent(event=ChangeState(...)) stands for a ChangeStateAction in a Description
 EMITTED_EVENTS[ChangeState] = lambda event, condition: event.as_action(condition)
 
-# where launch_ros defines each name (compat.py builds the module tree from such rows)
-COMPAT_ROWS: list[tuple[str, str, Any]] = [
-    ("launch_ros.actions.lifecycle_node", "LifecycleNode", LifecycleNode),
-    ("launch_ros.actions.lifecycle_transition", "LifecycleTransition", LifecycleTransition),
-    ("launch_ros.events.lifecycle.change_state", "ChangeState", ChangeState),
-    ("launch_ros.events.lifecycle.state_transition", "StateTransition", StateTransition),
-    ("launch_ros.events.lifecycle.lifecycle_node_matchers", "matches_node_name",
-     matches_node_name),
-    ("launch_ros.events.matchers.matches_node_name", "matches_node_name", matches_node_name),
-    ("launch_ros.events", "matches_node_name", matches_node_name),
-    ("launch_ros.event_handlers.on_state_transition", "OnStateTransition",
-     OnStateTransition),
-]
-
 __all__ = [
     "ChangeState",
     "ChangeStateAction",

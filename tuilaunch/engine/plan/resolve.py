@@ -6,7 +6,7 @@ default when the argument has no value yet.
 
 This module walks the entities (dispatch, groups, triggers, event handlers, includes); what
 each kind becomes is built next door: scope.py (namespace, SetParameter/SetRemap,
-environment push/pop), command_line.py (a process's or node's command line), actions.py
+environment push/pop), command/command_line.py (a process's or node's command line), actions.py
 (log, call_service, set_parameters, ...), arguments.py, opaque.py.
 
 A little over 500 lines on purpose: `Resolver` is one recursive visitor (visit -> group /
@@ -72,12 +72,12 @@ from ..errors import (
 from . import lifecycle as lifecycle_plan
 from .actions import ActionPlanner, describe_entity
 from .arguments import declare_argument, type_notes
-from .command_line import LAUNCH_CONFIGURATIONS, ProcessPlanner
+from .command.command_line import LAUNCH_CONFIGURATIONS, ProcessPlanner
+from .command.prefix import LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER
 from .components import interfaces_warning
 from .model import ActionKind, ActionPlan, ArgumentInfo, Plan, ProcessPlan, TreeItem, Trigger
 from .opaque import is_custom_action, perform_opaque
 from .params import default_params_dir, remove_default_params_dir
-from .prefix import LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER
 from .scope import (
     Deferred,
     EventScopes,

@@ -6,7 +6,8 @@ and knows the plan, so graph endpoints are mapped to the launch's processes and 
 be named by its process id.
 
 Streams are per client: `watch_rates` measures the union of what the clients watch and
-stops a topic when nobody watches it; `echo` runs one throttled stream per client and
+stops a topic when nobody watches it (rate_watch.py); `hz` measures for one client
+(hz_streams.py); `echo` runs one throttled stream per client and
 topic (echo_streams.py); `plot` one stream of decimated points per client and topic
 (plot/streams.py); `watch_qos` sends the graph's QoS problems when they change
 (qos_watch.py). A client that disconnects loses its streams (`client_gone`).
@@ -15,44 +16,28 @@ topic (echo_streams.py); `plot` one stream of decimated points per client and to
 from __future__ import annotations
 
 import asyncio
-import contextlib
-from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ..errors import LaunchError
-from ..run.events import Event, Hz, Output, Rates, Started
-from ..run.plugins import Clients, Handlers, Plugin
+from ..run.events import Event, Output, Started
+from ..run.plugins import Clients, Handler, Handlers, Plugin
 from ..run.vocabulary.reported_names import ReportedNames
-from ..run.vocabulary.ros_requests import (
-    EchoStart,
-    EchoStop,
-    HzMeasure,
-    HzRead,
-    HzWatch,
-    LogLevel,
-    ParamsDump,
-    ParamsLoad,
-    PlotFields,
-    PlotStart,
-    PlotStop,
-    Topics,
-    WatchQos,
-    WatchRates,
-)
+from ..run.vocabulary.request import Request
+from ..run.vocabulary.ros_requests import LogLevel, ParamsDump, ParamsLoad, Topics
 from .actions import RosActions
 from .graph.echo_streams import EchoStreams
 from .graph.graph_requests import GraphRequests
+from .graph.hz_streams import HzStreams
 from .graph.qos_watch import Problems, QosWatch
-from .graph.topic_graph import topic_of
+from .graph.rate_watch import RateWatch
+from .graph.stream_hooks import StreamHooks
 from .plot.streams import PlotStreams
 from .ros_errors import RosError
 
 if TYPE_CHECKING:
     from ..run.supervisor.supervisor import Supervisor
 
-RATES_PERIOD = 1.0
-"""Seconds between `rates` events to a watching client."""
 DISCOVERY_WAIT = 3.0
 """A bridge made for this request waits at most this for the launch's nodes to show up:
 a graph read a moment after joining would be empty."""
@@ -64,9 +49,6 @@ again (a relaunch, a restart) is discovered within it on a busy machine (2 s was
 for an rclpy talker, with the test suite on both cores)."""
 SERVICE_TIMEOUT = 5.0
 """How long a node may take to answer a parameter or logger request."""
-MAX_WINDOW = 600.0
-RATE_HISTORY = 300
-"""Rates kept per watched topic, one a second: the Topics tab's last five minutes."""
 
 
 class Inspector(Plugin):
@@ -75,27 +57,19 @@ class Inspector(Plugin):
         self.ros = ros
         self.clients: Clients | None = None
         self.find_process: Callable[[str], str] | None = None
-        self.rate_watch: dict[int, set[str]] = {}
-        self.unmeasured: dict[str, str] = {}  # watched topics not measured yet: why
-        self.rate_history: dict[str, deque[float | None]] = {}
-        """A rate a second of each topic some client watches, for as long as one does: a
-        client that starts watching it is sent the minutes before (`watch_rates`)."""
-        self.rates_task: asyncio.Task[None] | None = None
-        self.hz_streams: dict[tuple[int, str], tuple[asyncio.Task[None], Any]] = {}
-        """`tuilaunch hz` clients' measures, by (client, topic): the task sending the
-        figures, and the meter."""
-        self.pending: set[asyncio.Task[None]] = set()
         self.bridge_lock = asyncio.Lock()
         self.discovered = False
         self.reported = ReportedNames()
         self.unnamed: tuple[object, set[str]] = (None, set())  # (plan, its unnamed nodes)
         self.qos = QosWatch(self.qos_problems, self.send)
-        self.echoes = EchoStreams(self.bridge, self.publisher_problem, self._subscribed,
-                                  self.send, PUBLISHER_WAIT)
+        hooks = StreamHooks(self.bridge, self.publisher_problem, self._subscribed, self.send,
+                            PUBLISHER_WAIT)
+        self.echoes = EchoStreams(hooks)
+        self.plots = PlotStreams(hooks)
+        self.hz = HzStreams(hooks)
+        self.rates = RateWatch(hooks, lambda: self.ros.made)
         # the Services and Params tabs' requests
         self.graph = GraphRequests(self.bridge, self.current_name, SERVICE_TIMEOUT)
-        self.plots = PlotStreams(self.bridge, self.publisher_problem, self._subscribed,
-                                 self.send, PUBLISHER_WAIT)
         supervisor.subscribe(self.learn_names)
 
     def learn_names(self, event: Event) -> None:
@@ -122,39 +96,20 @@ class Inspector(Plugin):
 
     def handlers(self, find_process: Callable[[str], str]) -> Handlers:
         self.find_process = find_process
-        return {Topics: self.topics, HzMeasure: self.hz, WatchRates: self.watch_rates,
-                HzWatch: self.hz_watch, HzRead: self.hz_read,
-                EchoStart: self.echoes.echo, EchoStop: self.echoes.echo_stop,
-                ParamsDump: self.params_dump, ParamsLoad: self.params_load,
-                LogLevel: self.log_level, WatchQos: self.qos.watch,
-                PlotStart: self.plots.plot, PlotStop: self.plots.plot_stop,
-                PlotFields: self.plots.plot_fields, **self.graph.handlers()}
+        handlers: dict[type[Request[Any]], Handler] = {
+            Topics: self.topics, ParamsDump: self.params_dump, ParamsLoad: self.params_load,
+            LogLevel: self.log_level}
+        for part in (self.hz, self.rates, self.echoes, self.plots, self.qos, self.graph):
+            handlers.update(part.handlers())
+        return handlers
 
     def client_gone(self, client: int) -> None:
-        self.qos.client_gone(client)
-        self.echoes.client_gone(client)
-        self.plots.client_gone(client)
-        for key in [k for k in self.hz_streams if k[0] == client]:
-            self.hz_streams.pop(key)[0].cancel()
-        if self.rate_watch.pop(client, None) is not None:
-            task = asyncio.ensure_future(self.update_rates())
-            self.pending.add(task)  # kept until done: a bare task may be collected
-            task.add_done_callback(self.pending.discard)
+        for streams in (self.qos, self.echoes, self.plots, self.hz, self.rates):
+            streams.client_gone(client)
 
     async def close(self) -> None:
-        for task in [*(t for t, _ in self.hz_streams.values()), self.rates_task]:
-            if task is not None:
-                task.cancel()
-                with contextlib.suppress(asyncio.CancelledError, Exception):
-                    await task
-        await self.echoes.close()
-        await self.plots.close()
-        self.hz_streams.clear()
-        self.rate_watch.clear()
-        await self.qos.close()
-        bridge = self.ros.made
-        if bridge is not None:
-            await bridge.stop_rates()
+        for streams in (self.hz, self.echoes, self.plots, self.qos, self.rates):
+            await streams.close()
 
     # --- shared ------------------------------------------------------------------------------
 
@@ -262,7 +217,7 @@ class Inspector(Plugin):
             return f"no topic {topic} on the ROS graph"
         return f"topic {topic} has no publisher"
 
-    # --- topics and rates --------------------------------------------------------------------
+    # --- topics ------------------------------------------------------------------------------
 
     async def topics(self, request: Topics, client: int = 0) -> dict[str, Any]:
         node = request.node
@@ -282,144 +237,6 @@ class Inspector(Plugin):
             return []
         topics: Problems = (await self.topics(Topics(problems_only=True))).get("topics") or []
         return topics
-
-    async def hz(self, request: HzMeasure, client: int) -> dict[str, Any]:
-        from .graph.rates import RateMeter
-
-        topic = topic_of(request.topic)
-        window = request.window or 10.0
-        if not 0 < window <= MAX_WINDOW:
-            raise ValueError(f"window {window:g} s is out of range (0-{MAX_WINDOW:g} s)")
-        bridge = await self.bridge()
-        # its own meter: a client watching the same topic keeps its own window
-        meter = RateMeter(bridge.node)
-        try:
-            try:
-                await meter.start(topic, window, PUBLISHER_WAIT)
-            except RosError:
-                raise LaunchError(f"{await self.publisher_problem(bridge, topic)} "
-                                  f"(waited {PUBLISHER_WAIT:g} s)") from None
-            await asyncio.sleep(window)
-            return meter.read(topic)[topic]
-        finally:
-            meter.stop_all()
-
-    async def hz_watch(self, request: HzWatch, client: int) -> dict[str, Any]:
-        """`tuilaunch hz`: the topic measured over its last `messages` messages (as ros2
-        topic hz -w), its figures sent to the client as an "hz" event every `every` s until
-        it leaves; `hz_read` gives them at once."""
-        from .graph.rates import RateMeter
-
-        topic = topic_of(request.topic)
-        if self.clients is None or not self.clients.subscribed(client):
-            raise LaunchError("hz sends its figures as events: subscribe first")
-        messages = request.messages
-        if messages < 1:
-            raise ValueError(f"messages {messages!r} is not a positive number")
-        every = request.every or 1.0
-        bridge = await self.bridge()
-        meter = RateMeter(bridge.node)
-        try:
-            await meter.start(topic, wait=PUBLISHER_WAIT, messages=messages)
-        except RosError:
-            meter.stop_all()
-            raise LaunchError(f"{await self.publisher_problem(bridge, topic)} "
-                              f"(waited {PUBLISHER_WAIT:g} s)") from None
-        old = self.hz_streams.pop((client, topic), None)
-        if old is not None:
-            old[0].cancel()
-        task = asyncio.ensure_future(self.stream_hz(meter, topic, client, every))
-        self.hz_streams[(client, topic)] = (task, meter)
-        return {}
-
-    async def stream_hz(self, meter: Any, topic: str, client: int, every: float) -> None:
-        try:
-            while True:
-                await asyncio.sleep(every)
-                for result in meter.read(topic).values():
-                    self.send(Hz(data=result), client)
-        finally:
-            meter.stop_all()
-            entry = self.hz_streams.get((client, topic))
-            if entry is not None and entry[0] is asyncio.current_task():
-                del self.hz_streams[(client, topic)]
-
-    async def hz_read(self, request: HzRead, client: int) -> dict[str, Any]:
-        topic = topic_of(request.topic)
-        entry = self.hz_streams.get((client, topic))
-        if entry is None:
-            raise LaunchError(f"{topic} is not measured for this client")
-        result: dict[str, Any] = entry[1].read(topic)[topic]
-        return result
-
-    async def watch_rates(self, request: WatchRates, client: int) -> dict[str, Any]:
-        topics = request.topics
-        if not all(isinstance(t, str) for t in topics):
-            raise ValueError("watch_rates needs topics as a list of names")
-        if topics:
-            self.rate_watch[client] = set(topics)
-        else:
-            self.rate_watch.pop(client, None)
-        await self.update_rates()
-        return {"unmeasured": {t: self.unmeasured[t] for t in topics if t in self.unmeasured},
-                "history": {t: list(self.rate_history[t]) for t in topics
-                            if t in self.rate_history}}
-
-    async def update_rates(self) -> None:
-        """Measures the union of the watched topics, no more; the ticker runs while any
-        client watches."""
-        wanted = set().union(*self.rate_watch.values()) if self.rate_watch else set()
-        if not wanted:
-            if self.rates_task is not None:
-                self.rates_task.cancel()
-                self.rates_task = None
-            self.unmeasured.clear()
-            self.rate_history.clear()
-            if self.ros.made is not None:
-                await self.ros.made.stop_rates()
-            return
-        bridge = await self.bridge()
-        measured = set(bridge.rate_meter().measured())
-        await bridge.stop_rates(sorted(measured - wanted))
-        for topic in list(self.unmeasured):
-            if topic not in wanted:
-                del self.unmeasured[topic]
-        for topic in list(self.rate_history):
-            if topic not in wanted:
-                del self.rate_history[topic]
-        await self.start_missing(bridge, wanted - measured)
-        if self.rates_task is None:
-            self.rates_task = asyncio.ensure_future(self.tick_rates())
-
-    async def start_missing(self, bridge: Any, topics: set[str]) -> None:
-        from .messages import MessageError
-
-        for topic in sorted(topics):
-            try:
-                await bridge.start_rates([topic], wait=0.0)
-                self.unmeasured.pop(topic, None)
-            except RosError:
-                self.unmeasured[topic] = await self.publisher_problem(bridge, topic)
-            except MessageError as exc:
-                self.unmeasured[topic] = str(exc)
-
-    async def tick_rates(self) -> None:
-        while self.rate_watch:
-            await asyncio.sleep(RATES_PERIOD)
-            bridge = self.ros.made
-            if bridge is None:
-                continue
-            if self.unmeasured:  # a publisher may have come since
-                await self.start_missing(bridge, set(self.unmeasured))
-            rates = await bridge.read_rates()
-            for topic in set().union(*self.rate_watch.values()):
-                self.rate_history.setdefault(topic, deque(maxlen=RATE_HISTORY)).append(
-                    rates.get(topic, {}).get("rate_hz"))
-            for client, topics in list(self.rate_watch.items()):
-                data = {t: {"rate_hz": rates.get(t, {}).get("rate_hz"),
-                            "bytes_per_s": rates.get(t, {}).get("bytes_per_s")}
-                        for t in sorted(topics)}
-                self.send(Rates(data=data), client)
 
     def send(self, event: Event, client: int) -> None:
         if self.clients is not None:

@@ -65,6 +65,20 @@ class QuietTable(DataTable[Any]):
         return super().refresh(*regions, **kwargs)
 
 
+def row_values(name: str, entry: Mapping[str, Any], rate: Mapping[str, Any],
+               problem_mark: str) -> dict[str, Any]:
+    """A topic's row, by column key: its `topics` entry and its last rates."""
+    return {
+        "topic": name,
+        "pubs": str(len(entry.get("publishers") or [])),
+        "subs": str(len(entry.get("subscribers") or [])),
+        "rate": rate_text(rate.get("rate_hz")) if rate else "",
+        "bw": bytes_text(rate.get("bytes_per_s"), "/s") if rate else "",
+        "qos": Text(problem_mark, "bold red") if entry.get("qos_problems") else "",
+        "type": ", ".join(str(t) for t in entry.get("types") or []),
+    }
+
+
 def endpoint_line(endpoint: Mapping[str, Any]) -> str:
     """`/talker  [talker-1]  reliable, volatile, keep_last 10`."""
     process = endpoint.get("process")
@@ -81,6 +95,146 @@ def endpoint_line(endpoint: Mapping[str, Any]) -> str:
         depth = qos.get("depth")
         policies.append(f"{history} {depth}" if depth is not None else str(history))
     return f"  {endpoint.get('node', '?')}  {where}  {', '.join(policies)}"
+
+
+class TopicRates:
+    """The rates the server measures for the panel: of the rows on screen only, each with
+    its last minutes (the selected one's is the sparkline) or why it has none."""
+
+    def __init__(self) -> None:
+        self.watched: list[str] = []
+        """The topics the server measures for us (the rows on screen)."""
+        self.rates: dict[str, dict[str, Any]] = {}
+        self.history: dict[str, deque[float]] = {}
+        """A rate a second of each watched topic, oldest first."""
+        self.unmeasured: dict[str, str] = {}
+        """Watched topics the server cannot measure, and why."""
+
+    def watch(self, topics: list[str]) -> list[str]:
+        """The topics watched from now on; the ones no longer watched, returned, lose their
+        figure: an old one would pass for a live one when the row comes back."""
+        gone = [t for t in self.watched if t not in topics]
+        for topic in gone:
+            self.rates.pop(topic, None)
+        self.watched = list(topics)
+        return gone
+
+    def answered(self, result: Mapping[str, Any] | None) -> None:
+        """The server's answer to `watch_rates`."""
+        # why a topic has no rate (nobody publishes it, its type is not installed)
+        self.unmeasured = dict((result or {}).get("unmeasured") or {})
+        # the minutes the server kept of each (another client watching it, or we before)
+        for topic, kept in ((result or {}).get("history") or {}).items():
+            if topic in self.watched and len(kept) > len(self.history.get(topic, ())):
+                self.history[topic] = deque((r or 0.0 for r in kept), maxlen=RATE_HISTORY)
+        for topic in [t for t in self.history if t not in self.watched]:
+            del self.history[topic]
+
+    def take(self, rates: Mapping[str, Any]) -> list[str]:
+        """A `rates` event: the topics whose figures it brought, watched still."""
+        taken = []
+        for topic, values in rates.items():
+            if not isinstance(values, Mapping) or topic not in self.watched:
+                continue  # a figure sent before we stopped watching that row
+            self.rates[topic] = dict(values)
+            self.history.setdefault(topic, deque(maxlen=RATE_HISTORY)).append(
+                float(values.get("rate_hz") or 0.0))
+            taken.append(topic)
+        return taken
+
+
+class TopicEcho:
+    """The echo of one topic under the detail: which topic, its newest messages, and the
+    requests that start and stop it on the server."""
+
+    def __init__(self, panel: TopicsPanel) -> None:
+        self.panel = panel
+        self.topic: str | None = None
+        self.messages: deque[str] = deque(maxlen=ECHO_KEEP)
+
+    def toggle(self, topic: str) -> None:
+        """Echoes `topic`, or stops when it is the one echoed."""
+        stop = self.topic == topic
+        if self.topic is not None:
+            self.stop()
+        if not stop:
+            self.topic = topic
+            self.messages.clear()
+            self.panel.run_worker(self._start(topic), group="topics-echo", exit_on_error=False)
+
+    async def _start(self, topic: str) -> None:
+        try:
+            await self.panel.request(EchoStart(topic=topic, max_per_s=ECHO_PER_S))
+        except Exception as exc:
+            if self.topic == topic:
+                self.topic = None
+                self.panel.note(f"cannot echo {topic}: {_one_line(exc)}", ok=False)
+                self.panel.show_detail()
+
+    def stop(self) -> None:
+        topic, self.topic = self.topic, None
+        self.messages.clear()
+        if topic is not None:
+            self.panel.run_worker(self._stop(topic), group="topics-echo", exit_on_error=False)
+
+    async def _stop(self, topic: str) -> None:
+        try:
+            await self.panel.request(EchoStop(topic=topic))
+        except Exception:
+            pass  # the echo ended by itself (its count, the topic gone): nothing to stop
+
+    def take(self, data: Mapping[str, Any]) -> bool:
+        """An `echo` event: a message of the echoed topic, as YAML (False: of another)."""
+        if data.get("topic") != self.topic:
+            return False
+        # each message's YAML ends with its `---`; they are joined with one again
+        self.messages.append(str(data.get("text") or "").rstrip().removesuffix("---").rstrip())
+        return True
+
+    def lines(self, room: int) -> list[tuple[str, str]]:
+        """The echo's title and its newest lines that fit in `room` lines."""
+        messages = "\n---\n".join(self.messages) if self.messages else "waiting for a message"
+        echoed = [(line, "") for line in messages.splitlines()]
+        # the newest lines are what an echo is for: the oldest go first
+        return [(f"echo {self.topic} (e stops):", "bold"),
+                *echoed[max(0, len(echoed) - (room - 1)):]]
+
+
+class RateTrend(Horizontal):
+    """The selected topic's rate over the last minutes, as a sparkline (Textual's), with
+    its span and its top; hidden for a topic with fewer than two rates."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.data: list[float] = []
+        """The rates drawn."""
+
+    def compose(self) -> ComposeResult:
+        yield Static("rate, last minutes", id="tpc-trend-label")
+        yield Static("", id="tpc-spark")
+
+    def show(self, history: deque[float] | None) -> None:
+        shown = history is not None and len(history) >= 2
+        self.set_class(shown, "shown")
+        if shown and history is not None and list(history) != self.data:
+            # from zero to the max said beside it: a steady rate draws steady bars
+            data = self.data = list(history)
+            self.query_one("#tpc-trend-label", Static).update(
+                f"rate, last {len(data) // 60 or len(data)} "
+                f"{'min' if len(data) >= 60 else 's'} (0 to {rate_text(max(data))})")
+            spark = self.query_one("#tpc-spark", Static)
+            spark.update(units.spark(data, max(spark.size.width, 10)))
+
+
+def styled(lines: list[tuple[str, str]]) -> Text:
+    """Lines of text, each with its style ("" for none), as one Text."""
+    text = Text("\n".join(line for line, _ in lines), no_wrap=True, overflow="ellipsis")
+    position = 0
+    for line, style in lines:
+        if style:
+            text.stylize(style, position, position + len(line))
+        position += len(line) + 1
+    return text
 
 
 class TopicsPanel(Vertical):
@@ -133,25 +287,15 @@ class TopicsPanel(Vertical):
         """The table's rows (topic names), in order."""
         self.cells: dict[tuple[str, str], str] = {}
         """The text of every cell, so an unchanged one is not sent to the terminal again."""
-        self.rates: dict[str, dict[str, Any]] = {}
-        self.rate_history: dict[str, deque[float]] = {}
-        """A rate a second of each watched topic, oldest first (the selected one's is the
-        sparkline above the detail)."""
-        self.unmeasured: dict[str, str] = {}
-        """Watched topics the server cannot measure, and why."""
-        self.watched: list[str] = []
-        """The topics the server measures for us (the rows on screen)."""
+        self.measured = TopicRates()
         self.node: str | None = None
         """A node whose topics only are listed (the Nodes tab's `o`)."""
         self.selected: str | None = None
-        self.echo_topic: str | None = None
-        self.echoed: deque[str] = deque(maxlen=ECHO_KEEP)
+        self.echo = TopicEcho(self)
         self.active = False
         self.ticks = 0
         self.problem_mark = "x" if ascii_terminal() else "✗"
         self._detail_text = ""
-        self.trend_data: list[float] = []
-        """The rates the sparkline draws (the tests read them)."""
         self._note = ("", True)
 
     def compose(self) -> ComposeResult:
@@ -162,9 +306,7 @@ class TopicsPanel(Vertical):
             yield Static("", id="tpc-rec")  # a recording and its size (tui/recording.py)
         yield QuietTable(id="tpc-table", cursor_type="row", zebra_stripes=False)
         yield Static("", id="tpc-note")
-        with Horizontal(id="tpc-trend"):
-            yield Static("rate, last minutes", id="tpc-trend-label")
-            yield Static("", id="tpc-spark")
+        yield RateTrend(id="tpc-trend")
         yield Static("", id="tpc-detail")
 
     def on_mount(self) -> None:
@@ -192,7 +334,7 @@ class TopicsPanel(Vertical):
         else:
             self.timer.pause()
             self.watch_visible([])
-            if self.echo_topic is not None:
+            if self.echo.topic is not None:
                 self.stop_echo()
 
     def tick(self) -> None:
@@ -266,18 +408,8 @@ class TopicsPanel(Vertical):
         self.show_detail()
 
     def _values(self, name: str) -> dict[str, Any]:
-        entry = self.entries.get(name, {})
-        rate = self.rates.get(name, {})
-        problems = entry.get("qos_problems") or []
-        return {
-            "topic": name,
-            "pubs": str(len(entry.get("publishers") or [])),
-            "subs": str(len(entry.get("subscribers") or [])),
-            "rate": rate_text(rate.get("rate_hz")) if rate else "",
-            "bw": bytes_text(rate.get("bytes_per_s"), "/s") if rate else "",
-            "qos": Text(self.problem_mark, "bold red") if problems else "",
-            "type": ", ".join(str(t) for t in entry.get("types") or []),
-        }
+        return row_values(name, self.entries.get(name, {}), self.measured.rates.get(name, {}),
+                          self.problem_mark)
 
     def _set(self, row: str, column: str, value: Any) -> None:
         text = str(value)
@@ -304,19 +436,21 @@ class TopicsPanel(Vertical):
 
     # --- rates -------------------------------------------------------------------------------
 
+    @property
+    def watched(self) -> list[str]:
+        """The topics the server measures for us (the rows on screen)."""
+        return self.measured.watched
+
     def watch_visible(self, topics: list[str]) -> None:
         """Asks the server to measure these topics for us, when they changed."""
         if not self.active:
             topics = []
-        if topics == self.watched:
+        if topics == self.measured.watched:
             return
-        for gone in set(self.watched) - set(topics):
-            # an old figure would pass for a live one when the row comes back
-            self.rates.pop(gone, None)
+        for gone in self.measured.watch(topics):
             if gone in self.shown:
                 self._set(gone, "rate", "")
                 self._set(gone, "bw", "")
-        self.watched = list(topics)
         self._send_watch(list(topics))
 
     @work(group="topics-watch", exit_on_error=False)
@@ -327,26 +461,19 @@ class TopicsPanel(Vertical):
             if topics:
                 self.note(f"cannot measure rates: {_one_line(exc)}", ok=False)
             return
-        # why a topic has no rate (nobody publishes it, its type is not installed)
-        self.unmeasured = dict((result or {}).get("unmeasured") or {})
-        # the minutes the server kept of each (another client watching it, or we before)
-        for topic, kept in ((result or {}).get("history") or {}).items():
-            if topic in self.watched and len(kept) > len(self.rate_history.get(topic, ())):
-                self.rate_history[topic] = deque((r or 0.0 for r in kept),
-                                                 maxlen=RATE_HISTORY)
-        for topic in [t for t in self.rate_history if t not in self.watched]:
-            del self.rate_history[topic]
+        self.measured.answered(result)
         self.show_detail()
+
+    @property
+    def rates(self) -> dict[str, dict[str, Any]]:
+        """The last figures of the watched topics, by topic (the tests read them)."""
+        return self.measured.rates
 
     def show_rates(self, rates: Mapping[str, Any]) -> None:
         """A `rates` event: the cells of these topics, where their text changed."""
-        for topic, values in rates.items():
-            if not isinstance(values, Mapping) or topic not in self.watched:
-                continue  # a figure sent before we stopped watching that row
-            self.rates[topic] = dict(values)
-            self.rate_history.setdefault(topic, deque(maxlen=RATE_HISTORY)).append(
-                float(values.get("rate_hz") or 0.0))
+        for topic in self.measured.take(rates):
             if topic in self.shown:
+                values = self.measured.rates[topic]
                 self._set(topic, "rate", rate_text(values.get("rate_hz")))
                 self._set(topic, "bw", bytes_text(values.get("bytes_per_s"), "/s"))
         if self.selected in rates:
@@ -355,49 +482,23 @@ class TopicsPanel(Vertical):
     # --- echo --------------------------------------------------------------------------------
 
     def action_echo(self) -> None:
-        topic = self.selected
-        if topic is None:
-            return
-        stop = self.echo_topic == topic
-        if self.echo_topic is not None:
-            self.stop_echo()
-        if not stop:
-            self.echo_topic = topic
-            self.echoed.clear()
-            self._start_echo(topic)
-        self.show_detail()
+        if self.selected is not None:
+            self.echo.toggle(self.selected)
+            self.show_detail()
 
-    @work(group="topics-echo", exit_on_error=False)
-    async def _start_echo(self, topic: str) -> None:
-        try:
-            await self.request(EchoStart(topic=topic, max_per_s=ECHO_PER_S))
-        except Exception as exc:
-            if self.echo_topic == topic:
-                self.echo_topic = None
-                self.note(f"cannot echo {topic}: {_one_line(exc)}", ok=False)
-                self.show_detail()
+    @property
+    def echo_topic(self) -> str | None:
+        """The topic echoed under the detail, if any."""
+        return self.echo.topic
 
     def stop_echo(self) -> None:
-        topic, self.echo_topic = self.echo_topic, None
-        self.echoed.clear()
-        if topic is not None:
-            self._stop_echo(topic)
+        self.echo.stop()
         self.show_detail()
-
-    @work(group="topics-echo", exit_on_error=False)
-    async def _stop_echo(self, topic: str) -> None:
-        try:
-            await self.request(EchoStop(topic=topic))
-        except Exception:
-            pass  # the echo ended by itself (its count, the topic gone): nothing to stop
 
     def show_echo(self, data: Mapping[str, Any]) -> None:
         """An `echo` event: a message of the echoed topic, as YAML."""
-        if data.get("topic") != self.echo_topic:
-            return
-        # each message's YAML ends with its `---`; they are joined with one again
-        self.echoed.append(str(data.get("text") or "").rstrip().removesuffix("---").rstrip())
-        self.show_detail()
+        if self.echo.take(data):
+            self.show_detail()
 
     def action_plot(self) -> None:
         if self.selected is not None:
@@ -420,58 +521,40 @@ class TopicsPanel(Vertical):
             lines.append(("Pick a topic: its publishers, subscribers and QoS show here.",
                           "dim"))
         else:
-            rate = self.rates.get(name)
-            head = f"{name}  {', '.join(entry.get('types') or [])}"
-            if rate and name in self.watched:
-                head += f"  {rate_text(rate.get('rate_hz'))}  " \
-                        f"{bytes_text(rate.get('bytes_per_s'), '/s')}"
-            lines.append((head, "bold"))
-            if name in self.unmeasured and name in self.watched:
-                lines.append((f"no rate: {self.unmeasured[name]}", "yellow"))
-            for problem in entry.get("qos_problems") or []:
-                lines.append((f"{self.problem_mark} {problem}", "red"))
-            if self.echo_topic is None:  # while echoing, the messages take the room
-                for title, key in (("publishers", "publishers"),
-                                   ("subscribers", "subscribers")):
-                    endpoints = entry.get(key) or []
-                    lines.append((f"{title}: {len(endpoints) or 'none'}", ""))
-                    lines += [(endpoint_line(e), "") for e in endpoints]
+            lines += self._topic_lines(name, entry)
         height = max(1, detail.size.height or 1)
-        if self.echo_topic is not None:
-            lines.append((f"echo {self.echo_topic} (e stops):", "bold"))
-            messages = "\n---\n".join(self.echoed) if self.echoed else "waiting for a message"
-            echoed = [(line, "") for line in messages.splitlines()]
-            # the newest lines are what an echo is for: the oldest go first
-            lines += echoed[max(0, len(echoed) - (height - len(lines))):]
-        text = Text("\n".join(line for line, _ in lines[:height]), no_wrap=True,
-                    overflow="ellipsis")
-        position = 0
-        for line, style in lines[:height]:
-            if style:
-                text.stylize(style, position, position + len(line))
-            position += len(line) + 1
+        if self.echo.topic is not None:
+            lines += self.echo.lines(height - len(lines))
+        text = styled(lines[:height])
         if text.plain != self._detail_text:  # an unchanged detail is not sent again
             self._detail_text = text.plain
             detail.update(text)
-        self._show_trend()
+        self.query_one(RateTrend).show(self.measured.history.get(self.selected or ""))
 
-    def _show_trend(self) -> None:
-        """The selected topic's rate over the last minutes, as a sparkline (Textual's)."""
-        history = self.rate_history.get(self.selected or "")
-        trend = self.query_one("#tpc-trend")
-        shown = history is not None and len(history) >= 2
-        trend.set_class(shown, "shown")
-        if shown and history is not None:
-            data = list(history)
-            if data != self.trend_data:
-                # from zero to the max said beside it: a steady rate draws steady bars
-                self.trend_data = data
-                high = max(data)
-                self.query_one("#tpc-trend-label", Static).update(
-                    f"rate, last {len(data) // 60 or len(data)} "
-                    f"{'min' if len(data) >= 60 else 's'} (0 to {rate_text(high)})")
-                spark = self.query_one("#tpc-spark", Static)
-                spark.update(units.spark(data, max(spark.size.width, 10)))
+    def _topic_lines(self, name: str, entry: Mapping[str, Any]) -> list[tuple[str, str]]:
+        """The selected topic's head line (types, rate), its problems, and its endpoints
+        unless an echo takes the room."""
+        rate = self.measured.rates.get(name)
+        head = f"{name}  {', '.join(entry.get('types') or [])}"
+        watched = name in self.measured.watched
+        if rate and watched:
+            head += f"  {rate_text(rate.get('rate_hz'))}  " \
+                    f"{bytes_text(rate.get('bytes_per_s'), '/s')}"
+        lines = [(head, "bold")]
+        if name in self.measured.unmeasured and watched:
+            lines.append((f"no rate: {self.measured.unmeasured[name]}", "yellow"))
+        lines += [(f"{self.problem_mark} {p}", "red") for p in entry.get("qos_problems") or []]
+        if self.echo.topic is None:  # while echoing, the messages take the room
+            for key in ("publishers", "subscribers"):
+                endpoints = entry.get(key) or []
+                lines.append((f"{key}: {len(endpoints) or 'none'}", ""))
+                lines += [(endpoint_line(e), "") for e in endpoints]
+        return lines
+
+    @property
+    def trend_data(self) -> list[float]:
+        """The rates the sparkline draws (the tests read them)."""
+        return self.query_one(RateTrend).data
 
     def note(self, text: str, ok: bool = True) -> None:
         if (text, ok) != self._note:

@@ -8,12 +8,13 @@ module that defines it: a package also offers every name of its direct submodule
 `__init__` files do. A name launch has and tuilaunch does not is listed as UNSUPPORTED, so a
 file using it fails with "tuilaunch does not support launch.actions.X yet".
 
-Other helpers add their names with rows of their own (`register(...)`), e.g. lifecycle nodes.
+Other modules of the engine may add names of their own with `register(...)`.
 """
 
 from __future__ import annotations
 
 import logging
+import re
 from types import ModuleType
 from typing import Any
 
@@ -63,19 +64,22 @@ SomeSubstitutionsType_types_tuple = (str, s.Substitution)
 SomeEntitiesType = Any
 SomeEntitiesType_types_tuple = (e.Entity,)
 
+def named_after(package: str, *objects: Any) -> list[tuple[str, str, Any]]:
+    """Rows of classes that launch defines each in a module named after it, its convention
+    (launch.actions.LogInfo in launch/actions/log_info.py), where tuilaunch's class has
+    launch's name."""
+    return [(f"{package}.{re.sub(r'(?<!^)(?=[A-Z])', '_', obj.__name__).lower()}",
+             obj.__name__, obj) for obj in objects]
+
+
 # (module where launch / launch_ros define the name, public name, tuilaunch's object)
 NAMES: list[tuple[str, str, Any]] = [
     # launch, top level
+    *named_after("launch", c.Condition, ev.Event, e.EventHandler, InvalidLaunchFileError,
+                 LaunchContext, e.LaunchDescription, e.LaunchDescriptionSource, s.Substitution),
     ("launch.action", "Action", e.Action),
-    ("launch.condition", "Condition", c.Condition),
-    ("launch.event", "Event", ev.Event),
-    ("launch.event_handler", "EventHandler", e.EventHandler),
     ("launch.event_handler", "BaseEventHandler", e.EventHandler),
-    ("launch.invalid_launch_file_error", "InvalidLaunchFileError", InvalidLaunchFileError),
-    ("launch.launch_context", "LaunchContext", LaunchContext),
-    ("launch.launch_description", "LaunchDescription", e.LaunchDescription),
     ("launch.launch_description_entity", "LaunchDescriptionEntity", e.Entity),
-    ("launch.launch_description_source", "LaunchDescriptionSource", e.LaunchDescriptionSource),
     ("launch.launch_introspector", "LaunchIntrospector", UNSUPPORTED),
     ("launch.launch_service", "LaunchService", UNSUPPORTED),
     ("launch.some_entities_type", "SomeEntitiesType", SomeEntitiesType),
@@ -83,90 +87,46 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch.some_substitutions_type", "SomeSubstitutionsType", SomeSubstitutionsType),
     ("launch.some_substitutions_type", "SomeSubstitutionsType_types_tuple",
      SomeSubstitutionsType_types_tuple),
-    ("launch.substitution", "Substitution", s.Substitution),
     # launch.actions
-    ("launch.actions.append_environment_variable", "AppendEnvironmentVariable",
-     e.AppendEnvironmentVariable),
-    ("launch.actions.declare_launch_argument", "DeclareLaunchArgument", e.DeclareLaunchArgument),
-    ("launch.actions.emit_event", "EmitEvent", e.EmitEvent),
-    ("launch.actions.execute_local", "ExecuteLocal", e.ExecuteLocal),
-    ("launch.actions.execute_process", "ExecuteProcess", e.ExecuteProcess),
-    ("launch.actions.group_action", "GroupAction", e.GroupAction),
-    ("launch.actions.include_launch_description", "IncludeLaunchDescription",
-     e.IncludeLaunchDescription),
-    ("launch.actions.log_info", "LogInfo", e.LogInfo),
-    ("launch.actions.opaque_coroutine", "OpaqueCoroutine", e.OpaqueCoroutine),
-    ("launch.actions.opaque_function", "OpaqueFunction", e.OpaqueFunction),
-    ("launch.actions.pop_environment", "PopEnvironment", e.PopEnvironment),
-    ("launch.actions.pop_launch_configurations", "PopLaunchConfigurations",
-     e.PopLaunchConfigurations),
-    ("launch.actions.push_environment", "PushEnvironment", e.PushEnvironment),
-    ("launch.actions.push_launch_configurations", "PushLaunchConfigurations",
-     e.PushLaunchConfigurations),
-    ("launch.actions.register_event_handler", "RegisterEventHandler", e.RegisterEventHandler),
-    ("launch.actions.reset_environment", "ResetEnvironment", e.ResetEnvironment),
-    ("launch.actions.reset_launch_configurations", "ResetLaunchConfigurations",
-     e.ResetLaunchConfigurations),
-    ("launch.actions.set_environment_variable", "SetEnvironmentVariable",
-     e.SetEnvironmentVariable),
-    ("launch.actions.set_launch_configuration", "SetLaunchConfiguration",
-     e.SetLaunchConfiguration),
+    *named_after("launch.actions", e.AppendEnvironmentVariable, e.DeclareLaunchArgument,
+                 e.EmitEvent, e.ExecuteLocal, e.ExecuteProcess, e.GroupAction,
+                 e.IncludeLaunchDescription, e.LogInfo, e.OpaqueCoroutine, e.OpaqueFunction,
+                 e.PopEnvironment, e.PopLaunchConfigurations, e.PushEnvironment,
+                 e.PushLaunchConfigurations, e.RegisterEventHandler, e.ResetEnvironment,
+                 e.ResetLaunchConfigurations, e.SetEnvironmentVariable, e.SetLaunchConfiguration,
+                 e.TimerAction, e.UnsetEnvironmentVariable, e.UnsetLaunchConfiguration),
     ("launch.actions.shutdown_action", "Shutdown", e.Shutdown),
-    ("launch.actions.timer_action", "TimerAction", e.TimerAction),
     ("launch.actions.unregister_event_handler", "UnregisterEventHandler", UNSUPPORTED),
-    ("launch.actions.unset_environment_variable", "UnsetEnvironmentVariable",
-     e.UnsetEnvironmentVariable),
-    ("launch.actions.unset_launch_configuration", "UnsetLaunchConfiguration",
-     e.UnsetLaunchConfiguration),
     # launch.conditions
+    *named_after("launch.conditions", c.IfCondition, c.InvalidConditionExpressionError,
+                 c.LaunchConfigurationEquals, c.LaunchConfigurationNotEquals, c.UnlessCondition),
     ("launch.conditions.evaluate_condition_expression_impl", "evaluate_condition_expression",
      c.evaluate_condition_expression),
     ("launch.conditions.evaluate_condition_expression_impl", "VALID_TRUE_EXPRESSIONS",
      ["true", "1"]),
     ("launch.conditions.evaluate_condition_expression_impl", "VALID_FALSE_EXPRESSIONS",
      ["false", "0"]),
-    ("launch.conditions.if_condition", "IfCondition", c.IfCondition),
-    ("launch.conditions.invalid_condition_expression_error", "InvalidConditionExpressionError",
-     c.InvalidConditionExpressionError),
-    ("launch.conditions.launch_configuration_equals", "LaunchConfigurationEquals",
-     c.LaunchConfigurationEquals),
-    ("launch.conditions.launch_configuration_not_equals", "LaunchConfigurationNotEquals",
-     c.LaunchConfigurationNotEquals),
-    ("launch.conditions.unless_condition", "UnlessCondition", c.UnlessCondition),
     # launch.descriptions
-    ("launch.descriptions.executable", "Executable", e.Executable),
+    *named_after("launch.descriptions", e.Executable),
     # launch.event_handlers
+    *named_after("launch.event_handlers", e.OnExecutionComplete, e.OnProcessExit, e.OnProcessStart,
+                 e.OnShutdown),
     ("launch.event_handlers.event_named", "event_named", UNSUPPORTED),
     ("launch.event_handlers.on_action_event_base", "OnActionEventBase", e.EventHandler),
-    ("launch.event_handlers.on_execution_complete", "OnExecutionComplete",
-     e.OnExecutionComplete),
     ("launch.event_handlers.on_include_launch_description", "OnIncludeLaunchDescription",
      UNSUPPORTED),
-    ("launch.event_handlers.on_process_exit", "OnProcessExit", e.OnProcessExit),
     ("launch.event_handlers.on_process_io", "OnProcessIO", e.OnProcessIO),
-    ("launch.event_handlers.on_process_start", "OnProcessStart", e.OnProcessStart),
-    ("launch.event_handlers.on_shutdown", "OnShutdown", e.OnShutdown),
     # launch.events
-    ("launch.events.execution_complete", "ExecutionComplete", ev.ExecutionComplete),
+    *named_after("launch.events", ev.ExecutionComplete, e.Shutdown, ev.TimerEvent),
+    *named_after("launch.events.process", ev.ProcessExited, ev.ProcessStarted, ev.ProcessStderr,
+                 ev.ProcessStdin, ev.ProcessStdout, ev.ProcessTargetedEvent, ev.RunningProcessEvent,
+                 e.ShutdownProcess, e.SignalProcess),
     ("launch.events.include_launch_description", "IncludeLaunchDescription", UNSUPPORTED),
     ("launch.events.matchers", "matches_action", e.matches_action),
-    ("launch.events.shutdown", "Shutdown", e.Shutdown),
-    ("launch.events.timer_event", "TimerEvent", ev.TimerEvent),
-    ("launch.events.process.process_exited", "ProcessExited", ev.ProcessExited),
     ("launch.events.process.process_io", "ProcessIO", ev.ProcessIO),
     ("launch.events.process.process_matchers", "matches_pid", UNSUPPORTED),
     ("launch.events.process.process_matchers", "matches_name", UNSUPPORTED),
     ("launch.events.process.process_matchers", "matches_executable", UNSUPPORTED),
-    ("launch.events.process.process_started", "ProcessStarted", ev.ProcessStarted),
-    ("launch.events.process.process_stderr", "ProcessStderr", ev.ProcessStderr),
-    ("launch.events.process.process_stdin", "ProcessStdin", ev.ProcessStdin),
-    ("launch.events.process.process_stdout", "ProcessStdout", ev.ProcessStdout),
-    ("launch.events.process.process_targeted_event", "ProcessTargetedEvent",
-     ev.ProcessTargetedEvent),
-    ("launch.events.process.running_process_event", "RunningProcessEvent",
-     ev.RunningProcessEvent),
-    ("launch.events.process.shutdown_process", "ShutdownProcess", e.ShutdownProcess),
-    ("launch.events.process.signal_process", "SignalProcess", e.SignalProcess),
     # launch.launch_description_sources
     ("launch.launch_description_sources.any_launch_description_source",
      "AnyLaunchDescriptionSource", e.AnyLaunchDescriptionSource),
@@ -187,31 +147,19 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch.logging", "get_output_loggers", UNSUPPORTED),
     ("launch.logging", "reset", UNSUPPORTED),
     # launch.substitutions
-    ("launch.substitutions.anon_name", "AnonName", s.AnonName),
+    *named_after("launch.substitutions", s.AnonName, s.Command, s.EnvironmentVariable,
+                 ls.EqualsSubstitution, s.FileContent, s.FindExecutable, ls.IfElseSubstitution,
+                 s.LaunchConfiguration, s.LaunchLogDir, s.LocalSubstitution,
+                 ls.NotEqualsSubstitution, s.PythonExpression, s.SubstitutionFailure,
+                 s.TextSubstitution, s.ThisLaunchFile, s.ThisLaunchFileDir),
     ("launch.substitutions.boolean_substitution", "NotSubstitution", ls.NotSubstitution),
     ("launch.substitutions.boolean_substitution", "AndSubstitution", ls.AndSubstitution),
     ("launch.substitutions.boolean_substitution", "OrSubstitution", ls.OrSubstitution),
     ("launch.substitutions.boolean_substitution", "AnySubstitution", ls.AnySubstitution),
     ("launch.substitutions.boolean_substitution", "AllSubstitution", ls.AllSubstitution),
-    ("launch.substitutions.command", "Command", s.Command),
-    ("launch.substitutions.environment_variable", "EnvironmentVariable", s.EnvironmentVariable),
-    ("launch.substitutions.equals_substitution", "EqualsSubstitution", ls.EqualsSubstitution),
-    ("launch.substitutions.file_content", "FileContent", s.FileContent),
-    ("launch.substitutions.find_executable", "FindExecutable", s.FindExecutable),
-    ("launch.substitutions.if_else_substitution", "IfElseSubstitution", ls.IfElseSubstitution),
-    ("launch.substitutions.launch_configuration", "LaunchConfiguration", s.LaunchConfiguration),
-    ("launch.substitutions.launch_log_dir", "LaunchLogDir", s.LaunchLogDir),
-    ("launch.substitutions.local_substitution", "LocalSubstitution", s.LocalSubstitution),
-    ("launch.substitutions.not_equals_substitution", "NotEqualsSubstitution",
-     ls.NotEqualsSubstitution),
     ("launch.substitutions.path_join_substitution", "PathJoinSubstitution",
      s.PathJoinSubstitution),
     ("launch.substitutions.path_join_substitution", "PathSubstitution", s.PathSubstitution),
-    ("launch.substitutions.python_expression", "PythonExpression", s.PythonExpression),
-    ("launch.substitutions.substitution_failure", "SubstitutionFailure", s.SubstitutionFailure),
-    ("launch.substitutions.text_substitution", "TextSubstitution", s.TextSubstitution),
-    ("launch.substitutions.this_launch_file", "ThisLaunchFile", s.ThisLaunchFile),
-    ("launch.substitutions.this_launch_file_dir", "ThisLaunchFileDir", s.ThisLaunchFileDir),
     # launch.utilities
     ("launch.utilities.class_tools_impl", "is_a", u.is_a),
     ("launch.utilities.class_tools_impl", "is_a_subclass", u.is_a_subclass),
@@ -235,22 +183,15 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch.utilities.type_utils", "get_typed_value", u.get_typed_value),
     ("launch.utilities.typing_file_path", "FilePath", Any),
     # launch_ros.actions
-    ("launch_ros.actions.composable_node_container", "ComposableNodeContainer",
-     e.ComposableNodeContainer),
-    ("launch_ros.actions.load_composable_nodes", "LoadComposableNodes", e.LoadComposableNodes),
-    ("launch_ros.actions.node", "Node", e.Node),
+    *named_after("launch_ros.actions", e.ComposableNodeContainer, e.LoadComposableNodes, e.Node,
+                 e.PushRosNamespace, e.SetParameter, e.SetParametersFromFile, e.SetRemap,
+                 e.SetUseSimTime),
     ("launch_ros.actions.push_ros_namespace", "PushROSNamespace", e.PushROSNamespace),
-    ("launch_ros.actions.push_ros_namespace", "PushRosNamespace", e.PushRosNamespace),
     ("launch_ros.actions.ros_timer", "ROSTimer", e.TimerAction),
     ("launch_ros.actions.ros_timer", "RosTimer", e.TimerAction),
-    ("launch_ros.actions.set_parameter", "SetParameter", e.SetParameter),
-    ("launch_ros.actions.set_parameters_from_file", "SetParametersFromFile",
-     e.SetParametersFromFile),
-    ("launch_ros.actions.set_remap", "SetRemap", e.SetRemap),
     ("launch_ros.actions.set_ros_log_dir", "SetROSLogDir", e.SetROSLogDir),
-    ("launch_ros.actions.set_use_sim_time", "SetUseSimTime", e.SetUseSimTime),
     # launch_ros.descriptions and parameter_descriptions
-    ("launch_ros.descriptions.composable_node", "ComposableNode", e.ComposableNode),
+    *named_after("launch_ros.descriptions", e.ComposableNode),
     ("launch_ros.descriptions", "Parameter", pf.Parameter),
     ("launch_ros.descriptions", "ParameterFile", pf.ParameterFile),
     ("launch_ros.descriptions", "ParameterValue", params.ParameterValue),
@@ -265,12 +206,11 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch_ros.remap_rule_type", "SomeRemapRules", Any),
     ("launch_ros.remap_rule_type", "SomeRemapRule", Any),
     ("launch_ros.remap_rule_type", "RemapRules", Any),
-    # launch_ros lifecycle actions and events: describe/lifecycle.py's COMPAT_ROWS
+    # launch_ros lifecycle actions and events: _rows() (describe/lifecycle.py, loaded late)
     ("launch_ros.ros_adapters", "get_ros_node", UNSUPPORTED),
     ("launch_ros.ros_adapters", "get_ros_adapter", UNSUPPORTED),
     # launch_ros.substitutions
-    ("launch_ros.substitutions.executable_in_package", "ExecutableInPackage",
-     rs.ExecutableInPackage),
+    *named_after("launch_ros.substitutions", rs.ExecutableInPackage),
     ("launch_ros.substitutions.find_package", "FindPackage", rs.FindPackagePrefix),
     ("launch_ros.substitutions.find_package", "FindPackagePrefix", rs.FindPackagePrefix),
     ("launch_ros.substitutions.find_package", "FindPackageShare", rs.FindPackageShare),
@@ -294,8 +234,7 @@ NAMES: list[tuple[str, str, Any]] = [
     ("launch_yaml.launch_description_sources.yaml_launch_description_source",
      "YAMLLaunchDescriptionSource", e.LaunchDescriptionSource),
     # simple_launch
-    ("simple_launch.simple_launcher", "SimpleLauncher", SimpleLauncher),
-    ("simple_launch.simple_substitution", "SimpleSubstitution", s.SimpleSubstitution),
+    *named_after("simple_launch", SimpleLauncher, s.SimpleSubstitution),
     ("simple_launch.simple_substitution", "flatten", s.flatten),
 ]
 
@@ -320,9 +259,15 @@ def _rows() -> list[tuple[str, str, Any]]:
              for name in _SIMPLE_EVENTS]
     rows += [("simple_launch.gazebo", name, getattr(gazebo, name))
              for name in ("GazeboBridge", "ros_gz_prefix", "only_show_args")]
-    from ..lifecycle import COMPAT_ROWS as lifecycle_rows
+    from .. import lifecycle as lc
 
-    return rows + lifecycle_rows + _extra
+    rows += [*named_after("launch_ros.actions", lc.LifecycleNode, lc.LifecycleTransition),
+             *named_after("launch_ros.events.lifecycle", lc.ChangeState, lc.StateTransition),
+             *named_after("launch_ros.event_handlers", lc.OnStateTransition)]
+    rows += [(where, "matches_node_name", lc.matches_node_name) for where in (
+        "launch_ros.events.lifecycle.lifecycle_node_matchers",
+        "launch_ros.events.matchers.matches_node_name", "launch_ros.events")]
+    return rows + _extra
 
 
 class CompatModule(ModuleType):

@@ -10,13 +10,22 @@ from typing import Any
 
 
 class Event:
-    """launch.Event: the base of every event."""
+    """launch.Event: the base of every event. A subclass's `name` is where launch defines
+    it, `module`.ClassName, unless it says otherwise (`named=`, or a `name` of its own)."""
 
     name = "launch.Event"
+    module = "launch.events"
+
+    def __init_subclass__(cls, named: str | None = None, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "name" not in cls.__dict__:
+            cls.name = f"{cls.module}.{named or cls.__name__}"
 
 
 class EventInfo(Event):
     """One event with every field a handler may read; the subclasses say which kind."""
+
+    name = "launch.Event"
 
     def __init__(self, process_name: str | None = None, pid: int | None = None,
                  text: bytes = b"", returncode: int | None = None, reason: str = "",
@@ -38,53 +47,50 @@ class EventInfo(Event):
 
 
 class RunningProcessEvent(EventInfo):
-    name = "launch.events.process.RunningProcessEvent"
+    module = "launch.events.process"
 
 
 class ProcessStarted(RunningProcessEvent):
-    name = "launch.events.process.ProcessStarted"
+    """launch.events.process.ProcessStarted."""
 
 
 class ProcessExited(RunningProcessEvent):
-    name = "launch.events.process.ProcessExited"
+    """launch.events.process.ProcessExited."""
 
 
 class ProcessIO(RunningProcessEvent):
-    name = "launch.events.process.ProcessIO"
     fd = 1
 
 
 class ProcessStdout(ProcessIO):
-    name = "launch.events.process.ProcessStdout"
+    """launch.events.process.ProcessStdout."""
 
 
 class ProcessStderr(ProcessIO):
-    name = "launch.events.process.ProcessStderr"
     fd = 2
 
 
 class ProcessStdin(ProcessIO):
-    name = "launch.events.process.ProcessStdin"
     fd = 0
 
 
 class ProcessTargetedEvent(Event):
-    name = "launch.events.process.ProcessTargetedEvent"
+    module = "launch.events.process"
 
     def __init__(self, *, process_matcher: Any = None) -> None:
         self.process_matcher = process_matcher
 
 
 class ExecutionComplete(EventInfo):
-    name = "launch.events.ExecutionComplete"
+    """launch.events.ExecutionComplete."""
 
 
-class ShutdownEvent(EventInfo):
-    name = "launch.events.Shutdown"
+class ShutdownEvent(EventInfo, named="Shutdown"):
+    """launch.events.Shutdown."""
 
 
 class TimerEvent(EventInfo):
-    name = "launch.events.TimerEvent"
+    """launch.events.TimerEvent."""
 
 
 def event_for(on: str, stream: str | None = None, **fields: Any) -> EventInfo:

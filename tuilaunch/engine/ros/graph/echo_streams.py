@@ -8,14 +8,14 @@ the last marked done. It ends with its client (`client_gone`), and with the sess
 from __future__ import annotations
 
 import asyncio
-import contextlib
-from collections.abc import Awaitable, Callable
 from typing import Any
 
 from ...errors import LaunchError
-from ...run.events import Echo, Event
+from ...run.events import Echo
+from ...run.plugins import Handlers
 from ...run.vocabulary.ros_requests import EchoStart, EchoStop
 from ..ros_errors import RosError
+from .stream_hooks import StreamHooks, stopped
 from .topic_graph import topic_of
 
 ECHO_DEFAULT_PER_S = 5.0
@@ -27,36 +27,28 @@ ECHO_UNTHROTTLED_POLL = 0.05
 class EchoStreams:
     """The running echo streams, by (client, topic)."""
 
-    def __init__(self, bridge: Callable[[], Awaitable[Any]],
-                 problem: Callable[[Any, str], Awaitable[str]],
-                 subscribed: Callable[[int], bool], send: Callable[[Event, int], None],
-                 publisher_wait: float) -> None:
-        """`bridge()`: the launch's bridge; `problem(bridge, topic)`: why a topic has no
-        publisher to echo; `subscribed(client)`: whether it takes events; `send`: an event
-        to one client; `publisher_wait`: the longest wait for a first publisher."""
-        self._bridge = bridge
-        self._problem = problem
-        self._subscribed = subscribed
-        self._send = send
-        self._publisher_wait = publisher_wait
+    def __init__(self, hooks: StreamHooks) -> None:
+        self.hooks = hooks
         self.streams: dict[tuple[int, str], asyncio.Task[None]] = {}
+
+    def handlers(self) -> Handlers:
+        return {EchoStart: self.echo, EchoStop: self.echo_stop}
 
     async def echo(self, request: EchoStart, client: int) -> dict[str, Any]:
         topic = topic_of(request.topic)
-        if not self._subscribed(client):
+        if not self.hooks.subscribed(client):
             raise LaunchError("echo sends its messages as events: subscribe first")
         count = request.count
         if count is not None and count < 1:
             raise ValueError(f"count {count!r} is not a positive number")
         per_s = ECHO_DEFAULT_PER_S if request.max_per_s is None else request.max_per_s
         # `echo --timeout 3` waits 3 s for a publisher, not the usual 5
-        wait = min(request.wait or self._publisher_wait, self._publisher_wait)
-        bridge = await self._bridge()
+        wait = min(request.wait or self.hooks.publisher_wait, self.hooks.publisher_wait)
+        bridge = await self.hooks.bridge()
         try:
             stream = await bridge.start_echo(topic, wait=wait)
         except RosError:
-            raise LaunchError(f"{await self._problem(bridge, topic)} "
-                              f"(waited {wait:g} s)") from None
+            raise await self.hooks.no_publisher(bridge, topic, wait) from None
         old = self.streams.pop((client, topic), None)
         if old is not None:
             old.cancel()
@@ -78,7 +70,7 @@ class EchoStreams:
                     data: dict[str, Any] = {"topic": topic, "text": text}
                     if sent == count:
                         data["done"] = True
-                    self._send(Echo(data=data), client)
+                    self.hooks.send(Echo(data=data), client)
         finally:
             await bridge.stop_echo(stream)
             if self.streams.get((client, topic)) is asyncio.current_task():
@@ -95,10 +87,7 @@ class EchoStreams:
             self.streams.pop(key).cancel()
 
     async def close(self) -> None:
-        for task in list(self.streams.values()):
-            task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await task
+        await stopped(*self.streams.values())
         self.streams.clear()
 
 

@@ -86,11 +86,8 @@ class GraphRequests:
 
     async def params_describe(self, request: ParamsDescribe, client: int) -> dict[str, Any]:
         node = await self.current_name(request.node)
-        bridge = await self.bridge()
-        try:
-            described = await bridge.describe_parameters(node, timeout=self.service_timeout)
-        except RosError as exc:
-            raise LaunchError(f"{node} does not answer: {exc}") from None
+        described = await self._ask(node, lambda bridge: bridge.describe_parameters(
+            node, timeout=self.service_timeout))
         return {"parameters": [dataclasses.asdict(p) for p in described]}
 
     async def params_set(self, request: ParamsSet, client: int) -> dict[str, Any]:
@@ -98,11 +95,8 @@ class GraphRequests:
         values = request.values
         if not values:
             raise ValueError("params_set needs values: {name: value}")
-        bridge = await self.bridge()
-        try:
-            results = await bridge.set_parameters(node, values, timeout=self.service_timeout)
-        except RosError as exc:
-            raise LaunchError(f"{node} does not answer: {exc}") from None
+        results = await self._ask(node, lambda bridge: bridge.set_parameters(
+            node, values, timeout=self.service_timeout))
         return {"results": [{"name": r.name, "ok": r.successful, "reason": r.reason}
                             for r in results]}
 
@@ -111,12 +105,16 @@ class GraphRequests:
         names = request.names
         if not all(isinstance(n, str) for n in names):
             raise ValueError("params_get needs names: [name]")
+        return {"values": await self._ask(node, lambda bridge: bridge.get_parameters(
+            node, names, timeout=self.service_timeout))}
+
+    async def _ask(self, node: str, call: Callable[[Any], Awaitable[Any]]) -> Any:
+        """`call(bridge)`, a request to `node`; a node that does not answer is said so."""
         bridge = await self.bridge()
         try:
-            values = await bridge.get_parameters(node, names, timeout=self.service_timeout)
+            return await call(bridge)
         except RosError as exc:
             raise LaunchError(f"{node} does not answer: {exc}") from None
-        return {"values": values}
 
 
 def _text(value: str, op: str, key: str) -> str:

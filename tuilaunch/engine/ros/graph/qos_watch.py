@@ -11,14 +11,15 @@ out) changes nothing: the marks stay as they were.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from collections.abc import Awaitable, Callable
 from typing import Any
 
 from ...errors import LaunchError
 from ...run.events import Event, Qos
+from ...run.plugins import Handlers
 from ...run.vocabulary.ros_requests import WatchQos
 from ..ros_errors import RosError
+from .stream_hooks import stopped
 
 QOS_PERIOD = 5.0
 """Seconds between two checks of the graph while a client watches."""
@@ -39,6 +40,9 @@ class QosWatch:
         self._last: Problems | None = None  # the newest check's result
         self._task: asyncio.Task[None] | None = None
 
+    def handlers(self) -> Handlers:
+        return {WatchQos: self.watch}
+
     async def watch(self, request: WatchQos, client: int) -> dict[str, Any]:
         """The `watch_qos {on}` request of a subscribed client."""
         if not request.on:
@@ -55,10 +59,7 @@ class QosWatch:
         self._sent.pop(client, None)
 
     async def close(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self._task
+        await stopped(self._task)
         self._sent.clear()
 
     async def _run(self) -> None:

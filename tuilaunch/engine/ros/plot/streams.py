@@ -18,14 +18,14 @@ a topic ends with its last stream.
 from __future__ import annotations
 
 import asyncio
-import contextlib
-from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from ...errors import LaunchError
-from ...run.events import Event, PlotSamples
+from ...run.events import PlotSamples
+from ...run.plugins import Handlers
 from ...run.vocabulary.ros_requests import PlotFields, PlotStart, PlotStop
+from ..graph.stream_hooks import StreamHooks, in_background, stopped
 from ..graph.topic_graph import topic_of
 from ..ros_errors import RosError
 
@@ -61,17 +61,8 @@ class PlotStream:
 class PlotStreams:
     """The running plot streams by (client, topic), and the samplers by topic."""
 
-    def __init__(self, bridge: Callable[[], Awaitable[Any]],
-                 problem: Callable[[Any, str], Awaitable[str]],
-                 subscribed: Callable[[int], bool], send: Callable[[Event, int], None],
-                 publisher_wait: float) -> None:
-        """As EchoStreams: `bridge()`, `problem(bridge, topic)`: why a topic has no
-        publisher, `subscribed(client)`, `send(event, client)`, `publisher_wait`."""
-        self._bridge = bridge
-        self._problem = problem
-        self._subscribed = subscribed
-        self._send = send
-        self._publisher_wait = publisher_wait
+    def __init__(self, hooks: StreamHooks) -> None:
+        self.hooks = hooks
         self.streams: dict[tuple[int, str], PlotStream] = {}
         self.samplers: dict[str, Any] = {}  # PlotSampler by topic
         self.task: asyncio.Task[None] | None = None
@@ -82,13 +73,15 @@ class PlotStreams:
         """The topic's message class and its publishers' infos, once one publishes."""
         from ..graph.rates import message_class, wait_for_publishers
 
-        bridge = await self._bridge()
+        bridge = await self.hooks.bridge()
         try:
             infos = await wait_for_publishers(bridge.node, topic, wait)
         except RosError:
-            raise LaunchError(f"{await self._problem(bridge, topic)} "
-                              f"(waited {wait:g} s)") from None
+            raise await self.hooks.no_publisher(bridge, topic, wait) from None
         return message_class(infos[0].topic_type), infos
+
+    def handlers(self) -> Handlers:
+        return {PlotStart: self.plot, PlotStop: self.plot_stop, PlotFields: self.plot_fields}
 
     async def plot_fields(self, request: PlotFields, client: int) -> dict[str, Any]:
         """`{"type", "fields", "stamped"}`: the topic's numeric fields by dotted path (the
@@ -121,14 +114,14 @@ class PlotStreams:
                 await asyncio.to_thread(sampler.close)
 
     def _wait(self, asked: float | None) -> float:
-        return min(asked or self._publisher_wait, self._publisher_wait)
+        return min(asked or self.hooks.publisher_wait, self.hooks.publisher_wait)
 
     async def plot(self, request: PlotStart, client: int) -> dict[str, Any]:
         from .buckets import POINTS_PER_S
         from .fields import FieldError, compile_path, numeric_fields, type_name
 
         topic = topic_of(request.topic)
-        if not self._subscribed(client):
+        if not self.hooks.subscribed(client):
             raise LaunchError("plot sends its points as events: subscribe first")
         paths = request.fields
         if not paths or not all(isinstance(p, str) for p in paths):
@@ -170,7 +163,7 @@ class PlotStreams:
         from .fields import small
         from .sampler import PlotSampler
 
-        bridge = await self._bridge()
+        bridge = await self.hooks.bridge()
         qos = matching_qos([i.qos_profile for i in infos])
         qos.depth = DEPTH_SMALL if small(cls) else DEPTH_LARGE
         return PlotSampler(bridge.node, topic, cls, qos)
@@ -200,16 +193,11 @@ class PlotStreams:
 
     def client_gone(self, client: int) -> None:
         for key in [k for k in self.streams if k[0] == client]:
-            task = asyncio.ensure_future(self._end(*key))
-            self.pending.add(task)  # kept until done: a bare task may be collected
-            task.add_done_callback(self.pending.discard)
+            in_background(self.pending, self._end(*key))
 
     async def close(self) -> None:
-        if self.task is not None:
-            self.task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self.task
-            self.task = None
+        await stopped(self.task)
+        self.task = None
         self.streams.clear()
         samplers, self.samplers = list(self.samplers.values()), {}
         for sampler in samplers:
@@ -239,7 +227,7 @@ class PlotStreams:
                     else:
                         continue
                     if data is not None:
-                        self._send(PlotSamples(data=data), client)
+                        self.hooks.send(PlotSamples(data=data), client)
         finally:
             self.task = None
 

@@ -40,6 +40,7 @@ from ...run.vocabulary.ros_requests import (
     RecordStop,
     RecordTake,
 )
+from ..graph.stream_hooks import in_background, stopped
 
 if TYPE_CHECKING:
     from ...run.supervisor.supervisor import Supervisor
@@ -129,10 +130,7 @@ class Recorder(Plugin):
         return {"black_box": self.status()} if self.box is not None else {}
 
     async def close(self) -> None:
-        if self.follow_task is not None:
-            self.follow_task.cancel()
-            with contextlib.suppress(asyncio.CancelledError, Exception):
-                await self.follow_task
+        await stopped(self.follow_task)
         for task in list(self.pending):  # a black box being written is finished
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await task
@@ -185,9 +183,7 @@ class Recorder(Plugin):
                 tape.add(OUTPUT_TOPIC, time_ns, message)
 
     def _spawn(self, coroutine: Any) -> None:
-        task = asyncio.ensure_future(coroutine)
-        self.pending.add(task)  # kept until done: a bare task may be collected
-        task.add_done_callback(self.pending.discard)
+        in_background(self.pending, coroutine)
 
     # --- the topics recorded -----------------------------------------------------------------
 

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from ...errors import LaunchError
+from ...plan.command.prefix import with_prefix
+from ...plan.command.shell_command import env_changes, shell_command
 from ...plan.model import ProcessPlan
-from ...plan.prefix import with_prefix
-from ...plan.shell_command import env_changes, shell_command
 from .cores import core_location, is_crash, signal_name
 
 LOG_LEVELS = ("debug", "info", "warn", "error", "fatal", "unset")

@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...errors import LaunchError
-from ...plan.prefix import with_prefix
+from ...plan.command.prefix import with_prefix
 from ..process.process_command import check_log_level, describe_command
 from ..process.readers import NO_TERMINAL, Running
 from ..process.terminal_input import InputRefused

@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import types
 import typing
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from typing import Any, ClassVar, Generic, TypeVar
 
 from ...errors import LaunchError
@@ -30,64 +30,43 @@ R = TypeVar("R")
 T = TypeVar("T")
 
 
-class _Registry(dict[str, "type[Request[Any]]"]):
+class _Registry(Mapping[str, "type[Request[Any]]"]):
     """The request classes by op, complete whenever it is read: a module of requests made
     on demand (requests.py's ROS inspector's requests, `later`) is imported on the first
-    read, so that a launch nobody inspects does not pay for their classes at start."""
+    read, so that a launch nobody inspects does not pay for their classes at start. Every
+    read goes through the three methods below (Mapping builds get, in, keys... on them)."""
 
     def __init__(self) -> None:
-        super().__init__()
+        self._classes: dict[str, type[Request[Any]]] = {}
         self._pending: list[Callable[[], object]] = []
 
     def later(self, load: Callable[[], object]) -> None:
         """`load` imports more requests (they register themselves): run before a read."""
         self._pending.append(load)
 
-    def _load(self) -> None:
+    def _load(self) -> dict[str, type[Request[Any]]]:
         while self._pending:
             self._pending.pop()()
+        return self._classes
 
     def register(self, op: str, cls: type[Request[Any]]) -> None:
-        if dict.__contains__(self, op):
-            known = dict.__getitem__(self, op)
+        known = self._classes.get(op)
+        if known is not None:
             raise TypeError(f"two requests with op {op!r}: {known.__name__}, {cls.__name__}")
-        dict.__setitem__(self, op, cls)
+        self._classes[op] = cls
 
     def __getitem__(self, op: str) -> type[Request[Any]]:
-        self._load()
-        return super().__getitem__(op)
-
-    def get(self, op: str, default: Any = None) -> Any:
-        self._load()
-        return super().get(op, default)
-
-    def __contains__(self, op: object) -> bool:
-        self._load()
-        return super().__contains__(op)
+        return self._load()[op]
 
     def __iter__(self) -> Iterator[str]:
-        self._load()
-        return super().__iter__()
+        return iter(self._load())
 
     def __len__(self) -> int:
-        self._load()
-        return super().__len__()
-
-    def keys(self) -> Any:
-        self._load()
-        return super().keys()
-
-    def values(self) -> Any:
-        self._load()
-        return super().values()
-
-    def items(self) -> Any:
-        self._load()
-        return super().items()
+        return len(self._load())
 
 
 REGISTRY = _Registry()
-REQUESTS: dict[str, type[Request[Any]]] = REGISTRY
+REQUESTS: Mapping[str, type[Request[Any]]] = REGISTRY
 """Every request class, by its op."""
 
 

@@ -11,23 +11,23 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from ..describe.conditions import ConditionOutcome
-from ..describe.entities import ExecuteProcess, Node, pair_list
-from ..describe.parameter_files import Parameter, ParameterFile, substitute_text
-from ..describe.substitutions import (
+from ...describe.conditions import ConditionOutcome
+from ...describe.entities import ExecuteProcess, Node, pair_list
+from ...describe.parameter_files import Parameter, ParameterFile, substitute_text
+from ...describe.substitutions import (
     PerformContext,
     describe,
     perform,
     perform_optional,
     text_to_bool,
 )
-from ..describe.values import ParamValue, flatten_parameters
-from ..errors import LaunchError, Origin, PackageError
-from ..packages import find_executable
-from .components import component_plan
-from .model import ProcessPlan
+from ...describe.values import ParamValue, flatten_parameters
+from ...errors import LaunchError, Origin, PackageError
+from ...packages import find_executable
+from ..components import component_plan
+from ..model import ProcessPlan
+from ..scope import Scope, join_namespace, name_problem, namespace_problem
 from .prefix import LAUNCH_PREFIX, LAUNCH_PREFIX_FILTER, final_cmd
-from .scope import Scope, join_namespace, name_problem, namespace_problem
 
 _FIND_EXEC = re.compile(r"\$\((?:find-exec|exec-in-pkg) ([^ )]+)[^)]*\)")
 DEFAULT_RESPAWN_MAX_RETRIES = -1  # as launch: respawn for as long as the launch runs

@@ -26,7 +26,7 @@ import re
 import shlex
 import shutil
 
-from ..errors import LaunchError
+from ...errors import LaunchError
 
 LAUNCH_PREFIX = "launch-prefix"
 LAUNCH_PREFIX_FILTER = "launch-prefix-filter"
