@@ -67,10 +67,11 @@ async def tab_panel(pilot: Pilot, app: TuiLaunchApp, key: str, kind: type[W]) ->
 
 def holds(check: Callable[[], object]) -> bool:
     """Whether `check` holds; not yet while a widget it reads is not mounted (a screen
-    pushed and not yet composed, on a loaded machine)."""
+    pushed and not yet composed, on a loaded machine), nor while a row it reads is not drawn
+    (the tree is the plan the session's server sends, once it has loaded the file)."""
     try:
         return bool(check())
-    except NoMatches:
+    except (NoMatches, KeyError):
         return False
 
 
