@@ -81,7 +81,8 @@ async def launched(path: str, arguments: dict[str, str], tmp_path: Path,
                    prepare: Callable[[TuiLaunchApp], None] | None = None, **options: Any)\
         -> AsyncIterator[tuple[TuiLaunchApp, Pilot]]:
     """The TUI as `tuilaunch FILE` runs it (launch_app): the launch's session server starts
-    once the tree shows, and this TUI is its owning client; in a private session folder.
+    at once and loads the file, its processes start once the tree shows, and this TUI is its
+    owning client; in a private session folder.
     When the test is over the session is stopped, and nothing it started is left.
     `prepare(app)`: before it runs."""
     with session_folders(tmp_path / "log"):
