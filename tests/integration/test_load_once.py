@@ -22,9 +22,11 @@ from typing import Any
 import pytest
 
 from tuilaunch.client.link import open_link
+from tuilaunch.client.session_start import spawn_session
 from tuilaunch.engine.run.session import session_dir
+from tuilaunch.engine.run.session.owner_gate import OWNER_WAIT
 from tuilaunch.engine.run.vocabulary.request import Request
-from tuilaunch.engine.run.vocabulary.requests import Apply
+from tuilaunch.engine.run.vocabulary.requests import Apply, ShutdownLaunch, Status
 
 from ..conftest import run_cli, run_headless, session_folders, wait_for
 from .proc_tree import end, servers_of
@@ -218,3 +220,32 @@ def test_a_file_that_does_not_load_is_one_line_and_status_2_in_a_terminal(folder
         terminal.close()
     assert not servers_of(folders)
     assert "started with pid" not in launch_log(folders)
+
+
+def test_a_launch_whose_tui_never_shows_the_plan_starts_after_its_wait(folders):
+    """A TUI killed (or stuck) before it drew the tree leaves a launch that runs, not one
+    that waits forever; one stopped meanwhile starts nothing."""
+    path, loads = counted_file(folders)
+    for stopped in (False, True):
+        starting = spawn_session(str(path), {}, None, folders / "log" / f"s{stopped}",
+                                 owner=True)
+        server = starting.wait()
+        try:
+            reply = asked(starting.name, Status())
+            assert {p.state for p in reply.processes if p.id.startswith("leaf_")} == {"pending"}
+            log = folders / "log" / f"s{stopped}" / "launch.log"
+            if stopped:
+                asked(starting.name, ShutdownLaunch("stopped before the plan showed"))
+                server.wait(timeout=60)
+                assert "started" not in log.read_text()
+            else:
+                wait_for(lambda log=log: log.read_text().count("started leaf_") == 3,
+                         timeout=OWNER_WAIT + 60, what="the launch started on its own")
+                assert "did not show the plan" in log.read_text()
+                asked(starting.name, ShutdownLaunch("test over"))
+                server.wait(timeout=60)
+        finally:
+            if server.poll() is None:
+                server.kill()
+                server.wait()
+    assert loads_of(loads) == 2  # once per launch
