@@ -67,10 +67,11 @@ async def tab_panel(pilot: Pilot, app: TuiLaunchApp, key: str, kind: type[W]) ->
 
 def holds(check: Callable[[], object]) -> bool:
     """Whether `check` holds; not yet while a widget it reads is not mounted (a screen
-    pushed and not yet composed, on a loaded machine)."""
+    pushed and not yet composed, on a loaded machine), nor while a row it reads is not drawn
+    (the tree is the plan the session's server sends, once it has loaded the file)."""
     try:
         return bool(check())
-    except NoMatches:
+    except (NoMatches, KeyError):
         return False
 
 
@@ -80,7 +81,8 @@ async def launched(path: str, arguments: dict[str, str], tmp_path: Path,
                    prepare: Callable[[TuiLaunchApp], None] | None = None, **options: Any)\
         -> AsyncIterator[tuple[TuiLaunchApp, Pilot]]:
     """The TUI as `tuilaunch FILE` runs it (launch_app): the launch's session server starts
-    once the tree shows, and this TUI is its owning client; in a private session folder.
+    at once and loads the file, its processes start once the tree shows, and this TUI is its
+    owning client; in a private session folder.
     When the test is over the session is stopped, and nothing it started is left.
     `prepare(app)`: before it runs."""
     with session_folders(tmp_path / "log"):

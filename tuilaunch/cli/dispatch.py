@@ -194,6 +194,9 @@ def _main(argv: list[str] | None) -> int:
         # `ros2 launch FILE --show-args` shows the flag to the file (simple_launch reads it)
         set_command_line(positional + (["--show-args"] if options.show_args else []),
                          arguments)
+        if _in_tui(options):
+            # the server loads the file, once, as ros2 launch does; the TUI draws its plan
+            return _run_tui(path, arguments, options, positional)
         with file_output:
             try:
                 loaded = load_file(path)
@@ -231,6 +234,25 @@ def _main(argv: list[str] | None) -> int:
         return 3 if problems else 0
     for warning in plan.warnings:
         print(f"tuilaunch: warning: {warning}", file=sys.stderr)
+    log_dir = _log_dir()
+    if log_dir is None:
+        return 2
+    if options.detach:
+        return _start_detached(path, arguments, options, log_dir, positional)
+    from .headless import run_headless
+
+    return run_headless(plan, log_dir, placement=placement, command=positional,
+                        arguments=arguments)
+
+
+def _in_tui(options: argparse.Namespace) -> bool:
+    """The launch is followed in a TUI: not printed, detached nor headless, on a terminal."""
+    return not (options.print_plan or options.show_args or options.detach or
+                options.headless) and sys.stdout.isatty() and sys.stdin.isatty()
+
+
+def _log_dir() -> Path | None:
+    """This launch's log folder, made; None once why not is said."""
     from .headless import run_log_dir
 
     log_dir = run_log_dir()
@@ -239,15 +261,8 @@ def _main(argv: list[str] | None) -> int:
     except OSError as exc:
         print(f"tuilaunch: error: cannot create the log folder {log_dir} (set by ROS_LOG_DIR, "
               f"ROS_HOME or ~/.ros): {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    if options.detach:
-        return _start_detached(path, arguments, options, log_dir, positional)
-    if options.headless or not (sys.stdout.isatty() and sys.stdin.isatty()):
-        from .headless import run_headless
-
-        return run_headless(plan, log_dir, placement=placement, command=positional,
-                            arguments=arguments)
-    return _run_tui(path, arguments, options, log_dir, positional)
+        return None
+    return log_dir
 
 
 def _start_server(path: str, arguments: dict[str, str], options: argparse.Namespace,
@@ -277,26 +292,46 @@ def _start_detached(path: str, arguments: dict[str, str], options: argparse.Name
 
 
 def _run_tui(path: str, arguments: dict[str, str], options: argparse.Namespace,
-             log_dir: Path, positional: list[str]) -> int:
-    """The launch runs in a session server; this TUI is its first client. The server, and
-    so every process of the launch, starts once the TUI shows the tree (`start_server`)."""
-    from ..tui.app import launch_app
+             positional: list[str]) -> int:
+    """The launch runs in a session server, started first: it loads the file while the TUI
+    imports (the TUI never loads it); this TUI is its first client and draws the plan the
+    server resolved, and the server's first process starts once the tree is on screen."""
+    from ..client.session_start import spawn_session
     from .commands import report_end
 
+    log_dir = _log_dir()
+    if log_dir is None:
+        return 2
+    placement: Placement | None = options.placement
+    placed = None if placement is None else {
+        "text": placement.text, "path": placement.machines.path, "share": placement.share}
     try:
-        app = launch_app(path, arguments, log_dir, options.name, positional, options.placement,
-                         scrollback=options.scrollback, keep_on_hangup=options.keep_on_hangup)
+        starting = spawn_session(path, arguments, options.name, log_dir, positional,
+                                 placement=placed, owner=True)
     except LaunchError as exc:  # the name is taken
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
-    name = app.session_name
-    status = app.run()
+    try:
+        from ..tui.app import launch_app  # imported while the server loads the file
+
+        app = launch_app(path, arguments, log_dir, starting.name, positional, placement,
+                         starting=starting, scrollback=options.scrollback,
+                         keep_on_hangup=options.keep_on_hangup)
+        status = app.run()
+    except BaseException:  # Ctrl+C while importing: the server goes too, nothing started
+        starting.process.terminate()
+        raise
     if app.start_error is not None:
-        print(f"tuilaunch: error: {app.start_error}", file=sys.stderr)
+        error = LaunchError(app.start_error)
+        if starting.own_error is not None:  # the file's own error, as a local load says it
+            from .suggest import not_a_launch_file
+
+            error = not_a_launch_file(path, error)
+        print(f"tuilaunch: error: {error}", file=sys.stderr)
         return 2
     if app.quit_before_start:
         return status or 0  # its server, if it came up, stops every process it started
-    report_end(app, name)
+    report_end(app, starting.name)
     server = app.server_process
     if not app.detached and server is not None:
         try:

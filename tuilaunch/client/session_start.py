@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ..engine.run.session import session_dir
+from ..engine.run.session.owner_gate import OWNER_ENV
 from ..engine.run.session.session_dir import SessionError
 
 _RESERVED: dict[str, int] = {}
@@ -46,44 +47,74 @@ def start_session(path: str, arguments: dict[str, str], name: str | None, log_di
     `positional` is FILE or PACKAGE FILE as given: what the launch file sees in sys.argv;
     `placement` (`--machines`) is {"text", "path", "share"} as engine/server_main.py reads
     it."""
+    starting = spawn_session(path, arguments, name, log_dir, positional, placement)
+    return starting.name, starting.wait(timeout)
+
+
+def spawn_session(path: str, arguments: dict[str, str], name: str | None, log_dir: Path,
+                  positional: list[str] | None = None,
+                  placement: dict[str, Any] | None = None, owner: bool = False,
+                  ) -> StartingServer:
+    """A session server started, not waited for: `tuilaunch FILE` starts it before it
+    imports the TUI, so the server loads the file while the TUI imports. `owner`: the
+    launch's processes wait for the owner's `PlanShown` (session/owner_gate.py)."""
     if name is None or name not in _RESERVED:
         name = session_name_for(path, name)
     lock = _RESERVED.pop(name)
     try:
-        return name, _start_server(path, arguments, name, log_dir, positional, timeout,
-                                   placement, lock)
+        log_dir.mkdir(parents=True, exist_ok=True)
+        server_log = log_dir / "session.log"
+        env = {**os.environ, session_dir.LOCK_FD_ENV: str(lock)}
+        if owner:
+            env[OWNER_ENV] = "1"
+        with open(server_log, "ab") as errors:
+            server = subprocess.Popen(
+                [sys.executable, "-m", "tuilaunch.engine.server_main", name,
+                 os.path.abspath(path), str(log_dir), json.dumps(arguments),
+                 json.dumps(positional or [path]),
+                 *([json.dumps(placement)] if placement else [])],
+                stdin=subprocess.DEVNULL, stdout=errors, stderr=errors,
+                start_new_session=True, pass_fds=(lock,), env=env)
     finally:
         os.close(lock)  # the server holds the name now (or it failed and lets it go)
+    return StartingServer(name, server, server_log)
 
 
-def _start_server(path: str, arguments: dict[str, str], name: str, log_dir: Path,
-                  positional: list[str] | None, timeout: float,
-                  placement: dict[str, Any] | None, lock: int) -> subprocess.Popen[bytes]:
-    log_dir.mkdir(parents=True, exist_ok=True)
-    server_log = log_dir / "session.log"
-    with open(server_log, "ab") as errors:
-        server = subprocess.Popen(
-            [sys.executable, "-m", "tuilaunch.engine.server_main", name,
-             os.path.abspath(path), str(log_dir), json.dumps(arguments),
-             json.dumps(positional or [path]),
-             *([json.dumps(placement)] if placement else [])],
-            stdin=subprocess.DEVNULL, stdout=errors, stderr=errors, start_new_session=True,
-            pass_fds=(lock,), env={**os.environ, session_dir.LOCK_FD_ENV: str(lock)})
-    deadline = time.monotonic() + timeout
-    # ours, not another server that took the name at the same instant
-    while (session_dir.read_info(name) or {}).get("pid") != server.pid or \
-            not session_dir.is_alive(name):
-        if server.poll() is not None:
-            text = server_log.read_text(errors="replace").strip()
-            # the server's own one-line error (and its hint), else its last words
-            reason = text.rsplit("tuilaunch: error: ", 1)[-1] if "tuilaunch: error: " in \
-                text else (text.splitlines() or ["no message"])[-1]
-            raise SessionError(f"session {name} did not start: {reason}")
-        if time.monotonic() > deadline:
-            server.kill()
-            raise SessionError(f"session {name} did not answer within {timeout:g} s")
-        time.sleep(0.02)
-    return server
+class StartingServer:
+    """A session's server started, until it answers (`wait`); called, it waits with the
+    default timeout (the TUI's `start_server`)."""
+
+    def __init__(self, name: str, process: subprocess.Popen[bytes], log: Path) -> None:
+        self.name = name
+        self.process = process
+        self.log = log
+        self.own_error: str | None = None
+        """The server's own error (the file did not load, a bad argument), once it ended
+        with one: said as the command line says it, without the session's name."""
+
+    def __call__(self) -> subprocess.Popen[bytes]:
+        return self.wait()
+
+    def wait(self, timeout: float = 60.0) -> subprocess.Popen[bytes]:
+        """The server, once it answers (it has loaded the file and resolved the plan);
+        SessionError: it ended first (its own one-line error) or did not answer in time."""
+        name, server = self.name, self.process
+        deadline = time.monotonic() + timeout
+        # ours, not another server that took the name at the same instant
+        while (session_dir.read_info(name) or {}).get("pid") != server.pid or \
+                not session_dir.is_alive(name):
+            if server.poll() is not None:
+                text = self.log.read_text(errors="replace").strip()
+                if "tuilaunch: error: " in text:  # the server's own one-line error and hint
+                    self.own_error = text.rsplit("tuilaunch: error: ", 1)[-1]
+                    raise SessionError(self.own_error)
+                reason = (text.splitlines() or ["no message"])[-1]  # else its last words
+                raise SessionError(f"session {name} did not start: {reason}")
+            if time.monotonic() > deadline:
+                server.kill()
+                raise SessionError(f"session {name} did not answer within {timeout:g} s")
+            time.sleep(0.02)
+        return server
 
 
 REMOTE_START_TIMEOUT = 90.0

@@ -16,7 +16,6 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
-import subprocess
 import sys
 from collections.abc import Iterable
 from pathlib import Path
@@ -31,7 +30,7 @@ from textual.widgets import Footer, Static, TabbedContent, TabPane
 from ..client.port import LaunchPort
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
 from ..client.served_session import ServedSession
-from ..client.session_start import session_name_for, start_session
+from ..client.session_start import spawn_session
 from ..engine.errors import LaunchError
 from ..engine.plan.machines import Placement
 from ..engine.plan.session import Session
@@ -200,6 +199,8 @@ class TuiLaunchApp(SessionLink, KeyOrder):
             self.exit(2, return_code=2)
         elif not self.quit_before_start:
             self.wire_supervisor()
+            if self.starting is not None:  # once drawn, the launch's first process starts
+                self.call_after_refresh(self.starting.plan_shown)
 
     def on_unmount(self) -> None:
         if self.starting is not None:
@@ -394,20 +395,17 @@ class TuiLaunchApp(SessionLink, KeyOrder):
 def launch_app(path: str, arguments: dict[str, str], log_dir: Path, name: str | None = None,
                positional: list[str] | None = None, placement: Placement | None = None,
                **options: Any) -> TuiLaunchApp:
-    """`tuilaunch FILE`: the launch runs in a session server, started once the TUI shows the
-    tree (`start_server`), and this TUI is its first client, the owner (its quit stops the
-    launch). `name`: `--name`, else the file's stem and a free number (LaunchError when
-    taken). The tests open a launch's TUI through here too: the path users run."""
-    session_name = session_name_for(path, name)
-    placed = None if placement is None else {
-        "text": placement.text, "path": placement.machines.path, "share": placement.share}
-
-    def start_server() -> subprocess.Popen[bytes]:
-        return start_session(path, arguments, session_name, log_dir, positional,
-                             placement=placed)[1]
-
-    return make_app(path, arguments, log_dir, session_name=session_name, owner=True,
-                    placement=placement, start_server=start_server, **options)
+    """`tuilaunch FILE`: the launch runs in a session server (`starting`: started already by
+    the command line, else here), which loads the file; this TUI draws the plan it sends and
+    is its first client, the owner (its quit stops the launch). `name`: `--name`, else the
+    file's stem and a free number (LaunchError when taken). The tests open a launch's TUI
+    through here too: the path users run."""
+    starting = options.pop("starting", None) or spawn_session(
+        path, arguments, name, log_dir, positional, owner=True, placement=None
+        if placement is None else {"text": placement.text, "path": placement.machines.path,
+                                   "share": placement.share})
+    return make_app(path, arguments, log_dir, session_name=starting.name, owner=True,
+                    served=True, start_server=starting, **options)
 
 
 def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any)\

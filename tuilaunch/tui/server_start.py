@@ -1,5 +1,7 @@
-"""`tuilaunch FILE`: the session's server started once the TUI shows the tree, on a thread
-of its own, and stopped at once when the TUI is left while it comes up.
+"""`tuilaunch FILE`: the session's server, started before the TUI (it loads the launch file
+while the TUI imports), waited for on a thread of its own, and stopped at once when the
+TUI is left while it comes up. The TUI draws the plan the server sends, then says so
+(`plan_shown`): the server's first process starts then, so the tree is on screen first.
 
 What the command line reads once the TUI has ended stays on the app: the server's process
 (`server_process`), why it did not start (`start_error`), whether the TUI was left before
@@ -12,13 +14,21 @@ import os
 import subprocess
 import threading
 from collections.abc import Callable
-from typing import Protocol
+from concurrent.futures import Future
+from typing import Any, Protocol
 
 from textual.message import Message
+from textual.widgets import Tree
 
 from ..client.port import LaunchPort
+from ..client.session_start import StartingServer
 from ..engine.errors import LaunchError
 from ..engine.plan.resolve import remove_default_params_dir
+from ..engine.run.engine_thread import EngineThread
+from ..engine.run.vocabulary.requests import PlanShown
+
+SHOWN_TRIES = 50
+"""Refreshes `plan_shown` waits at most for the tree to have drawn its rows."""
 
 
 class ServerStarted(Message):
@@ -37,19 +47,30 @@ class StartHost(Protocol):
     terminal_lost: bool
     supervisor: LaunchPort | None
     """The session's client, once it is followed."""
+    engine: EngineThread
+
+    @property
+    def launch_tree(self) -> Tree[Any]: ...
+
+    def call_after_refresh(self, callback: Callable[..., object], *args: Any) -> bool: ...
 
     def post_message(self, message: Message) -> bool: ...
 
 
 class ServerStart:
-    """The server's start (`start`, once the tree is on screen) and its abandon (`abandon`,
-    when the TUI is left meanwhile). `start_server` starts it and returns its process
-    (LaunchError: why not); the app hears the outcome as a `ServerStarted` message."""
+    """The server's start (`start`, once the TUI is on screen) and its abandon (`abandon`,
+    when the TUI is left meanwhile). `start_server` returns the server's process once it
+    answers (LaunchError: why not): a `StartingServer`, already started, is waited for;
+    the app hears the outcome as a `ServerStarted` message, and says `plan_shown` once it
+    has drawn the plan."""
 
     def __init__(self, host: StartHost,
                  start_server: Callable[[], subprocess.Popen[bytes]]) -> None:
         self.host = host
         self.start_server = start_server
+        self.spawned = start_server.process if isinstance(start_server, StartingServer) \
+            else None
+        """The server started before the TUI: stopped with it even before it answers."""
         self._lock = threading.Lock()  # the server comes up while the app may leave
         self._thread: threading.Thread | None = None
 
@@ -69,7 +90,12 @@ class ServerStart:
         try:
             server = self.start_server()
         except LaunchError as exc:
-            host.post_message(ServerStarted(str(exc)))  # dropped if the app is gone
+            with self._lock:
+                abandoned = host.quit_before_start
+            if not abandoned:  # else it ended because it was stopped: no error of its own
+                host.post_message(ServerStarted(str(exc)))  # dropped if the app is gone
+            elif host.terminal_lost:
+                leave_now(0)
             return
         with self._lock:
             host.server_process = server
@@ -90,14 +116,42 @@ class ServerStart:
             return
         with self._lock:
             host.quit_before_start = True
-            server = host.server_process
-            starting = self._thread is not None and server is None
+            server = host.server_process or self.spawned
+            # its thread ends once the server has (stopped here), and leaves then
+            starting = self._thread is not None and host.server_process is None
         if server is not None:
             server.terminate()
         if host.terminal_lost and not starting:
             # Textual's teardown blocks on a dead terminal (as in run_supervisor), and
             # nothing is left to stop; else the starting thread leaves once it has
             leave_now(0)
+
+
+    def plan_shown(self, tries: int = 0, settled: bool = False) -> None:
+        """The plan the server sent is on screen: its launch's first process may start.
+
+        Called after a refresh, but the tree lays its rows out on its own idle, which can
+        come after the screen's, and then asks the screen to paint them: asked again after
+        each refresh until the tree has nothing left to lay out, then once more, so the
+        screen has painted what the tree last asked for (`SHOWN_TRIES` refreshes at most:
+        the server's own wait is the backstop)."""
+        host = self.host
+        if host.supervisor is None or host.quit_before_start:
+            return
+        tree = host.launch_tree
+        pending = getattr(tree, "_layout_required", False) or \
+            getattr(tree, "_repaint_required", False) or \
+            tree.virtual_size.height != tree.last_line + 1  # last_line builds its rows
+        if (pending or not settled) and tries < SHOWN_TRIES:
+            host.call_after_refresh(self.plan_shown, tries + 1, not pending)
+            return
+        # not awaited: the server starts the launch after its OWNER_WAIT anyway
+        host.engine.submit(host.supervisor.request(PlanShown())).add_done_callback(
+            _ignored)
+
+
+def _ignored(future: Future[Any]) -> None:
+    future.exception()  # a link gone meanwhile: the server's own wait starts the launch
 
 
 def leave_now(status: int) -> None:

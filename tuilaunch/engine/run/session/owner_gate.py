@@ -18,7 +18,7 @@ import os
 
 OWNER_ENV = "TUILAUNCH_OWNER_WAITS"
 """Set for a server started by its owning TUI: its processes wait for the plan to show."""
-OWNER_WAIT = 5.0
+OWNER_WAIT = 10.0
 """Seconds a server waits for its owner to show the plan before it starts the launch anyway:
 the owner shows it within a fraction of a second of the server's answer on a quiet machine,
 and a second or two on a loaded one."""
