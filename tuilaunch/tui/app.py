@@ -49,6 +49,7 @@ from .quitting import LEAVING_BINDINGS, QUIT_BINDINGS, Quitting
 from .screens.tree_panel import LaunchTree, ascii_terminal
 from .server_start import ServerStarted
 from .session_link import DRAIN_HZ, PANE_CHROME, SessionLink
+from .session_view import pane_save_dir
 from .status_line import StatusLine
 from .tab_panels import TabPanels
 
@@ -422,14 +423,3 @@ def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any
     if served or (options.get("session_host") is not None and not os.access(path, os.R_OK)):
         return TuiLaunchApp(ServedSession(path, arguments), log_dir, **options)
     return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)
-
-
-def pane_save_dir(log_dir: Path, host: str | None, name: str) -> Path:
-    """Where `w` writes a pane: the launch's log folder, which is on this computer, unless
-    the session runs on another machine (its log folder is there; a pane is saved here, in
-    a folder named after that machine and session)."""
-    if host is None:
-        return log_dir
-    base = os.environ.get("ROS_LOG_DIR") or os.path.join(
-        os.environ.get("ROS_HOME") or os.path.expanduser("~/.ros"), "log")
-    return Path(base) / f"tuilaunch-{host}-{name}"
