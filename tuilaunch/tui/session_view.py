@@ -7,12 +7,15 @@ whose group stops ask first), its keyboard (`i`, `g`, `c`: NodeKeyboard, its bur
 its log levels, its black box, the stamps its link did not send. The view is itself the
 host those pieces need (the keyboard's KeyboardHost, the tree's NodesHost, the Args tab's
 ArgsHost): one adapter, whatever app lays the view out. What it needs of that app is a
-small `ViewHost`; what it says it says on the app its tree is on, naming the session.
+small `ViewHost`; what it says it says on the app its tree is on, naming the session in a
+fleet. The single TUI (app.py) holds one view, its `label` empty (alone on screen: its
+lines name no session, its root is the launch's); a fleet view (fleet/app.py) one each.
 
-A composition object, not a Widget: each app lays the view's widgets out its own way. A
-fleet view (fleet/app.py) stacks N trees in one scrolling column and switches panes beside
-them, so a session's tree and pane are not one box of the screen; a Widget holding both
-would change that layout. The rules (a group stop asks, a session out of reach refuses its
+A composition object, not a Widget: each app lays the view's widgets out its own way. The
+single TUI puts the tree and pane side by side in its Nodes tab (nodes/tab.py, with the
+detail line); a fleet view stacks N trees in one scrolling column and switches panes
+beside them, so a session's tree and pane are not one box of the screen; a Widget holding
+both would change that layout. The rules (a group stop asks, a session out of reach refuses its
 keys with one line, a link's silence on its root, bursts held after `i`) are the view's
 code, so each session of a fleet keeps them by construction.
 """
@@ -30,6 +33,7 @@ from rich.text import Text
 from textual.app import App
 from textual.notifications import SeverityLevel
 from textual.widget import Widget
+from textual.widgets import TabbedContent
 
 from ..client.link import relink_words
 from ..client.port import LaunchPort, Verb
@@ -38,7 +42,7 @@ from ..client.served_session import ServedSession
 from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.events import Event, Reading, Relaunched
+from ..engine.run.events import LIVE_STATES, Event, Reading, Relaunched
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.vocabulary.request import Request
 from .inspect.log_levels import LogLevels
@@ -50,7 +54,6 @@ from .nodes.gaps import GapReader
 from .output_store import OutputStore
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree, RowKind
-from .session_link import DRAIN_HZ
 from .status_line import counts_words, silence_words
 
 R = TypeVar("R")
@@ -64,9 +67,12 @@ class ViewHost(Protocol):
     def engine(self) -> EngineThread: ...
     @property
     def read_only(self) -> bool: ...
-
-    def nodes_shown(self) -> bool:
-        """Whether the Nodes tab (the trees) is on screen: the keyboard's keys are its."""
+    @property
+    def quitting(self) -> bool:
+        """Whether the app is stopping the launch (a fleet never does)."""
+    @property
+    def tabs(self) -> TabbedContent:
+        """Its tabs: the Nodes tab (`nodes`) shows the views' trees."""
 
     def update_status(self) -> None: ...
 
@@ -76,10 +82,8 @@ class ViewHost(Protocol):
 
 class SessionView:
     """One session, shown by `tree` and `pane`: `label` is how its root names it
-    (HOST:NAME, local:NAME), `host` its machine (None: this computer)."""
-
-    quitting = False
-    """A view never stops its session by leaving (the single TUI's quit does, itself)."""
+    (HOST:NAME, local:NAME; empty: the session is alone on screen), `host` its machine
+    (None: this computer)."""
 
     def __init__(self, label: str, host: str | None, name: str, tree: LaunchTree,
                  pane: OutputPanel, store: OutputStore, screen: ViewHost,
@@ -106,7 +110,7 @@ class SessionView:
             tree, store, lambda: self.session.plan,
             lambda: None if self.supervisor is None else self.supervisor.states,
             lambda: {} if self.supervisor is None else self.supervisor.lifecycle.states,
-            asked_to_stop=self.asked_to_stop)
+            lambda: screen.quitting, self.asked_to_stop)
         self.keyboard = NodeKeyboard(self)
         self.commands = SelectionCommands(tree, self, tree, store, who=label)
         self.recordings = Recordings(self, self.request)  # `b`: its black box written
@@ -120,6 +124,10 @@ class SessionView:
     @property
     def app(self) -> App[Any]:
         return self.tree.app
+
+    @property
+    def quitting(self) -> bool:
+        return self.screen.quitting
 
     @property
     def who(self) -> str:
@@ -143,19 +151,31 @@ class SessionView:
         return self.screen.read_only
 
     def client(self) -> LaunchPort:
+        """The session's client; SessionError (a LaunchError) before it is followed (a key
+        pressed, a tab shown, while its server still comes up)."""
         if self.supervisor is None:
-            raise SessionError(self.problem or "not connected")
+            raise SessionError((self.problem or "not connected") if self.label else
+                               f"session {self.name} is not followed yet")
         return self.supervisor
+
+    def running(self) -> list[str]:
+        if self.supervisor is None:
+            return []
+        return [p for p, s in self.supervisor.states.items() if s in LIVE_STATES]
 
     def over_link(self) -> LaunchPort | None:
         supervisor = self.supervisor
         return supervisor if supervisor is not None and supervisor.host is not None else None
 
     def nodes_shown(self) -> bool:
-        return self.screen.nodes_shown()
+        return self.screen.tabs.active == "nodes"
 
     def unavailable(self) -> str | None:
         """Why keys cannot act on this session now, as said (None: they can)."""
+        if not self.label:
+            # alone on screen, a link lost is said by the request that fails (a fleet
+            # greys the session's root instead, and its keys say why)
+            return "the session is not followed yet" if self.supervisor is None else None
         why = self.out_of_reach()
         if why is None:
             return None
@@ -170,7 +190,8 @@ class SessionView:
 
     def notify(self, message: str, *, severity: SeverityLevel = "information",
                title: str = "") -> None:
-        self.app.notify(f"{self.label}: {message}", severity=severity, title=title)
+        self.app.notify(f"{self.label}: {message}" if self.label else message,
+                        severity=severity, title=title)
 
     async def show_typing_line(self, line: Widget) -> None:
         await self.screen.show_typing_line(line)
@@ -182,17 +203,23 @@ class SessionView:
         self.show_events(self.buffer.drain())
 
     def describe_waiting(self) -> None:
-        self.refresh_root()  # the new plan's counts
+        """After a relaunch: each process not started yet says why on its row (alone on
+        screen); a fleet's root says the new plan's counts."""
+        if self.label:
+            self.refresh_root()
+        else:
+            self.events.describe_waiting()
 
     # --- its link ----------------------------------------------------------------------------
 
-    async def open_port(self, scrollback: int, lines: int) -> LaunchPort:
-        """On the engine thread: the session's RemoteSupervisor (or the port handed in)."""
+    async def open_port(self, scrollback: int, lines: int, interval: float) -> LaunchPort:
+        """On the engine thread: the session's RemoteSupervisor (or the port handed in);
+        `interval`: its drain's, for a session on this computer."""
         if self.given_port is not None:
             return self.given_port
         if self.host is None:
             return await RemoteSupervisor.open(self.name, self.session, scrollback,
-                                               max_lines=lines, interval=1 / DRAIN_HZ)
+                                               max_lines=lines, interval=interval)
         return await RemoteSupervisor.open_remote(
             self.host, self.name, self.session, scrollback, max_lines=lines,
             interval=LINK_INTERVAL)

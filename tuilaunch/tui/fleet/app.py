@@ -102,6 +102,8 @@ class FleetApp(KeyOrder):
     NARROW = 70
     """Columns below which the trees go above the pane (a phone's browser)."""
     BINDINGS = BINDINGS
+    quitting = False
+    """A fleet view never stops its sessions by leaving."""
 
     def __init__(self, addresses: list[tuple[str | None, str]], scrollback: int = 5000,
                  read_only: bool = False,
@@ -187,9 +189,6 @@ class FleetApp(KeyOrder):
         if narrow:  # the trees above the panes take the whole width, whatever `<` `>` set
             self.query_one("#fleet-trees").styles.width = None
 
-    def nodes_shown(self) -> bool:
-        return self.tabs.active == "nodes"
-
     async def show_typing_line(self, line: Widget) -> None:
         await self.nodes_tab.mount(line, before="#fleet-split")
 
@@ -203,7 +202,7 @@ class FleetApp(KeyOrder):
         while member.supervisor is None and not self.detached:
             try:
                 member.supervisor = await self.engine.run(member.open_port(
-                    self.scrollback, max(12, self.size.height - PANE_CHROME)))
+                    self.scrollback, max(12, self.size.height - PANE_CHROME), 1 / DRAIN_HZ))
             except LaunchError as exc:
                 member.problem = f"{exc.message}; retrying (R: now)"
                 member.refresh_root()
