@@ -52,7 +52,7 @@ from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree, ascii_terminal
 from .server_start import ServerStarted
 from .session_link import DRAIN_HZ, PANE_CHROME, SessionLink
-from .session_view import SessionView, pane_save_dir
+from .session_view import COMMAND_BINDINGS, SessionView, pane_save_dir
 from .status_line import StatusLine
 from .tab_panels import TabPanels
 
@@ -109,10 +109,7 @@ class TuiLaunchApp(SessionLink, KeyOrder):
                 tooltip="Get and set parameters"),
         Binding("5", "navigation('tab', 'topics')", "Topics", show=False,
                 tooltip="Topics, rates, QoS problems, echo"),
-        Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
-        Binding("r", "command('restart')", "Restart",
-                tooltip="Restart the selected node or group"),
-        Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+        *COMMAND_BINDINGS,
         Binding("a", "command('all_output')", "All", show=False, tooltip="Output of all nodes"),
         Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up",
                 tooltip="Configure an unconfigured, activate an inactive lifecycle node"),

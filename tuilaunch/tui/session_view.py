@@ -31,6 +31,7 @@ from typing import Any, Protocol, TypeVar
 
 from rich.text import Text
 from textual.app import App
+from textual.binding import Binding
 from textual.notifications import SeverityLevel
 from textual.widget import Widget
 from textual.widgets import TabbedContent
@@ -57,6 +58,14 @@ from .screens.tree_panel import LaunchTree, RowKind
 from .status_line import counts_words, silence_words
 
 R = TypeVar("R")
+
+COMMAND_BINDINGS = [
+    Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
+    Binding("r", "command('restart')", "Restart",
+            tooltip="Restart the selected node or group"),
+    Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+]
+"""The keys of a view's selection's commands (`command`), the same in every app."""
 
 
 class ViewHost(Protocol):
@@ -89,7 +98,10 @@ class SessionView:
                  pane: OutputPanel, store: OutputStore, screen: ViewHost,
                  session: Session | None = None, port: LaunchPort | None = None) -> None:
         self.label, self.host, self.name = label, host, name
+        self.who = label
+        """The session a question names (empty: the one on screen needs no name)."""
         self.tree, self.pane, self.store, self.screen = tree, pane, store, screen
+        self.launch_tree = tree
         self.session: Session = session or ServedSession("?", {})
         """Its plan: the one its server runs, sent over the link (a test hands its own)."""
         self.given_port = port
@@ -130,10 +142,6 @@ class SessionView:
         return self.screen.quitting
 
     @property
-    def who(self) -> str:
-        return self.label
-
-    @property
     def address(self) -> str:
         """As the command line takes it."""
         return self.name if self.host is None else f"{self.host}:{self.name}"
@@ -141,10 +149,6 @@ class SessionView:
     @property
     def engine(self) -> EngineThread:
         return self.screen.engine
-
-    @property
-    def launch_tree(self) -> LaunchTree:
-        return self.tree
 
     @property
     def read_only(self) -> bool:
