@@ -37,7 +37,7 @@ from textual.notifications import SeverityLevel
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Footer, Static, TabbedContent, TabPane, Tree
 
-from ...client.port import LaunchPort, Verb
+from ...client.port import LaunchPort
 from ...client.remote_supervisor import RETRY_MOST
 from ...engine.errors import LaunchError
 from ...engine.plan.session import Session
@@ -55,7 +55,7 @@ from .bindings import BINDINGS, FleetHelp
 from .plots import FleetPlots
 from .tabs import FleetTabs
 
-NODES_ONLY = frozenset({"command", "all_output", "lifecycle", "pane", "inspector", "resize"})
+NODES_ONLY = frozenset({"command", "all_output", "pane", "inspector", "resize"})
 """The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
@@ -244,19 +244,21 @@ class FleetApp(KeyOrder):
 
     # --- the selection -------------------------------------------------------------------
 
-    def member_of(self, tree: object) -> SessionView | None:
-        return next((m for m in self.members if m.tree is tree), None)
-
     def on_descendant_focus(self, event: events.DescendantFocus) -> None:
         """The session of the tree with the focus is the selected one."""
-        member = self.member_of(event.widget)
+        member = view_of(self.members, event.widget)
+        if member is not None and member is not self.current:
+            self.current = member
+            self.switcher.current = member.pane.id
+            if self.tabs.active != "nodes":
+                self.session_tabs.shown(self.tabs.active, member)
+            self.update_status()
         if member is not None:
-            self.select(member)
             self.update_detail()
 
     @on(Tree.NodeHighlighted)
     def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
-        member = self.member_of(event.control)
+        member = view_of(self.members, event.control)
         if member is None:
             return
         data = event.node.data
@@ -267,17 +269,9 @@ class FleetApp(KeyOrder):
         self.update_detail()
         self.refresh_bindings()  # the keys that apply follow the row
 
-    def select(self, member: SessionView) -> None:
-        if member is not self.current:
-            self.current = member
-            self.switcher.current = member.pane.id
-            if self.tabs.active != "nodes":
-                self.session_tabs.shown(self.tabs.active, member)
-            self.update_status()
-
     def step_tree(self, tree: FleetTree, step: int) -> None:
         """Up from a tree's first row, down from its last: the neighbouring session's."""
-        member = self.member_of(tree)
+        member = view_of(self.members, tree)
         if member is None:
             return
         index = self.members.index(member) + step
@@ -353,7 +347,7 @@ class FleetApp(KeyOrder):
             return action == "pane" and name == "search"
         if action == "inspector" and name != "black_box":
             return True if self.current.selected_process() else None
-        if action == "command" and self.current.out_of_reach() is None:
+        if action == "command" and name != "lifecycle" and self.current.out_of_reach() is None:
             # greyed as in the single TUI (nothing to stop); a session out of reach keeps
             # them, to say why in one line
             return self.current.commands.applies(str(parameters[0]), ())
@@ -365,18 +359,18 @@ class FleetApp(KeyOrder):
             self.current.pane.action_clear_search()
         self._go_home(self.tabs.active)
 
-    def action_command(self, verb: Verb) -> None:
-        """s, r, t on the selected rows of the selected session (session_view.py)."""
-        self.current.command(verb)
+    def action_command(self, verb: str, *parameters: str) -> None:
+        """s, r, t on the selected rows of the selected session; `]` (up), `[` (down) on its
+        lifecycle node, which say why when they cannot (session_view.py)."""
+        if verb == "lifecycle":
+            self.current.lifecycle(parameters[0])
+        else:
+            self.current.command(verb)  # type: ignore[arg-type]
         self.update_detail()
 
     def action_keyboard(self, action: str, *parameters: str) -> None:
         """i, g, c: the single TUI's keyboard, on the selected session (keyboard.py)."""
         self.current.keyboard.act(action, *parameters)
-
-    def action_lifecycle(self, direction: str) -> None:
-        """`]` (up), `[` (down) on the selected session's lifecycle node."""
-        self.current.lifecycle(direction)
 
     def action_inspector(self, action: str) -> None:
         """o, L, b: the single TUI's inspector keys, on the selected session: its node's
@@ -478,3 +472,8 @@ class FleetApp(KeyOrder):
         if text != self._detail_text:
             self._detail_text = text
             self.detail_bar.update(Text(text))
+
+
+def view_of(views: list[SessionView], widget: object) -> SessionView | None:
+    """The view whose tree `widget` is."""
+    return next((v for v in views if v.tree is widget), None)

@@ -36,9 +36,9 @@ BINDINGS: list[BindingType] = [
     Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
             tooltip="The previous session's root"),
     Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
-    Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up", show=False,
+    Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up", show=False,
             tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
-    Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
+    Binding("left_square_bracket", "command('lifecycle', 'down')", "Lifecycle down", show=False,
             tooltip="Deactivate an active, clean up an inactive lifecycle node"),
     *INSPECTOR_BINDINGS,  # o, L, b: on the selected session (FleetApp.action_inspector)
     # not in the footer: the header says it (`O: this one in full`), and the single TUI's
