@@ -19,10 +19,10 @@ from textual.widgets import Input, Static
 
 from tuilaunch.client import remote_supervisor
 from tuilaunch.tui.fleet.app import FleetApp, FleetHelp
-from tuilaunch.tui.fleet.member import Member
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ChoiceScreen, ConfirmScreen
 from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
+from tuilaunch.tui.session_view import SessionView
 
 from ..conftest import run_cli, wait_for
 from .sshd import Machines, alive, machines_fixture, proxies_on  # noqa: F401
@@ -32,13 +32,13 @@ from .test_sessions import Terminal, detached_with, run_cli_together, runtime, t
 from .test_tui import until
 
 
-def starts(member: Member, process: str) -> int:
+def starts(member: SessionView, process: str) -> int:
     """How many times the member's pane says `process` started."""
     return sum("process started with pid" in line.text
                for line in member.store.lines(View(process)))
 
 
-def ticks(member: Member) -> int:
+def ticks(member: SessionView) -> int:
     return sum(line.text.startswith("tick") for line in member.store.lines(View("ticker-1")))
 
 
@@ -51,7 +51,7 @@ def notices(app: FleetApp) -> list[str]:
     return said
 
 
-async def select(pilot, member: Member, process: str) -> None:
+async def select(pilot, member: SessionView, process: str) -> None:
     """The row of `process` in the member's tree, selected as the arrows would (again
     until it holds: a tree not laid out yet puts the cursor back on its root)."""
     member.tree.focus()
@@ -245,7 +245,7 @@ def test_lifecycle_keys_step_the_selected_sessions_node_and_no_other(write):
         async with app.run_test(size=(100, 30)) as pilot:
             one, two = app.members
 
-            def state(member: Member, process: str) -> str | None:
+            def state(member: SessionView, process: str) -> str | None:
                 return None if member.supervisor is None else \
                     member.supervisor.lifecycle.states.get(process)
 
@@ -325,7 +325,7 @@ def test_services_params_and_topics_tabs_follow_the_selected_session(write):
             await until(pilot, lambda: ra.supervisor is not None and rb.supervisor is not None)
             panels = {m.label: app.session_tabs.of(m) for m in app.members}
 
-            def services(member: Member) -> list[str]:
+            def services(member: SessionView) -> list[str]:
                 return [name for name, _ in panels[member.label].services.services]
 
             await select(pilot, ra, "talker-1")

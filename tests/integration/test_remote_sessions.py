@@ -27,9 +27,10 @@ from tuilaunch.client import remote_supervisor
 from tuilaunch.engine.run.event_buffer import EventBuffer
 from tuilaunch.engine.run.events import Event, Output, Resources
 from tuilaunch.tui import status_line
-from tuilaunch.tui.app import make_app, pane_save_dir
+from tuilaunch.tui.app import make_app
 from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import QuitScreen
+from tuilaunch.tui.session_view import pane_save_dir
 
 from ..conftest import run_cli, wait_for
 from .sshd import Machine, Machines, alive, free_port, machines_fixture, proxies_on  # noqa: F401

@@ -59,13 +59,13 @@ async def test_the_status_line_counts_the_attempt_under_way(tmp_path: Path) -> N
 def test_the_fleets_root_row_says_the_attempt_and_its_latest_reason() -> None:
     from types import SimpleNamespace
 
-    from tuilaunch.tui.fleet.member import Member
+    from tuilaunch.tui.session_view import relinking
 
     port = SimpleNamespace(attempt=2, attempt_since=None, lost_reason="ssh exit status 255",
                            link_lost="link to nuc lost (ssh exit status 255)")
-    assert Member._relinking(port) == "reconnecting (R: now)"  # type: ignore[arg-type]
+    assert relinking(port) == "reconnecting (R: now)"  # type: ignore[arg-type]
     port.attempt_since = time.monotonic() - 5.2
-    assert Member._relinking(port) == "retrying (attempt 2, 5 s)"  # type: ignore[arg-type]
+    assert relinking(port) == "retrying (attempt 2, 5 s)"  # type: ignore[arg-type]
     port.lost_reason = REFUSED  # the latest reason, not the one the row already says
-    assert Member._relinking(port) == \
+    assert relinking(port) == \
         f"retrying (attempt 2, 5 s), last: {REFUSED}"  # type: ignore[arg-type]

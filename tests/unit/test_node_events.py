@@ -1,7 +1,7 @@
-"""The Nodes tab over a session's events, in a small host app (no process, no ROS graph):
-the events go down to the tab as a message, and a process's life shows in its row and its
-pane in ros2 launch's words; the app hears of it by the tab's message. The fleet view shows
-each session through the same NodeEvents (tests/integration/test_fleet_tui.py)."""
+"""The Nodes tab over a session's view (session_view.py), in a small host app (no process,
+no ROS graph): the events go down to the tab as a message, and a process's life shows in
+its row and its pane in ros2 launch's words; the app hears of it by the tab's message.
+The fleet view shows each session through the same view (tests/integration/test_fleet_tui.py)."""
 
 from __future__ import annotations
 
@@ -24,6 +24,9 @@ from tuilaunch.engine.run.events import (
 )
 from tuilaunch.tui.nodes.tab import NodesTab, SessionEvents
 from tuilaunch.tui.output_store import OutputStore, View
+from tuilaunch.tui.screens.output_panel import OutputPanel
+from tuilaunch.tui.screens.tree_panel import LaunchTree
+from tuilaunch.tui.session_view import SessionView
 
 LAUNCH = """
 from launch import LaunchDescription
@@ -52,28 +55,33 @@ class Client:
 
 
 class Host(App[None]):
-    """Holds a session's link as the TUI does, and the Nodes tab."""
+    """Holds a session's view as the TUI does, and the Nodes tab over it."""
 
     def __init__(self, session: Session) -> None:
         super().__init__()
         self.session = session
-        self.supervisor: Any = Client(session)
         self.engine: Any = None
+        self.read_only = False
         self.quitting = False
-        self.asked_to_stop: set[str] = set()
         self.store = OutputStore()
+        self.view = SessionView("", None, "demo", LaunchTree(id="tree"), OutputPanel(
+            self.store, Path("."), max_lines=100, max_fps=100.0, id="output"), self.store,
+            self, session)
+        self.supervisor: Any = Client(session)
+        self.view.supervisor = self.supervisor
+        self.asked_to_stop = self.view.asked_to_stop
         self.heard: list[NodesTab.Shown] = []
 
     def compose(self) -> ComposeResult:
-        yield NodesTab(self, self.store, Path("."), max_lines=100, max_fps=100.0)
+        yield NodesTab(self.view, lambda: None)
 
     def on_mount(self) -> None:
         self.query_one(NodesTab).events.show_plan()
 
-    def over_link(self) -> None:
-        return None
+    def update_status(self) -> None:
+        pass
 
-    def drain(self) -> None:
+    async def show_typing_line(self, line: Any) -> None:
         pass
 
     def on_nodes_tab_shown(self, message: NodesTab.Shown) -> None:

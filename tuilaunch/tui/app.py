@@ -1,10 +1,12 @@
 """The Textual app: lays out the panels and wires them to the engine.
 
-The app keeps the session's link (session_link.py) and the screens; each concern of its
-keys is an object it holds, over the app as its host: `keyboard` (typing into a node,
-tools, the command line), `inspector` (the session's readings, plots, log levels,
-recordings), `navigation` (tabs and focus), `leaving` (quit, detach, SIGTERM, SIGHUP),
-`status` (the status line), `starting` (the session's server, `tuilaunch FILE`). A key
+The app keeps the session's link (session_link.py), its one session view
+(session_view.py: the session's port, tree, pane, commands and keyboard, as a fleet view
+holds one per session) and the screens; each concern of its keys is an object it holds:
+`keyboard` (the view's: typing into a node, tools, the command line), `inspector` (the
+session's readings, plots, log levels, recordings), `navigation` (tabs and focus),
+`leaving` (quit, detach, SIGTERM, SIGHUP), `status` (the status line), `starting` (the
+session's server, `tuilaunch FILE`). A key
 names the object and its verb (`keyboard('type_into')`). The tabs are widgets that own
 their state, the app their host: the Nodes tab (nodes/tab.py's NodesTab: the tree, the
 detail line and the pane, sent the session's events as messages) and the Args tab
@@ -45,9 +47,11 @@ from .keys.keyboard import KEYBOARD_BINDINGS, NodeKeyboard
 from .navigation import Navigation
 from .nodes.tab import NodesTab
 from .quitting import LEAVING_BINDINGS, QUIT_BINDINGS, Quitting
+from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree, ascii_terminal
 from .server_start import ServerStarted
 from .session_link import DRAIN_HZ, PANE_CHROME, SessionLink
+from .session_view import COMMAND_BINDINGS, SessionView, pane_save_dir
 from .status_line import StatusLine
 from .tab_panels import TabPanels
 
@@ -104,10 +108,7 @@ class TuiLaunchApp(SessionLink, KeyOrder):
                 tooltip="Get and set parameters"),
         Binding("5", "navigation('tab', 'topics')", "Topics", show=False,
                 tooltip="Topics, rates, QoS problems, echo"),
-        Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
-        Binding("r", "command('restart')", "Restart",
-                tooltip="Restart the selected node or group"),
-        Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+        *COMMAND_BINDINGS,
         Binding("a", "command('all_output')", "All", show=False, tooltip="Output of all nodes"),
         Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up",
                 tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
@@ -130,12 +131,19 @@ class TuiLaunchApp(SessionLink, KeyOrder):
     ]
 
     keyboard: NodeKeyboard
+    view: SessionView
     inspector: Inspector
     status: StatusLine
 
     def __init__(self, *args: Any, **options: Any) -> None:
         super().__init__(*args, **options)
-        self.keyboard = NodeKeyboard(self)
+        save_dir = pane_save_dir(self.log_dir, self.session_host, self.session_name)
+        self.view = SessionView(
+            "", self.session_host, self.session_name, LaunchTree(id="tree"),
+            OutputPanel(self.store, save_dir, max_lines=self.scrollback,
+                        max_fps=self.pane_fps, id="output"), self.store, self, self.session)
+        self.buffer, self.asked_to_stop = self.view.buffer, self.view.asked_to_stop
+        self.keyboard = self.view.keyboard  # the session's (its view the keyboard's host)
         self.inspector = Inspector(self, lambda tab: self.navigation.tab(tab))
         # the Services, Params and Topics panels: made the first time their tab shows
         panels = TabPanels(self, lambda: self.inspector.graph, self.inspector.inspect)
@@ -149,11 +157,9 @@ class TuiLaunchApp(SessionLink, KeyOrder):
         yield Static("", id="status")
         with LaunchTabs(initial="nodes"):
             with TabPane("1 Nodes", id="nodes"):
-                save_dir = pane_save_dir(self.log_dir, self.session_host, self.session_name)
-                yield NodesTab(self, self.store, save_dir, max_lines=self.scrollback,
-                               max_fps=self.pane_fps, id="nodes-tab")
+                yield NodesTab(self.view, self.drain, id="nodes-tab")
             with TabPane("2 Args", id="args"):
-                yield ArgsTab(self, id="args-tab")
+                yield ArgsTab(self.view, id="args-tab")
             # empty until first shown: most sessions never open them (tab_panels.py)
             yield TabPane("3 Services", id="services")
             yield TabPane("4 Params", id="params")
@@ -245,14 +251,14 @@ class TuiLaunchApp(SessionLink, KeyOrder):
             local.owner, local.keep_on_hangup = self.owner, self.keep_on_hangup
             remote = local
         remote.read_only = self.read_only
-        self.supervisor = remote  # from here on, only its port (client/port.py)
+        self.view.supervisor = remote  # from here on, only its port (client/port.py)
         remote.subscribe(self.buffer)
         if isinstance(self.session, ServedSession):  # the form from the server's plan
             self.args_tab.show_form()
         tree = self.launch_tree
         self.nodes.events.show_plan()
         # what was printed before we came: shown, not news
-        self.show_events(self.supervisor.history, replaying=True)
+        self.show_events(remote.history, replaying=True)
         self.run_supervisor()
         self.drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         self.update_status()
@@ -420,14 +426,3 @@ def make_app(path: str, arguments: dict[str, str], log_dir: Path, **options: Any
     if served or (options.get("session_host") is not None and not os.access(path, os.R_OK)):
         return TuiLaunchApp(ServedSession(path, arguments), log_dir, **options)
     return TuiLaunchApp(Session(path, arguments, placement=placement), log_dir, **options)
-
-
-def pane_save_dir(log_dir: Path, host: str | None, name: str) -> Path:
-    """Where `w` writes a pane: the launch's log folder, which is on this computer, unless
-    the session runs on another machine (its log folder is there; a pane is saved here, in
-    a folder named after that machine and session)."""
-    if host is None:
-        return log_dir
-    base = os.environ.get("ROS_LOG_DIR") or os.path.join(
-        os.environ.get("ROS_HOME") or os.path.expanduser("~/.ros"), "log")
-    return Path(base) / f"tuilaunch-{host}-{name}"

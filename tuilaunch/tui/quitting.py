@@ -47,7 +47,7 @@ class Quitting:
     def request_quit(self) -> None:
         if self._asking_to_quit():
             return  # q or ctrl+c again while the question is shown: one question
-        running = self.app.running()
+        running = self.app.view.running()
         if (self.app.is_web or self.app.read_only) and not self.app.quitting:
             # a browser tab (tuilaunch serve) or a read-only view: q leaves, the launch
             # runs on, as closing the tab does

@@ -45,8 +45,10 @@ class StartHost(Protocol):
     server_process: subprocess.Popen[bytes] | None
     quit_before_start: bool
     terminal_lost: bool
-    supervisor: LaunchPort | None
-    """The session's client, once it is followed."""
+    @property
+    def supervisor(self) -> LaunchPort | None:
+        """The session's client, once it is followed."""
+
     engine: EngineThread
 
     @property

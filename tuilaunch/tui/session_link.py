@@ -1,9 +1,11 @@
 """The app's state and its link to the engine: supervisor wiring, engine events.
 
-Engine events reach the UI through one EventBuffer drained on a timer, so a flood from a
-node costs one batched write per pane per tick: each tick's batch goes to the Nodes tab as
-a message (nodes/tab.py), the readings a tab asked for to the inspector. The App
-constructor does no I/O: the session's client starts in on_mount.
+The session itself (its port, buffer, tree and pane, its commands and its keyboard) is the
+app's one `SessionView` (session_view.py, `view`, made by app.py), as each session of a
+fleet view is one. Engine events reach the UI through the view's EventBuffer drained on a
+timer, so a flood from a node costs one batched write per pane per tick: each tick's
+batch goes to the Nodes tab as a message (nodes/tab.py), the readings a tab asked for to
+the inspector. The App constructor does no I/O: the session's client starts in on_mount.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from textual import on, work
 from textual.app import App, ScreenStackError
 from textual.notifications import SeverityLevel
 from textual.timer import Timer
+from textual.widget import Widget
 from textual.widgets import Static, TabbedContent, Tree
 from textual.worker import Worker, WorkerState
 
@@ -29,9 +32,8 @@ from ..client.read_only import ReadOnlyError
 from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.events import LIVE_STATES, Event, Reading
+from ..engine.run.events import Event, Reading
 from ..engine.run.machines.remote import RemoteLink
-from ..engine.run.session.session_dir import SessionError
 from .arguments import ArgsTab
 from .nodes.tab import NodesTab, SessionEvents
 from .output_store import OutputStore
@@ -84,6 +86,22 @@ class Readings(Protocol):
     def detail_shown(self) -> None: ...
 
 
+class OneSession(Protocol):
+    """The app's session as the link reads it (session_view.py's SessionView)."""
+
+    buffer: EventBuffer
+    """Lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
+    the rest is counted on screen and kept in the log files."""
+    supervisor: LaunchPort | None
+    own_relaunch: list[str] | None
+    asked_to_stop: set[str]
+    """The stops the operator asked for: their non-zero exit is not a failure."""
+
+    def client(self) -> LaunchPort: ...
+    def running(self) -> list[str]: ...
+    def over_link(self) -> LaunchPort | None: ...
+
+
 class SessionLink(App[int]):
     """The app's state and its link to the engine: the supervisor (in-process, or a session
     server's through RemoteSupervisor) runs on the engine thread; its events are drained on
@@ -105,6 +123,9 @@ class SessionLink(App[int]):
     engine: EngineThread
     drain_timer: Timer
     keyboard: KeyboardNews
+    view: OneSession
+    buffer: EventBuffer
+    asked_to_stop: set[str]
     inspector: Readings
     status: StatusWords
 
@@ -131,16 +152,12 @@ class SessionLink(App[int]):
         self.sigkill_timeout = sigkill_timeout
         self.pane_fps = pane_fps
         self.store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
-        # lines taken per drain tick at most: 10 ticks/s x 2500 is more than anyone reads;
-        # the rest is counted on screen and kept in the log files
-        self.buffer = EventBuffer(max_lines=2500)
-        self.supervisor: LaunchPort | None = None
-        self.given_port = port
-        """A session's port handed in (an in-memory one, in tests/unit): followed as the
-        session server's client would be, without opening one."""
         # with a session name the launch runs in a session server and this app is a client
         self.session_name = session_name
         self.session_host = session_host  # the session runs there, reached over ssh
+        self.given_port = port
+        """A session's port handed in (an in-memory one, in tests/unit): followed as the
+        session server's client would be, without opening one."""
         self.remote_link = remote_link  # an ssh link to it already open (attach made it)
         self.owner = owner
         self.keep_on_hangup = keep_on_hangup
@@ -151,7 +168,6 @@ class SessionLink(App[int]):
         self.opened_at = time.time()
         """When this client opened: a relaunch before it is no news to it, also when its
         event comes after the history (the server's events at subscribing)."""
-        self.own_relaunch: list[str] | None = None
         self.exit_status = 0
         self.quitting = False
         self.terminal_lost = False
@@ -159,8 +175,6 @@ class SessionLink(App[int]):
         self.ended_elsewhere: str | None = None
         """Why the session ended when neither this client nor its terminal asked
         (`tuilaunch stop`, another client's quit): said on screen, then in the shell."""
-        # stops the operator asked for: their non-zero exit is not a failure
-        self.asked_to_stop: set[str] = set()
         self.quit_started: float | None = None
         # the session's server not started yet: it is, once the tree is on screen (on_ready)
         self.starting = None if start_server is None else ServerStart(self, start_server)
@@ -230,17 +244,14 @@ class SessionLink(App[int]):
         except ScreenStackError:
             pass
 
-    def client(self) -> LaunchPort:
-        """The session's client; SessionError (a LaunchError) before the session is
-        followed (a key pressed, a tab shown, while its server still comes up)."""
-        if self.supervisor is None:
-            raise SessionError(f"session {self.session_name} is not followed yet")
-        return self.supervisor
+    @property
+    def supervisor(self) -> LaunchPort | None:
+        """The session's port (its view's): None until the session is followed."""
+        return self.view.supervisor
 
-    def running(self) -> list[str]:
-        if self.supervisor is None:
-            return []
-        return [p for p, s in self.supervisor.states.items() if s in LIVE_STATES]
+    async def show_typing_line(self, line: Widget) -> None:
+        """The line taking the keys (`i`), above the Nodes tab's tree and pane."""
+        await self.nodes.mount(line, before="#nodes-split")
 
     # --- engine events -------------------------------------------------------------------
 
@@ -252,7 +263,7 @@ class SessionLink(App[int]):
         asked for to the inspector; the rest down to the Nodes tab, by message, which says
         when they are on screen (`on_nodes_tab_shown`). `replaying`: what happened before
         this client came, shown but no news, at once."""
-        supervisor = self.over_link()
+        supervisor = self.view.over_link()
         # over an ssh link the server sends only the output pane's process's lines (all for
         # the all-nodes pane); the others' are read from their log files when shown
         if supervisor is not None and self.output_panel.view.process != supervisor.only:
@@ -272,7 +283,8 @@ class SessionLink(App[int]):
             self.nodes.show_batch(rest, replaying=True)
         else:
             self.nodes.post_message(SessionEvents(rest))
-        if not rest and (self.quit_started is not None or self.over_link() is not None):
+        if not rest and (self.quit_started is not None or
+                         self.view.over_link() is not None):
             self.update_status()  # the signal stage, a link's silence: move on with time
         self.keyboard.events_shown(kept)
 
@@ -280,21 +292,15 @@ class SessionLink(App[int]):
         """The Nodes tab shows a batch: the status line, the keys that apply, the form
         after a relaunch, follow."""
         for event in message.shown.relaunched:
-            if event.lines != self.own_relaunch:
+            if event.lines != self.view.own_relaunch:
                 self.status.relaunched_elsewhere(
                     event.lines, (event.data or {}).get("edited"),
                     message.replaying or event.time < self.opened_at)
-            self.own_relaunch = None
+            self.view.own_relaunch = None
         if message.shown.lifecycle:
             self.refresh_bindings()
         self.update_status()
         self.update_detail()
-
-    def over_link(self) -> LaunchPort | None:
-        """The session's supervisor when an ssh link is between (the session is on another
-        machine): what crosses it is then kept to what the screen shows."""
-        supervisor = self.supervisor
-        return supervisor if supervisor is not None and supervisor.host is not None else None
 
     def update_status(self) -> None:
         self.status.update()
@@ -304,7 +310,3 @@ class SessionLink(App[int]):
         selection (the inspector's figures, the Topics tab's node) follows."""
         self.nodes.update_detail()
         self.inspector.detail_shown()
-
-    def describe_waiting(self) -> None:
-        """Each process not started yet says why on its row."""
-        self.nodes.events.describe_waiting()

@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.text import Text
 
@@ -14,7 +15,9 @@ from ..client.link import lost_link_line
 from ..client.port import LaunchPort
 from ..engine.plan.model import Plan
 from .output_store import WARN, Line
-from .session_link import SessionLink
+
+if TYPE_CHECKING:  # the session view reads its words here; the link holds the view
+    from .session_link import SessionLink
 
 SILENCE_SHOWN = 5.0
 """Seconds without a word from the other side of a link (probed meanwhile) after which the
@@ -75,14 +78,14 @@ class StatusLine:
             args = f"not declared: {', '.join(undeclared)}  {args}"
         prefix = ""
         if self.app.quitting:
-            still = self.app.running()
+            still = self.app.view.running()
             prefix = f"stopping {', '.join(still)} ({self.signal_stage()})... " if still \
                 else "stopped. "
         name = Path(self.app.session.plan.file).name
         where = f"{self.app.session_host}:" if self.app.session_host else ""
         read_only = " read-only" if self.app.read_only else ""
         name = f"[{where}{self.app.session_name}{read_only}] {name}"
-        link = self.app.over_link()
+        link = self.app.view.over_link()
         if link is not None and link.link_lost:
             # what is shown is as it was when the link dropped; the short form first, so
             # 80 columns show it whole, then the reason (the latest attempt's), its end
@@ -122,7 +125,7 @@ class StatusLine:
         return "SIGKILL sent"
 
     def _escalation(self) -> tuple[float, float]:
-        still = set(self.app.running())
+        still = set(self.app.view.running())
         waits = [(self.app.sigterm_timeout if p.sigterm_timeout is None else p.sigterm_timeout,
                   self.app.sigkill_timeout if p.sigkill_timeout is None else p.sigkill_timeout)
                  for p in self.app.session.plan.processes if p.id in still]

@@ -3,20 +3,20 @@
 
 The Nodes view has one tree per session, its root the session (`HOST:NAME`, `local:NAME`
 here) with its live counts; the output pane and the header follow the session of the
-selected row, and every key acts on that session alone. Each session is a `Member`
-(member.py) with its own RemoteSupervisor and ssh link on the one engine thread: a
-link lost to one robot greys its root, says why and that it reconnects (RemoteSupervisor
-retries by itself), and its rows refuse keys with one line while the others stay live. A
-robot unreachable at start is a root that says why and retries.
+selected row, and every key acts on that session alone. Each session is a `SessionView`
+(session_view.py: the single TUI's pieces over one session, its tree, pane, commands,
+keyboard and link words) with its own RemoteSupervisor and ssh link on the one engine
+thread: a link lost to one robot greys its root, says why and that it reconnects
+(RemoteSupervisor retries by itself), and its rows refuse keys with one line while the
+others stay live. A robot unreachable at start is a root that says why and retries.
 
 The Args, Services, Params and Topics tabs (`2`-`5`) are here, each session with its own
-panels (tabs.py), showing the session of the selected row; F5 relaunches that session. The
-keys on a tree's selection are the single TUI's SelectionCommands, one per session (its
-questions name the session); so are its keyboard's (`i` types into the node here, `g`,
-`c`: keyboard.py's NodeKeyboard, one per session, over fleet/host.py's MemberHost), which
-work in a browser's page too; `p` in Topics is the single TUI's plot screen (plots.py); `O`
-is the session in the single-session TUI (this screen suspended meanwhile; `q`, `d` there
-come back here). A fleet TUI never stops a session by leaving: `q` detaches from all.
+panels (tabs.py), showing the session of the selected row; F5 relaunches that session.
+`s`, `r`, `t`, `]`, `[`, `i`, `g`, `c`, `o`, `L`, `b` are the selected view's (its
+questions name the session), which work in a browser's page too; `p` in Topics is the
+single TUI's plot screen (plots.py); `O` is the session in the single-session TUI (this
+screen suspended meanwhile; `q`, `d` there come back here). A fleet TUI never stops a
+session by leaving: `q` detaches from all.
 """
 
 from __future__ import annotations
@@ -27,9 +27,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Sequence
-from functools import partial
 from pathlib import Path
-from typing import TypeVar
 
 from rich.text import Text
 from textual import events, on, work
@@ -39,32 +37,25 @@ from textual.notifications import SeverityLevel
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher, Footer, Static, TabbedContent, TabPane, Tree
 
-from ...client.port import LaunchPort, Verb
-from ...client.remote_supervisor import LINK_INTERVAL, RETRY_MOST, RemoteSupervisor
+from ...client.port import LaunchPort
+from ...client.remote_supervisor import RETRY_MOST
 from ...engine.errors import LaunchError
 from ...engine.plan.session import Session
 from ...engine.run.engine_thread import EngineThread
-from ...engine.run.session.session_dir import SessionError
-from ...engine.run.vocabulary.request import Request
-from ..app import LaunchTabs, pane_save_dir
-from ..inspect.log_levels import LogLevels
+from ..app import LaunchTabs
 from ..key_order import KeyOrder
-from ..nodes.commands import SelectionCommands
-from ..nodes.gaps import GapReader
 from ..output_store import OutputStore
 from ..screens.output_panel import OutputPanel
 from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree, RowData, RowKind
 from ..session_link import DRAIN_HZ, PANE_CHROME
+from ..session_view import SessionView
 from ..toasts import OnceToasts
 from .bindings import BINDINGS, FleetHelp
-from .member import Member
 from .plots import FleetPlots
 from .tabs import FleetTabs
 
-R = TypeVar("R")
-
-NODES_ONLY = frozenset({"command", "all_output", "lifecycle", "pane", "inspector", "resize"})
+NODES_ONLY = frozenset({"command", "all_output", "pane", "inspector", "resize"})
 """The actions of the Nodes tab: in another tab their keys are the panel's (or nothing)."""
 
 FIRST_RETRY = 1.0
@@ -92,7 +83,8 @@ class FleetTree(LaunchTree):
 class FleetApp(KeyOrder):
     """One TUI over several sessions (see the module's docstring). Its keys are handled one
     after the other, as the single TUI's (key_order.py): `3/reset` typed at once over ssh
-    filters the services, never stopping a node with its `s`."""
+    filters the services, never stopping a node with its `s`. A session's keys are its
+    view's (session_view.py): the app picks the view, lays the views out, is their host."""
 
     CSS_PATH = "../screens/app.tcss"  # the single-session TUI's look
     TITLE = "tuilaunch"
@@ -110,6 +102,8 @@ class FleetApp(KeyOrder):
     NARROW = 70
     """Columns below which the trees go above the pane (a phone's browser)."""
     BINDINGS = BINDINGS
+    quitting = False
+    """A fleet view never stops its sessions by leaving."""
 
     def __init__(self, addresses: list[tuple[str | None, str]], scrollback: int = 5000,
                  read_only: bool = False,
@@ -122,24 +116,20 @@ class FleetApp(KeyOrder):
         self.read_only = read_only
         self.animation_level = "none"  # every frame is bytes over ssh
         self.scrollback = scrollback
-        self.members: list[Member] = []
+        given = list(ports or ())
+        self.members: list[SessionView] = []
         for i, (host, name) in enumerate(addresses):
             store = OutputStore(scrollback=scrollback, all_scrollback=scrollback * 4)
             label = f"{host or 'local'}:{name}"
             tree = FleetTree(id=f"fleet-tree-{i}")
             tree.root.set_label(Text(f"{label} connecting...", style="dim"))
             pane = OutputPanel(store, Path.cwd(), max_lines=scrollback, id=f"fleet-pane-{i}")
-            self.members.append(Member(label, host, name, tree, pane, store))
+            session, port = given[i] if i < len(given) else (None, None)
+            self.members.append(SessionView(label, host, name, tree, pane, store, self,
+                                            session, port))
         self.current = self.members[0]
-        self.given: dict[int, LaunchPort] = {}
-        for member, (session, port) in zip(self.members, ports or (), strict=False):
-            member.session = session
-            self.given[id(member)] = port
-        self.plots = FleetPlots(self, self.members, self.member_request)
-        self.session_tabs = FleetTabs(self.members, self.member_request, self, self.plots)
-        self.log_levels = {id(m): LogLevels(self, partial(self.member_request, m),
-                                            m.asked_to_stop, f"{m.label}: ")
-                           for m in self.members}
+        self.plots = FleetPlots(self, self.members)
+        self.session_tabs = FleetTabs(self.members, self.plots)
         for member in self.members:
             member.on_event = self.session_tabs.event
         self._status_text = ""
@@ -199,16 +189,20 @@ class FleetApp(KeyOrder):
         if narrow:  # the trees above the panes take the whole width, whatever `<` `>` set
             self.query_one("#fleet-trees").styles.width = None
 
+    async def show_typing_line(self, line: Widget) -> None:
+        await self.nodes_tab.mount(line, before="#fleet-split")
+
     # --- the members' links ------------------------------------------------------------
 
     @work(exit_on_error=False)
-    async def follow(self, member: Member) -> None:
+    async def follow(self, member: SessionView) -> None:
         """Opens the member's session (again and again, with backoff, while it cannot be
         reached), then follows it until it ends or the fleet detaches."""
         wait = FIRST_RETRY
         while member.supervisor is None and not self.detached:
             try:
-                member.supervisor = await self.engine.run(self._open(member))
+                member.supervisor = await self.engine.run(member.open_port(
+                    self.scrollback, max(12, self.size.height - PANE_CHROME), 1 / DRAIN_HZ))
             except LaunchError as exc:
                 member.problem = f"{exc.message}; retrying (R: now)"
                 member.refresh_root()
@@ -220,13 +214,7 @@ class FleetApp(KeyOrder):
         supervisor = member.supervisor
         if supervisor is None:
             return
-        member.problem = None
-        # `w` writes where the single TUI would for this session (its log folder here, or a
-        # folder named after its machine), not into the folder the fleet was started in
-        member.pane.save_dir = pane_save_dir(supervisor.log_dir, member.host, member.name)
-        supervisor.read_only = self.read_only  # refused by the client, said in one line
-        supervisor.subscribe(member.buffer)
-        member.show_plan()
+        member.followed(supervisor, supervisor.log_dir)
         self.session_tabs.followed(member)
         member.show_events(supervisor.history)
         self.update_status()
@@ -235,30 +223,17 @@ class FleetApp(KeyOrder):
             return
         member.ended = True
         member.problem = "ended" if not supervisor.lost else "the session's server is gone"
-        member.show_events(member.buffer.drain())
+        member.drain()
         member.refresh_root()
         self.update_status()
         if all(m.ended for m in self.members):
             self.exit(0)
 
-    async def _open(self, member: Member) -> LaunchPort:
-        """On the engine thread: the member's RemoteSupervisor, subscribed; the plan drawn
-        is the one its server runs (the file may be on the robot only)."""
-        if id(member) in self.given:
-            return self.given[id(member)]
-        lines = max(12, self.size.height - PANE_CHROME)
-        if member.host is None:
-            return await RemoteSupervisor.open(member.name, member.session, self.scrollback,
-                                               max_lines=lines, interval=1 / DRAIN_HZ)
-        return await RemoteSupervisor.open_remote(
-            member.host, member.name, member.session, self.scrollback, max_lines=lines,
-            interval=LINK_INTERVAL)
-
     def drain(self) -> None:
         for member in self.members:
             if member.supervisor is None:
                 continue
-            member.show_events(member.buffer.drain())
+            member.drain()
             # a link lost, back, or silent for one more second: the root says it
             member.refresh_root()
             telling = member.tell_shown()  # the lines of its pane's node, over a link
@@ -269,19 +244,21 @@ class FleetApp(KeyOrder):
 
     # --- the selection -------------------------------------------------------------------
 
-    def member_of(self, tree: object) -> Member | None:
-        return next((m for m in self.members if m.tree is tree), None)
-
     def on_descendant_focus(self, event: events.DescendantFocus) -> None:
         """The session of the tree with the focus is the selected one."""
-        member = self.member_of(event.widget)
+        member = view_of(self.members, event.widget)
+        if member is not None and member is not self.current:
+            self.current = member
+            self.switcher.current = member.pane.id
+            if self.tabs.active != "nodes":
+                self.session_tabs.shown(self.tabs.active, member)
+            self.update_status()
         if member is not None:
-            self.select(member)
             self.update_detail()
 
     @on(Tree.NodeHighlighted)
     def _highlighted(self, event: Tree.NodeHighlighted[RowData]) -> None:
-        member = self.member_of(event.control)
+        member = view_of(self.members, event.control)
         if member is None:
             return
         data = event.node.data
@@ -292,22 +269,33 @@ class FleetApp(KeyOrder):
         self.update_detail()
         self.refresh_bindings()  # the keys that apply follow the row
 
-    def select(self, member: Member) -> None:
-        if member is not self.current:
-            self.current = member
-            self.switcher.current = member.pane.id
-            if self.tabs.active != "nodes":
-                self.session_tabs.shown(self.tabs.active, member)
-            self.update_status()
+    def step_tree(self, tree: FleetTree, step: int) -> None:
+        """Up from a tree's first row, down from its last: the neighbouring session's."""
+        member = view_of(self.members, tree)
+        if member is None:
+            return
+        index = self.members.index(member) + step
+        if not 0 <= index < len(self.members):
+            return  # the first or last row of all: the cursor stays (no wrap)
+        target = self.members[index].tree
+        target.focus()
+        target.cursor_line = 0 if step > 0 else target.last_line
+        target.scroll_to_node(target.cursor_node or target.root)
+
+    def action_jump(self, step: int) -> None:
+        """`}`, `{`: the next (previous) session's root, as k9s switches context; at the
+        last (first) session the cursor stays."""
+        index = self.members.index(self.current) + step
+        if not 0 <= index < len(self.members):
+            return
+        target = self.members[index].tree
+        if self.tabs.active != "nodes":
+            self.action_tab("nodes")
+        target.focus()
+        target.cursor_line = 0
+        target.scroll_to_node(target.root)
 
     # --- the tabs ------------------------------------------------------------------------
-
-    async def member_request(self, member: Member, request: Request[R]) -> R:
-        """A request to a member's session, from its panels (on the engine thread)."""
-        why = member.unavailable()
-        if why is not None or member.supervisor is None:
-            raise SessionError(f"{member.label}: {why or 'not connected'}")
-        return await self.engine.run(member.supervisor.request(request))
 
     def action_tab(self, tab: str) -> None:
         """1, 3, 4, 5: the tab, for the session of the selected row; the cursor where the
@@ -334,8 +322,18 @@ class FleetApp(KeyOrder):
         """F5, from any tab: the selected session relaunched with its Args tab's values and
         its file as it is now (as the single TUI's F5)."""
         member = self.current
-        if self._keys_reach(member):
+        if member.keys_reach():
             self.session_tabs.of(member).args.apply()
+
+    @on(TopicsPanel.PlotAsked)
+    def _plot_asked(self, message: TopicsPanel.PlotAsked) -> None:
+        """p on a topic: the single TUI's plot, over the selected session's link."""
+        message.stop()
+        member = self.current
+        if member.keys_reach():
+            self.plots.open(member, message.topic)
+
+    # --- keys: the selected session's view acts ---------------------------------------------
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if any(m.keyboard.typing_to is not None for m in self.members):
@@ -348,11 +346,11 @@ class FleetApp(KeyOrder):
             # `/` into the tab's filter; the Nodes tab's other keys are not this tab's
             return action == "pane" and name == "search"
         if action == "inspector" and name != "black_box":
-            return True if self.current.keyboard.host.selected_process() else None
-        if action == "command" and self.current.unavailable() is None:
+            return True if self.current.selected_process() else None
+        if action == "command" and name != "lifecycle" and self.current.out_of_reach() is None:
             # greyed as in the single TUI (nothing to stop); a session out of reach keeps
             # them, to say why in one line
-            return self.commands().applies(str(parameters[0]), ())
+            return self.current.commands.applies(str(parameters[0]), ())
         return True
 
     def action_leave_field(self) -> None:
@@ -361,117 +359,30 @@ class FleetApp(KeyOrder):
             self.current.pane.action_clear_search()
         self._go_home(self.tabs.active)
 
-    @on(TopicsPanel.PlotAsked)
-    def _plot_asked(self, message: TopicsPanel.PlotAsked) -> None:
-        """p on a topic: the single TUI's plot, over the selected session's link."""
-        message.stop()
-        member = self.current
-        if self._keys_reach(member):
-            self.plots.open(member, message.topic)
-
-    def step_tree(self, tree: FleetTree, step: int) -> None:
-        """Up from a tree's first row, down from its last: the neighbouring session's."""
-        member = self.member_of(tree)
-        if member is None:
-            return
-        index = self.members.index(member) + step
-        if not 0 <= index < len(self.members):
-            return  # the first or last row of all: the cursor stays (no wrap)
-        target = self.members[index].tree
-        target.focus()
-        target.cursor_line = 0 if step > 0 else target.last_line
-        target.scroll_to_node(target.cursor_node or target.root)
-
-    def action_jump(self, step: int) -> None:
-        """`}`, `{`: the next (previous) session's root, as k9s switches context; at the
-        last (first) session the cursor stays."""
-        index = self.members.index(self.current) + step
-        if not 0 <= index < len(self.members):
-            return
-        target = self.members[index].tree
-        if self.tabs.active != "nodes":
-            self.action_tab("nodes")
-        target.focus()
-        target.cursor_line = 0
-        target.scroll_to_node(target.root)
-
-    def commands(self, member: Member | None = None) -> SelectionCommands:
-        """The single TUI's commands on the member's tree (the selected session's)."""
-        return self.session_tabs.of(member or self.current).commands
-
-    def selected(self) -> list[str]:
-        return self.commands().selected()
-
-    # --- keys ------------------------------------------------------------------------------
-
-    def _keys_reach(self, member: Member) -> bool:
-        """Whether keys can act on the member's session now; else one line says why."""
-        why = member.unavailable()
-        if why is not None or member.supervisor is None:
-            self.notify(f"{member.label}: the session ended" if member.ended else
-                        f"{member.label}: {why}; its nodes take no keys until it is back",
-                        severity="warning")
-            return False
-        return True
-
-    def action_command(self, verb: Verb) -> None:
-        """s, r, t on the selected rows of the selected session, and nothing else: the
-        single TUI's commands (a stop or restart of more than one asks, naming it)."""
-        member = self.current
-        if self._keys_reach(member):
-            self.commands(member).command(verb)
-            self.update_detail()
+    def action_command(self, verb: str, *parameters: str) -> None:
+        """s, r, t on the selected rows of the selected session; `]` (up), `[` (down) on its
+        lifecycle node, which say why when they cannot (session_view.py)."""
+        if verb == "lifecycle":
+            self.current.lifecycle(parameters[0])
+        else:
+            self.current.command(verb)  # type: ignore[arg-type]
+        self.update_detail()
 
     def action_keyboard(self, action: str, *parameters: str) -> None:
         """i, g, c: the single TUI's keyboard, on the selected session (keyboard.py)."""
         self.current.keyboard.act(action, *parameters)
 
-    def action_lifecycle(self, direction: str) -> None:
-        """`]` (up), `[` (down) on the selected lifecycle node of the selected session, from
-        the state the steps typed before lead to (the single TUI's steps)."""
-        member = self.current
-        supervisor = member.supervisor
-        if not self._keys_reach(member) or supervisor is None:
-            return
-        commands = self.commands(member)
-        selected = commands.selected()
-        states = supervisor.lifecycle.states
-        if len(selected) != 1 or selected[0] not in states:
-            self.notify(f"{member.label}: {']' if direction == 'up' else '['} steps one "
-                        "lifecycle node: select it", severity="warning")
-            return
-        step = commands.lifecycle_step(direction)
-        if step is None:
-            self.notify(f"{member.label}: {selected[0]} is {states.get(selected[0])}: no "
-                        f"step {'up' if direction == 'up' else 'down'} from there",
-                        severity="warning")
-            return
-        commands.lifecycle_transition(*step)
+    def action_inspector(self, action: str) -> None:
+        """o, L, b: the single TUI's inspector keys, on the selected session: its node's
+        topics in its Topics tab, its node's log level, its black box written."""
+        node = self.current.inspect(action)
+        if node is not None:  # o: the node's topics
+            self.session_tabs.of(self.current).topics.show_node(node)
+            self.action_tab("topics")
 
     @on(OutputPanel.StampsWanted)
     def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
-        """T, f: the ROS stamps of the lines a link sent without them, read first (the
-        single-session TUI's GapReader, one a session)."""
-        member = self.current  # the keys reach the selected session's pane alone
-        supervisor = member.supervisor
-        port = supervisor if supervisor is not None and supervisor.host is not None else None
-        gaps = self.session_tabs.of(member).gaps
-        if port is None or gaps.stamps_known(port, message.shown):
-            message.then()
-            return
-        self._read_stamps(member, gaps, port, message)
-
-    @work(group="stamps", exit_on_error=False)
-    async def _read_stamps(self, member: Member, gaps: GapReader, port: LaunchPort,
-                           message: OutputPanel.StampsWanted) -> None:
-        read = await gaps.read_stamps(port, message.shown)
-        if read is not None:  # else not read, and said: the key still does its part
-            member.show_events(member.buffer.drain())  # the lines sent before the answer
-            gaps.fill_stamps(*read)
-        message.then()
-
-    def action_help(self) -> None:
-        self.push_screen(FleetHelp())
+        self.current.stamps_wanted(message)  # the keys reach the selected session's pane
 
     def action_all_output(self) -> None:
         self.current.pane.show_view(None)
@@ -484,6 +395,12 @@ class FleetApp(KeyOrder):
             return
         getattr(self.current.pane, f"action_{name}")()
 
+    def action_reconnect(self) -> None:
+        self.current.reconnect()
+
+    def action_help(self) -> None:
+        self.push_screen(FleetHelp())
+
     def action_resize(self, step: int) -> None:
         """`<`, `>`: the trees' column narrower or wider (the panes keep the rest)."""
         trees = self.query_one("#fleet-trees")
@@ -491,20 +408,12 @@ class FleetApp(KeyOrder):
             trees.styles.width = max(12, min(trees.outer_size.width + step,
                                              max(self.size.width - 20, 12)))
 
-    def action_reconnect(self) -> None:
-        """Now, rather than at the next try: a dropped link, or a session never reached."""
-        supervisor = self.current.supervisor
-        if supervisor is not None:
-            self.engine.call(supervisor.retry_now)
-        elif self.current.wake is not None:
-            self.current.wake.set()
-
     def action_open_session(self, tab: str = "nodes") -> None:
         """The selected session in the single-session TUI (all its tabs), on `tab`, this
         screen suspended meanwhile; `d` (or `q`) there comes back."""
         member = self.current
-        if member.unavailable() is not None:
-            self.notify(f"{member.label}: {member.unavailable()}", severity="warning")
+        if member.out_of_reach() is not None:
+            self.notify(f"{member.label}: {member.out_of_reach()}", severity="warning")
             return
         args = ("attach", member.address, "--tab", tab)
         try:
@@ -523,28 +432,6 @@ class FleetApp(KeyOrder):
                 event.time < self._resumed_at:
             return  # read before the other TUI took the terminal: typed for it
         await super().on_event(event)
-
-    def action_inspector(self, action: str) -> None:
-        """o, L, b: the single TUI's inspector keys (inspector.py), on the selected
-        session: its node's topics in its Topics tab, its node's log level, its black
-        box written."""
-        member = self.current
-        if not self._keys_reach(member):
-            return
-        panels = self.session_tabs.of(member)
-        process = panels.host.selected_process()
-        if action == "black_box":
-            self.run_worker(panels.recordings.black_box_now(), group="recording",
-                            exit_on_error=False)
-            return
-        if process is None:
-            return
-        node = member.store.node_name(member.session.plan, process)  # its ROS name
-        if action == "node_topics":
-            panels.topics.show_node(node)
-            self.action_tab("topics")
-        else:
-            self.log_levels[id(member)].ask(process, node)
 
     def action_quit_fleet(self) -> None:
         """Leaves every session running: a fleet view is a watcher, each robot's launch its
@@ -570,7 +457,7 @@ class FleetApp(KeyOrder):
     def update_status(self) -> None:
         member = self.current
         others = len(self.members) - 1
-        why = member.unavailable() or member.silence()
+        why = member.out_of_reach() or member.silence()
         what = why if why is not None else member.counts_text()
         file = Path(member.session.plan.file).name if member.supervisor else ""
         label = f"{member.label} read-only" if self.read_only else member.label
@@ -581,12 +468,12 @@ class FleetApp(KeyOrder):
 
     def update_detail(self) -> None:
         """The selected row in full; on a session's root, the session as the root says."""
-        tree = self.current.tree
-        node = tree.cursor_node
-        if node is None or node is tree.root:
-            text = self.current.root_label().plain
-        else:
-            text = tree.describe(node)
+        text = self.current.detail_text()
         if text != self._detail_text:
             self._detail_text = text
             self.detail_bar.update(Text(text))
+
+
+def view_of(views: list[SessionView], widget: object) -> SessionView | None:
+    """The view whose tree `widget` is."""
+    return next((v for v in views if v.tree is widget), None)

@@ -15,6 +15,7 @@ from ..inspect.inspector import INSPECTOR_BINDINGS
 from ..keys.keyboard import KEYBOARD_BINDINGS
 from ..screens.dialogs import HelpScreen
 from ..screens.output_panel import PANE_BINDINGS
+from ..session_view import COMMAND_BINDINGS
 
 BINDINGS: list[BindingType] = [
     *KEYBOARD_BINDINGS,  # i, g, c: the selected session's keyboard (FleetApp.action_keyboard)
@@ -28,19 +29,16 @@ BINDINGS: list[BindingType] = [
             tooltip="The selected session's nodes' parameters: get and set them"),
     Binding("5", "tab('topics')", "Topics", show=False,
             tooltip="The selected session's topics, rates and QoS, echo"),
-    Binding("s", "command('stop')", "Stop", tooltip="Stop the selected node or group"),
-    Binding("r", "command('restart')", "Restart",
-            tooltip="Restart the selected node or group"),
-    Binding("t", "command('start')", "Start", tooltip="Start the selected node or group"),
+    *COMMAND_BINDINGS,  # the selected session's view's (FleetApp.action_command)
     *PANE_BINDINGS,  # the single TUI's pane keys, on the selected session's pane
     Binding("right_curly_bracket", "jump(1)", "Next session", show=False,
             tooltip="The next session's root (as k9s switches context)"),
     Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
             tooltip="The previous session's root"),
     Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
-    Binding("right_square_bracket", "lifecycle('up')", "Lifecycle up", show=False,
+    Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up", show=False,
             tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
-    Binding("left_square_bracket", "lifecycle('down')", "Lifecycle down", show=False,
+    Binding("left_square_bracket", "command('lifecycle', 'down')", "Lifecycle down", show=False,
             tooltip="Deactivate an active, clean up an inactive lifecycle node"),
     *INSPECTOR_BINDINGS,  # o, L, b: on the selected session (FleetApp.action_inspector)
     # not in the footer: the header says it (`O: this one in full`), and the single TUI's

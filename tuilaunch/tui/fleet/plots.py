@@ -9,29 +9,23 @@ come (each stream's tag says whose).
 
 from __future__ import annotations
 
-from collections.abc import Awaitable, Callable
-from functools import partial
 from typing import Any
 
 from textual.app import App
 
 from ..inspect.plots import open_plot
-from .member import Member
-
-Request = Callable[..., Awaitable[Any]]
-"""`request(member, request)`: a request to a member's session (SessionError while it
-cannot be reached)."""
+from ..session_view import SessionView
 
 
 class FleetPlots:
     """The plot on screen, if any, of `app`, over the sessions of `members`."""
 
-    def __init__(self, app: App[Any], members: list[Member], request: Request) -> None:
-        self.app, self.members, self.request = app, members, request
+    def __init__(self, app: App[Any], members: list[SessionView]) -> None:
+        self.app, self.members = app, members
         self.screen: Any = None
         """The plot on screen (the screen's module is imported with the first plot)."""
 
-    def open(self, member: Member, topic: str) -> None:
+    def open(self, member: SessionView, topic: str) -> None:
         self.app.run_worker(self._open(member, topic), group="plot", exit_on_error=False)
 
     def add(self, data: dict[str, Any]) -> None:
@@ -39,9 +33,9 @@ class FleetPlots:
         if self.screen is not None:
             self.screen.add(data)
 
-    async def _open(self, member: Member, topic: str) -> None:
-        requesters = {m.label: partial(self.request, m) for m in self.members}
-        self.screen = await open_plot(self.app, partial(self.request, member), topic,
+    async def _open(self, member: SessionView, topic: str) -> None:
+        requesters = {m.label: m.request for m in self.members}
+        self.screen = await open_plot(self.app, member.request, topic,
                                       requesters, member.label, self._leave, f"{member.label}: ")
 
     def _leave(self) -> None:

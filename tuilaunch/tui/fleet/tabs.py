@@ -1,8 +1,8 @@
-"""The fleet TUI's per-session pieces: each session's Args, Services, Params and Topics
-panels and the commands on its tree's selection, the single TUI's own; the plot (`p`)
-over them all (plots.py).
+"""The fleet TUI's per-session tabs: each session's Args, Services, Params and Topics
+panels, the single TUI's own; the plot (`p`) over them all (plots.py). What a session's
+Nodes keys do is its view's (session_view.py).
 
-Each robot has its own file, arguments and ROS graph, so each member holds its own ArgsTab,
+Each robot has its own file, arguments and ROS graph, so each session has its own ArgsTab,
 ServicesPanel, ParamsPanel and TopicsPanel (the single-session TUI's widgets), acting on
 its own session; a tab shows the panels of the session of the selected row (a
 ContentSwitcher per tab), and the header says which. A member's panels keep what they
@@ -13,10 +13,6 @@ the single TUI stops them when its tab is left.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from functools import partial
-from typing import Any
-
 from textual.app import ComposeResult
 from textual.widget import Widget
 from textual.widgets import ContentSwitcher
@@ -24,16 +20,11 @@ from textual.widgets import ContentSwitcher
 from ...client.inspect.session_graph import SessionGraph
 from ...engine.run.events import Echo, Event, PlotSamples, Rates, Relaunched
 from ..arguments import ArgsTab
-from ..inspect.recording import Recordings
-from ..keys.keyboard import NodeKeyboard
-from ..nodes.commands import SelectionCommands
-from ..nodes.gaps import GapReader
 from ..screens.fields import Field
 from ..screens.params_panel import ParamsPanel
 from ..screens.services_panel import ServicesPanel
 from ..screens.topics_panel import TopicsPanel
-from .host import FleetScreen, MemberHost
-from .member import Member
+from ..session_view import SessionView
 from .plots import FleetPlots
 
 TABS = ("args", "services", "params", "topics")
@@ -45,30 +36,19 @@ HOMES = {"args": "#apply", "services": "#svc-list", "params": "#prm-nodes",
 
 
 class SessionPanels:
-    """One member's Args, Services, Params and Topics panels, its tree's commands (`s`,
-    `r`, `t`, `]`, `[`: the questions the single TUI asks, naming the session) and its
-    keyboard (`i`, `g`, `c`: the single TUI's, the member's `keyboard`), acting on its
-    session alone."""
+    """One session's Args, Services, Params and Topics panels, acting on its session alone
+    (through its view, their host)."""
 
-    def __init__(self, member: Member, index: int, request: Callable[..., Any],
-                 host: MemberHost) -> None:
+    def __init__(self, member: SessionView, index: int) -> None:
         self.member = member
-        self.host = host
-        ask = partial(request, member)
-        self.args = ArgsTab(host, id=f"args-{index}")
+        ask = member.request
+        self.args = ArgsTab(member, id=f"args-{index}")
         self.graph = SessionGraph(ask)
         self.services = ServicesPanel(lambda: self.graph, id=f"services-{index}")
         self.params = ParamsPanel(lambda: self.graph, lambda: member.session.plan,
                                   reported=lambda: member.store.reported_names,
                                   request=ask, id=f"params-{index}")
         self.topics = TopicsPanel(ask, id=f"topics-{index}")
-        self.commands = SelectionCommands(member.tree, host, member.tree, member.store,
-                                          who=member.label)
-        member.keyboard = NodeKeyboard(host)
-        self.recordings = Recordings(host, ask)  # `b`: its black box written
-        # what its link did not send (`T`, `f`: stamps), read back; said naming it
-        self.gaps = GapReader(member.store, member.pane, lambda: host.engine,
-                              lambda: member.supervisor, host.notify)
 
     def panel(self, tab: str) -> Widget:
         return {"args": self.args, "services": self.services, "params": self.params,
@@ -77,19 +57,16 @@ class SessionPanels:
 
 class FleetTabs:
     """The per-session tabs of a fleet TUI: which session's panels show, and what a tab
-    does when it comes on screen. `request(member, request)` asks a member's session
-    (raises SessionError while it cannot be reached)."""
+    does when it comes on screen."""
 
-    def __init__(self, members: list[Member], request: Callable[..., Any],
-                 fleet: FleetScreen, plots: FleetPlots) -> None:
+    def __init__(self, members: list[SessionView], plots: FleetPlots) -> None:
         self.plots = plots
-        self.panels = {id(m): SessionPanels(m, i, request, MemberHost(m, fleet))
-                       for i, m in enumerate(members)}
+        self.panels = {id(m): SessionPanels(m, i) for i, m in enumerate(members)}
         self.members = members
         self.active = "nodes"
         """The tab last shown (a click on a tab is told from its key by it)."""
 
-    def of(self, member: Member) -> SessionPanels:
+    def of(self, member: SessionView) -> SessionPanels:
         return self.panels[id(member)]
 
     def compose(self, tab: str) -> ComposeResult:
@@ -97,7 +74,7 @@ class FleetTabs:
         panels = [self.of(m).panel(tab) for m in self.members]
         yield ContentSwitcher(*panels, id=f"fleet-{tab}", initial=panels[0].id)
 
-    def shown(self, tab: str, member: Member) -> None:
+    def shown(self, tab: str, member: SessionView) -> None:
         """`tab` is on screen for `member` (the selected session): its panels show and
         refresh; the others' Topics stop measuring."""
         self.active = tab
@@ -114,33 +91,33 @@ class FleetTabs:
         elif tab == "params":
             panels.params.refresh_listing()
 
-    def home(self, tab: str, member: Member) -> Widget | None:
+    def home(self, tab: str, member: SessionView) -> Widget | None:
         """Where the tab's work starts, for `member` (the selected session)."""
         selector = HOMES.get(tab)
         if selector is None:
             return None
         return self.of(member).panel(tab).query_one(selector)
 
-    def filter_field(self, tab: str, member: Member) -> Field | None:
+    def filter_field(self, tab: str, member: SessionView) -> Field | None:
         selector = FILTERS.get(tab)
         if selector is None:
             return None
         return self.of(member).panel(tab).query_one(selector, Field)
 
-    def followed(self, member: Member) -> None:
+    def followed(self, member: SessionView) -> None:
         """The member's session is followed (again): its Args tab shows its plan's form."""
         self.of(member).args.show_form()
 
-    def event(self, member: Member, event: Event) -> None:
+    def event(self, member: SessionView, event: Event) -> None:
         """An event of the member's session for its tabs: a reading (rates, echo) for its
         Topics panel; a relaunch, the new form in its Args tab (another client's: said)."""
         panels = self.of(member)
         if isinstance(event, Relaunched):
-            if event.lines != panels.host.own_relaunch:
+            if event.lines != member.own_relaunch:
                 panels.args.show_form()
                 panels.args.notify(f"{member.label}: relaunched by another client: "
                                    f"{' '.join(event.lines) or 'defaults'}")
-            panels.host.own_relaunch = None
+            member.own_relaunch = None
             return
         topics = panels.topics
         if isinstance(event, PlotSamples):

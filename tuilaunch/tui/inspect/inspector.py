@@ -82,7 +82,7 @@ class Inspector:
 
     async def inspect(self, request: Request[R]) -> R:
         """A session request's result; raises SessionError with the server's message."""
-        return await self.app.engine.run(self.app.client().request(request))
+        return await self.app.engine.run(self.app.view.client().request(request))
 
     def show(self, event: Event) -> None:
         """A reading the session sent (rates, echo, plot samples, CPU and memory, QoS

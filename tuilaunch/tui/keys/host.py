@@ -1,8 +1,8 @@
 """What the keyboard (keyboard.py's NodeKeyboard: `i`, `g`, `c`) needs of the one session it
 acts on: its port and engine thread, its tree and selection, where its typing line goes,
-and how a line is said. The single TUI is one such host (`AppHost`, over the app); each
-session of a fleet view is another (fleet/host.py's MemberHost), so both hold the same
-keyboard and a fleet types into a node in its own screen, a browser's page too."""
+and how a line is said. A session's view (session_view.py's SessionView) is the one such
+host, the single TUI's as each of a fleet's, so both hold the same keyboard and a fleet
+types into a node in its own screen, a browser's page too."""
 
 from __future__ import annotations
 
@@ -15,7 +15,6 @@ from textual.widget import Widget
 from ...client.port import LaunchPort
 from ...engine.run.engine_thread import EngineThread
 from ..screens.tree_panel import LaunchTree
-from ..session_link import SessionLink
 
 
 class KeyboardHost(Protocol):
@@ -65,58 +64,3 @@ class KeyboardHost(Protocol):
         """Puts the line taking the keys above the session's tree and pane."""
 
     def update_status(self) -> None: ...
-
-
-class AppHost:
-    """The single TUI as the keyboard's host: its session, its Nodes tab."""
-
-    who = ""
-
-    def __init__(self, app: SessionLink) -> None:
-        self._app = app
-
-    @property
-    def app(self) -> App[Any]:
-        return self._app
-
-    @property
-    def supervisor(self) -> LaunchPort | None:
-        return self._app.supervisor
-
-    @property
-    def engine(self) -> EngineThread:
-        return self._app.engine
-
-    @property
-    def launch_tree(self) -> LaunchTree:
-        return self._app.launch_tree
-
-    @property
-    def asked_to_stop(self) -> set[str]:
-        return self._app.asked_to_stop
-
-    @property
-    def read_only(self) -> bool:
-        return self._app.read_only
-
-    def client(self) -> LaunchPort:
-        return self._app.client()
-
-    def nodes_shown(self) -> bool:
-        return self._app.tabs.active == "nodes"
-
-    def unavailable(self) -> str | None:
-        # a link lost is said by the request that fails (a fleet greys the session instead)
-        return "the session is not followed yet" if self._app.supervisor is None else None
-
-    def selected_process(self) -> str | None:
-        return self._app.nodes.selected_process()
-
-    def notify(self, message: str, *, severity: SeverityLevel = "information") -> None:
-        self._app.notify(message, severity=severity)
-
-    async def show_typing_line(self, line: Widget) -> None:
-        await self._app.nodes.mount(line, before="#nodes-split")
-
-    def update_status(self) -> None:
-        self._app.update_status()

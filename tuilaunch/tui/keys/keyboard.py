@@ -3,9 +3,9 @@ started with pipes, as launch's default is, it offers to restart it with a termi
 first), `g` restarts it under a tool (gdb, valgrind...), `c` shows the exact command it was
 started with. Through the session's server (one client types at a time).
 
-The keyboard acts on one session through a small host (keyboard_host.py): the single TUI
-holds one keyboard over itself, a fleet view one per session (fleet/host.py), so `i` types
-into a node of any session of a fleet in the fleet's own screen, a browser's page too."""
+The keyboard acts on one session through a small host (host.py's KeyboardHost): a session
+view (session_view.py), the single TUI's one as each of a fleet's, so `i` types into a
+node of any session of a fleet in the fleet's own screen, a browser's page too."""
 
 from __future__ import annotations
 
@@ -24,8 +24,7 @@ from ...engine.run.vocabulary.status import ProcessStatus
 from ..key_order import KeyHold, hold_keys
 from ..screens.interact_dialogs import CommandScreen, PrefixPrompt, TerminalQuestion, TypingLine
 from ..screens.tree_panel import LaunchTree, RowKind
-from ..session_link import SessionLink
-from .host import AppHost, KeyboardHost
+from .host import KeyboardHost
 from .key_bytes import edit_line, is_release, key_bytes
 
 RECENT_PREFIXES = 10
@@ -51,12 +50,11 @@ KEYBOARD_BINDINGS = [
 
 class NodeKeyboard:
     """Typing into the selected node, running it under a tool, its command line, on one
-    session (its `host`): an object the app holds (the single TUI's `app.keyboard`, each
-    fleet member's `keyboard`), its keys handed to it by name (`act`)."""
+    session (its `host`, the session's view): an object the view holds (the single TUI's
+    `app.keyboard` is its view's), its keys handed to it by name (`act`)."""
 
-    def __init__(self, host: KeyboardHost | SessionLink) -> None:
-        # the single TUI hands itself: its host is the app's session
-        self.host: KeyboardHost = AppHost(host) if isinstance(host, SessionLink) else host
+    def __init__(self, host: KeyboardHost) -> None:
+        self.host = host
         self.typing_to: str | None = None
         """The node the keys go to, while typing."""
         self.typed_line = ""

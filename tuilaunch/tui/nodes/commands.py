@@ -1,9 +1,10 @@
 """Commands on the Nodes tab's selection: stop, restart, start, the lifecycle steps, and
 which of them apply to it.
 
-`SelectionCommands` is an object the Nodes tab holds over its tree; the app's keys (`s`,
-`r`, `t`, `]`, `[`, `a`) and its command palette call it. It reaches the session through the
-tab's host (`NodesHost`): its client on the engine thread, the plan, the stops it asked.
+`SelectionCommands` is an object a session's view (session_view.py) holds over its tree;
+the app's keys (`s`, `r`, `t`, `]`, `[`, `a`) and its command palette call it. It reaches
+the session through the view (`NodesHost`): its client on the engine thread, the plan, the
+stops it asked.
 """
 
 from __future__ import annotations

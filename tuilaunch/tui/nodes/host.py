@@ -1,4 +1,5 @@
-"""What the Nodes tab needs of whoever holds the session's link: the app (the single TUI)."""
+"""What the selection's commands (commands.py) need of the session they act on: its view
+(session_view.py's SessionView), the single TUI's one as each of a fleet's."""
 
 from __future__ import annotations
 
@@ -11,10 +12,10 @@ from ...engine.run.engine_thread import EngineThread
 
 class NodesHost(Protocol):
     """The session's client (None until it is followed), the engine thread its calls run
-    on, the session (its plan), whether this client is stopping the launch, and the stops it
-    asked for (their non-zero exit is no failure)."""
+    on, the session (its plan), and the stops it asked for (their non-zero exit is no
+    failure)."""
 
-    # read, never set, by the tab: properties, so a fleet's session can be a host too
+    # read, never set, by the commands: properties, so the view's own attributes fit
     @property
     def engine(self) -> EngineThread: ...
     @property
@@ -22,12 +23,4 @@ class NodesHost(Protocol):
     @property
     def session(self) -> Session: ...
     @property
-    def quitting(self) -> bool: ...
-    @property
     def asked_to_stop(self) -> set[str]: ...
-
-    def over_link(self) -> LaunchPort | None:
-        """The client, when an ssh link is between (what crosses it is kept small)."""
-
-    def drain(self) -> None:
-        """Takes the events waiting now, for the tab (as a message)."""

@@ -1,4 +1,5 @@
-"""The Nodes tab as one widget: the detail line, the group tree and the output pane.
+"""The Nodes tab as one widget: the detail line, and the group tree and the output pane of
+the app's session view (session_view.py), which owns them and their behaviour.
 
 The app posts it the session's events (`SessionEvents`, once a tick, as Textual intends:
 down by message) and it shows them in its tree and pane through `NodeEvents`; what the
@@ -11,7 +12,7 @@ detail line, with its CPU and memory trend when the app has one (`trend_of`).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from pathlib import Path
+from typing import Protocol
 
 from rich.text import Text
 from textual import events, on
@@ -30,7 +31,6 @@ from ..screens.units import short_bytes, spark
 from .commands import SelectionCommands
 from .events import Batch, NodeEvents
 from .gaps import GapReader
-from .host import NodesHost
 
 TREND_WIDTH = 10
 """Columns of each sparkline (CPU, memory) at the end of the detail line."""
@@ -62,6 +62,19 @@ class StampsRead(Message, bubble=False):
         self.first, self.end, self.stamps, self.then = first, end, stamps, then
 
 
+class TabSession(Protocol):
+    """The session the tab shows (session_view.py's SessionView): its widgets and pieces."""
+
+    tree: LaunchTree
+    pane: OutputPanel
+    store: OutputStore
+    events: NodeEvents
+    gaps: GapReader
+    commands: SelectionCommands
+
+    def over_link(self) -> LaunchPort | None: ...
+
+
 class NodesTab(Vertical):
     """The tree, the detail line and the pane of one session."""
 
@@ -72,12 +85,16 @@ class NodesTab(Vertical):
             super().__init__()
             self.events, self.shown, self.replaying = events, shown, replaying
 
-    def __init__(self, host: NodesHost, store: OutputStore, save_dir: Path, max_lines: int,
-                 max_fps: float, id: str | None = None) -> None:
+    def __init__(self, view: TabSession, drain: Callable[[], None],
+                 id: str | None = None) -> None:
+        """`drain`: takes the session's events waiting now, for the tab (as a message)."""
         super().__init__(id=id)
-        self.host = host
-        self.store = store
-        self._save_dir, self._max_lines, self._max_fps = save_dir, max_lines, max_fps
+        self.view, self.drain = view, drain
+        self.store = view.store
+        # the view's: its tree and pane, how its events show in them, what a link did not
+        # send read back, the selection's commands
+        self.launch_tree, self.pane = view.tree, view.pane
+        self.events, self.gaps, self.commands = view.events, view.gaps, view.commands
         self.trend_of: Callable[[str], Sequence[tuple[float, float]] | None] = lambda _: None
         """The selected process's (CPU%, RSS) samples, oldest first (the app's inspector
         sets it; None: not measured)."""
@@ -87,25 +104,13 @@ class NodesTab(Vertical):
     def compose(self) -> ComposeResult:
         yield Static("", id="detail")
         with NodesView(id="nodes-split"):
-            yield LaunchTree(id="tree")
-            yield OutputPanel(self.store, self._save_dir, max_lines=self._max_lines,
-                              max_fps=self._max_fps, id="output")
+            yield self.launch_tree
+            yield self.pane
 
     def on_mount(self) -> None:
         # held, not queried: the events keep coming while a modal is the active screen
-        self.launch_tree = self.query_one(LaunchTree)
-        self.pane = self.query_one(OutputPanel)
         self.detail = self.query_one("#detail", Static)
         self.launch_tree.reported = self.store.reported_names
-        host = self.host
-        self.events = NodeEvents(
-            self.launch_tree, self.store, lambda: host.session.plan,
-            lambda: None if host.supervisor is None else host.supervisor.states,
-            lambda: {} if host.supervisor is None else host.supervisor.lifecycle.states,
-            lambda: host.quitting, host.asked_to_stop)
-        self.gaps = GapReader(self.store, self.pane, lambda: host.engine,
-                              lambda: host.supervisor, self.app.notify)
-        self.commands = SelectionCommands(self, host, self.launch_tree, self.store)
 
     def on_resize(self, event: events.Resize) -> None:
         """Below NARROW columns the tree goes above the pane, each half the height: beside
@@ -207,7 +212,7 @@ class NodesTab(Vertical):
 
     @on(OutputPanel.StampsWanted)
     def _stamps_wanted(self, message: OutputPanel.StampsWanted) -> None:
-        port = self.host.over_link()
+        port = self.view.over_link()
         if port is None or self.gaps.stamps_known(port, message.shown):
             message.then()
             return
@@ -219,7 +224,7 @@ class NodesTab(Vertical):
         if read is None:
             message.then()  # the key still does its part
             return
-        self.host.drain()  # the lines sent before the answer: in the queue before the stamps
+        self.drain()  # the lines sent before the answer: in the queue before the stamps
         self.post_message(StampsRead(*read, message.then))
 
     def on_stamps_read(self, message: StampsRead) -> None:
