@@ -69,7 +69,7 @@ def spawn_session(path: str, arguments: dict[str, str], name: str | None, log_di
             env[OWNER_ENV] = "1"
         with open(server_log, "ab") as errors:
             server = subprocess.Popen(
-                [sys.executable, "-m", "tuilaunch.engine.server_main", name,
+                [sys.executable, "-P", "-m", "tuilaunch.engine.server_main", name,
                  os.path.abspath(path), str(log_dir), json.dumps(arguments),
                  json.dumps(positional or [path]),
                  *([json.dumps(placement)] if placement else [])],

@@ -118,7 +118,7 @@ def start_detached(items: list[str], name: str | None) -> str:
     """Starts the launch as `tuilaunch FILE ... --detach` does (the same checks and
     errors, said on stderr): the new session's name."""
     done = subprocess.run(
-        [sys.executable, "-m", "tuilaunch", "--", *items, "--detach",
+        [sys.executable, "-P", "-m", "tuilaunch", "--", *items, "--detach",
          *(["--name", name] if name else [])],
         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, text=True)
     if done.returncode != 0:

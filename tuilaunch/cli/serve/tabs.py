@@ -47,7 +47,7 @@ class TabService(AppService):
     def __init__(self, words: list[str], warm: Warm | None = None,
                  **kwargs: Any) -> None:
         # serve_tab.py, as the warm one is (start_tab_process): its words on its first line
-        super().__init__(shlex.join([sys.executable, "-m", "tuilaunch.cli.serve_tab"]),
+        super().__init__(shlex.join([sys.executable, "-P", "-m", "tuilaunch.cli.serve_tab"]),
                          **kwargs)
         self.words = words
         self.warm = warm
@@ -139,7 +139,7 @@ class Warm:
 async def start_tab_process(environment: dict[str, str]) -> Process:
     """serve_tab.py, waiting for its tab's words on its first line."""
     return await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "tuilaunch.cli.serve_tab", stdin=asyncio.subprocess.PIPE,
+        sys.executable, "-P", "-m", "tuilaunch.cli.serve_tab", stdin=asyncio.subprocess.PIPE,
         stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE, env=environment)
 
 

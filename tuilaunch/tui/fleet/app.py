@@ -418,7 +418,7 @@ class FleetApp(KeyOrder):
         args = ("attach", member.address, "--tab", tab)
         try:
             with self.suspend():
-                subprocess.run([sys.executable, "-m", "tuilaunch", *args])
+                subprocess.run([sys.executable, "-P", "-m", "tuilaunch", *args])
         except SuspendNotSupported:  # a browser's page (tuilaunch serve) has no terminal
             self.notify(f"this view cannot hand its terminal over: run tuilaunch "
                         f"{' '.join(args)} in one", severity="warning")
