@@ -1,1 +1,2 @@
-"""inspect."""
+"""The inspector's commands: `topics`, `hz`, `echo`, `params`, `log-level` (inspector.py)
+and `plot` (plot.py)."""
