@@ -42,12 +42,13 @@ def start_here(path: str | Path, *args: str) -> str:
 
 def stop_here(name: str, gone_ok: bool = False) -> None:
     """`tuilaunch stop NAME`: returns once the session and every process it started are
-    gone (stop_session), said on this test's stderr; `gone_ok`: a session already gone (the
-    test stopped it, or failed before) is no error. In a thread of its own: a Link runs its
-    own event loop, and a test's may be running here."""
+    gone (stop_session), said on this test's stderr. `gone_ok` (a fixture's end, as
+    `stop` with its result unread): a session already gone (the test stopped it, or failed
+    before) or one that cannot be reached is no error; the caller ends what is left. In a
+    thread of its own: a Link runs its own event loop, and a test's may be running here."""
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:
             pool.submit(stop_session, name, quiet=True).result()
-        except SessionError:
+        except (SessionError, OSError):
             if not gone_ok:
                 raise
