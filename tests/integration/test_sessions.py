@@ -459,11 +459,8 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
                 if "word delta" in [line.text for line in app.store.lines(View("echo-3"))]:
                     break
             assert app.session.arguments == {"word": "delta"}
-            for _ in range(100):  # the form is rebuilt on the next refresh
-                await pilot.pause(0.05)
-                if app.query_one("#arg-word", Input).value == "delta":
-                    break
-            assert app.query_one("#arg-word", Input).value == "delta"
+            # the form is rebuilt on the next refresh (its field is away meanwhile)
+            await until(pilot, lambda: app.query_one("#arg-word", Input).value == "delta")
             assert "word delta" in [line.text for line in app.store.lines(View("echo-3"))]
             await pilot.press("d")
             await until(pilot, lambda: getattr(app.supervisor, "detached", False))
