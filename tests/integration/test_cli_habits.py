@@ -3,7 +3,6 @@ a user tries it: real launches, the command run as a shell runs it."""
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 
@@ -14,7 +13,8 @@ from tuilaunch.engine.run.vocabulary.requests import Apply, Subscribe
 
 from ..conftest import run_cli, wait_for
 from .inspector_helpers import eventually, run
-from .test_sessions import Terminal, tl
+from .session_steps import start_here, stop_here
+from .test_sessions import Terminal, status, tl, wait_state
 from .test_sessions import runtime as runtime  # the private session folder
 
 TALKER = """
@@ -65,8 +65,8 @@ def dumped(session: str, node: str) -> None:
 
 
 def test_a_relaunched_namespace_leaves_no_stale_service_on_the_graph(runtime, write):
-    name = tl(str(write(ROBOT)), "--detach").stdout.strip()
-    tl("wait", name, "talker-1", "running", "--timeout", "60")
+    name = start_here(str(write(ROBOT)))
+    wait_state(name, "talker-1", "running")
     # the session's bridge calls /r1/talker's parameter services: its clients are made
     dumped(name, "/r1/talker")
     link = open_link(name)
@@ -74,7 +74,7 @@ def test_a_relaunched_namespace_leaves_no_stale_service_on_the_graph(runtime, wr
         link.request(Apply(arguments={"robot": "r2"}))
     finally:
         link.close()
-    tl("wait", name, "talker-1", "running", "--timeout", "60")
+    wait_state(name, "talker-1", "running")
     dumped(name, "/r2/talker")
 
     async def r1_gone(bridge: RosBridge) -> None:
@@ -85,7 +85,7 @@ def test_a_relaunched_namespace_leaves_no_stale_service_on_the_graph(runtime, wr
         await eventually(listed, what="no /r1 service listed, /r2/talker's are")
 
     run(r1_gone)
-    tl("stop", name)
+    stop_here(name)
 
 
 SAYS = """
@@ -152,7 +152,7 @@ def test_what_launch_code_prints_in_a_session_is_a_line_every_client_sees(runtim
     """print() in an event callback or a timer's OpaqueFunction, which ros2 launch shows on
     its terminal: a session has none, so each line is a launch line, in every client's
     all-nodes pane (the TUI runs its launch as a session too) and in launch.log."""
-    name = tl(str(write(PRINTS)), "--detach").stdout.strip()
+    name = start_here(str(write(PRINTS)))
 
     def said() -> set[str]:
         link = open_link(name)
@@ -168,7 +168,7 @@ def test_what_launch_code_prints_in_a_session_is_a_line_every_client_sees(runtim
                           "stdout is utf-8 True"} <= said(),
                  what="the printed lines among the session's launch lines")
     finally:
-        tl("stop", name)
+        stop_here(name)
 
 
 UNNAMED = """
@@ -183,17 +183,17 @@ def generate_launch_description():
 def test_a_restart_at_debug_level_keeps_the_name_the_node_reports(runtime, write):
     """At debug level rcl speaks first (`[rcl]: Initializing node ...`): the node a process
     runs is still known by its own logger's name, not /rcl (issue 36, item 4)."""
-    name = tl(str(write(UNNAMED)), "--detach").stdout.strip()
+    name = start_here(str(write(UNNAMED)))
     try:
-        tl("wait", name, "talker-1", "running", "--timeout", "60")
+        wait_state(name, "talker-1", "running")
         dumped(name, "talker-1")
         tl("restart", name, "talker-1", "--log-level", "debug")
-        tl("wait", name, "talker-1", "running", "--timeout", "60")
+        wait_state(name, "talker-1", "running")
         wait_for(lambda: "[rcl]: " in tl("logs", name, "talker-1").stdout,
                  what="rcl's debug lines, before the node's own")
         dumped(name, "talker-1")
     finally:
-        tl("stop", name)
+        stop_here(name)
 
 
 def test_the_parameter_folder_of_a_killed_server_is_removed_by_the_next_start(
@@ -204,9 +204,9 @@ def test_the_parameter_folder_of_a_killed_server_is_removed_by_the_next_start(
     tmp.mkdir()
     monkeypatch.setenv("TMPDIR", str(tmp))
     launch = str(write(TALKER))
-    name = tl(launch, "--detach").stdout.strip()
-    tl("wait", name, "talker-1", "running", "--timeout", "60")
-    pid = json.loads(tl("status", name, "--json").stdout)["pid"]
+    name = start_here(launch)
+    wait_state(name, "talker-1", "running")
+    pid = status(name)["pid"]
     left = list(tmp.glob(f"tuilaunch-{pid}-params-*"))
     assert len(left) == 1
     os.kill(pid, signal.SIGKILL)
@@ -214,8 +214,8 @@ def test_the_parameter_folder_of_a_killed_server_is_removed_by_the_next_start(
              open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0] == "Z",
              what="the server killed")
     assert left[0].is_dir()  # nothing ran its cleanup
-    again = tl(launch, "--detach").stdout.strip()
+    again = tl(launch, "--detach").stdout.strip()  # the command plans: the subject
     try:
         assert not left[0].exists()
     finally:
-        tl("stop", again)
+        stop_here(again)

@@ -18,10 +18,12 @@ from pathlib import Path
 
 import pytest
 
-from ..conftest import run_cli, session_folders
+from ..conftest import session_folders
 from .inspector_helpers import NODE_SCRIPT
 from .launch_world import make_package
+from .session_steps import start_here, stop_here
 from .system_packages import program
+from .test_sessions import wait_state
 
 pytestmark = pytest.mark.skipif(program("tmux") is None, reason="tmux is not installed and "
                                 "could not be (apt-get install tmux)")
@@ -165,12 +167,11 @@ def world(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, object
     (work / "demo.launch.py").write_text(textwrap.dedent(DEMO))
     (work / "notes.txt").write_text("not a launch file\n")
     with session_folders(root / "log", prefix):
-        started = run_cli(str(work / "demo.launch.py"), "--detach", "--name", "cmpdemo")
-        assert started.returncode == 0, started.stderr
-        waited = run_cli("wait", "cmpdemo", "talker-1", "running", "--timeout", "60")
-        assert waited.returncode == 0, waited.stderr
+        # the setting, started and ended from this process: completion is the subject
+        start_here(work / "demo.launch.py", "--name", "cmpdemo")
+        wait_state("cmpdemo", "talker-1", "running")
         yield {"root": root, "work": work}
-        run_cli("stop", "cmpdemo")
+        stop_here("cmpdemo")
 
 
 @pytest.fixture(scope="module")

@@ -22,6 +22,7 @@ from tuilaunch.engine.run.vocabulary.requests import ReadLog
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.output_store import View
 
+from .session_steps import stop_here
 from .test_sessions import detached_with, runtime, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
 
@@ -95,7 +96,7 @@ def test_every_line_kept_from_a_client_is_where_its_gap_says(runtime, write, tmp
         return seen
 
     assert asyncio.run(scenario()) == [str(i) for i in range(1, COUNT + 1)]
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_a_pane_scrolled_back_reads_the_lines_a_flood_kept_off_it(runtime, write,  # noqa: F811
@@ -137,7 +138,7 @@ def test_a_pane_scrolled_back_reads_the_lines_a_flood_kept_off_it(runtime, write
             assert "not drawn" not in str(panel.query_one("#output-status").render())
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_a_gap_whose_log_file_is_gone_says_so_and_stays(runtime, write, tmp_path):  # noqa: F811
@@ -166,4 +167,4 @@ def test_a_gap_whose_log_file_is_gone_says_so_and_stays(runtime, write, tmp_path
             assert gaps()[0] is before[0]
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)

@@ -44,6 +44,8 @@ from .inspector_helpers import NODE_SCRIPT
 from .inspector_helpers import eventually as eventually_async
 from .inspector_helpers import run as run_bridge
 from .launch_world import make_package
+from .session_steps import start_here, stop_here
+from .test_sessions import wait_state
 
 LAUNCH = """
 from launch import LaunchDescription
@@ -112,11 +114,13 @@ def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
                  probe=f"#!{sys.executable}\n" + NODE_SCRIPT.read_text())
     (root / "inspect.launch.py").write_text(textwrap.dedent(LAUNCH))
     with session_folders(root / "log", prefix):
-        name = ok(str(root / "inspect.launch.py"), "--detach", "--name", "insp").strip()
+        # the module's setting, started and ended from this process: the commands tested
+        # are the ones the tests run on it
+        name = start_here(root / "inspect.launch.py", "--name", "insp")
         for process in (FAST, STRICT, BUSY, PLAIN, ANON):
-            ok("wait", name, process, "running", "--timeout", "60")
+            wait_state(name, process, "running")
         yield name
-        tl("stop", name)
+        stop_here(name)
 
 
 def topics_of(name: str, *extra: str) -> dict[str, dict[str, Any]]:
@@ -437,7 +441,7 @@ def test_a_qos_watcher_is_told_the_problems_when_they_change_and_only_then(sessi
         link.request(WatchQos(on=False))
     finally:
         link.close()
-        ok("wait", session, STRICT, "running", "--timeout", "60")
+        wait_state(session, STRICT, "running")  # as the module's session was
 
 
 def test_an_echo_stream_is_throttled_per_client_and_stops_when_asked(session):

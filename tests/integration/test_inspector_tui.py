@@ -25,7 +25,8 @@ from tuilaunch.tui.screens.tree_panel import LaunchTree
 
 from .inspector_helpers import NODE_SCRIPT
 from .launch_world import make_package
-from .test_sessions import runtime, status, tl  # noqa: F401
+from .session_steps import start_here, stop_here
+from .test_sessions import runtime, status, tl, wait_state  # noqa: F401
 from .test_tui import row_text, tab_panel, until
 
 # the package's executable: inspector_node.py, as a launch file's node runs it
@@ -67,16 +68,16 @@ def demo(runtime, tmp_path, monkeypatch):  # noqa: F811
 async def session_tui(path: Path, size: tuple[int, int] = (120, 36))\
         -> AsyncIterator[tuple[TuiLaunchApp, Pilot]]:
     """The launch in a session server (as `tuilaunch FILE` runs it) and the TUI attached."""
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     try:
         for process in ("lidar-1", "mapper-2", "chatter-3"):
-            tl("wait", name, process, "running", "--timeout", "60")
+            wait_state(name, process, "running")
         log_dir = Path(status(name)["log_dir"])
         app = make_app(str(path), {}, log_dir, session_name=name)
         async with app.run_test(size=size) as pilot:
             yield app, pilot
     finally:
-        tl("stop", name, check=False)
+        stop_here(name, gone_ok=True)
 
 
 def detail(app: TuiLaunchApp) -> str:

@@ -26,6 +26,7 @@ from tuilaunch.engine.run.vocabulary.requests import Input, Stop, Subscribe, Tak
 
 from ..conftest import run_cli, run_headless, session_folders, wait_for
 from .gdb_support import requires_gdb
+from .session_steps import start_here, stop_here
 from .terminal_harness import PROGRAMS
 from .test_sessions import (  # noqa: F401  (runtime: a fixture)
     Terminal,
@@ -69,7 +70,7 @@ def start(write) -> str:
 
 def start_file(path: Path) -> str:
     """A session of LAUNCH at `path`, once both readers are ready."""
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     wait_state(name, "lines-1", "running")
     wait_state(name, "keys-2", "running")
     wait_for(lambda: "ready" in logs(name, "lines-1") and "ready" in logs(name, "keys-2"),
@@ -89,7 +90,7 @@ def shared_session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[s
         try:
             yield name, folder
         finally:
-            tl("stop", name, check=False)
+            stop_here(name, gone_ok=True)
 
 
 @pytest.fixture
@@ -142,7 +143,7 @@ def test_a_client_types_lines_and_keys_and_ctrl_c_is_sigint_or_a_key(write):
     other.request(Input(process="keys-2", data="q"))
     wait_state(name, "keys-2", "exited")
     other.close()
-    tl("stop", name)
+    stop_here(name)
 
 
 PIPED = f"""
@@ -170,7 +171,7 @@ def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_pla
     them, as teleop_twist_keyboard does, and one that runs cannot be typed into. `restart
     --terminal` (what the TUI's `i` offers) gives it a terminal; a plain restart takes it
     back."""
-    name = tl(str(write(PIPED_TWO)), "--detach").stdout.strip()
+    name = start_here(str(write(PIPED_TWO)))
     wait_state(name, "lines-1", "failed")
     assert "stdin is not a terminal" in logs(name, "lines-1")
     assert process(name, "lines-1")["terminal"] is False
@@ -193,7 +194,7 @@ def test_a_node_with_pipes_is_restarted_with_a_terminal_to_type_into_until_a_pla
         assert logs(name, "lines-1").count("stdin is not a terminal") == 2
     finally:
         typist.close()
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(shared):
@@ -218,7 +219,7 @@ def test_a_segfault_is_failed_in_status_and_wait_with_its_signal(shared):
 
 def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
     """status agrees with headless ("process has died", ERROR), the tree and the exit status."""
-    name = tl(str(write("""
+    name = start_here(str(write("""
         from launch import LaunchDescription
         from launch.actions import ExecuteProcess
         def generate_launch_description():
@@ -226,7 +227,7 @@ def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
                 ExecuteProcess(name='quits', cmd=['sh', '-c', 'exit 3']),
                 ExecuteProcess(name='stays', cmd=['sleep', '600']),
             ])
-        """)), "--detach").stdout.strip()
+        """)))
     wait_state(name, "quits-1", "failed")
     quits = process(name, "quits-1")
     assert quits["state"] == "failed" and quits["exit_code"] == 3
@@ -238,7 +239,7 @@ def test_a_non_zero_exit_nobody_asked_for_is_failed_and_a_stop_is_not(write):
     finally:
         link.close()
     wait_state(name, "stays-2", "exited")  # asked for: not a failure
-    tl("stop", name)
+    stop_here(name)
 
 
 SEGV = f"""
@@ -258,7 +259,7 @@ def generate_launch_description():
 def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
         write, monkeypatch):
     monkeypatch.setenv("DEBUGINFOD_URLS", "")  # no network look-up of debug symbols
-    name = tl(str(write(SEGV)), "--detach").stdout.strip()
+    name = start_here(str(write(SEGV)))
     wait_state(name, "segv-1", "failed")
     tl("restart", name, "segv-1", "--prefix", "gdb -q -batch -nx -ex run -ex bt --args",
        check=False)
@@ -272,20 +273,20 @@ def test_restart_under_gdb_shows_the_backtrace_then_a_plain_restart_drops_it(
              not process(name, "segv-1")["command"][0].endswith("gdb"),
              what="a plain run that crashes again")
     assert process(name, "segv-1")["signal"] == "SIGSEGV"
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_a_respawning_node_left_under_a_tool_with_status_0_is_not_brought_back(write):
     """Quitting gdb ends the debugging session, status 0: a respawn=True node does not come
     back under gdb again (the file's own run would: launch respawns any end), and says so."""
-    name = tl(str(write("""
+    name = start_here(str(write("""
         from launch import LaunchDescription
         from launch.actions import ExecuteProcess
         def generate_launch_description():
             return LaunchDescription([
                 ExecuteProcess(name='keeps', respawn=True, respawn_delay=0.2,
                                cmd=['sh', '-c', 'echo keeps up; exec sleep 600'])])
-        """)), "--detach").stdout.strip()
+        """)))
     wait_state(name, "keeps-1", "running")
     # `true` stands for the tool the operator leaves: it ends at once, status 0
     tl("restart", name, "keeps-1", "--prefix", "true", check=False)
@@ -296,7 +297,7 @@ def test_a_respawning_node_left_under_a_tool_with_status_0_is_not_brought_back(w
     tl("restart", name, "keeps-1", check=False)
     wait_state(name, "keeps-1", "running")
     assert not process(name, "keeps-1")["command"][0] == "true"
-    tl("stop", name)
+    stop_here(name)
 
 def test_a_prefix_that_is_not_a_program_changes_nothing(shared):
     name = shared
@@ -377,7 +378,7 @@ def test_launch_prefix_with_a_filter_shows_in_print_as_ros2_launch_would(write, 
 
 
 def test_log_level_is_appended_as_ros_args_and_kept_until_changed(write, nodes):
-    name = tl(str(write(TALKER)), "--detach").stdout.strip()
+    name = start_here(str(write(TALKER)))
     wait_state(name, "talker-1", "running")
     tl("restart", name, "talker-1", "--log-level", "DEBUG")
     command = process(name, "talker-1")["command"]
@@ -387,7 +388,7 @@ def test_log_level_is_appended_as_ros_args_and_kept_until_changed(write, nodes):
     assert process(name, "talker-1")["command"][-1] == "debug"
     tl("restart", name, "talker-1", "--log-level", "")  # '' goes back to the file's
     assert "--log-level" not in process(name, "talker-1")["command"]
-    tl("stop", name)
+    stop_here(name)
 
 
 PROBE = """
@@ -405,12 +406,12 @@ print(names)
 
 
 def test_status_command_line_of_a_node_runs_it_by_hand(write, nodes):
-    name = tl(str(write(LISTENER)), "--detach").stdout.strip()
+    name = start_here(str(write(LISTENER)))
     wait_state(name, "listener-1", "running")
     line = next(p for p in cli_status(name)["processes"]
                 if p["id"] == "listener-1")["command_line"]
     assert "__node:=listener" in line
-    tl("stop", name)
+    stop_here(name)
     by_hand = subprocess.Popen(["sh", "-c", line], stdout=subprocess.DEVNULL,
                                stderr=subprocess.STDOUT, start_new_session=True)
     try:

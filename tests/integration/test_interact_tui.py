@@ -15,6 +15,7 @@ from tuilaunch.tui.output_store import View
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.interact_dialogs import CommandScreen, PrefixPrompt
 
+from .session_steps import stop_here
 from .test_interact import LAUNCH, PIPED, logs, process
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import launched, until
@@ -110,7 +111,7 @@ def test_i_types_into_nodes_until_ctrl_bracket_and_ctrl_c_does_not_quit(write):
             await until(pilot, lambda: getattr(app.supervisor, "detached", False))
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into_it(write):
@@ -161,7 +162,7 @@ def test_i_on_a_node_started_with_pipes_starts_it_with_a_terminal_and_types_into
             await pilot.press("ctrl+right_square_bracket")
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
@@ -210,7 +211,7 @@ def test_g_prompts_for_a_tool_and_c_shows_the_command_line(write):
             await until(pilot, lambda: getattr(app.supervisor, "detached", False))
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)
 
 
 async def test_i_types_into_a_node_of_the_tuis_own_launch(tmp_path, write):

@@ -28,7 +28,8 @@ from tuilaunch.tui.output_store import View
 
 from ..conftest import python_prints, wait_for
 from .inspector_helpers import NODE_SCRIPT
-from .test_sessions import runtime, tl  # noqa: F401  (runtime: a fixture)
+from .session_steps import start_here, stop_here
+from .test_sessions import runtime, tl, wait_state  # noqa: F401  (runtime: a fixture)
 from .test_tui import until
 
 PLAIN = """
@@ -94,8 +95,8 @@ def server_pid(folder: Path, name: str) -> int:
 
 
 def test_a_session_loads_rclpy_only_once_a_client_asks_for_topics(runtime, write):  # noqa: F811
-    name = tl(str(plain_launch(write)), "--detach", "--name", "light").stdout.strip()
-    tl("wait", name, "talker-21", "running", "--timeout", "60")
+    name = start_here(plain_launch(write), "--name", "light")
+    wait_state(name, "talker-21", "running")
     pid = server_pid(runtime, name)
     # the status, logs and waits of a session are no ROS work either
     tl("status", name)
@@ -111,7 +112,7 @@ def test_a_session_loads_rclpy_only_once_a_client_asks_for_topics(runtime, write
         assert time.monotonic() < deadline, "the talker's topic was never listed"
         time.sleep(0.5)
     assert {lib for lib in ros_libraries(pid) if lib.startswith("librcl")}
-    tl("stop", name)
+    stop_here(name)
 
 
 @pytest.mark.parametrize("module", ["tuilaunch.cli.headless", "tuilaunch.engine.launcher",

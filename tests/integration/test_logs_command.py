@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from ..conftest import run_cli, session_folders, wait_for
+from .session_steps import start_here, stop_here
 from .test_sessions import wait_state
 
 LAUNCH = """
@@ -52,7 +53,7 @@ def life_session(root: Path) -> Iterator[str]:
     segv-2 failed, again-3 respawned and gave up, counter-4 printed its 50 lines."""
     (root / "life.launch.py").write_text(LAUNCH)
     with session_folders(root / "log"):
-        name = tl(str(root / "life.launch.py"), "--detach", "--name", "life").strip()
+        name = start_here(str(root / "life.launch.py"), "--name", "life")
         try:
             for process, state in (("three-1", "failed"), ("segv-2", "failed"),
                                    ("counter-4", "running")):
@@ -62,7 +63,7 @@ def life_session(root: Path) -> Iterator[str]:
             wait_for(lambda: "line 50" in tl("logs", name, "counter-4"), what="50 lines")
             yield name
         finally:
-            run_cli("stop", name)
+            stop_here(name, gone_ok=True)
 
 
 @pytest.fixture(scope="module")
@@ -206,7 +207,7 @@ def generate_launch_description():
 def test_stop_says_what_it_waits_for_while_a_process_ignores_sigint(tmp_path):
     (tmp_path / "stubborn.launch.py").write_text(STUBBORN)
     with session_folders(tmp_path / "log"):
-        name = tl(str(tmp_path / "stubborn.launch.py"), "--detach", "--name", "stub").strip()
+        name = start_here(str(tmp_path / "stubborn.launch.py"), "--name", "stub")
         wait_for(lambda: "ready" in tl("logs", name, "stubborn-1"), what="ready")
         stopped = run_cli("stop", name)
         assert stopped.returncode == 0, stopped.stderr
@@ -259,7 +260,7 @@ def test_logs_of_a_whole_session_have_the_launch_files_own_lines_as_headless(tmp
     flag = tmp_path / "open"
     (tmp_path / "saying.launch.py").write_text(SAYING.replace("{flag}", str(flag)))
     with session_folders(tmp_path / "log"):
-        name = tl(str(tmp_path / "saying.launch.py"), "--detach").strip()
+        name = start_here(str(tmp_path / "saying.launch.py"))
         try:
             wait_for(lambda: "waiting" in tl("logs", name, "gate-1"), what="the gate")
             follow = subprocess.Popen([sys.executable, "-m", "tuilaunch", "logs", name, "-f"],
@@ -283,7 +284,7 @@ def test_logs_of_a_whole_session_have_the_launch_files_own_lines_as_headless(tmp
             assert "launch.user" not in tl("logs", name, "gate-1")
             assert tl("logs", name, "--level", "WARN") == ""
         finally:
-            run_cli("stop", name)
+            stop_here(name, gone_ok=True)
 
 
 TWICE = """
@@ -310,11 +311,11 @@ def test_two_launch_lines_said_within_a_millisecond_are_both_in_logs(tmp_path):
     after the other share their millisecond, and neither is taken for a repeat."""
     (tmp_path / "twice.launch.py").write_text(TWICE)
     with session_folders(tmp_path / "log"):
-        name = tl(str(tmp_path / "twice.launch.py"), "--detach").strip()
+        name = start_here(str(tmp_path / "twice.launch.py"))
         try:
             wait_for(lambda: "second thing said" in tl("logs", name), what="both lines")
             said = [line for line in tl("logs", name).splitlines() if "thing said" in line]
             assert said == ["[INFO] [launch.user]: first thing said",
                             "[INFO] [launch.user]: second thing said"]
         finally:
-            run_cli("stop", name)
+            stop_here(name, gone_ok=True)

@@ -13,6 +13,7 @@ import re
 from tuilaunch.tui.app import TuiLaunchApp, make_app
 from tuilaunch.tui.screens.output_panel import OutputPanel
 
+from .session_steps import stop_here
 from .terminal_harness import PROGRAMS
 from .test_sessions import detached_with, runtime, tl  # noqa: F401  (runtime: a fixture)
 from .test_tui import launched, until
@@ -244,7 +245,7 @@ def test_a_client_attaching_to_a_session_sees_the_waiting_prompt(write, runtime)
             await until(pilot, lambda: getattr(app.supervisor, "detached", False))
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)
 
 
 # --- long lines -----------------------------------------------------------------------------
@@ -292,7 +293,7 @@ def test_a_1_mib_line_is_kept_whole_in_the_log_logs_and_the_pane(write, runtime)
 
         asyncio.run(scenario())
     finally:
-        tl("stop", name)
+        stop_here(name)
 
 
 def test_a_line_without_end_is_cut_at_8_mib_and_the_rest_kept(write):

@@ -27,8 +27,10 @@ import pytest
 
 from ..conftest import run_cli, wait_for
 from .proc_tree import cmdline, descendants, terminate
+from .session_steps import stop_here
 from .sshd import SSHD, Machines, alive
 from .terminal_harness import PROGRAMS
+from .test_sessions import status, wait_state
 
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
@@ -61,13 +63,17 @@ class Placed:
     runtime: Path
     folder: Path
 
-    def status(self) -> dict:
+    def status(self, command: bool = False) -> dict:
+        """What `status NAME --json` says: the command itself (`command`: its subject), else
+        read from this process (the launching side is here), as the tests' other looks."""
+        if not command:
+            return status(NAME)
         done = run_cli("status", NAME, "--json")
         assert done.returncode == 0, done.stderr
         return json.loads(done.stdout)
 
-    def process(self, process_id: str) -> dict:
-        return next(p for p in self.status()["processes"] if p["id"] == process_id)
+    def process(self, process_id: str, command: bool = False) -> dict:
+        return next(p for p in self.status(command)["processes"] if p["id"] == process_id)
 
     def logs(self, process_id: str) -> str:
         return run_cli("logs", NAME, process_id).stdout
@@ -99,13 +105,11 @@ def placed_fixture(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Placed]
                            "--name", NAME)
             assert done.returncode == 0, done.stderr
             for process in ("lines-1", "debugged-2", "here-3"):
-                waited = run_cli("wait", NAME, process, "running", "--timeout", "90",
-                                 timeout=120)
-                assert waited.returncode == 0, waited.stderr
+                wait_state(NAME, process, "running", timeout=90)
             wait_for(lambda: "ready" in placed.logs("lines-1"), 60, "lines-1 ready")
             yield placed
         finally:
-            run_cli("stop", NAME, timeout=120)
+            stop_here(NAME, gone_ok=True)
             servers = [json.loads(info.read_text())["pid"]
                        for info in (runtime / "tuilaunch").glob("*.json")]
             for pid in servers:  # a launching side a failed test left running
@@ -199,11 +203,12 @@ def attached(placed: Placed, *args: str, size: tuple[int, int] = (80, 24)) -> It
 
 
 def test_status_says_the_terminal_a_node_has_on_its_machine(placed: Placed) -> None:
-    lines = placed.process("lines-1")
+    said = placed.status(command=True)["processes"]
+    lines, debugged, here = (next(p for p in said if p["id"] == process)
+                             for process in ("lines-1", "debugged-2", "here-3"))
     assert lines["machine"] == "r1" and lines["terminal"] is True, lines
-    debugged = placed.process("debugged-2")
     assert debugged["terminal"] is False, debugged
-    assert placed.process("here-3")["terminal"] is False
+    assert here["terminal"] is False
 
 
 def test_attach_type_types_into_a_node_on_another_machine(placed: Placed) -> None:

@@ -41,6 +41,8 @@ from tuilaunch.engine.run.vocabulary.requests import (
 from ..conftest import run_cli, session_folders
 from .launch_world import make_package
 from .nodes.signal_node import expected
+from .session_steps import start_here, stop_here
+from .test_sessions import wait_state
 
 SIGNAL_NODE = Path(__file__).resolve().parent / "nodes" / "signal_node.py"
 WRAPPER = f"""#!{sys.executable}
@@ -75,15 +77,15 @@ def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     make_package(prefix, "plot_nodes", ["signal_node"], probe=WRAPPER)
     (root / "plot.launch.py").write_text(textwrap.dedent(LAUNCH))
     with session_folders(root / "log", prefix):
-        done = tl(str(root / "plot.launch.py"), "--detach", "--name", "plt")
-        assert done.returncode == 0, done.stderr
-        name = done.stdout.strip()
+        # the module's setting, started and ended from this process: the commands tested
+        # are the ones the tests run on it
+        name = start_here(root / "plot.launch.py", "--name", "plt")
         try:
             for process in ("wave-1", "fast-2"):
-                assert tl("wait", name, process, "running", "--timeout", "60").returncode == 0
+                wait_state(name, process, "running")
             yield name
         finally:
-            tl("stop", name)
+            stop_here(name)
 
 
 def csv_rows(text: str) -> tuple[list[str], list[dict[str, str]]]:

@@ -22,7 +22,10 @@ from pathlib import Path
 
 from ..conftest import run_cli, wait_for
 from .nodes.signal_node import expected
+from .session_steps import start_here, stop_here
 from .sshd import Machine, Machines, machines_fixture, proxies_on  # noqa: F401
+from .test_remote_sessions import logged_in
+from .test_sessions import wait_state
 
 SIGNAL_NODE = Path(__file__).resolve().parent / "nodes" / "signal_node.py"
 LAUNCH = f"""
@@ -35,20 +38,14 @@ def generate_launch_description():
 """
 
 
-def there(machine: Machine) -> dict[str, str]:
-    """The environment of a user logged in on `machine`."""
-    return {"XDG_RUNTIME_DIR": str(machine.runtime),
-            "ROS_LOG_DIR": str(machine.folder / "roslog")}
-
-
 def test_plot_csv_through_the_ssh_link_prints_what_was_published(machines: Machines, write):
     robot = machines["robot1"]
     path = write(LAUNCH)
-    done = run_cli(str(path), "--detach", "--name", "far", env=there(robot))
-    assert done.returncode == 0, done.stderr
+    with logged_in(robot):  # the setting, from this process: the plot is the subject
+        start_here(path, "--name", "far")
     try:
-        assert run_cli("wait", "far", "wave-1", "running", "--timeout", "60",
-                       env=there(robot)).returncode == 0
+        with logged_in(robot):
+            wait_state("far", "wave-1", "running")
         # not a session of this machine's: only the link reaches it
         assert "far" not in run_cli("ls").stdout
         plotted = run_cli("plot", "robot1:far", "/ssh/wave", "x", "z", "--csv",
@@ -65,7 +62,8 @@ def test_plot_csv_through_the_ssh_link_prints_what_was_published(machines: Machi
         assert "/ssh/wave (geometry_msgs/msg/Point) has no numeric field 'nope'; " \
                "its numeric fields: x, y, z" in wrong.stderr.splitlines()[0]
     finally:
-        run_cli("stop", "far", env=there(robot))
+        with logged_in(robot):
+            stop_here("far", gone_ok=True)
     assert json.loads(run_cli("ls", "robot1", "--json").stdout) == []
 
 
@@ -113,11 +111,11 @@ def test_the_full_screen_plot_says_a_lost_link_and_an_ended_session_apart(
     """As hz and echo: the link's end is `link to HOST lost: REASON`, status 1 (the session
     runs on); the session's end is `session ... ended`, status 2."""
     robot = machines["robot1"]
-    done = run_cli(str(write(LAUNCH)), "--detach", "--name", "far", env=there(robot))
-    assert done.returncode == 0, done.stderr
+    with logged_in(robot):  # the setting, from this process: the plot is the subject
+        start_here(write(LAUNCH), "--name", "far")
     try:
-        assert run_cli("wait", "far", "wave-1", "running", "--timeout", "60",
-                       env=there(robot)).returncode == 0
+        with logged_in(robot):
+            wait_state("far", "wave-1", "running")
         plot = PtyPlot("robot1:far", "/ssh/wave", "x")
         wait_for(lambda: "last" in plot.text and len(proxies_on(robot)) == 1, 60,
                  "the plot drawn")
@@ -127,8 +125,8 @@ def test_the_full_screen_plot_says_a_lost_link_and_an_ended_session_apart(
         assert code == 1 and said.startswith("tuilaunch plot: link to robot1 lost: "), \
             (code, said)
         assert len(said.split("lost: ", 1)[1].strip()) > 0
-        assert run_cli("wait", "far", "wave-1", "running", "--timeout", "10",
-                       env=there(robot)).returncode == 0  # it ran on
+        with logged_in(robot):
+            wait_state("far", "wave-1", "running", timeout=10)  # it ran on
 
         plot = PtyPlot("robot1:far", "/ssh/wave", "x")
         wait_for(lambda: "last" in plot.text, 60, "the plot drawn")
@@ -137,4 +135,5 @@ def test_the_full_screen_plot_says_a_lost_link_and_an_ended_session_apart(
         assert code == 2 and said == "tuilaunch plot: error: session robot1:far ended", \
             (code, said)
     finally:
-        run_cli("stop", "far", env=there(robot))
+        with logged_in(robot):
+            stop_here("far", gone_ok=True)

@@ -29,6 +29,8 @@ from ..conftest import run_cli, session_folders
 from .launch_world import make_package
 from .nodes.joints_node import ORIGIN, positions
 from .nodes.signal_node import expected
+from .session_steps import start_here, stop_here
+from .test_sessions import wait_state
 
 NODES = Path(__file__).resolve().parent / "nodes"
 WRAPPER = f"""#!{sys.executable}
@@ -60,16 +62,15 @@ def session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     make_package(prefix, "several_nodes", ["run"], probe=WRAPPER)
     (root / "several.launch.py").write_text(textwrap.dedent(LAUNCH))
     with session_folders(root / "log", prefix):
-        done = run_cli(str(root / "several.launch.py"), "--detach", "--name", "sev")
-        assert done.returncode == 0, done.stderr
-        name = done.stdout.strip()
+        # the module's setting, started and ended from this process: the commands tested
+        # are the ones the tests run on it
+        name = start_here(root / "several.launch.py", "--name", "sev")
         try:
             for process in ("wave-1", "joints-2"):
-                assert run_cli("wait", name, process, "running", "--timeout",
-                               "60").returncode == 0
+                wait_state(name, process, "running")
             yield name
         finally:
-            run_cli("stop", name)
+            stop_here(name)
 
 
 def table(text: str) -> tuple[list[str], list[dict[str, str]]]:

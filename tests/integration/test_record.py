@@ -24,6 +24,7 @@ from tuilaunch.engine.run.vocabulary.requests import BlackBox
 
 from ..conftest import run_cli, session_folders
 from .launch_world import make_package
+from .session_steps import stop_here
 
 NODES = Path(__file__).resolve().parent / "nodes"
 LAUNCH = """
@@ -97,7 +98,7 @@ def session(root: Path) -> Iterator[str]:
                   "--black-box", "8").strip()
         ok("wait", name, WAVE, "running", "--timeout", "60")
         yield name
-        run_cli("stop", name)
+        stop_here(name)  # the setting's end, not a subject: from this process
 
 
 def test_a_recording_holds_each_message_as_published_and_the_output(session, tmp_path):
@@ -184,7 +185,7 @@ def test_a_flood_of_images_stays_within_the_black_box_size(root):
                 link.close()
             written = Path(ok("record", name, "--black-box").split(" (", 1)[0])
         finally:
-            run_cli("stop", name)
+            stop_here(name, gone_ok=True)
     _, messages = read(written)
     images = [m for topic, _, m in messages if topic == "/flood/image"]
     assert 3 <= len(images) <= bound // (640 * 480 * 3)

@@ -8,9 +8,11 @@ import sys
 from pathlib import Path
 
 from ..conftest import run_cli
+from .session_steps import start_here, stop_here
 from .sshd import Machines, machines_fixture  # noqa: F401
-from .test_plot_ssh import there  # a user's environment on that machine
 from .test_record import read
+from .test_remote_sessions import logged_in  # a user's environment on that machine
+from .test_sessions import wait_state
 
 SIGNAL_NODE = Path(__file__).resolve().parent / "nodes" / "signal_node.py"
 LAUNCH = f"""
@@ -25,13 +27,13 @@ def generate_launch_description():
 
 def test_a_recording_over_ssh_is_written_here(machines: Machines, write, tmp_path):
     robot = machines["robot1"]
-    done = run_cli(str(write(LAUNCH)), "--detach", "--name", "farrec", env=there(robot))
-    assert done.returncode == 0, done.stderr
+    with logged_in(robot):  # the setting, from this process: the recording is the subject
+        start_here(write(LAUNCH), "--name", "farrec")
     out = tmp_path / "here" / "far.mcap"
     out.parent.mkdir()
     try:
-        assert run_cli("wait", "farrec", "wave-1", "running", "--timeout", "60",
-                       env=there(robot)).returncode == 0
+        with logged_in(robot):
+            wait_state("farrec", "wave-1", "running")
         # 10 s: on a loaded machine the link and the subscription's discovery take seconds
         # of it before the first message (one run got 50 messages of a 4 s recording)
         recorded = run_cli("record", "robot1:farrec", "/ssh/rec", "-o", str(out),
@@ -42,7 +44,8 @@ def test_a_recording_over_ssh_is_written_here(machines: Machines, write, tmp_pat
         assert again.returncode != 0 and "Traceback" not in again.stderr
         assert f"{out} exists: tuilaunch never overwrites a recording" in again.stderr
     finally:
-        run_cli("stop", "farrec", env=there(robot))
+        with logged_in(robot):
+            stop_here("farrec", gone_ok=True)
     _, messages = read(out)
     numbers = [int(m.z) for topic, _, m in messages if topic == "/ssh/rec"]
     assert len(numbers) > 50

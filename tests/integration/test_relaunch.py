@@ -23,6 +23,7 @@ from tuilaunch.tui.screens.dialogs import ChoiceScreen
 from tuilaunch.tui.screens.topics_panel import TopicsPanel
 
 from ..conftest import run_cli, wait_for
+from .session_steps import start_here, stop_here
 from .test_sessions import runtime, status, tl, wait_state  # noqa: F401
 from .test_tui import BRINGUP, until
 
@@ -33,7 +34,7 @@ async def session_tui(path: str, *args: str, wait: tuple[str, ...] = (),
         -> AsyncIterator[tuple[TuiLaunchApp, Pilot, str]]:
     """The launch in a session server and the TUI on it: as `tuilaunch FILE` runs it
     (`owner`), or as `tuilaunch attach` opens it."""
-    name = tl(path, "--detach", *args).stdout.strip()
+    name = start_here(path, *args)
     try:
         for process in wait:
             wait_state(name, process, "running")
@@ -43,7 +44,7 @@ async def session_tui(path: str, *args: str, wait: tuple[str, ...] = (),
         async with app.run_test(size=size) as pilot:
             yield app, pilot, name
     finally:
-        tl("stop", name, check=False)
+        stop_here(name, gone_ok=True)
 
 
 def detail(app: TuiLaunchApp) -> str:
@@ -264,7 +265,7 @@ async def test_an_attached_client_says_when_the_session_is_stopped_elsewhere(
     monkeypatch.setattr("tuilaunch.tui.session_link.ENDED_ELSEWHERE_PAUSE", 1.0)
     path = write(SHELL)
     # a relaunch made by another client before this one attached
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     wait_state(name, "echo-1", "running")
     apply_elsewhere(name, word="beta")
     wait_state(name, "echo-1", "running")
@@ -297,7 +298,7 @@ async def test_an_attached_client_says_when_the_session_is_stopped_elsewhere(
             assert app.is_running  # still on screen, long enough to be read
             await until(pilot, lambda: not app.is_running)
     finally:
-        tl("stop", name, check=False)
+        stop_here(name, gone_ok=True)
     assert app.ended_elsewhere == "tuilaunch stop"
 
 
@@ -319,7 +320,7 @@ def test_the_shell_says_what_ended_the_tui(runtime, write):  # noqa: F811
     from .test_sessions import Terminal
 
     path = write(SHELL)
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     wait_state(name, "echo-1", "running")
     wait_state(name, "bad-2", "failed")  # before the stop, not raced by it
     attached = Terminal("attach", name)
@@ -452,7 +453,7 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
     from tuilaunch.client.served_session import ServedSession
 
     path = write(EDITABLE.format(said="word", extra=""))
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     try:
         wait_state(name, "echo-1", "running")
         info = status(name)
@@ -475,7 +476,7 @@ async def test_attaching_after_the_file_was_edited_shows_what_runs_and_what_f5_w
             app.leaving.detach()
             await until(pilot, lambda: app.detached)
     finally:
-        tl("stop", name, check=False)
+        stop_here(name, gone_ok=True)
 
 
 # `slow`, in its first run (word alpha), saves its state on SIGINT until the test releases it
@@ -495,7 +496,7 @@ def test_wait_running_waits_through_a_relaunch_that_stopped_the_process(
     from .test_logs_command import _has_socket
 
     release = tmp_path / "release"
-    name = tl(str(write(SLOW_STOP.replace("RELEASE", str(release)))), "--detach").stdout.strip()
+    name = start_here(str(write(SLOW_STOP.replace("RELEASE", str(release)))))
     try:
         for process in ("echo-1", "slow-2"):
             wait_state(name, process, "running")
@@ -527,4 +528,4 @@ def test_wait_running_waits_through_a_relaunch_that_stopped_the_process(
         assert "quick beta" in tl("logs", name, "echo-1").stdout
     finally:
         release.touch()  # a failed test's relaunch is not held up
-        tl("stop", name, check=False)
+        stop_here(name, gone_ok=True)

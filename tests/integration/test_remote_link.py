@@ -38,7 +38,10 @@ from tuilaunch.engine.run.vocabulary.request import Request, to_message
 from tuilaunch.engine.run.vocabulary.requests import Status
 
 from ..conftest import run_cli, wait_for
+from .session_steps import start_here, stop_here
 from .sshd import Machine, Machines, alive, free_port, keygen, proxies_on
+from .test_remote_sessions import logged_in
+from .test_sessions import wait_state
 
 LAUNCH = """
 from simple_launch import SimpleLauncher
@@ -53,13 +56,10 @@ def generate_launch_description():
 
 def start_on(machine: Machine, path: Path, name: str) -> None:
     """A session of the launch file `path` started on `machine` (its session folder), as a
-    user there would."""
-    env = {"XDG_RUNTIME_DIR": str(machine.runtime),
-           "ROS_LOG_DIR": str(machine.folder / "roslog")}
-    done = run_cli(str(path), "--detach", "--name", name, env=env)
-    assert done.returncode == 0, done.stderr
-    wait = run_cli("wait", name, "ticker-1", "running", "--timeout", "30", env=env)
-    assert wait.returncode == 0, wait.stderr
+    user there would (from this process: the link to it is the subject)."""
+    with logged_in(machine):
+        start_here(path, "--name", name)
+        wait_state(name, "ticker-1", "running", timeout=30)
 
 
 @pytest.fixture(name="machines", scope="module")
@@ -384,14 +384,13 @@ def generate_launch_description():
 async def test_a_message_larger_than_the_relay_chunk_crosses_whole(machines, write):
     """Another session on robot1 beside "far", stopped at the end."""
     path = write(BIG, "big_launch.py")
-    env = {"XDG_RUNTIME_DIR": str(machines["robot1"].runtime)}
-    done = run_cli(str(path), "--detach", "--name", "big", env=env)
-    assert done.returncode == 0, done.stderr
+    with logged_in(machines["robot1"]):
+        start_here(path, "--name", "big")
     try:
         await big_line_crosses_whole()
     finally:
-        stopped = run_cli("stop", "big", env=env)  # robot1 runs "far" alone again
-        assert stopped.returncode == 0, stopped.stderr
+        with logged_in(machines["robot1"]):
+            stop_here("big")  # robot1 runs "far" alone again
 
 
 async def big_line_crosses_whole() -> None:

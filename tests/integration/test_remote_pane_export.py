@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from ..conftest import run_cli, wait_for
+from ..conftest import wait_for
+from .session_steps import start_here, stop_here
 from .sshd import Machines, machines_fixture, proxies_on  # noqa: F401
 from .test_placed_terminal import Tmux
 
@@ -40,8 +41,10 @@ def test_w_right_after_a_reconnect_saves_every_line_the_pane_stands_for(
         machines: Machines, write, tmp_path: Path, monkeypatch) -> None:
     robot = machines["robot1"]
     there = {"XDG_RUNTIME_DIR": str(robot.runtime), "ROS_LOG_DIR": str(robot.folder / "log")}
-    started = run_cli(str(write(LAUNCH)), "--detach", "--name", "far", env=there)
-    assert started.returncode == 0, started.stderr
+    with pytest.MonkeyPatch.context() as patch:  # the setting, from this process
+        for key, value in there.items():
+            patch.setenv(key, value)
+        start_here(write(LAUNCH), "--name", "far")
     monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "here"))  # where w writes, here
     tui = Tmux(tmp_path, "attach", "robot1:far")
     try:
@@ -84,4 +87,7 @@ def test_w_right_after_a_reconnect_saves_every_line_the_pane_stands_for(
         wait_for(lambda: "link to robot1 lost" not in tui.screen(), 120, "the link back")
     finally:
         tui.close()
-        run_cli("stop", "far", env=there)
+        with pytest.MonkeyPatch.context() as patch:
+            for key, value in there.items():
+                patch.setenv(key, value)
+            stop_here("far", gone_ok=True)

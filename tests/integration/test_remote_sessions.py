@@ -33,6 +33,7 @@ from tuilaunch.tui.screens.dialogs import QuitScreen
 from tuilaunch.tui.session_view import pane_save_dir
 
 from ..conftest import run_cli, wait_for
+from .session_steps import start_here
 from .sshd import Machine, Machines, alive, free_port, machines_fixture, proxies_on  # noqa: F401
 from .test_sessions import Terminal, run_cli_together, status, wait_state
 from .test_tui import until
@@ -72,11 +73,11 @@ def status_there(machine: Machine, name: str) -> dict:
 
 
 def start_on(machine: Machine, write, name: str) -> int:
-    """A session started on `machine`; its server's pid."""
+    """A session started on `machine` (as `tuilaunch FILE --detach` there, from this
+    process: the tests' subject is what is done to it through the link); its server's pid."""
     path = write(LAUNCH)
-    done = run_cli(str(path), "--detach", "--name", name, env=there(machine))
-    assert done.returncode == 0, done.stderr
     with logged_in(machine):
+        start_here(path, "--name", name)
         wait_state(name, "ticker-1", "running")
     return machine.server_pid(name)
 
@@ -294,9 +295,8 @@ def test_attach_without_the_launch_file_here_draws_the_servers_plan(machines: Ma
     files.mkdir()
     path = files / "argued_launch.py"
     path.write_text(ARGUED)
-    started = run_cli(str(path), "--detach", "--name", "far", env=there(robot))
-    assert started.returncode == 0, started.stderr
     with logged_in(robot):
+        start_here(path, "--name", "far")
         wait_state("far", "quiet-2", "running")
     status = status_there(robot, "far")
     quiet_pid = {p["id"]: p["pid"] for p in status["processes"]}["quiet-2"]
@@ -486,8 +486,8 @@ def test_over_a_link_the_stamps_come_when_the_time_column_shows_them(machines: M
     # earlier run's saves are
     monkeypatch.setenv("ROS_LOG_DIR", str(tmp_path / "here"))
     path = write(STAMPED)
-    assert run_cli(str(path), "--detach", "--name", "stamped", env=there(robot)).returncode == 0
     with logged_in(robot):
+        start_here(path, "--name", "stamped")
         wait_state("stamped", "logger-1", "running")
     status = status_there(robot, "stamped")
 
@@ -603,9 +603,8 @@ def test_a_stream_whose_link_drops_says_so_and_the_session_runs_on(machines: Mac
     """`logs -f` and `hz` over ssh: the link's end is not the session's (exit 1 and
     one line naming the host, not exit 0 or "session ended")."""
     robot1 = machines["robot1"]
-    done = run_cli(str(write(STREAMED)), "--detach", "--name", "far", env=there(robot1))
-    assert done.returncode == 0, done.stderr
     with logged_in(robot1):
+        start_here(write(STREAMED), "--name", "far")
         wait_state("far", "talker-2", "running")
     server = int(status_there(robot1, "far")["pid"])
     lost = re.compile(r"^tuilaunch (logs|hz): link to robot1 lost: \S.*\n\Z")
@@ -752,8 +751,8 @@ def test_a_restart_at_debug_level_over_ssh_keeps_the_node_name(machines: Machine
     """Over ssh as here: after `restart --log-level debug` rcl's lines come first, and the
     node is still known by its own name (issue 36, item 4)."""
     robot = machines["robot1"]
-    done = run_cli(str(write(UNNAMED)), "--detach", "--name", "far", env=there(robot))
-    assert done.returncode == 0, done.stderr
+    with logged_in(robot):
+        start_here(write(UNNAMED), "--name", "far")
     try:
         def dumped() -> bool:
             return "rate:" in run_cli("params", "robot1:far", "talker-1", "--dump").stdout

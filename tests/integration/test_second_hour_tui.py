@@ -18,6 +18,7 @@ import pytest
 from tuilaunch.tui.app import make_app
 from tuilaunch.tui.key_order import BURST_GAP
 
+from .session_steps import start_here, stop_here
 from .test_interact import PROGRAMS
 from .test_interact_tui import pane, select
 from .test_sessions import detached_with, runtime, status, tl  # noqa: F401  (runtime: a fixture)
@@ -96,7 +97,7 @@ def test_an_operators_restart_backs_off_from_the_files_delay_again(write):
     """After quick crashes in a row the wait doubles; a restart by the operator starts the
     count again: the next wait is the file's respawn_delay, try 1."""
     path = str(write(RESPAWNING.replace("respawn_delay=4.0", "respawn_delay=0.3")))
-    name = tl(path, "--detach").stdout.strip()
+    name = start_here(path)
     try:
         logs = eventually(lambda: tl("logs", name, "flaky-1").stdout,
                           lambda text: "try 4 in" in text)
@@ -107,7 +108,7 @@ def test_an_operators_restart_backs_off_from_the_files_delay_again(write):
             lambda text: "respawning" in text)
         assert "try 1 in 0.3 s" in since, since
     finally:
-        tl("stop", name)
+        stop_here(name)
 
 
 PROGRESS = """
@@ -157,7 +158,7 @@ def test_a_progress_line_shows_as_it_stands_while_it_is_rewritten(write, tmp_pat
             await pilot.press("d")
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)
     log = next(log_dir.glob("fetch-1*.log")).read_bytes()
     # the log keeps the last state of the line (written when its process ended), never
     # 64 KB pieces of its past states

@@ -18,7 +18,15 @@ from selenium.webdriver.common.keys import Keys
 
 from ..conftest import wait_for
 from .browser import Serving, free_port, page, tab_processes
-from .test_sessions import Terminal, runtime, start_detached, status, tl  # noqa: F401
+from .session_steps import start_here
+from .test_sessions import (  # noqa: F401
+    Terminal,
+    runtime,
+    start_detached,
+    status,
+    tl,
+    wait_state,
+)
 
 # the first test may install chromium (apt-get, a few minutes on a slow mirror)
 pytestmark = pytest.mark.timeout(900)
@@ -326,8 +334,8 @@ def generate_launch_description():
     return LaunchDescription([ExecuteProcess(name='ticker', cmd=['sleep', '600']),
                               ExecuteProcess(name='{LONG}', cmd=['sleep', '600'])])
 """, "phone_launch.py")
-    name = tl(str(path), "--detach").stdout.strip()
-    tl("wait", name, f"{LONG}-2", "running", "--timeout", "60")
+    name = start_here(path)
+    wait_state(name, f"{LONG}-2", "running")
     serving = Serving(name, "--port", str(free_port()))
     try:
         with page() as browser:

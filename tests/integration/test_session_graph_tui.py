@@ -8,13 +8,13 @@ driven by keys; what the keys did is read from the nodes' own log lines.
 
 from __future__ import annotations
 
-import json
 import os
 import time
 from pathlib import Path
 
-from ..conftest import EXAMPLES, run_cli, wait_for
-from .test_sessions import Terminal, runtime, tl  # noqa: F401
+from ..conftest import EXAMPLES, wait_for
+from .session_steps import start_here, stop_here
+from .test_sessions import Terminal, runtime, status, tl, wait_state  # noqa: F401
 
 ESC, DOWN, TAB, CLEAR = "\x1b", "\x1b[B", "\t", "\x15"  # ctrl+u: the field emptied
 
@@ -44,13 +44,15 @@ def press(terminal: Terminal, keys: str, seen: bytes, again: bool = False,
 
 
 def logged(name: str, process: str, text: str) -> bool:
-    return text in run_cli("logs", name, process).stdout
+    """Whether the process's log has `text`: read from its file, not with a logs command
+    each look (the calls are the subject here, not the command)."""
+    log = Path(status(name)["log_dir"]) / f"{process}.log"
+    return log.exists() and text in log.read_text(errors="replace")
 
 
 def test_services_and_params_of_an_attached_tui_load_no_rclpy(runtime):  # noqa: F811
-    name = tl(str(EXAMPLES / "bringup.py"), "robot:=sg", "listener:=false",
-              "--detach").stdout.strip()
-    tl("wait", name, "service_server-4", "running", "--timeout", "60")
+    name = start_here(EXAMPLES / "bringup.py", "robot:=sg", "listener:=false")
+    wait_state(name, "service_server-4", "running")
     tl("wait", name, "set_parameters-1", "done", "--timeout", "60")
     terminal = Terminal("attach", name)
     try:
@@ -70,8 +72,8 @@ def test_services_and_params_of_an_attached_tui_load_no_rclpy(runtime):  # noqa:
                  what="the parameter set")
         assert rcl_mapped(terminal.proc.pid) == []
         # the session server did the calls: it has rclpy
-        server = int(json.loads(tl("status", name, "--json").stdout)["pid"])
+        server = int(status(name)["pid"])
         assert rcl_mapped(server)
     finally:
         terminal.close()
-    tl("stop", name)
+    stop_here(name)

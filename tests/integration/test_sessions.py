@@ -41,6 +41,7 @@ from tuilaunch.tui.output_store import LEVELS, View
 from ..conftest import run_cli, session_folders, wait_for
 from .proc_tree import alive as _alive
 from .proc_tree import end, servers_of
+from .session_steps import start_here, stop_here
 from .test_tui import until
 
 R = TypeVar("R")
@@ -86,13 +87,13 @@ def shared_session(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[s
     path = root / "test_launch.py"
     path.write_text(LAUNCH)
     with session_folders(root / "log") as folder:
-        name = tl(str(path), "--detach").stdout.strip()
+        name = start_here(path)
         try:
             wait_state(name, "echo-3", "running")
             wait_state(name, "early-2", "exited")
             yield name, folder
         finally:
-            tl("stop", name, check=False)
+            stop_here(name, gone_ok=True)  # a failed test may have ended it
 
 
 @pytest.fixture
@@ -162,14 +163,14 @@ def wait_state(name: str, process: str, state: str, timeout: float = 60) -> None
 def detached_with(path: str, process: str) -> tuple[str, Path]:
     """A session of `path` started detached, once `process` runs: its name and its log
     folder, for a TUI to attach to."""
-    name = tl(path, "--detach").stdout.strip()
+    name = start_here(path)
     wait_state(name, process, "running")
     return name, Path(status(name)["log_dir"])
 
 
 def start_detached(write, *args: str) -> str:
     path = write(LAUNCH)
-    name = tl(str(path), "--detach", *args).stdout.strip()
+    name = start_here(path, *args)
     wait_state(name, "echo-3", "running")
     # started before echo, but a busy machine may run it later: its end is part of the start
     wait_state(name, "early-2", "exited")
@@ -270,8 +271,8 @@ def test_ls_names_sessions_and_the_socket_is_private(runtime, write):
     # a session of the same name cannot start twice
     again = run_cli(str(write(LAUNCH)), "--detach", "--name", "other")
     assert again.returncode == 2 and "already running" in again.stderr
-    tl("stop", second)
-    tl("stop", name)
+    stop_here(second)
+    stop_here(name)
 
 
 def test_a_dead_server_leaves_no_node_and_ls_cleans_its_socket(runtime, write):
@@ -385,7 +386,7 @@ def test_killed_tui_client_leaves_nodes_running_and_attach_shows_what_was_missed
 
     asyncio.run(attach_again())
     assert pids(name) == before
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_stop_leaves_nothing_behind(runtime, write):
@@ -394,7 +395,7 @@ def test_stop_leaves_nothing_behind(runtime, write):
         "sl.declare_arg('word', 'alpha')\n"
         "    sl.add_action(ExecuteProcess(name='family', cmd=[\n"
         "        'sh', '-c', 'sleep 600; echo never']))"))
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     wait_state(name, "family-1", "running")
     info = status(name)
     group = [int(p) for p in subprocess.run(
@@ -458,11 +459,8 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
                 if "word delta" in [line.text for line in app.store.lines(View("echo-3"))]:
                     break
             assert app.session.arguments == {"word": "delta"}
-            for _ in range(100):  # the form is rebuilt on the next refresh
-                await pilot.pause(0.05)
-                if app.query_one("#arg-word", Input).value == "delta":
-                    break
-            assert app.query_one("#arg-word", Input).value == "delta"
+            # the form is rebuilt on the next refresh (its field is away meanwhile)
+            await until(pilot, lambda: app.query_one("#arg-word", Input).value == "delta")
             assert "word delta" in [line.text for line in app.store.lines(View("echo-3"))]
             await pilot.press("d")
             await until(pilot, lambda: getattr(app.supervisor, "detached", False))
@@ -473,13 +471,13 @@ def test_two_clients_see_the_same_relaunch(runtime, write):
     now = status(name)
     assert now["arguments"] == {"word": "delta"}
     assert not _alive(old_echo) and pids(name)["echo-3"] != old_echo
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_a_client_that_stops_reading_never_holds_up_the_launch(runtime, write):
     # ticker floods, in lines long enough that the megabytes are written in seconds
     path = write(LAUNCH.replace("echo tick $i; sleep 0.1; done", f"echo tick $i {'x' * 200}; done"))
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     log = Path(status(name)["log_dir"]) / "ticker-1.log"
     stalled = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     stalled.connect(str(runtime / "tuilaunch" / f"{name}.sock"))
@@ -489,7 +487,7 @@ def test_a_client_that_stops_reading_never_holds_up_the_launch(runtime, write):
         size = log.stat().st_size
         wait_for(lambda: log.stat().st_size > size + 5_000_000, 60)  # far past its buffers
         assert status(name)["counts"]["running"] == 2  # others are answered meanwhile
-        tl("stop", name)
+        stop_here(name)
     finally:
         stalled.close()
 
@@ -529,7 +527,7 @@ def test_hangup_of_a_foreground_tui_stops_all_unless_keep_on_hangup(runtime, wri
         for terminal in attached.values():
             terminal.close()
     assert pids("kept") == children
-    tl("stop", "kept")
+    stop_here("kept")
 
 
 def test_a_file_named_like_a_command_is_taken_as_the_file(runtime, write, tmp_path):
@@ -575,7 +573,7 @@ def test_wait_for_a_lifecycle_state_asks_the_node(runtime, write, tmp_path):
             return LaunchDescription([ExecuteProcess(name='lc', cmd=[{sys.executable!r},
                                                                      {str(script)!r}])])
         """)
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     try:
         tl("wait", name, "/lc", "active", "--timeout", "60")
         assert "active now" in tl("logs", name, "lc-1").stdout
@@ -588,7 +586,7 @@ def test_wait_for_a_lifecycle_state_asks_the_node(runtime, write, tmp_path):
         assert missing.returncode == 2 and "no process 'nobody'" in missing.stderr
         assert "lc-1" in missing.stderr  # the hint names the processes there are
     finally:
-        tl("stop", name)
+        stop_here(name)
 
 
 def test_logs_follow_joins_the_file_and_the_live_stream_without_gap(runtime, write):
@@ -609,7 +607,7 @@ def test_logs_follow_joins_the_file_and_the_live_stream_without_gap(runtime, wri
         assert pids(name)["ticker-1"] != old and not _alive(old)
         while lines[-1] != "tick 1":  # the new process counts from 1 again, in the stream
             lines.append(follower.stdout.readline().rstrip("\n"))
-        tl("stop", name)
+        stop_here(name)
         _, errors = follower.communicate(timeout=30)  # -f ends with the session
         assert follower.returncode == 0, errors
     finally:
@@ -688,7 +686,7 @@ def generate_launch_description():
 
 def test_kill_during_a_shutdown_sends_sigkill_at_once(runtime, write):
     path = str(write(STUBBORN))
-    name = tl(path, "--detach").stdout.strip()
+    name = start_here(path)
     wait_state(name, "stubborn-1", "running")
 
     async def scenario() -> list:
@@ -740,7 +738,7 @@ def test_two_sessions_started_with_one_name_at_once_one_wins(runtime, write):
     assert "a session named twin is already running" in results[1][2]
     assert [s["name"] for s in json.loads(tl("ls", "--json").stdout)] == ["twin"]
     assert status("twin")["counts"]["running"] >= 1  # the winner is the one that answers
-    tl("stop", "twin")
+    stop_here("twin")
     assert not list((runtime / "tuilaunch").iterdir())
 
 
@@ -764,7 +762,7 @@ def test_two_launches_of_one_file_started_at_once_take_two_names(runtime, write)
             (0, f"{stem}-3", ""), (0, f"{stem}-4", "")]
         for name in (f"{stem}-3", f"{stem}-4"):
             wait_state(name, "echo-3", "running")
-            tl("stop", name)
+            stop_here(name)
     finally:
         for terminal in terminals:
             terminal.close()
@@ -783,7 +781,7 @@ def test_a_session_loads_its_file_with_the_command_line_ros2_launch_would_give(
     name = tl(str(path), "--detach", "robots:=r1;r2").stdout.strip()
     wait_state(name, "argv-1", "exited")
     assert f"\n{path} robots:=r1;r2\n" in tl("logs", name, "argv-1").stdout
-    tl("stop", name)
+    stop_here(name)
 
 
 LIFECYCLE_SESSION = """
@@ -799,7 +797,7 @@ def generate_launch_description():
 def test_an_attached_client_follows_lifecycle_states_and_asks_for_transitions(
         runtime, write):
     path = str(write(LIFECYCLE_SESSION))
-    name = tl(path, "--detach").stdout.strip()
+    name = start_here(path)
     try:
         tl("wait", name, "/lc", "unconfigured", "--timeout", "60")
 
@@ -831,7 +829,7 @@ def test_an_attached_client_follows_lifecycle_states_and_asks_for_transitions(
         assert refused is False
         tl("wait", name, "/lc", "inactive", "--timeout", "60")
     finally:
-        tl("stop", name)
+        stop_here(name)
 
 
 def test_attach_shows_progress_bars_and_bad_bytes_as_the_live_pane_does(runtime, write):
@@ -845,7 +843,7 @@ def generate_launch_description():
     return LaunchDescription([ExecuteProcess(name='bar', cmd=['printf',
         'load 10%%\\\\rload 50%%\\\\rload 100%%\\\\n\\\\377bad\\\\000byte\\\\ndone\\\\n'])])
 """)
-    name = tl(str(path), "--detach").stdout.strip()
+    name = start_here(str(path))
     wait_state(name, "bar-1", "exited")
     log_dir = Path(status(name)["log_dir"])
     logged = (log_dir / "bar-1.log").read_bytes()
@@ -862,7 +860,7 @@ def generate_launch_description():
             await until(pilot, lambda: getattr(app.supervisor, "detached", False))
 
     asyncio.run(attach())
-    tl("stop", name)
+    stop_here(name)
 
 
 def test_a_stop_asked_elsewhere_is_not_shown_as_a_crash(runtime, write):
@@ -935,7 +933,7 @@ def test_a_session_whose_files_were_removed_puts_them_back_and_outlives_a_logout
         # nothing left there once the server has moved back (it tidies up just after)
         wait_for(lambda: not list((ros_home / "tuilaunch").iterdir()),
                  what="the fallback folder emptied")
-        tl("stop", name)
+        stop_here(name)
         assert not any(_alive(pid) for pid in before.values())
         assert not list((runtime / "tuilaunch").iterdir())  # and it cleans up after itself
     finally:
@@ -960,7 +958,7 @@ def test_a_client_is_sent_only_the_pane_it_shows_and_reads_the_others_when_shown
     when it switches panes, the lines it was not sent are read from the log file, so the
     pane shown has every line, in order, none twice."""
     path = str(write(TWO_PANES))
-    name = tl(path, "--detach").stdout.strip()
+    name = start_here(path)
     wait_state(name, "right-2", "running")
 
     def numbers(seen: list, process: str) -> list[int]:
@@ -996,7 +994,7 @@ def test_a_client_is_sent_only_the_pane_it_shows_and_reads_the_others_when_shown
         await task
 
     asyncio.run(scenario())
-    tl("stop", name)
+    stop_here(name)
 
 
 SLOW_STOP = """
@@ -1066,4 +1064,4 @@ def test_a_stop_in_progress_is_stopping_for_every_client_and_for_status(runtime,
 
     asyncio.run(scenario())
     assert status(name)["processes"][0]["state"] == "running"
-    tl("stop", name)
+    stop_here(name)

@@ -31,7 +31,8 @@ from tuilaunch.engine.run.vocabulary.requests import Start
 from tuilaunch.tui.key_order import BURST_GAP
 
 from .proc_tree import end, servers_of
-from .test_sessions import status, tl
+from .session_steps import start_here, stop_here
+from .test_sessions import status, wait_state
 
 pytestmark = pytest.mark.skipif(shutil.which("tmux") is None, reason="tmux is not installed")
 
@@ -66,12 +67,12 @@ def session() -> Iterator[str]:
         patch.setenv("ROS_LOG_DIR", str(logs))
         path = folder / "three.launch.py"
         path.write_text(THREE)
-        name = tl(str(path), "listener:=false", "--detach", "--name", "three").stdout.strip()
+        name = start_here(path, "listener:=false", "--name", "three")
         try:
-            tl("wait", name, "piped-3", "running", "--timeout", "60")
+            wait_state(name, "piped-3", "running")
             yield name
         finally:
-            tl("stop", name, check=False)
+            stop_here(name, gone_ok=True)
             end([json.loads(info.read_text())["pid"]
                  for info in (folder / "tuilaunch").glob("*.json")])
             end(servers_of(logs))

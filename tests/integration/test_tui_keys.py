@@ -19,6 +19,7 @@ from textual import events
 
 from tuilaunch.tui.app import TuiLaunchApp
 
+from .session_steps import stop_here
 from .test_interact import PROGRAMS
 from .test_sessions import runtime  # noqa: F401  (a fixture: a private session folder)
 from .test_tui_long_sessions import read_for, read_until, start_on_pty, stop_pty
@@ -129,7 +130,7 @@ def test_quitting_a_session_offers_detach_and_d_leaves_it_running(write, tmp_pat
         (session,) = json.loads(tl("ls", "--json").stdout)  # ... and the launch runs on
         name = session["name"]
         assert '"running"' in tl("status", name, "--json").stdout
-        tl("stop", name)
+        stop_here(name)
     finally:
         stop_pty(proc, master)
 

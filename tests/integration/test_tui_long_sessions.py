@@ -33,7 +33,8 @@ from tuilaunch.tui.screens.tree_panel import LaunchTree
 
 from ..conftest import session_folders
 from .proc_tree import end, servers_of
-from .test_sessions import status, tl
+from .session_steps import start_here, stop_here
+from .test_sessions import status, wait_state
 from .test_tui import BRINGUP, launched, pids, row_text, states, tab_panel, until
 
 COUNTER = """
@@ -236,13 +237,12 @@ def bringup(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Pat
     nodes (their pids change), nothing else of it; it is stopped at the end of the module."""
     root = tmp_path_factory.mktemp("bringup")
     with session_folders(root / "log"):
-        name = tl(BRINGUP, *(f"{k}:={v}" for k, v in BRINGUP_ARGUMENTS.items()),
-                  "--detach").stdout.strip()
+        name = start_here(BRINGUP, *(f"{k}:={v}" for k, v in BRINGUP_ARGUMENTS.items()))
         try:
-            tl("wait", name, "configurable-3", "running", "--timeout", "60")
+            wait_state(name, "configurable-3", "running")
             yield name, Path(status(name)["log_dir"])
         finally:
-            tl("stop", name, check=False)
+            stop_here(name, gone_ok=True)
             end(servers_of(root / "log"))
 
 
