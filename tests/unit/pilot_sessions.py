@@ -17,7 +17,7 @@ from textual.pilot import Pilot
 from textual.widgets import Static
 
 from tests.unit.memory_port import MemoryPort
-from tests.unit.test_app_pilot import BRINGUP, until
+from tests.unit.test_app_pilot import BRINGUP, PANE_FPS, until
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.events import Started
 from tuilaunch.tui.app import TuiLaunchApp
@@ -47,6 +47,7 @@ async def shown(tmp_path: Path, launch: Path = BRINGUP,
     enabled = session.plan.enabled_processes()
     if started:
         memory.happened(*(Started(p.id, pid=1000 + n) for n, p in enumerate(enabled)))
+    options.setdefault("pane_fps", PANE_FPS)
     app = TuiLaunchApp(session, tmp_path, session_name=name, port=memory, **options)
     async with app.run_test(size=size) as pilot:
         await until(pilot, lambda: app.supervisor is memory and (

@@ -14,7 +14,8 @@ CHANGES = ("stop", "restart", "start", "apply", "log_level", "transition")
 async def test_the_footer_offers_none_of_the_keys_it_refuses(tmp_path: Path) -> None:
     async with following(tmp_path, read_only=True) as (app, pilot, _port):
         select(app, "talker-1")
-        await pilot.pause()
+        # the footer is drawn anew for the row (empty for a moment): read once it is there
+        await until(pilot, lambda: "Search" in footer(app), "the row's footer drawn")
         offered = footer(app)
         for refused in ("Stop", "Restart", "Start", "Type", "Debug", "Apply"):
             assert refused not in offered, offered
