@@ -27,7 +27,7 @@ from textual import events, on
 from textual.app import ComposeResult, SystemCommand
 from textual.binding import Binding
 from textual.screen import Screen
-from textual.widgets import Footer, Static, TabbedContent, TabPane
+from textual.widgets import Static, TabbedContent, TabPane
 
 from ..client.port import LaunchPort
 from ..client.remote_supervisor import LINK_INTERVAL, RemoteSupervisor
@@ -54,6 +54,7 @@ from .session_link import DRAIN_HZ, PANE_CHROME, SessionLink
 from .session_view import COMMAND_BINDINGS, SessionView, pane_save_dir
 from .status_line import StatusLine
 from .tab_panels import TabPanels
+from .textual_compat import Footer
 
 if TYPE_CHECKING:
     from .screens.topics_panel import TopicsPanel

@@ -35,7 +35,7 @@ from textual.app import ComposeResult, SuspendNotSupported
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.notifications import SeverityLevel
 from textual.widget import Widget
-from textual.widgets import ContentSwitcher, Footer, Static, TabbedContent, TabPane, Tree
+from textual.widgets import ContentSwitcher, Static, TabbedContent, TabPane, Tree
 
 from ...client.port import LaunchPort
 from ...client.remote_supervisor import RETRY_MOST
@@ -50,6 +50,7 @@ from ..screens.topics_panel import TopicsPanel
 from ..screens.tree_panel import LaunchTree, RowData, RowKind
 from ..session_link import DRAIN_HZ, PANE_CHROME
 from ..session_view import SessionView
+from ..textual_compat import Footer
 from ..toasts import OnceToasts
 from .bindings import BINDINGS, FleetHelp
 from .plots import FleetPlots

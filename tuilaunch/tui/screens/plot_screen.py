@@ -28,7 +28,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal
 from textual.screen import Screen
-from textual.widgets import Footer, Static
+from textual.widgets import Static
 from textual_plotext import PlotextPlot
 
 from ...client.inspect.plot_series import WINDOWS, PlotSeries, Source, rebinned
@@ -36,6 +36,7 @@ from ...client.inspect.plot_shapes import panels, series_csv, xy_pairs
 from ...engine.run.session.session_dir import SessionError
 from ...engine.run.vocabulary.request import Request
 from ...engine.run.vocabulary.requests import PlotFields, PlotStart, PlotStop, Topics
+from ..textual_compat import Footer
 from .plot_pickers import FieldPicker, TopicPicker
 
 R = TypeVar("R")
