@@ -8,9 +8,11 @@ the tab key waits for the list; the quit question fits 40x10."""
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
+from textual import events
 from textual.widgets import Input
 
 from tests.unit.pilot_sessions import (
@@ -26,6 +28,7 @@ from tests.unit.test_app_pilot import footer, select, until
 from tuilaunch.engine.run.events import ExitCause, ProcessExited, Respawning, Typing
 from tuilaunch.engine.run.session.session_dir import SessionError
 from tuilaunch.tui.app import TuiLaunchApp
+from tuilaunch.tui.key_order import BURST_GAP
 from tuilaunch.tui.nodes import respawn_countdown
 from tuilaunch.tui.screens.dialogs import ConfirmScreen
 from tuilaunch.tui.screens.services_panel import ServicesPanel
@@ -206,6 +209,33 @@ async def test_keys_typed_with_i_on_a_row_that_is_not_a_node_are_never_commands(
         await keys_handled(pilot, app)
         assert dialogs(app) == [] and not app.quitting
         assert not COMMANDS & set(port.ops())  # nothing stopped, nothing restarted
+
+
+async def test_a_burst_is_told_by_when_its_keys_were_read_not_by_when_their_turn_came(
+        tmp_path: Path) -> None:
+    """A loaded machine delays the keys' turns, not their reading: `istop` read in one
+    burst, whose `stop` gets its turn a second after `i` was refused, is still dropped (its
+    `s` asked to stop the group when the gap was taken at the turn); a key read after
+    a real pause, though its turn comes at once, is a command again."""
+    async with three(tmp_path) as (app, pilot, port):
+        await on_row(pilot, app, 2)  # a group
+        i_read = events.Key("i", "i")
+        app.post_message(i_read)
+        await until(pilot, lambda: any("is a group, not a node" in t for t in toasts(app)),
+                    "i refused")
+        await until(pilot, lambda: time.monotonic() > i_read.time + 1, "a second later")
+        for key in "stop":  # read with the i, their turn only now
+            read = events.Key(key, key)
+            read.time = i_read.time + 0.05
+            app.post_message(read)
+        await keys_handled(pilot, app)
+        assert dialogs(app) == [] and not COMMANDS & set(port.ops())
+        assert app.tabs.active == "nodes"
+        after_pause = events.Key("2", "2")  # read after a pause, its turn with the burst's
+        after_pause.time = i_read.time + 0.05 + BURST_GAP + 0.1
+        app.post_message(after_pause)
+        await until(pilot, lambda: app.tabs.active == "args", "2 shows the Args tab")
+        assert not COMMANDS & set(port.ops())
 
 
 async def test_questions_that_stop_or_quit_open_on_the_safe_answer(tmp_path: Path) -> None:

@@ -172,6 +172,10 @@ class KeyOrder(App[int]):
         """Where a rerouted key goes in the waiting line: after those rerouted by the same
         key, before the keys read after it."""
         self._key_holds = 0
+        self._arrival = 0.0
+        """When the key on its trip was read from the terminal (Textual stamps each event
+        as it is made, in the driver's thread): bursts are told apart by these times, not
+        by when the keys' turns come, which a busy loop delays."""
         self._stuck_timer: Any = None
         self._settling: asyncio.Task[None] | None = None
         self.dropping_until = 0.0
@@ -205,6 +209,8 @@ class KeyOrder(App[int]):
             self._keys_waiting.appendleft(following)
             event = events.Key("escape", "\x1b")
         tracked = TrackedKey(event.key, event.character, self._key_done)
+        tracked.time = event.time  # when it was read, not when its turn came
+        self._arrival = event.time
         # no sender: a key sent by the app would stop at the screen, its trip ending
         # there before the app's bindings ran
         send_as_app(tracked)
@@ -257,34 +263,48 @@ class KeyOrder(App[int]):
         (`KeyHold.drop`) when the field will not open, so that keys meant for a node never
         become tuilaunch's commands."""
         self._key_holds += 1
-        return KeyHold(self._let_go)
+        # the burst to drop, if it comes to that, is the one of the key that took the hold
+        since = self._arrival if self._key_in_flight is not None else time.monotonic()
 
-    def _let_go(self, drop: bool, said: Callable[[], None] | None = None) -> None:
+        def let_go(drop: bool, said: Callable[[], None] | None = None) -> None:
+            self._let_go(drop, said, since)
+
+        return KeyHold(let_go)
+
+    def _let_go(self, drop: bool, said: Callable[[], None] | None, since: float) -> None:
         self._key_holds = max(0, self._key_holds - 1)  # 0 already when it was stuck
         if drop:
-            self._drop_burst(said)
+            self._drop_burst(said, since)
         self._next_key()
 
-    def _drop_burst(self, said: Callable[[], None] | None = None) -> None:
-        """Drops the keys waiting (those typed after the held action's key), and the keys of
-        the same burst still arriving: until a pause of `BURST_GAP` between two keys.
-        `said` is called at the first key dropped."""
+    def _drop_burst(self, said: Callable[[], None] | None, since: float) -> None:
+        """Drops the keys of the burst of the held action's key (read at `since`): those
+        waiting and those still to come, until a pause of `BURST_GAP` between two keys as
+        they were read, however late their turn comes. Keys typed after that pause are
+        kept. `said` is called at the first key dropped."""
         if self._key_holds:
             return  # another hold still waits for its field: those keys are its
         self._say_dropped = said
-        if self._keys_waiting:
-            self._keys_waiting.clear()
+        last = since
+        kept: deque[events.Key | events.Paste] = deque()
+        dropped = False
+        for key in self._keys_waiting:
+            if not kept and key.time - last < BURST_GAP:
+                last, dropped = key.time, True
+            else:
+                kept.append(key)
+        self._keys_waiting = kept
+        if dropped:
             self._tell_dropped()
         self._first_in_line = 0
-        self.dropping_until = time.monotonic() + BURST_GAP
+        self.dropping_until = last + BURST_GAP
 
     def _dropped(self, event: events.Key | events.Paste) -> bool:
         """A key of a burst being dropped: it goes nowhere, and the burst goes on."""
-        now = time.monotonic()
-        if now >= self.dropping_until:
+        if event.time >= self.dropping_until:
             self._say_dropped = None
             return False
-        self.dropping_until = now + BURST_GAP
+        self.dropping_until = event.time + BURST_GAP
         self._tell_dropped()
         return True
 
