@@ -164,7 +164,7 @@ class Supervisor:
         it (a tool, a terminal given there by a restart are theirs to know), for the ones
         that answer now: the launching side's `status` reports them."""
         remote = self.core.placing.remote
-        return {} if remote is None else await remote.commands()
+        return {} if remote is None else await remote.requests.commands()
 
     # --- the run ------------------------------------------------------------------------------
 
