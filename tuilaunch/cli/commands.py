@@ -54,8 +54,9 @@ if TYPE_CHECKING:
     from ..tui.app import TuiLaunchApp
 
 
-def main(argv: list[str]) -> int:
-    return run(commands_parser().parse_args(argv))
+def main(argv: list[str], handler: Callable[[argparse.Namespace], int] | None = None) -> int:
+    """`handler`: the command's, where it is not a cmd_NAME here or in inspector.py."""
+    return run(commands_parser().parse_args(argv), handler)
 
 
 def run(options: argparse.Namespace, handler: Callable[[argparse.Namespace], int] | None = None,

@@ -151,10 +151,11 @@ def _main(argv: list[str] | None) -> int:
 
         return proxy.main(argv)
     if is_command(argv) and argv[0] == "record":  # one session at a time: record.py
-        from .record import main as record_main
+        from .commands import main as session_command
+        from .record import cmd_record
 
         ensure_environment()
-        return record_main(argv)
+        return session_command(argv, cmd_record)
     if is_command(argv):
         from .fleet import main as command_main
 

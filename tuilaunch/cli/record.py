@@ -19,24 +19,11 @@ from typing import TYPE_CHECKING, Any
 from ..client.link import Link, open_link
 from ..engine.errors import LaunchError
 from ..engine.run.session.session_dir import SessionError
-from ..engine.run.vocabulary.requests import (
-    BlackBox,
-    BlackBoxWrite,
-    RecordStart,
-    RecordStop,
-    RecordTake,
-)
+from ..engine.run.vocabulary import ros_requests as rq
 from .inspect.inspector import SLACK
 
 if TYPE_CHECKING:
     from ..client.inspect.recording import RecordFile
-
-
-def main(argv: list[str]) -> int:
-    from .commands import run
-    from .parsers import commands_parser
-
-    return run(commands_parser().parse_args(argv), cmd_record)
 
 
 def black_box_option(seconds: float, size_mb: float) -> None:
@@ -63,11 +50,11 @@ def cmd_record(options: argparse.Namespace) -> int:
             raise SessionError(f"topic {topic!r} is not a full name: write /{topic}")
     link = open_link(options.name, timeout=SLACK)
     try:
-        answer = link.request(RecordStart(topics=options.topic))
+        answer = link.request(rq.RecordStart(topics=options.topic))
         try:
             record = RecordFile(options.output, options.name)
         except OSError as exc:
-            link.request(RecordStop(recording=answer["recording"]))
+            link.request(rq.RecordStop(recording=answer["recording"]))
             raise SessionError(str(exc)) from None
         _record(link, answer, record, options.duration)
     finally:
@@ -86,12 +73,12 @@ def _record(link_: Link, answer: dict[str, Any], file: RecordFile,
     try:
         try:
             while end is None or time.monotonic() < end:
-                file.apply(link_.request(RecordTake(recording=ident)))
+                file.apply(link_.request(rq.RecordTake(recording=ident)))
         except KeyboardInterrupt:
             pass  # Ctrl+C ends the recording: what came is written, the file completed
         try:  # what the session took meanwhile, then the end of it there
-            file.apply(link_.request(RecordTake(recording=ident, wait=0)))
-            link_.request(RecordStop(recording=ident), short=True)
+            file.apply(link_.request(rq.RecordTake(recording=ident, wait=0)))
+            link_.request(rq.RecordStop(recording=ident), short=True)
         except (SessionError, OSError, KeyboardInterrupt):
             pass  # the link is gone: the file holds what came, and is completed below
     finally:
@@ -106,13 +93,13 @@ def _black_box(options: argparse.Namespace) -> int:
             if options.black_box_on < 0 or not options.black_box_size > 0:
                 raise SessionError("--black-box-on needs seconds >= 0 and a positive "
                                    "--black-box-size")
-            status = link.request(BlackBox(seconds=options.black_box_on,
+            status = link.request(rq.BlackBox(seconds=options.black_box_on,
                                            size=int(options.black_box_size * (1 << 20))))
             state = f"on: the last {status['seconds']:g} s" if status["on"] else "off"
             print(f"black box {state}")
             if not options.black_box:
                 return 0
-        written = link.request(BlackBoxWrite())
+        written = link.request(rq.BlackBoxWrite())
     finally:
         link.close()
     where = f"{link.host}:" if link.host else ""
@@ -120,4 +107,4 @@ def _black_box(options: argparse.Namespace) -> int:
     return 0
 
 
-__all__ = ["black_box_option", "cmd_record", "main"]
+__all__ = ["black_box_option", "cmd_record"]

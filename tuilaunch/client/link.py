@@ -18,8 +18,8 @@ from ..engine.run.machines.proxy import SERVER_GONE_WORDS
 from ..engine.run.machines.remote import Address, open_remote_link, parse_address
 from ..engine.run.session import session_dir
 from ..engine.run.session.connection import Connection, run_blocking
-from ..engine.run.session.forward import Forward
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.forward import Forward
 from ..engine.run.vocabulary.request import Request
 
 R = TypeVar("R")

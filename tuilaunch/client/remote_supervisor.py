@@ -36,25 +36,13 @@ from ..engine.run.events import Event
 from ..engine.run.machines.remote import RemoteError, RemoteLink
 from ..engine.run.session import session_dir
 from ..engine.run.session.connection import Connection
-from ..engine.run.session.forward import Forward
 from ..engine.run.session.log_reader import LAUNCH_LOG
 from ..engine.run.session.protocol import ProtocolError, Stamps
 from ..engine.run.session.reconnector import RETRY_FIRST, RETRY_MOST, Reconnector
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary import requests as rq
+from ..engine.run.vocabulary.forward import Forward
 from ..engine.run.vocabulary.request import Request
-from ..engine.run.vocabulary.requests import (
-    Apply,
-    Kill,
-    ReadLog,
-    ReadStamps,
-    Restart,
-    RunAction,
-    SetView,
-    ShutdownLaunch,
-    Start,
-    Stop,
-    Subscribe,
-)
 from .gaps import Gaps
 from .history import merged
 from .inspect.watches import Watches
@@ -154,7 +142,7 @@ class RemoteSupervisor:
         self = cls(name, session, conn)
         self.gaps.scrollback, self.max_lines, self.interval = scrollback, max_lines, interval
         try:
-            result = await asyncio.wait_for(conn.call(Subscribe(max_lines, interval)),
+            result = await asyncio.wait_for(conn.call(rq.Subscribe(max_lines, interval)),
                                             ANSWER_TIMEOUT)
         except TimeoutError:
             conn.close()
@@ -200,7 +188,7 @@ class RemoteSupervisor:
         """Subscribes on the current connection; from here on lines are counted from the
         log files' sizes it answers with."""
         # fair: with a screenful a second, a loud node must not hide the others' lines
-        result: dict[str, Any] = await self.conn.call(Subscribe(
+        result: dict[str, Any] = await self.conn.call(rq.Subscribe(
             max_lines=self.max_lines, interval=self.interval, fair=True, only=self.only,
             plain=True, stamps=self.stamps_shown))
         self.gaps.subscribed(result["offsets"])
@@ -294,7 +282,7 @@ class RemoteSupervisor:
             return
         self.only = process
         if self.link_lost is None:
-            await self._request(SetView(only=process))
+            await self._request(rq.SetView(only=process))
 
     async def _switched(self, only: str | None, offsets: dict[str, int]) -> None:
         """A `view` event: the lines of the pane now shown that were not sent (gaps.py)."""
@@ -323,7 +311,7 @@ class RemoteSupervisor:
                 continue  # heard lately, or the last probe is still unanswered
             self._probed = now
             with contextlib.suppress(ConnectionError, OSError):
-                self.conn.send(ReadLog(LAUNCH_LOG, limit=0))  # its reply is passed over
+                self.conn.send(rq.ReadLog(LAUNCH_LOG, limit=0))  # its reply is passed over
 
     def retry_now(self) -> None:
         """Reconnect at once instead of at the next try (on the loop's thread)."""
@@ -352,7 +340,7 @@ class RemoteSupervisor:
         connection are the server's no longer."""
         self.stamps_shown = shown
         before = self.gaps.lines_before
-        result = await self._request(ReadStamps(
+        result = await self._request(rq.ReadStamps(
             on=shown, since=None if since is None else max(since - before, 0)))
         first = before + int(result.get("first") or 0)
         stamps = Stamps().decode(list(result.get("stamps") or []))
@@ -379,28 +367,28 @@ class RemoteSupervisor:
         await self._request(VERBS[verb](process))
 
     async def start(self, process_id: str) -> None:
-        await self._request(Start(process_id))
+        await self._request(rq.Start(process_id))
 
     async def stop(self, process_id: str) -> None:
-        await self._request(Stop(process_id))
+        await self._request(rq.Stop(process_id))
 
     async def restart(self, process_id: str, prefix: str | None = None,
                       log_level: str | None = None, terminal: bool = False) -> None:
         """As Supervisor.restart: `prefix` runs it under a tool, `terminal` gives it a
         terminal, until a plain restart."""
-        await self._request(Restart(process_id, prefix, log_level, terminal))
+        await self._request(rq.Restart(process_id, prefix, log_level, terminal))
 
     async def shutdown(self, reason: str = "shutdown") -> None:
         self.stopping = True
-        await self._request(ShutdownLaunch(reason=reason))
+        await self._request(rq.ShutdownLaunch(reason=reason))
 
     async def run_action(self, action_id: str) -> None:
-        await self._request(RunAction(action=action_id))
+        await self._request(rq.RunAction(action=action_id))
 
     async def replace_plan(self, plan: Plan) -> PlanDiff:
         """Relaunches with the session's accepted arguments (the plan was resolved from them);
         the server serialises relaunches and tells every client."""
-        result = await self._request(Apply(arguments=self.session.arguments))
+        result = await self._request(rq.Apply(arguments=self.session.arguments))
         stop, start = list(result["stop"]), list(result["start"])
         return PlanDiff([], stop, start)
 
@@ -418,13 +406,13 @@ class RemoteSupervisor:
         if self.host is not None:
             # over there: only the link reaches it, and only "kill now" is ours to send
             if self.stopping and self.link_lost is None and not self.conn.closing:
-                self.conn.send(Kill())
+                self.conn.send(rq.Kill())
             return
         if self.stopping:
-            if not send_once(self.name, Kill()):
+            if not send_once(self.name, rq.Kill()):
                 self._kill_server()
         elif self.owner and not self.keep_on_hangup and not self.detached:
-            send_once(self.name, ShutdownLaunch("the UI ended"))
+            send_once(self.name, rq.ShutdownLaunch("the UI ended"))
 
     def _kill_server(self) -> None:
         """"Kill now" and the server does not answer: SIGKILL it; its watchdog then kills

@@ -17,19 +17,7 @@ from typing import Any
 
 from ..engine.plan.model import Plan
 from ..engine.plan.session import Session
-from ..engine.run.events import (
-    Dropped,
-    Event,
-    Failed,
-    LifecycleChanged,
-    Log,
-    Output,
-    ProcessExited,
-    Relaunched,
-    Resources,
-    Shutdown,
-    Started,
-)
+from ..engine.run import events as ev
 from ..engine.run.session.connection import Connection
 from ..engine.run.session.log_reader import LogLine, tail_lines
 from ..engine.run.session.protocol import Stamps, event_from_dict
@@ -39,7 +27,7 @@ from .history import merged
 from .remote_lifecycle import RemoteLifecycle
 from .served_session import ServedSession
 
-Consumer = Callable[[Event], None]
+Consumer = Callable[[ev.Event], None]
 
 
 def merged_usage(held: dict[str, Any], moved: dict[str, Any]) -> dict[str, Any]:
@@ -78,7 +66,7 @@ class SessionState:
         self.shutdown_reason: str | None = None
         """Why the session began to stop, as its server said (`tuilaunch stop`, another
         client's quit, a signal): a client that did not ask says it before leaving."""
-        self.history: list[Event] = []
+        self.history: list[ev.Event] = []
         self.consumers: list[Consumer] = []
         self.usage: dict[str, Any] = {}  # the figures of `resources`, which sends changes
         self.stamps = Stamps()  # the current batch's output stamps
@@ -126,7 +114,7 @@ class SessionState:
         self.gaps.heard(recent)
         for data in recent:
             event = event_from_dict(data)
-            if isinstance(event, ProcessExited) and event.process and event.code is not None:
+            if isinstance(event, ev.ProcessExited) and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
                 self._note_crash(event)
         return recent
@@ -157,60 +145,60 @@ class SessionState:
             if "stamps" in data:
                 self.stamps.unpack(data)
             event = event_from_dict(data)
-            if isinstance(event, Output) and event.process:
+            if isinstance(event, ev.Output) and event.process:
                 self.gaps.count(event.process, len(event.lines))
                 if self.remote:  # only a link's stream leaves stamps out
                     event.data = {**(event.data or {}),
                                   "line": self.gaps.number(len(event.lines))}
-            elif isinstance(event, Dropped) and event.process:
+            elif isinstance(event, ev.Dropped) and event.process:
                 # in the file, not sent to us: where, for a display to read them back
                 event.data = self.gaps.where(event.process)
                 self.gaps.count(event.process, event.code or 0)
             else:
                 self.gaps.last_event = max(self.gaps.last_event, event.time)
-            if isinstance(event, Relaunched):
+            if isinstance(event, ev.Relaunched):
                 self.adopt(dict(item.split(":=", 1) for item in event.lines), True)
             self._note_pid(event)
-            if isinstance(event, ProcessExited) and event.process and event.code is not None:
+            if isinstance(event, ev.ProcessExited) and event.process and event.code is not None:
                 self.exit_codes[event.process] = event.code
                 self._note_crash(event)
-            if isinstance(event, (ProcessExited, Failed)) and event.process and event.reason:
+            if isinstance(event, (ev.ProcessExited, ev.Failed)) and event.process and event.reason:
                 self.reasons[event.process] = event.reason
-            if isinstance(event, Shutdown):
+            if isinstance(event, ev.Shutdown):
                 self.shutdown_reason = event.reason or "stop requested"
-            if isinstance(event, LifecycleChanged) and event.process:
+            if isinstance(event, ev.LifecycleChanged) and event.process:
                 self.lifecycle.follow(event.process, event.reason or "")
-            if isinstance(event, Resources):
+            if isinstance(event, ev.Resources):
                 self.usage = merged_usage(self.usage, event.data or {})
                 event.data = dict(self.usage)  # the consumers get them all
             self.deliver(event)
 
-    def deliver(self, event: Event) -> None:
+    def deliver(self, event: ev.Event) -> None:
         for consumer in list(self.consumers):
             consumer(event)
 
     def say(self, text: str, level: str = "INFO") -> None:
         """A line of this client's own (a lost link, a reconnection) to the consumers."""
-        self.deliver(Log(reason=text, level=level))
+        self.deliver(ev.Log(reason=text, level=level))
 
-    def _note_ends(self, events: list[Event]) -> None:
+    def _note_ends(self, events: list[ev.Event]) -> None:
         """How processes ended before this client came (the server's recent events)."""
         for event in events:
             self._note_pid(event)
-            if isinstance(event, (ProcessExited, Failed)) and event.process and event.reason:
+            if isinstance(event, (ev.ProcessExited, ev.Failed)) and event.process and event.reason:
                 self.reasons[event.process] = event.reason
-            if isinstance(event, ProcessExited) and event.process:
+            if isinstance(event, ev.ProcessExited) and event.process:
                 self._note_crash(event)
 
-    def _note_pid(self, event: Event) -> None:
+    def _note_pid(self, event: ev.Event) -> None:
         if event.process is None:
             return
-        if isinstance(event, Started) and event.pid is not None:
+        if isinstance(event, ev.Started) and event.pid is not None:
             self.pids[event.process] = event.pid
-        elif isinstance(event, (ProcessExited, Failed)):
+        elif isinstance(event, (ev.ProcessExited, ev.Failed)):
             self.pids.pop(event.process, None)
 
-    def _note_crash(self, event: ProcessExited) -> None:
+    def _note_crash(self, event: ev.ProcessExited) -> None:
         """An exit nobody asked for with a non-zero status: the run's exit status is 1."""
         assert event.process is not None
         if event.crashed:

@@ -15,29 +15,19 @@ from textual.app import ComposeResult
 from textual.containers import Vertical
 from textual.timer import Timer
 
-from ..client.port import LaunchPort
 from ..engine.errors import LaunchError
 from ..engine.plan.model import ArgumentInfo, PlanDiff
-from ..engine.plan.session import Preview, Session, Stamp, file_stamp
-from ..engine.run.engine_thread import EngineThread
+from ..engine.plan.session import Preview, Stamp, file_stamp
+from .nodes.host import SessionParts
 from .screens.args_panel import ArgsPanel, check_plan, check_values, type_notes
 from .screens.tree_panel import LaunchTree
 
 
-class ArgsHost(Protocol):
+class ArgsHost(SessionParts, Protocol):
     """What the Args tab needs of whoever holds its session."""
 
     own_relaunch: list[str] | None
     """The arguments of this client's own relaunch, until the session says it happened."""
-
-    @property
-    def session(self) -> Session: ...
-
-    @property
-    def supervisor(self) -> LaunchPort | None: ...
-
-    @property
-    def engine(self) -> EngineThread: ...
 
     @property
     def launch_tree(self) -> LaunchTree: ...

@@ -63,15 +63,8 @@ class Quitting:
         if not running:
             self.stop_all_and_exit()
             return
-
-        def answered(answer: str | None) -> None:
-            if answer == "stop":
-                self.stop_all_and_exit()
-            elif answer == "detach":
-                self.detach()
-
         # a session runs on without this window: detaching is one of the answers
-        self._ask_quit(QuitScreen(running, detach=True), answered)
+        self._ask_stop_or_detach(QuitScreen(running, detach=True))
 
     def _asking_to_quit(self) -> bool:
         return any(getattr(screen, "quit_question", False) for screen in self.app.screen_stack)
@@ -81,6 +74,15 @@ class Quitting:
         screen.quit_question = True
         self.app.push_screen(screen, answered)
 
+    def _ask_stop_or_detach(self, screen: QuitScreen) -> None:
+        def answered(answer: str | None) -> None:
+            if answer == "stop":
+                self.stop_all_and_exit()
+            elif answer == "detach":
+                self.detach()
+
+        self._ask_quit(screen, answered)
+
     def _quit_remote(self, running: list[str]) -> None:
         """On another machine's session, quitting leaves it running unless the operator
         says to stop it: a robot's launch is not stopped by closing a laptop's TUI. With
@@ -89,15 +91,8 @@ class Quitting:
         if not running or (supervisor is not None and supervisor.link_lost is not None):
             self.detach()
             return
-
-        def answered(answer: str | None) -> None:
-            if answer == "stop":
-                self.stop_all_and_exit()
-            elif answer == "detach":
-                self.detach()
-
         # the local question's keys: `n` keeps running here too, `d` detaches
-        self._ask_quit(QuitScreen(running, detach=True, host=self.app.session_host), answered)
+        self._ask_stop_or_detach(QuitScreen(running, detach=True, host=self.app.session_host))
 
     def _offer_kill(self, running: list[str]) -> None:
         """A second q while stubborn processes stop: SIGKILL them now, or keep waiting."""

@@ -45,6 +45,7 @@ from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.events import LIVE_STATES, Event, Reading, Relaunched
 from ..engine.run.session.session_dir import SessionError
+from ..engine.run.vocabulary.forward import Forward
 from ..engine.run.vocabulary.request import Request
 from .inspect.log_levels import LogLevels
 from .inspect.recording import Recordings
@@ -133,26 +134,15 @@ class SessionView:
 
     # --- as the host of the single TUI's pieces ----------------------------------------------
 
-    @property
-    def app(self) -> App[Any]:
-        return self.tree.app
-
-    @property
-    def quitting(self) -> bool:
-        return self.screen.quitting
+    app = Forward[App[Any]]("tree")
+    quitting = Forward[bool]("screen")
+    engine = Forward[EngineThread]("screen")
+    read_only = Forward[bool]("screen")
 
     @property
     def address(self) -> str:
         """As the command line takes it."""
         return self.name if self.host is None else f"{self.host}:{self.name}"
-
-    @property
-    def engine(self) -> EngineThread:
-        return self.screen.engine
-
-    @property
-    def read_only(self) -> bool:
-        return self.screen.read_only
 
     def client(self) -> LaunchPort:
         """The session's client; SessionError (a LaunchError) before it is followed (a key

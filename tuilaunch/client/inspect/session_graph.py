@@ -13,15 +13,7 @@ from typing import Any, Protocol
 
 from ...engine.ros.calls import ParameterInfo, SetResult
 from ...engine.ros.messages import FieldInfo
-from ...engine.run.vocabulary.requests import (
-    CallService,
-    Nodes,
-    ParamsDescribe,
-    ParamsGet,
-    ParamsSet,
-    ServiceFields,
-    Services,
-)
+from ...engine.run.vocabulary import ros_requests as rq
 
 
 class GraphCalls(Protocol):
@@ -56,38 +48,39 @@ class SessionGraph:
         self.request = request
 
     async def list_nodes(self) -> list[str]:
-        return [str(name) for name in (await self.request(Nodes()))["nodes"]]
+        return [str(name) for name in (await self.request(rq.Nodes()))["nodes"]]
 
     async def list_services(self) -> list[tuple[str, list[str]]]:
         return [(str(name), [str(t) for t in types])
-                for name, types in (await self.request(Services()))["services"]]
+                for name, types in (await self.request(rq.Services()))["services"]]
 
     async def service_fields(self, type_name: str) -> list[FieldInfo]:
         return [field_info(f) for f in
-                (await self.request(ServiceFields(type=type_name)))["fields"]]
+                (await self.request(rq.ServiceFields(type=type_name)))["fields"]]
 
     async def call_service(self, name: str, request: dict[str, Any], timeout: float = 5.0,
                            wait: float | None = 0.0, service_type: str | None = None)\
             -> tuple[dict[str, Any], dict[str, Any]]:
-        result = await self.request(CallService(service=name, type=service_type or "",
+        result = await self.request(rq.CallService(service=name, type=service_type or "",
                                                 request=request, timeout=timeout))
         return result["request"], result["response"]
 
     async def describe_parameters(self, node: str, names: list[str] | None = None,
                                   timeout: float = 5.0) -> list[ParameterInfo]:
-        result = await self.request(ParamsDescribe(node=node))
+        result = await self.request(rq.ParamsDescribe(node=node))
         return [ParameterInfo(**p) for p in result["parameters"]
                 if names is None or p["name"] in names]
 
     async def set_parameters(self, node: str, values: dict[str, Any], timeout: float = 5.0)\
             -> list[SetResult]:
-        result = await self.request(ParamsSet(node=node, values=values))
+        result = await self.request(rq.ParamsSet(node=node, values=values))
         return [SetResult(r["name"], bool(r["ok"]), str(r["reason"] or ""))
                 for r in result["results"]]
 
     async def get_parameters(self, node: str, names: list[str], timeout: float = 5.0)\
             -> dict[str, Any]:
-        values: dict[str, Any] = (await self.request(ParamsGet(node=node, names=names)))["values"]
+        answer = await self.request(rq.ParamsGet(node=node, names=names))
+        values: dict[str, Any] = answer["values"]
         return values
 
 

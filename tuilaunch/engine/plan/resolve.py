@@ -22,38 +22,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from ..describe import entities as en
 from ..describe.conditions import ConditionOutcome, condition_outcome
-from ..describe.entities import (
-    AppendEnvironmentVariable,
-    CallService,
-    DeclareLaunchArgument,
-    DslOpaque,
-    EnvironmentStack,
-    ExecuteProcess,
-    Group,
-    IncludeLaunchDescription,
-    IoCallbacks,
-    LaunchDescription,
-    LoadComposableNodes,
-    LogInfo,
-    Node,
-    OpaqueCoroutine,
-    OpaqueFunction,
-    PushRosNamespace,
-    RegisterEventHandler,
-    SendSignal,
-    SetEnvironmentVariable,
-    SetLaunchConfiguration,
-    SetParameter,
-    SetParameters,
-    SetParametersFromFile,
-    SetRemap,
-    Shutdown,
-    StopProcess,
-    TimerAction,
-    UnsetEnvironmentVariable,
-    UnsetLaunchConfiguration,
-)
 from ..describe.environ import EnvironView
 from ..describe.lifecycle import ChangeStateAction, LifecycleTransition
 from ..describe.python.loader import (
@@ -177,7 +147,7 @@ class Resolver:
                 self._visit_leniently(entity, scope, parent)
             elif scope.trigger is None or not scope.enabled:
                 self.visit(entity, scope, parent)
-            elif isinstance(entity, OpaqueFunction) or is_custom_action(entity):
+            elif isinstance(entity, en.OpaqueFunction) or is_custom_action(entity):
                 self.defer([entity], scope, parent, "runs when the event happens")
             else:
                 self._visit_or_defer(entity, scope, parent)
@@ -252,52 +222,52 @@ class Resolver:
     def visit(self, entity: Any, scope: Scope, parent: TreeItem) -> None:
         if self._environ is not None:
             self._environ.show(scope.env)
-        if isinstance(entity, LaunchDescription):
+        if isinstance(entity, en.LaunchDescription):
             self.walk(entity.entities, scope, parent)
-        elif isinstance(entity, DeclareLaunchArgument):
+        elif isinstance(entity, en.DeclareLaunchArgument):
             declare_argument(self.arguments, self.lenient, entity, scope)
-        elif isinstance(entity, Group):
+        elif isinstance(entity, en.Group):
             self.group(entity, scope, parent)
-        elif isinstance(entity, Node | ExecuteProcess):
+        elif isinstance(entity, en.Node | en.ExecuteProcess):
             self.process(entity, scope, parent)
-        elif isinstance(entity, IncludeLaunchDescription):
+        elif isinstance(entity, en.IncludeLaunchDescription):
             self.include(entity, scope, parent)
-        elif isinstance(entity, PushRosNamespace):
+        elif isinstance(entity, en.PushRosNamespace):
             if self.gate(entity, scope)[0]:
                 scope.namespace = join_namespace(scope.namespace,
                                                  perform(entity.namespace, scope.context()))
                 scope.namespace_pushed = True
-        elif isinstance(entity, LogInfo | CallService | SetParameters | Shutdown | IoCallbacks
-                        | LoadComposableNodes | StopProcess | SendSignal | OpaqueCoroutine
-                        | ChangeStateAction
+        elif isinstance(entity, en.LogInfo | en.CallService | en.SetParameters | en.Shutdown
+                        | en.IoCallbacks | en.LoadComposableNodes | en.StopProcess
+                        | en.SendSignal | en.OpaqueCoroutine | ChangeStateAction
                         | LifecycleTransition):
             self.action(entity, scope, parent)
-        elif isinstance(entity, TimerAction):
+        elif isinstance(entity, en.TimerAction):
             self.events.timer(entity, scope, parent)
-        elif isinstance(entity, RegisterEventHandler):
+        elif isinstance(entity, en.RegisterEventHandler):
             self.events.event_handler(entity, scope, parent)
-        elif isinstance(entity, DslOpaque | OpaqueFunction) or is_custom_action(entity):
+        elif isinstance(entity, en.DslOpaque | en.OpaqueFunction) or is_custom_action(entity):
             self.opaque(entity, scope, parent)
-        elif isinstance(entity, SetEnvironmentVariable | SetLaunchConfiguration):
+        elif isinstance(entity, en.SetEnvironmentVariable | en.SetLaunchConfiguration):
             if self.gate(entity, scope)[0]:
                 ctx = scope.context()
-                into: dict[str, Any] = scope.env if isinstance(entity, SetEnvironmentVariable) \
+                into: dict[str, Any] = scope.env if isinstance(entity, en.SetEnvironmentVariable) \
                     else scope.configurations
                 into[perform(entity.name, ctx)] = perform(entity.value, ctx)
-        elif isinstance(entity, UnsetEnvironmentVariable):
+        elif isinstance(entity, en.UnsetEnvironmentVariable):
             if self.gate(entity, scope)[0]:
                 scope.env[perform(entity.name, scope.context())] = None
-        elif isinstance(entity, SetParameter):
+        elif isinstance(entity, en.SetParameter):
             if self.gate(entity, scope)[0]:
                 scope.global_parameters.append((entity.name, entity.value))
-        elif isinstance(entity, SetParametersFromFile):
+        elif isinstance(entity, en.SetParametersFromFile):
             if self.gate(entity, scope)[0]:
                 scope.global_parameters.append((None, entity.filename))
-        elif isinstance(entity, SetRemap):
+        elif isinstance(entity, en.SetRemap):
             if self.gate(entity, scope)[0]:
                 scope.remaps.append((entity.src, entity.dst))
-        elif isinstance(entity, AppendEnvironmentVariable | EnvironmentStack
-                        | UnsetLaunchConfiguration):
+        elif isinstance(entity, en.AppendEnvironmentVariable | en.EnvironmentStack
+                        | en.UnsetLaunchConfiguration):
             if self.gate(entity, scope)[0]:
                 apply_scope_action(entity, scope)
         else:
@@ -307,7 +277,7 @@ class Resolver:
 
     # --- groups and triggers ---------------------------------------------------------------
 
-    def group(self, group: Group, outer: Scope, parent: TreeItem) -> None:
+    def group(self, group: en.Group, outer: Scope, parent: TreeItem) -> None:
         enabled, skipped, outcome = self._gate_outcome(group, outer)
         scope = outer.child(group.scoped)
         scope.enabled, scope.skipped_by = enabled, skipped
@@ -349,7 +319,7 @@ class Resolver:
 
     # --- includes and opaque functions -----------------------------------------------------
 
-    def include(self, include: IncludeLaunchDescription, outer: Scope, parent: TreeItem)\
+    def include(self, include: en.IncludeLaunchDescription, outer: Scope, parent: TreeItem)\
             -> None:
         enabled, skipped = self.gate(include, outer)
         ctx = outer.context()
@@ -413,7 +383,7 @@ class Resolver:
 
     # --- processes -------------------------------------------------------------------------
 
-    def process(self, entity: Node | ExecuteProcess, scope: Scope, parent: TreeItem) -> None:
+    def process(self, entity: en.Node | en.ExecuteProcess, scope: Scope, parent: TreeItem) -> None:
         enabled, skipped = self.gate(entity, scope)
         counter = self._counter
         try:

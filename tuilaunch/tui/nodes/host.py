@@ -10,17 +10,21 @@ from ...engine.plan.session import Session
 from ...engine.run.engine_thread import EngineThread
 
 
-class NodesHost(Protocol):
+class SessionParts(Protocol):
     """The session's client (None until it is followed), the engine thread its calls run
-    on, the session (its plan), and the stops it asked for (their non-zero exit is no
-    failure)."""
+    on, and the session (its plan): what each of the view's tabs acts through."""
 
-    # read, never set, by the commands: properties, so the view's own attributes fit
+    # read, never set, by the tabs: properties, so the view's own attributes fit
     @property
     def engine(self) -> EngineThread: ...
     @property
     def supervisor(self) -> LaunchPort | None: ...
     @property
     def session(self) -> Session: ...
+
+
+class NodesHost(SessionParts, Protocol):
+    """The session's parts, and the stops it asked for (their non-zero exit is no failure)."""
+
     @property
     def asked_to_stop(self) -> set[str]: ...

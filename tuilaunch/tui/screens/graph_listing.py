@@ -11,9 +11,12 @@ import asyncio
 from collections.abc import Callable
 from typing import Any, cast
 
+from rich.text import Text
 from textual import work
 from textual.timer import Timer
 from textual.widget import Widget
+from textual.widgets import OptionList
+from textual.widgets.option_list import Option
 
 from ...client.inspect.session_graph import GraphCalls
 
@@ -26,6 +29,22 @@ on a busy machine, and nodes come and go."""
 def discovering(noun: str, every: float) -> str:
     """What an empty list of the graph says: a graph seen too early looks empty."""
     return f"no {noun} yet, discovering (asked every {every:g} s)"
+
+
+def refill(listing: OptionList, shown: list[str], title: str) -> bool:
+    """Lists the names `shown` under `title`. The row the user was on stays highlighted
+    (the list is asked again every few seconds): False when it is no longer shown."""
+    highlighted = listing.highlighted
+    was = None if highlighted is None or highlighted >= listing.option_count else \
+        listing.get_option_at_index(highlighted).id
+    listing.clear_options()
+    listing.add_options([Option(Text(name, no_wrap=True, overflow="ellipsis"), id=name)
+                         for name in shown])
+    listing.border_title = title
+    if was not in shown:
+        return False
+    listing.highlighted = shown.index(was)
+    return True
 
 
 class GraphListing:

@@ -14,7 +14,6 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Button, DataTable, Input, OptionList, Static
-from textual.widgets.option_list import Option
 
 from ...client.inspect.session_graph import GraphCalls
 from ...engine.plan.model import Plan
@@ -22,7 +21,7 @@ from ...engine.ros.calls import ParameterInfo
 from ...engine.run.vocabulary.requests import ParamsDump, ParamsLoad
 from .dialogs import PathScreen
 from .fields import Field
-from .graph_listing import GraphListing
+from .graph_listing import GraphListing, refill
 
 
 def show_value(value: Any) -> str:
@@ -137,20 +136,12 @@ class ParamsPanel(GraphListing, Horizontal):
     @on(Input.Changed, "#prm-filter")
     def _fill_nodes(self) -> None:
         term = self.query_one("#prm-filter", Input).value.lower()
-        listing = self.query_one("#prm-nodes", OptionList)
-        highlighted = listing.highlighted
-        was = None if highlighted is None or highlighted >= listing.option_count else \
-            listing.get_option_at_index(highlighted).id
-        listing.clear_options()
         shown = [n for n in self.nodes if term in n.lower()]
-        listing.add_options([Option(Text(n, no_wrap=True, overflow="ellipsis"), id=n)
-                             for n in shown])
         shared = len(self.shared)
-        listing.border_title = self.title(len(shown), term, "node", (
+        refill(self.query_one("#prm-nodes", OptionList), shown, self.title(
+            len(shown), term, "node",
             f"; {shared} name{'s' if shared > 1 else ''} shared by several nodes"
             if shared else ""))
-        if was in shown:  # the row the user was on stays highlighted
-            listing.highlighted = shown.index(was)
 
     @on(Input.Submitted, "#prm-filter")
     def _filter_submitted(self) -> None:

@@ -21,7 +21,7 @@ from ...engine.ros.messages import FieldInfo
 from ...engine.ros.ros_errors import MessageError, RosError
 from ..key_order import KeyHold, hold_keys
 from .fields import Field
-from .graph_listing import GraphListing
+from .graph_listing import GraphListing, refill
 
 
 @dataclass
@@ -156,20 +156,13 @@ class ServicesPanel(GraphListing, Horizontal):
     def _fill_list(self) -> None:
         term = self.query_one("#svc-filter", Input).value.lower()
         listing = self.query_one("#svc-list", OptionList)
-        highlighted = listing.highlighted
-        was = None if highlighted is None or highlighted >= listing.option_count else \
-            listing.get_option_at_index(highlighted).id
-        listing.clear_options()
         shown = [name for name, types in self.services
                  if (term in name.lower() or any(term in t.lower() for t in types))
                  and (term or not name.endswith(_STANDARD))]
-        listing.add_options([Option(Text(name, no_wrap=True, overflow="ellipsis"), id=name)
-                             for name in shown])
         hidden = "" if term else ", node parameter services hidden: type to search all"
-        listing.border_title = self.title(len(shown), term, "service", hidden)
-        if listing.option_count:
-            # the row the user was on stays highlighted when the list is asked again
-            listing.highlighted = shown.index(was) if was in shown else 0
+        if not refill(listing, shown, self.title(len(shown), term, "service", hidden)) \
+                and listing.option_count:
+            listing.highlighted = 0
 
     @on(Input.Submitted, "#svc-filter")
     def _filter_submitted(self) -> None:

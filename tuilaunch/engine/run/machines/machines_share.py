@@ -371,18 +371,6 @@ class MachinesCoordinator(Plugin):
             # as it is there once done (its events may still be on their way)
             self.supervisor.states[process_id] = state
 
-    async def commands(self) -> dict[str, dict[str, Any]]:
-        return await self.requests.commands()
-
-    async def take_keys(self, process_id: str) -> None:
-        await self.requests.take_keys(process_id)
-
-    def give_keys(self, process_id: str) -> None:
-        self.requests.give_keys(process_id)
-
-    async def type_keys(self, process_id: str, data: bytes) -> int:
-        return await self.requests.type_keys(process_id, data)
-
     async def _stop_share(self, share: Share, reason: str) -> None:
         """Asks the share to stop; its `ended` closes the link."""
         if share.conn is not None:

@@ -30,6 +30,7 @@ from ..events import LIVE_STATES, Event, Log, Output, Relaunched, Started
 from ..plugins import Handler
 from ..supervisor.stopping import CTRL_C_REASON
 from ..supervisor.supervisor import Supervisor
+from ..vocabulary.forward import Forward
 from ..vocabulary.request import Request, reply_to_json
 from ..vocabulary.requests import (
     Apply,
@@ -125,32 +126,14 @@ class SessionServer:
         """The requests added with `add_handler`, by class."""
         return dict(self._handlers)
 
-    @property
-    def clients(self) -> dict[int, ClientQueue]:
-        """Subscribed clients' queues, by client id."""
-        return self.hub.clients
-
-    @property
-    def queues(self) -> set[ClientQueue]:
-        return self.hub.queues
-
-    @property
-    def writers(self) -> set[asyncio.StreamWriter]:
-        return self.hub.writers
-
-    @property
-    def dropped_clients(self) -> int:
-        """Clients cut loose because they stopped reading."""
-        return self.hub.dropped_clients
-
-    @property
-    def ended(self) -> bool:
-        """The supervisor's run is over; writers send "ended" and stop."""
-        return self.hub.ended
-
-    @property
-    def status_code(self) -> int:
-        return self.hub.status_code
+    clients = Forward[dict[int, ClientQueue]](
+        "hub", doc="Subscribed clients' queues, by client id.")
+    queues = Forward[set[ClientQueue]]("hub")
+    writers = Forward[set[asyncio.StreamWriter]]("hub")
+    dropped_clients = Forward[int]("hub", doc="Clients cut loose because they stopped reading.")
+    ended = Forward[bool](
+        "hub", doc="The supervisor's run is over; writers send `ended` and stop.")
+    status_code = Forward[int]("hub")
 
     # --- the supervisor's events -------------------------------------------------------------
 

@@ -58,7 +58,7 @@ class Interacting:
         """The client typing into `process_id` let go: run elsewhere, so does this side."""
         core = self.core
         if not core.runs_here(process_id) and core.placing.remote is not None:
-            core.placing.remote.give_keys(process_id)
+            core.placing.remote.requests.give_keys(process_id)
 
     async def type_keys(self, process_id: str, data: bytes) -> int:
         """`write_input`, for a process here or on another machine (the keys are sent

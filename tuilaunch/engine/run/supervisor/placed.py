@@ -31,14 +31,9 @@ UNKNOWN = "unknown"
 on there, or not; nobody here can say until the link is back."""
 
 
-class RemoteControl(Protocol):
-    """What starts and stops a process on the machine it is placed on."""
-
-    async def forward(self, request: Start | Stop | Restart) -> None:
-        """Asks the process's machine to start, stop or restart it (the session's own
-        request, a restart with its prefix, log_level, terminal); raises LaunchError when
-        the machine cannot be asked."""
-        ...
+class RemoteKeys(Protocol):
+    """What types into a process on the machine it is placed on, and asks what it was
+    started with."""
 
     async def commands(self) -> dict[str, dict[str, Any]]:
         """What each process placed elsewhere was started with, as its machine's `status`
@@ -56,6 +51,21 @@ class RemoteControl(Protocol):
 
     async def type_keys(self, process_id: str, data: bytes) -> int:
         """Types `data` into `process_id` on its machine; the bytes it dropped."""
+        ...
+
+
+class RemoteControl(Protocol):
+    """What starts and stops a process on the machine it is placed on."""
+
+    async def forward(self, request: Start | Stop | Restart) -> None:
+        """Asks the process's machine to start, stop or restart it (the session's own
+        request, a restart with its prefix, log_level, terminal); raises LaunchError when
+        the machine cannot be asked."""
+        ...
+
+    @property
+    def requests(self) -> RemoteKeys:
+        """What asks the other machines for their processes' keyboards and commands."""
         ...
 
 
@@ -103,14 +113,14 @@ class Placing:
                               "launching side")
         await self.remote.forward(request)
 
-    def keys_of(self, plan: Plan, process_id: str) -> RemoteControl:
-        """Who types into `process_id`, run elsewhere: the launching side's remote control
-        (the keys go to the machine that runs it); LaunchError from a share."""
+    def keys_of(self, plan: Plan, process_id: str) -> RemoteKeys:
+        """Who types into `process_id`, run elsewhere: the launching side's remote control's
+        requests (the keys go to the machine that runs it); LaunchError from a share."""
         if self.remote is None:
             where = plan.process(process_id).machine or "the launching side"
             raise LaunchError(f"{process_id} runs on {where}: type into it from there or "
                               "from the launching side")
-        return self.remote
+        return self.remote.requests
 
 
-__all__ = ["ELSEWHERE", "UNKNOWN", "Placing", "RemoteControl"]
+__all__ = ["ELSEWHERE", "UNKNOWN", "Placing", "RemoteControl", "RemoteKeys"]

@@ -33,6 +33,7 @@ from ...plan.model import ActionKind, Plan, PlanDiff, diff_plans
 from ..events import Consumer, Event, LaunchEvent, Output, ProcessExited, Started
 from ..plugins import SupervisorPlugin
 from ..process.readers import Running
+from ..vocabulary.forward import Forward
 from ..vocabulary.requests import Restart
 from .core import SupervisorCore
 from .ending import Ending
@@ -63,23 +64,17 @@ class Supervisor:
 
     # --- the state others read (the core's) ---------------------------------------------------
 
-    @property
-    def plan(self) -> Plan:
-        return self.core.plan
-
-    @property
-    def states(self) -> dict[str, str]:
-        """Each process's and action's state, by id."""
-        return self.core.states
-
-    @property
-    def running(self) -> dict[str, Running]:
-        """The processes that run now, by id."""
-        return self.core.running
-
-    @property
-    def shutting_down(self) -> bool:
-        return self.core.shutting_down
+    plan = Forward[Plan]("core")
+    states = Forward[dict[str, str]]("core", doc="Each process's and action's state, by id.")
+    running = Forward[dict[str, Running]]("core", doc="The processes that run now, by id.")
+    shutting_down = Forward[bool]("core")
+    failed_parts = Forward[set[str]](
+        "core", doc="What failed inside a process (a component), by id: the launch ends non-zero.")
+    retries = Forward[dict[str, int]]("core", doc="Respawns of each process so far.")
+    busy = Forward[int](
+        "core", doc="Triggers sleeping or respawns scheduled: the run is not over while any is.")
+    log_dir = Forward[Path]("core")
+    plugins = Forward[list[SupervisorPlugin]]("core")
 
     @property
     def exit_codes(self) -> dict[str, int]:
@@ -92,37 +87,14 @@ class Supervisor:
         return self.core.records.having("death")
 
     @property
-    def failed_parts(self) -> set[str]:
-        """What failed inside a process (a component), by id: the launch ends non-zero."""
-        return self.core.failed_parts
-
-    @property
     def coming_back(self) -> set[str]:
         """Processes stopped to be started again (a restart, a relaunch)."""
         return set(self.core.records.having("coming_back"))
 
     @property
-    def retries(self) -> dict[str, int]:
-        """Respawns of each process so far."""
-        return self.core.retries
-
-    @property
     def respawn_waits(self) -> dict[str, asyncio.Event]:
         """Processes waiting out their respawn delay."""
         return self.core.records.having("respawn_wait")
-
-    @property
-    def busy(self) -> int:
-        """Triggers sleeping or respawns scheduled: the run is not over while any is."""
-        return self.core.busy
-
-    @property
-    def log_dir(self) -> Path:
-        return self.core.log_dir
-
-    @property
-    def plugins(self) -> list[SupervisorPlugin]:
-        return self.core.plugins
 
     # --- how the world hears of the launch, and plugs into it (the core's) --------------------
 
@@ -192,7 +164,7 @@ class Supervisor:
         it (a tool, a terminal given there by a restart are theirs to know), for the ones
         that answer now: the launching side's `status` reports them."""
         remote = self.core.placing.remote
-        return {} if remote is None else await remote.commands()
+        return {} if remote is None else await remote.requests.commands()
 
     # --- the run ------------------------------------------------------------------------------
 
