@@ -51,7 +51,7 @@ from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree, ascii_terminal
 from .server_start import ServerStarted
 from .session_link import DRAIN_HZ, PANE_CHROME, SessionLink
-from .session_view import COMMAND_BINDINGS, SessionView, pane_save_dir
+from .session_view import COMMAND_BINDINGS, SessionView, lifecycle_bindings, pane_save_dir
 from .status_line import StatusLine
 from .tab_panels import TabPanels
 from .textual_compat import Footer
@@ -111,10 +111,7 @@ class TuiLaunchApp(SessionLink, KeyOrder):
                 tooltip="Topics, rates, QoS problems, echo"),
         *COMMAND_BINDINGS,
         Binding("a", "command('all_output')", "All", show=False, tooltip="Output of all nodes"),
-        Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up",
-                tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
-        Binding("left_square_bracket", "command('lifecycle', 'down')", "Lifecycle down",
-                tooltip="Deactivate an active, clean up an inactive lifecycle node"),
+        *lifecycle_bindings(),
         Binding("f5", "apply", "Apply", tooltip="Relaunch with the edited arguments"),
         *INSPECTOR_BINDINGS,
         *LEAVING_BINDINGS,

@@ -69,6 +69,18 @@ COMMAND_BINDINGS = [
 """The keys of a view's selection's commands (`command`), the same in every app."""
 
 
+def lifecycle_bindings(show: bool = True) -> list[Binding]:
+    """`]` and `[`: the selected lifecycle node a step up or down (`command('lifecycle')`),
+    the same in every app; `show`: in the footer (a fleet's has no room for them)."""
+    return [
+        Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up",
+                show=show,
+                tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
+        Binding("left_square_bracket", "command('lifecycle', 'down')", "Lifecycle down",
+                show=show, tooltip="Deactivate an active, clean up an inactive lifecycle node"),
+    ]
+
+
 class ViewHost(Protocol):
     """What a view needs of the app that lays it out."""
 

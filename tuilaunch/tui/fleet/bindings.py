@@ -15,7 +15,7 @@ from ..inspect.inspector import INSPECTOR_BINDINGS
 from ..keys.keyboard import KEYBOARD_BINDINGS
 from ..screens.dialogs import HelpScreen
 from ..screens.output_panel import PANE_BINDINGS
-from ..session_view import COMMAND_BINDINGS
+from ..session_view import COMMAND_BINDINGS, lifecycle_bindings
 
 BINDINGS: list[BindingType] = [
     *KEYBOARD_BINDINGS,  # i, g, c: the selected session's keyboard (FleetApp.action_keyboard)
@@ -36,10 +36,7 @@ BINDINGS: list[BindingType] = [
     Binding("left_curly_bracket", "jump(-1)", "Previous session", show=False,
             tooltip="The previous session's root"),
     Binding("a", "all_output", "All", show=False, tooltip="This session's every node"),
-    Binding("right_square_bracket", "command('lifecycle', 'up')", "Lifecycle up", show=False,
-            tooltip="Configure an unconfigured, activate an inactive lifecycle node"),
-    Binding("left_square_bracket", "command('lifecycle', 'down')", "Lifecycle down", show=False,
-            tooltip="Deactivate an active, clean up an inactive lifecycle node"),
+    *lifecycle_bindings(show=False),
     *INSPECTOR_BINDINGS,  # o, L, b: on the selected session (FleetApp.action_inspector)
     # not in the footer: the header says it (`O: this one in full`), and the single TUI's
     # keys come first there (a tablet's browser shows Type to Filter whole)
