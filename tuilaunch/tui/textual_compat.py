@@ -160,11 +160,13 @@ class Footer(TextualFooter):
     """Textual's footer, its keys made as it draws them. Textual makes each FooterKey
     compact, then binds it to the footer's `compact` (False in a terminal): every key of
     the footer was restyled twice each time the footer is drawn anew, which is after most
-    keys (a focus move, a tab shown): a third of the CPU a keypress cost. Each key starts
-    with its footer's value instead; the binding still follows a change of it."""
+    keys (a focus move, a tab shown): a third of the CPU a keypress cost. Each bound key
+    starts with its footer's value instead; the binding still follows a change of it."""
 
     def compose(self) -> ComposeResult:
         for widget in super().compose():
-            if isinstance(widget, FooterKey):
+            # the palette's key is not bound to the footer: it stays compact, as Textual
+            # draws it
+            if isinstance(widget, FooterKey) and not widget.has_class("-command-palette"):
                 widget.set_reactive(FooterKey.compact, self.compact)
             yield widget
