@@ -52,6 +52,8 @@ class ArgsTab(Vertical):
         self.preview: Preview | None = None
         self.file_timer: Timer | None = None
         self.file_seen: Stamp = None
+        self.edited = False
+        """A value of the form was edited since it was drawn."""
 
     def compose(self) -> ComposeResult:
         plan = self.host.session.plan
@@ -66,12 +68,19 @@ class ArgsTab(Vertical):
         another client or with an edited file): an edit starts from what runs."""
         self.preview = None
         self.host.launch_tree.set_preview(None)
-        self.panel.arguments = self.host.session.plan.arguments
+        arguments = self.host.session.plan.arguments
+        if arguments == self.panel.arguments and not self.edited:
+            # the form shows just that (a session followed again after a lost link): drawn
+            # anew, its Select was removed while still mounting, which Textual raises on
+            return
+        self.edited = False
+        self.panel.arguments = arguments
         self.panel.refresh(recompose=True)
 
     @on(ArgsPanel.Edited)
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
         event.stop()
+        self.edited = True
         if self.host.supervisor is not None:  # the form drawn before the session is followed
             self.preview_values(event.values)
 
