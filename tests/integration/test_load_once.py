@@ -8,12 +8,7 @@ Each launch file's module level appends a line to a file: its lines are the load
 from __future__ import annotations
 
 import os
-import pty
 import re
-import select
-import signal
-import subprocess
-import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -30,6 +25,7 @@ from tuilaunch.engine.run.vocabulary.requests import Apply, ShutdownLaunch, Stat
 
 from ..conftest import run_cli, run_headless, session_folders, wait_for
 from .proc_tree import end, servers_of
+from .test_sessions import Terminal as SessionsTerminal
 
 COUNTED = """
 import os, sys, time
@@ -69,26 +65,14 @@ def loads_of(loads: Path) -> int:
     return len(loads.read_text().splitlines()) if loads.exists() else 0
 
 
-class Terminal:
+class Terminal(SessionsTerminal):
     """`tuilaunch ARGS` on a pseudo-terminal of 120x32, its output read as a terminal's."""
 
     def __init__(self, *args: str) -> None:
-        self.master, slave = pty.openpty()
-        env = {**os.environ, "TERM": "xterm-256color", "COLUMNS": "120", "LINES": "32"}
-        self.proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", *args], stdin=slave,
-                                     stdout=slave, stderr=slave, env=env,
-                                     start_new_session=True)
-        os.close(slave)
-        self.screen = b""
+        super().__init__(*args, size=(120, 32))
 
     def read_until(self, marker: bytes, limit: float = 90.0) -> bytes:
-        """What was printed up to and with the read that showed `marker`."""
-        end_at = time.monotonic() + limit
-        while marker not in self.screen:
-            assert time.monotonic() < end_at, \
-                f"{marker!r} never appeared: {self.screen[-600:]!r}"
-            self.pump(0.1)
-        return self.screen
+        return super().read_until(marker, limit)
 
     def row_state(self, process: str, limit: float = 90.0) -> str:
         """The state the first drawing of `process`'s row in the tree says."""
@@ -99,13 +83,6 @@ class Terminal:
                 f"{process}'s row never appeared: {plain(self.screen)[-600:]!r}"
             self.pump(0.1)
         return found.group(1).decode()
-
-    def pump(self, wait: float) -> None:
-        if select.select([self.master], [], [], wait)[0]:
-            try:
-                self.screen += os.read(self.master, 1 << 16)
-            except OSError:  # the program is gone
-                time.sleep(wait)
 
     def press(self, key: bytes) -> None:
         os.write(self.master, key)
@@ -122,19 +99,10 @@ class Terminal:
         return self.wait_exit()
 
     def wait_exit(self, limit: float = 90.0) -> int:
-        end_at = time.monotonic() + limit
-        while self.proc.poll() is None:
-            assert time.monotonic() < end_at, "the TUI never exited"
-            self.pump(0.1)
+        code = super().wait_exit(limit)
         for _ in range(20):  # what it printed last (an error line after the TUI's screen)
             self.pump(0.05)
-        return self.proc.returncode
-
-    def close(self) -> None:
-        if self.proc.poll() is None:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-            self.proc.wait()
-        os.close(self.master)
+        return code
 
 
 @pytest.fixture

@@ -180,27 +180,32 @@ def start_detached(write, *args: str) -> str:
 class Terminal:
     """A command on a pseudo-terminal whose screen is read continuously, as a terminal's."""
 
-    def __init__(self, *args: str) -> None:
+    def __init__(self, *args: str, size: tuple[int, int] | None = None) -> None:
+        """`size`: (columns, lines) the program is told, else the terminal's default."""
         self.master, slave = pty.openpty()
         env = {**os.environ, "TERM": "xterm-256color"}
+        if size is not None:
+            env.update(COLUMNS=str(size[0]), LINES=str(size[1]))
         self.proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", *args], stdin=slave,
                                      stdout=slave, stderr=slave, env=env,
                                      start_new_session=True)
         os.close(slave)
         self.screen = b""
 
-    def read_until(self, marker: bytes, limit: float = 60.0) -> None:
+    def read_until(self, marker: bytes, limit: float = 60.0) -> bytes:
+        """What was printed up to and with the read that showed `marker`."""
         end = time.monotonic() + limit
         while marker not in self.screen:
             assert time.monotonic() < end, f"{marker!r} never appeared: {self.screen[-500:]!r}"
             self.pump(0.1)
+        return self.screen
 
     def pump(self, wait: float) -> None:
         if select.select([self.master], [], [], wait)[0]:
             try:
                 self.screen += os.read(self.master, 1 << 16)
-            except OSError:
-                pass
+            except OSError:  # the program is gone: no loop spinning on its closed side
+                time.sleep(wait)
 
     def press_until_exit(self, key: bytes, limit: float = 60.0) -> int:
         """`key` (d, q) again every half second until the TUI exits: keys that come right
