@@ -11,6 +11,11 @@ from textual.css.query import NoMatches
 from tests.unit.test_app_pilot import following, pane, row, select, status, toasts, until
 from tuilaunch.engine.run.events import ProcessExited, Relaunched, Started
 from tuilaunch.tui.app import TuiLaunchApp
+from tuilaunch.tui.screens.fields import Field
+
+
+def preview(app: TuiLaunchApp) -> str:
+    return str(app.query_one("#args-preview").render())
 
 
 def form_value(app: TuiLaunchApp, name: str) -> str | None:
@@ -80,6 +85,23 @@ async def test_another_clients_relaunch_is_said_and_the_form_follows(tmp_path: P
         await until(pilot, lambda: status(app).endswith("robot:=r2"), "the header's values")
         select(app, "talker-1")
         await until(pilot, lambda: "/r2/" in str(app.detail_bar.render()), "its new name")
+
+
+async def test_an_edit_not_applied_gives_way_to_another_clients_relaunch(
+        tmp_path: Path) -> None:
+    """The form keeps its editors and takes the values that run now: what was typed and
+    not applied is gone, and the form is not left looking edited."""
+    async with following(tmp_path) as (app, pilot, port):
+        await pilot.press("a")
+        editor = app.query_one("#arg-robot", Field)
+        editor.value = "r9"
+        await until(pilot, lambda: "would" in preview(app), "the edit previewed")
+        port.tell(Relaunched(None, lines=["robot:=r2"]))
+        await until(pilot, lambda: form_value(app, "robot") == "r2", "the running value")
+        assert app.query_one("#arg-robot", Field) is editor  # not drawn anew
+        await pilot.press("f5")
+        await until(pilot, lambda: "nothing to apply" in toasts(app), "nothing left to apply")
+        assert "relaunch" not in port.ops()
 
 
 async def test_a_relaunch_before_this_client_came_is_no_news(tmp_path: Path) -> None:

@@ -52,8 +52,6 @@ class ArgsTab(Vertical):
         self.preview: Preview | None = None
         self.file_timer: Timer | None = None
         self.file_seen: Stamp = None
-        self.edited = False
-        """A value of the form was edited since it was drawn."""
 
     def compose(self) -> ComposeResult:
         plan = self.host.session.plan
@@ -68,19 +66,11 @@ class ArgsTab(Vertical):
         another client or with an edited file): an edit starts from what runs."""
         self.preview = None
         self.host.launch_tree.set_preview(None)
-        arguments = self.host.session.plan.arguments
-        if arguments == self.panel.arguments and not self.edited:
-            # the form shows just that (a session followed again after a lost link): drawn
-            # anew, its Select was removed while still mounting, which Textual raises on
-            return
-        self.edited = False
-        self.panel.arguments = arguments
-        self.panel.refresh(recompose=True)
+        self.panel.show(self.host.session.plan.arguments)
 
     @on(ArgsPanel.Edited)
     def _args_edited(self, event: ArgsPanel.Edited) -> None:
         event.stop()
-        self.edited = True
         if self.host.supervisor is not None:  # the form drawn before the session is followed
             self.preview_values(event.values)
 
@@ -192,10 +182,8 @@ class ArgsTab(Vertical):
         tree.set_preview(None)
         tree.show_plan(plan, host.supervisor.states)
         host.describe_waiting()
-        if _form_of(plan.arguments) != _form_of(self.panel.arguments):
-            # the edited file declares other arguments: the form is the new file's
-            self.panel.arguments = plan.arguments
-            self.panel.refresh(recompose=True)
+        # the values applied; the edited file's other arguments, a form of its own
+        self.panel.show(plan.arguments)
         self.panel.set_preview_text(
             f"Applied. Stopped: {', '.join(diff.stop) or 'none'}; started: "
             f"{', '.join(diff.start) or 'none'}.", error=False)
@@ -252,9 +240,3 @@ def _diff_words(diff: PlanDiff, start: str, restart: str, stop: str) -> str:
     if stop_only:
         parts.append(f"{stop}: {', '.join(stop_only)}")
     return "; ".join(parts)
-
-
-def _form_of(arguments: list[ArgumentInfo]) -> list[tuple[object, ...]]:
-    """What the form shows of each argument, apart from the value typed."""
-    return [(a.name, a.default, a.description, a.type, tuple(a.choices or ()), a.file)
-            for a in arguments]

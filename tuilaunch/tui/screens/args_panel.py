@@ -90,6 +90,20 @@ def bool_text(arg: ArgumentInfo, state: bool) -> str:
     return text
 
 
+def _shown(arg: ArgumentInfo) -> str:
+    """The value an argument's editor is drawn with: the running one, else the default."""
+    return arg.value if arg.value is not None else (arg.default or "")
+
+
+def _editors_of(arguments: list[ArgumentInfo]) -> list[tuple[object, ...]]:
+    """What decides each argument's editor and its lines, apart from the value."""
+    return [(a.name, a.default, a.description, a.type, tuple(a.choices or ()), a.file,
+             tuple(a.elsewhere or ()),
+             # a value outside the choices is an option of its own
+             bool(a.choices) and _shown(a) not in (a.choices or ()) and _shown(a),
+             a.type == "bool" and text_to_bool(_shown(a)) is not None) for a in arguments]
+
+
 class ArgsPanel(Vertical):
     """The Apply and Defaults bar above the values; `shift+tab` from the first value goes
     back to Apply, where the tab starts (not to Defaults, which resets the form)."""
@@ -148,7 +162,7 @@ class ArgsPanel(Vertical):
         return text
 
     def _editor(self, arg: ArgumentInfo) -> Widget:
-        value = arg.value if arg.value is not None else (arg.default or "")
+        value = _shown(arg)
         name = f"arg-{arg.name}"
         if arg.choices:
             options = [(c, c) for c in arg.choices]
@@ -163,6 +177,43 @@ class ArgsPanel(Vertical):
         # typed as text and checked as a whole by the preview: Input's number types drop
         # a refused character silently (1.5 in an int field became 15)
         return Field(value, id=name, classes="arg-editor", compact=True)
+
+    def drawn_values(self) -> dict[str, str]:
+        """What `values` gives while nothing is typed: the form as drawn for its arguments
+        (a Select says Changed as it mounts, which is not an edit)."""
+        out = {}
+        for arg in self.arguments:
+            value = _shown(arg)
+            if not arg.choices and arg.type == "bool" and text_to_bool(value) is not None:
+                value = bool_text(arg, bool(text_to_bool(value)))
+            out[arg.name] = value
+        return out
+
+    def show(self, arguments: list[ArgumentInfo]) -> None:
+        """These arguments' values in the form. The same editors are kept and given the
+        new values (a relaunch by another client), saying no edit; only other editors (the
+        edited file declares other arguments) draw the form anew: removing a Select that
+        is still mounting is what Textual raises on."""
+        if _editors_of(arguments) != _editors_of(self.arguments):
+            self.arguments = arguments
+            self.refresh(recompose=True)
+            return
+        self.arguments = arguments
+        wanted = self.drawn_values()
+        if self.values() == wanted:
+            return
+        with self.prevent(Input.Changed, Checkbox.Changed, Select.Changed):
+            for arg in arguments:
+                editor = self.query_one(f"#arg-{arg.name}")
+                value = wanted[arg.name]
+                if isinstance(editor, Checkbox):
+                    editor.value = bool(text_to_bool(value))
+                    editor.label = value
+                elif isinstance(editor, Select):
+                    editor.value = value
+                elif isinstance(editor, Input):
+                    editor.value = value
+        self.mark_changes()
 
     def values(self) -> dict[str, str]:
         out = {}
