@@ -7,6 +7,7 @@ import atexit
 import os
 import shutil
 import tempfile
+from dataclasses import dataclass
 
 from ...errors import LaunchError, Origin
 from ..substitutions import (
@@ -20,15 +21,14 @@ from ..substitutions import (
 from .subst_parser import SubstitutionSyntaxError, parse_substitutions
 
 
+@dataclass(eq=False, repr=False)  # a Substitution's own equality and repr
 class AppendedEnvironment(Substitution):
     """The value `<append_env>` gives a variable: the old value, a separator, the new one."""
 
-    def __init__(self, name: SubValue, value: SubValue, prepend: SubValue,
-                 separator: SubValue) -> None:
-        self.name = name
-        self.value = value
-        self.prepend = prepend
-        self.separator = separator
+    name: SubValue
+    value: SubValue
+    prepend: SubValue
+    separator: SubValue
 
     def perform(self, context: PerformContext) -> str:
         value = perform(self.value, context)

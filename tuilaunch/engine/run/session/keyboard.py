@@ -8,6 +8,7 @@ kind `typing` (`process`, `data: {"client": id or None}`), so the others can sho
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from ...errors import LaunchError
@@ -17,17 +18,17 @@ from ..supervisor.supervisor import Supervisor
 from ..vocabulary.requests import Input, TakeKeys
 
 
+@dataclass
 class Keyboard:
     """Who types into which process of one session's supervisor."""
 
-    def __init__(self, supervisor: Supervisor, find: Any) -> None:
-        """`find` turns a client's process reference into a process id (or raises)."""
-        self.supervisor = supervisor
-        self.find = find
-        self.client: int | None = None
-        """The client holding the keyboard, if any."""
-        self.process: str | None = None
-        """The process it types into."""
+    supervisor: Supervisor
+    find: Any
+    """Turns a client's process reference into a process id (or raises)."""
+    client: int | None = None
+    """The client holding the keyboard, if any."""
+    process: str | None = None
+    """The process it types into."""
 
     def handlers(self) -> Handlers:
         return {TakeKeys: self.typing, Input: self.input}
