@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from textual.css.query import NoMatches
 
 from tests.unit.test_app_pilot import following, pane, row, select, status, toasts, until
@@ -62,7 +63,10 @@ async def test_r_with_no_link_down_says_so(tmp_path: Path) -> None:
         assert "retry" not in port.ops()
 
 
-async def test_a_session_stopped_elsewhere_says_so_before_leaving(tmp_path: Path) -> None:
+async def test_a_session_stopped_elsewhere_says_so_before_leaving(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # the words stay until the test has read them, however late a loaded machine runs it
+    monkeypatch.setattr("tuilaunch.tui.session_link.ENDED_ELSEWHERE_PAUSE", 600.0)
     async with following(tmp_path) as (app, pilot, port):
         port.end(0, reason="tuilaunch stop")
         said = "session bringup was stopped elsewhere (tuilaunch stop); leaving"

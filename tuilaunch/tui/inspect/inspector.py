@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import re
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
+from functools import partial
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from textual.binding import Binding
@@ -126,12 +127,10 @@ class Inspector:
         nodes = pane == "nodes"
         if nodes != self.watching_resources and self.app.supervisor is not None:
             self.watching_resources = nodes
-            self.app.run_worker(self._watch_resources(nodes), group="inspector",
-                                exit_on_error=False)
+            self._start(partial(self._watch_resources, nodes))
             # the QoS marks: the server checks the graph and says when they change, so
             # an ssh link carries no request for marks that rarely change
-            self.app.run_worker(self._watch(WatchQos(on=nodes)), group="inspector",
-                                exit_on_error=False)
+            self._start(partial(self._watch, WatchQos(on=nodes)))
 
     def qos_problems_by_process(self, topics: list[dict[str, Any]]) -> dict[str, list[str]]:
         """Each launch process's node, and the QoS sentences that name it."""
@@ -152,6 +151,14 @@ class Inspector:
                     if named.search(problem) and problem not in found.get(process, []):
                         found.setdefault(process, []).append(problem)
         return found
+
+    def _start(self, work: partial[Coroutine[Any, Any, None]]) -> None:
+        """A request of the inspector's, in a worker. Given as a coroutine function, not a
+        coroutine: a worker the closing app never starts leaves none unawaited."""
+        # Textual runs a partial of a coroutine function (textual/worker.py) but its
+        # annotation names plain callables only
+        self.app.run_worker(work, group="inspector",  # type: ignore[arg-type]
+                            exit_on_error=False)
 
     async def _watch_resources(self, on: bool) -> None:
         # no CPU column without it; of the processes whose figures are on screen only; and
@@ -199,8 +206,7 @@ class Inspector:
     def _ask_figures(self) -> None:
         self._figures_timer = None
         if self.watching_resources and self._figures_moved():
-            self.app.run_worker(self._watch_resources(True), group="inspector",
-                                exit_on_error=False)
+            self._start(partial(self._watch_resources, True))
 
     # --- plots ------------------------------------------------------------------------------
 
