@@ -8,8 +8,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from textual.widgets import Label, Select, Static
+from textual.widgets._footer import FooterKey
 
-from tests.unit.test_app_pilot import following, footer, row, status, toasts, until
+from tests.unit.test_app_pilot import following, footer, row, select, status, toasts, until
 from tuilaunch.tui.app import TuiLaunchApp
 
 
@@ -54,6 +55,29 @@ async def test_the_footer_offers_each_tabs_own_keys(tmp_path: Path) -> None:
         await pilot.press("1")
         await until(pilot, lambda: {"Stop", "Restart", "Search", "Level"}
                     <= set(footer(app)), "the Nodes tab's keys")
+
+
+def stop_key(app: TuiLaunchApp) -> FooterKey:
+    return next(k for k in app.screen.query(FooterKey) if k.description == "Stop")
+
+
+async def test_a_tap_on_a_footer_key_counts_though_the_keys_were_refreshed_meanwhile(
+        tmp_path: Path) -> None:
+    """A tap is a press and a release on the same key. The keys refreshed between the two
+    (a row's selection, a focus move; a browser's tap under load) draw the same keys: the
+    footer keeps its keys, and the tap stops the node."""
+    async with following(tmp_path, size=(160, 30)) as (app, pilot, port):
+        select(app, "talker-1")
+        await until(pilot, lambda: footer(app).get("Stop") is True and "Type" in footer(app)
+                    and stop_key(app).region.width > 0, "a node's keys on screen")
+        stop = stop_key(app)
+        await pilot.mouse_down(stop)
+        app.refresh_bindings()
+        await pilot.pause()
+        await pilot.mouse_up(stop)
+        await until(pilot, lambda: ("stop", {"process": "talker-1"}) in port.asked,
+                    "talker-1 stopped by the tap")
+        assert stop.is_attached
 
 
 async def test_the_args_form_shows_every_argument_its_help_and_editor(tmp_path: Path) -> None:

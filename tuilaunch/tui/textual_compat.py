@@ -161,9 +161,33 @@ class Footer(TextualFooter):
     compact, then binds it to the footer's `compact` (False in a terminal): every key of
     the footer was restyled twice each time the footer is drawn anew, which is after most
     keys (a focus move, a tab shown): a third of the CPU a keypress cost. Each bound key
-    starts with its footer's value instead; the binding still follows a change of it."""
+    starts with its footer's value instead; the binding still follows a change of it.
+
+    And it is drawn anew only when the keys it shows changed. Textual redraws it at every
+    `refresh_bindings` (a row selected, a focus move), replacing each FooterKey: a tap on
+    a key, whose press and release fell either side of such a redraw, was on two widgets
+    and so no click (a tablet's tap on Stop lost in a browser, under load)."""
+
+    _drawn: tuple[object, ...] | None = None
+    """What the footer's keys were drawn from (`_keys`), when last composed."""
+
+    def _keys(self, screen: Any) -> tuple[object, ...]:
+        """Everything compose draws the keys from: each shown binding, whether it is
+        enabled, its tooltip; the palette's key is among the active bindings too."""
+        return tuple((binding.key, binding.description, binding.action, binding.show,
+                      binding.group, enabled, tooltip)
+                     for (_, binding, enabled, tooltip) in screen.active_bindings.values()
+                     if binding.show or binding.action == "command_palette")
+
+    def bindings_changed(self, screen: Any) -> None:
+        if self._drawn is not None and screen is self.screen and \
+                self._keys(screen) == self._drawn:
+            return  # a redraw would draw the same keys
+        super().bindings_changed(screen)
 
     def compose(self) -> ComposeResult:
+        if self._bindings_ready:
+            self._drawn = self._keys(self.screen)
         for widget in super().compose():
             # the palette's key is not bound to the footer: it stays compact, as Textual
             # draws it
