@@ -1,6 +1,6 @@
 """The Nodes tab over a session's view (session_view.py), in a small host app (no process,
-no ROS graph): the events go down to the tab as a message, and a process's life shows in
-its row and its pane in ros2 launch's words; the app hears of it by the tab's message.
+no ROS graph): the view shows the events as the app's drain hands them, and a process's
+life shows in its row and its pane in ros2 launch's words; the app hears what changed.
 The fleet view shows each session through the same view (tests/integration/test_fleet_tui.py)."""
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ from tuilaunch.engine.run.events import (
     Respawning,
     Started,
 )
-from tuilaunch.tui.nodes.tab import NodesTab, SessionEvents
+from tuilaunch.tui.nodes.events import Batch
+from tuilaunch.tui.nodes.tab import NodesTab
 from tuilaunch.tui.output_store import OutputStore, View
 from tuilaunch.tui.screens.output_panel import OutputPanel
 from tuilaunch.tui.screens.tree_panel import LaunchTree
@@ -70,7 +71,8 @@ class Host(App[None]):
         self.supervisor: Any = Client(session)
         self.view.supervisor = self.supervisor
         self.asked_to_stop = self.view.asked_to_stop
-        self.heard: list[NodesTab.Shown] = []
+        self.heard: list[tuple[Batch, bool]] = []
+        """What each batch changed, and whether it was a replay."""
 
     def compose(self) -> ComposeResult:
         yield NodesTab(self.view, lambda: None)
@@ -84,16 +86,16 @@ class Host(App[None]):
     async def show_typing_line(self, line: Any) -> None:
         pass
 
-    def on_nodes_tab_shown(self, message: NodesTab.Shown) -> None:
-        self.heard.append(message)
-
     def send(self, *events: Event, replaying: bool = False) -> None:
         for event in events:  # the client's states change before its events are shown
             if event.process in self.supervisor.states and event.kind != "output":
                 self.supervisor.states[event.process] = {
                     "started": "running", "exited": "exited",
                     "respawning": "respawning"}.get(event.kind, event.kind)
-        self.query_one(NodesTab).post_message(SessionEvents(list(events), replaying))
+        # as the app's drain does (session_link.py)
+        _, shown = self.view.show_events(list(events), replaying)
+        self.query_one(NodesTab).batch_shown(shown, bool(events))
+        self.heard.append((shown, replaying))
 
 
 def session(tmp_path: Path) -> Session:
@@ -130,7 +132,7 @@ async def test_a_process_life_shows_in_its_row_and_its_pane_in_ros2_launch_words
         assert tab.launch_tree.states[listener] == "exited"
         assert pane_lines(app, listener)[-1] == "process stopped [pid 102, SIGINT]"
         # the app heard of each batch, after the tab had shown it
-        assert len(app.heard) == 2 and not app.heard[-1].shown.lifecycle
+        assert len(app.heard) == 2 and not app.heard[-1][0].lifecycle
 
 
 async def test_a_respawn_wait_counts_down_on_its_row(tmp_path):
@@ -163,7 +165,7 @@ async def test_a_replay_keeps_the_lifecycle_states_reached_since(tmp_path):
         app.send(LifecycleChanged(talker, reason="inactive"), replaying=True)
         await pilot.pause()
         assert tab.launch_tree.lifecycle[talker] == "active"
-        assert app.heard[-1].replaying and app.heard[-1].shown.lifecycle
+        assert app.heard[-1][1] and app.heard[-1][0].lifecycle
         app.send(Relaunched(None, lines=["robot:=r2"]))
         await pilot.pause()
-        assert [e.lines for e in app.heard[-1].shown.relaunched] == [["robot:=r2"]]
+        assert [e.lines for e in app.heard[-1][0].relaunched] == [["robot:=r2"]]

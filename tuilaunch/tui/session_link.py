@@ -4,8 +4,9 @@ The session itself (its port, buffer, tree and pane, its commands and its keyboa
 app's one `SessionView` (session_view.py, `view`, made by app.py), as each session of a
 fleet view is one. Engine events reach the UI through the view's EventBuffer drained on a
 timer, so a flood from a node costs one batched write per pane per tick: each tick's
-batch goes to the Nodes tab as a message (nodes/tab.py), the readings a tab asked for to
-the inspector. The App constructor does no I/O: the session's client starts in on_mount.
+batch goes into the tree and pane by the view (as each fleet session's does), the status
+line in the same call, the readings a tab asked for to the inspector. The App
+constructor does no I/O: the session's client starts in on_mount.
 """
 
 from __future__ import annotations
@@ -35,7 +36,8 @@ from ..engine.run.event_buffer import EventBuffer
 from ..engine.run.events import Event, Reading
 from ..engine.run.machines.remote import RemoteLink
 from .arguments import ArgsTab
-from .nodes.tab import NodesTab, SessionEvents
+from .nodes.events import Batch
+from .nodes.tab import NodesTab
 from .output_store import OutputStore
 from .screens.output_panel import OutputPanel
 from .screens.tree_panel import LaunchTree, RowData
@@ -100,6 +102,8 @@ class OneSession(Protocol):
     def client(self) -> LaunchPort: ...
     def running(self) -> list[str]: ...
     def over_link(self) -> LaunchPort | None: ...
+    def show_events(self, events: list[Event],
+                    replaying: bool = False) -> tuple[list[Event], Batch]: ...
 
 
 class SessionLink(App[int]):
@@ -259,48 +263,38 @@ class SessionLink(App[int]):
         self.show_events(self.buffer.drain())
 
     def show_events(self, events: list[Event], replaying: bool = False) -> None:
-        """A batch of the session's events (the tick's, often none): the readings a tab
-        asked for to the inspector; the rest down to the Nodes tab, by message, which says
-        when they are on screen (`on_nodes_tab_shown`). `replaying`: what happened before
-        this client came, shown but no news, at once."""
+        """A batch of the session's events (the tick's, often none) into the tree and the
+        pane by the view, at once; then the readings a tab asked for to the inspector, and
+        what the app does about the rest (the status line, the keys that apply, the form
+        after a relaunch) in the same call: no frame has a row's news without its counts.
+        `replaying`: what happened before this client came, shown but no news."""
         supervisor = self.view.over_link()
         # over an ssh link the server sends only the output pane's process's lines (all for
         # the all-nodes pane); the others' are read from their log files when shown
         if supervisor is not None and self.output_panel.view.process != supervisor.only:
             # set on the engine thread: asked again until it is
             self.engine.submit(supervisor.show(self.output_panel.view.process))
-        kept = events
-        events = self.keyboard.take_events(events)
-        rest = [event for event in events if not isinstance(event, Reading)]
+        events, shown = self.view.show_events(events, replaying)
         readings = [event for event in events if isinstance(event, Reading)]
         for reading in readings:
             self.inspector.show(reading)
+        news = len(readings) < len(events)
+        self.nodes.batch_shown(shown, news)
         if readings:
             self.update_detail()  # a node's figures on its row, and so on the detail line
-        if replaying:
-            # shown with the tree it comes with (the states the session has now), before
-            # either is on screen: no frame has a row's end without its lines
-            self.nodes.show_batch(rest, replaying=True)
-        else:
-            self.nodes.post_message(SessionEvents(rest))
-        if not rest and (self.quit_started is not None or
-                         self.view.over_link() is not None):
+        if news:
+            for event in shown.relaunched:
+                if event.lines != self.view.own_relaunch:
+                    self.status.relaunched_elsewhere(
+                        event.lines, (event.data or {}).get("edited"),
+                        replaying or event.time < self.opened_at)
+                self.view.own_relaunch = None
+            if shown.lifecycle:
+                self.refresh_bindings()
+            self.update_status()
+            self.update_detail()
+        elif self.quit_started is not None or self.view.over_link() is not None:
             self.update_status()  # the signal stage, a link's silence: move on with time
-        self.keyboard.events_shown(kept)
-
-    def on_nodes_tab_shown(self, message: NodesTab.Shown) -> None:
-        """The Nodes tab shows a batch: the status line, the keys that apply, the form
-        after a relaunch, follow."""
-        for event in message.shown.relaunched:
-            if event.lines != self.view.own_relaunch:
-                self.status.relaunched_elsewhere(
-                    event.lines, (event.data or {}).get("edited"),
-                    message.replaying or event.time < self.opened_at)
-            self.view.own_relaunch = None
-        if message.shown.lifecycle:
-            self.refresh_bindings()
-        self.update_status()
-        self.update_detail()
 
     def update_status(self) -> None:
         self.status.update()

@@ -51,7 +51,7 @@ from .inspect.log_levels import LogLevels
 from .inspect.recording import Recordings
 from .keys.keyboard import NodeKeyboard
 from .nodes.commands import SelectionCommands
-from .nodes.events import NodeEvents
+from .nodes.events import Batch, NodeEvents
 from .nodes.gaps import GapReader
 from .output_store import OutputStore
 from .screens.output_panel import OutputPanel
@@ -307,13 +307,18 @@ class SessionView:
 
     # --- events ------------------------------------------------------------------------------
 
-    def show_events(self, events: list[Event]) -> None:
-        """The events of a drain into the tree and pane, as the single TUI's Nodes tab
-        shows them (the same NodeEvents); the readings and the relaunches to its tabs
-        (`on_event`)."""
+    def show_events(self, events: list[Event],
+                    replaying: bool = False) -> tuple[list[Event], Batch]:
+        """The events of a drain into the tree and pane (NodeEvents), at once: the single
+        TUI's and each fleet session's alike, so no frame has a row's news without its
+        lines or the status that counts it. The readings and the relaunches go to its
+        tabs (`on_event`, a fleet's). `replaying`: what happened before this client came,
+        shown but no news. Returns the events the keyboard left and what they changed."""
         kept = events
         events = self.keyboard.take_events(events)  # who types where: the keyboard's
         shown = self.events.show([e for e in events if not isinstance(e, Reading)])
+        if replaying:
+            self.events.show_lifecycle()  # the states it has now, newer than the replay's
         if self.on_event is not None:
             for event in events:
                 if isinstance(event, (Reading, Relaunched)):
@@ -321,11 +326,16 @@ class SessionView:
         if shown.lines:
             self.pane.append(shown.lines)
         self.pane.flush()
-        if shown.counting:  # a respawn's wait: its row counts down (only changed rows drawn)
-            self.events.count_down()
-        if events:
-            self.refresh_root()
+        if self.label:
+            # a fleet's session: a respawn's wait counts down on its row each tick (only
+            # changed rows drawn), its root says its counts (the single TUI's Nodes tab
+            # counts down once a second, its status line says the counts)
+            if shown.counting:
+                self.events.count_down()
+            if events:
+                self.refresh_root()
         self.keyboard.events_shown(kept)  # a node typed into that ended gives the keys back
+        return events, shown
 
     def show_plan(self) -> None:
         """The session's plan as the tree's children, its root the session."""

@@ -217,7 +217,7 @@ class FleetApp(KeyOrder):
             return
         member.followed(supervisor, supervisor.log_dir)
         self.session_tabs.followed(member)
-        member.show_events(supervisor.history)
+        member.show_events(supervisor.history, replaying=True)
         self.update_status()
         await self.engine.run(supervisor.run(keep_alive=True))
         if self.detached:

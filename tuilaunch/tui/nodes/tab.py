@@ -1,12 +1,12 @@
 """The Nodes tab as one widget: the detail line, and the group tree and the output pane of
 the app's session view (session_view.py), which owns them and their behaviour.
 
-The app posts it the session's events (`SessionEvents`, once a tick, as Textual intends:
-down by message) and it shows them in its tree and pane through `NodeEvents`; what the
-app does about them (the status line, the keys that apply, the form after a relaunch) it
-learns from the tab's `Shown` message, posted up. The tab reads a pane's gaps and missing
-stamps through the session itself (`GapReader`), and draws the selected row in full on the
-detail line, with its CPU and memory trend when the app has one (`trend_of`).
+The view shows each tick's events in the tree and pane (`SessionView.show_events`, at
+once, with the status line the app updates in the same call); the tab then counts a
+respawn's wait down and redraws its detail line (`batch_shown`). The tab reads a pane's
+gaps and missing stamps through the session itself (`GapReader`), and draws the selected
+row in full on the detail line, with its CPU and memory trend when the app has one
+(`trend_of`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ from textual.timer import Timer
 from textual.widgets import Static, Tree
 
 from ...client.port import LaunchPort
-from ...engine.run.events import Event
 from ..output_store import Line, OutputStore
 from ..screens.output_panel import NodesView, OutputPanel
 from ..screens.tree_panel import LaunchTree, RowData, RowKind
@@ -39,17 +38,6 @@ SCALE_WIDTH = 6
 NARROW = 70
 """Columns below which the tree goes above the pane (a phone's browser: about 42), as the
 fleet's trees do (app.tcss: NodesTab.-narrow)."""
-
-
-class SessionEvents(Message, bubble=False):
-    """A batch of the session's events for the tab (the app's tick: often none, and the
-    pane then repaints what it held back); `replaying`: what happened before this client
-    came, shown but no news."""
-
-    def __init__(self, events: list[Event], replaying: bool = False) -> None:
-        super().__init__()
-        self.events = events
-        self.replaying = replaying
 
 
 class StampsRead(Message, bubble=False):
@@ -77,13 +65,6 @@ class TabSession(Protocol):
 
 class NodesTab(Vertical):
     """The tree, the detail line and the pane of one session."""
-
-    class Shown(Message):
-        """A batch of events is on screen; `shown` says what else changed."""
-
-        def __init__(self, events: list[Event], shown: Batch, replaying: bool) -> None:
-            super().__init__()
-            self.events, self.shown, self.replaying = events, shown, replaying
 
     def __init__(self, view: TabSession, drain: Callable[[], None],
                  id: str | None = None) -> None:
@@ -122,24 +103,16 @@ class NodesTab(Vertical):
 
     # --- events ------------------------------------------------------------------------------
 
-    def on_session_events(self, message: SessionEvents) -> None:
-        self.show_batch(message.events, message.replaying)
-
-    def show_batch(self, events: list[Event], replaying: bool = False) -> None:
-        """A batch into the tree and the pane (a message's; the replay of what happened
-        before this client came, called at once); the app hears of it by `Shown`."""
-        shown = self.events.show(events)
-        if replaying:
-            self.events.show_lifecycle()
-        self.show_lines(shown.lines)
+    def batch_shown(self, shown: Batch, news: bool) -> None:
+        """A batch is in the tree and the pane (the view's `show_events`): a respawn's wait
+        counts down once a second; `news` (not only readings): the detail line follows."""
         if shown.counting and self._countdown is None:
             self._countdown = self.set_interval(1.0, self._count_down)
-        if events:
+        if news:
             self.update_detail()
-            self.post_message(self.Shown(events, shown, replaying))
 
     def show_lines(self, lines: list[Line]) -> None:
-        """New lines for the pane (the plan's warnings, a batch's), and the pane's tick."""
+        """Lines of the app's own for the pane (the plan's warnings)."""
         if lines:
             self.pane.append(lines)
         self.pane.flush()
