@@ -537,7 +537,9 @@ async def test_an_engine_event_after_the_screens_closed_is_no_error(write, tmp_p
         async def then_an_event() -> None:
             await close_all()
             assert not app.screen_stack
-            app.show_events([LifecycleChanged("stubborn-1", reason="finalized")])
+            # as the drain does: the view shows it, the app acts on its news
+            last = LifecycleChanged("stubborn-1", reason="finalized")
+            app.news_shown(app.view.show_events([last]))
             delivered.append(True)
 
         app._close_all = then_an_event  # type: ignore[method-assign]

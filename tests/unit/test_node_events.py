@@ -93,7 +93,7 @@ class Host(App[None]):
                     "started": "running", "exited": "exited",
                     "respawning": "respawning"}.get(event.kind, event.kind)
         # as the app's drain does (session_link.py)
-        _, shown = self.view.show_events(list(events), replaying)
+        shown = self.view.show_events(list(events), replaying)
         self.query_one(NodesTab).batch_shown(shown, bool(events))
         self.heard.append((shown, replaying))
 

@@ -256,7 +256,7 @@ class TuiLaunchApp(SessionLink, KeyOrder):
         tree = self.launch_tree
         self.nodes.events.show_plan()
         # what was printed before we came: shown, not news
-        self.show_events(remote.history, replaying=True)
+        self.news_shown(self.view.show_events(remote.history, replaying=True), replaying=True)
         self.run_supervisor()
         self.drain_timer = self.set_interval(1 / DRAIN_HZ, self.drain)
         self.update_status()

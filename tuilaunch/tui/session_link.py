@@ -15,9 +15,9 @@ import asyncio
 import os
 import subprocess
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rich.text import Text
 from textual import on, work
@@ -33,7 +33,7 @@ from ..client.read_only import ReadOnlyError
 from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.events import Event, Reading
+from ..engine.run.events import Event
 from ..engine.run.machines.remote import RemoteLink
 from .arguments import ArgsTab
 from .nodes.events import Batch
@@ -102,8 +102,8 @@ class OneSession(Protocol):
     def client(self) -> LaunchPort: ...
     def running(self) -> list[str]: ...
     def over_link(self) -> LaunchPort | None: ...
-    def show_events(self, events: list[Event],
-                    replaying: bool = False) -> tuple[list[Event], Batch]: ...
+    def tell_shown(self) -> Coroutine[Any, Any, None] | None: ...
+    def drain(self) -> Batch: ...
 
 
 class SessionLink(App[int]):
@@ -260,41 +260,35 @@ class SessionLink(App[int]):
     # --- engine events -------------------------------------------------------------------
 
     def drain(self) -> None:
-        self.show_events(self.buffer.drain())
+        """The tick: the view shows what came (the tree, the pane), then the app acts on
+        its news (`news_shown`), in the same call."""
+        telling = self.view.tell_shown()  # over a link: the lines of the pane's process only
+        if telling is not None:
+            self.engine.submit(telling)  # asked again each tick until it is set
+        self.news_shown(self.view.drain())
 
-    def show_events(self, events: list[Event], replaying: bool = False) -> None:
-        """A batch of the session's events (the tick's, often none) into the tree and the
-        pane by the view, at once; then the readings a tab asked for to the inspector, and
-        what the app does about the rest (the status line, the keys that apply, the form
-        after a relaunch) in the same call: no frame has a row's news without its counts.
-        `replaying`: what happened before this client came, shown but no news."""
-        supervisor = self.view.over_link()
-        # over an ssh link the server sends only the output pane's process's lines (all for
-        # the all-nodes pane); the others' are read from their log files when shown
-        if supervisor is not None and self.output_panel.view.process != supervisor.only:
-            # set on the engine thread: asked again until it is
-            self.engine.submit(supervisor.show(self.output_panel.view.process))
-        events, shown = self.view.show_events(events, replaying)
-        readings = [event for event in events if isinstance(event, Reading)]
-        for reading in readings:
+    def news_shown(self, shown: Batch, replaying: bool = False) -> None:
+        """What the app does about a batch the view has shown: the readings a tab asked for
+        to the inspector; for the rest, the status line, the keys that apply, the form
+        after a relaunch. `replaying`: what happened before this client came, no news."""
+        for reading in shown.readings:
             self.inspector.show(reading)
-        news = len(readings) < len(events)
-        self.nodes.batch_shown(shown, news)
-        if readings:
+        self.nodes.batch_shown(shown, shown.news)
+        if shown.readings:
             self.update_detail()  # a node's figures on its row, and so on the detail line
-        if news:
-            for event in shown.relaunched:
-                if event.lines != self.view.own_relaunch:
-                    self.status.relaunched_elsewhere(
-                        event.lines, (event.data or {}).get("edited"),
-                        replaying or event.time < self.opened_at)
-                self.view.own_relaunch = None
-            if shown.lifecycle:
-                self.refresh_bindings()
+        for event in shown.relaunched:
+            if event.lines != self.view.own_relaunch:
+                self.status.relaunched_elsewhere(
+                    event.lines, (event.data or {}).get("edited"),
+                    replaying or event.time < self.opened_at)
+            self.view.own_relaunch = None
+        if shown.lifecycle:
+            self.refresh_bindings()
+        if shown.news or shown.lines or self.quit_started is not None or \
+                self.view.over_link() is not None:
+            # a batch's counts; with none, the signal stage and a link's silence move on
             self.update_status()
             self.update_detail()
-        elif self.quit_started is not None or self.view.over_link() is not None:
-            self.update_status()  # the signal stage, a link's silence: move on with time
 
     def update_status(self) -> None:
         self.status.update()

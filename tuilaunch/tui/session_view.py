@@ -25,7 +25,7 @@ from __future__ import annotations
 import asyncio
 import os
 import time
-from collections.abc import Callable, Coroutine
+from collections.abc import Coroutine
 from pathlib import Path
 from typing import Any, Protocol, TypeVar
 
@@ -43,7 +43,7 @@ from ..client.served_session import ServedSession
 from ..engine.plan.session import Session
 from ..engine.run.engine_thread import EngineThread
 from ..engine.run.event_buffer import EventBuffer
-from ..engine.run.events import LIVE_STATES, Event, Reading, Relaunched
+from ..engine.run.events import LIVE_STATES, Event, Output, Reading, Typing
 from ..engine.run.session.session_dir import SessionError
 from ..engine.run.vocabulary.forward import Forward
 from ..engine.run.vocabulary.request import Request
@@ -129,8 +129,6 @@ class SessionView:
         self.asked_to_stop: set[str] = set()
         """The stops this client asked for (a restart's): their exit is no failure."""
         self.own_relaunch: list[str] | None = None
-        self.on_event: Callable[[SessionView, Event], None] | None = None
-        """Where the events for its tabs go (readings, relaunches): fleet/tabs.py."""
         self.events = NodeEvents(
             tree, store, lambda: self.session.plan,
             lambda: None if self.supervisor is None else self.supervisor.states,
@@ -205,8 +203,9 @@ class SessionView:
     def update_status(self) -> None:
         self.screen.update_status()
 
-    def drain(self) -> None:
-        self.show_events(self.buffer.drain())
+    def drain(self) -> Batch:
+        """The events waiting now, shown (`show_events`): what they changed."""
+        return self.show_events(self.buffer.drain())
 
     def describe_waiting(self) -> None:
         """After a relaunch: each process not started yet says why on its row (alone on
@@ -307,22 +306,22 @@ class SessionView:
 
     # --- events ------------------------------------------------------------------------------
 
-    def show_events(self, events: list[Event],
-                    replaying: bool = False) -> tuple[list[Event], Batch]:
+    def show_events(self, events: list[Event], replaying: bool = False) -> Batch:
         """The events of a drain into the tree and pane (NodeEvents), at once: the single
-        TUI's and each fleet session's alike, so no frame has a row's news without its
-        lines or the status that counts it. The readings and the relaunches go to its
-        tabs (`on_event`, a fleet's). `replaying`: what happened before this client came,
-        shown but no news. Returns the events the keyboard left and what they changed."""
-        kept = events
-        events = self.keyboard.take_events(events)  # who types where: the keyboard's
-        shown = self.events.show([e for e in events if not isinstance(e, Reading)])
+        TUI's and each fleet session's alike. `replaying`: what happened before this client
+        came, shown but no news. Returns what they changed, with the readings for the
+        tabs, for the app to act on in the same call: no frame has a row's news without
+        its counts."""
+        # a flood's lines are the tree's and the pane's only: the keyboard is handed the
+        # rest, the app what they changed
+        said = [event for event in events if not isinstance(event, Output)]
+        news = self.keyboard.take_events(said)  # who types where: the keyboard's
+        shown = self.events.show([event for event in events
+                                  if not isinstance(event, (Reading, Typing))])
+        shown.readings = [event for event in news if isinstance(event, Reading)]
+        shown.news = len(shown.readings) < len(news)
         if replaying:
             self.events.show_lifecycle()  # the states it has now, newer than the replay's
-        if self.on_event is not None:
-            for event in events:
-                if isinstance(event, (Reading, Relaunched)):
-                    self.on_event(self, event)
         if shown.lines:
             self.pane.append(shown.lines)
         self.pane.flush()
@@ -334,8 +333,8 @@ class SessionView:
                 self.events.count_down()
             if events:
                 self.refresh_root()
-        self.keyboard.events_shown(kept)  # a node typed into that ended gives the keys back
-        return events, shown
+        self.keyboard.events_shown(said)  # a node typed into that ended gives the keys back
+        return shown
 
     def show_plan(self) -> None:
         """The session's plan as the tree's children, its root the session."""

@@ -131,8 +131,6 @@ class FleetApp(KeyOrder):
         self.current = self.members[0]
         self.plots = FleetPlots(self, self.members)
         self.session_tabs = FleetTabs(self.members, self.plots)
-        for member in self.members:
-            member.on_event = self.session_tabs.event
         self._status_text = ""
         self._detail_text = ""
         self.detached = False
@@ -217,14 +215,15 @@ class FleetApp(KeyOrder):
             return
         member.followed(supervisor, supervisor.log_dir)
         self.session_tabs.followed(member)
-        member.show_events(supervisor.history, replaying=True)
+        self.session_tabs.news(member, member.show_events(supervisor.history,
+                                                          replaying=True))
         self.update_status()
         await self.engine.run(supervisor.run(keep_alive=True))
         if self.detached:
             return
         member.ended = True
         member.problem = "ended" if not supervisor.lost else "the session's server is gone"
-        member.drain()
+        self.session_tabs.news(member, member.drain())
         member.refresh_root()
         self.update_status()
         if all(m.ended for m in self.members):
@@ -234,7 +233,7 @@ class FleetApp(KeyOrder):
         for member in self.members:
             if member.supervisor is None:
                 continue
-            member.drain()
+            self.session_tabs.news(member, member.drain())
             # a link lost, back, or silent for one more second: the root says it
             member.refresh_root()
             telling = member.tell_shown()  # the lines of its pane's node, over a link

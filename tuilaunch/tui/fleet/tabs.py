@@ -20,6 +20,7 @@ from textual.widgets import ContentSwitcher
 from ...client.inspect.session_graph import SessionGraph
 from ...engine.run.events import Echo, Event, PlotSamples, Rates, Relaunched
 from ..arguments import ArgsTab
+from ..nodes.events import Batch
 from ..screens.fields import Field
 from ..screens.params_panel import ParamsPanel
 from ..screens.services_panel import ServicesPanel
@@ -107,6 +108,12 @@ class FleetTabs:
     def followed(self, member: SessionView) -> None:
         """The member's session is followed (again): its Args tab shows its plan's form."""
         self.of(member).args.show_form()
+
+    def news(self, member: SessionView, shown: Batch) -> None:
+        """What a drain of the member's session changed (its view's `show_events`): the
+        readings and relaunches for its tabs."""
+        for event in [*shown.readings, *shown.relaunched]:
+            self.event(member, event)
 
     def event(self, member: SessionView, event: Event) -> None:
         """An event of the member's session for its tabs: a reading (rates, echo) for its

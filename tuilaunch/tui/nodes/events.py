@@ -23,6 +23,7 @@ from ...engine.run.events import (
     Log,
     Output,
     ProcessExited,
+    Reading,
     Relaunched,
     Respawning,
     Started,
@@ -47,6 +48,11 @@ class Batch:
     """Relaunches (the tree shows the new plan already): the form, a note."""
     counting: bool = False
     """A respawn's wait is being counted down: `count_down` once a second until it ends."""
+    readings: list[Reading] = field(default_factory=list)
+    """Figures a tab asked for (rates, an echo, plot samples, CPU and memory): its own."""
+    news: bool = False
+    """An event came that is neither a line nor a reading (a start, an end, a state): the
+    counts said beside the tree may have changed."""
 
 
 class NodeEvents:
