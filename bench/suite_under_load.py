@@ -17,6 +17,7 @@ import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -49,7 +50,11 @@ def main() -> int:
             print(f"run {run}: exit {done.returncode} in {took / 60:.1f} min: {last[0]}",
                   flush=True)
             if done.returncode != 0:
+                # the whole report kept: the tail names the failures, not always why
+                kept = Path(tempfile.gettempdir()) / f"suite-under-load-run{run}.log"
+                kept.write_text(done.stdout + done.stderr)
                 print(done.stdout[-5000:])
+                print(f"(the whole report: {kept})")
                 break
     finally:
         for burner in burners:

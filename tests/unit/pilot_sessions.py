@@ -17,7 +17,8 @@ from textual.pilot import Pilot
 from textual.widgets import Static
 
 from tests.unit.memory_port import MemoryPort
-from tests.unit.test_app_pilot import BRINGUP, PANE_FPS, until
+from tests.unit.test_app_pilot import BRINGUP, PANE_FPS, record_toasts, until
+from tests.unit.test_app_pilot import toasts as toasts_said
 from tuilaunch.engine.plan.session import Session
 from tuilaunch.engine.run.events import Started
 from tuilaunch.tui.app import TuiLaunchApp
@@ -49,6 +50,7 @@ async def shown(tmp_path: Path, launch: Path = BRINGUP,
         memory.happened(*(Started(p.id, pid=1000 + n) for n, p in enumerate(enabled)))
     options.setdefault("pane_fps", PANE_FPS)
     app = TuiLaunchApp(session, tmp_path, session_name=name, port=memory, **options)
+    record_toasts(app)
     async with app.run_test(size=size) as pilot:
         await until(pilot, lambda: app.supervisor is memory and (
             not started or not enabled or
@@ -88,7 +90,7 @@ def dialogs(app: TuiLaunchApp) -> list[str]:
 
 
 def toasts(app: TuiLaunchApp) -> list[str]:
-    return [str(n.message) for n in app._notifications]
+    return toasts_said(app)
 
 
 def line_view(app: TuiLaunchApp) -> LineView:

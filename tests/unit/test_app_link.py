@@ -126,3 +126,18 @@ async def test_an_undeclared_argument_is_said_apart_and_in_the_all_nodes_pane(
         await until(pilot, lambda: any(line.startswith("[launch] warning:") and "robto" in line
                                        for line in pane(app)), "the warning, kept")
         assert any("did you mean 'robot'?" in line for line in pane(app))
+
+
+async def test_over_a_link_the_selected_nodes_figures_are_asked_for_while_nothing_comes(
+        tmp_path: Path) -> None:
+    """Over a link the status line is redrawn each tick (a silence is counted); the detail
+    line only when something came: its redraw restarts the wait after which the figures
+    of the selected node are asked for, so at each tick they never were."""
+    async with following(tmp_path, host="robot1") as (app, pilot, port):
+        select(app, "listener-2")
+
+        def trend_asked() -> bool:
+            return any(op == "watch_resources" and "listener-2" in (fields.get("trend") or [])
+                       for op, fields in port.asked)
+
+        await until(pilot, trend_asked, "the selected node's trend asked for")

@@ -13,6 +13,7 @@ import time
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from pathlib import Path
+from typing import Any
 
 from textual.pilot import Pilot
 from textual.widgets import Static
@@ -69,6 +70,7 @@ async def following(tmp_path: Path, launch: Path = BRINGUP,
         port.happened(*(Started(p.id, pid=1000 + n) for n, p in enumerate(enabled)))
     app = TuiLaunchApp(session, tmp_path, session_name=name, port=port, session_host=host,
                        read_only=read_only, pane_fps=PANE_FPS)
+    record_toasts(app)
     async with app.run_test(size=size) as pilot:
         await until(pilot, lambda: app.supervisor is port and (
             not started or not enabled or
@@ -147,8 +149,24 @@ def footer(app: TuiLaunchApp) -> dict[str, bool]:
 
 
 def toasts(app: TuiLaunchApp) -> list[str]:
-    """The notifications on screen, oldest first."""
-    return [str(n.message) for n in app._notifications]
+    """Every notification the app has shown, oldest first, including those whose time on
+    screen is over: a loaded machine may run the test's next look after a toast's seconds
+    (the harnesses record them: `record_toasts`)."""
+    return list(getattr(app, "said_toasts", None) or
+                [str(n.message) for n in app._notifications])
+
+
+def record_toasts(app: TuiLaunchApp) -> None:
+    """From now on each notification's words are kept in `app.said_toasts`."""
+    said: list[str] = []
+    notify = app.notify
+
+    def recorded(message: str, *args: Any, **options: Any) -> None:
+        said.append(str(message))
+        notify(message, *args, **options)
+
+    app.notify = recorded  # type: ignore[method-assign]
+    app.said_toasts = said  # type: ignore[attr-defined]
 
 
 async def test_the_tree_shows_the_sessions_states(tmp_path: Path) -> None:

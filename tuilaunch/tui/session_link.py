@@ -284,11 +284,13 @@ class SessionLink(App[int]):
             self.view.own_relaunch = None
         if shown.lifecycle:
             self.refresh_bindings()
-        if shown.news or shown.lines or self.quit_started is not None or \
-                self.view.over_link() is not None:
-            # a batch's counts; with none, the signal stage and a link's silence move on
-            self.update_status()
+        if shown.news or shown.lines:
+            self.update_status()  # the batch's counts
             self.update_detail()
+        elif self.quit_started is not None or self.view.over_link() is not None:
+            # no batch: the signal stage and a link's silence move on with time (not the
+            # detail line, whose redraw restarts the wait before the figures are asked for)
+            self.update_status()
 
     def update_status(self) -> None:
         self.status.update()
