@@ -47,8 +47,10 @@ async def test_a_tab_is_made_when_first_shown_and_works_then(tmp_path: Path) -> 
                         app.focused is app.tabs.query_one(home), f"{key}: {tab}, on {home}")
             assert tab in made(app)
         assert made(app) == {"services", "params", "topics"}
-        # each asked the session for its part of the graph once on screen
-        assert {"services", "nodes", "topics"} <= set(port.ops())
+        # each asks the session for its part of the graph once on screen (a worker's
+        # request: it may come a moment after the focus)
+        await until(pilot, lambda: {"services", "nodes", "topics"} <= set(port.ops()),
+                    "each tab's part of the graph asked for")
         await pilot.press("1", "3")  # shown again: the same panel, not a second one
         await until(pilot, lambda: app.tabs.active == "services", "Services again")
         assert len(app.tabs.query("#services-panel")) == 1

@@ -287,10 +287,13 @@ class SessionLink(App[int]):
         if shown.news or shown.lines:
             self.update_status()  # the batch's counts
             self.update_detail()
-        elif self.quit_started is not None or self.view.over_link() is not None:
-            # no batch: the signal stage and a link's silence move on with time (not the
-            # detail line, whose redraw restarts the wait before the figures are asked for)
-            self.update_status()
+        else:
+            if self.quit_started is not None or self.view.over_link() is not None:
+                self.update_status()  # no batch: the signal stage, a link's silence move on
+            # the selected row's words may change without a batch (the new plan a relaunch
+            # fetched): drawn again only if they did, and not as a move of the selection,
+            # which would restart the wait before its figures are asked for
+            self.nodes.update_detail()
 
     def update_status(self) -> None:
         self.status.update()
