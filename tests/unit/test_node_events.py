@@ -94,7 +94,7 @@ class Host(App[None]):
                     "respawning": "respawning"}.get(event.kind, event.kind)
         # as the app's drain does (session_link.py)
         shown = self.view.show_events(list(events), replaying)
-        self.query_one(NodesTab).batch_shown(shown)
+        self.query_one(NodesTab).batch_shown(shown, bool(events))
         self.heard.append((shown, replaying))
 
 

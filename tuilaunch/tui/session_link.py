@@ -273,7 +273,9 @@ class SessionLink(App[int]):
         after a relaunch. `replaying`: what happened before this client came, no news."""
         for reading in shown.readings:
             self.inspector.show(reading)
-        self.nodes.batch_shown(shown)
+        self.nodes.batch_shown(shown, shown.news)
+        if shown.readings:
+            self.update_detail()  # a node's figures on its row, and so on the detail line
         for event in shown.relaunched:
             if event.lines != self.view.own_relaunch:
                 self.status.relaunched_elsewhere(
@@ -282,14 +284,16 @@ class SessionLink(App[int]):
             self.view.own_relaunch = None
         if shown.lifecycle:
             self.refresh_bindings()
-        if shown.news or shown.lines or self.quit_started is not None or \
-                self.view.over_link() is not None:
-            # a batch's counts; with none, the signal stage and a link's silence move on
-            self.update_status()
-        # at every tick, drawn again only where its words changed: a node's figures on its
-        # row, and the selected row's words, which may change without a batch (the new
-        # plan a relaunch fetched)
-        self.update_detail()
+        if shown.news or shown.lines:
+            self.update_status()  # the batch's counts
+            self.update_detail()
+        else:
+            if self.quit_started is not None or self.view.over_link() is not None:
+                self.update_status()  # no batch: the signal stage, a link's silence move on
+            # the selected row's words may change without a batch (the new plan a relaunch
+            # fetched): drawn again only if they did, and not as a move of the selection,
+            # which would restart the wait before its figures are asked for
+            self.nodes.update_detail()
 
     def update_status(self) -> None:
         self.status.update()

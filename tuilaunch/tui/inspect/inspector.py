@@ -56,8 +56,6 @@ class Inspector:
         self._figures_asked: list[str] | None = None
         """The processes the server sends CPU and memory of (None: all), last asked."""
         self._figures_timer: Timer | None = None
-        self._figures_waiting: tuple[list[str] | None, str | None] | None = None
-        """What the running timer will ask for: (figures shown, selected process)."""
         self.log_levels = LogLevels(app, self.inspect, app.asked_to_stop)
         self._graph: GraphCalls | None = None
         self.recordings = Recordings(app, self.inspect)  # w in the Topics tab, b
@@ -197,12 +195,8 @@ class Inspector:
         selection rests, so running down the tree is one request, not one a row."""
         if not self.watching_resources or not self._figures_moved():
             return
-        target = (self.app.launch_tree.figures_shown(), self.app.nodes.selected_process())
         if self._figures_timer is not None:
-            if target == self._figures_waiting:
-                return  # drawn again, not moved (each batch over a link): the wait goes on
             self._figures_timer.stop()
-        self._figures_waiting = target
         self._figures_timer = self.app.set_timer(FIGURES_SETTLE, self._ask_figures)
 
     def _figures_moved(self) -> bool:

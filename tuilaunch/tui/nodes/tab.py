@@ -3,10 +3,10 @@ the app's session view (session_view.py), which owns them and their behaviour.
 
 The view shows each tick's events in the tree and pane (`SessionView.show_events`, at
 once, with the status line the app updates in the same call); the tab then counts a
-respawn's wait down (`batch_shown`), and redraws its detail line when the app asks, each
-tick (`update_detail`: only when its words changed). The tab reads a pane's gaps and
-missing stamps through the session itself (`GapReader`), and draws the selected row in
-full on the detail line, with its CPU and memory trend when the app has one (`trend_of`).
+respawn's wait down and redraws its detail line (`batch_shown`). The tab reads a pane's
+gaps and missing stamps through the session itself (`GapReader`), and draws the selected
+row in full on the detail line, with its CPU and memory trend when the app has one
+(`trend_of`).
 """
 
 from __future__ import annotations
@@ -103,11 +103,13 @@ class NodesTab(Vertical):
 
     # --- events ------------------------------------------------------------------------------
 
-    def batch_shown(self, shown: Batch) -> None:
+    def batch_shown(self, shown: Batch, news: bool) -> None:
         """A batch is in the tree and the pane (the view's `show_events`): a respawn's wait
-        counts down once a second (the app redraws the detail line in the same call)."""
+        counts down once a second; `news` (not only readings): the detail line follows."""
         if shown.counting and self._countdown is None:
             self._countdown = self.set_interval(1.0, self._count_down)
+        if news:
+            self.update_detail()
 
     def show_lines(self, lines: list[Line]) -> None:
         """Lines of the app's own for the pane (the plan's warnings)."""
