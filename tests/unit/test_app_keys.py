@@ -9,6 +9,7 @@ from pathlib import Path
 
 from textual.command import CommandList, CommandPalette
 from textual.widgets import Static
+from textual.widgets._footer import FooterKey
 
 from tests.unit.test_app_pilot import (
     following,
@@ -54,6 +55,25 @@ async def test_the_footer_offers_stop_and_restart_of_a_running_node(tmp_path: Pa
         port.tell(ProcessExited("talker-1", pid=1000, code=0, reason="exit code 0"))
         await until(pilot, lambda: footer(app).get("Start") is True, "Start once it ended")
         assert footer(app)["Stop"] is False
+
+
+async def test_a_row_selected_greys_or_offers_the_footers_keys_where_they_are(
+        tmp_path: Path) -> None:
+    """The same keys, only some greyed or offered: the footer's keys stay, not drawn anew
+    (a FooterKey acts on the press: one pressed while the footer was being drawn anew went
+    to a key already removed, and a tap on Stop right after a tap on a row was lost)."""
+    async with following(tmp_path) as (app, pilot, port):
+        select(app, "ns /r1/control")
+        await until(pilot, lambda: footer(app).get("Type") is False, "Type greyed on a group")
+        await pilot.pause()  # the redraws the first bindings asked for, done
+        drawn = list(app.screen.query(FooterKey))
+        select(app, "talker-1")
+        await until(pilot, lambda: footer(app).get("Type") is True, "Type offered on a node")
+        port.tell(ProcessExited("talker-1", pid=1000, code=0, reason="exit code 0"))
+        await until(pilot, lambda: footer(app).get("Start") is True, "Start once it ended")
+        assert footer(app)["Stop"] is False
+        assert list(app.screen.query(FooterKey)) == drawn
+        assert all(key.is_attached for key in drawn)
 
 
 async def test_a_groups_footer_offers_its_commands_and_only_the_tabs_own_keys(

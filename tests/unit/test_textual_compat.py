@@ -9,6 +9,7 @@ import inspect
 import pytest
 from textual import events
 from textual.widgets import Input
+from textual.widgets._footer import FooterKey
 
 from tuilaunch.tui import textual_compat
 from tuilaunch.tui.key_order import keep_escape_before_punctuation
@@ -30,7 +31,8 @@ def test_each_internal_is_there_with_its_shape(internal: Internal):
     elif internal.shape == "attribute":
         owner, attribute = found
         instance = {"MessagePump": lambda: owner(), "Message": lambda: events.Key("a", "a"),
-                    "DOMNode": lambda: Input()}[owner.__name__]()
+                    "DOMNode": lambda: Input(),
+                    "FooterKey": lambda: FooterKey("s", "s", "Stop", "stop")}[owner.__name__]()
         assert hasattr(instance, attribute), \
             f"a fresh {owner.__name__} has no {attribute}: used for {internal.why}"
     else:

@@ -282,7 +282,10 @@ class SessionLink(App[int]):
                     event.lines, (event.data or {}).get("edited"),
                     replaying or event.time < self.opened_at)
             self.view.own_relaunch = None
-        if shown.lifecycle:
+        if shown.lifecycle or shown.news:
+            # a start, an end, a state: the keys that apply to the selection may have
+            # changed (Stop greyed once its node ended, Start offered); the footer greys or
+            # offers its keys where they are, drawn anew only when other keys apply
             self.refresh_bindings()
         if shown.news or shown.lines:
             self.update_status()  # the batch's counts

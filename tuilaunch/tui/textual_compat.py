@@ -78,6 +78,10 @@ INTERNALS: tuple[Internal, ...] = (
              "the footer's keys, made as the footer draws them (`Footer`): Textual makes "
              "each compact, then binds it to its footer's `compact`, restyling every key "
              "twice on each redraw of the footer (after most keys)"),
+    Internal("textual.widgets._footer:FooterKey._disabled", "attribute",
+             "whether a footer key is greyed (its press rings the bell instead): set with "
+             "its `-disabled` class, a key drawn is greyed or offered where it is, the "
+             "footer not drawn anew (`Footer`)"),
     Internal("textual.widgets._tabbed_content:TabbedContent._on_tab_pane_focused",
              "call(self, event)",
              "overridden (app.py): a late focus message must not flip the tab back"),
@@ -163,10 +167,13 @@ class Footer(TextualFooter):
     keys (a focus move, a tab shown): a third of the CPU a keypress cost. Each bound key
     starts with its footer's value instead; the binding still follows a change of it.
 
-    And it is drawn anew only when the keys it shows changed. Textual redraws it at every
-    `refresh_bindings` (a row selected, a focus move), replacing each FooterKey: a tap on
-    a key, whose press and release fell either side of such a redraw, was on two widgets
-    and so no click (a tablet's tap on Stop lost in a browser, under load)."""
+    And it is drawn anew only when the keys it shows changed; when only whether some can
+    be pressed changed (a node's row selected offers Type and Debug, a node that ended
+    greys Stop), those are greyed or offered where they are. Textual redraws it at every
+    `refresh_bindings`, removing each FooterKey before mounting the new ones, the page
+    still showing the old ones meanwhile; a FooterKey acts on the press, and a press that
+    came in between went to a key already removed: no key (a tap on Stop right after a
+    tap on a row, lost in a browser under load)."""
 
     _drawn: tuple[object, ...] | None = None
     """What the footer's keys were drawn from (`_keys`), when last composed."""
@@ -180,10 +187,32 @@ class Footer(TextualFooter):
                      if binding.show or binding.action == "command_palette")
 
     def bindings_changed(self, screen: Any) -> None:
-        if self._drawn is not None and screen is self.screen and \
-                self._keys(screen) == self._drawn:
-            return  # a redraw would draw the same keys
+        if self._drawn is not None and screen is self.screen and self.is_attached:
+            keys = self._keys(screen)
+            if keys == self._drawn:
+                return  # a redraw would draw the same keys
+            if self._enable_in_place(keys):
+                self._drawn = keys
+                return
         super().bindings_changed(screen)
+
+    def _enable_in_place(self, keys: tuple[Any, ...]) -> bool:
+        """The keys drawn greyed or offered as `keys` says, when they are the same keys
+        and only that changed: True then; False when the footer must be drawn anew."""
+        def but_enabled(drawn: tuple[Any, ...]) -> list[tuple[Any, ...]]:
+            return [key[:5] + key[6:] for key in drawn]
+
+        if but_enabled(keys) != but_enabled(self._drawn or ()):
+            return False
+        enabled = {key[0]: bool(key[5]) for key in keys}
+        widgets = list(self.query(FooterKey))
+        if any(widget.key not in enabled for widget in widgets):
+            return False
+        for widget in widgets:
+            if widget._disabled == enabled[widget.key]:
+                widget._disabled = not enabled[widget.key]
+                widget.set_class(widget._disabled, "-disabled")
+        return True
 
     def compose(self) -> ComposeResult:
         if self._bindings_ready:
