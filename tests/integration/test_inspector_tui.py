@@ -95,8 +95,10 @@ async def test_topics_tab_lists_processes_rates_problems_and_echoes(demo):
         await until(pilot, lambda: {"/scan_tui", "/chat_tui"} <= set(panel.shown))
         # the publishing process is named, with the QoS it offers
         panel.table.move_cursor(row=panel.shown.index("/scan_tui"))
-        await until(pilot, lambda: "[lidar-1]" in detail(app))
-        assert "best_effort" in detail(app) and "[mapper-2]" in detail(app)
+        # (/parameter_events names every process too: the detail must be /scan_tui's)
+        await until(pilot, lambda: detail(app).startswith("/scan_tui")
+                    and "[lidar-1]" in detail(app) and "[mapper-2]" in detail(app))
+        assert "best_effort" in detail(app)
         # the pair that cannot talk is marked in its row and said in a sentence
         assert cell(app, "/scan_tui", "qos") != ""
         assert cell(app, "/chat_tui", "qos") == ""

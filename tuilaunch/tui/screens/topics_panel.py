@@ -380,7 +380,10 @@ class TopicsPanel(Vertical):
         table = self.table
         names = self._matching()
         if names != self.shown:
-            keep = self.selected
+            # the row under the cursor now: `selected` follows it by a message, which a
+            # listing that lands first would otherwise undo (a topic came as one moved)
+            keep = self.shown[table.cursor_row] if table.cursor_row < len(self.shown) \
+                else self.selected
             table.clear()
             self.cells = {}
             for name in names:
