@@ -112,7 +112,7 @@ def test_a_recording_holds_each_message_as_published_and_the_output(session, tmp
         first = recorder.stderr.readline()
         assert f"/rec/wave and the output into {out}" in first, first
         began = time.monotonic()
-        eventually(lambda: time.monotonic() - began > 3, what="3 s of recording")
+        eventually(lambda: time.monotonic() - began > 4, what="4 s of recording")
         recorder.send_signal(signal.SIGINT)  # Ctrl+C: the file is completed
         _, said = recorder.communicate(timeout=60)
     finally:
@@ -130,7 +130,10 @@ def test_a_recording_holds_each_message_as_published_and_the_output(session, tmp
     assert schemas[wave.schema_id].encoding == "ros2msg"
     assert b"float64 x" in schemas[wave.schema_id].data
     points = [(t, m) for topic, t, m in messages if topic == "/rec/wave"]
-    assert len(points) > 100  # 3 s at 50 Hz, less a start on a busy machine
+    # 4 s at 50 Hz, less the subscription's discovery, which a busy machine can stretch
+    # past a second (a CI run held 99 of 3 s): that every sample between the first and
+    # the last is there is what says none was lost
+    assert len(points) > 50
     numbers = [int(m.z) for _, m in points]
     assert numbers == list(range(numbers[0], numbers[0] + len(numbers)))  # none lost
     from .nodes.signal_node import expected
