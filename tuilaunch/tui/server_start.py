@@ -54,6 +54,9 @@ class StartHost(Protocol):
     @property
     def launch_tree(self) -> Tree[Any]: ...
 
+    @property
+    def screen(self) -> Any: ...
+
     def call_after_refresh(self, callback: Callable[..., object], *args: Any) -> bool: ...
 
     def post_message(self, message: Message) -> bool: ...
@@ -140,16 +143,27 @@ class ServerStart:
         host = self.host
         if host.supervisor is None or host.quit_before_start:
             return
-        tree = host.launch_tree
+        tree, screen = host.launch_tree, host.screen
         pending = getattr(tree, "_layout_required", False) or \
             getattr(tree, "_repaint_required", False) or \
-            tree.virtual_size.height != tree.last_line + 1  # last_line builds its rows
+            tree.virtual_size.height != tree.last_line + 1 or \
+            _unpainted(screen) or getattr(host, "_batch_count", 0)  # last_line builds rows
         if (pending or not settled) and tries < SHOWN_TRIES:
             host.call_after_refresh(self.plan_shown, tries + 1, not pending)
             return
         # not awaited: the server starts the launch after its OWNER_WAIT anyway
         host.engine.submit(host.supervisor.request(PlanShown())).add_done_callback(
             _ignored)
+
+
+def _unpainted(screen: Any) -> bool:
+    """Whether the screen holds changes it has not written to the terminal yet: a screen
+    that idles while the app batches its updates, or before the tree has handed it its
+    rows, calls back after a refresh that painted nothing (a loaded machine showed the
+    rows first as running, 1 launch in 12)."""
+    return bool(getattr(screen, "_dirty_widgets", None) or
+                getattr(screen, "_layout_required", False) or
+                getattr(screen, "_repaint_required", False))
 
 
 def _ignored(future: Future[Any]) -> None:
