@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shlex
 import shutil
 import subprocess
@@ -197,6 +198,10 @@ def test_t_on_a_group_never_starts_the_node_its_condition_skipped(session, attac
     wait_for(lambda: states(session) == {"talker-1": "exited", "listener-2": "skipped",
                                          "piped-3": "exited"}, "the group stopped",
              lambda: states(session))
+    # `t` is greyed while this client still shows a process running (a user sees the row
+    # first): pressed once its own detail line says the stop is over
+    wait_for(lambda: re.search(r"group: 0 of 3 processes running(?!,)", pane.screen()),
+             "the stopped group on screen", pane.screen)
     pane.burst("t")
     wait_for(lambda: states(session) == {"talker-1": "running", "listener-2": "skipped",
                                          "piped-3": "running"}, "the group started again",
