@@ -18,6 +18,8 @@ from concurrent.futures import Future
 from typing import Any, Protocol
 
 from textual.message import Message
+from textual.screen import Screen
+from textual.widget import Widget
 from textual.widgets import Tree
 
 from ..client.port import LaunchPort
@@ -55,7 +57,7 @@ class StartHost(Protocol):
     def launch_tree(self) -> Tree[Any]: ...
 
     @property
-    def screen(self) -> Any: ...
+    def screen(self) -> Screen[Any]: ...
 
     def call_after_refresh(self, callback: Callable[..., object], *args: Any) -> bool: ...
 
@@ -143,11 +145,10 @@ class ServerStart:
         host = self.host
         if host.supervisor is None or host.quit_before_start:
             return
-        tree, screen = host.launch_tree, host.screen
-        pending = getattr(tree, "_layout_required", False) or \
-            getattr(tree, "_repaint_required", False) or \
-            tree.virtual_size.height != tree.last_line + 1 or \
-            _unpainted(screen) or getattr(host, "_batch_count", 0)  # last_line builds rows
+        tree = host.launch_tree
+        pending = _unpainted(tree) or _unpainted(host.screen) or \
+            bool(getattr(host, "_batch_count", 0)) or \
+            tree.virtual_size.height != tree.last_line + 1  # last_line builds its rows
         if (pending or not settled) and tries < SHOWN_TRIES:
             host.call_after_refresh(self.plan_shown, tries + 1, not pending)
             return
@@ -156,14 +157,14 @@ class ServerStart:
             _ignored)
 
 
-def _unpainted(screen: Any) -> bool:
-    """Whether the screen holds changes it has not written to the terminal yet: a screen
-    that idles while the app batches its updates, or before the tree has handed it its
-    rows, calls back after a refresh that painted nothing (a loaded machine showed the
+def _unpainted(widget: Widget) -> bool:
+    """Whether the tree, or the screen, holds changes not yet written to the terminal: a
+    screen idles and calls back after a refresh that painted nothing while it still holds
+    widgets to paint, or while the app batches its updates (a loaded machine showed the
     rows first as running, 1 launch in 12)."""
-    return bool(getattr(screen, "_dirty_widgets", None) or
-                getattr(screen, "_layout_required", False) or
-                getattr(screen, "_repaint_required", False))
+    return bool(getattr(widget, "_layout_required", False) or
+                getattr(widget, "_repaint_required", False) or
+                getattr(widget, "_dirty_widgets", None))
 
 
 def _ignored(future: Future[Any]) -> None:
