@@ -174,9 +174,13 @@ import sys, time
 from launch import LaunchDescription
 def generate_launch_description():
     print('loading', file=sys.stderr, flush=True)
-    time.sleep(60)
+    for _ in range(600):
+        time.sleep(0.1)
     return LaunchDescription([])
 """)
+    # Steps, as a slow file's work is (xacro, a lookup): Python sees a signal between them.
+    # One sleep(60) would not see a Ctrl+C that came between the print and the sleep until
+    # it returned (the interpreter's race, not ours: 1 run in ~450 under load hung so).
     proc = subprocess.Popen([sys.executable, "-m", "tuilaunch", str(path), mode],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "ROS_LOG_DIR": str(tmp_path)})

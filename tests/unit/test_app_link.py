@@ -91,6 +91,24 @@ async def test_another_clients_relaunch_is_said_and_the_form_follows(tmp_path: P
         await until(pilot, lambda: "/r2/" in str(app.detail_bar.render()), "its new name")
 
 
+async def test_a_row_chosen_as_soon_as_a_relaunch_redraws_the_tree_is_selected(
+        tmp_path: Path) -> None:
+    """The tree drawn again (a relaunch) and a row chosen before it has painted (`a`, or a
+    selection in the same tick): that row is selected, not none. A loaded machine ran a
+    look between the redraw and the paint; this makes that moment happen every time."""
+    async with following(tmp_path) as (app, pilot, port):
+        port.tell(Relaunched(None, lines=["robot:=r2"]))
+        await until(pilot, lambda: form_value(app, "robot") == "r2", "the relaunch taken")
+        tree = app.launch_tree
+        tree.show_plan(port.plan, dict(tree.states))  # no await: nothing painted in between
+        select(app, "talker-1")
+        assert tree.cursor_node is tree.rows["talker-1"]
+        await until(pilot, lambda: "/r2/" in str(app.detail_bar.render()), "its new name")
+        tree.show_plan(port.plan, dict(tree.states))
+        app.nodes.show_all()  # `a`, in the same tick as a redraw
+        assert tree.cursor_node is tree.root.children[0]
+
+
 async def test_an_edit_not_applied_gives_way_to_another_clients_relaunch(
         tmp_path: Path) -> None:
     """The form keeps its editors and takes the values that run now: what was typed and

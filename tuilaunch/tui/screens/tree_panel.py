@@ -122,6 +122,10 @@ class LaunchTree(Tree[RowData]):
         for child in plan.tree.children:
             self._add(self.root, child)
         self.root.expand_all()
+        # Tree numbers its lines when it next paints or idles; until then each new row's line
+        # is -1, and moving the cursor to it (`a` or `attach --type` right after a relaunch
+        # or the first plan) would select nothing. Numbered now (last_line builds them).
+        self.last_line  # noqa: B018
 
     def _add(self, parent: TreeNode[RowData], item: TreeItem) -> list[str]:
         if item.kind == RowKind.PROCESS and item.ref:
