@@ -161,8 +161,9 @@ async def test_o_lists_the_selected_nodes_topics(tmp_path: Path) -> None:
         scope = app.topics_panel.query_one("#tpc-scope", Static)
         await until(pilot, lambda: str(scope.render()) == "node /r1/talker (x: all)",
                     "the node's topics")
-        assert ("topics", {"node": "/r1/talker"}) in port.asked
+        # the scope is said first, the listing asked after it: its answer is what shows
         await until(pilot, lambda: "/r1/chatter" in app.topics_panel.entries, "its topic")
+        assert ("topics", {"node": "/r1/talker"}) in port.asked
 
 
 async def test_a_group_has_no_log_level_nor_topics_of_a_node(tmp_path: Path) -> None:

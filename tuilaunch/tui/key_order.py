@@ -109,9 +109,16 @@ class KeyHold:
             let_go(drop, said)
 
 
-STUCK_AFTER = 3.0
+STUCK_AFTER = 15.0
 """Seconds after which a key whose trip never reported its end no longer holds the others
-back (a widget removed with the key in its queue): the keys go on as Textual sends them."""
+back: the keys go on as Textual sends them. A key whose widget was removed with it in its
+queue is let go at the next look (`lost`), not after this. It was 3 s, but on a loaded
+machine a legitimate trip came near it (the first show of the Services tab: 1.4 s with 8
+busy processes on 2 cores), and a key let go early reaches the widget the one before it was
+leaving (`s` on a node's row, where it was typed for a field about to open)."""
+
+STUCK_CHECK = 0.75
+"""Seconds between two looks at the key in flight while others wait."""
 
 
 class TrackedKey(TripKey):
@@ -335,7 +342,7 @@ class KeyOrder(App[int]):
 
     def _watch_stuck(self) -> None:
         if self._stuck_timer is None:
-            self._stuck_timer = self.set_timer(STUCK_AFTER / 4, self._check_stuck)
+            self._stuck_timer = self.set_timer(STUCK_CHECK, self._check_stuck)
 
     def _check_stuck(self) -> None:
         self._stuck_timer = None
@@ -346,7 +353,7 @@ class KeyOrder(App[int]):
                                   time.monotonic() - self._key_started > STUCK_AFTER):
             self._key_in_flight = None
             self._next_key()
-        elif self._key_holds and time.monotonic() - self._key_started > STUCK_AFTER * 4:
+        elif self._key_holds and time.monotonic() - self._key_started > STUCK_AFTER * 2:
             self._key_holds = 0  # an action that never released them: the keys go on
             self._next_key()
         if self._keys_waiting:
