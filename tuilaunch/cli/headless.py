@@ -277,4 +277,8 @@ def run_headless(plan: Plan, log_dir: Path | None = None, placement: Placement |
                  arguments: dict[str, str] | None = None) -> int:
     """`placement` (`--machines`, applied to `plan`): its other machines run their share,
     started with `command` (FILE or PACKAGE FILE as given) and `arguments`."""
-    return asyncio.run(_run(plan, log_dir or run_log_dir(), placement, command, arguments))
+    status = asyncio.run(_run(plan, log_dir or run_log_dir(), placement, command, arguments))
+    actions = sys.modules.get("tuilaunch.engine.ros.actions")  # loaded only if rclpy was
+    if actions is not None:
+        actions.exit_now_if_hung(status)
+    return status

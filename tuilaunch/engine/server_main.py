@@ -51,10 +51,14 @@ def main(argv: list[str]) -> int:
     for kind, handler in plan_handlers(session).items():  # a client without the launch file
         server.add_handler(kind, handler)
     try:
-        return asyncio.run(server.serve())
+        status = asyncio.run(server.serve())
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
+    actions = sys.modules.get("tuilaunch.engine.ros.actions")  # loaded only if rclpy was
+    if actions is not None:
+        actions.exit_now_if_hung(status)
+    return status
 
 
 if __name__ == "__main__":

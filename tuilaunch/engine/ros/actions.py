@@ -8,6 +8,7 @@ by the caller (the TUI shares its own), and only closed here when it was made he
 from __future__ import annotations
 
 import asyncio
+import threading
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -17,6 +18,26 @@ from ..run.plugins import ActionRunner, Plugin
 from .ros_errors import MessageError, RosError
 
 Emit = Callable[[Event], None]
+
+CLOSE_WITHIN = 10.0
+"""Seconds a stop waits for rclpy to shut down. Fast DDS can hang in it (a writer's timer
+waiting for the event thread, seen once under load in a full test run): the session ends
+all the same, its processes stopped, rather than never."""
+
+CLOSE_HUNG = threading.Event()
+"""Set when rclpy did not shut down in time: the process then ends without running the
+DDS library's own exit code, which would wait on the same lock (`exit_now_if_hung`)."""
+
+
+def exit_now_if_hung(status: int) -> None:
+    """Ends the process at once, with `status`, when rclpy's shutdown hung."""
+    if CLOSE_HUNG.is_set():
+        import os
+        import sys
+
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
 
 
 class RosActions(Plugin):
@@ -44,7 +65,17 @@ class RosActions(Plugin):
 
     async def close(self) -> None:
         if self._bridge is not None and self._bridge_factory is None:
-            await asyncio.to_thread(self._bridge.close)
+            # a daemon thread of its own: a pool's thread stuck in the DDS library would be
+            # waited for at exit
+            closing = threading.Thread(target=self._bridge.close, name="ros-bridge-close",
+                                       daemon=True)
+            closing.start()
+            await asyncio.to_thread(closing.join, CLOSE_WITHIN)
+            if closing.is_alive():
+                CLOSE_HUNG.set()
+                self._emit_to(Log("launch", level="WARN", reason=(
+                    f"rclpy did not shut down within {CLOSE_WITHIN:g} s (a hang in the DDS "
+                    "library): the launch ends without it")))
 
     def bridge(self) -> Any:
         """Made on first use: a launch without ROS actions never starts rclpy here."""
