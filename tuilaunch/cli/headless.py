@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, TextIO, cast
 
 from ..engine.launcher import make_supervisor
 from ..engine.plan.model import Plan
+from ..engine.ros.actions import exit_now_if_hung
 from ..engine.run.events import (
     ActionFinished,
     ComponentReport,
@@ -278,7 +279,5 @@ def run_headless(plan: Plan, log_dir: Path | None = None, placement: Placement |
     """`placement` (`--machines`, applied to `plan`): its other machines run their share,
     started with `command` (FILE or PACKAGE FILE as given) and `arguments`."""
     status = asyncio.run(_run(plan, log_dir or run_log_dir(), placement, command, arguments))
-    actions = sys.modules.get("tuilaunch.engine.ros.actions")  # loaded only if rclpy was
-    if actions is not None:
-        actions.exit_now_if_hung(status)
+    exit_now_if_hung(status)  # rclpy's shutdown hung: the DDS library's exit would too
     return status

@@ -24,6 +24,7 @@ def main(argv: list[str]) -> int:
     from .launcher import make_supervisor
     from .packages import ensure_environment
     from .plan.session import Session
+    from .ros.actions import exit_now_if_hung
     from .run.session.plan_ops import plan_handlers
     from .run.session.session_server import SessionServer
 
@@ -55,9 +56,7 @@ def main(argv: list[str]) -> int:
     except LaunchError as exc:
         print(f"tuilaunch: error: {exc}", file=sys.stderr)
         return 2
-    actions = sys.modules.get("tuilaunch.engine.ros.actions")  # loaded only if rclpy was
-    if actions is not None:
-        actions.exit_now_if_hung(status)
+    exit_now_if_hung(status)  # rclpy's shutdown hung: the DDS library's exit would too
     return status
 
 

@@ -8,6 +8,8 @@ by the caller (the TUI shares its own), and only closed here when it was made he
 from __future__ import annotations
 
 import asyncio
+import os
+import sys
 import threading
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -32,9 +34,6 @@ DDS library's own exit code, which would wait on the same lock (`exit_now_if_hun
 def exit_now_if_hung(status: int) -> None:
     """Ends the process at once, with `status`, when rclpy's shutdown hung."""
     if CLOSE_HUNG.is_set():
-        import os
-        import sys
-
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(status)
