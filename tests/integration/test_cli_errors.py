@@ -280,6 +280,10 @@ def test_a_missing_file_is_guessed_only_from_the_folder_it_names(tmp_path):
     assert "count.py" not in error("sub/cont.py")  # sub holds no count.py
     assert "count.py" not in error("tuilaunch_demo")
     assert "did you mean the package 'tuilaunch_demos'?" in error("tuilaunch_demo")
+    # a session command mistyped: the command, not a file
+    assert "hint: did you mean the command 'ls'? (tuilaunch ls ...)" in error("list")
+    assert "did you mean the command" not in error("lst.py")
+    assert "hint: did you mean the command 'attach'?" in error("atach", "base")
 
 
 def test_an_argument_without_its_colon_and_a_file_that_is_no_launch_file(tmp_path):

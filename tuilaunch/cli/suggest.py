@@ -50,6 +50,15 @@ def launch_files(package: str) -> list[str]:
     return sorted(found)
 
 
+def command_guess(word: str) -> str:
+    """`tuilaunch list`, `tuilaunch atach nuc:base`: a session command mistyped reads as a
+    launch file's or a package's name; the command it resembles, if any."""
+    from .parsers import COMMANDS
+
+    close = close_matches(word, list(COMMANDS))
+    return f"did you mean the command {close[0]!r}? (tuilaunch {close[0]} ...)" if close else ""
+
+
 def missing_file(path: str) -> PackageError:
     """A FILE that does not exist: a package of that name lists its launch files, else the
     names in its folder that resemble it."""
@@ -73,6 +82,8 @@ def missing_file(path: str) -> PackageError:
     if not guess and "/" not in path:
         guess = did_you_mean(path, list(known_packages()))
         guess = guess.replace("did you mean", "did you mean the package") if guess else ""
+    if not guess and "/" not in path and not path.endswith(LAUNCH_EXTENSIONS):
+        guess = command_guess(path)
     hint = guess or "give a path, or PACKAGE FILE to search a package's share"
     return PackageError(f"launch file {path} does not exist", hint=hint)
 
@@ -82,7 +93,7 @@ def missing_package(package: str) -> PackageError | None:
     packages = known_packages()
     if package in packages:
         return None
-    guess = did_you_mean(package, list(packages))
+    guess = did_you_mean(package, list(packages)) or command_guess(package)
     return PackageError(f"package '{package}' not found in the ament index",
                         hint=guess or "source the workspace that provides it, or install it "
                         "into this environment")
