@@ -500,9 +500,11 @@ def test_second_and_third_ctrl_c_escalate_at_once(write, tmp_path, launches):
 
 def test_exit_status_tells_a_clean_stop_from_a_lost_child(write, tmp_path, launches):
     started, _ = launches
+    # slept in steps: a SIGINT landing between the print and one long sleep would be seen
+    # only when that sleep returns (CPython's race), and the stop would need SIGTERM
     path = launch_file(write, """
 sl.add_action(ExecuteProcess(cmd=['python3', '-c', 'import time; print("up", flush=True); '
-                                  'time.sleep(600)'], name='plain'))""")
+                                  '[time.sleep(0.1) for _ in range(6000)]'], name='plain'))""")
     proc = start_headless(str(path), log_dir=tmp_path / "clean")
     started.append(proc)
     read_until(proc, "[plain-1] up")
