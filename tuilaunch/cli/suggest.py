@@ -82,8 +82,8 @@ def missing_file(path: str) -> PackageError:
     if not guess and "/" not in path:
         guess = did_you_mean(path, list(known_packages()))
         guess = guess.replace("did you mean", "did you mean the package") if guess else ""
-    if not guess and "/" not in path and not path.endswith(LAUNCH_EXTENSIONS):
-        guess = command_guess(path)
+        if not guess and not path.endswith(LAUNCH_EXTENSIONS):
+            guess = command_guess(path)
     hint = guess or "give a path, or PACKAGE FILE to search a package's share"
     return PackageError(f"launch file {path} does not exist", hint=hint)
 
